@@ -1,0 +1,68 @@
+"""Homogeneous 4 x 4 transforms (FvDFH 5.6-5.7).
+
+Points are column vectors ``(x, y, z, 1)``; a matrix acts on the left and a translation sits in
+the rightmost column (the course notes insist on this). Every function returns a fresh float64
+array.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def translate(tx: float, ty: float, tz: float) -> np.ndarray:
+    """T(tx, ty, tz)."""
+    m = np.eye(4)
+    m[:3, 3] = np.array((tx, ty, tz), dtype=np.float64) + 0.0   # + 0.0 turns -0.0 into 0.0
+    return m
+
+
+def scale(sx: float, sy: float, sz: float) -> np.ndarray:
+    """S(sx, sy, sz)."""
+    return np.diag([float(sx), float(sy), float(sz), 1.0])
+
+
+def rotate_x(theta: float) -> np.ndarray:
+    """R_x(theta): rotation by ``theta`` radians about x, counter-clockwise looking down +x."""
+    c, s = np.cos(theta), np.sin(theta)
+    m = np.eye(4)
+    m[1:3, 1:3] = [[c, -s], [s, c]]
+    return m
+
+
+def rotate_y(theta: float) -> np.ndarray:
+    """R_y(theta)."""
+    c, s = np.cos(theta), np.sin(theta)
+    m = np.eye(4)
+    m[0, 0], m[0, 2], m[2, 0], m[2, 2] = c, s, -s, c
+    return m
+
+
+def rotate_z(theta: float) -> np.ndarray:
+    """R_z(theta)."""
+    c, s = np.cos(theta), np.sin(theta)
+    m = np.eye(4)
+    m[0:2, 0:2] = [[c, -s], [s, c]]
+    return m
+
+
+def shear_xy(shx: float, shy: float) -> np.ndarray:
+    """SH_xy(shx, shy): x += shx z, y += shy z (FvDFH eq. 6.22), the form SH_par takes."""
+    m = np.eye(4)
+    m[0, 2], m[1, 2] = shx, shy
+    return m
+
+
+def rows_as_rotation(u: np.ndarray, v: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """The rotation whose rows are the orthonormal basis u, v, n (FvDFH eq. 6.25)."""
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = u, v, n
+    return m
+
+
+def apply(m: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Transform ``(N, 3)`` or ``(N, 4)`` points by ``m``; returns ``(N, 4)`` homogeneous rows."""
+    points = np.asarray(points, dtype=np.float64)
+    if points.shape[-1] == 3:
+        points = np.concatenate([points, np.ones(points.shape[:-1] + (1,))], axis=-1)
+    return points @ m.T

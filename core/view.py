@@ -1,0 +1,167 @@
+"""Viewing: the VRC system and the normalizing transformations N_per and N_par (FvDFH 6.5).
+
+Takes a :class:`View` (VRP, VPN, VUP, window, PRP, F, B — the six lines of Assignment #1) and
+returns 4 x 4 matrices that carry world coordinates into the canonical view volumes:
+
+- parallel:     ``N_par = S_par · T_par · SH_par · R · T(-VRP)``;
+  volume ``-1 <= x <= 1, -1 <= y <= 1, -1 <= z <= 0``.
+- perspective:  ``N_per = S_per · SH_par · T(-PRP) · R · T(-VRP)``;
+  volume ``z <= x <= -z, z <= y <= -z, -1 <= z <= z_min``.
+
+Every factor is kept by name (:func:`n_par_factors`, :func:`n_per_factors`) so that a learner
+can hold each one against a hand calculation (``python -m app matrices``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from core.transforms import rows_as_rotation, scale, shear_xy, translate
+
+PROJECTIONS = ("perspective", "parallel")
+
+
+class ViewError(ValueError):
+    """An invalid or unreasonable view; the message names the view and the reason."""
+
+
+@dataclass(frozen=True)
+class View:
+    """One view specification, in the order of Assignment #1.
+
+    ``window`` is ``(u_min, u_max, v_min, v_max)``; ``front`` and ``back`` are the signed
+    distances F and B along n from the VRP. ``label`` says where the view came from
+    (``"house.views: view 3 (line 13)"``) so that every message can name it.
+    """
+
+    vrp: tuple[float, float, float]
+    vpn: tuple[float, float, float]
+    vup: tuple[float, float, float]
+    window: tuple[float, float, float, float]
+    prp: tuple[float, float, float]
+    front: float
+    back: float
+    label: str = field(default="view", compare=False)
+
+    @property
+    def numbers(self) -> np.ndarray:
+        """All 18 numbers of the view, in file order."""
+        return np.array([*self.vrp, *self.vpn, *self.vup, *self.window, *self.prp,
+                         self.front, self.back], dtype=np.float64)
+
+
+# Relative tolerance under which two directions count as parallel (|VUP x n| / |VUP|).
+PARALLEL_TOLERANCE = 1e-12
+
+
+def problems(view: View, projection: str | None = None) -> list[str]:
+    """Every reason the view is invalid or unreasonable (pipeline.md's list); empty if valid.
+
+    With ``projection=None`` only the checks that hold for both projections are made.
+    """
+    if not np.all(np.isfinite(view.numbers)):
+        return ["a number is NaN or infinite"]
+    vpn, vup, prp = (np.array(a, dtype=np.float64) for a in (view.vpn, view.vup, view.prp))
+    u_min, u_max, v_min, v_max = view.window
+    found = []
+    vpn_len = np.linalg.norm(vpn)
+    if vpn_len == 0.0:
+        found.append("VPN is zero")
+    if np.linalg.norm(vup) == 0.0:
+        found.append("VUP is zero")
+    elif vpn_len > 0.0:
+        n = vpn / vpn_len
+        if np.linalg.norm(np.cross(vup, n)) <= PARALLEL_TOLERANCE * np.linalg.norm(vup):
+            found.append("VUP is parallel to VPN")
+    if prp[2] == 0.0:
+        found.append("PRP lies on the view plane (PRP_n = 0), so the direction of projection "
+                     "is parallel to the view plane")
+    if not u_max > u_min:
+        found.append(f"the window is degenerate: u_max ({u_max:g}) <= u_min ({u_min:g})")
+    if not v_max > v_min:
+        found.append(f"the window is degenerate: v_max ({v_max:g}) <= v_min ({v_min:g})")
+    if not view.back < view.front:
+        found.append(f"B ({view.back:g}) is not behind F ({view.front:g})")
+    if projection == "perspective" and not view.front < prp[2]:
+        found.append(f"the front plane F = {view.front:g} is not in front of the eye "
+                     f"(PRP_n = {prp[2]:g})")
+    if not found and projection is not None:
+        factors = (n_per_factors if projection == "perspective" else n_par_factors)(view, validate=False)
+        if not all(np.all(np.isfinite(m)) for m in factors.values()):
+            found.append("the numbers are too large or too small: the normalizing "
+                         "transformation overflows")
+    return found
+
+
+def check(view: View, projection: str | None = None) -> None:
+    """Raise :class:`ViewError` naming the view and every reason it is invalid."""
+    found = problems(view, projection)
+    if found:
+        raise ViewError(f"{view.label}: " + "; ".join(found))
+
+
+def vrc_basis(view: View) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """u, v, n of the VRC: ``n = VPN/|VPN|``, ``u = VUP x n / |VUP x n|``, ``v = n x u``."""
+    vpn = np.asarray(view.vpn, dtype=np.float64)
+    n = vpn / np.linalg.norm(vpn)
+    u = np.cross(np.asarray(view.vup, dtype=np.float64), n)
+    u /= np.linalg.norm(u)
+    v = np.cross(n, u)
+    return u, v, n
+
+
+def _common_factors(view: View) -> dict[str, np.ndarray]:
+    """T(-VRP), R and SH_par, shared by both projections."""
+    u, v, n = vrc_basis(view)
+    u_min, u_max, v_min, v_max = view.window
+    prp = np.asarray(view.prp, dtype=np.float64)
+    cw = np.array([(u_min + u_max) / 2, (v_min + v_max) / 2, 0.0])
+    dop = cw - prp
+    return {
+        "T_vrp": translate(*(-np.asarray(view.vrp, dtype=np.float64))),
+        "R": rows_as_rotation(u, v, n),
+        "SH_par": shear_xy(-dop[0] / dop[2], -dop[1] / dop[2]),
+    }
+
+
+def n_par_factors(view: View, validate: bool = True) -> dict[str, np.ndarray]:
+    """The parallel chain by name: T_vrp, R, SH_par, T_par, S_par and N_par (FvDFH 6.5.1)."""
+    if validate:
+        check(view, "parallel")
+    u_min, u_max, v_min, v_max = view.window
+    f = _common_factors(view)
+    f["T_par"] = translate(-(u_max + u_min) / 2, -(v_max + v_min) / 2, -view.front)
+    f["S_par"] = scale(2 / (u_max - u_min), 2 / (v_max - v_min), 1 / (view.front - view.back))
+    f["N_par"] = f["S_par"] @ f["T_par"] @ f["SH_par"] @ f["R"] @ f["T_vrp"]
+    return f
+
+
+def n_per_factors(view: View, validate: bool = True) -> dict[str, np.ndarray]:
+    """The perspective chain by name: T_vrp, R, T_prp, SH_par, S_per, N_per, and z_min.
+
+    ``z_min`` is returned as a 0-d array beside the matrices (FvDFH 6.5.2).
+    """
+    if validate:
+        check(view, "perspective")
+    u_min, u_max, v_min, v_max = view.window
+    f = _common_factors(view)
+    f["T_prp"] = translate(*(-np.asarray(view.prp, dtype=np.float64)))
+    vrp_z = -view.prp[2]                      # z of the VRP after T(-PRP) and the shear
+    f["S_per"] = scale(2 * vrp_z / ((u_max - u_min) * (vrp_z + view.back)),
+                       2 * vrp_z / ((v_max - v_min) * (vrp_z + view.back)),
+                       -1 / (vrp_z + view.back))
+    f["N_per"] = f["S_per"] @ f["SH_par"] @ f["T_prp"] @ f["R"] @ f["T_vrp"]
+    f["z_min"] = np.array(-(vrp_z + view.front) / (vrp_z + view.back))
+    return f
+
+
+def normalizing_transform(view: View, projection: str) -> tuple[np.ndarray, float]:
+    """``(N, z_min)``: N_per or N_par for ``projection``; z_min is 0 for parallel (unused)."""
+    if projection == "perspective":
+        f = n_per_factors(view)
+        return f["N_per"], float(f["z_min"])
+    if projection == "parallel":
+        return n_par_factors(view)["N_par"], 0.0
+    raise ValueError(f"projection must be one of {PROJECTIONS}, not {projection!r}")
