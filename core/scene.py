@@ -39,7 +39,7 @@ class Light:
     attenuation: tuple[float, float, float] = (1.0, 0.0, 0.0)   # c1, c2, c3
 
 
-@dataclass
+@dataclass(eq=False)          # identity: meshes hold arrays and key the render caches
 class Mesh:
     """Triangles and/or line edges over one vertex array.
 
@@ -73,7 +73,7 @@ class Mesh:
         return np.unique(np.sort(both, axis=1), axis=0)
 
 
-@dataclass
+@dataclass(eq=False)          # identity: a scene keys the render caches
 class Scene:
     """Everything one scene file describes.
 

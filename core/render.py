@@ -1,0 +1,122 @@
+"""The renderer: assembles the stages a scene needs, in pipeline order, and runs them.
+
+``render(scene, view_index, projection, shading, size) -> Frame``. The stages are those of
+:func:`core.plan.plan`; what actually ran, what was allocated and how long each stage took go
+into ``Frame.stats``. Nothing here touches GL: the frame is a numpy image, top row first.
+
+Per-scene work that does not depend on the view (edge lists, concatenated triangle arrays,
+normals) is computed once and kept in a cache keyed by the mesh object.
+"""
+
+from __future__ import annotations
+
+import time
+import weakref
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from core import clip, project, raster_lines
+from core.plan import Stage, plan
+from core.scene import Scene
+from core.transforms import apply
+from core.view import normalizing_transform, problems
+
+
+@dataclass
+class Frame:
+    """One rendered picture: ``color`` is ``(H, W, 3)`` uint8, row 0 at the top."""
+
+    color: np.ndarray
+    plan: list[Stage]
+    message: str | None = None
+    stats: dict = field(default_factory=dict)
+
+
+def to_rgb8(color) -> np.ndarray:
+    """A colour in [0, 1] → uint8, rounded half up."""
+    return np.floor(np.clip(np.asarray(color, dtype=np.float64), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+
+
+_edges_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _edges(mesh) -> np.ndarray:
+    if mesh not in _edges_cache:
+        _edges_cache[mesh] = mesh.all_edges()
+    return _edges_cache[mesh]
+
+
+class _Timer:
+    """Collects per-stage wall times (ms) into a stats dict."""
+
+    def __init__(self, stats: dict):
+        self.times = stats.setdefault("ms", {})
+        self.t = time.perf_counter()
+
+    def lap(self, stage: str) -> None:
+        now = time.perf_counter()
+        self.times[stage] = self.times.get(stage, 0.0) + (now - self.t) * 1e3
+        self.t = now
+
+
+def render(scene: Scene, view_index: int, projection: str | None = None,
+           shading: str | None = None, size: tuple[int, int] | None = None) -> Frame:
+    """Render view ``view_index`` (0-based) of ``scene``.
+
+    An invalid view, a scene without views, or a zero-sized framebuffer gives a frame of the
+    background colour with ``message`` saying why; it never raises for bad scene data.
+    """
+    projection = projection or scene.projection
+    shading = shading or scene.shading
+    width, height = size or scene.size
+    stages = plan(scene, projection, shading)
+    color = np.empty((max(height, 0), max(width, 0), 3), dtype=np.uint8)
+    color[:] = to_rgb8(scene.background)
+    stats = {"allocated": ["color"], "computed": [], "projection": projection, "shading": shading}
+    frame = Frame(color=color, plan=stages, stats=stats)
+    if not scene.views:
+        frame.message = f"{scene.name}: no valid view to show"
+        return frame
+    view = scene.views[view_index % len(scene.views)]
+    found = problems(view, projection)
+    if found:
+        frame.message = f"{view.label}: invalid for {projection} projection: " + "; ".join(found)
+        return frame
+    if width <= 0 or height <= 0:
+        frame.message = f"the framebuffer is {width} x {height}: nothing to draw"
+        return frame
+
+    timer = _Timer(stats)
+    n, z_min = normalizing_transform(view, projection)
+    vp = project.viewport(view.window, width, height)
+    timer.lap("normalize")
+    solid = shading != "wireframe" and scene.triangle_count > 0
+    if solid:
+        from core.render_solid import render_solid     # the triangle pipeline
+        render_solid(frame, scene, view, projection, shading, n, z_min, vp, timer)
+    line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
+    if line_meshes:
+        _render_lines(color, line_meshes, projection, n, z_min, vp, scene.line_color, timer, stats)
+    return frame
+
+
+def _render_lines(color, meshes, projection, n, z_min, vp, line_color, timer, stats) -> None:
+    """Wireframe: transform, Cohen–Sutherland clip, M_per · M_vv3dv, divide, scan-convert."""
+    drawn = 0
+    for mesh in meshes:
+        edges = _edges(mesh)
+        if len(edges) == 0:
+            continue
+        points = apply(n, mesh.positions)[:, :3]
+        timer.lap("normalize")
+        q0, q1 = clip.clip_lines(points[edges[:, 0]], points[edges[:, 1]], projection, z_min)
+        timer.lap("clip lines")
+        d0 = project.project_lines(q0, projection, vp)
+        d1 = project.project_lines(q1, projection, vp)
+        timer.lap("project")
+        raster_lines.draw_lines(color, d0, d1, to_rgb8(line_color))
+        timer.lap("scan-convert lines")
+        drawn += len(q0)
+    stats["segments drawn"] = drawn
+    stats["computed"].append("line clipping")
