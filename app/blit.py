@@ -1,0 +1,71 @@
+"""The blit: shows the CPU framebuffer on the GPU, texel for pixel, and nothing more.
+
+Takes the renderer's ``Frame.color`` — an ``(H, W, 3)`` uint8 numpy image, row 0 at the top —
+uploads it into a texture of the same size (NEAREST filtering, recreated when the size
+changes) and draws one oversized triangle whose fragment shader fetches the texel under
+``gl_FragCoord`` (``shaders/blit.vert``, ``shaders/blit.frag``). Depth test and blending are
+off: every pixel on screen is exactly the pixel our CPU pipeline wrote. No geometry, no
+transform, no lighting happens here (FvDFH's frame buffer, shown by a video controller).
+"""
+
+from __future__ import annotations
+
+import moderngl
+import numpy as np
+
+from core.paths import SHADERS_DIR
+
+
+def load_program(ctx: moderngl.Context, name: str) -> moderngl.Program:
+    """The program ``shaders/<name>.vert`` + ``shaders/<name>.frag``."""
+    return ctx.program(
+        vertex_shader=(SHADERS_DIR / f"{name}.vert").read_text(),
+        fragment_shader=(SHADERS_DIR / f"{name}.frag").read_text(),
+    )
+
+
+class Blit:
+    """Uploads a CPU image and draws it into the bound framebuffer, pixel (0, 0) bottom-left."""
+
+    def __init__(self, ctx: moderngl.Context):
+        self.ctx = ctx
+        self.program = load_program(ctx, "blit")
+        self.program["frame"].value = 0
+        # No buffers: the vertex shader places the triangle from gl_VertexID.
+        self.vao = ctx.vertex_array(self.program, [])
+        self.texture: moderngl.Texture | None = None
+
+    @property
+    def size(self) -> tuple[int, int] | None:
+        """(width, height) of the image last uploaded, or None before the first."""
+        return None if self.texture is None else self.texture.size
+
+    def upload(self, color: np.ndarray) -> None:
+        """Write a new frame; the texture is recreated only when the size changes."""
+        if color.ndim != 3 or color.shape[2] != 3 or color.dtype != np.uint8:
+            raise ValueError(f"expected an (H, W, 3) uint8 image, got {color.shape} {color.dtype}")
+        height, width = color.shape[:2]
+        if self.texture is None or self.texture.size != (width, height):
+            if self.texture is not None:
+                self.texture.release()
+            # alignment=1: rows of 3*W bytes need not be a multiple of 4 (odd widths).
+            self.texture = self.ctx.texture((width, height), 3, dtype="f1", alignment=1)
+            self.texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            self.texture.repeat_x = self.texture.repeat_y = False
+        # Image row 0 goes to texture row 0; the fragment shader flips rows when it fetches.
+        self.texture.write(np.ascontiguousarray(color))
+
+    def draw(self) -> None:
+        """Draw the last uploaded frame over the current viewport (does nothing before one)."""
+        if self.texture is None:
+            return
+        self.ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND | moderngl.CULL_FACE)
+        self.texture.use(location=0)
+        self.vao.render(moderngl.TRIANGLES, vertices=3)
+
+    def release(self) -> None:
+        if self.texture is not None:
+            self.texture.release()
+            self.texture = None
+        self.vao.release()
+        self.program.release()

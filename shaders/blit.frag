@@ -1,0 +1,18 @@
+#version 330 core
+// Copies the CPU framebuffer to the screen texel for pixel: no filtering, no lighting.
+// The texture holds the image in its row order (row 0 = top) and GL counts window rows from
+// the bottom, so window row y shows image row H-1-y.
+uniform sampler2D frame;
+out vec4 color;
+
+void main() {
+    ivec2 size = textureSize(frame, 0);
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    ivec2 texel = ivec2(pixel.x, size.y - 1 - pixel.y);
+    if (texel.x >= size.x || texel.y < 0) {
+        // The window grew and the new frame is not rendered yet: show black, not garbage.
+        color = vec4(0.0, 0.0, 0.0, 1.0);
+        return;
+    }
+    color = vec4(texelFetch(frame, texel, 0).rgb, 1.0);
+}
