@@ -22,7 +22,7 @@ The geometry goes through the SAME matrices as the CPU core, composed into one c
 
 The fragment shaders implement the Phong illumination model of issue 4 in WORLD coordinates
 (FvDFH 16.1, 16.2): ``I = I_a k_a O_d + sum f_att I_p [k_d O_d max(N.L, 0) + k_s O_s max(R.V, 0)^n]``
-per RGB channel, ``f_att = min(1, 1 / (c1 + c2 d + c3 d^2))``, the halfway form ``(N.H)^n`` when
+per RGB channel, ``f_att = min(1, 1 / (c1 + c2 d + c3 d^2))`` (1 for directional lights), the halfway form ``(N.H)^n`` when
 the scene says ``specular = "halfway"``; meshes that are not closed are lit from both sides
 (the normal is flipped to face the viewer); closed meshes have their back faces culled.
 
@@ -71,13 +71,26 @@ uniform int perspective;                 // 1: V points to the PRP, 0: V = -DOP
 uniform vec3 eye;                        // PRP in world coordinates
 uniform vec3 toward_viewer;              // -DOP / |DOP| in world coordinates
 
-vec3 view_vector(vec3 p) {
-    return perspective == 1 ? normalize(eye - p) : toward_viewer;
+// v / |v|, and the zero vector for a zero v (GLSL's normalize would give NaN).
+vec3 unit(vec3 v) {
+    float len = length(v);
+    return len > 0.0 ? v / len : vec3(0.0);
 }
 
-// Phong illumination model (FvDFH eq. 16.14-16.15) at world point p with unit normal n.
+// Phong illumination model (FvDFH eq. 16.14-16.15) at world point p with unit (or zero)
+// normal n, clamped to [0, 1]. The degenerate cases follow core/illumination.py: V = N at the
+// eye, no term from a light at p, none (diffuse or specular) where N.L <= 0, no specular
+// where L + V = 0, the specular base clamped to [0, 1], f_att = 1 when c1 + c2 d + c3 d^2 <= 1.
 vec3 illuminate(vec3 p, vec3 n) {
-    vec3 v = view_vector(p);
+    vec3 v;
+    if (perspective == 1) {
+        v = unit(eye - p);
+        if (v == vec3(0.0)) {
+            v = n;
+        }
+    } else {
+        v = toward_viewer;
+    }
     if (two_sided == 1 && dot(n, v) < 0.0) {
         n = -n;
     }
@@ -88,25 +101,31 @@ vec3 illuminate(vec3 p, vec3 n) {
         if (light_where[i].w > 0.5) {
             vec3 to_light = light_where[i].xyz - p;
             float d = length(to_light);
+            if (d == 0.0) {
+                continue;
+            }
             l = to_light / d;
             vec3 c = light_attenuation[i];
-            f_att = min(1.0, 1.0 / (c.x + c.y * d + c.z * d * d));
+            float den = c.x + c.y * d + c.z * d * d;
+            f_att = den <= 1.0 ? 1.0 : 1.0 / den;
         } else {
-            l = normalize(light_where[i].xyz);
+            l = unit(light_where[i].xyz);
         }
         float n_dot_l = dot(n, l);
-        float spec_base;
-        if (halfway == 1) {
-            spec_base = dot(n, normalize(l + v));
-        } else {
-            vec3 r = 2.0 * n_dot_l * n - l;
-            spec_base = dot(r, v);
+        if (!(n_dot_l > 0.0)) {
+            continue;
         }
-        float diffuse = max(n_dot_l, 0.0);
-        float specular = pow(max(spec_base, 0.0), shininess);
-        color += f_att * light_intensity[i] * (kd * od * diffuse + ks * os * specular);
+        float base;
+        if (halfway == 1) {
+            base = dot(n, unit(l + v));
+        } else {
+            base = dot(2.0 * n_dot_l * n - l, v);
+        }
+        // pow(0, 0) is undefined in GLSL; x^0 = 1 as in Python.
+        float specular = shininess == 0.0 ? 1.0 : pow(clamp(base, 0.0, 1.0), shininess);
+        color += f_att * light_intensity[i] * (kd * od * n_dot_l + ks * os * specular);
     }
-    return color;
+    return clamp(color, 0.0, 1.0);
 }
 """ % {"max_lights": MAX_LIGHTS}
 
@@ -158,7 +177,7 @@ flat in vec3 face_color;
 out vec4 frag_color;
 void main() {
     clip_to_viewport();
-    frag_color = vec4(clamp(face_color, 0.0, 1.0), 1.0);
+    frag_color = vec4(face_color, 1.0);
 }
 """ % _DISCARD_GLSL),
     "gouraud": ("""
@@ -170,7 +189,7 @@ in vec3 in_normal;
 out vec3 vertex_color;
 void main() {
     gl_Position = clip_from_world * vec4(in_position, 1.0);
-    vertex_color = clamp(illuminate(in_position, normalize(in_normal)), 0.0, 1.0);
+    vertex_color = illuminate(in_position, unit(in_normal));
 }
 """ % _LIGHTING_GLSL, """
 #version 330
@@ -203,7 +222,7 @@ in vec3 world_normal;
 out vec4 frag_color;
 void main() {
     clip_to_viewport();
-    frag_color = vec4(clamp(illuminate(world_position, normalize(world_normal)), 0.0, 1.0), 1.0);
+    frag_color = vec4(illuminate(world_position, unit(world_normal)), 1.0);
 }
 """ % (_DISCARD_GLSL, _LIGHTING_GLSL)),
 }
