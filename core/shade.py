@@ -1,0 +1,297 @@
+"""Shading: flat, Gouraud and Phong (FvDFH 16.2.3–16.2.5; Assignment #3) on a visibility buffer.
+
+The z-buffer pass (``core.raster``) leaves, per pixel, the index of the visible (post-clip)
+triangle and the perspective-correct barycentric weights of its vertices. Shading is then two
+small steps per mode, a "vertex" step before clipping and a "pixel" step after rasterizing
+(tinyrenderer's shader split; the z-buffer knows nothing about light):
+
+=========  ==========================================  =======================================
+mode       before clipping (world coordinates)         per pixel (resolve)
+=========  ==========================================  =======================================
+flat       face normals; the model once per face at    the face's colour: ``face_rgb[source]``
+           its centroid → ``face_rgb (T, 3)``
+gouraud    vertex normals; the model at every vertex   the three vertex colours interpolated
+           → RGB carried as 3 attributes by the clipper   with the barycentrics
+phong      vertex normals and positions → 6 attributes  normal and position interpolated, the
+           carried by the clipper                       normal renormalised, the model evaluated
+=========  ==========================================  =======================================
+
+Interpolating with perspective-correct barycentrics is FvDFH's incremental interpolation
+along the edges and the scan line, done once per visible pixel. The model is
+:mod:`core.illumination`; normals come from :mod:`core.normals` (flat computes no vertex normals,
+Gouraud no per-pixel normals). Meshes that are not closed are lit from both sides: the normal
+is turned to the viewer per face (flat), per vertex (Gouraud) or per pixel (Phong).
+
+How ``core.render`` calls it (all arrays float64 / int64, world coordinates)::
+
+    eye = shade.eye_from_view(view, projection)             # PRP, or the direction to the viewer
+    shading = shade.prepare(mode, scene, eye)               # ShadeInput
+    # shading.positions (V, 3), shading.triangles (T, 3): every mesh's triangles, in scene
+    # order, over one vertex array; shading.vertex_attrs (V, K), K = 0 / 3 / 6.
+    # ... transform shading.positions by N, cull (kept = indices of the triangles kept),
+    clipped = clip_triangles(points, shading.triangles[kept], shading.vertex_attrs, projection, z_min)
+    vis = rasterize(..., clipped.triangles, width, height)
+    image = shade.resolve(shading, vis, clipped.triangles, clipped.attrs,
+                          kept[clipped.source], scene.background)  # (H, W, 3) uint8, row 0 top
+
+``source`` given to :func:`resolve` must index ``shading.triangles`` (the triangles before any
+culling), hence ``kept[clipped.source]`` when faces were culled. ``shading.computed`` names the
+stages that ran, in :func:`core.plan.plan`'s words. Colours are clamped to [0, 1] where the
+model is evaluated (a Gouraud vertex colour is clamped before it is interpolated, as GL does)
+and turned into bytes rounded half up (:func:`core.illumination.to_uint8`).
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass, field
+from typing import Callable, NamedTuple
+
+import numpy as np
+from numba import njit, prange
+
+from core.illumination import (Eye, eye_from_view, illuminate, pack_ambient, pack_eye,
+                               pack_lights, pack_surfaces, phong_point, quantize, to_uint8, unit3)
+from core.normals import WEIGHTINGS, face_normals, vertex_normals
+
+__all__ = ["MODES", "ShadeInput", "Eye", "eye_from_view", "prepare", "resolve"]
+
+MODES = ("flat", "gouraud", "phong")
+ATTRIBUTE_COUNT = {"flat": 0, "gouraud": 3, "phong": 6}
+
+
+@dataclass
+class ShadeInput:
+    """What :func:`prepare` computed for one frame, and what :func:`resolve` needs.
+
+    ``positions`` ``(V, 3)`` and ``triangles`` ``(T, 3)`` are all meshes' vertices and
+    triangles in scene order (mesh ``i``'s vertices start at ``vertex_offset[i]``);
+    ``vertex_attrs`` ``(V, K)`` is what the clipper must carry (flat: K = 0; Gouraud: RGB;
+    Phong: normal then position); ``face_rgb`` ``(T, 3)`` the flat colours (None otherwise);
+    ``face_surface`` ``(T,)`` the row of ``surfaces`` (the mesh) of each triangle.
+    """
+
+    mode: str
+    positions: np.ndarray
+    triangles: np.ndarray
+    vertex_attrs: np.ndarray
+    face_rgb: np.ndarray | None
+    face_surface: np.ndarray
+    vertex_surface: np.ndarray
+    vertex_offset: np.ndarray
+    surfaces: np.ndarray
+    lights: np.ndarray
+    ambient: np.ndarray
+    eye: np.ndarray
+    halfway: bool
+    computed: list[str] = field(default_factory=list)
+
+
+# --------------------------------------------------------------------------------------------
+# Per-mesh work that does not depend on the view, kept while the mesh lives.
+
+_mesh_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def _cached(mesh, key: str, compute: Callable[[], object]):
+    """``compute()`` once per mesh (and per version of its arrays)."""
+    arrays = (id(mesh.positions), id(mesh.triangles), id(mesh.normals))
+    entry = _mesh_cache.get(mesh)
+    if entry is None or entry[0] != arrays:
+        entry = (arrays, {})
+        _mesh_cache[mesh] = entry
+    if key not in entry[1]:
+        entry[1][key] = compute()
+    return entry[1][key]
+
+
+def _mesh_face_normals(mesh) -> np.ndarray:
+    return _cached(mesh, "face normals", lambda: face_normals(mesh.positions, mesh.triangles)[0])
+
+
+def _mesh_vertex_normals(mesh, weighting: str) -> np.ndarray:
+    return _cached(mesh, f"vertex normals {weighting}", lambda: vertex_normals(mesh, weighting))
+
+
+# --------------------------------------------------------------------------------------------
+# The vertex step of each mode
+
+
+def _prepare_flat(s: ShadeInput, meshes, weighting) -> None:
+    """One evaluation per face, at its centroid with its face normal (FvDFH 16.2.3)."""
+    p, t = s.positions, s.triangles
+    normals = np.concatenate([_mesh_face_normals(m) for m in meshes]) if len(t) else np.zeros((0, 3))
+    centroid = (p[t[:, 0]] + p[t[:, 1]] + p[t[:, 2]]) / 3.0
+    s.face_rgb = illuminate(centroid, normals, s.face_surface, s.surfaces, s.lights, s.ambient,
+                            s.eye, s.halfway)
+    s.vertex_attrs = np.zeros((len(p), 0))
+    s.computed += ["face normals", "illuminate faces"]
+
+
+def _all_vertex_normals(s: ShadeInput, meshes, weighting) -> np.ndarray:
+    if any(m.normals is None and len(m.triangles) for m in meshes):
+        s.computed.append("vertex normals")
+    parts = [_mesh_vertex_normals(m, weighting) for m in meshes]
+    return np.concatenate(parts) if parts else np.zeros((0, 3))
+
+
+def _prepare_gouraud(s: ShadeInput, meshes, weighting) -> None:
+    """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4)."""
+    normals = _all_vertex_normals(s, meshes, weighting)
+    s.vertex_attrs = illuminate(s.positions, normals, s.vertex_surface, s.surfaces, s.lights,
+                                s.ambient, s.eye, s.halfway)
+    s.computed.append("illuminate vertices")
+
+
+def _prepare_phong(s: ShadeInput, meshes, weighting) -> None:
+    """Normals and world positions to interpolate; the model runs per pixel (FvDFH 16.2.5)."""
+    normals = _all_vertex_normals(s, meshes, weighting)
+    s.vertex_attrs = np.concatenate([normals, s.positions], axis=1)
+    s.computed.append("illuminate pixels")
+
+
+# --------------------------------------------------------------------------------------------
+# The pixel step of each mode (numba; rows in parallel, pixels in order along the scan line)
+
+
+@njit(cache=True, parallel=True)
+def _resolve_flat(tri, source, face_rgb8, background8, out):
+    height, width = tri.shape
+    for row in prange(height):
+        for col in range(width):
+            t = tri[row, col]
+            if t < 0:
+                for c in range(3):
+                    out[row, col, c] = background8[c]
+            else:
+                f = source[t]
+                for c in range(3):
+                    out[row, col, c] = face_rgb8[f, c]
+
+
+@njit(cache=True, parallel=True)
+def _resolve_gouraud(tri, b1, b2, triangles, rgb, background8, out):
+    height, width = tri.shape
+    for row in prange(height):
+        for col in range(width):
+            t = tri[row, col]
+            if t < 0:
+                for c in range(3):
+                    out[row, col, c] = background8[c]
+                continue
+            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+            w1, w2 = b1[row, col], b2[row, col]
+            w0 = 1.0 - w1 - w2
+            for c in range(3):
+                out[row, col, c] = quantize(w0 * rgb[i0, c] + w1 * rgb[i1, c] + w2 * rgb[i2, c])
+
+
+@njit(cache=True, parallel=True)
+def _resolve_phong(tri, b1, b2, triangles, attrs, source, face_surface, surfaces, lights,
+                   ambient, eye, halfway, background8, out):
+    height, width = tri.shape
+    for row in prange(height):
+        for col in range(width):
+            t = tri[row, col]
+            if t < 0:
+                for c in range(3):
+                    out[row, col, c] = background8[c]
+                continue
+            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+            w1, w2 = b1[row, col], b2[row, col]
+            w0 = 1.0 - w1 - w2
+            nx = w0 * attrs[i0, 0] + w1 * attrs[i1, 0] + w2 * attrs[i2, 0]
+            ny = w0 * attrs[i0, 1] + w1 * attrs[i1, 1] + w2 * attrs[i2, 1]
+            nz = w0 * attrs[i0, 2] + w1 * attrs[i1, 2] + w2 * attrs[i2, 2]
+            px = w0 * attrs[i0, 3] + w1 * attrs[i1, 3] + w2 * attrs[i2, 3]
+            py = w0 * attrs[i0, 4] + w1 * attrs[i1, 4] + w2 * attrs[i2, 4]
+            pz = w0 * attrs[i0, 5] + w1 * attrs[i1, 5] + w2 * attrs[i2, 5]
+            nx, ny, nz, _ = unit3(nx, ny, nz)        # renormalise the interpolated normal
+            r, g, b = phong_point(px, py, pz, nx, ny, nz, face_surface[source[t]], surfaces,
+                                  lights, ambient, eye, halfway)
+            out[row, col, 0] = quantize(r)
+            out[row, col, 1] = quantize(g)
+            out[row, col, 2] = quantize(b)
+
+
+class _Shader(NamedTuple):
+    prepare: Callable
+    attribute_count: int
+
+
+SHADERS = {
+    "flat": _Shader(_prepare_flat, 0),
+    "gouraud": _Shader(_prepare_gouraud, 3),
+    "phong": _Shader(_prepare_phong, 6),
+}
+
+
+# --------------------------------------------------------------------------------------------
+# What the renderer calls
+
+
+def prepare(mode: str, scene, eye: Eye, weighting: str = "mean") -> ShadeInput:
+    """The vertex step of ``mode`` for every mesh of ``scene`` seen from ``eye``.
+
+    ``eye`` is :func:`eye_from_view`'s answer. ``weighting`` picks the vertex-normal average
+    (:data:`core.normals.WEIGHTINGS`; the notes' ``"mean"`` by default). Raises ValueError for
+    an unknown mode or weighting.
+    """
+    if mode not in SHADERS:
+        raise ValueError(f"shading must be one of {MODES}, not {mode!r}")
+    if weighting not in WEIGHTINGS:
+        raise ValueError(f"weighting must be one of {WEIGHTINGS}, not {weighting!r}")
+    meshes = list(scene.meshes)
+    sizes = np.array([len(m.positions) for m in meshes], dtype=np.int64)
+    offset = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    positions = (np.concatenate([m.positions for m in meshes]) if meshes else np.zeros((0, 3)))
+    triangles = (np.concatenate([m.triangles + offset[i] for i, m in enumerate(meshes)])
+                 if meshes else np.zeros((0, 3), np.int64)).astype(np.int64)
+    face_surface = np.repeat(np.arange(len(meshes), dtype=np.int64),
+                             [len(m.triangles) for m in meshes])
+    vertex_surface = np.repeat(np.arange(len(meshes), dtype=np.int64), sizes)
+    s = ShadeInput(
+        mode=mode, positions=positions, triangles=triangles,
+        vertex_attrs=np.zeros((len(positions), 0)), face_rgb=None,
+        face_surface=face_surface, vertex_surface=vertex_surface, vertex_offset=offset[:-1],
+        surfaces=pack_surfaces([m.material for m in meshes], [not m.closed for m in meshes]),
+        lights=pack_lights(scene.lights), ambient=pack_ambient(scene.ambient),
+        eye=pack_eye(eye), halfway=scene.specular == "halfway")
+    SHADERS[mode].prepare(s, meshes, weighting)
+    return s
+
+
+def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_attrs: np.ndarray,
+            source: np.ndarray, background, out: np.ndarray | None = None) -> np.ndarray:
+    """The pixel step: a visibility buffer → ``(H, W, 3)`` uint8, row 0 at the top.
+
+    ``vis`` has ``tri`` ``(H, W)`` (-1 empty, else an index into ``clipped_triangles``) and
+    ``b1``, ``b2`` (the perspective-correct weights of vertices 1 and 2). ``clipped_attrs``
+    are ``shading.vertex_attrs`` after clipping; ``source`` maps each clipped triangle to its
+    row of ``shading.triangles``. Empty pixels get ``background`` (RGB in [0, 1]). Writes into
+    ``out`` when given.
+    """
+    tri = np.ascontiguousarray(vis.tri, dtype=np.int32)
+    height, width = tri.shape
+    if out is None:
+        out = np.empty((height, width, 3), dtype=np.uint8)
+    background8 = to_uint8(background).reshape(3)
+    triangles = np.ascontiguousarray(clipped_triangles, dtype=np.int64).reshape(-1, 3)
+    source = np.ascontiguousarray(source, dtype=np.int64).reshape(-1)
+    attrs = np.ascontiguousarray(clipped_attrs, dtype=np.float64).reshape(len(clipped_attrs), -1)
+    k = SHADERS[shading.mode].attribute_count
+    if attrs.shape[1] != k:
+        raise ValueError(f"{shading.mode} shading carries {k} attributes per vertex, "
+                         f"the clipper gave {attrs.shape[1]}")
+    if shading.mode == "flat":
+        _resolve_flat(tri, source, to_uint8(shading.face_rgb).reshape(-1, 3), background8, out)
+    elif shading.mode == "gouraud":
+        _resolve_gouraud(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
+                         np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs,
+                         background8, out)
+    else:
+        _resolve_phong(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
+                       np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, source,
+                       shading.face_surface, shading.surfaces, shading.lights, shading.ambient,
+                       shading.eye, shading.halfway, background8, out)
+    return out
