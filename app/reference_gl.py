@@ -29,7 +29,8 @@ the scene says ``specular = "halfway"``; meshes that are not closed are lit from
 - flat:    one evaluation per triangle at its centroid with the face normal; every triangle gets
            its own three vertices carrying the face normal and centroid (``flat`` varyings);
 - gouraud: the model evaluated per vertex (vertex shader) with the same vertex normals as the
-           CPU, the colour interpolated perspective-correctly;
+           CPU (:func:`core.normals.vertex_normals`), clamped, then interpolated
+           perspective-correctly;
 - phong:   world position and normal interpolated, renormalised, evaluated per fragment;
 - coverage: one flat colour (white on black), for the coverage oracle.
 
@@ -45,6 +46,7 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
+from core.normals import vertex_normals
 from core.project import perspective_to_parallel, viewport
 from core.scene import Scene
 from core.view import View, normalizing_transform, vrc_basis
@@ -272,25 +274,6 @@ def face_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     cross = np.cross(p1 - p0, p2 - p0)
     length = np.linalg.norm(cross, axis=1, keepdims=True)
     return np.divide(cross, length, out=np.zeros_like(cross), where=length > 0)
-
-
-def vertex_normals(mesh) -> np.ndarray:
-    """The vertex normals the CPU uses for Gouraud and Phong (the mesh's own, if it has them)."""
-    try:
-        from core import normals as cpu_normals
-    except ImportError:
-        cpu_normals = None
-    if cpu_normals is not None:
-        return np.asarray(cpu_normals.vertex_normals(mesh), dtype=np.float64)
-    if mesh.normals is not None:
-        return mesh.normals
-    # The notes' rule: the average of the unit normals of the faces that meet at the vertex.
-    sums = np.zeros_like(mesh.positions)
-    fn = face_normals(mesh.positions, mesh.triangles)
-    for k in range(3):
-        np.add.at(sums, mesh.triangles[:, k], fn)
-    length = np.linalg.norm(sums, axis=1, keepdims=True)
-    return np.divide(sums, length, out=np.zeros_like(sums), where=length > 0)
 
 
 @dataclass
