@@ -63,6 +63,11 @@ def problems(view: View, projection: str | None = None) -> list[str]:
     """
     if not np.all(np.isfinite(view.numbers)):
         return ["a number is NaN or infinite"]
+    with np.errstate(all="ignore"):            # huge or tiny numbers are reported, not raised
+        return _problems(view, projection)
+
+
+def _problems(view: View, projection: str | None) -> list[str]:
     vpn, vup, prp = (np.array(a, dtype=np.float64) for a in (view.vpn, view.vup, view.prp))
     u_min, u_max, v_min, v_max = view.window
     found = []

@@ -1,0 +1,35 @@
+# Two commands do all set-up on a fresh machine:
+#   make run    the viewer on the default scene (PNG files instead when there is no display)
+#   make test   the test suite
+# Each creates .venv and installs what it needs the first time.
+
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+.PHONY: run test bench report stability clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $(STAMP)
+
+run: $(STAMP)
+	$(PY) -m app
+
+test: $(STAMP)
+	$(PY) -m pytest -q
+
+bench: $(STAMP)
+	$(PY) -m app bench --out bench
+
+report: $(STAMP)
+	$(PY) -m app report --out report
+
+stability: $(STAMP)
+	$(PY) -m app stability
+
+clean:
+	rm -rf $(VENV) .pytest_cache .hypothesis fvd-views
