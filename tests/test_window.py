@@ -247,6 +247,43 @@ def frames(log: str) -> list[dict]:
                  size=(int(m[6]), int(m[7]))) for m in pattern.finditer(log)]
 
 
+def test_no_display_renders_every_view_to_png(state, tmp_path, capsys):
+    from PIL import Image
+
+    from app.viewer import render_all_views
+    from core.render import render
+
+    out = tmp_path / "views"
+    assert render_all_views(state, out, "DISPLAY and WAYLAND_DISPLAY are not set") == 0
+    captured = capsys.readouterr()
+    n = state.view_count
+    assert (f"no display found (DISPLAY and WAYLAND_DISPLAY are not set): rendering the {n} "
+            f"views to PNG in {out}") in captured.err
+    files = sorted(out.glob("*.png"))
+    assert [f.name for f in files] == [f"house-view{k:02d}-perspective-wireframe.png"
+                                       for k in range(1, n + 1)]
+    for k, path in enumerate(files):
+        assert f"wrote {path}" in captured.out
+        expected = render(state.scene, k, "perspective", "wireframe", (200, 150)).color
+        assert np.array_equal(np.asarray(Image.open(path).convert("RGB")), expected)
+
+
+def test_view_command_without_display_falls_back_to_png(tmp_path):
+    if not (SCENES_DIR / "house.toml").exists():
+        pytest.skip("the default scene scenes/house.toml is not here yet")
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    env.update(PYTHONPATH=str(ROOT), FVD_OUT=str(tmp_path / "out"))
+    done = subprocess.run([sys.executable, "-m", "app", "view"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    match = re.search(r"no display found \(.*\): rendering the (\d+) views to PNG in (.+?)/? "
+                      r"instead", done.stderr)
+    assert match and Path(match[2]) == tmp_path / "out"
+    files = sorted((tmp_path / "out").glob("*.png"))
+    assert len(files) == int(match[1]) > 0
+    assert all(f"wrote {f}" in done.stdout for f in files)
+
+
 @pytest.mark.xvfb
 @pytest.mark.slow
 def test_window_click_menu_and_keys_under_xvfb(tmp_path):
@@ -307,6 +344,19 @@ def test_window_click_menu_and_keys_under_xvfb(tmp_path):
         assert len(np.unique(cpu[middle].reshape(-1, 3), axis=0)) >= 2, "nothing to compare"
         assert np.array_equal(screen[middle], cpu[middle])
         assert len(np.unique(screen.reshape(-1, 3), axis=0)) > 10  # picture and GUI text
+
+        # Keys: '3' is Phong, the right arrow the next view; each re-renders at once.
+        mark = len(app.log())
+        app.key("3")
+        app.wait_for(r"shading=phong", timeout=20, after=mark)
+        app.key("Right")
+        app.wait_for(r"frame \d+: view 3 of .*projection=parallel shading=phong", timeout=10,
+                     after=mark)
+
+        # Resizing re-renders at the new framebuffer size (odd sizes too).
+        mark = len(app.log())
+        app.xdotool("windowsize", app.window, "333", "217")
+        app.wait_for(r"frame \d+: view 3 of .* size=333x217", timeout=10, after=mark)
 
         # q quits cleanly.
         app.key("q")
