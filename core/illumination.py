@@ -173,9 +173,11 @@ def unit3(x, y, z):
     m = max(abs(x), abs(y), abs(z))
     if not m > 0.0:
         return 0.0, 0.0, 0.0, 0.0
-    x, y, z = x / m, y / m, z / m
+    inv_m = 1.0 / m                   # one division and three products: this runs per pixel
+    x, y, z = x * inv_m, y * inv_m, z * inv_m
     s = math.sqrt(x * x + y * y + z * z)
-    return x / s, y / s, z / s, m * s
+    inv_s = 1.0 / s
+    return x * inv_s, y * inv_s, z * inv_s, m * s
 
 
 @njit(cache=True)
@@ -245,11 +247,12 @@ def unit_rows(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Row-wise :func:`unit3`: ``(unit vectors (N, 3), lengths (N,))``; zero rows stay zero."""
     m = np.max(np.abs(v), axis=1)
     nonzero = m > 0.0
-    scaled = np.divide(v, m[:, None], out=np.zeros_like(v), where=nonzero[:, None])
+    inv_m = np.divide(1.0, m, out=np.zeros_like(m), where=nonzero)
+    scaled = v * inv_m[:, None]
     x, y, z = scaled[:, 0], scaled[:, 1], scaled[:, 2]
     s = np.sqrt(x * x + y * y + z * z)
-    unit = np.divide(scaled, s[:, None], out=np.zeros_like(v), where=nonzero[:, None])
-    return unit, np.where(nonzero, m * s, 0.0)
+    inv_s = np.divide(1.0, s, out=np.zeros_like(s), where=nonzero)
+    return scaled * inv_s[:, None], m * s
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:

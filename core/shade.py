@@ -278,11 +278,11 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
     background8 = to_uint8(background).reshape(3)
     triangles = np.ascontiguousarray(clipped_triangles, dtype=np.int64).reshape(-1, 3)
     source = np.ascontiguousarray(source, dtype=np.int64).reshape(-1)
-    attrs = np.ascontiguousarray(clipped_attrs, dtype=np.float64).reshape(len(clipped_attrs), -1)
+    attrs = np.ascontiguousarray(clipped_attrs, dtype=np.float64)
     k = SHADERS[shading.mode].attribute_count
-    if attrs.shape[1] != k:
+    if attrs.ndim != 2 or attrs.shape[1] != k:
         raise ValueError(f"{shading.mode} shading carries {k} attributes per vertex, "
-                         f"the clipper gave {attrs.shape[1]}")
+                         f"the clipper gave an array of shape {attrs.shape}")
     if shading.mode == "flat":
         _resolve_flat(tri, source, to_uint8(shading.face_rgb).reshape(-1, 3), background8, out)
     elif shading.mode == "gouraud":
