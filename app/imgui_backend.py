@@ -179,7 +179,7 @@ class ImGuiRenderer:
 
 
 class GlfwInput:
-    """Feeds one glfw window's input to ImGui's io. Call :meth:`new_frame` before ``imgui.new_frame()``.
+    """Feeds one glfw window's input to ImGui's io; call :meth:`new_frame` before ImGui's.
 
     A mouse press and release that arrive between two frames would be invisible to a renderer
     that polls button state, so presses are latched until the next frame has seen them.

@@ -101,7 +101,8 @@ class ViewerState:
         self.size = (int(self.size[0]), int(self.size[1]))
 
     @classmethod
-    def open(cls, source: str | Path, size: tuple[int, int] | None = None, **kwargs) -> ViewerState:
+    def open(cls, source: str | Path, size: tuple[int, int] | None = None,
+             **kwargs) -> ViewerState:
         """Load ``source`` (raises the reader's error: there is no earlier scene to keep)."""
         loader = kwargs.get("loader", load_scene)
         scene = loader(source, size=size)
@@ -127,6 +128,16 @@ class ViewerState:
         if message:
             found.append(message)
         return found
+
+    def frame_summary(self) -> str:
+        """One log line for the last frame: which view, projection, shading, size and time."""
+        label = self.scene.views[self.view_index].label if self.view_count else "-"
+        message = getattr(self.frame, "message", None)
+        return (f"frame {self.frame_count}: view {self.view_index + 1 if self.view_count else 0} "
+                f"of {self.view_count} ({label}) projection={self.projection} "
+                f"shading={self.shading} size={self.size[0]}x{self.size[1]} "
+                f"render={self.frame_seconds * 1e3:.1f}ms"
+                + (f" message={message!r}" if message else ""))
 
     @property
     def renderable(self) -> bool:
@@ -154,7 +165,8 @@ class ViewerState:
 
     def set_projection(self, projection: str) -> None:
         if projection not in PROJECTIONS:
-            raise ValueError(f"projection must be one of {', '.join(PROJECTIONS)}, not {projection!r}")
+            raise ValueError(
+                f"projection must be one of {', '.join(PROJECTIONS)}, not {projection!r}")
         if projection != self.projection:
             self.projection = projection
             self.dirty = True

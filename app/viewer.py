@@ -141,10 +141,7 @@ def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:
             print(f"error: cannot write {path}: {error}", file=sys.stderr)
             failed += 1
             continue
-        log.info("frame %d: view %d of %d (%s) projection=%s shading=%s size=%dx%d render=%.1fms",
-                 state.frame_count, index + 1, len(scene.views), scene.views[index].label,
-                 state.projection, state.shading, state.size[0], state.size[1],
-                 state.frame_seconds * 1e3)
+        log.info("%s", state.frame_summary())
         print(f"wrote {path}")
     if not scene.views:
         print(f"{scene.name}: no valid view to render", file=sys.stderr)

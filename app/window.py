@@ -51,6 +51,7 @@ NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
 # After an event, draw a few frames so that ImGui's hover and menu states settle; then sleep
 # until the next event (a busy loop would take the CPU the rasterizer needs).
 FRAMES_AFTER_EVENT = 3
+PANEL_FLAGS = imgui.WINDOW_NO_SAVED_SETTINGS | imgui.WINDOW_NO_FOCUS_ON_APPEARING
 
 
 # ImGui's built-in font covers Latin-1 only; the core's messages use a few typographic marks.
@@ -73,7 +74,8 @@ def shipped_scenes() -> list[Path]:
     if not SCENES_DIR.is_dir():
         return []
     return sorted(p for p in SCENES_DIR.iterdir()
-                  if p.is_file() and not p.name.startswith((".", "_")) and p.suffix not in NOT_SCENES)
+                  if p.is_file() and not p.name.startswith((".", "_"))
+                  and p.suffix not in NOT_SCENES)
 
 
 def create_window(size: tuple[int, int], title: str):
@@ -238,7 +240,8 @@ class ViewerWindow:
         from PIL import Image
 
         s = self.state
-        stem = f"{Path(s.scene.name).stem or 'scene'}-view{s.view_index + 1}-{s.projection}-{s.shading}"
+        stem = (f"{Path(s.scene.name).stem or 'scene'}-view{s.view_index + 1}"
+                f"-{s.projection}-{s.shading}")
         path = self.out_dir / f"{stem}.png"
         n = 1
         while path.exists():
@@ -275,7 +278,7 @@ class ViewerWindow:
         return 0
 
     def draw_frame(self) -> bool:
-        """One pass: input → clicks → (re-render if needed) → GUI → blit → swap. False if hidden."""
+        """Input, clicks, re-render if needed, GUI, blit, swap; False when minimised."""
         fb_w, fb_h = glfw.get_framebuffer_size(self.window)
         self.state.resize(fb_w, fb_h)
         if not self.state.renderable or glfw.get_window_attrib(self.window, glfw.ICONIFIED):
@@ -325,14 +328,9 @@ class ViewerWindow:
                 imgui.open_popup("popup")
 
     def _log_frame(self) -> None:
-        s, frame = self.state, self.state.frame
-        label = s.scene.views[s.view_index].label if s.view_count else "-"
-        log.info("frame %d: view %d of %d (%s) projection=%s shading=%s size=%dx%d render=%.1fms%s",
-                 s.frame_count, s.view_index + 1 if s.view_count else 0, s.view_count, label,
-                 s.projection, s.shading, s.size[0], s.size[1], s.frame_seconds * 1e3,
-                 f" message={frame.message!r}" if frame.message else "")
-        if frame.message:
-            print(frame.message, file=sys.stderr)
+        log.info("%s", self.state.frame_summary())
+        if self.state.frame.message:
+            print(self.state.frame.message, file=sys.stderr)
         glfw.set_window_title(self.window, self._title())
 
     def _title(self) -> str:
@@ -454,9 +452,7 @@ class ViewerWindow:
         imgui.set_next_window_size(panel_width, 0, imgui.ALWAYS)
         imgui.set_next_window_collapsed(True, imgui.FIRST_USE_EVER)
         imgui.set_next_window_bg_alpha(0.85)
-        expanded, _ = imgui.begin(f"{title}###plan", False,
-                                  imgui.WINDOW_NO_SAVED_SETTINGS | imgui.WINDOW_NO_FOCUS_ON_APPEARING
-                                  | imgui.WINDOW_NO_MOVE)
+        expanded, _ = imgui.begin(f"{title}###plan", False, PANEL_FLAGS | imgui.WINDOW_NO_MOVE)
         # Not ``expanded``: a window that auto-fits its height still takes items when collapsed.
         self._plan_open = expanded and not imgui.is_window_collapsed()
         if self._plan_open:
@@ -484,11 +480,11 @@ class ViewerWindow:
         if not messages:
             return
         width, height = imgui.get_io().display_size
-        imgui.set_next_window_position(4, height - 4, imgui.FIRST_USE_EVER, pivot_x=0.0, pivot_y=1.0)
+        imgui.set_next_window_position(4, height - 4, imgui.FIRST_USE_EVER,
+                                       pivot_x=0.0, pivot_y=1.0)
         imgui.set_next_window_size(max(width - 8, 100), min(120, height / 3), imgui.FIRST_USE_EVER)
         imgui.set_next_window_bg_alpha(0.8)
-        expanded, _ = imgui.begin(f"Messages ({len(messages)})###messages", False,
-                                  imgui.WINDOW_NO_SAVED_SETTINGS | imgui.WINDOW_NO_FOCUS_ON_APPEARING)
+        expanded, _ = imgui.begin(f"Messages ({len(messages)})###messages", False, PANEL_FLAGS)
         if expanded:
             if self.state.open_messages and imgui.small_button("Clear"):
                 self.state.clear_messages()

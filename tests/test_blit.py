@@ -55,7 +55,8 @@ def test_blit_is_bit_exact(ctx, size):
     out = blit_through(ctx, blit, image)
     blit.release()
     assert out.shape == image.shape
-    assert np.array_equal(out, image), f"{np.count_nonzero((out != image).any(axis=2))} pixels differ"
+    differ = np.count_nonzero((out != image).any(axis=2))
+    assert differ == 0, f"{differ} pixels differ"
 
 
 def test_blit_keeps_row_order(ctx):
@@ -171,7 +172,7 @@ def test_imgui_window_draws_text_inside_its_rectangle(ctx, gui):
     assert len(commands) >= 1
     for draw_list in draw_data.commands_lists:
         records = draw_commands(draw_list)
-        assert [int(c) for c in records["elem_count"]] == [c.elem_count for c in draw_list.commands]
+        assert list(records["elem_count"]) == [c.elem_count for c in draw_list.commands]
         assert list(records["idx_offset"]) == list(np.cumsum([0, *records["elem_count"][:-1]]))
         assert records["elem_count"].sum() == draw_list.idx_buffer_size
 
