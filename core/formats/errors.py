@@ -1,0 +1,47 @@
+"""The readers' error type and the text helpers every reader shares.
+
+Every reader of ``core.formats`` turns bad input into a :class:`ReaderError` whose message
+names the file, the line (where the problem has one) and the reason, in the form compilers use:
+``scenes/bad.tri:7: expected 9 numbers for triangle 3, got 5``. Nothing else escapes a reader.
+"""
+
+from __future__ import annotations
+
+
+class ReaderError(ValueError):
+    """A file that cannot be read; ``str(error)`` is ``FILE:LINE: REASON`` (or ``FILE: REASON``)."""
+
+    def __init__(self, file: str, reason: str, line: int | None = None) -> None:
+        self.file = str(file)
+        self.line = line
+        self.reason = reason
+        where = self.file if line is None else f"{self.file}:{line}"
+        super().__init__(f"{where}: {reason}")
+
+
+def decode_text(data: bytes, file: str) -> str:
+    """``data`` as UTF-8 text (a leading BOM dropped), or a ReaderError at the first bad byte.
+
+    A NUL byte is refused too: no text format we read contains one, and binary junk usually does.
+    """
+    try:
+        text = data.decode("utf-8-sig")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        raise ReaderError(file, f"not a text file: byte 0x{data[error.start]:02x} at offset "
+                                f"{error.start} is not UTF-8", line) from None
+    nul = text.find("\0")
+    if nul >= 0:
+        raise ReaderError(file, f"not a text file: NUL byte at offset {nul}",
+                          text.count("\n", 0, nul) + 1)
+    return text
+
+
+def line_of(text: str, offset: int) -> int:
+    """The 1-based line number of character ``offset`` of ``text``."""
+    return text.count("\n", 0, offset) + 1
+
+
+def short(token: str, limit: int = 40) -> str:
+    """``repr`` of a token from a file, cut to ``limit`` characters so that messages stay short."""
+    return repr(token if len(token) <= limit else token[:limit] + "...")

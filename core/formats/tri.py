@@ -1,0 +1,127 @@
+"""The course's triangle file (``.tri``, Assignments #2 and #3) read into a Scene.
+
+Takes the text of a ``.tri`` file and returns a :class:`Scene` with one open mesh (a soup of
+arbitrary winding: ``closed=False``, lit from both sides), the file's camera as the first view
+(``camera.tri_view``), framing views after it, and the startup code's light::
+
+    vx vy vz          the viewpoint (centre of projection), world coordinates
+    tx ty tz          the top-left of the screen: where pixel (0, 0) lies
+    rx ry rz          displacement from one pixel to the next, to the right
+    dx dy dz          displacement from one pixel to the next, downward
+    N                 number of triangles
+    x0 y0 z0 x1 y1 z1 x2 y2 z2      N times
+
+Numbers may be split across lines in any way (the startup code reads them with ``>>``);
+``#`` starts a comment. The count N is never used to allocate: the numbers present are read
+first, then held against N, and a disagreement is an error naming the line. Equal vertices
+become one mesh vertex by hashing, numbered in order of first appearance like the startup
+code's ``v_table`` (which finds them with an O(N^2) scan).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from core.formats.camera import default_lights, framing_views, tri_light, tri_view
+from core.formats.errors import ReaderError, decode_text, short
+from core.formats.meshfile import merge_vertices
+from core.formats.numbers import Numbers
+from core.scene import Light, Material, Mesh, Scene
+from core.transforms import apply
+
+# Coordinates beyond this are refused: products of a few of them must stay finite in float64.
+MAX_COORDINATE = 1e30
+DEFAULT_SIZE = (500, 500)
+_HEADER = ("the viewpoint", "the top-left corner", "the right displacement",
+           "the down displacement")
+_COUNT = re.compile(r"\+?\d+")
+
+
+def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) -> Scene:
+    """The scene of a ``.tri`` file; ``size`` (width, height) is the image, 500 x 500 by default."""
+    text = decode_text(data, file) if isinstance(data, bytes) else data
+    size = tuple(size) if size is not None else DEFAULT_SIZE
+    numbers = Numbers(text, file, keep=13)
+    values = numbers.values
+
+    if len(values) < 12:
+        what = _HEADER[len(values) // 3]
+        raise ReaderError(file, f"the file ends before the header is complete: {what} needs 3 "
+                                f"numbers (the header is 12 numbers and the triangle count; "
+                                f"found {len(values)})", numbers.line(len(values)))
+    for k, what in enumerate(_HEADER):
+        _check_finite(values[3 * k:3 * k + 3], what, numbers, 3 * k, file)
+    if len(values) < 13:
+        raise ReaderError(file, "the file ends before the triangle count N",
+                          numbers.line(len(values)))
+    count_token = numbers.tokens[12]
+    if not _COUNT.fullmatch(count_token):
+        raise ReaderError(file, f"the triangle count must be a whole number >= 0, got "
+                                f"{short(count_token)}", numbers.line(12))
+    count = int(count_token)
+    count_line = numbers.line(12)
+
+    body = values[13:]                      # what the file holds, whatever N says
+    if len(body) < 9 * count:
+        k = len(body) // 9                  # triangles complete
+        got = len(body) - 9 * k
+        if got:
+            raise ReaderError(file, f"expected 9 numbers for triangle {k + 1}, got {got} (the "
+                                    f"file ends; the count on line {count_line} is {count})",
+                              numbers.line(13 + 9 * k))
+        raise ReaderError(file, f"the file ends after {k} triangles, but the count on line "
+                                f"{count_line} says {count}", numbers.line(len(values)))
+    if len(body) > 9 * count:
+        extra = 13 + 9 * count
+        raise ReaderError(file, f"more numbers than the count on line {count_line} says: "
+                                f"{count} triangles end before {short(numbers_text(values[extra]))}",
+                          numbers.line(extra))
+    _check_finite(body, "a triangle", numbers, 13, file)
+
+    viewpoint, top_left, right, down = (values[3 * k:3 * k + 3].copy() for k in range(4))
+    corners = body.reshape(-1, 3)           # three rows per triangle
+    positions, inverse = merge_vertices(corners)
+    triangles = inverse.reshape(-1, 3)
+    try:
+        camera = tri_view(viewpoint, top_left, right, down, size, positions,
+                          label=f"{file}: the file's camera")
+    except ValueError as error:
+        raise ReaderError(file, str(error), numbers.line(0 if "viewpoint" in str(error) else 6))
+    light = tri_light(viewpoint, right, down)
+    if camera.mirror is not None:
+        positions = apply(camera.mirror, positions)[:, :3]
+        light = apply(camera.mirror, light[None])[0, :3]
+
+    mesh = Mesh(positions=positions, triangles=triangles, closed=False, material=Material(),
+                name=_stem(file))
+    views = [camera.view] + framing_views(positions, f"{file}")
+    lights = [Light(intensity=(1.0, 1.0, 1.0), position=tuple(float(c) for c in light))]
+    if len(positions) == 0:
+        lights = default_lights(positions)
+    return Scene(name=_stem(file), meshes=[mesh], views=views, lights=lights,
+                 shading="flat", projection="perspective", size=size, source=str(file))
+
+
+def numbers_text(value: float) -> str:
+    return f"{value:g}"
+
+
+def _check_finite(values: np.ndarray, what: str, numbers: Numbers, first: int, file: str) -> None:
+    """Refuse NaN, infinities and coordinates too large to compute with, naming the line."""
+    bad = ~np.isfinite(values) | (np.abs(np.nan_to_num(values)) > MAX_COORDINATE)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        value = values[k]
+        reason = ("NaN" if np.isnan(value) else "infinite" if np.isinf(value) else
+                  f"too large (|x| > {MAX_COORDINATE:g})")
+        if what == "a triangle":
+            what = f"triangle {k // 9 + 1}, vertex {k % 9 // 3 + 1}"
+        raise ReaderError(file, f"{what} has a coordinate that is {reason} "
+                                f"({numbers_text(value)})", numbers.line(first + k))
+
+
+def _stem(file: str) -> str:
+    name = str(file).replace("\\", "/").rsplit("/", 1)[-1]
+    return name.rsplit(".", 1)[0] or name
