@@ -180,7 +180,7 @@ def _matrices(args) -> int:
     if args.projection == "perspective":
         out["M_per"] = project.m_per(-1.0).tolist()
         out["M"] = project.perspective_to_parallel(float(factors["z_min"])).tolist()
-    print(json.dumps(out, indent=2))
+    print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0
 
 
@@ -193,5 +193,5 @@ def _plan(args) -> int:
     shading = args.shading or scene.shading
     out = {"scene": scene.name, "projection": projection, "shading": shading,
            **plan_as_dict(plan(scene, projection, shading))}
-    print(json.dumps(out, indent=2))
+    print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0

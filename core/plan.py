@@ -63,9 +63,7 @@ def plan(scene: Scene, projection: str, shading: str) -> list[Stage]:
         Stage("clip triangles", solid,
               "outcodes first; only triangles that cross the volume go through Sutherland–Hodgman"
               if solid else no_solid("")),
-        Stage("project", True,
-              ("M_per (lines) / perspective-to-parallel M (depth), M_vv3dv, divide by W"
-               if projection == "perspective" else "M_vv3dv; a parallel view needs no divide")),
+        Stage("project", True, _projection_reason(projection, solid, draws_lines)),
         Stage("scan-convert lines", draws_lines,
               "midpoint line into the frame buffer" if draws_lines else "no edges are drawn"),
         Stage("depth buffer", solid,
@@ -78,6 +76,17 @@ def plan(scene: Scene, projection: str, shading: str) -> list[Stage]:
               if solid and shading == "phong" else no_solid("not Phong shading")),
     ]
     return stages
+
+
+def _projection_reason(projection: str, solid: bool, lines: bool) -> str:
+    if projection == "parallel":
+        return "M_vv3dv onto the viewport; a parallel view needs no divide"
+    steps = []
+    if lines:
+        steps.append("lines: M_per (d = -1), M_vv3dv, divide by W")
+    if solid:
+        steps.append("triangles: perspective-to-parallel M (keeps depth), M_vv3dv, divide by W")
+    return "; ".join(steps)
 
 
 def plan_as_dict(stages: list[Stage]) -> dict:
