@@ -267,6 +267,10 @@ class ViewerWindow:
     # -- the loop ----------------------------------------------------------------------------
     def run(self) -> int:
         try:
+            # Show the window (menus, status, the scene's background) before the first CPU
+            # frame: that frame may wait for numba to load or compile its kernels.
+            self.draw_frame(allow_render=False)
+            self._log_since_start("window shown")
             while not glfw.window_should_close(self.window):
                 if self._busy > 0 or self.state.dirty:
                     glfw.poll_events()
@@ -277,7 +281,7 @@ class ViewerWindow:
             self.close()
         return 0
 
-    def draw_frame(self) -> bool:
+    def draw_frame(self, allow_render: bool = True) -> bool:
         """Input, clicks, re-render if needed, GUI, blit, swap; False when minimised."""
         fb_w, fb_h = glfw.get_framebuffer_size(self.window)
         self.state.resize(fb_w, fb_h)
@@ -290,7 +294,7 @@ class ViewerWindow:
         imgui.new_frame()
         self._handle_clicks()
 
-        if self.state.update():
+        if allow_render and self.state.update():
             self._log_frame()
             self.blit.upload(self.state.frame.color)
             self._wake()                  # the GUI shows the new frame's plan and timing next
@@ -298,16 +302,20 @@ class ViewerWindow:
         imgui.render()
 
         self.ctx.viewport = (0, 0, fb_w, fb_h)
-        self.ctx.clear(0.0, 0.0, 0.0, 1.0)
+        self.ctx.clear(*self.state.scene.background[:3], 1.0)
         self.blit.draw()
         self.gui.render(imgui.get_draw_data())
         glfw.swap_buffers(self.window)
         if not self._first_frame_logged and self.state.frame is not None:
             self._first_frame_logged = True
-            since = f"{time.perf_counter() - self.started:.3f} s after process start" \
-                if self.started is not None else "(process start unknown)"
-            log.info("first frame shown %s", since)
+            self._log_since_start("first frame shown")
         return True
+
+    def _log_since_start(self, what: str) -> None:
+        if self.started is None:
+            log.info("%s", what)
+        else:
+            log.info("%s %.3f s after process start", what, time.perf_counter() - self.started)
 
     def _handle_clicks(self) -> None:
         """Left click: next view; right click: the pop-up — unless ImGui wants this click."""
@@ -432,7 +440,10 @@ class ViewerWindow:
         if s.view_count:
             imgui.text_disabled(displayable(s.scene.views[s.view_index].label))
         imgui.text(f"{s.projection}, {s.shading}")
-        imgui.text(f"{s.size[0]} x {s.size[1]}, frame {s.frame_seconds * 1e3:.1f} ms")
+        if s.frame is None:
+            imgui.text("rendering the first frame...")
+        else:
+            imgui.text(f"{s.size[0]} x {s.size[1]}, frame {s.frame_seconds * 1e3:.1f} ms")
         if self._notice:
             imgui.text_disabled(displayable(self._notice))
         imgui.end()

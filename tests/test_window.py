@@ -360,8 +360,9 @@ def test_window_click_menu_and_keys_under_xvfb(tmp_path):
         app.xdotool("windowsize", app.window, "333", "217")
         app.wait_for(r"frame \d+: view 3 of .* size=333x217", timeout=10, after=mark)
 
-        # q quits cleanly.
-        app.key("q")
+        # q quits cleanly (on the key press: xdotool's release may find the window gone).
+        subprocess.run(["xdotool", "key", "--window", app.window, "q"], env=app.env,
+                       capture_output=True, timeout=10)
         assert app.process.wait(timeout=10) == 0
     finally:
         app.stop()
