@@ -50,8 +50,9 @@ from typing import Callable, NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from core.illumination import (Eye, eye_from_view, illuminate, pack_ambient, pack_eye,
-                               pack_lights, pack_surfaces, phong_point, quantize, to_uint8, unit3)
+from core.illumination import (Eye, eye_from_view, pack_ambient, pack_eye, pack_lights,
+                               pack_surfaces, phong_point, phong_points, quantize, to_uint8,
+                               unit3)
 from core.normals import WEIGHTINGS, face_normals, vertex_normals
 
 __all__ = ["MODES", "ShadeInput", "Eye", "eye_from_view", "prepare", "resolve"]
@@ -122,7 +123,7 @@ def _prepare_flat(s: ShadeInput, meshes, weighting) -> None:
     p, t = s.positions, s.triangles
     normals = np.concatenate([_mesh_face_normals(m) for m in meshes]) if len(t) else np.zeros((0, 3))
     centroid = (p[t[:, 0]] + p[t[:, 1]] + p[t[:, 2]]) / 3.0
-    s.face_rgb = illuminate(centroid, normals, s.face_surface, s.surfaces, s.lights, s.ambient,
+    s.face_rgb = phong_points(centroid, normals, s.face_surface, s.surfaces, s.lights, s.ambient,
                             s.eye, s.halfway)
     s.vertex_attrs = np.zeros((len(p), 0))
     s.computed += ["face normals", "illuminate faces"]
@@ -138,7 +139,7 @@ def _all_vertex_normals(s: ShadeInput, meshes, weighting) -> np.ndarray:
 def _prepare_gouraud(s: ShadeInput, meshes, weighting) -> None:
     """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4)."""
     normals = _all_vertex_normals(s, meshes, weighting)
-    s.vertex_attrs = illuminate(s.positions, normals, s.vertex_surface, s.surfaces, s.lights,
+    s.vertex_attrs = phong_points(s.positions, normals, s.vertex_surface, s.surfaces, s.lights,
                                 s.ambient, s.eye, s.halfway)
     s.computed.append("illuminate vertices")
 
