@@ -12,6 +12,7 @@ No GL and no window library here, so everything about it is testable without a d
 
 from __future__ import annotations
 
+import logging
 import sys
 import threading
 import time
@@ -21,6 +22,8 @@ from typing import Callable
 
 from core.scene import SHADINGS, Scene
 from core.view import PROJECTIONS
+
+log = logging.getLogger("fvd")
 
 
 def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene:
@@ -87,6 +90,7 @@ class ViewerState:
     frame: object | None = None                              # the last core.render.Frame
     frame_seconds: float = 0.0                               # how long that frame took
     frame_count: int = 0
+    render_error: str | None = None                          # the last render that raised
     dirty: bool = True
     renderer: Callable = render
     loader: Callable = load_scene
@@ -127,6 +131,8 @@ class ViewerState:
         message = getattr(self.frame, "message", None)
         if message:
             found.append(message)
+        if self.render_error:
+            found.append(self.render_error)
         return found
 
     def frame_summary(self) -> str:
@@ -212,7 +218,12 @@ class ViewerState:
 
     # -- frames ------------------------------------------------------------------------------
     def update(self) -> bool:
-        """Render a new frame if the picture changed; returns whether one was rendered."""
+        """Render a new frame if the picture changed; returns whether one was rendered.
+
+        A stage that raises does not end the session: the error becomes a message (and its
+        traceback goes to the log), the last good frame stays, and another mode or view can
+        still be chosen.
+        """
         if not self.dirty or not self.renderable:
             return False
         notice = None
@@ -223,11 +234,19 @@ class ViewerState:
             notice.start()
         start = time.perf_counter()
         try:
-            self.frame = self.renderer(self.scene, self.view_index, self.projection,
-                                       self.shading, self.size)
+            frame = self.renderer(self.scene, self.view_index, self.projection, self.shading,
+                                  self.size)
+        except Exception as error:
+            self.render_error = (f"could not render view {self.view_index + 1} "
+                                 f"({self.projection}, {self.shading}): "
+                                 f"{type(error).__name__}: {error}")
+            log.error("%s", self.render_error, exc_info=True)
+            self.dirty = False
+            return False
         finally:
             if notice is not None:
                 notice.cancel()
+        self.frame, self.render_error = frame, None
         self.frame_seconds = time.perf_counter() - start
         self._modes_rendered.add(self.shading)
         self.frame_count += 1

@@ -131,6 +131,10 @@ def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:
     for index in range(len(scene.views)):
         state.set_view(index)
         state.update()
+        if state.render_error:
+            print(f"error: view {index + 1}: {state.render_error}", file=sys.stderr)
+            failed += 1
+            continue
         frame = state.frame
         if frame.message:
             print(f"view {index + 1}: {frame.message}", file=sys.stderr)

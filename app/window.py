@@ -441,7 +441,7 @@ class ViewerWindow:
             imgui.text_disabled(displayable(s.scene.views[s.view_index].label))
         imgui.text(f"{s.projection}, {s.shading}")
         if s.frame is None:
-            imgui.text("rendering the first frame...")
+            imgui.text("rendering the first frame..." if s.dirty else "no frame to show")
         else:
             imgui.text(f"{s.size[0]} x {s.size[1]}, frame {s.frame_seconds * 1e3:.1f} ms")
         if self._notice:

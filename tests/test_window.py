@@ -109,6 +109,26 @@ def test_minimised_window_renders_nothing_and_resize_renders_at_new_size(state):
     assert not state.update()
 
 
+def test_a_failing_render_keeps_the_last_frame_and_says_why(state):
+    state.update()
+    good = state.frame
+    real = state.renderer
+
+    def broken(scene, view_index, projection, shading, size):
+        if shading == "phong":
+            raise ZeroDivisionError("a stage fell over")
+        return real(scene, view_index, projection, shading, size)
+
+    state.renderer = broken
+    state.set_shading("phong")
+    assert not state.update() and state.frame is good and not state.dirty
+    assert state.messages[-1] == ("could not render view 1 (perspective, phong): "
+                                  "ZeroDivisionError: a stage fell over")
+    state.set_shading("wireframe")                          # the user carries on
+    assert state.update() and state.frame is not good and state.render_error is None
+    assert not any("could not render" in m for m in state.messages)
+
+
 def test_messages_show_invalid_views_and_the_frame_message(state):
     scene = state.scene
     assert scene.view_messages, "house.views has invalid views that must give messages"
