@@ -284,6 +284,16 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
     if attrs.ndim != 2 or attrs.shape[1] != k:
         raise ValueError(f"{shading.mode} shading carries {k} attributes per vertex, "
                          f"the clipper gave an array of shape {attrs.shape}")
+    # The kernels index without bounds checks: refuse indices that point nowhere.
+    if tri.size and tri.max() >= len(triangles):
+        raise ValueError(f"the visibility buffer names triangle {tri.max()}, "
+                         f"but only {len(triangles)} were clipped")
+    if len(source) != len(triangles) or (source.size and not
+                                         0 <= source.min() <= source.max() < len(shading.triangles)):
+        raise ValueError("source must give, for each clipped triangle, its row of "
+                         f"shading.triangles (0..{len(shading.triangles) - 1})")
+    if k and triangles.size and not 0 <= triangles.min() <= triangles.max() < len(attrs):
+        raise ValueError(f"clipped triangles index {len(attrs)} attribute rows out of range")
     if shading.mode == "flat":
         _resolve_flat(tri, source, to_uint8(shading.face_rgb).reshape(-1, 3), background8, out)
     elif shading.mode == "gouraud":

@@ -168,6 +168,17 @@ def test_resolve_writes_into_out_and_checks_the_attribute_count():
                       np.zeros(0, np.int64), (0, 0, 0))
 
 
+def test_resolve_refuses_indices_that_point_nowhere():
+    s = shade.prepare("phong", quad_scene(), EYE)
+    one = np.array([[0, 1, 2]])
+    with pytest.raises(ValueError, match="names triangle 1, but only 1 were clipped"):
+        shade.resolve(s, visibility([[1]]), one, s.vertex_attrs, np.array([0]), (0, 0, 0))
+    with pytest.raises(ValueError, match="source must give"):
+        shade.resolve(s, visibility([[0]]), one, s.vertex_attrs, np.array([4]), (0, 0, 0))
+    with pytest.raises(ValueError, match="attribute rows out of range"):
+        shade.resolve(s, visibility([[0]]), one, s.vertex_attrs[:2], np.array([0]), (0, 0, 0))
+
+
 def test_empty_scene_resolves_to_background():
     scene = Scene(name="empty", meshes=[], views=[VIEW], background=(1.0, 0.5, 0.0))
     for mode in shade.MODES:
