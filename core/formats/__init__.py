@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from core.formats.errors import ReaderError, decode_text
+from core.formats.errors import ReaderError, decode_text, read_file
 from core.formats.meshfile import MESH_EXTENSIONS, read_mesh
 from core.formats.scenefile import read_scene_file
 from core.formats.tri import read_tri
@@ -50,10 +50,7 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
             text = decode_text(stream.read(), "<stdin>") if stream else sys.stdin.read()
             return _views_scene(text, "<stdin>", size)
         path = Path(source)
-        try:
-            data = path.read_bytes()
-        except OSError as error:
-            raise ReaderError(name, f"cannot read the file: {error.strerror or error}") from None
+        data = read_file(path, name)
         ext = path.suffix.lower()
         if ext == ".toml":
             return read_scene_file(data, name, path.parent, size)

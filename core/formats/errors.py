@@ -7,6 +7,8 @@ names the file, the line (where the problem has one) and the reason, in the form
 
 from __future__ import annotations
 
+from pathlib import Path
+
 
 class ReaderError(ValueError):
     """A file that cannot be read; ``str(error)`` is ``FILE:LINE: REASON`` (or ``FILE: REASON``)."""
@@ -45,3 +47,20 @@ def line_of(text: str, offset: int) -> int:
 def short(token: str, limit: int = 40) -> str:
     """``repr`` of a token from a file, cut to ``limit`` characters so that messages stay short."""
     return repr(token if len(token) <= limit else token[:limit] + "...")
+
+
+def read_file(path: Path, shown: str) -> bytes:
+    """The bytes of a regular file (never a device, a FIFO or a folder), or a ReaderError."""
+    try:
+        if not path.is_file():
+            reason = "no such file" if not path.exists() else "not a regular file"
+            raise ReaderError(shown, f"cannot read it: {reason}")
+        return path.read_bytes()
+    except (OSError, ValueError) as error:        # ValueError: a NUL in the path
+        raise ReaderError(shown, f"cannot read it: {getattr(error, 'strerror', None) or error}") from None
+
+
+def file_stem(file: str) -> str:
+    """``scenes/torus.toml`` -> ``torus``: the default name of what a file holds."""
+    name = str(file).replace("\\", "/").rsplit("/", 1)[-1]
+    return name.rsplit(".", 1)[0] or name

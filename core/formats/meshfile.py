@@ -28,7 +28,7 @@ import struct
 
 import numpy as np
 
-from core.formats.errors import ReaderError, decode_text, short
+from core.formats.errors import ReaderError, decode_text, file_stem, short
 from core.scene import Mesh
 
 MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl")
@@ -51,6 +51,16 @@ def merge_vertices(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     rank = np.empty_like(order)
     rank[order] = np.arange(len(order))
     return unique[order], rank[inverse.reshape(-1)].astype(np.int64)
+
+
+def fan(polygons: np.ndarray) -> np.ndarray:
+    """``(F, k)`` polygons as ``(F (k - 2), 3)`` triangles fanned from each first corner."""
+    k = polygons.shape[1]
+    if k == 3:
+        return polygons
+    corners = np.arange(1, k - 1)
+    return np.stack([np.repeat(polygons[:, :1], k - 2, axis=1), polygons[:, corners],
+                     polygons[:, corners + 1]], axis=-1).reshape(-1, 3)
 
 
 def edge_problem(triangles: np.ndarray) -> str | None:
@@ -290,9 +300,10 @@ def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
                 continue
             if v.ndim != 2 or v.shape[1] != 3:
                 raise ValueError(f"vertices have shape {v.shape}, not (V, 3)")
-            if f.ndim != 2 or f.shape[1] != 3 or f.dtype.kind not in "iu":
-                raise ValueError(f"faces have shape {f.shape} and type {f.dtype}, not (T, 3) "
-                                 f"integers")
+            if f.ndim != 2 or f.shape[1] < 3 or f.dtype.kind not in "iu":
+                raise ValueError(f"faces have shape {f.shape} and type {f.dtype}, not (T, k) "
+                                 f"integers with k >= 3")
+            f = fan(f)
         except (TypeError, ValueError) as error:
             raise ReaderError(file, f"unexpected result from the mesh library: {error}") from None
         n = part.get("vertex_normals")
@@ -325,9 +336,5 @@ def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
         positions, inverse = merge_vertices(positions)
         triangles = inverse[triangles]
     return Mesh(positions=positions, triangles=triangles, normals=vertex_normals,
-                closed=is_closed(positions, triangles), name=_stem(file))
+                closed=is_closed(positions, triangles), name=file_stem(file))
 
-
-def _stem(file: str) -> str:
-    name = str(file).replace("\\", "/").rsplit("/", 1)[-1]
-    return name.rsplit(".", 1)[0] or name

@@ -34,7 +34,7 @@ import numpy as np
 
 from core import generators
 from core.formats.camera import default_lights, framing_views
-from core.formats.errors import ReaderError, decode_text
+from core.formats.errors import ReaderError, decode_text, file_stem, read_file
 from core.formats.meshfile import MESH_EXTENSIONS, edge_problem, read_mesh
 from core.scene import SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
@@ -52,6 +52,7 @@ MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 SPECULARS = ("reflect", "halfway")
+TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
 
 Path_ = tuple            # a key path: ("geometry", 2, "material", "kd")
 
@@ -83,7 +84,7 @@ class _Reader:
         """Best-effort line of ``path``: its ``[[table]]`` block, then the key inside it."""
         start, stop = 0, len(self.lines)
         keys = list(path)
-        in_block = len(keys) >= 2 and isinstance(keys[1], int)
+        in_block = len(keys) >= 2 and keys[0] in TABLE_ARRAYS and isinstance(keys[1], int)
         if in_block:
             name, index = keys[0], keys[1]
             header = re.compile(rf"\s*\[\[\s*{re.escape(name)}\s*\]\]")
@@ -162,7 +163,8 @@ class _Reader:
         try:
             doc = tomllib.loads(self.text)
         except tomllib.TOMLDecodeError as error:
-            raise _toml_error(error, self.file, len(self.lines)) from None
+            last = max(1, self.text.count("\n") + (not self.text.endswith("\n")))
+            raise _toml_error(error, self.file, last) from None
         except RecursionError:
             raise ReaderError(self.file, "TOML nesting too deep") from None
         self.table(doc, (), TOP_KEYS)
@@ -177,7 +179,7 @@ class _Reader:
         lights = ([self.light(t, ("light", i + 1))
                    for i, t in enumerate(self.tables(doc["light"], ("light",)))]
                   if "light" in doc else default_lights(points))
-        scene = Scene(name=self.string(doc.get("name", _stem(self.file)), ("name",)),
+        scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
                       meshes=meshes, views=views, view_messages=messages, lights=lights,
                       source=self.file)
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
@@ -229,12 +231,9 @@ class _Reader:
         if ext not in MESH_EXTENSIONS + (".tri",):
             raise self.fail(path, f"{name!r}: not a mesh file type we read "
                                   f"({', '.join(MESH_EXTENSIONS + ('.tri',))})")
-        try:
-            data = target.read_bytes()
-        except OSError as error:
-            raise self.fail(path, f"cannot read {name!r}: {error.strerror or error}") from None
         shown = str(Path(self.file).parent / name)
         try:
+            data = read_file(target, shown)
             if ext == ".tri":
                 from core.formats.tri import read_tri
                 return read_tri(data, shown).meshes[0]
@@ -316,15 +315,13 @@ class _Reader:
             if source == "auto":
                 views += framing_views(points, self.file)
             else:
-                views_file = self.folder / source
-                try:
-                    data = views_file.read_bytes()
-                except OSError as error:
-                    raise self.fail(("views",), f"cannot read {source!r}: "
-                                                f"{error.strerror or error}") from None
-                from core.viewfile import read_views
                 shown = str(Path(self.file).parent / source)
-                found, said = read_views(decode_text(data, shown), shown)
+                try:
+                    text = decode_text(read_file(self.folder / source, shown), shown)
+                except ReaderError as error:
+                    raise self.fail(("views",), str(error)) from None
+                from core.viewfile import read_views
+                found, said = read_views(text, shown)
                 views += found
                 messages += said
         if "view" in doc:
@@ -394,7 +391,3 @@ def _kind(value) -> str:
         return "a table"
     return type(value).__name__
 
-
-def _stem(file: str) -> str:
-    name = str(file).replace("\\", "/").rsplit("/", 1)[-1]
-    return name.rsplit(".", 1)[0] or name

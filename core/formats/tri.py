@@ -25,7 +25,7 @@ import re
 import numpy as np
 
 from core.formats.camera import default_lights, framing_views, tri_light, tri_view
-from core.formats.errors import ReaderError, decode_text, short
+from core.formats.errors import ReaderError, decode_text, file_stem, short
 from core.formats.meshfile import merge_vertices
 from core.formats.numbers import Numbers
 from core.scene import Light, Material, Mesh, Scene
@@ -71,13 +71,13 @@ def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) 
             raise ReaderError(file, f"expected 9 numbers for triangle {k + 1}, got {got} (the "
                                     f"file ends; the count on line {count_line} is {count})",
                               numbers.line(13 + 9 * k))
-        raise ReaderError(file, f"the file ends after {k} triangles, but the count on line "
+        raise ReaderError(file, f"the file ends after {_triangles(k)}, but the count on line "
                                 f"{count_line} says {count}", numbers.line(len(values)))
     if len(body) > 9 * count:
         extra = 13 + 9 * count
-        raise ReaderError(file, f"more numbers than the count on line {count_line} says: "
-                                f"{count} triangles end before {short(numbers_text(values[extra]))}",
-                          numbers.line(extra))
+        raise ReaderError(file, f"more numbers than the count on line {count_line} says "
+                                f"({_triangles(count)}): {short(numbers_text(values[extra]))} would "
+                                f"start triangle {count + 1}", numbers.line(extra))
     _check_finite(body, "a triangle", numbers, 13, file)
 
     viewpoint, top_left, right, down = (values[3 * k:3 * k + 3].copy() for k in range(4))
@@ -95,17 +95,21 @@ def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) 
         light = apply(camera.mirror, light[None])[0, :3]
 
     mesh = Mesh(positions=positions, triangles=triangles, closed=False, material=Material(),
-                name=_stem(file))
+                name=file_stem(file))
     views = [camera.view] + framing_views(positions, f"{file}")
     lights = [Light(intensity=(1.0, 1.0, 1.0), position=tuple(float(c) for c in light))]
     if len(positions) == 0:
         lights = default_lights(positions)
-    return Scene(name=_stem(file), meshes=[mesh], views=views, lights=lights,
+    return Scene(name=file_stem(file), meshes=[mesh], views=views, lights=lights,
                  shading="flat", projection="perspective", size=size, source=str(file))
 
 
 def numbers_text(value: float) -> str:
     return f"{value:g}"
+
+
+def _triangles(k: int) -> str:
+    return f"{k} triangle" + ("" if k == 1 else "s")
 
 
 def _check_finite(values: np.ndarray, what: str, numbers: Numbers, first: int, file: str) -> None:
@@ -121,7 +125,3 @@ def _check_finite(values: np.ndarray, what: str, numbers: Numbers, first: int, f
         raise ReaderError(file, f"{what} has a coordinate that is {reason} "
                                 f"({numbers_text(value)})", numbers.line(first + k))
 
-
-def _stem(file: str) -> str:
-    name = str(file).replace("\\", "/").rsplit("/", 1)[-1]
-    return name.rsplit(".", 1)[0] or name
