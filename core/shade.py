@@ -95,10 +95,15 @@ _mesh_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 def _cached(mesh, key: str, compute: Callable[[], object]):
-    """``compute()`` once per mesh (and per version of its arrays)."""
-    arrays = (id(mesh.positions), id(mesh.triangles), id(mesh.normals))
+    """``compute()`` once per mesh, again whenever one of its arrays is replaced.
+
+    The entry holds the arrays it was computed from (so their ids cannot be reused while it
+    lives) and is dropped with the mesh. Arrays changed in place are not noticed: a scene is
+    data that the stages never change (core.scene).
+    """
+    arrays = (mesh.positions, mesh.triangles, mesh.normals)
     entry = _mesh_cache.get(mesh)
-    if entry is None or entry[0] != arrays:
+    if entry is None or any(a is not b for a, b in zip(entry[0], arrays)):
         entry = (arrays, {})
         _mesh_cache[mesh] = entry
     if key not in entry[1]:

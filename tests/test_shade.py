@@ -89,6 +89,16 @@ def test_two_sided_flat_faces_are_lit_on_the_side_the_viewer_sees():
     np.testing.assert_allclose(closed[2:], [[0.2 * 0.2 * 0.1, 0.2 * 0.2 * 0.1, 0.2 * 0.2 * 1.0]] * 2)
 
 
+def test_replacing_a_meshs_arrays_recomputes_its_normals():
+    scene = quad_scene()
+    before = shade.prepare("phong", scene, EYE).vertex_attrs[:4, :3]
+    np.testing.assert_array_equal(before, [[0, 0, 1]] * 4)
+    red = scene.meshes[0]
+    red.positions = red.positions[:, [2, 1, 0]]             # the square turned into x = 0
+    after = shade.prepare("phong", scene, EYE).vertex_attrs[:4, :3]
+    np.testing.assert_array_equal(after, [[-1, 0, 0]] * 4)
+
+
 def test_unknown_mode_is_refused():
     with pytest.raises(ValueError, match="shading must be one of"):
         shade.prepare("toon", quad_scene(), EYE)
