@@ -201,7 +201,9 @@ class ViewerState:
         try:
             scene = self.loader(source, size=self.size if self.renderable else None)
         except reader_errors() as error:
-            self.open_messages.append(f"could not open {source}: {error}")
+            reason = str(error)        # the readers' messages start with the file's name
+            self.open_messages.append(f"could not open {reason}" if reason.startswith(str(source))
+                                      else f"could not open {source}: {reason}")
             return False
         self.scene = scene
         self.scene_source = str(source)

@@ -303,7 +303,8 @@ class ViewerWindow:
 
         self.ctx.viewport = (0, 0, fb_w, fb_h)
         self.ctx.clear(*self.state.scene.background[:3], 1.0)
-        self.blit.draw()
+        if self.state.frame is not None:  # after a scene change, never the old scene's picture
+            self.blit.draw()
         self.gui.render(imgui.get_draw_data())
         glfw.swap_buffers(self.window)
         if not self._first_frame_logged and self.state.frame is not None:
