@@ -123,7 +123,12 @@ class ViewerWindow:
         self.started = started            # process start, in time.perf_counter() seconds
         self.window = create_window(state.size, self._title())
         glfw.ERROR_REPORTING = "log"      # later glfw errors are not fatal
-        self.ctx = moderngl.create_context()
+        try:
+            self.ctx = moderngl.create_context(require=330)
+        except Exception as error:        # e.g. a display whose OpenGL is older than 3.3
+            glfw.destroy_window(self.window)
+            glfw.terminate()
+            raise WindowError(f"no OpenGL 3.3 context: {error}") from None
         self.blit = Blit(self.ctx)
         self.gui_context = imgui.create_context()
         io = imgui.get_io()
@@ -271,12 +276,15 @@ class ViewerWindow:
             # frame: that frame may wait for numba to load or compile its kernels.
             self.draw_frame(allow_render=False)
             self._log_since_start("window shown")
+            shown = True
             while not glfw.window_should_close(self.window):
-                if self._busy > 0 or self.state.dirty:
+                # Sleep until an event unless a frame is due; a minimised window always sleeps
+                # (it stays "dirty" until it has a size again).
+                if shown and (self._busy > 0 or self.state.dirty):
                     glfw.poll_events()
                 else:
                     glfw.wait_events_timeout(0.5)
-                self.draw_frame()
+                shown = self.draw_frame()
         finally:
             self.close()
         return 0
