@@ -161,7 +161,7 @@ def _prepare_phong(s: ShadeInput, meshes, weighting) -> None:
 
 
 @njit(cache=True, parallel=True)
-def _resolve_flat(tri, source, face_rgb8, background8, out):
+def _resolve_flat(tri, source, face_rgb, background8, out):
     height, width = tri.shape
     for row in prange(height):
         for col in range(width):
@@ -172,7 +172,7 @@ def _resolve_flat(tri, source, face_rgb8, background8, out):
             else:
                 f = source[t]
                 for c in range(3):
-                    out[row, col, c] = face_rgb8[f, c]
+                    out[row, col, c] = quantize(face_rgb[f, c])
 
 
 @njit(cache=True, parallel=True)
@@ -300,7 +300,8 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
     if k and triangles.size and not 0 <= triangles.min() <= triangles.max() < len(attrs):
         raise ValueError(f"clipped triangles index {len(attrs)} attribute rows out of range")
     if shading.mode == "flat":
-        _resolve_flat(tri, source, to_uint8(shading.face_rgb).reshape(-1, 3), background8, out)
+        _resolve_flat(tri, source, np.ascontiguousarray(shading.face_rgb, dtype=np.float64),
+                      background8, out)
     elif shading.mode == "gouraud":
         _resolve_gouraud(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
                          np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs,
