@@ -75,18 +75,18 @@ def edge_problem(triangles: np.ndarray) -> str | None:
     directed = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
     if np.any(directed[:, 0] == directed[:, 1]):
         return "a triangle repeats a vertex"
-    pairs, counts = np.unique(directed, axis=0, return_counts=True)
+    # One int64 key per directed edge (a, b): sorting keys is the hash here.
+    base = int(t.max()) + 1
+    keys, counts = np.unique(directed[:, 0] * base + directed[:, 1], return_counts=True)
     if np.any(counts > 1):
-        a, b = pairs[np.argmax(counts > 1)]
-        return f"edge ({a}, {b}) is used twice in the same direction (inconsistent winding)"
-    # pairs is sorted; each reversed edge must be found among them
-    reverse = pairs[:, ::-1]
-    key = pairs[:, 0] * (int(t.max()) + 1) + pairs[:, 1]
-    rkey = reverse[:, 0] * (int(t.max()) + 1) + reverse[:, 1]
-    found = np.isin(rkey, key)
+        key = int(keys[np.argmax(counts > 1)])
+        return (f"edge ({key // base}, {key % base}) is used twice in the same direction "
+                f"(inconsistent winding)")
+    reverse = (keys % base) * base + keys // base
+    found = np.isin(reverse, keys, assume_unique=True)
     if not np.all(found):
-        a, b = pairs[np.argmin(found)]
-        return f"edge ({a}, {b}) has no neighbour across it (the surface has a border)"
+        key = int(keys[np.argmin(found)])
+        return f"edge ({key // base}, {key % base}) has no neighbour across it (the surface has a border)"
     return None
 
 
