@@ -70,6 +70,8 @@ class ShadeInput:
     ``vertex_attrs`` ``(V, K)`` is what the clipper must carry (flat: K = 0; Gouraud: RGB;
     Phong: normal then position); ``face_rgb`` ``(T, 3)`` the flat colours (None otherwise);
     ``face_surface`` ``(T,)`` the row of ``surfaces`` (the mesh) of each triangle.
+    Arrays that do not depend on the view (positions, triangles, Phong's attributes) are kept
+    between frames and are read-only.
     """
 
     mode: str
@@ -89,70 +91,128 @@ class ShadeInput:
 
 
 # --------------------------------------------------------------------------------------------
-# Per-mesh work that does not depend on the view, kept while the mesh lives.
+# Work that does not depend on the view, kept while the mesh (or the scene) lives: face and
+# vertex normals per mesh; the concatenated arrays per scene. Cached arrays are read-only.
 
 _mesh_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_scene_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
-def _cached(mesh, key: str, compute: Callable[[], object]):
-    """``compute()`` once per mesh, again whenever one of its arrays is replaced.
+def _read_only(value):
+    for a in value if isinstance(value, tuple) else (value,):
+        if isinstance(a, np.ndarray):
+            a.flags.writeable = False
+    return value
+
+
+def _cached(cache, owner, arrays: tuple, key: str, compute: Callable[[], object]):
+    """``compute()`` once per ``owner``, again whenever one of ``arrays`` is replaced.
 
     The entry holds the arrays it was computed from (so their ids cannot be reused while it
-    lives) and is dropped with the mesh. Arrays changed in place are not noticed: a scene is
+    lives) and is dropped with the owner. Arrays changed in place are not noticed: a scene is
     data that the stages never change (core.scene).
     """
-    arrays = (mesh.positions, mesh.triangles, mesh.normals)
-    entry = _mesh_cache.get(mesh)
-    if entry is None or any(a is not b for a, b in zip(entry[0], arrays)):
+    entry = cache.get(owner)
+    if entry is None or len(entry[0]) != len(arrays) or any(
+            a is not b for a, b in zip(entry[0], arrays)):
         entry = (arrays, {})
-        _mesh_cache[mesh] = entry
+        cache[owner] = entry
     if key not in entry[1]:
-        entry[1][key] = compute()
+        entry[1][key] = _read_only(compute())
     return entry[1][key]
 
 
+def _mesh_arrays(mesh) -> tuple:
+    return (mesh.positions, mesh.triangles, mesh.normals)
+
+
+def _scene_arrays(meshes) -> tuple:
+    return tuple(meshes) + tuple(a for m in meshes for a in _mesh_arrays(m))
+
+
 def _mesh_face_normals(mesh) -> np.ndarray:
-    return _cached(mesh, "face normals", lambda: face_normals(mesh.positions, mesh.triangles)[0])
+    return _cached(_mesh_cache, mesh, _mesh_arrays(mesh), "face normals",
+                   lambda: face_normals(mesh.positions, mesh.triangles)[0])
 
 
 def _mesh_vertex_normals(mesh, weighting: str) -> np.ndarray:
-    return _cached(mesh, f"vertex normals {weighting}", lambda: vertex_normals(mesh, weighting))
+    return _cached(_mesh_cache, mesh, _mesh_arrays(mesh), f"vertex normals {weighting}",
+                   lambda: vertex_normals(mesh, weighting))
+
+
+def _concatenated(scene, meshes, key: str, parts: Callable, width: int, dtype=np.float64):
+    """The per-mesh arrays ``parts(mesh)`` of all meshes, one after another (cached)."""
+    def join():
+        arrays = [parts(m) for m in meshes]
+        return np.concatenate(arrays) if arrays else np.zeros((0, width), dtype)
+    return _cached(_scene_cache, scene, _scene_arrays(meshes), key, join)
+
+
+def _geometry(scene, meshes):
+    """``positions, triangles, face_surface, vertex_surface, vertex_offset`` of all meshes."""
+    def build():
+        sizes = np.array([len(m.positions) for m in meshes], dtype=np.int64)
+        offset = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+        positions = np.concatenate([m.positions for m in meshes]) if meshes else np.zeros((0, 3))
+        triangles = (np.concatenate([m.triangles + offset[i] for i, m in enumerate(meshes)])
+                     if meshes else np.zeros((0, 3), np.int64)).astype(np.int64)
+        face_surface = np.repeat(np.arange(len(meshes), dtype=np.int64),
+                                 [len(m.triangles) for m in meshes])
+        vertex_surface = np.repeat(np.arange(len(meshes), dtype=np.int64), sizes)
+        return positions, triangles, face_surface, vertex_surface, offset[:-1].copy()
+    return _cached(_scene_cache, scene, _scene_arrays(meshes), "geometry", build)
 
 
 # --------------------------------------------------------------------------------------------
 # The vertex step of each mode
 
 
-def _prepare_flat(s: ShadeInput, meshes, weighting) -> None:
+@njit(cache=True, parallel=True)
+def _phong_faces(positions, triangles, normals, face_surface, surfaces, lights, ambient, eye,
+                 halfway, out):
+    """The model once per face, at its centroid with its face normal."""
+    for f in prange(triangles.shape[0]):
+        i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
+        cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
+        cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
+        cz = (positions[i0, 2] + positions[i1, 2] + positions[i2, 2]) / 3.0
+        r, g, b = phong_point(cx, cy, cz, normals[f, 0], normals[f, 1], normals[f, 2],
+                              face_surface[f], surfaces, lights, ambient, eye, halfway)
+        out[f, 0], out[f, 1], out[f, 2] = r, g, b
+
+
+def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
     """One evaluation per face, at its centroid with its face normal (FvDFH 16.2.3)."""
-    p, t = s.positions, s.triangles
-    normals = np.concatenate([_mesh_face_normals(m) for m in meshes]) if len(t) else np.zeros((0, 3))
-    centroid = (p[t[:, 0]] + p[t[:, 1]] + p[t[:, 2]]) / 3.0
-    s.face_rgb = phong_points(centroid, normals, s.face_surface, s.surfaces, s.lights, s.ambient,
-                            s.eye, s.halfway)
-    s.vertex_attrs = np.zeros((len(p), 0))
+    normals = _concatenated(scene, meshes, "face normals", _mesh_face_normals, 3)
+    s.face_rgb = np.empty((len(s.triangles), 3))
+    _phong_faces(s.positions, s.triangles, normals, s.face_surface, s.surfaces, s.lights,
+                 s.ambient, s.eye, s.halfway, s.face_rgb)
     s.computed += ["face normals", "illuminate faces"]
 
 
-def _all_vertex_normals(s: ShadeInput, meshes, weighting) -> np.ndarray:
+def _all_vertex_normals(s: ShadeInput, scene, meshes, weighting) -> np.ndarray:
     if any(m.normals is None and len(m.triangles) for m in meshes):
         s.computed.append("vertex normals")
-    parts = [_mesh_vertex_normals(m, weighting) for m in meshes]
-    return np.concatenate(parts) if parts else np.zeros((0, 3))
+    return _concatenated(scene, meshes, f"vertex normals {weighting}",
+                         lambda m: _mesh_vertex_normals(m, weighting), 3)
 
 
-def _prepare_gouraud(s: ShadeInput, meshes, weighting) -> None:
+def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
     """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4)."""
-    normals = _all_vertex_normals(s, meshes, weighting)
+    normals = _all_vertex_normals(s, scene, meshes, weighting)
     s.vertex_attrs = phong_points(s.positions, normals, s.vertex_surface, s.surfaces, s.lights,
-                                s.ambient, s.eye, s.halfway)
+                                  s.ambient, s.eye, s.halfway)
     s.computed.append("illuminate vertices")
 
 
-def _prepare_phong(s: ShadeInput, meshes, weighting) -> None:
-    """Normals and world positions to interpolate; the model runs per pixel (FvDFH 16.2.5)."""
-    normals = _all_vertex_normals(s, meshes, weighting)
-    s.vertex_attrs = np.concatenate([normals, s.positions], axis=1)
+def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
+    """Normals and world positions to interpolate; the model runs per pixel (FvDFH 16.2.5).
+
+    Nothing here depends on the view, so the attribute array is kept with the scene."""
+    normals = _all_vertex_normals(s, scene, meshes, weighting)
+    s.vertex_attrs = _cached(_scene_cache, scene, _scene_arrays(meshes),
+                             f"phong attributes {weighting}",
+                             lambda: np.concatenate([normals, s.positions], axis=1))
     s.computed.append("illuminate pixels")
 
 
@@ -248,22 +308,15 @@ def prepare(mode: str, scene, eye: Eye, weighting: str = "mean") -> ShadeInput:
     if weighting not in WEIGHTINGS:
         raise ValueError(f"weighting must be one of {WEIGHTINGS}, not {weighting!r}")
     meshes = list(scene.meshes)
-    sizes = np.array([len(m.positions) for m in meshes], dtype=np.int64)
-    offset = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
-    positions = (np.concatenate([m.positions for m in meshes]) if meshes else np.zeros((0, 3)))
-    triangles = (np.concatenate([m.triangles + offset[i] for i, m in enumerate(meshes)])
-                 if meshes else np.zeros((0, 3), np.int64)).astype(np.int64)
-    face_surface = np.repeat(np.arange(len(meshes), dtype=np.int64),
-                             [len(m.triangles) for m in meshes])
-    vertex_surface = np.repeat(np.arange(len(meshes), dtype=np.int64), sizes)
+    positions, triangles, face_surface, vertex_surface, offset = _geometry(scene, meshes)
     s = ShadeInput(
         mode=mode, positions=positions, triangles=triangles,
         vertex_attrs=np.zeros((len(positions), 0)), face_rgb=None,
-        face_surface=face_surface, vertex_surface=vertex_surface, vertex_offset=offset[:-1],
+        face_surface=face_surface, vertex_surface=vertex_surface, vertex_offset=offset,
         surfaces=pack_surfaces([m.material for m in meshes], [not m.closed for m in meshes]),
         lights=pack_lights(scene.lights), ambient=pack_ambient(scene.ambient),
         eye=pack_eye(eye), halfway=scene.specular == "halfway")
-    SHADERS[mode].prepare(s, meshes, weighting)
+    SHADERS[mode].prepare(s, scene, meshes, weighting)
     return s
 
 
