@@ -105,78 +105,9 @@ def _progress(text: str) -> None:
 
 # ----------------------------------------------------------------------------- scenes
 
-def _outward(positions: np.ndarray, triangles: np.ndarray, outward: np.ndarray) -> np.ndarray:
-    """``triangles`` re-wound counter-clockwise seen from outside (``outward`` per vertex)."""
-    p0, p1, p2 = (positions[triangles[:, k]] for k in range(3))
-    facing = np.einsum("ij,ij->i", np.cross(p1 - p0, p2 - p0), outward[triangles].sum(axis=1))
-    flipped = triangles.copy()
-    flipped[facing < 0] = triangles[facing < 0][:, ::-1]
-    return flipped
-
-
-def _grid_triangles(rows: int, cols: int, wrap_rows: bool) -> np.ndarray:
-    """Two triangles per cell of a (rows x cols) vertex grid that wraps around in columns."""
-    i, j = np.meshgrid(np.arange(rows if wrap_rows else rows - 1), np.arange(cols), indexing="ij")
-    i, j = i.ravel(), j.ravel()
-    a = i * cols + j
-    b = i * cols + (j + 1) % cols
-    c = ((i + 1) % rows) * cols + j
-    d = ((i + 1) % rows) * cols + (j + 1) % cols
-    return np.concatenate([np.stack([a, c, b], 1), np.stack([b, c, d], 1)])
-
-
-def _local_sphere_torus(triangles: int):
-    """A UV sphere and a torus beside it, about ``triangles / 2`` triangles each, one view.
-
-    Used only until ``core.generators.sphere_torus`` exists.
-    """
-    from core.scene import Light, Material, Mesh, Scene
-    from core.view import View
-
-    half = max(triangles // 2, 8)
-    seg = max(4, int(round(np.sqrt(half))))                  # sphere: 2 seg (rings - 1) = seg^2
-    rings = max(3, seg // 2 + 1)
-    theta = np.linspace(0.0, np.pi, rings + 1)[1:-1]
-    phi = np.linspace(0.0, 2 * np.pi, seg, endpoint=False)
-    t, f = np.meshgrid(theta, phi, indexing="ij")
-    unit = np.stack([np.sin(t) * np.cos(f), np.cos(t), np.sin(t) * np.sin(f)], -1).reshape(-1, 3)
-    unit = np.concatenate([[(0.0, 1.0, 0.0)], unit, [(0.0, -1.0, 0.0)]])
-    body = _grid_triangles(rings - 1, seg, wrap_rows=False) + 1
-    north = np.stack([np.zeros(seg, int), 1 + np.arange(seg), 1 + (np.arange(seg) + 1) % seg], 1)
-    last = len(unit) - 1
-    ring0 = last - seg
-    south = np.stack([np.full(seg, last), ring0 + (np.arange(seg) + 1) % seg, ring0 + np.arange(seg)], 1)
-    tris = np.concatenate([north, body, south])
-    centre = np.array([-1.3, 0.0, 0.0])
-    sphere = Mesh(positions=centre + unit, triangles=_outward(unit, tris, unit), closed=True,
-                  material=Material(od=(0.9, 0.3, 0.2)), name="sphere")
-
-    minor = max(3, int(round(np.sqrt(half / 4))))             # torus: 2 (2 minor) minor
-    major = 2 * minor
-    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, major, endpoint=False),
-                       np.linspace(0, 2 * np.pi, minor, endpoint=False), indexing="ij")
-    big, small = 1.0, 0.35
-    ring = np.stack([np.cos(u), np.zeros_like(u), np.sin(u)], -1)
-    out = np.cos(v)[..., None] * ring + np.sin(v)[..., None] * np.array([0.0, 1.0, 0.0])
-    pts = (big * ring + small * out).reshape(-1, 3)
-    tris = _grid_triangles(major, minor, wrap_rows=True)
-    tilt = np.array([[1, 0, 0], [0, np.cos(1.0), -np.sin(1.0)], [0, np.sin(1.0), np.cos(1.0)]])
-    torus = Mesh(positions=pts @ tilt.T + np.array([1.3, 0.0, 0.0]),
-                 triangles=_outward(pts, tris, out.reshape(-1, 3)), closed=True,
-                 material=Material(od=(0.2, 0.5, 0.9)), name="torus")
-    view = View(vrp=(0.0, 0.0, 0.0), vpn=(0.2, 0.3, 1.0), vup=(0.0, 1.0, 0.0),
-                window=(-2.6, 2.6, -2.6, 2.6), prp=(0.0, 0.0, 8.0), front=3.0, back=-3.0,
-                label="sphere_torus: view 1")
-    return Scene(name="sphere+torus", meshes=[sphere, torus], views=[view],
-                 lights=[Light(position=(4.0, 6.0, 10.0))], shading="gouraud")
-
-
 def bench_scene(triangles: int):
     """The default bench scene: a sphere plus a torus of about ``triangles`` triangles."""
-    try:
-        from core.generators import sphere_torus
-    except ImportError:
-        return _local_sphere_torus(triangles)
+    from core.generators import sphere_torus
     return sphere_torus(triangles=triangles)
 
 

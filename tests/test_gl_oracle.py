@@ -25,7 +25,9 @@ moderngl = pytest.importorskip("moderngl")
 from core.render import render                                   # noqa: E402
 from core.scene import Light, Material, Mesh, Scene              # noqa: E402
 from core.transforms import apply                                # noqa: E402
-from core.view import View, normalizing_transform                # noqa: E402
+from core.formats import load_scene                              # noqa: E402
+from core.paths import SCENES_DIR                                # noqa: E402
+from core.view import View, normalizing_transform, problems      # noqa: E402
 from app.bench import bench_scene                                # noqa: E402
 from app.reference_gl import GLRenderer, eye_of, face_normals    # noqa: E402
 from app.reference_gl import clip_from_world                      # noqa: E402
@@ -188,28 +190,24 @@ def crossing_the_eye() -> Scene:
     return Scene("crossing the eye", [floor], views, lights=[Light(direction=(0.3, 1.0, 0.4))])
 
 
-def cube() -> Scene:
-    """A closed unit cube, counter-clockwise from outside, seen corner-on."""
-    positions = np.array([(x, y, z) for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
-    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-    tris = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
-    mesh = Mesh(positions=positions, triangles=tris, closed=True)
-    views = [_view((0, 0, 0), (1, 0.8, 1.2), (0, 1, 0), (-2, 2, -2, 2), (0, 0, 6), 3, -3),
-             _view((0, 0, 0), (-1, -0.5, 0.7), (0, 1, 0), (-2.5, 2.5, -1.5, 1.5), (0.5, 0.5, 5), 1.2, -3)]
-    return Scene("cube", [mesh], views, lights=[Light(position=(5.0, 8.0, 6.0))])
+def scene_file(name: str, triangles: int = 1000) -> Scene:
+    """A shipped scene (``scenes/NAME``), or the bench's sphere + torus for ``sphere_torus``."""
+    if name == "sphere_torus":
+        return bench_scene(triangles)        # at 1000 triangles, big enough to leave room off edges
+    return load_scene(SCENES_DIR / name)
 
 
-def sphere_torus(triangles: int = 1000) -> Scene:
-    """The bench's scene (a sphere and a torus, closed) at a size whose triangles are big."""
-    return bench_scene(triangles)
+HAND_MADE = {"few triangles": few_triangles, "crossing the eye": crossing_the_eye}
+COVERAGE_SCENES = [*HAND_MADE, "cube.toml", "torus.toml", "few_triangles.tri",
+                   "interpenetrating.tri", "crossing_front_plane.tri", "sphere_torus"]
 
 
-COVERAGE_SCENES = {
-    "few triangles": few_triangles,
-    "crossing the eye": crossing_the_eye,
-    "cube": cube,
-    "sphere+torus": sphere_torus,
-}
+def coverage_scene(name: str) -> Scene:
+    return HAND_MADE[name]() if name in HAND_MADE else scene_file(name)
+
+
+def valid_views(scene: Scene, projection: str) -> list[int]:
+    return [i for i, view in enumerate(scene.views) if not problems(view, projection)]
 
 
 # ------------------------------------------------------------------ coverage (issue 3)
@@ -227,17 +225,19 @@ def gl_coverage(gl: GLRenderer, scene: Scene, view_index: int, projection: str) 
 
 
 @pytest.mark.parametrize("projection", ["perspective", "parallel"])
-@pytest.mark.parametrize("name", list(COVERAGE_SCENES))
+@pytest.mark.parametrize("name", COVERAGE_SCENES)
 def test_coverage_matches_llvmpipe_except_on_edges(gl, name, projection):
-    scene = COVERAGE_SCENES[name]()
-    for view_index in range(len(scene.views)):
+    scene = coverage_scene(name)
+    views = valid_views(scene, projection)
+    assert views, f"{name}: no view valid for {projection}"
+    for view_index in views:
         ours = cpu_coverage(scene, view_index, projection)
         theirs = gl_coverage(gl, scene, view_index, projection)
         edges = edge_mask(scene, view_index, projection)
         differ = ours ^ theirs
         label = f"{name}-{projection}-view{view_index + 1}"
         # The comparison must mean something: both draw, and edges leave most pixels free.
-        assert theirs.sum() > 1000, f"{label}: llvmpipe drew almost nothing"
+        assert theirs.sum() > 100, f"{label}: llvmpipe drew almost nothing"
         assert edges.mean() < 0.5, f"{label}: the edge mask covers {edges.mean():.0%} of the image"
         off_edge = differ & ~edges
         if differ.sum() >= 0.001 * differ.size or off_edge.any():
@@ -270,31 +270,50 @@ def test_edge_mask_traces_a_known_triangle():
 # ------------------------------------------------------------------ shading (issue 4)
 
 def _lit(scene: Scene, variant: str) -> Scene:
-    """The scene under a light set that exercises the whole model."""
-    if variant == "reflect":
-        return dataclasses.replace(scene, specular="reflect", ambient=(0.3, 0.3, 0.3))
+    """The scene's own lights, or a set that exercises the rest of the model."""
+    if variant == "own lights":
+        return scene
     lights = [Light(intensity=(0.9, 0.8, 0.7), position=(3.0, 4.0, 6.0), attenuation=(0.5, 0.05, 0.01)),
               Light(intensity=(0.3, 0.4, 0.6), direction=(-1.0, 0.5, 0.8))]
     return dataclasses.replace(scene, specular="halfway", lights=lights, ambient=(0.2, 0.25, 0.3))
 
 
-@pytest.mark.parametrize("variant", ["reflect", "halfway"])
+@pytest.mark.parametrize("variant", ["own lights", "halfway, attenuated"])
 @pytest.mark.parametrize("projection", ["perspective", "parallel"])
 @pytest.mark.parametrize("shading", ["flat", "gouraud", "phong"])
-def test_shading_matches_llvmpipe_away_from_edges(gl, shading, projection, variant):
-    scene = _lit(sphere_torus(), variant)
-    frame = render(scene, 0, projection, shading, SIZE)
-    assert frame.message is None, frame.message
+@pytest.mark.parametrize("name", ["sphere.toml", "torus.toml", "interpenetrating.tri"])
+def test_shading_matches_llvmpipe_away_from_edges(gl, name, shading, projection, variant):
+    scene = _lit(scene_file(name), variant)
     gl.load(scene, modes=(shading, "coverage"))
-    theirs = gl.render(0, projection, shading)
-    covered = gl.render(0, projection, "coverage")[:, :, 0] > 127
-    away = covered & ~edge_mask(scene, 0, projection)
-    assert away.sum() > 0.3 * covered.sum(), "too few pixels away from edges to compare"
-    diff = np.abs(frame.color.astype(np.int16) - theirs.astype(np.int16)).max(axis=2)
-    worst = int(diff[away].max())
-    label = f"shading-{shading}-{projection}-{variant}"
-    if worst > 2:
-        where = _save_failure(label, ours=frame.color, llvmpipe=theirs,
-                              differ=((diff > 2) & away))
-        pytest.fail(f"{label}: {np.count_nonzero((diff > 2) & away)} pixels away from edges differ "
-                    f"by more than 2/255 (worst {worst}); {where}")
+    for view_index in valid_views(scene, projection):
+        frame = render(scene, view_index, projection, shading, SIZE)
+        assert frame.message is None, frame.message
+        theirs = gl.render(view_index, projection, shading)
+        covered = gl.render(view_index, projection, "coverage")[:, :, 0] > 127
+        away = covered & ~edge_mask(scene, view_index, projection)
+        label = f"shading-{name}-{shading}-{projection}-{variant}-view{view_index + 1}"
+        # Dense meshes leave a minority of pixels off every edge; still thousands to compare.
+        assert away.sum() >= 2000, f"{label}: only {away.sum()} pixels away from edges"
+        diff = np.abs(frame.color.astype(np.int16) - theirs.astype(np.int16)).max(axis=2)
+        worst = int(diff[away].max())
+        if worst > 2:
+            where = _save_failure(label, ours=frame.color, llvmpipe=theirs,
+                                  differ=((diff > 2) & away))
+            pytest.fail(f"{label}: {np.count_nonzero((diff > 2) & away)} pixels away from edges "
+                        f"differ by more than 2/255 (worst {worst}); {where}")
+
+
+def test_shading_comparison_can_fail(gl):
+    """The control: 2/255 is tight enough to tell Gouraud from Phong, and a changed exponent."""
+    scene = scene_file("sphere.toml")
+    gl.load(scene, modes=("gouraud", "phong", "coverage"))
+    covered = gl.render(0, "perspective", "coverage")[:, :, 0] > 127
+    away = covered & ~edge_mask(scene, 0, "perspective")
+    ours_phong = render(scene, 0, "perspective", "phong", SIZE).color.astype(np.int16)
+    gouraud = gl.render(0, "perspective", "gouraud").astype(np.int16)
+    assert np.abs(ours_phong - gouraud).max(axis=2)[away].max() > 2
+    shinier = dataclasses.replace(scene, meshes=[dataclasses.replace(
+        scene.meshes[0], material=dataclasses.replace(scene.meshes[0].material,
+                                                      n=scene.meshes[0].material.n * 1.5))])
+    gl.load(shinier, modes=("phong",))
+    assert np.abs(ours_phong - gl.render(0, "perspective", "phong")).max(axis=2)[away].max() > 2
