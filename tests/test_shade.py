@@ -93,6 +93,9 @@ def test_replacing_a_meshs_arrays_recomputes_its_normals():
     scene = quad_scene()
     before = shade.prepare("phong", scene, EYE).vertex_attrs[:4, :3]
     np.testing.assert_array_equal(before, [[0, 0, 1]] * 4)
+    again = shade.prepare("phong", scene, EYE)
+    assert again.vertex_attrs is shade.prepare("phong", scene, EYE).vertex_attrs   # kept
+    assert not again.vertex_attrs.flags.writeable and not again.positions.flags.writeable
     red = scene.meshes[0]
     red.positions = red.positions[:, [2, 1, 0]]             # the square turned into x = 0
     after = shade.prepare("phong", scene, EYE).vertex_attrs[:4, :3]
