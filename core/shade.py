@@ -58,7 +58,6 @@ from core.normals import WEIGHTINGS, face_normals, vertex_normals
 __all__ = ["MODES", "ShadeInput", "Eye", "eye_from_view", "prepare", "resolve"]
 
 MODES = ("flat", "gouraud", "phong")
-ATTRIBUTE_COUNT = {"flat": 0, "gouraud": 3, "phong": 6}
 
 
 @dataclass
