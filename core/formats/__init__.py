@@ -19,9 +19,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import numpy as np
-
-from core.formats.errors import ReaderError, decode_text, read_file
+from core.formats.errors import ReaderError, decode_text, read_file, tolerant_of_underflow
 from core.formats.meshfile import MESH_EXTENSIONS, read_mesh
 from core.formats.scenefile import read_scene_file
 from core.formats.tri import read_tri
@@ -42,23 +40,20 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
     name = str(source)
     if size is not None:
         size = _size(size, name)
-    # Every reader checks its numbers' magnitudes; tiny ones may still underflow to 0 on the
-    # way, which is harmless here (the tests turn every numpy warning into an error).
-    with np.errstate(under="ignore"):
-        if name == STDIN:
-            stream = getattr(sys.stdin, "buffer", None)         # bytes, so junk is reported
-            text = decode_text(stream.read(), "<stdin>") if stream else sys.stdin.read()
-            return _views_scene(text, "<stdin>", size)
-        path = Path(source)
-        data = read_file(path, name)
-        ext = path.suffix.lower()
-        if ext == ".toml":
-            return read_scene_file(data, name, path.parent, size)
-        if ext == ".tri":
-            return read_tri(data, name, size)
-        if ext in MESH_EXTENSIONS:
-            return _mesh_scene(read_mesh(data, name, ext), name, size)
-        return _views_scene(decode_text(data, name), name, size)
+    if name == STDIN:
+        stream = getattr(sys.stdin, "buffer", None)         # bytes, so junk is reported
+        text = decode_text(stream.read(), "<stdin>") if stream else sys.stdin.read()
+        return _views_scene(text, "<stdin>", size)
+    path = Path(source)
+    data = read_file(path, name)
+    ext = path.suffix.lower()
+    if ext == ".toml":
+        return read_scene_file(data, name, path.parent, size)
+    if ext == ".tri":
+        return read_tri(data, name, size)
+    if ext in MESH_EXTENSIONS:
+        return _mesh_scene(read_mesh(data, name, ext), name, size)
+    return _views_scene(decode_text(data, name), name, size)
 
 
 def _size(size, name: str) -> tuple[int, int]:
@@ -71,6 +66,7 @@ def _size(size, name: str) -> tuple[int, int]:
     return width, height
 
 
+@tolerant_of_underflow
 def _mesh_scene(mesh, name: str, size) -> Scene:
     """A bare mesh file: framing views, default lights, Gouraud when the mesh is smooth."""
     from core.formats.camera import default_lights, framing_views

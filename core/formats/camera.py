@@ -92,6 +92,10 @@ def tri_view(viewpoint: np.ndarray, top_left: np.ndarray, right: np.ndarray, dow
     width, height = size
     len_r, len_d = float(np.linalg.norm(right)), float(np.linalg.norm(down))
     eye = viewpoint - top_left
+    if min(len_r, len_d) < 1e-12 * float(np.linalg.norm(eye)):
+        raise ValueError("the pixel displacements are too small next to the viewpoint's "
+                         "distance from the screen (less than 1e-12 of it): the image would "
+                         "be one point")
     prp = np.array([eye @ u, eye @ v, eye @ n])
     mirror = None
     if prp[2] == 0.0:
@@ -126,8 +130,10 @@ def bounds(points: np.ndarray) -> tuple[np.ndarray, float]:
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre = (lo + hi) / 2
     radius = float(np.sqrt(((points - centre) ** 2).sum(axis=1).max()))
-    if not radius > 0.0:
-        radius = max(1.0, float(np.abs(centre).max()) * 1e-3)
+    # A point, or a speck too small for float64 views around it: frame a sensible size.
+    floor = 1e-9 * (1.0 + float(np.abs(centre).max()))
+    if not radius > floor:
+        radius = max(1.0, float(np.abs(centre).max()) * 1e-3) if radius == 0.0 else floor
     return centre, radius
 
 

@@ -7,7 +7,14 @@ names the file, the line (where the problem has one) and the reason, in the form
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
+
+import numpy as np
+
+# Coordinates beyond this are refused by every reader: products of a few of them (cross
+# products, volumes, the normalizing transforms) must stay finite in float64.
+MAX_COORDINATE = 1e30
 
 
 class ReaderError(ValueError):
@@ -64,3 +71,15 @@ def file_stem(file: str) -> str:
     """``scenes/torus.toml`` -> ``torus``: the default name of what a file holds."""
     name = str(file).replace("\\", "/").rsplit("/", 1)[-1]
     return name.rsplit(".", 1)[0] or name
+
+
+def tolerant_of_underflow(read):
+    """Run a reader with numpy's underflow ignored: a tiny number in a file may underflow to
+    zero on the way, which is harmless, and must not become a FloatingPointError where numpy
+    is set to raise (the tests set ``np.seterr(all="raise")``). Overflow cannot happen: every
+    reader bounds its numbers by MAX_COORDINATE first."""
+    @functools.wraps(read)
+    def guarded(*args, **kwargs):
+        with np.errstate(under="ignore"):
+            return read(*args, **kwargs)
+    return guarded

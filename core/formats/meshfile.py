@@ -28,7 +28,8 @@ import struct
 
 import numpy as np
 
-from core.formats.errors import ReaderError, decode_text, file_stem, short
+from core.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
+                                 tolerant_of_underflow)
 from core.scene import Mesh
 
 MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl")
@@ -267,6 +268,7 @@ def _loaded_parts(loaded: dict) -> list[dict]:
     return [loaded]
 
 
+@tolerant_of_underflow
 def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
     """The mesh in ``data``, a file of type ``ext`` (``.obj``, ``.ply``, ``.off``, ``.stl``)."""
     ext = ext.lower()
@@ -319,6 +321,10 @@ def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
     bad = ~np.all(np.isfinite(positions), axis=1)
     if np.any(bad):
         raise ReaderError(file, f"vertex {int(np.argmax(bad))} has a NaN or infinite coordinate")
+    bad = np.any(np.abs(positions) > MAX_COORDINATE, axis=1)
+    if np.any(bad):
+        raise ReaderError(file, f"vertex {int(np.argmax(bad))} has a coordinate beyond "
+                                f"{MAX_COORDINATE:g}")
     if triangles.min() < 0 or triangles.max() >= len(positions):
         k = int(np.argmax((triangles < 0).any(axis=1) | (triangles >= len(positions)).any(axis=1)))
         raise ReaderError(file, f"triangle {k} refers to vertex {triangles[k].tolist()}, but "

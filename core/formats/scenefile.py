@@ -34,14 +34,14 @@ import numpy as np
 
 from core import generators
 from core.formats.camera import default_lights, framing_views
-from core.formats.errors import ReaderError, decode_text, file_stem, read_file
+from core.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, read_file,
+                                 tolerant_of_underflow)
 from core.formats.meshfile import MESH_EXTENSIONS, edge_problem, read_mesh
 from core.scene import SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.view import PROJECTIONS, View, problems
 
-# Numbers beyond this are refused: products of a few of them must stay finite in float64.
-MAX_NUMBER = 1e30
+MAX_NUMBER = MAX_COORDINATE
 MAX_SIZE = 8192                        # framebuffer side, pixels
 
 TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
@@ -355,6 +355,7 @@ class _Reader:
         return view, (f"{view.label}: " + "; ".join(found)) if found else None
 
 
+@tolerant_of_underflow
 def read_scene_file(data: bytes | str, file: str, folder: Path | None = None,
                     size: tuple[int, int] | None = None) -> Scene:
     """The scene in the TOML text ``data``; relative paths start at ``folder``."""

@@ -25,20 +25,20 @@ import re
 import numpy as np
 
 from core.formats.camera import default_lights, framing_views, tri_light, tri_view
-from core.formats.errors import ReaderError, decode_text, file_stem, short
+from core.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
+                                 tolerant_of_underflow)
 from core.formats.meshfile import merge_vertices
 from core.formats.numbers import Numbers
 from core.scene import Light, Material, Mesh, Scene
 from core.transforms import apply
 
-# Coordinates beyond this are refused: products of a few of them must stay finite in float64.
-MAX_COORDINATE = 1e30
 DEFAULT_SIZE = (500, 500)
 _HEADER = ("the viewpoint", "the top-left corner", "the right displacement",
            "the down displacement")
 _COUNT = re.compile(r"\+?\d+")
 
 
+@tolerant_of_underflow
 def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) -> Scene:
     """The scene of a ``.tri`` file; ``size`` (width, height) is the image, 500 x 500 by default."""
     text = decode_text(data, file) if isinstance(data, bytes) else data
