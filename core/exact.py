@@ -358,26 +358,27 @@ def relative_error(approx, exact) -> float:
     return worst
 
 
-def condition(f: Callable[[list[Fraction]], list[list[Fraction]]], inputs: Sequence[Fraction],
-              trials: int = 3, seed: int = 6) -> float:
+def condition(f: Callable[[list[Fraction]], list[list[list[Fraction]]]],
+              inputs: Sequence[Fraction], trials: int = 3, seed: int = 6) -> float:
     """Componentwise relative condition number of ``f`` at ``inputs``, estimated exactly.
 
+    ``f`` maps the inputs to blocks of rows of outputs (``[[row, ...], ...]``); each column of
+    each block is measured against its own largest value, as :func:`relative_error` does.
     Every input is moved by a relative ``h = 2**-64`` with a random sign (the perturbation
     rounding the inputs to float64 makes, shrunk so that the response is linear), ``trials``
-    times; ``f`` returns rows of outputs and each output column is measured against its own
-    largest value, as :func:`relative_error` does. The estimate is ``max response / h``: the
-    factor by which the relative error of the inputs can grow in the outputs, whatever
-    algorithm computes them. Random signs find it to within a small factor.
+    times. The estimate is ``max response / h``: the factor by which the relative error of
+    the inputs can grow in the outputs, whatever algorithm computes them. Random signs find it
+    to within a small factor.
     """
     h = Fraction(1, 1 << 64)
     base = f(list(inputs))
     rng = random.Random(seed)
     worst = ZERO
     for _ in range(trials):
-        moved = [x * (1 + h * rng.choice((-1, 1))) for x in inputs]
-        out = f(moved)
-        for k in range(len(base[0]) if base else 0):
-            size = max(abs(row[k]) for row in base)
-            diff = max(abs(a[k] - b[k]) for a, b in zip(out, base))
-            worst = max(worst, diff / size if size else diff)
+        moved = f([x * (1 + h * rng.choice((-1, 1))) for x in inputs])
+        for block, block0 in zip(moved, base):
+            for k in range(len(block0[0]) if block0 else 0):
+                size = max(abs(row[k]) for row in block0)
+                diff = max(abs(a[k] - b[k]) for a, b in zip(block, block0))
+                worst = max(worst, diff / size if size else diff)
     return float(worst / h)
