@@ -17,7 +17,6 @@ import pytest
 
 from core import generators, project
 from core.formats import ReaderError, load_scene, read_mesh, read_scene_file, read_tri
-from core.formats.camera import tri_view
 from core.formats.meshfile import edge_problem, merge_vertices, signed_volume
 from core.paths import SCENES_DIR
 from core.render import render

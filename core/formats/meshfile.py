@@ -11,11 +11,14 @@ these formats that a hand parser gets wrong: OBJ polygons fanned into triangles,
 PLY in ASCII and both binary byte orders with any property types; binary and ASCII STL; OFF.
 We call its format loaders (``trimesh.exchange.load.mesh_loaders``) directly instead of
 ``trimesh.load(..., force="mesh")``, because turning the loaded scene into one mesh drops the
-normals the file carries (trimesh 4.x). trimesh does not validate everything, and some
-malformed input goes through silently (an OBJ face index 0 becomes vertex 1; a vertex line with
-two numbers shifts the columns of the others; an ASCII PLY whose header over-counts its vertices
-loads the faces as vertices). So a short linear pass checks each format's structure first and
-reports the line, and the result is checked for NaN, infinities and indices out of range.
+normals the file carries (trimesh 4.x); faces that are all k-gons come back from a loader
+untriangulated (trimesh's mesh constructor would fan them), so :func:`fan` does that here.
+trimesh does not validate everything, and some
+malformed input goes through silently (an OBJ face index 0 becomes vertex 1; one vertex line with
+two numbers makes it drop or shift the coordinates of the others; an ASCII PLY whose header
+over-counts its vertices loads the faces as vertices). So a short linear pass checks each
+format's structure first and reports the line, and the result is checked for NaN, infinities,
+coordinates beyond 1e30 and indices out of range.
 Every trimesh exception becomes a :class:`ReaderError` naming the file. Vertices that are equal
 are merged into one by hashing (``np.unique`` on rows), as the course's ``.tri`` reader does.
 """

@@ -88,7 +88,8 @@ def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) 
         camera = tri_view(viewpoint, top_left, right, down, size, positions,
                           label=f"{file}: the file's camera")
     except ValueError as error:
-        raise ReaderError(file, str(error), numbers.line(0 if "viewpoint" in str(error) else 6))
+        at = 0 if str(error).startswith("the viewpoint") else 6     # else: the displacements
+        raise ReaderError(file, str(error), numbers.line(at)) from None
     light = tri_light(viewpoint, right, down)
     if camera.mirror is not None:
         positions = apply(camera.mirror, positions)[:, :3]
