@@ -361,9 +361,10 @@ def write_chart(rows: list[dict], path: Path) -> None:
     ax.set_yscale("log")
     ax.set_ylabel("frame time, ms (median, min–max)")
     ax.set_xticks(x, labels, fontsize=8)
-    scene_names = sorted({r["scene"] for r in rows})
+    # sphere_torus_1000, sphere_torus_10000, ... → sphere_torus
+    scene_names = sorted({re.sub(r"_\d+$", "", r["scene"]) for r in rows})
     ax.set_title(f"{', '.join(scene_names)}: {rows[0]['size'][0]} x {rows[0]['size'][1]}, "
-                 f"{rows[0]['projection']}")
+                 f"{rows[0]['projection']}, ours vs llvmpipe")
     ax.legend()
     ax.grid(axis="y", which="both", alpha=0.3)
     fig.tight_layout()
