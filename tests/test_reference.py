@@ -194,7 +194,6 @@ def test_sphere_phong_beats_gouraud_beats_flat():
     perspective, 200 x 200, against the reference at 16 samples a pixel. Measured RMSE
     (0-255 scale) on 20 676 pixels: flat 4.66, Gouraud 3.04, Phong 0.36 (the 8-bit rounding
     alone gives ~0.29)."""
-    pytest.importorskip("core.clip_polygon", reason="the triangle clipper is not in the tree yet")
     scene = sphere_scene(48, 24)
     reference = render_reference([Sphere((0, 0, 0), 1.0, SPHERE_MATERIAL)], scene, SPHERE_VIEW,
                                  "perspective", size=SIZE, samples=4)
@@ -212,7 +211,6 @@ def test_torus_phong_matches_the_reference():
     two lights: on the pixels where every reference sample sees the torus, Phong shading is
     within a fraction of one 8-bit step of the exact image, and flat is far from it. Measured
     RMSE (0-255 scale) on 17 632 pixels: flat 3.29, Gouraud 1.93, Phong 0.34."""
-    pytest.importorskip("core.clip_polygon", reason="the triangle clipper is not in the tree yet")
     from core.render import render
     mesh = generators.torus(1.0, 0.35, segments=96, sides=48)
     mesh.material = SPHERE_MATERIAL

@@ -206,8 +206,7 @@ def test_empty_scene_resolves_to_background():
 def render_with_raster(scene: Scene, view: View, projection: str, mode: str, size):
     """Normalize, project, rasterize and resolve (no clipping: the scene lies inside the
     view volume); what core.render does for the solid pipeline, reduced to the minimum."""
-    raster = pytest.importorskip("core.raster", reason="core/raster.py is not in the tree yet")
-    from core import project
+    from core import project, raster
     from core.transforms import apply
     from core.view import normalizing_transform
     width, height = size
