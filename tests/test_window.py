@@ -148,6 +148,28 @@ def test_messages_show_invalid_views_and_the_frame_message(state):
             assert "invalid" in state.frame.message
 
 
+def test_compile_notice_only_when_numba_compiles(capsys):
+    from app import state as state_module
+
+    state_module._compiling.clear()
+    state_module.compile_notice()                 # slow, but loading cached kernels: silent
+    assert capsys.readouterr().err == ""
+    state_module._compiling.set()
+    state_module.compile_notice()
+    assert capsys.readouterr().err == "compiling the rasterizer (first start only)…\n"
+    state_module._compiling.clear()
+
+
+def test_gui_text_keeps_to_the_fonts_characters():
+    pytest.importorskip("glfw")
+    from app.window import displayable, shipped_scenes
+
+    assert displayable("Cohen–Sutherland — “clip” … 1/W ≤ 0 · ok") == \
+        'Cohen-Sutherland - "clip" ... 1/W ? 0 . ok'
+    names = [p.name for p in shipped_scenes()]
+    assert "house.views" in names and not any(n.endswith((".py", ".md")) for n in names)
+
+
 def bad_scene_files(tmp_path) -> list[Path]:
     junk = tmp_path / "junk.tri"
     junk.write_bytes(b"\x00\xff not a tri file \x00" * 10)
