@@ -82,11 +82,13 @@ def project_triangles(points: np.ndarray, projection: str, z_min: float, vp):
 
     Perspective goes through the perspective-to-parallel matrix so that depth stays affine in
     screen space; ``inv_w`` (1/W) lets the rasterizer interpolate attributes perspective-
-    correctly. The clipper guarantees W = -z > 0 for every point that reaches here.
+    correctly. The clipper guarantees W = -z > 0 for every vertex a triangle uses.
     """
     m = m_vv3dv(*vp)
     if projection == "perspective":
         m = m @ perspective_to_parallel(z_min)
     h = _homogeneous(points) @ m.T
-    inv_w = 1.0 / h[:, 3]
+    # The clipper keeps its input vertex array whole, so vertices no triangle uses may lie
+    # outside the volume, even at the eye (W = 0): they get inv_w = 0 instead of a division.
+    inv_w = np.divide(1.0, h[:, 3], out=np.zeros(len(h)), where=h[:, 3] > 0.0)
     return h[:, :3] * inv_w[:, None], inv_w
