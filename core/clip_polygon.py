@@ -1,20 +1,29 @@
-"""3D clipping of triangles in the canonical view volumes (FvDFH 3.14.1 and 6.5.3).
+"""Clipping triangles against the canonical view volume: outcodes, then Sutherland–Hodgman.
 
-Takes canonical-volume points ``(V, 3)`` (after N_per / N_par, before any divide), triangles
-``(T, 3)`` and per-vertex attributes ``(V, K)``; returns the visible parts as triangles over an
-extended vertex array, with each attribute interpolated at every crossing by the same
-parameter t, and ``source`` naming the input triangle each output triangle came from.
+Takes triangles in the canonical volume, after N_per or N_par and before any divide
+(FvDFH 6.5.3–6.5.4; pipeline.md "Clipping in 3D"): ``points`` (V, 3) float64, ``triangles``
+(T, 3) int64, per-vertex ``attrs`` (V, K) float64 (K may be 0), the ``projection``
+("perspective" or "parallel") and the front plane ``z_min`` of the perspective volume.
 
-1. Outcodes per vertex (:func:`core.clip.outcodes`, the same six bits as the line clipper).
-2. Trivial accept (OR of the three codes is 0): the triangle passes through untouched, over
-   the input vertices. Trivial reject (AND is not 0): dropped.
-3. Only the rest go through Sutherland–Hodgman, plane by plane (only the planes some vertex
-   violates), and the convex result is fanned back into triangles.
+Returns :class:`ClippedTriangles`: points (V', 3), triangles (T', 3), attrs (V', K) and
+``source`` (T',) int64, the input triangle each output triangle came from.
 
-A point exactly on a plane is inside. Intersections are computed from the inside vertex towards
-the outside one, so two triangles sharing an edge get bit-identical crossing points and stay
-watertight. A triangle crossing the eye plane is clipped here, before any divide, so no NaN
-reaches the projection.
+* Each vertex gets FvDFH's 6-bit outcode (vectorised numpy). A point exactly on a plane is
+  inside. A triangle whose codes are all 0 is trivially accepted and passes through untouched
+  (same vertex indices); one whose codes AND to non-zero lies wholly outside one plane and is
+  trivially rejected. When every vertex is inside, the input arrays are returned as they are.
+* Only the remaining triangles are clipped: Sutherland–Hodgman (FvDFH 3.14.1, Fig. 3.49)
+  against each plane their codes say they cross, every attribute interpolated with the same
+  parameter t as the position, and the convex result fanned back into triangles. New vertices
+  are appended after the input ones; vertices of the input that survive keep their index.
+* Output order: the accepted triangles in input order, then the clipped ones in input order.
+
+Robustness: the clip happens in the canonical volume, so a triangle crossing the eye plane
+never reaches a divide; an intersection is always computed from the inside end of an edge
+(t = d_in / (d_in - d_out) with d_in >= 0 > d_out, never 0/0), so both triangles sharing an
+edge get bit-identical crossing points and the mesh stays watertight. Each new vertex is then
+put exactly on its plane. A vertex with a NaN or infinite coordinate counts as outside every
+plane; a triangle that uses one is dropped.
 """
 
 from __future__ import annotations
@@ -24,112 +33,265 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from core.clip import outcodes, planes
+# Outcode bits, in FvDFH's order (parallel volume | perspective volume).
+ABOVE = 1  # y > 1        | y > -z
+BELOW = 2  # y < -1       | y < z
+RIGHT = 4  # x > 1        | x > -z
+LEFT = 8  # x < -1        | x < z
+BEHIND = 16  # z < -1     | z < -1   (beyond the back plane)
+FRONT = 32  # z > 0       | z > z_min (in front of the front plane)
+ALL_PLANES = 63
 
-# A triangle clipped by six planes has at most 3 + 6 vertices.
-MAX_POLYGON = 9
+# The order Sutherland–Hodgman visits the planes: front and back first, so that the part of a
+# triangle behind the eye is gone before the side planes (which meet at the eye) are used.
+_PLANE_ORDER = np.array([FRONT, BEHIND, ABOVE, BELOW, RIGHT, LEFT], dtype=np.int64)
+
+MAX_POLYGON = 9  # a triangle clipped by six planes has at most 3 + 6 vertices
+MAX_FAN = MAX_POLYGON - 2
 
 
 @dataclass
 class ClippedTriangles:
-    points: np.ndarray      # (V', 3) canonical coordinates; the input points come first
-    triangles: np.ndarray   # (T', 3) int64
-    attrs: np.ndarray       # (V', K)
-    source: np.ndarray      # (T',) int64: the input triangle of each output triangle
+    """Triangles inside the canonical volume, ready for projection to the device."""
+
+    points: np.ndarray  # (V', 3) float64, canonical coordinates
+    triangles: np.ndarray  # (T', 3) int64 indices into points
+    attrs: np.ndarray  # (V', K) float64, interpolated like the positions
+    source: np.ndarray  # (T',) int64, index of the input triangle
+
+
+def _check_projection(projection: str) -> bool:
+    if projection not in ("perspective", "parallel"):
+        raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
+    return projection == "perspective"
+
+
+def outcodes(points: np.ndarray, projection: str, z_min: float = 0.0) -> np.ndarray:
+    """FvDFH's 6-bit outcode of each point, (N,) uint8 (0 = inside or on the volume).
+
+    Bits ABOVE, BELOW, RIGHT, LEFT, BEHIND, FRONT as defined in this module, for the
+    canonical parallel volume (-1 <= x, y <= 1, -1 <= z <= 0) or perspective volume
+    (z <= x, y <= -z, -1 <= z <= z_min). A NaN or infinite coordinate sets every bit it
+    cannot satisfy; a NaN coordinate is outside both of its planes.
+    """
+    perspective = _check_projection(projection)
+    points = np.asarray(points, dtype=np.float64)
+    x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    if perspective:
+        minus_z = -z
+        top, bottom, right, left, far, near = minus_z, z, minus_z, z, -1.0, float(z_min)
+    else:
+        top, bottom, right, left, far, near = 1.0, -1.0, 1.0, -1.0, -1.0, 0.0
+    # Build the bits of "inside" and flip them at the end: a comparison with NaN is False,
+    # so a NaN coordinate ends up outside.
+    inside = (y <= top).view(np.uint8)
+    inside = inside | ((y >= bottom).view(np.uint8) << 1)
+    inside |= (x <= right).view(np.uint8) << 2
+    inside |= (x >= left).view(np.uint8) << 3
+    inside |= (z >= far).view(np.uint8) << 4
+    inside |= (z <= near).view(np.uint8) << 5
+    return inside ^ np.uint8(ALL_PLANES)
+
+
+# --------------------------------------------------------------------------------------------
+# Sutherland–Hodgman (FvDFH Fig. 3.49), one triangle at a time
 
 
 @njit(cache=True)
-def _sutherland_hodgman(points, attrs, triangles, work, codes_or, pl, out_points, out_attrs,
-                        out_triangles, out_source):
-    """Clip each triangle ``work[k]`` against the planes in ``codes_or[k]``.
+def _distance(plane, x, y, z, perspective, z_min):
+    """Signed distance-like value of (x, y, z) from a clip plane: >= 0 inside, < 0 outside."""
+    if plane == ABOVE:
+        return (-z if perspective else 1.0) - y
+    if plane == BELOW:
+        return y - (z if perspective else -1.0)
+    if plane == RIGHT:
+        return (-z if perspective else 1.0) - x
+    if plane == LEFT:
+        return x - (z if perspective else -1.0)
+    if plane == BEHIND:
+        return z + 1.0
+    return (z_min if perspective else 0.0) - z  # FRONT
 
-    Writes new vertices into ``out_points`` / ``out_attrs`` and fanned triangles (indexing
-    those new vertices) into ``out_triangles``; returns (vertices written, triangles written).
+
+@njit(cache=True)
+def _put_on_plane(plane, p, perspective, z_min):
+    """Remove the rounding left by the interpolation: set the coordinate the plane fixes."""
+    if plane == ABOVE:
+        p[1] = -p[2] if perspective else 1.0
+    elif plane == BELOW:
+        p[1] = p[2] if perspective else -1.0
+    elif plane == RIGHT:
+        p[0] = -p[2] if perspective else 1.0
+    elif plane == LEFT:
+        p[0] = p[2] if perspective else -1.0
+    elif plane == BEHIND:
+        p[2] = -1.0
+    else:
+        p[2] = z_min if perspective else 0.0
+
+
+@njit(cache=True)
+def _intersect(plane, inside_p, inside_a, d_in, outside_p, outside_a, d_out, out_p, out_a,
+               perspective, z_min):
+    """The crossing of edge inside->outside with the plane, positions and attributes alike."""
+    t = d_in / (d_in - d_out)  # d_in >= 0 > d_out: 0 <= t < 1, never 0/0
+    for c in range(3):
+        out_p[c] = inside_p[c] + t * (outside_p[c] - inside_p[c])
+    for k in range(inside_a.shape[0]):
+        out_a[k] = inside_a[k] + t * (outside_a[k] - inside_a[k])
+    _put_on_plane(plane, out_p, perspective, z_min)
+
+
+@njit(cache=True)
+def _clip_against_plane(plane, in_p, in_a, in_id, n_in, out_p, out_a, out_id, perspective,
+                        z_min):
+    """SutherlandHodgmanPolygonClip: the polygon in_* (n_in vertices) against one plane.
+
+    Walks the edges s->p: p inside -> output p (preceded by the crossing if s was outside);
+    p outside and s inside -> output the crossing. Returns the output vertex count. A vertex
+    keeps its id (index of the input vertex) or gets -1 when it is a new crossing point.
     """
-    k_attr = attrs.shape[1]
-    poly = np.empty((MAX_POLYGON + 1, 3))
-    poly_a = np.empty((MAX_POLYGON + 1, k_attr))
-    nxt = np.empty((MAX_POLYGON + 1, 3))
-    nxt_a = np.empty((MAX_POLYGON + 1, k_attr))
-    nv = 0
-    nt = 0
-    for k in range(work.shape[0]):
-        t = work[k]
-        count = 3
+    n_out = 0
+    s = n_in - 1
+    d_s = _distance(plane, in_p[s, 0], in_p[s, 1], in_p[s, 2], perspective, z_min)
+    for p in range(n_in):
+        d_p = _distance(plane, in_p[p, 0], in_p[p, 1], in_p[p, 2], perspective, z_min)
+        if d_p >= 0.0:
+            if d_s < 0.0:  # entering: the crossing, computed from the inside end p
+                _intersect(plane, in_p[p], in_a[p], d_p, in_p[s], in_a[s], d_s, out_p[n_out],
+                           out_a[n_out], perspective, z_min)
+                out_id[n_out] = -1
+                n_out += 1
+            out_p[n_out] = in_p[p]
+            out_a[n_out] = in_a[p]
+            out_id[n_out] = in_id[p]
+            n_out += 1
+        elif d_s >= 0.0:  # leaving: the crossing, computed from the inside end s
+            _intersect(plane, in_p[s], in_a[s], d_s, in_p[p], in_a[p], d_p, out_p[n_out],
+                       out_a[n_out], perspective, z_min)
+            out_id[n_out] = -1
+            n_out += 1
+        s = p
+        d_s = d_p
+    return n_out
+
+
+@njit(cache=True)
+def _sutherland_hodgman(points, triangles, attrs, codes, todo, perspective, z_min):
+    """Clip the triangles listed in ``todo``; returns new points, attrs, triangles, sources.
+
+    New vertices are numbered from len(points) on; a vertex of the input that survives the
+    clip keeps its index.
+    """
+    n_attrs = attrs.shape[1]
+    n_points = points.shape[0]
+    m = todo.shape[0]
+    new_points = np.empty((m * MAX_POLYGON, 3))
+    new_attrs = np.empty((m * MAX_POLYGON, n_attrs))
+    new_triangles = np.empty((m * MAX_FAN, 3), np.int64)
+    new_source = np.empty(m * MAX_FAN, np.int64)
+    # two polygon buffers, swapped after each plane
+    poly_p = np.empty((2, MAX_POLYGON, 3))
+    poly_a = np.empty((2, MAX_POLYGON, n_attrs))
+    poly_id = np.empty((2, MAX_POLYGON), np.int64)
+    index = np.empty(MAX_POLYGON, np.int64)
+    n_new_points = 0
+    n_new_triangles = 0
+    for k in range(m):
+        t = todo[k]
+        finite = True
+        crossed = 0  # the planes some vertex is outside of
         for c in range(3):
-            poly[c] = points[triangles[t, c]]
-            poly_a[c] = attrs[triangles[t, c]]
-        for i in range(6):
-            if (codes_or[k] >> i) & 1 == 0 or count == 0:
-                continue
-            a, b, cc, d = pl[i, 0], pl[i, 1], pl[i, 2], pl[i, 3]
-            m = 0
-            s = count - 1                               # S: the previous vertex, P: this one
-            f_s = a * poly[s, 0] + b * poly[s, 1] + cc * poly[s, 2] + d
-            for p in range(count):
-                f_p = a * poly[p, 0] + b * poly[p, 1] + cc * poly[p, 2] + d
-                if (f_p <= 0.0) != (f_s <= 0.0):        # the edge S-P crosses plane i
-                    if f_s <= 0.0:
-                        inside, outside, f_in, f_out = s, p, f_s, f_p
-                    else:
-                        inside, outside, f_in, f_out = p, s, f_p, f_s
-                    u = f_in / (f_in - f_out)
-                    for c in range(3):
-                        nxt[m, c] = poly[inside, c] + u * (poly[outside, c] - poly[inside, c])
-                    for c in range(k_attr):
-                        nxt_a[m, c] = poly_a[inside, c] + u * (poly_a[outside, c] - poly_a[inside, c])
-                    m += 1
-                if f_p <= 0.0:
-                    nxt[m] = poly[p]
-                    nxt_a[m] = poly_a[p]
-                    m += 1
-                s, f_s = p, f_p
-            count = m
-            poly[:count] = nxt[:count]
-            poly_a[:count] = nxt_a[:count]
-        if count < 3:
-            continue
-        for c in range(count):
-            out_points[nv + c] = poly[c]
-            out_attrs[nv + c] = poly_a[c]
-        for c in range(1, count - 1):                   # fan from the first vertex
-            out_triangles[nt, 0] = nv
-            out_triangles[nt, 1] = nv + c
-            out_triangles[nt, 2] = nv + c + 1
-            out_source[nt] = t
-            nt += 1
-        nv += count
-    return nv, nt
+            v = triangles[t, c]
+            poly_p[0, c] = points[v]
+            poly_a[0, c] = attrs[v]
+            poly_id[0, c] = v
+            crossed |= codes[v]
+            for d in range(3):
+                finite &= np.isfinite(points[v, d])
+        if not finite:
+            continue  # a NaN or infinite vertex: nothing sensible to draw
+        n = 3
+        cur = 0
+        for plane in _PLANE_ORDER:
+            if crossed & plane and n > 0:
+                n = _clip_against_plane(plane, poly_p[cur], poly_a[cur], poly_id[cur], n,
+                                        poly_p[1 - cur], poly_a[1 - cur], poly_id[1 - cur],
+                                        perspective, z_min)
+                cur = 1 - cur
+        if n < 3:
+            continue  # clipped away, or only an edge or a point on the volume's boundary
+        for i in range(n):
+            if poly_id[cur, i] >= 0:
+                index[i] = poly_id[cur, i]
+            else:
+                new_points[n_new_points] = poly_p[cur, i]
+                new_attrs[n_new_points] = poly_a[cur, i]
+                index[i] = n_points + n_new_points
+                n_new_points += 1
+        for i in range(1, n - 1):  # fan the convex polygon from its first vertex
+            new_triangles[n_new_triangles, 0] = index[0]
+            new_triangles[n_new_triangles, 1] = index[i]
+            new_triangles[n_new_triangles, 2] = index[i + 1]
+            new_source[n_new_triangles] = t
+            n_new_triangles += 1
+    return (new_points[:n_new_points], new_attrs[:n_new_points],
+            new_triangles[:n_new_triangles], new_source[:n_new_triangles])
 
 
-def clip_triangles(points: np.ndarray, triangles: np.ndarray, attrs: np.ndarray | None,
-                   projection: str, z_min: float = 0.0) -> ClippedTriangles:
-    """Clip ``triangles`` over ``points`` to the canonical volume of ``projection``."""
-    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+# --------------------------------------------------------------------------------------------
+
+_identity = np.arange(0, dtype=np.int64)
+
+
+def _arange(n: int) -> np.ndarray:
+    """0..n-1 as a read-only view of a cached array (no allocation per frame)."""
+    global _identity
+    if _identity.shape[0] < n:
+        _identity = np.arange(max(n, 2 * _identity.shape[0]), dtype=np.int64)
+        _identity.flags.writeable = False
+    return _identity[:n]
+
+
+def clip_triangles(points, triangles, attrs, projection: str,
+                   z_min: float = 0.0) -> ClippedTriangles:
+    """Clip triangles to the canonical view volume (see the module docstring).
+
+    ``attrs`` may be None (no attributes: (V, 0)). ``z_min`` is the front plane of the
+    perspective volume (-1 < z_min < 0); it is ignored for the parallel one. When every vertex is inside, the inputs are returned unchanged
+    (no copy), with ``source`` a read-only 0..T-1.
+    """
+    perspective = _check_projection(projection)
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64)
     if attrs is None:
-        attrs = np.zeros((len(points), 0))
-    attrs = np.ascontiguousarray(attrs, dtype=np.float64).reshape(len(points), -1)
-    codes = outcodes(points, projection, z_min)[triangles]            # (T, 3)
-    code_or = codes[:, 0] | codes[:, 1] | codes[:, 2]
-    code_and = codes[:, 0] & codes[:, 1] & codes[:, 2]
-    accept = code_or == 0
-    if accept.all():
-        return ClippedTriangles(points, triangles, attrs, np.arange(len(triangles)))
-    work = np.flatnonzero(~accept & (code_and == 0))
-    kept = np.flatnonzero(accept)
-    if len(work) == 0:
+        attrs = np.empty((points.shape[0], 0))
+    attrs = np.ascontiguousarray(attrs, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f"points must be (V, 3), got {points.shape}")
+    if triangles.ndim != 2 or triangles.shape[1] != 3:
+        raise ValueError(f"triangles must be (T, 3), got {triangles.shape}")
+    if attrs.ndim != 2 or attrs.shape[0] != points.shape[0]:
+        raise ValueError(f"attrs must be ({points.shape[0]}, K), got {attrs.shape}")
+    n_triangles = triangles.shape[0]
+    codes = outcodes(points, projection, z_min)
+    if not codes.any():  # the whole mesh is inside: trivial accept for every triangle
+        return ClippedTriangles(points, triangles, attrs, _arange(n_triangles))
+
+    corner = codes[triangles]  # (T, 3) outcodes of each triangle's corners
+    code_or = corner[:, 0] | corner[:, 1] | corner[:, 2]
+    code_and = corner[:, 0] & corner[:, 1] & corner[:, 2]
+    accepted = code_or == 0
+    todo = np.flatnonzero(~accepted & (code_and == 0))  # neither accepted nor rejected
+    kept = np.flatnonzero(accepted)
+    if todo.size == 0:
         return ClippedTriangles(points, triangles[kept], attrs, kept)
-    new_points = np.empty((len(work) * MAX_POLYGON, 3))
-    new_attrs = np.empty((len(work) * MAX_POLYGON, attrs.shape[1]))
-    new_triangles = np.empty((len(work) * (MAX_POLYGON - 2), 3), dtype=np.int64)
-    new_source = np.empty(len(work) * (MAX_POLYGON - 2), dtype=np.int64)
-    nv, nt = _sutherland_hodgman(points, attrs, triangles, work, code_or[work].astype(np.int64),
-                                 planes(projection, z_min), new_points, new_attrs,
-                                 new_triangles, new_source)
+
+    new_points, new_attrs, new_triangles, new_source = _sutherland_hodgman(
+        points, triangles, attrs, codes, todo, perspective, float(z_min))
     return ClippedTriangles(
-        points=np.concatenate([points, new_points[:nv]]),
-        triangles=np.concatenate([triangles[kept], new_triangles[:nt] + len(points)]),
-        attrs=np.concatenate([attrs, new_attrs[:nv]]),
-        source=np.concatenate([kept, new_source[:nt]]),
+        points=np.concatenate([points, new_points]),
+        triangles=np.concatenate([triangles[kept], new_triangles]),
+        attrs=np.concatenate([attrs, new_attrs]),
+        source=np.concatenate([kept, new_source]),
     )
