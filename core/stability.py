@@ -201,8 +201,9 @@ def probe(scene: Scene, projection: str, shading: str, size=SIZE, view_index: in
           ) -> list[str]:
     """The stages of ``core.render_solid`` run one by one; the names of non-finite arrays.
 
-    Also flags ``1/W <= 0`` reaching the rasterizer and barycentric weights outside
-    [-1e-9, 1 + 1e-9] (both would mean a point at or behind the eye got through).
+    Also flags ``1/W <= 0`` at a vertex a triangle uses and barycentric weights outside
+    [-1e-9, 1 + 1e-9] (both would mean a point at or behind the eye got through). Vertices no
+    triangle uses (the clipper keeps its input array whole) are not the rasterizer's concern.
     """
     from core.clip_polygon import clip_triangles
     from core.raster import rasterize
@@ -229,9 +230,10 @@ def probe(scene: Scene, projection: str, shading: str, size=SIZE, view_index: in
     finite("clipped attributes", clipped.attrs)
     vp = project.viewport(view.window, *size)
     device, inv_w = project.project_triangles(clipped.points, projection, z_min, vp)
-    finite("device points", device)
-    finite("1/W", inv_w)
-    if len(inv_w) and not np.all(inv_w > 0.0):
+    used = np.unique(clipped.triangles)
+    finite("device points", device[used])
+    finite("1/W", inv_w[used])
+    if len(used) and not np.all(inv_w[used] > 0.0):
         bad.append("1/W <= 0")
     vis = rasterize(device, inv_w, clipped.triangles, size[0], size[1])
     covered = vis.tri >= 0
@@ -575,20 +577,30 @@ FACING_VIEW = View(vrp=(0, 0, 0), vpn=tuple(FACING[:3, 2]), vup=tuple(FACING[:3,
 
 
 def _exact_square_mask(corners, view: View, size=SIZE) -> np.ndarray:
-    """Pixels whose centres lie inside the projected convex polygon ``corners``, exactly."""
+    """Pixels whose centres lie inside the projected convex polygon ``corners``, exactly.
+
+    The corners are projected in exact arithmetic; the edge functions are evaluated in float64
+    and any pixel centre within 1e-6 of an edge is decided again in exact arithmetic.
+    """
     vp = project.viewport(view.window, *size)
     _, device = exact.chain(exact.view_numbers(view),
                             [tuple(exact.q(c) for c in p) for p in corners], "perspective", vp)
     xy = [(d[0], d[1]) for d in device]
     width, height = size
-    mask = np.zeros((height, width), dtype=bool)
-    for j in range(height):
-        for i in range(width):
-            x, y = Fraction(2 * i + 1, 2), Fraction(2 * j + 1, 2)
-            sides = [(b[0] - a[0]) * (y - a[1]) - (b[1] - a[1]) * (x - a[0])
-                     for a, b in zip(xy, xy[1:] + xy[:1])]
-            inside = all(s > 0 for s in sides) or all(s < 0 for s in sides)
-            mask[height - 1 - j, i] = inside
+    j, i = np.mgrid[height - 1:-1:-1, 0:width]            # device row of each image row
+    x, y = i + 0.5, j + 0.5
+
+    def sides(px, py, number):
+        return [(b[0] - a[0]) * (py - a[1]) - (b[1] - a[1]) * (px - a[0])
+                for a, b in zip(number(xy), number(xy[1:] + xy[:1]))]
+
+    floats = sides(x, y, lambda pts: [(float(a), float(b)) for a, b in pts])
+    mask = np.all([s > 0 for s in floats], axis=0) | np.all([s < 0 for s in floats], axis=0)
+    close = np.any([np.abs(s) < 1e-6 for s in floats], axis=0)
+    for r, c in zip(*np.nonzero(close)):
+        exact_sides = sides(Fraction(int(2 * x[r, c]), 2), Fraction(int(2 * y[r, c]), 2),
+                            lambda pts: pts)
+        mask[r, c] = all(s > 0 for s in exact_sides) or all(s < 0 for s in exact_sides)
     return mask
 
 
