@@ -123,29 +123,33 @@ def _scenes(args) -> list:
 
 # ----------------------------------------------------------------------------- timing
 
-def _summary(seconds: list[float]) -> dict:
+def _summary(seconds: list[float], cpu_seconds: list[float]) -> dict:
+    """Wall-time median, min and max in ms; ``cpu_median``: the process's CPU time per frame
+    (all threads), which says how much of the wall time other processes took."""
     ms = np.asarray(seconds) * 1e3
     return {"median": float(np.median(ms)), "min": float(ms.min()), "max": float(ms.max()),
-            "frames": len(ms)}
+            "frames": len(ms), "cpu_median": float(np.median(cpu_seconds) * 1e3)}
 
 
 def time_ours(scene, projection: str, shading: str, size, frames: int, warmup: int, blit) -> dict:
     """Full CPU frames plus the viewer's texture upload; per-stage medians from Frame.stats."""
     from core.render import render
-    totals, uploads, stages = [], [], {}
+    totals, cpu, uploads, stages = [], [], [], {}
     frame = None
     for k in range(warmup + frames):
+        c0 = time.process_time()
         t0 = time.perf_counter()
         frame = render(scene, 0, projection, shading, size)
         t1 = time.perf_counter()
         blit.upload(frame.color)
         t2 = time.perf_counter()
         if k >= warmup:
+            cpu.append(time.process_time() - c0)
             totals.append(t2 - t0)
             uploads.append(t2 - t1)
             for stage, ms in frame.stats.get("ms", {}).items():
                 stages.setdefault(stage, []).append(ms)
-    result = _summary(totals)
+    result = _summary(totals, cpu)
     result["upload_ms"] = float(np.median(uploads) * 1e3)
     result["stages_ms"] = {stage: float(np.median(v)) for stage, v in stages.items()}
     if frame is not None and frame.message:
@@ -155,13 +159,15 @@ def time_ours(scene, projection: str, shading: str, size, frames: int, warmup: i
 
 def time_llvmpipe(renderer, projection: str, shading: str, frames: int, warmup: int) -> dict:
     """llvmpipe frames: draw + finish timed; the readback timed apart."""
-    draws, reads = [], []
+    draws, cpu, reads = [], [], []
     for k in range(warmup + frames):
+        c0 = time.process_time()
         draw, read = renderer.timed_frame(0, projection, shading)
         if k >= warmup:
+            cpu.append(time.process_time() - c0)     # includes the readback
             draws.append(draw)
             reads.append(read)
-    result = _summary(draws)
+    result = _summary(draws, cpu)
     result["readback_ms"] = float(np.median(reads) * 1e3)
     return result
 
@@ -302,12 +308,14 @@ def _ms(stat: dict) -> str:
 
 def format_table(rows: list[dict]) -> str:
     head = (f"{'scene':<20} {'triangles':>10} {'shading':<8} {'ours ms median (min–max)':>28} "
-            f"{'fps':>7} {'llvmpipe ms median (min–max)':>30} {'ours/llvmpipe':>13}")
+            f"{'fps':>7} {'llvmpipe ms median (min–max)':>30} {'ours/llvmpipe':>13} "
+            f"{'CPU ms ours/llvmpipe':>21}")
     lines = [head, "-" * len(head)]
     for r in rows:
         lines.append(f"{r['scene']:<20} {r['triangles']:>10,} {r['shading']:<8} "
                      f"{_ms(r['ours']):>28} {r['ours_fps']:>7.1f} {_ms(r['llvmpipe']):>30} "
-                     f"{r['ratio']:>13.2f}")
+                     f"{r['ratio']:>13.2f} "
+                     f"{r['ours']['cpu_median']:>10.1f}/{r['llvmpipe']['cpu_median']:<10.1f}")
     return "\n".join(lines)
 
 
