@@ -38,7 +38,11 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
 
     v = sub.add_parser("view", help="open the viewer window (renders PNGs when there is no display)")
     v.add_argument("scene", nargs="?", help=scene_help + "; default: the house")
-    v.add_argument("--size", type=_size, default=None, help="framebuffer size WxH (default 500x500)")
+    v.add_argument("--size", type=_size, default=None,
+                   help="framebuffer size WxH (default: the scene's, 500x500)")
+    v.add_argument("--out", default=None,
+                   help="where screenshots go, and the PNGs when there is no display "
+                        "(default: ., and ./fvd-views or $FVD_OUT without a display)")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
@@ -111,7 +115,7 @@ def _pick_view(scene, k: int):
 def _dispatch(args) -> int:
     if args.command == "view":
         from app.viewer import main as viewer_main
-        return viewer_main(args.scene, args.size or (500, 500))
+        return viewer_main(args.scene, args.size, out_dir=args.out)
     if args.command == "render":
         return _render(args)
     if args.command == "matrices":

@@ -17,14 +17,14 @@ both volumes (bits in pipeline.md's order):
   5    z > 0           z > z_min
 =====  ==============  =====================
 
-A point exactly on a plane is inside. Trivial accept and reject are vectorised; only the
-segments that need it go through the compiled loop.
+A point exactly on a plane is inside. Everything is vectorised numpy over the segments (no
+numba here, so a wireframe frame needs no compiler); only segments that are neither trivially
+accepted nor rejected enter the clipping loop.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 
 def planes(projection: str, z_min: float = 0.0) -> np.ndarray:
@@ -38,58 +38,54 @@ def planes(projection: str, z_min: float = 0.0) -> np.ndarray:
     raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
 
 
-def outcodes(points: np.ndarray, projection: str, z_min: float = 0.0) -> np.ndarray:
-    """The 6-bit Cohen–Sutherland outcode of each canonical point ``(N, 3)`` → ``(N,)`` uint8."""
-    pl = planes(projection, z_min)
+def outcodes(points: np.ndarray, projection_or_planes, z_min: float = 0.0) -> np.ndarray:
+    """The 6-bit Cohen–Sutherland outcode of each canonical point ``(N, 3)`` → ``(N,)`` int64.
+
+    The second argument is a projection name or a ``planes(...)`` array.
+    """
+    pl = (planes(projection_or_planes, z_min) if isinstance(projection_or_planes, str)
+          else projection_or_planes)
     outside = points @ pl[:, :3].T + pl[:, 3] > 0.0                  # (N, 6)
-    return (outside.astype(np.uint8) << np.arange(6, dtype=np.uint8)).sum(axis=1, dtype=np.uint8)
+    return outside.astype(np.int64) @ (np.int64(1) << np.arange(6, dtype=np.int64))
 
 
-@njit(cache=True)
-def _outcode(p, pl):
-    code = np.int64(0)
-    for i in range(6):
-        if pl[i, 0] * p[0] + pl[i, 1] * p[1] + pl[i, 2] * p[2] + pl[i, 3] > 0.0:
-            code |= np.int64(1) << i
-    return code
+def _cohen_sutherland(a, b, code_a, code_b, pl):
+    """Clip the segments a[k]–b[k] (none trivially accepted or rejected) in place.
+
+    FvDFH's loop, run for all segments at once: while a segment is neither accepted nor
+    rejected, take an endpoint that is outside, the first plane it violates, and move that
+    endpoint to the plane. Returns a mask of the segments that keep a visible part.
+    """
+    k = np.arange(len(a))
+    code_a, code_b = code_a.astype(np.int64), code_b.astype(np.int64)
+    for _ in range(12):              # each pass clears one bit; 12 bounds round-off cycling
+        active = ((code_a | code_b) != 0) & ((code_a & code_b) == 0)
+        if not active.any():
+            break
+        i = np.flatnonzero(active)
+        a_out = code_a[i] != 0                      # clip endpoint a if it is outside, else b
+        code = np.where(a_out, code_a[i], code_b[i])
+        bit = _lowest_bit(code)
+        plane = pl[bit]
+        out = np.where(a_out[:, None], a[i], b[i])
+        other = np.where(a_out[:, None], b[i], a[i])
+        f_out = np.einsum("ij,ij->i", plane[:, :3], out) + plane[:, 3]
+        f_in = np.einsum("ij,ij->i", plane[:, :3], other) + plane[:, 3]
+        # f_out > 0 >= f_in up to round-off (else the AND test rejected); clamp t anyway.
+        denominator = f_out - f_in
+        t = np.divide(f_out, denominator, out=np.zeros_like(f_out), where=denominator != 0.0)
+        t = np.clip(t, 0.0, 1.0)
+        moved = out + t[:, None] * (other - out)
+        new_code = outcodes(moved, pl) & ~(np.int64(1) << bit)   # on that plane by construction
+        ia, ib = i[a_out], i[~a_out]
+        a[ia], code_a[ia] = moved[a_out], new_code[a_out]
+        b[ib], code_b[ib] = moved[~a_out], new_code[~a_out]
+    return (code_a | code_b) == 0
 
 
-@njit(cache=True)
-def _cohen_sutherland(p0, p1, code0, code1, pl, keep):
-    """Clip segments p0[k]–p1[k] in place; keep[k] = False where nothing is left."""
-    for k in range(p0.shape[0]):
-        a, b = p0[k].copy(), p1[k].copy()
-        ca, cb = np.int64(code0[k]), np.int64(code1[k])
-        for _ in range(12):          # each pass clears one bit; 12 bounds round-off cycling
-            if ca == 0 and cb == 0:  # trivial accept
-                break
-            if ca & cb != 0:         # trivial reject: both outside one plane
-                break
-            # Pick an endpoint that is outside and the first plane it violates.
-            if ca != 0:
-                out, other, code = a, b, ca
-            else:
-                out, other, code = b, a, cb
-            i = 0
-            while (code >> i) & 1 == 0:
-                i += 1
-            f_out = pl[i, 0] * out[0] + pl[i, 1] * out[1] + pl[i, 2] * out[2] + pl[i, 3]
-            f_in = pl[i, 0] * other[0] + pl[i, 1] * other[1] + pl[i, 2] * other[2] + pl[i, 3]
-            # f_out > 0 >= f_in up to round-off (else the AND test rejected); clamp t anyway.
-            t = min(max(f_out / (f_out - f_in), 0.0), 1.0) if f_out != f_in else 0.0
-            for c in range(3):
-                out[c] = out[c] + t * (other[c] - out[c])
-            new_code = _outcode(out, pl) & ~(np.int64(1) << i)   # on plane i by construction
-            if ca != 0:
-                ca = new_code
-            else:
-                cb = new_code
-        if ca == 0 and cb == 0:
-            p0[k] = a
-            p1[k] = b
-            keep[k] = True
-        else:
-            keep[k] = False
+def _lowest_bit(code: np.ndarray) -> np.ndarray:
+    """Index of the lowest set bit of each (non-zero) code: the first violated plane."""
+    return np.log2(code & -code).astype(np.int64)
 
 
 def clip_lines(p0: np.ndarray, p1: np.ndarray, projection: str, z_min: float = 0.0):
@@ -108,8 +104,6 @@ def clip_lines(p0: np.ndarray, p1: np.ndarray, projection: str, z_min: float = 0
     q0, q1 = p0.copy(), p1.copy()
     if work.any():
         w0, w1 = q0[work], q1[work]
-        kept = np.zeros(len(w0), dtype=np.bool_)
-        _cohen_sutherland(w0, w1, c0[work], c1[work], planes(projection, z_min), kept)
+        keep[work] = _cohen_sutherland(w0, w1, c0[work], c1[work], planes(projection, z_min))
         q0[work], q1[work] = w0, w1
-        keep[work] = kept
     return q0[keep], q1[keep]

@@ -2,71 +2,59 @@
 
 Takes device-space endpoints (x right, y up, in pixels) and sets every pixel of every line in
 a ``(H, W, 3)`` uint8 image stored top row first. Endpoints land on the pixel that contains
-them; the midpoint algorithm then steps along the major axis one pixel at a time with integer
-arithmetic only.
+them. The midpoint algorithm steps along the major axis one pixel at a time, choosing between
+the two candidate minor-axis pixels by the sign of the decision variable
+``d = 2 dy - dx`` (``+2 dy`` each step, ``-2 dx`` when the minor coordinate advances).
+
+Its closed form — after ``i`` steps the minor coordinate has advanced
+``k_i = ceil((2 dy i - dx) / (2 dx))`` times (never below 0) — lets every pixel of every line
+be computed at once with integer numpy arithmetic; ``tests/test_raster_lines.py`` checks it
+against the step-by-step loop. No numba here: a wireframe frame needs no compiler.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 
-@njit(cache=True)
-def _plot(image, x, y, color):
-    h = image.shape[0]
-    if 0 <= x < image.shape[1] and 0 <= y < h:
-        row = h - 1 - y                      # device rows run bottom-up, image rows top-down
-        for c in range(3):
-            image[row, x, c] = color[c]
-
-
-@njit(cache=True)
-def _midpoint_line(image, x0, y0, x1, y1, color):
-    """FvDFH's MidpointLine generalised to all eight octants."""
-    dx, dy = abs(x1 - x0), abs(y1 - y0)
-    sx = 1 if x1 >= x0 else -1
-    sy = 1 if y1 >= y0 else -1
-    x, y = x0, y0
-    if dx >= dy:                             # x is the major axis
-        d = 2 * dy - dx
-        for _ in range(dx + 1):
-            _plot(image, x, y, color)
-            if d > 0:
-                y += sy
-                d -= 2 * dx
-            d += 2 * dy
-            x += sx
-    else:                                    # y is the major axis
-        d = 2 * dx - dy
-        for _ in range(dy + 1):
-            _plot(image, x, y, color)
-            if d > 0:
-                x += sx
-                d -= 2 * dy
-            d += 2 * dx
-            y += sy
-
-
-@njit(cache=True)
-def _draw_segments(image, p0, p1, color):
-    w, h = image.shape[1], image.shape[0]
-    for k in range(p0.shape[0]):
-        # The pixel containing each endpoint; a point on the far edge belongs to the last pixel.
-        x0 = min(max(int(np.floor(p0[k, 0])), 0), w - 1)
-        y0 = min(max(int(np.floor(p0[k, 1])), 0), h - 1)
-        x1 = min(max(int(np.floor(p1[k, 0])), 0), w - 1)
-        y1 = min(max(int(np.floor(p1[k, 1])), 0), h - 1)
-        _midpoint_line(image, x0, y0, x1, y1, color)
+def line_pixels(x0, y0, x1, y1) -> tuple[np.ndarray, np.ndarray]:
+    """All pixels of the integer segments (x0, y0)–(x1, y1), as the midpoint algorithm sets them."""
+    x0, y0, x1, y1 = (np.asarray(a, dtype=np.int64) for a in (x0, y0, x1, y1))
+    dx, dy = np.abs(x1 - x0), np.abs(y1 - y0)
+    x_major = dx >= dy
+    major = np.where(x_major, dx, dy)              # steps along the major axis
+    minor = np.where(x_major, dy, dx)
+    counts = major + 1
+    segment = np.repeat(np.arange(len(x0)), counts)
+    first = np.cumsum(counts) - counts
+    i = np.arange(counts.sum()) - np.repeat(first, counts)          # step number in its line
+    big, small = major[segment], minor[segment]
+    # k_i = ceil((2 small i - big) / (2 big)) clipped at 0; for a point (big = 0) k = 0.
+    numerator = 2 * small * i - big
+    k = np.where(big > 0, np.maximum(-((-numerator) // np.maximum(2 * big, 1)), 0), 0)
+    sx = np.where(x1 >= x0, 1, -1)[segment]
+    sy = np.where(y1 >= y0, 1, -1)[segment]
+    xm = x_major[segment]
+    x = x0[segment] + sx * np.where(xm, i, k)
+    y = y0[segment] + sy * np.where(xm, k, i)
+    return x, y
 
 
 def draw_lines(image: np.ndarray, p0: np.ndarray, p1: np.ndarray, color) -> None:
     """Draw segments ``p0[k]–p1[k]`` (device ``(N, >=2)``) into ``image`` in place.
 
-    The endpoints must be finite (the clipper guarantees it); they are clamped to the image.
+    The endpoints must be finite (the clipper guarantees it); the pixel containing each is
+    clamped to the image, so a point on the far edge belongs to the last pixel.
     """
     if len(p0) == 0 or image.size == 0:
         return
-    rgb = np.asarray(color, dtype=np.uint8)
-    _draw_segments(image, np.ascontiguousarray(p0[:, :2], dtype=np.float64),
-                   np.ascontiguousarray(p1[:, :2], dtype=np.float64), rgb)
+    height, width = image.shape[:2]
+
+    def pixel(p):
+        col = np.clip(np.floor(p[:, 0]), 0, width - 1).astype(np.int64)
+        row = np.clip(np.floor(p[:, 1]), 0, height - 1).astype(np.int64)
+        return col, row
+
+    (x0, y0), (x1, y1) = pixel(np.asarray(p0)), pixel(np.asarray(p1))
+    x, y = line_pixels(x0, y0, x1, y1)
+    image[height - 1 - y, x] = np.asarray(color, dtype=np.uint8)   # device rows run bottom-up
