@@ -49,7 +49,8 @@ def plan(scene: Scene, projection: str, shading: str) -> list[Stage]:
         Stage("vertex normals", solid and shading in ("gouraud", "phong") and not file_normals,
               (f"{shading} shading needs a normal at each vertex (average of the adjacent faces)"
                if solid and shading in ("gouraud", "phong") and not file_normals
-               else "taken from the mesh file" if solid and shading in ("gouraud", "phong")
+               else "given with the mesh (by its file or its generator)"
+               if solid and shading in ("gouraud", "phong")
                else no_solid("flat shading needs no vertex normals"))),
         Stage("illuminate faces", solid and shading == "flat",
               "one evaluation per face, at its centroid" if solid and shading == "flat"
