@@ -33,9 +33,14 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
 
 
 def render(scene, view_index, projection, shading, size):
-    """``core.render.render``, imported when first needed (it pulls in numba)."""
+    """``core.render.render``, imported when first needed.
+
+    A wireframe needs no compiled kernel, so numba is imported (to listen for compiles) only
+    when a frame will draw triangles; the default scene's first frame then skips it entirely.
+    """
     from core.render import render as render_frame
-    _listen_for_compiles()
+    if (shading or scene.shading) != "wireframe" and scene.triangle_count:
+        _listen_for_compiles()
     return render_frame(scene, view_index, projection, shading, size)
 
 
