@@ -50,15 +50,23 @@ def markdown_table(points: list[Point]) -> str:
     return "\n".join(rows)
 
 
+def _load() -> str:
+    try:
+        return "load average %.1f" % os.getloadavg()[0]
+    except OSError:
+        return "load average unknown"
+
+
 def write_markdown(points: list[Point], config: accuracy.SweepConfig, wall: float,
-                   path: Path) -> None:
+                   path: Path, load: str = "") -> None:
     size = f"{config.size} x {config.size}"
     text = [
         "# Error against run time",
         "",
         f"`python -m app report` ({'quick' if config == accuracy.QUICK else 'default'} sweep): "
         f"{size} pixels, {len(points)} settings, {wall:.0f} s wall time on "
-        f"{os.cpu_count()} cores ({platform.machine()}), {time.strftime('%Y-%m-%d')}. Errors on "
+        f"{os.cpu_count()} cores ({platform.machine()}; {load or _load()} when it began, "
+        f"{_load()} at the end), {time.strftime('%Y-%m-%d')}. Errors on "
         f"the 0–255 scale against the exact image (the true surface, float64, 16 samples a "
         f"pixel).",
         "",
@@ -125,7 +133,7 @@ def write_plot(points: list[Point], path: Path) -> None:
         for axis in (ax.xaxis, ax.yaxis):
             axis.set_major_formatter(plain)
             axis.set_minor_formatter(FuncFormatter(
-                lambda v, _: f"{v:g}" if f"{v:.1g}"[0] in "25" else ""))
+                lambda v, _: f"{v:g}" if f"{v:.0e}"[0] in "25" else ""))
         ax.set_title(f"{scene}: RMSE against frame time")
         ax.set_xlabel("frame time, ms (median; render + box filter)")
         ax.set_ylabel("RMSE against the exact image (0–255)")
@@ -152,6 +160,7 @@ def main(args) -> int:
         print(f"error: cannot create {out}: {error}", file=sys.stderr)
         return 2
     start = time.perf_counter()
+    load = _load()
     steps = len(accuracy.settings(config))
     print(f"report: {steps} settings at {config.size} x {config.size}"
           f"{' (quick)' if config == accuracy.QUICK else ''}", file=sys.stderr, flush=True)
@@ -160,7 +169,7 @@ def main(args) -> int:
     paths = (out / "error_vs_time.csv", out / "error_vs_time.md", out / "error_vs_time.png")
     try:
         write_csv(points, paths[0])
-        write_markdown(points, config, wall, paths[1])
+        write_markdown(points, config, wall, paths[1], load)
         write_plot(points, paths[2])
     except OSError as error:
         print(f"error: cannot write the report into {out}: {error}", file=sys.stderr)
