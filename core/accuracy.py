@@ -12,9 +12,10 @@ measured as follows.
   is our pipeline run at the higher resolution, nothing else; its samples sit at the centres of
   a regular k x k grid in each pixel.
 - Run time: the median over ``repeats`` frames of render + box filter, in the steady state a
-  viewer is in: an untimed frame first wherever the pipeline would do one-off work (the first
-  frame of a mesh and mode compiles and fills the per-mesh caches; the first frame at a size
-  allocates the z-buffer). Fewer repeats at the bigger sizes keep the sweep short.
+  viewer is in (one untimed frame first: it compiles, fills the per-mesh caches and
+  allocates the z-buffer). The timed frames go round-robin over the settings of one size, so
+  that load from other programs spreads evenly. Fewer repeats at the bigger sizes keep the
+  sweep short.
 - The reference: :func:`core.reference.render_reference` on the true sphere or torus, the same
   view, lights and materials, float64, 16 samples a pixel (4 x 4), computed once and cached on
   disk (:func:`cached_reference`).
@@ -43,6 +44,7 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
+from numba import njit, prange
 
 from core import reference as reference_module
 from core.generators import torus, uv_sphere
@@ -81,9 +83,7 @@ class SweepConfig:
     samples: tuple[int, ...] = (1, 4, 16)
     shadings: tuple[str, ...] = SHADINGS
     scenes: tuple[str, ...] = SCENES
-    repeats: dict = field(default_factory=lambda: {1: 15, 4: 7, 16: 3})
-    # one untimed frame before every setting, not only where one-off work happens
-    always_warm_up: bool = False
+    repeats: dict = field(default_factory=lambda: {1: 15, 4: 9, 16: 5})
     cache: Path | None = CACHE
 
 
@@ -102,6 +102,7 @@ class Point:
     triangles: int
     ms: float                # median frame time, render + box filter
     frames: int              # timed frames behind the median
+    ms_min: float            # the fastest of them: the cost with the machine to itself
     rmse: float              # 0-255 scale, whole image
     max_error: float         # 0-255 scale, whole image
     rmse_inside: float       # 0-255 scale, pixels fully covered in both
@@ -191,12 +192,31 @@ def cached_reference(name: str, size: int, samples: int, cache: Path | None = CA
 # The pipeline at k x k samples a pixel
 
 
+@njit(cache=True, parallel=True)
+def _box_filter(image, k, out):
+    height, width = out.shape[0], out.shape[1]
+    scale = 1.0 / (k * k)
+    for row in prange(height):
+        for col in range(width):
+            for c in range(3):
+                total = 0
+                for a in range(k):
+                    for b in range(k):
+                        total += image[row * k + a, col * k + b, c]
+                out[row, col, c] = total * scale
+
+
 def box_filter(image: np.ndarray, k: int) -> np.ndarray:
-    """``(kH, kW, 3)`` uint8 → ``(H, W, 3)`` float64: the mean of each k x k block."""
+    """``(kH, kW, 3)`` uint8 → ``(H, W, 3)`` float64: the mean of each k x k block.
+
+    Part of the cost of supersampling, so it is timed with the frame: a compiled loop (numpy's
+    ``reshape(...).mean(axis=(1, 3))`` takes longer than the 4 x 4 render it filters).
+    """
     if k == 1:
         return image.astype(np.float64)
-    height, width = image.shape[0] // k, image.shape[1] // k
-    return image.reshape(height, k, width, k, 3).mean(axis=(1, 3))
+    out = np.empty((image.shape[0] // k, image.shape[1] // k, 3))
+    _box_filter(np.ascontiguousarray(image), int(k), out)
+    return out
 
 
 def sample_coverage(image: np.ndarray, k: int) -> np.ndarray:
@@ -215,29 +235,35 @@ def render_supersampled(scene: Scene, shading: str, size: int, k: int) -> np.nda
     return frame.color
 
 
-def measure(name: str, scene: Scene, shading: str, level: int, samples: int, config: SweepConfig,
-            reference: Reference, coverage_reference: Reference, warm_up: bool = True) -> Point:
-    """Time and measure one setting (see the module docstring)."""
+def errors(name: str, scene: Scene, shading: str, level: int, samples: int, size: int,
+           reference: Reference, coverage_reference: Reference) -> Point:
+    """One frame of a setting and its errors against the references (time still unmeasured).
+
+    The pipeline is deterministic, so one frame gives the errors of every frame; this one is
+    also the untimed frame that compiles and fills the caches.
+    """
     k = int(round(samples ** 0.5))
-    size = config.size
-    if warm_up:
-        render_supersampled(scene, shading, size, k)              # untimed: JIT and caches
-    times = []
-    for _ in range(config.repeats.get(samples, 3)):
-        start = time.perf_counter()
-        big = render_supersampled(scene, shading, size, k)
-        image = box_filter(big, k)
-        times.append(time.perf_counter() - start)
+    big = render_supersampled(scene, shading, size, k)
+    image = box_filter(big, k)
     error = image - 255.0 * reference.rgb
     ours = sample_coverage(big, k)
     exact_count = np.rint(coverage_reference.coverage * k * k).astype(np.int64)
     inside = (ours == k * k) & (reference.coverage == 1.0)
     return Point(scene=name, shading=shading, level=level, samples=samples,
-                 triangles=int(scene.triangle_count), ms=1e3 * statistics.median(times),
-                 frames=len(times), rmse=float(np.sqrt(np.mean(error ** 2))),
+                 triangles=int(scene.triangle_count), ms=float("nan"), frames=0,
+                 ms_min=float("nan"),
+                 rmse=float(np.sqrt(np.mean(error ** 2))),
                  max_error=float(np.max(np.abs(error))),
                  rmse_inside=float(np.sqrt(np.mean(error[inside] ** 2))) if inside.any() else 0.0,
                  coverage_differs=float(np.mean(ours != exact_count)))
+
+
+def frame_time(scene: Scene, shading: str, size: int, samples: int) -> float:
+    """Seconds for one frame: render at k times the size and box-filter."""
+    k = int(round(samples ** 0.5))
+    start = time.perf_counter()
+    box_filter(render_supersampled(scene, shading, size, k), k)
+    return time.perf_counter() - start
 
 
 def settings(config: SweepConfig) -> list[tuple[int, str, int, str]]:
@@ -249,7 +275,13 @@ def settings(config: SweepConfig) -> list[tuple[int, str, int, str]]:
 
 def sweep(config: SweepConfig = DEFAULT, progress: Callable[[str], None] | None = None
           ) -> list[Point]:
-    """Every setting of ``config``, measured; ``progress`` gets one line per step."""
+    """Every setting of ``config``, measured; ``progress`` gets a line per step.
+
+    For each number of samples a pixel (one framebuffer size): first one frame of every
+    setting (its errors; compiles and fills the caches), then the timed frames round-robin
+    over those settings, so that a burst of load from other programs spreads over all of them
+    instead of skewing the few that happened to run then.
+    """
     say = progress or (lambda line: None)
     references: dict[tuple[str, int], Reference] = {}
 
@@ -263,26 +295,41 @@ def sweep(config: SweepConfig = DEFAULT, progress: Callable[[str], None] | None 
         return references[(name, samples_per_axis)]
 
     scenes: dict[tuple[str, int], Scene] = {}
-    warm: set = set()                  # (scene, level, shading) and sizes already rendered once
-    points = []
-    todo = settings(config)
-    for step, (samples, name, level, shading) in enumerate(todo, start=1):
-        if (name, level) not in scenes:
+    for name in config.scenes:
+        for level in config.levels:
             scene, shape = analytic_scene(name, level)
             _check_never_black(shape.material)
             scenes[(name, level)] = scene
+    points: list[Point] = []
+    todo = settings(config)
+    step = 0
+    for samples in config.samples:
         k = int(round(samples ** 0.5))
         if k * k != samples:
             raise ValueError(f"samples a pixel must be a square (1, 4, 16), not {samples}")
-        fresh = (name, level, shading) not in warm or samples not in warm
-        warm |= {(name, level, shading), samples}
-        point = measure(name, scenes[(name, level)], shading, level, samples, config,
-                        ref(name, REFERENCE_SAMPLES), ref(name, k),
-                        warm_up=fresh or config.always_warm_up)
-        points.append(point)
-        say(f"[{step}/{len(todo)}] {name} {point.label()} ({point.triangles} triangles): "
-            f"{point.ms:.0f} ms, RMSE {point.rmse:.2f}, max {point.max_error:.0f}, coverage "
-            f"differs {100 * point.coverage_differs:.2f}%")
+        group = []
+        for _, name, level, shading in (t for t in todo if t[0] == samples):
+            step += 1
+            point = errors(name, scenes[(name, level)], shading, level, samples, config.size,
+                           ref(name, REFERENCE_SAMPLES), ref(name, k))
+            group.append(point)
+            say(f"[{step}/{len(todo)}] {name} {point.label()} ({point.triangles} triangles): "
+                f"RMSE {point.rmse:.2f}, max {point.max_error:.0f}, RMSE inside "
+                f"{point.rmse_inside:.2f}, coverage differs {100 * point.coverage_differs:.2f}%")
+        repeats = config.repeats.get(samples, 3)
+        times: dict[int, list[float]] = {i: [] for i in range(len(group))}
+        start = time.perf_counter()
+        for _ in range(repeats):
+            for i, p in enumerate(group):
+                times[i].append(frame_time(scenes[(p.scene, p.level)], p.shading, config.size,
+                                           samples))
+        for i, p in enumerate(group):
+            p.ms, p.frames = 1e3 * statistics.median(times[i]), len(times[i])
+            p.ms_min = 1e3 * min(times[i])
+        say(f"timed {samples} sample{'s' if samples > 1 else ''} a pixel: {repeats} rounds of "
+            f"{len(group)} frames in {time.perf_counter() - start:.1f} s; median "
+            + ", ".join(f"{p.scene[0]}{p.shading[0]}{p.level} {p.ms:.0f}" for p in group) + " ms")
+        points += group
     for name in config.scenes:
         pareto_front([p for p in points if p.scene == name])
     return points
@@ -375,7 +422,7 @@ def reading(points: list[Point]) -> list[str]:
     return lines
 
 
-COLUMNS = ("scene", "shading", "level", "triangles", "samples", "ms", "frames", "rmse",
+COLUMNS = ("scene", "shading", "level", "triangles", "samples", "ms", "frames", "ms_min", "rmse",
            "max_error", "rmse_inside", "coverage_differs", "pareto")
 
 

@@ -15,7 +15,7 @@ from core.accuracy import Point
 
 def point(ms, rmse, shading="phong", level=8, samples=1, scene="sphere") -> Point:
     return Point(scene=scene, shading=shading, level=level, samples=samples, triangles=100,
-                 ms=ms, frames=3, rmse=rmse, max_error=10 * rmse, rmse_inside=rmse / 2,
+                 ms=ms, frames=3, ms_min=ms, rmse=rmse, max_error=10 * rmse, rmse_inside=rmse / 2,
                  coverage_differs=0.01)
 
 
@@ -76,7 +76,7 @@ def test_quick_sweep_covers_every_setting(quick_points):
     q = accuracy.QUICK
     assert len(quick_points) == len(q.scenes) * len(q.shadings) * len(q.levels) * len(q.samples)
     for p in quick_points:
-        assert p.ms > 0 and 0 < p.rmse <= p.max_error <= 255 and 0 <= p.coverage_differs < 0.1
+        assert p.ms >= p.ms_min > 0 and p.frames >= 3 and 0 < p.rmse <= p.max_error <= 255 and 0 <= p.coverage_differs < 0.1
     assert any(p.pareto for p in quick_points)
 
 
