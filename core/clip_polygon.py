@@ -8,8 +8,9 @@ Takes triangles in the canonical volume, after N_per or N_par and before any div
 Returns :class:`ClippedTriangles`: points (V', 3), triangles (T', 3), attrs (V', K) and
 ``source`` (T',) int64, the input triangle each output triangle came from.
 
-* Each vertex gets FvDFH's 6-bit outcode (vectorised numpy). A point exactly on a plane is
-  inside. A triangle whose codes are all 0 is trivially accepted and passes through untouched
+* Each vertex gets FvDFH's 6-bit outcode in one compiled pass (the numpy version, six
+  comparisons on strided columns, took 8 ms for 500k vertices). A point exactly on a plane
+  is inside. A triangle whose codes are all 0 is trivially accepted and passes through untouched
   (same vertex indices); one whose codes AND to non-zero lies wholly outside one plane and is
   trivially rejected. When every vertex is inside, the input arrays are returned as they are.
 * Only the remaining triangles are clipped: Sutherland–Hodgman (FvDFH 3.14.1, Fig. 3.49)
@@ -66,6 +67,35 @@ def _check_projection(projection: str) -> bool:
     return projection == "perspective"
 
 
+@njit(cache=True)
+def _outcode(x, y, z, perspective, z_min):
+    """One point's outcode, built from "inside" tests so that NaN lands outside."""
+    if perspective:
+        top, bottom, right, left, near = -z, z, -z, z, z_min
+    else:
+        top, bottom, right, left, near = 1.0, -1.0, 1.0, -1.0, 0.0
+    code = ALL_PLANES
+    if y <= top:
+        code ^= ABOVE
+    if y >= bottom:
+        code ^= BELOW
+    if x <= right:
+        code ^= RIGHT
+    if x >= left:
+        code ^= LEFT
+    if z >= -1.0:
+        code ^= BEHIND
+    if z <= near:
+        code ^= FRONT
+    return code
+
+
+@njit(cache=True)
+def _outcodes(points, perspective, z_min, codes):
+    for v in range(points.shape[0]):
+        codes[v] = _outcode(points[v, 0], points[v, 1], points[v, 2], perspective, z_min)
+
+
 def outcodes(points: np.ndarray, projection: str, z_min: float = 0.0) -> np.ndarray:
     """FvDFH's 6-bit outcode of each point, (N,) uint8 (0 = inside or on the volume).
 
@@ -73,24 +103,42 @@ def outcodes(points: np.ndarray, projection: str, z_min: float = 0.0) -> np.ndar
     canonical parallel volume (-1 <= x, y <= 1, -1 <= z <= 0) or perspective volume
     (z <= x, y <= -z, -1 <= z <= z_min). A NaN or infinite coordinate sets every bit it
     cannot satisfy; a NaN coordinate is outside both of its planes.
+
+    One compiled pass over the points (about 1 ms for 500k; a thread of its own would cost
+    more to wake than it saves); ``points`` may be a strided view (the first three columns of
+    homogeneous points) and is not copied.
     """
     perspective = _check_projection(projection)
     points = np.asarray(points, dtype=np.float64)
-    x, y, z = points[:, 0], points[:, 1], points[:, 2]
-    if perspective:
-        minus_z = -z
-        top, bottom, right, left, far, near = minus_z, z, minus_z, z, -1.0, float(z_min)
-    else:
-        top, bottom, right, left, far, near = 1.0, -1.0, 1.0, -1.0, -1.0, 0.0
-    # Build the bits of "inside" and flip them at the end: a comparison with NaN is False,
-    # so a NaN coordinate ends up outside.
-    inside = (y <= top).view(np.uint8)
-    inside = inside | ((y >= bottom).view(np.uint8) << 1)
-    inside |= (x <= right).view(np.uint8) << 2
-    inside |= (x >= left).view(np.uint8) << 3
-    inside |= (z >= far).view(np.uint8) << 4
-    inside |= (z <= near).view(np.uint8) << 5
-    return inside ^ np.uint8(ALL_PLANES)
+    if points.ndim != 2 or points.shape[1] < 3:
+        raise ValueError(f"points must be (N, 3), got {points.shape}")
+    codes = np.empty(points.shape[0], np.uint8)
+    _outcodes(points, perspective, float(z_min), codes)
+    return codes
+
+
+@njit(cache=True)
+def _classify(triangles, codes):
+    """Trivial accept (OR of the corner codes is 0) and reject (AND is not 0), in order.
+
+    Returns (kept, todo): the accepted triangles and those that need clipping.
+    """
+    n = triangles.shape[0]
+    kept = np.empty(n, np.int64)
+    todo = np.empty(n, np.int64)
+    n_kept = 0
+    n_todo = 0
+    for t in range(n):
+        c0 = codes[triangles[t, 0]]
+        c1 = codes[triangles[t, 1]]
+        c2 = codes[triangles[t, 2]]
+        if (c0 | c1 | c2) == 0:
+            kept[n_kept] = t
+            n_kept += 1
+        elif (c0 & c1 & c2) == 0:
+            todo[n_todo] = t
+            n_todo += 1
+    return kept[:n_kept], todo[:n_todo]
 
 
 # --------------------------------------------------------------------------------------------
@@ -262,28 +310,24 @@ def clip_triangles(points, triangles, attrs, projection: str,
     (no copy), with ``source`` a read-only 0..T-1.
     """
     perspective = _check_projection(projection)
-    points = np.ascontiguousarray(points, dtype=np.float64)
+    points = np.asarray(points, dtype=np.float64)       # a strided view is fine: no copy
     triangles = np.ascontiguousarray(triangles, dtype=np.int64)
     if attrs is None:
         attrs = np.empty((points.shape[0], 0))
-    attrs = np.ascontiguousarray(attrs, dtype=np.float64)
+    attrs = np.asarray(attrs, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 3:
         raise ValueError(f"points must be (V, 3), got {points.shape}")
     if triangles.ndim != 2 or triangles.shape[1] != 3:
         raise ValueError(f"triangles must be (T, 3), got {triangles.shape}")
     if attrs.ndim != 2 or attrs.shape[0] != points.shape[0]:
         raise ValueError(f"attrs must be ({points.shape[0]}, K), got {attrs.shape}")
-    n_triangles = triangles.shape[0]
+    if triangles.size and (triangles.min() < 0 or triangles.max() >= points.shape[0]):
+        raise ValueError("triangle vertex index out of range")
     codes = outcodes(points, projection, z_min)
     if not codes.any():  # the whole mesh is inside: trivial accept for every triangle
-        return ClippedTriangles(points, triangles, attrs, _arange(n_triangles))
+        return ClippedTriangles(points, triangles, attrs, _arange(triangles.shape[0]))
 
-    corner = codes[triangles]  # (T, 3) outcodes of each triangle's corners
-    code_or = corner[:, 0] | corner[:, 1] | corner[:, 2]
-    code_and = corner[:, 0] & corner[:, 1] & corner[:, 2]
-    accepted = code_or == 0
-    todo = np.flatnonzero(~accepted & (code_and == 0))  # neither accepted nor rejected
-    kept = np.flatnonzero(accepted)
+    kept, todo = _classify(triangles, codes)
     if todo.size == 0:
         return ClippedTriangles(points, triangles[kept], attrs, kept)
 

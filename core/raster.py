@@ -11,27 +11,33 @@ perspective-correct barycentric weights of vertex 1 and vertex 2 of that triangl
 centre (vertex 0's weight is 1 - b1 - b2; both are 0 where empty). All arrays are in image
 order: row 0 is the top, so device row j is array row H - 1 - j.
 
-How it works (``lp_setup_tri.c`` / ``lp_rast_tri.c`` in llvmpipe):
+Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene, ``lp_rast_tri.c`` consumes it):
 
-* setup snaps each vertex to fixed point with ``SUBPIXEL_BITS`` = 8 sub-pixel bits (int64),
-  orients the triangle counter-clockwise (either winding is drawn; zero area draws nothing) and
-  writes each edge as an edge function E(x, y) = A x + B y + C whose constant already holds the
-  top-left fill rule, so a pixel centre is inside exactly when all three E are >= 0 — one sign
-  test (``e0 | e1 | e2 >= 0``). The integer arithmetic is exact: two triangles sharing an edge
-  see the same numbers, so the shared edge is neither drawn twice nor left open.
-* scan conversion walks the bounding box (clamped to the framebuffer) row by row, stepping the
-  edge functions by A per pixel — FvDFH's incremental scan line, in integers.
-* depth is interpolated linearly in screen space (after the perspective-to-parallel divide the
-  depth is an affine function of x and y, FvDFH 6.5.4) and tested strictly: a pixel is written
-  only when nearer. Barycentrics are perspective-corrected with ``inv_w``.
-* both cores: the framebuffer is cut into horizontal bands, one task per band; each band walks
-  the triangles whose bounding box meets it, in triangle order, so every pixel sees the same
-  triangles in the same order as the single-threaded path and the result is bit-identical.
+* **setup** snaps each vertex to fixed point with ``SUBPIXEL_BITS`` = 8 sub-pixel bits, finds
+  each triangle's box of pixel centres (clamped to the framebuffer) and keeps only triangles
+  that can draw something: not degenerate, box not empty, and for boxes of a few pixels at
+  least one centre actually covered (in a dense mesh most triangles cover none). Each kept
+  triangle goes into the *scene*: its id, the horizontal bands it meets, its fixed-point
+  corners, depths and 1/W, packed so that the scan reads it in order.
+* **rast** orients each triangle counter-clockwise (either winding is drawn) and writes each
+  edge as an edge function E(x, y) = A x + B y + C whose constant already holds the top-left
+  fill rule, so a pixel centre is inside exactly when all three E are >= 0: one sign test
+  (``e0 | e1 | e2 >= 0``). The integers are exact: two triangles sharing an edge see the same
+  numbers, so the edge is neither drawn twice nor left open. The box is walked row by row,
+  the edge functions stepped by A per pixel (FvDFH's incremental scan line, in integers).
+  Depth is interpolated linearly in screen space (after the perspective-to-parallel divide it
+  is an affine function of x and y, FvDFH 6.5.4) and tested strictly: a pixel is written only
+  when nearer. Barycentrics are perspective-corrected with 1/W.
+
+Both cores: setup works on chunks of the triangle array, rast on horizontal bands of the
+framebuffer, handed out one at a time. Each band draws the scene's triangles that meet it in
+triangle order, so every pixel sees the same triangles in the same order as the single-threaded
+path (``parallel=False``) and the result is bit-identical.
 
 Vertices far outside the framebuffer are safe: coordinates are clamped to ``COORD_LIMIT``
-pixels before the fixed-point conversion (so no product overflows int64) and the bounding box
-is clamped to the framebuffer. A triangle with a non-finite coordinate or a non-positive or
-non-finite ``inv_w`` is skipped (the clipper never produces one).
+pixels before the fixed-point conversion (so no product overflows int64) and boxes are clamped
+to the framebuffer. A triangle with a non-finite coordinate or a 1/W that is not positive and
+finite is skipped (the clipper never produces one); a vertex index out of range raises.
 """
 
 from __future__ import annotations
@@ -45,11 +51,41 @@ from numba import njit, prange
 SUBPIXEL_BITS = 8
 SUBPIXEL_ONE = 1 << SUBPIXEL_BITS  # one pixel in fixed point
 PIXEL_CENTRE = SUBPIXEL_ONE // 2  # a pixel centre sits half a pixel in
-# |x|, |y| are clamped to this many pixels: fixed-point coordinates stay below 2^28, edge
-# coefficients below 2^29 and the edge constants below 2^59, all inside int64.
+# |x|, |y| are clamped to this many pixels: fixed-point coordinates stay below 2^28 (int32),
+# edge coefficients below 2^29 and edge constants below 2^59, all inside int64.
 COORD_LIMIT = float(1 << 20)
-MAX_SIZE = 1 << 15  # framebuffer width/height limit (keeps A * x inside int64 too)
-MAX_BANDS = 16  # band membership is a uint16 bit mask per triangle
+INVALID = np.int32(np.iinfo(np.int32).min)  # fixed x of a vertex no triangle may use
+MAX_SIZE = 1 << 15  # framebuffer width and height limit
+MAX_BANDS = 16  # a triangle's bands are a uint16 bit mask
+SETUP_CHUNKS = 64  # pieces of the triangle array that setup hands to the cores
+SMALL_BOX = 4  # boxes of up to this many pixels are tested for coverage during setup
+
+
+@dataclass
+class _Scene:
+    """Setup's output, rast's input: the triangles that can draw, chunk by chunk.
+
+    Chunk c covers triangles [c T / n, (c + 1) T / n) and writes its kept triangles from slot
+    c T / n on, in triangle order, up to ``chunk_end[c]``. Capacity grows on demand and is
+    kept from frame to frame.
+    """
+
+    fixed: np.ndarray = field(default_factory=lambda: np.empty((0, 2), np.int32))  # (V, 2)
+    tri: np.ndarray = field(default_factory=lambda: np.empty(0, np.int32))  # triangle id
+    bands: np.ndarray = field(default_factory=lambda: np.empty(0, np.uint16))  # band mask
+    xy: np.ndarray = field(default_factory=lambda: np.empty((0, 6), np.int32))  # fixed x0..y2
+    zw: np.ndarray = field(default_factory=lambda: np.empty((0, 6)))  # z0, z1, z2, 1/W0..2
+    chunk_end: np.ndarray = field(default_factory=lambda: np.empty(SETUP_CHUNKS, np.int64))
+
+    def reserve(self, n_vertices: int, n_triangles: int) -> None:
+        if self.fixed.shape[0] < n_vertices:
+            self.fixed = np.empty((max(n_vertices, 2 * self.fixed.shape[0]), 2), np.int32)
+        if self.tri.shape[0] < n_triangles:
+            n = max(n_triangles, 2 * self.tri.shape[0])
+            self.tri = np.empty(n, np.int32)
+            self.bands = np.empty(n, np.uint16)
+            self.xy = np.empty((n, 6), np.int32)
+            self.zw = np.empty((n, 6))
 
 
 @dataclass
@@ -64,20 +100,14 @@ class VisibilityBuffer:
     tri: np.ndarray  # int32, -1 = empty
     b1: np.ndarray  # float64, perspective-correct weight of vertex 1
     b2: np.ndarray  # float64, perspective-correct weight of vertex 2
-    # scratch kept between frames so that a frame allocates nothing new
-    _fixed: np.ndarray = field(default_factory=lambda: np.empty((0, 2), np.int32), repr=False)
-    _band_mask: np.ndarray = field(default_factory=lambda: np.empty(0, np.uint16), repr=False)
+    _scene: _Scene = field(default_factory=_Scene, repr=False)
 
     @classmethod
     def allocate(cls, width: int, height: int) -> "VisibilityBuffer":
         """A cleared buffer of ``height`` rows and ``width`` columns."""
         shape = (int(height), int(width))
-        return cls(
-            depth=np.full(shape, -np.inf),
-            tri=np.full(shape, -1, np.int32),
-            b1=np.zeros(shape),
-            b2=np.zeros(shape),
-        )
+        return cls(depth=np.full(shape, -np.inf), tri=np.full(shape, -1, np.int32),
+                   b1=np.zeros(shape), b2=np.zeros(shape))
 
     @property
     def width(self) -> int:
@@ -94,47 +124,22 @@ class VisibilityBuffer:
         self.b1.fill(0.0)
         self.b2.fill(0.0)
 
-    def _scratch(self, n_vertices: int, n_triangles: int) -> tuple[np.ndarray, np.ndarray]:
-        """Fixed-point vertices (V, 2) int32 and band masks (T,) uint16, grown on demand."""
-        if self._fixed.shape[0] < n_vertices:
-            self._fixed = np.empty((max(n_vertices, 2 * self._fixed.shape[0]), 2), np.int32)
-        if self._band_mask.shape[0] < n_triangles:
-            self._band_mask = np.empty(max(n_triangles, 2 * self._band_mask.shape[0]), np.uint16)
-        return self._fixed[:n_vertices], self._band_mask[:n_triangles]
-
 
 # --------------------------------------------------------------------------------------------
-# Setup (lp_setup_tri.c): fixed point, orientation, edge functions with the fill rule folded in
-
-INVALID = np.int32(np.iinfo(np.int32).min)  # fixed x of a vertex that must not be drawn
+# Fixed point and edge functions, shared by setup and rast
 
 
 @njit(cache=True)
 def _to_fixed(v):
-    """Snap a device coordinate to fixed point (round to nearest 1/256 pixel), clamped."""
+    """Snap a device coordinate to fixed point (nearest 1/256 pixel), clamped."""
     v = min(max(v, -COORD_LIMIT), COORD_LIMIT)
     return np.int32(np.floor(v * SUBPIXEL_ONE + 0.5))
 
 
 @njit(cache=True)
-def _snap_vertex(xy_z, inv_w, fixed, v):
-    """Fixed-point x, y of vertex v, or INVALID for a vertex no triangle may use."""
-    x = xy_z[v, 0]
-    y = xy_z[v, 1]
-    w = inv_w[v]
-    s = x + y + xy_z[v, 2] + w
-    if s - s == 0.0 and w > 0.0:  # all finite (NaN and inf make s - s NaN), W in front
-        fixed[v, 0] = _to_fixed(x)
-        fixed[v, 1] = _to_fixed(y)
-    else:
-        fixed[v, 0] = INVALID
-        fixed[v, 1] = 0
-
-
-@njit(cache=True)
 def _pixel_box(x0, y0, x1, y1, x2, y2, width, height):
     """Columns i_min..i_max and device rows j_min..j_max whose pixel centres lie in the box."""
-    # pixel i's centre is i*256 + 128: first centre >= min, last centre <= max
+    # pixel i's centre is i*256 + 128: the first centre >= min, the last centre <= max
     i_min = (min(x0, x1, x2) - PIXEL_CENTRE + SUBPIXEL_ONE - 1) >> SUBPIXEL_BITS
     i_max = (max(x0, x1, x2) - PIXEL_CENTRE) >> SUBPIXEL_BITS
     j_min = (min(y0, y1, y2) - PIXEL_CENTRE + SUBPIXEL_ONE - 1) >> SUBPIXEL_BITS
@@ -161,33 +166,11 @@ def _edge(xa, ya, xb, yb, sign):
 
 
 @njit(cache=True)
-def _triangle_box(triangles, fixed, t, width, height):
-    """Vertex ids, fixed-point vertices and pixel box of triangle t.
-
-    Returns (boxed, v0, v1, v2, x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max); ``boxed``
-    is False when a vertex is unusable or the box holds no pixel centre of the framebuffer.
-    """
-    v0 = triangles[t, 0]
-    v1 = triangles[t, 1]
-    v2 = triangles[t, 2]
-    x0 = np.int64(fixed[v0, 0])
-    y0 = np.int64(fixed[v0, 1])
-    x1 = np.int64(fixed[v1, 0])
-    y1 = np.int64(fixed[v1, 1])
-    x2 = np.int64(fixed[v2, 0])
-    y2 = np.int64(fixed[v2, 1])
-    i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
-    valid = (x0 != INVALID) & (x1 != INVALID) & (x2 != INVALID)
-    boxed = valid & (i_min <= i_max) & (j_min <= j_max)
-    return boxed, v0, v1, v2, x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max
-
-
-@njit(cache=True)
 def _triangle_edges(x0, y0, x1, y1, x2, y2):
     """Twice the area (>= 0) and the three oriented edges (A, B, C, bias) opposite v0, v1, v2.
 
     E_k is the edge opposite vertex k, so E_k / area2 is vertex k's barycentric weight.
-    Zero area2 means a degenerate triangle, which draws nothing.
+    area2 == 0 means a degenerate triangle, which draws nothing.
     """
     area2 = (x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0)  # twice the signed area
     sign = 1 | (area2 >> 63)  # +1 or -1: orient counter-clockwise, either winding is drawn
@@ -195,6 +178,26 @@ def _triangle_edges(x0, y0, x1, y1, x2, y2):
     edge1 = _edge(x2, y2, x0, y0, sign)
     edge2 = _edge(x0, y0, x1, y1, sign)
     return sign * area2, edge0, edge1, edge2
+
+
+# --------------------------------------------------------------------------------------------
+# Setup (lp_setup_tri.c): fixed point, boxes, culling, binning into bands
+
+
+@njit(cache=True)
+def _snap_vertices(xy_z, inv_w, fixed):
+    """Fixed-point x, y of every vertex, or INVALID for one no triangle may use."""
+    for v in range(xy_z.shape[0]):
+        x = xy_z[v, 0]
+        y = xy_z[v, 1]
+        w = inv_w[v]
+        s = x + y + xy_z[v, 2] + w
+        if s - s == 0.0 and w > 0.0:  # all finite (NaN and inf make s - s NaN), W in front
+            fixed[v, 0] = _to_fixed(x)
+            fixed[v, 1] = _to_fixed(y)
+        else:
+            fixed[v, 0] = INVALID
+            fixed[v, 1] = 0
 
 
 @njit(cache=True)
@@ -215,45 +218,89 @@ def _covers_a_centre(edge0, edge1, edge2, i_min, i_max, j_min, j_max):
     return hit
 
 
-SMALL_BOX = 4  # pixel boxes up to this many pixels are tested exactly while binning
-
-
 @njit(cache=True)
-def _bin_triangle(triangles, fixed, width, height, band_scale, band_mask, t):
-    """Which bands triangle t draws into, as a bit mask (0: it covers no pixel centre).
+def _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk, n_chunks,
+                 s_tri, s_bands, s_xy, s_zw, chunk_end):
+    """Put the triangles of one chunk that can draw something into the scene, in order.
 
-    Most triangles of a dense mesh cover one pixel centre or none; testing small boxes here,
-    where the vertices are already at hand, keeps the empty ones out of the scan.
+    Returns how many triangles name a vertex that does not exist (they are never drawn).
     """
-    (drawn, v0, v1, v2, x0, y0, x1, y1, x2, y2,
-     i_min, i_max, j_min, j_max) = _triangle_box(triangles, fixed, t, width, height)
-    if drawn and (i_max - i_min + 1) * (j_max - j_min + 1) <= SMALL_BOX:
-        area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
-        drawn = area2 != 0 and _covers_a_centre(edge0, edge1, edge2, i_min, i_max, j_min, j_max)
-    mask = 0
-    if drawn:
+    n_vertices = fixed.shape[0]
+    n = triangles.shape[0]
+    first = chunk * n // n_chunks
+    slot = first
+    bad = 0
+    for t in range(first, (chunk + 1) * n // n_chunks):
+        v0 = triangles[t, 0]
+        v1 = triangles[t, 1]
+        v2 = triangles[t, 2]
+        if min(v0, v1, v2) < 0 or max(v0, v1, v2) >= n_vertices:
+            bad += 1
+            continue
+        x0 = np.int64(fixed[v0, 0])
+        y0 = np.int64(fixed[v0, 1])
+        x1 = np.int64(fixed[v1, 0])
+        y1 = np.int64(fixed[v1, 1])
+        x2 = np.int64(fixed[v2, 0])
+        y2 = np.int64(fixed[v2, 1])
+        if x0 == INVALID or x1 == INVALID or x2 == INVALID:
+            continue
+        i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
+        if i_min > i_max or j_min > j_max:
+            continue  # no pixel centre of the framebuffer in its box
+        if (i_max - i_min + 1) * (j_max - j_min + 1) <= SMALL_BOX:
+            area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
+            if area2 == 0 or not _covers_a_centre(edge0, edge1, edge2, i_min, i_max, j_min,
+                                                  j_max):
+                continue
         # bands first..last: j // rows_per_band, as a multiply by band_scale = 2^32 //
         # rows_per_band + 1 (exact while j * rows_per_band < 2^32; rows are < 2^15)
-        first = (j_min * band_scale) >> 32
-        last = (j_max * band_scale) >> 32
-        mask = ((1 << (last + 1)) - 1) ^ ((1 << first) - 1)
-    band_mask[t] = mask
+        band_first = (j_min * band_scale) >> 32
+        band_last = (j_max * band_scale) >> 32
+        s_tri[slot] = t
+        s_bands[slot] = ((1 << (band_last + 1)) - 1) ^ ((1 << band_first) - 1)
+        s_xy[slot, 0] = x0
+        s_xy[slot, 1] = y0
+        s_xy[slot, 2] = x1
+        s_xy[slot, 3] = y1
+        s_xy[slot, 4] = x2
+        s_xy[slot, 5] = y2
+        s_zw[slot, 0] = xy_z[v0, 2]
+        s_zw[slot, 1] = xy_z[v1, 2]
+        s_zw[slot, 2] = xy_z[v2, 2]
+        s_zw[slot, 3] = inv_w[v0]
+        s_zw[slot, 4] = inv_w[v1]
+        s_zw[slot, 5] = inv_w[v2]
+        slot += 1
+    chunk_end[chunk] = slot
+    return bad
 
 
 @njit(cache=True, parallel=True)
-def _setup_parallel(xy_z, inv_w, triangles, width, height, band_scale, fixed, band_mask):
-    for v in prange(xy_z.shape[0]):
-        _snap_vertex(xy_z, inv_w, fixed, v)
-    for t in prange(triangles.shape[0]):
-        _bin_triangle(triangles, fixed, width, height, band_scale, band_mask, t)
+def _setup_parallel(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tri, s_bands,
+                    s_xy, s_zw, chunk_end):
+    n_chunks = chunk_end.shape[0]
+    for part in prange(n_chunks):  # the vertices, in as many pieces
+        n = xy_z.shape[0]
+        lo = part * n // n_chunks
+        hi = (part + 1) * n // n_chunks
+        _snap_vertices(xy_z[lo:hi], inv_w[lo:hi], fixed[lo:hi])
+    bad = 0
+    for chunk in prange(n_chunks):
+        bad += _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk,
+                            n_chunks, s_tri, s_bands, s_xy, s_zw, chunk_end)
+    return bad
 
 
 @njit(cache=True)
-def _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, band_mask):
-    for v in range(xy_z.shape[0]):
-        _snap_vertex(xy_z, inv_w, fixed, v)
-    for t in range(triangles.shape[0]):
-        _bin_triangle(triangles, fixed, width, height, band_scale, band_mask, t)
+def _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tri, s_bands,
+                  s_xy, s_zw, chunk_end):
+    _snap_vertices(xy_z, inv_w, fixed)
+    bad = 0
+    for chunk in range(chunk_end.shape[0]):
+        bad += _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk,
+                            chunk_end.shape[0], s_tri, s_bands, s_xy, s_zw, chunk_end)
+    return bad
 
 
 # --------------------------------------------------------------------------------------------
@@ -261,29 +308,32 @@ def _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, band
 
 
 @njit(cache=True)
-def _scan_triangle(xy_z, inv_w, triangles, fixed, t, band_first, band_last, depth, tri, b1, b2,
-                   count_fragments, fragments):
-    """Scan-convert triangle t into device rows band_first..band_last (FvDFH 15.4)."""
+def _scan_triangle(t, xy, zw, band_first, band_last, depth, tri, b1, b2, count_fragments,
+                   fragments):
+    """Scan-convert triangle t (its scene entry: xy, zw) into device rows of one band."""
     height, width = depth.shape
-    (boxed, v0, v1, v2, x0, y0, x1, y1, x2, y2,
-     i_min, i_max, j_min, j_max) = _triangle_box(triangles, fixed, t, width, height)
+    x0 = np.int64(xy[0])
+    y0 = np.int64(xy[1])
+    x1 = np.int64(xy[2])
+    y1 = np.int64(xy[3])
+    x2 = np.int64(xy[4])
+    y2 = np.int64(xy[5])
+    i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
     j_min = max(j_min, band_first)
     j_max = min(j_max, band_last)
-    if not boxed or j_min > j_max:
-        return
     area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
-    if area2 == 0:
+    if area2 == 0 or j_min > j_max:
         return
     a0, b0, c0, bias0 = edge0
     a1, b1_, c1, bias1 = edge1
     a2, b2_, c2, bias2 = edge2
     inv_area = 1.0 / area2
-    z0 = xy_z[v0, 2]
-    dz1 = xy_z[v1, 2] - z0
-    dz2 = xy_z[v2, 2] - z0
-    w0 = inv_w[v0]
-    w1 = inv_w[v1]
-    w2 = inv_w[v2]
+    z0 = zw[0]
+    dz1 = zw[1] - z0
+    dz2 = zw[2] - z0
+    w0 = zw[3]
+    w1 = zw[4]
+    w2 = zw[5]
     px = i_min * SUBPIXEL_ONE + PIXEL_CENTRE
     for j in range(j_min, j_max + 1):
         py = j * SUBPIXEL_ONE + PIXEL_CENTRE
@@ -319,9 +369,9 @@ def _scan_triangle(xy_z, inv_w, triangles, fixed, t, band_first, band_last, dept
 
 
 @njit(cache=True)
-def _scan_band(xy_z, inv_w, triangles, fixed, band_mask, band, rows_per_band, depth, tri, b1,
-               b2, count_fragments, fragments):
-    """Clear one band of rows, then draw into it every triangle that meets it, in order."""
+def _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end, depth,
+               tri, b1, b2, count_fragments, fragments):
+    """Clear one band of rows, then draw into it every scene triangle that meets it, in order."""
     height, width = depth.shape
     first = band * rows_per_band
     last = min(height, first + rows_per_band) - 1
@@ -333,27 +383,28 @@ def _scan_band(xy_z, inv_w, triangles, fixed, band_mask, band, rows_per_band, de
             b1[row, i] = 0.0
             b2[row, i] = 0.0
     bit = np.uint16(1 << band)
-    for t in range(triangles.shape[0]):
-        if band_mask[t] & bit:
-            _scan_triangle(xy_z, inv_w, triangles, fixed, t, first, last, depth, tri, b1, b2,
-                           count_fragments, fragments)
+    n_chunks = chunk_end.shape[0]
+    for chunk in range(n_chunks):
+        for slot in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
+            if s_bands[slot] & bit:
+                _scan_triangle(s_tri[slot], s_xy[slot], s_zw[slot], first, last, depth, tri,
+                               b1, b2, count_fragments, fragments)
 
 
 @njit(cache=True, parallel=True)
-def _scan_parallel(xy_z, inv_w, triangles, fixed, band_mask, n_bands, rows_per_band, depth,
-                   tri, b1, b2, count_fragments, fragments):
-    # one band per task (the caller sets parallel_chunksize(1) so an idle core takes the next)
+def _rast_parallel(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
+                   depth, tri, b1, b2, count_fragments, fragments):
     for band in prange(n_bands):
-        _scan_band(xy_z, inv_w, triangles, fixed, band_mask, band, rows_per_band, depth, tri,
-                   b1, b2, count_fragments, fragments)
+        _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
+                   depth, tri, b1, b2, count_fragments, fragments)
 
 
 @njit(cache=True)
-def _scan_serial(xy_z, inv_w, triangles, fixed, band_mask, n_bands, rows_per_band, depth, tri,
-                 b1, b2, count_fragments, fragments):
+def _rast_serial(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
+                 depth, tri, b1, b2, count_fragments, fragments):
     for band in range(n_bands):
-        _scan_band(xy_z, inv_w, triangles, fixed, band_mask, band, rows_per_band, depth, tri,
-                   b1, b2, count_fragments, fragments)
+        _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
+                   depth, tri, b1, b2, count_fragments, fragments)
 
 
 # --------------------------------------------------------------------------------------------
@@ -363,7 +414,7 @@ _NO_FRAGMENTS = np.zeros((1, 1), np.int32)
 
 
 def default_bands(height: int) -> int:
-    """Bands for the parallel path: a few per core so a core never waits on a busy band."""
+    """Bands for the parallel path: a few per core, so that no core waits on a busy band."""
     return max(1, min(MAX_BANDS, 4 * numba.get_num_threads(), height))
 
 
@@ -380,8 +431,6 @@ def _checked(xy_z, inv_w, triangles, width, height):
         raise ValueError(f"inv_w must be ({xy_z.shape[0]},), got {inv_w.shape}")
     if triangles.ndim != 2 or triangles.shape[1] != 3:
         raise ValueError(f"triangles must be (T, 3), got {triangles.shape}")
-    if triangles.size and (triangles.min() < 0 or triangles.max() >= xy_z.shape[0]):
-        raise ValueError("triangle vertex index out of range")
     return xy_z, inv_w, triangles, width, height
 
 
@@ -395,19 +444,23 @@ def _run(xy_z, inv_w, triangles, width, height, out, parallel, n_bands, fragment
     rows_per_band = -(-height // n_bands)
     n_bands = -(-height // rows_per_band)  # no empty band at the end
     band_scale = (1 << 32) // rows_per_band + 1
-    fixed, band_mask = out._scratch(xy_z.shape[0], triangles.shape[0])
+    n_triangles = triangles.shape[0]
+    scene = out._scene
+    scene.reserve(xy_z.shape[0], n_triangles)
+    fixed = scene.fixed[:xy_z.shape[0]]
     count = fragments is not None
     frag = fragments if count else _NO_FRAGMENTS
-    if parallel:
-        _setup_parallel(xy_z, inv_w, triangles, width, height, band_scale, fixed, band_mask)
-        # chunk size 1: bands are handed out one at a time, so the cores balance the load
-        with numba.parallel_chunksize(1):
-            _scan_parallel(xy_z, inv_w, triangles, fixed, band_mask, n_bands, rows_per_band,
-                           out.depth, out.tri, out.b1, out.b2, count, frag)
-    else:
-        _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, band_mask)
-        _scan_serial(xy_z, inv_w, triangles, fixed, band_mask, n_bands, rows_per_band,
-                     out.depth, out.tri, out.b1, out.b2, count, frag)
+    setup = _setup_parallel if parallel else _setup_serial
+    rast = _rast_parallel if parallel else _rast_serial
+    # chunk size 1: chunks and bands are handed out one at a time, so the cores share the
+    # load even when a few bands hold most of the triangles
+    with numba.parallel_chunksize(1):
+        bad = setup(xy_z, inv_w, triangles, width, height, band_scale, fixed, scene.tri,
+                    scene.bands, scene.xy, scene.zw, scene.chunk_end)
+        if bad:
+            raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
+        rast(n_bands, rows_per_band, n_triangles, scene.tri, scene.bands, scene.xy, scene.zw,
+             scene.chunk_end, out.depth, out.tri, out.b1, out.b2, count, frag)
     return out
 
 
@@ -422,8 +475,8 @@ def rasterize(xy_z, inv_w, triangles, width, height, out: VisibilityBuffer | Non
     triangles : (T, 3) int64 vertex indices; either winding is drawn.
     out : a buffer to reuse (cleared here); a new one is allocated if it is None or its size
         differs, so always use the returned buffer.
-    parallel : draw horizontal bands on all cores; ``False`` runs the single-threaded path
-        (one band), whose result is bit-identical.
+    parallel : use all cores; ``False`` runs the single-threaded path (one band), whose
+        result is bit-identical.
     n_bands : number of horizontal bands (default: a few per core; at most 16).
     """
     return _run(xy_z, inv_w, triangles, width, height, out, parallel, n_bands, None)

@@ -179,7 +179,7 @@ def test_bad_arguments_raise_value_error():
         rasterize(np.zeros((3, 2)), np.ones(3), np.zeros((1, 3), np.int64), 4, 4)
     with pytest.raises(ValueError, match="inv_w"):
         rasterize(np.zeros((3, 3)), np.ones(2), np.zeros((1, 3), np.int64), 4, 4)
-    with pytest.raises(ValueError, match="out of range"):
+    with pytest.raises(ValueError, match="outside 0..2"):
         rasterize(np.zeros((3, 3)), np.ones(3), np.array([[0, 1, 3]]), 4, 4)
     with pytest.raises(ValueError, match="size"):
         rasterize(np.zeros((3, 3)), np.ones(3), np.array([[0, 1, 2]]), 0, 4)
