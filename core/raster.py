@@ -279,12 +279,10 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk
 @njit(cache=True, parallel=True)
 def _setup_parallel(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tri, s_bands,
                     s_xy, s_zw, chunk_end):
+    # Snapping is one cheap pass (about 1 ms for 500k vertices); a parallel region of its
+    # own would cost a core's wake-up, and on a loaded machine a scheduler tick, each frame.
+    _snap_vertices(xy_z, inv_w, fixed)
     n_chunks = chunk_end.shape[0]
-    for part in prange(n_chunks):  # the vertices, in as many pieces
-        n = xy_z.shape[0]
-        lo = part * n // n_chunks
-        hi = (part + 1) * n // n_chunks
-        _snap_vertices(xy_z[lo:hi], inv_w[lo:hi], fixed[lo:hi])
     bad = 0
     for chunk in prange(n_chunks):
         bad += _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk,
@@ -308,16 +306,16 @@ def _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tr
 
 
 @njit(cache=True)
-def _scan_triangle(t, xy, zw, band_first, band_last, depth, tri, b1, b2, count_fragments,
-                   fragments):
-    """Scan-convert triangle t (its scene entry: xy, zw) into device rows of one band."""
+def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b2,
+                   count_fragments, fragments):
+    """Scan-convert triangle t (scene slot ``slot``) into the device rows of one band."""
     height, width = depth.shape
-    x0 = np.int64(xy[0])
-    y0 = np.int64(xy[1])
-    x1 = np.int64(xy[2])
-    y1 = np.int64(xy[3])
-    x2 = np.int64(xy[4])
-    y2 = np.int64(xy[5])
+    x0 = np.int64(s_xy[slot, 0])
+    y0 = np.int64(s_xy[slot, 1])
+    x1 = np.int64(s_xy[slot, 2])
+    y1 = np.int64(s_xy[slot, 3])
+    x2 = np.int64(s_xy[slot, 4])
+    y2 = np.int64(s_xy[slot, 5])
     i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
     j_min = max(j_min, band_first)
     j_max = min(j_max, band_last)
@@ -328,12 +326,12 @@ def _scan_triangle(t, xy, zw, band_first, band_last, depth, tri, b1, b2, count_f
     a1, b1_, c1, bias1 = edge1
     a2, b2_, c2, bias2 = edge2
     inv_area = 1.0 / area2
-    z0 = zw[0]
-    dz1 = zw[1] - z0
-    dz2 = zw[2] - z0
-    w0 = zw[3]
-    w1 = zw[4]
-    w2 = zw[5]
+    z0 = s_zw[slot, 0]
+    dz1 = s_zw[slot, 1] - z0
+    dz2 = s_zw[slot, 2] - z0
+    w0 = s_zw[slot, 3]
+    w1 = s_zw[slot, 4]
+    w2 = s_zw[slot, 5]
     px = i_min * SUBPIXEL_ONE + PIXEL_CENTRE
     for j in range(j_min, j_max + 1):
         py = j * SUBPIXEL_ONE + PIXEL_CENTRE
@@ -387,8 +385,8 @@ def _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chu
     for chunk in range(n_chunks):
         for slot in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
             if s_bands[slot] & bit:
-                _scan_triangle(s_tri[slot], s_xy[slot], s_zw[slot], first, last, depth, tri,
-                               b1, b2, count_fragments, fragments)
+                _scan_triangle(s_xy, s_zw, slot, s_tri[slot], first, last, depth, tri, b1,
+                               b2, count_fragments, fragments)
 
 
 @njit(cache=True, parallel=True)
