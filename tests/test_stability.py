@@ -163,6 +163,7 @@ def test_one_pixel_mismatches():
     assert stability.one_pixel_mismatches(a, b) == 0
 
 
+@pytest.mark.slow
 def test_command_prints_the_table_and_json(results, capsys, monkeypatch):
     from app import stability as command
     monkeypatch.setattr(stability, "run_suite", lambda progress=None: results)
