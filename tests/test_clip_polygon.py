@@ -163,6 +163,12 @@ def test_degenerate_and_non_finite_input():
     assert not set(c.source.tolist()) & {1, 2, 3}
 
 
+def test_vertex_index_out_of_range_raises():
+    pts = np.array([(0, 0, -0.5), (2, 0, -0.5), (0, 0.5, -0.5)])
+    with pytest.raises(ValueError, match="outside 0..2"):
+        clip_triangles(pts, [[0, 1, 3]], None, "parallel")
+
+
 def test_shared_edge_gets_identical_crossing_points():
     # Pairs of triangles sharing an edge that crosses a plane, walked in opposite directions
     # (a-b in one, b-a in the other): the crossing point and its attributes must be
@@ -177,8 +183,8 @@ def test_shared_edge_gets_identical_crossing_points():
             pts = np.array([a, b, c, d])
             attrs = rng.normal(size=(4, 2))
             out = clip_triangles(pts, [[0, 1, 2], [1, 0, 3]], attrs, projection, Z_MIN)
-            first = {tuple(out.points[v]) + tuple(out.attrs[v]) for v in out.triangles[out.source == 0].ravel()}
-            second = {tuple(out.points[v]) + tuple(out.attrs[v]) for v in out.triangles[out.source == 1].ravel()}
+            first, second = ({tuple(out.points[v]) + tuple(out.attrs[v])
+                              for v in out.triangles[out.source == k].ravel()} for k in (0, 1))
             shared = first & second
             # a and the crossing point on a-b (x = 1, or x = -z): both triangles have them
             assert len(shared) == 2, (projection, pts)

@@ -196,7 +196,8 @@ def _split_square(rng, x0, y0, x1, y1, splits):
     p = np.array(pts, dtype=np.int64)
 
     def area2(a, b, c):
-        return (p[b, 0] - p[a, 0]) * (p[c, 1] - p[a, 1]) - (p[c, 0] - p[a, 0]) * (p[b, 1] - p[a, 1])
+        (ax, ay), (bx, by), (cx, cy) = p[a], p[b], p[c]
+        return (bx - ax) * (cy - ay) - (cx - ax) * (by - ay)
 
     points = list(pts)
     done = 0
@@ -260,7 +261,8 @@ def _perspective_grid(rng, n):
     x = 48 + dx + 75 * X / W
     y = 40 + dy + 75 * Y / W
     idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
     diag = rng.random(n * n) < 0.5
     t1 = np.where(diag[:, None], np.stack([a, b, c], 1), np.stack([a, b, d], 1))
     t2 = np.where(diag[:, None], np.stack([a, c, d], 1), np.stack([b, c, d], 1))
