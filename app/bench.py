@@ -325,7 +325,8 @@ def format_stages(rows: list[dict]) -> str:
     for r in rows:
         stages = sorted(r["ours"]["stages_ms"].items(), key=lambda kv: -kv[1])
         parts = ", ".join(f"{name} {ms:.2f}" for name, ms in stages)
-        lines.append(f"{r['triangles']:>10,} {r['shading']:<8} upload {r['ours']['upload_ms']:.2f}; {parts}")
+        lines.append(f"{r['triangles']:>10,} {r['shading']:<8} upload {r['ours']['upload_ms']:.2f}; {parts} "
+                     f"(llvmpipe readback, not in its time: {r['llvmpipe']['readback_ms']:.2f})")
     return "\n".join(lines)
 
 
