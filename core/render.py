@@ -20,7 +20,7 @@ from core import clip, project, raster_lines
 from core.plan import Stage, plan
 from core.scene import Scene
 from core.transforms import apply
-from core.view import normalizing_transform, problems
+from core.view import ViewError, normalizing_transform
 
 
 @dataclass
@@ -72,32 +72,47 @@ def render(scene: Scene, view_index: int, projection: str | None = None,
     width, height = size or scene.size
     stages = plan(scene, projection, shading)
     color = np.empty((max(height, 0), max(width, 0), 3), dtype=np.uint8)
-    color[:] = to_rgb8(scene.background)
     stats = {"allocated": ["color"], "computed": [], "projection": projection, "shading": shading}
     frame = Frame(color=color, plan=stages, stats=stats)
+    solid = shading != "wireframe" and scene.triangle_count > 0
+    if not solid:
+        fill(color, scene.background)          # the solid path's resolve writes every pixel
     if not scene.views:
         frame.message = f"{scene.name}: no valid view to show"
-        return frame
+        return _blank(frame, scene, solid)
     view = scene.views[view_index % len(scene.views)]
-    found = problems(view, projection)
-    if found:
-        frame.message = f"{view.label}: invalid for {projection} projection: " + "; ".join(found)
-        return frame
+    try:
+        n, z_min = normalizing_transform(view, projection)
+    except ViewError as error:
+        frame.message = f"invalid for {projection} projection: {error}"
+        return _blank(frame, scene, solid)
     if width <= 0 or height <= 0:
         frame.message = f"the framebuffer is {width} x {height}: nothing to draw"
         return frame
 
     timer = _Timer(stats)
-    n, z_min = normalizing_transform(view, projection)
     vp = project.viewport(view.window, width, height)
     timer.lap("normalize")
-    solid = shading != "wireframe" and scene.triangle_count > 0
     if solid:
-        from core.render_solid import render_solid     # the triangle pipeline
+        from core.render_solid import render_solid     # the triangle pipeline (numba kernels)
         render_solid(frame, scene, view, projection, shading, n, z_min, vp, timer)
     line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
     if line_meshes:
         _render_lines(color, line_meshes, projection, n, z_min, vp, scene.line_color, timer, stats)
+    return frame
+
+
+def fill(color: np.ndarray, rgb) -> None:
+    """Fill an (H, W, 3) image with one colour: one row, then whole rows (a length-3 inner
+    broadcast over every pixel costs ~100x more)."""
+    if color.size:
+        color[0] = to_rgb8(rgb)
+        color[1:] = color[0]
+
+
+def _blank(frame: Frame, scene: Scene, filled: bool) -> Frame:
+    if not filled:
+        fill(frame.color, scene.background)
     return frame
 
 

@@ -59,27 +59,33 @@ PARALLEL_TOLERANCE = 1e-12
 def problems(view: View, projection: str | None = None) -> list[str]:
     """Every reason the view is invalid or unreasonable (pipeline.md's list); empty if valid.
 
-    With ``projection=None`` only the checks that hold for both projections are made.
+    With ``projection=None`` only the checks that hold for both projections are made; with a
+    projection, the normalizing transformation is also built and checked for overflow.
     """
-    if not np.all(np.isfinite(view.numbers)):
-        return ["a number is NaN or infinite"]
-    with np.errstate(all="ignore"):            # huge or tiny numbers are reported, not raised
-        return _problems(view, projection)
+    found = _problems(view, projection)
+    if not found and projection is not None:
+        _factors_or_overflow(view, projection, found)
+    return found
 
 
 def _problems(view: View, projection: str | None) -> list[str]:
-    vpn, vup, prp = (np.array(a, dtype=np.float64) for a in (view.vpn, view.vup, view.prp))
-    u_min, u_max, v_min, v_max = view.window
-    found = []
-    vpn_len = np.linalg.norm(vpn)
-    if vpn_len == 0.0:
-        found.append("VPN is zero")
-    if np.linalg.norm(vup) == 0.0:
-        found.append("VUP is zero")
-    elif vpn_len > 0.0:
-        n = vpn / vpn_len
-        if np.linalg.norm(np.cross(vup, n)) <= PARALLEL_TOLERANCE * np.linalg.norm(vup):
-            found.append("VUP is parallel to VPN")
+    """The checks of pipeline.md that need no matrix."""
+    if not np.all(np.isfinite(view.numbers)):
+        return ["a number is NaN or infinite"]
+    with np.errstate(all="ignore"):            # huge or tiny numbers are reported, not raised
+        vpn, vup, prp = (np.array(a, dtype=np.float64) for a in (view.vpn, view.vup, view.prp))
+        u_min, u_max, v_min, v_max = view.window
+        found = []
+        vpn_len = np.sqrt(vpn @ vpn)
+        vup_len = np.sqrt(vup @ vup)
+        if vpn_len == 0.0:
+            found.append("VPN is zero")
+        if vup_len == 0.0:
+            found.append("VUP is zero")
+        elif vpn_len > 0.0:
+            across = cross3(vup, vpn / vpn_len)
+            if np.sqrt(across @ across) <= PARALLEL_TOLERANCE * vup_len:
+                found.append("VUP is parallel to VPN")
     if prp[2] == 0.0:
         found.append("PRP lies on the view plane (PRP_n = 0), so the direction of projection "
                      "is parallel to the view plane")
@@ -92,12 +98,19 @@ def _problems(view: View, projection: str | None) -> list[str]:
     if projection == "perspective" and not view.front < prp[2]:
         found.append(f"the front plane F = {view.front:g} is not in front of the eye "
                      f"(PRP_n = {prp[2]:g})")
-    if not found and projection is not None:
-        factors = (n_per_factors if projection == "perspective" else n_par_factors)(view, validate=False)
-        if not all(np.all(np.isfinite(m)) for m in factors.values()):
-            found.append("the numbers are too large or too small: the normalizing "
-                         "transformation overflows")
     return found
+
+
+def _factors_or_overflow(view: View, projection: str, found: list[str]) -> dict | None:
+    """The chain's factors, or None after adding the overflow message to ``found``."""
+    build = _n_per if projection == "perspective" else _n_par
+    with np.errstate(all="ignore"):            # overflow is detected below, not raised
+        factors = build(view)
+    if all(np.all(np.isfinite(m)) for m in factors.values()):
+        return factors
+    found.append("the numbers are too large or too small: the normalizing transformation "
+                 "overflows")
+    return None
 
 
 def check(view: View, projection: str | None = None) -> None:
@@ -107,13 +120,18 @@ def check(view: View, projection: str | None = None) -> None:
         raise ViewError(f"{view.label}: " + "; ".join(found))
 
 
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b for two 3-vectors (np.cross's generality costs ~20 us a call)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def vrc_basis(view: View) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """u, v, n of the VRC: ``n = VPN/|VPN|``, ``u = VUP x n / |VUP x n|``, ``v = n x u``."""
     vpn = np.asarray(view.vpn, dtype=np.float64)
     n = vpn / np.linalg.norm(vpn)
-    u = np.cross(np.asarray(view.vup, dtype=np.float64), n)
+    u = cross3(np.asarray(view.vup, dtype=np.float64), n)
     u /= np.linalg.norm(u)
-    v = np.cross(n, u)
+    v = cross3(n, u)
     return u, v, n
 
 
@@ -131,10 +149,21 @@ def _common_factors(view: View) -> dict[str, np.ndarray]:
     }
 
 
+def _validated(view: View, projection: str) -> dict[str, np.ndarray]:
+    """Check the view and build its chain once; raise ViewError naming every problem."""
+    found = _problems(view, projection)
+    factors = None if found else _factors_or_overflow(view, projection, found)
+    if found:
+        raise ViewError(f"{view.label}: " + "; ".join(found))
+    return factors
+
+
 def n_par_factors(view: View, validate: bool = True) -> dict[str, np.ndarray]:
     """The parallel chain by name: T_vrp, R, SH_par, T_par, S_par and N_par (FvDFH 6.5.1)."""
-    if validate:
-        check(view, "parallel")
+    return _validated(view, "parallel") if validate else _n_par(view)
+
+
+def _n_par(view: View) -> dict[str, np.ndarray]:
     u_min, u_max, v_min, v_max = view.window
     f = _common_factors(view)
     f["T_par"] = translate(-(u_max + u_min) / 2, -(v_max + v_min) / 2, -view.front)
@@ -148,8 +177,10 @@ def n_per_factors(view: View, validate: bool = True) -> dict[str, np.ndarray]:
 
     ``z_min`` is returned as a 0-d array beside the matrices (FvDFH 6.5.2).
     """
-    if validate:
-        check(view, "perspective")
+    return _validated(view, "perspective") if validate else _n_per(view)
+
+
+def _n_per(view: View) -> dict[str, np.ndarray]:
     u_min, u_max, v_min, v_max = view.window
     f = _common_factors(view)
     f["T_prp"] = translate(*(-np.asarray(view.prp, dtype=np.float64)))
