@@ -59,6 +59,7 @@ MAX_SIZE = 1 << 15  # framebuffer width and height limit
 MAX_BANDS = 16  # a triangle's bands are a uint16 bit mask
 SETUP_CHUNKS = 64  # pieces of the triangle array that setup hands to the cores
 SMALL_BOX = 4  # boxes of up to this many pixels are tested for coverage during setup
+PARALLEL_SETUP = 50_000  # fewer triangles than this are set up on one core
 
 
 @dataclass
@@ -448,7 +449,9 @@ def _run(xy_z, inv_w, triangles, width, height, out, parallel, n_bands, fragment
     fixed = scene.fixed[:xy_z.shape[0]]
     count = fragments is not None
     frag = fragments if count else _NO_FRAGMENTS
-    setup = _setup_parallel if parallel else _setup_serial
+    # Below PARALLEL_SETUP triangles setup takes well under a millisecond: waking a second
+    # core would cost more than it saves. (Either way the scene is the same.)
+    setup = _setup_parallel if parallel and n_triangles >= PARALLEL_SETUP else _setup_serial
     rast = _rast_parallel if parallel else _rast_serial
     # chunk size 1: chunks and bands are handed out one at a time, so the cores share the
     # load even when a few bands hold most of the triangles

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
+from core import raster
 from core.raster import (SUBPIXEL_ONE, VisibilityBuffer, count_fragments, default_bands,
                          rasterize)
 
@@ -357,7 +358,8 @@ def test_shuffled_mesh_gives_identical_buffers():
 
 
 @pytest.mark.parametrize("n_bands", [2, 3, 7, 16])
-def test_parallel_bands_are_bit_identical_to_serial(n_bands):
+def test_parallel_bands_are_bit_identical_to_serial(n_bands, monkeypatch):
+    monkeypatch.setattr(raster, "PARALLEL_SETUP", 0)       # the parallel setup too
     rng = np.random.default_rng(n_bands)
     for xy_z, inv_w, tris, w, h in (_random_scene(rng, 300, 61, 47) + (61, 47),
                                     _sphere_torus(30_000) + (500, 500)):
