@@ -77,17 +77,24 @@ def project_lines(points: np.ndarray, projection: str, vp) -> np.ndarray:
     return divide_by_w(_homogeneous(points) @ m.T)
 
 
+def triangle_matrix(projection: str, z_min: float, vp) -> np.ndarray:
+    """The one matrix that carries canonical points to the device before the divide:
+    ``M_vv3dv · M`` (perspective, M the perspective-to-parallel matrix) or ``M_vv3dv``."""
+    m = m_vv3dv(*vp)
+    if projection == "perspective":
+        m = m @ perspective_to_parallel(z_min)
+    return m
+
+
 def project_triangles(points: np.ndarray, projection: str, z_min: float, vp):
     """Solids: canonical ``(N, 3)`` → ``(device (N, 3), inv_w (N,))``.
 
     Perspective goes through the perspective-to-parallel matrix so that depth stays affine in
     screen space; ``inv_w`` (1/W) lets the rasterizer interpolate attributes perspective-
     correctly. The clipper guarantees W = -z > 0 for every vertex a triangle uses.
+    (``core.vertex_kernels.transform_projective`` is the compiled twin the renderer uses.)
     """
-    m = m_vv3dv(*vp)
-    if projection == "perspective":
-        m = m @ perspective_to_parallel(z_min)
-    h = _homogeneous(points) @ m.T
+    h = _homogeneous(points) @ triangle_matrix(projection, z_min, vp).T
     # The clipper keeps its input vertex array whole, so vertices no triangle uses may lie
     # outside the volume, even at the eye (W = 0): they get inv_w = 0 instead of a division.
     inv_w = np.divide(1.0, h[:, 3], out=np.zeros(len(h)), where=h[:, 3] > 0.0)

@@ -20,7 +20,7 @@ from core import clip, project, raster_lines
 from core.plan import Stage, plan
 from core.scene import Scene
 from core.transforms import apply
-from core.view import ViewError, normalizing_transform
+from core.view import ViewError, normalizing_transform, problems
 
 
 @dataclass
@@ -48,21 +48,30 @@ def _edges(mesh) -> np.ndarray:
 
 
 class _Timer:
-    """Collects per-stage wall times (ms) into a stats dict."""
+    """Collects per-stage wall times (ms) into a stats dict, and hands each stage's arrays to
+    an ``inspect(stage, arrays)`` callback when one is given (the stability suite checks every
+    intermediate array that way, on the real path)."""
 
-    def __init__(self, stats: dict):
+    def __init__(self, stats: dict, inspect=None):
         self.times = stats.setdefault("ms", {})
+        self.inspect = inspect
         self.t = time.perf_counter()
 
-    def lap(self, stage: str) -> None:
+    def lap(self, stage: str, **arrays) -> None:
         now = time.perf_counter()
         self.times[stage] = self.times.get(stage, 0.0) + (now - self.t) * 1e3
-        self.t = now
+        if self.inspect is not None and arrays:
+            self.inspect(stage, arrays)
+        self.t = time.perf_counter()
 
 
 def render(scene: Scene, view_index: int, projection: str | None = None,
-           shading: str | None = None, size: tuple[int, int] | None = None) -> Frame:
+           shading: str | None = None, size: tuple[int, int] | None = None,
+           inspect=None) -> Frame:
     """Render view ``view_index`` (0-based) of ``scene``.
+
+    ``inspect(stage, arrays)``, when given, is called after each stage of the triangle path
+    with the arrays it produced (named as in ``core/render_solid.py``).
 
     An invalid view, a scene without views, or a zero-sized framebuffer gives a frame of the
     background colour with ``message`` saying why; it never raises for bad scene data.
@@ -79,18 +88,19 @@ def render(scene: Scene, view_index: int, projection: str | None = None,
         fill(color, scene.background)          # the solid path's resolve writes every pixel
     if not scene.views:
         frame.message = f"{scene.name}: no valid view to show"
-        return _blank(frame, scene, solid)
+        return _blank(frame, scene, filled=not solid)
     view = scene.views[view_index % len(scene.views)]
     try:
         n, z_min = normalizing_transform(view, projection)
-    except ViewError as error:
-        frame.message = f"invalid for {projection} projection: {error}"
-        return _blank(frame, scene, solid)
+    except ViewError:
+        frame.message = (f"{view.label}: invalid for {projection} projection: "
+                         + "; ".join(problems(view, projection)))
+        return _blank(frame, scene, filled=not solid)
     if width <= 0 or height <= 0:
         frame.message = f"the framebuffer is {width} x {height}: nothing to draw"
         return frame
 
-    timer = _Timer(stats)
+    timer = _Timer(stats, inspect)
     vp = project.viewport(view.window, width, height)
     timer.lap("normalize")
     if solid:

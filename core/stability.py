@@ -199,46 +199,40 @@ def render_image(scene: Scene, projection: str, shading: str, size=SIZE, view_in
 
 def probe(scene: Scene, projection: str, shading: str, size=SIZE, view_index: int = 0
           ) -> list[str]:
-    """The stages of ``core.render_solid`` run one by one; the names of non-finite arrays.
+    """The names of the non-finite arrays between the stages of the real triangle path.
 
     Also flags ``1/W <= 0`` at a vertex a triangle uses and barycentric weights outside
     [-1e-9, 1 + 1e-9] (both would mean a point at or behind the eye got through). Vertices no
     triangle uses (the clipper keeps its input array whole) are not the rasterizer's concern.
     """
-    from core.clip_polygon import clip_triangles
-    from core.raster import rasterize
-    from core.render_solid import front_faces
-    view = scene.views[view_index]
-    n, z_min = normalizing_transform(view, projection)
-    eye = shade.eye_from_view(view, projection)
-    inputs = shade.prepare(shading, scene, eye)
+    from core.render import render
+    arrays: dict[str, np.ndarray] = {}
+    # The real pipeline, each stage's arrays copied as they pass (the z-buffer is reused).
+    render(scene, view_index, projection, shading, size,
+           inspect=lambda stage, found: arrays.update({k: np.array(v) for k, v in found.items()}))
     bad = []
+    if "vertex_attrs" not in arrays:             # no triangle stage ran (e.g. an invalid view)
+        return bad
 
     def finite(name, array):
         if not np.all(np.isfinite(array)):
             bad.append(name)
 
-    finite("vertex attributes", inputs.vertex_attrs)
-    if inputs.face_rgb is not None:
-        finite("face colours", inputs.face_rgb)
-    points = apply(n, inputs.positions)[:, :3]
-    finite("canonical points", points)
-    kept = front_faces(scene, eye)
-    triangles = inputs.triangles if kept is None else inputs.triangles[kept]
-    clipped = clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min)
-    finite("clipped points", clipped.points)
-    finite("clipped attributes", clipped.attrs)
-    vp = project.viewport(view.window, *size)
-    device, inv_w = project.project_triangles(clipped.points, projection, z_min, vp)
-    used = np.unique(clipped.triangles)
-    finite("device points", device[used])
-    finite("1/W", inv_w[used])
-    if len(used) and not np.all(inv_w[used] > 0.0):
+    finite("vertex attributes", arrays["vertex_attrs"])
+    if "face_rgb" in arrays:
+        finite("face colours", arrays["face_rgb"])
+    finite("canonical points", arrays["canonical_points"])
+    finite("clipped points", arrays["clipped_points"])
+    finite("clipped attributes", arrays["clipped_attrs"])
+    used = np.unique(arrays["clipped_triangles"])
+    finite("device points", arrays["device_points"][used])
+    finite("1/W", arrays["inv_w"][used])
+    if len(used) and not np.all(arrays["inv_w"][used] > 0.0):
         bad.append("1/W <= 0")
-    vis = rasterize(device, inv_w, clipped.triangles, size[0], size[1])
-    covered = vis.tri >= 0
-    finite("depth", vis.depth[covered])
-    for name, b in (("b1", vis.b1), ("b2", vis.b2)):
+    covered = arrays["tri"] >= 0
+    finite("depth", arrays["depth"][covered])
+    for name in ("b1", "b2"):
+        b = arrays[name]
         finite(name, b[covered])
         if covered.any() and not (np.all(b[covered] >= -1e-9) and np.all(b[covered] <= 1 + 1e-9)):
             bad.append(f"{name} outside [0, 1]")

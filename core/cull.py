@@ -1,0 +1,87 @@
+"""Back-face culling (FvDFH 15.2.4), in world coordinates, before clipping.
+
+For a mesh declared closed and consistently wound (counter-clockwise seen from outside), a face
+whose outer side is turned away from the viewer can never be seen: the z-buffer would hide it
+behind the front of the same mesh. A face is kept when the eye lies on the outer side of its
+plane, ``N·E - N·V0 >= 0`` (perspective, E the PRP), or when the direction towards the viewer
+does, ``N·D >= 0`` (parallel). Faces exactly edge-on are kept. Meshes that are not closed keep
+every face.
+
+The face planes (unnormalised normal N and constant ``N·V0``) do not depend on the view and are
+computed once per mesh; the per-frame test is one compiled pass over the faces that writes the
+kept triangles directly (no boolean mask, no gather afterwards).
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+from numba import njit
+
+_planes: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def face_planes(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Unnormalised outward normals ``(T, 3)`` and plane constants ``N·V0`` ``(T,)`` of a mesh."""
+    cached = _planes.get(mesh)
+    if cached is not None and cached[0] is mesh.positions and cached[1] is mesh.triangles:
+        return cached[2], cached[3]
+    p, t = mesh.positions, mesh.triangles
+    v0 = p[t[:, 0]]
+    normal = np.cross(p[t[:, 1]] - v0, p[t[:, 2]] - v0)
+    d = np.einsum("ij,ij->i", normal, v0)
+    _planes[mesh] = (mesh.positions, mesh.triangles, normal, d)
+    return normal, d
+
+
+@njit(cache=True)
+def _keep_front(normal, d, triangles, first, eye, eye_is_point, kept, kept_triangles, count):
+    """Append the front faces of one mesh (its rows start at ``first``); returns the new count."""
+    ex, ey, ez = eye[0], eye[1], eye[2]
+    for t in range(normal.shape[0]):
+        side = normal[t, 0] * ex + normal[t, 1] * ey + normal[t, 2] * ez
+        if eye_is_point:
+            side -= d[t]
+        if side >= 0.0:
+            kept[count] = first + t
+            for c in range(3):
+                kept_triangles[count, c] = triangles[first + t, c]
+            count += 1
+    return count
+
+
+@njit(cache=True)
+def _keep_all(triangles, first, n, kept, kept_triangles, count):
+    for t in range(n):
+        kept[count] = first + t
+        for c in range(3):
+            kept_triangles[count, c] = triangles[first + t, c]
+        count += 1
+    return count
+
+
+def front_faces(meshes, triangles: np.ndarray, eye) -> tuple[np.ndarray, np.ndarray] | None:
+    """The faces that may be seen: ``(kept indices (K,), kept triangles (K, 3))``.
+
+    ``triangles`` are all meshes' triangles in scene order over one vertex array (what
+    ``shade.prepare`` built); ``eye`` is ``shade.eye_from_view``'s answer. Returns None when no
+    mesh is closed, so that nothing is copied.
+    """
+    if not any(m.closed and len(m.triangles) for m in meshes):
+        return None
+    kept = np.empty(len(triangles), dtype=np.int64)
+    kept_triangles = np.empty((len(triangles), 3), dtype=np.int64)
+    eye_is_point = eye.point is not None
+    e = np.asarray(eye.point if eye_is_point else eye.direction, dtype=np.float64)
+    count, first = 0, 0
+    for mesh in meshes:
+        n = len(mesh.triangles)
+        if mesh.closed and n:
+            normal, d = face_planes(mesh)
+            count = _keep_front(normal, d, triangles, first, e, eye_is_point, kept,
+                                kept_triangles, count)
+        elif n:
+            count = _keep_all(triangles, first, n, kept, kept_triangles, count)
+        first += n
+    return kept[:count], kept_triangles[:count]
