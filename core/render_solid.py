@@ -1,12 +1,13 @@
-"""The triangle pipeline: shade inputs → N → cull → clip → project → z-buffer → resolve.
+"""The triangle pipeline: cull → shade inputs → N → clip → project → z-buffer → resolve.
 
 Called by :func:`core.render.render` for solid shading modes. Each step is one call into the
 module that implements it; this file only threads arrays from one to the next and records what
 ran in ``frame.stats``:
 
-1. ``shade.prepare``: the mode's per-face or per-vertex work in world coordinates.
-2. ``N_per`` / ``N_par`` on every vertex (vectorised).
-3. ``front_faces``: back-face culling, only for meshes declared closed (``core/cull.py``).
+1. ``front_faces``: back-face culling, only for meshes declared closed (``core/cull.py``).
+2. ``shade.prepare``: the mode's per-face or per-vertex work in world coordinates, for the
+   faces that survived culling only.
+3. ``N_per`` / ``N_par`` on every vertex.
 4. ``clip_triangles``: trivial accept/reject by outcode, Sutherland–Hodgman for the rest.
 5. ``project_triangles``: perspective-to-parallel M, M_vv3dv, divide by W.
 6. ``rasterize``: the scan-line z-buffer into a visibility buffer (reused between frames).
@@ -45,20 +46,21 @@ def render_solid(frame, scene, view, projection, shading, n, z_min, vp, timer) -
     stats = frame.stats
     height, width = frame.color.shape[:2]
     eye = shade.eye_from_view(view, projection)
-    inputs = shade.prepare(shading, scene, eye)
+    positions, all_triangles = shade.geometry(scene)
+    culled = front_faces(scene.meshes, all_triangles, eye)
+    kept, triangles = (None, all_triangles) if culled is None else culled
+    if kept is not None:
+        stats["computed"].append("back-face culling")
+        stats["culled"] = int(len(all_triangles) - len(kept))
+    timer.lap("cull back faces")
+
+    inputs = shade.prepare(shading, scene, eye, faces=kept)
     stats["computed"].extend(inputs.computed)
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
 
-    points = transform_affine(n, inputs.positions)
+    points = transform_affine(n, positions)
     timer.lap("normalize", canonical_points=points)
-
-    culled = front_faces(scene.meshes, inputs.triangles, eye)
-    kept, triangles = (None, inputs.triangles) if culled is None else culled
-    if kept is not None:
-        stats["computed"].append("back-face culling")
-        stats["culled"] = int(len(inputs.triangles) - len(kept))
-    timer.lap("cull back faces")
 
     clipped = clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min)
     source = clipped.source if kept is None else kept[clipped.source]

@@ -86,6 +86,7 @@ class ShadeInput:
     ambient: np.ndarray
     eye: np.ndarray
     halfway: bool
+    faces: np.ndarray          # (F,) the faces that will be drawn; only these are lit
     computed: list[str] = field(default_factory=list)
 
 
@@ -167,10 +168,11 @@ def _geometry(scene, meshes):
 
 
 @njit(cache=True, parallel=True)
-def _phong_faces(positions, triangles, normals, face_surface, surfaces, lights, ambient, eye,
-                 halfway, out):
-    """The model once per face, at its centroid with its face normal."""
-    for f in prange(triangles.shape[0]):
+def _phong_faces(positions, triangles, faces, normals, face_surface, surfaces, lights, ambient,
+                 eye, halfway, out):
+    """The model once per face ``faces[k]``, at its centroid with its face normal."""
+    for k in prange(faces.shape[0]):
+        f = faces[k]
         i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
         cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
         cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
@@ -183,9 +185,9 @@ def _phong_faces(positions, triangles, normals, face_surface, surfaces, lights, 
 def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
     """One evaluation per face, at its centroid with its face normal (FvDFH 16.2.3)."""
     normals = _concatenated(scene, meshes, "face normals", _mesh_face_normals, 3)
-    s.face_rgb = np.empty((len(s.triangles), 3))
-    _phong_faces(s.positions, s.triangles, normals, s.face_surface, s.surfaces, s.lights,
-                 s.ambient, s.eye, s.halfway, s.face_rgb)
+    s.face_rgb = np.zeros((len(s.triangles), 3))          # faces not in s.faces stay unlit
+    _phong_faces(s.positions, s.triangles, s.faces, normals, s.face_surface, s.surfaces,
+                 s.lights, s.ambient, s.eye, s.halfway, s.face_rgb)
     s.computed += ["face normals", "illuminate faces"]
 
 
@@ -199,9 +201,33 @@ def _all_vertex_normals(s: ShadeInput, scene, meshes, weighting) -> np.ndarray:
 def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
     """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4)."""
     normals = _all_vertex_normals(s, scene, meshes, weighting)
-    s.vertex_attrs = phong_points(s.positions, normals, s.vertex_surface, s.surfaces, s.lights,
-                                  s.ambient, s.eye, s.halfway)
+    s.vertex_attrs = np.zeros((len(s.positions), 3))      # vertices no face uses stay unlit
+    _phong_vertices(s.positions, normals, _used_vertices(s.triangles, s.faces, len(s.positions)),
+                    s.vertex_surface, s.surfaces, s.lights, s.ambient, s.eye, s.halfway,
+                    s.vertex_attrs)
     s.computed.append("illuminate vertices")
+
+
+@njit(cache=True)
+def _used_vertices(triangles, faces, vertex_count):
+    """Indices of the vertices that the faces ``faces`` use, each once, in vertex order."""
+    used = np.zeros(vertex_count, dtype=np.bool_)
+    for k in range(faces.shape[0]):
+        for c in range(3):
+            used[triangles[faces[k], c]] = True
+    return np.flatnonzero(used)
+
+
+@njit(cache=True, parallel=True)
+def _phong_vertices(positions, normals, vertices, vertex_surface, surfaces, lights, ambient, eye,
+                    halfway, out):
+    """The model at each vertex ``vertices[k]`` with its vertex normal (FvDFH 16.2.4)."""
+    for k in prange(vertices.shape[0]):
+        i = vertices[k]
+        r, g, b = phong_point(positions[i, 0], positions[i, 1], positions[i, 2],
+                              normals[i, 0], normals[i, 1], normals[i, 2], vertex_surface[i],
+                              surfaces, lights, ambient, eye, halfway)
+        out[i, 0], out[i, 1], out[i, 2] = r, g, b
 
 
 def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
@@ -295,12 +321,22 @@ SHADERS = {
 # What the renderer calls
 
 
-def prepare(mode: str, scene, eye: Eye, weighting: str = "mean") -> ShadeInput:
+def geometry(scene) -> tuple[np.ndarray, np.ndarray]:
+    """``(positions (V, 3), triangles (T, 3))``: all meshes over one vertex array, scene order
+    (cached with the scene; the same arrays :func:`prepare` puts in its ShadeInput)."""
+    positions, triangles, *_ = _geometry(scene, list(scene.meshes))
+    return positions, triangles
+
+
+def prepare(mode: str, scene, eye: Eye, weighting: str = "mean",
+            faces: np.ndarray | None = None) -> ShadeInput:
     """The vertex step of ``mode`` for every mesh of ``scene`` seen from ``eye``.
 
     ``eye`` is :func:`eye_from_view`'s answer. ``weighting`` picks the vertex-normal average
-    (:data:`core.normals.WEIGHTINGS`; the notes' ``"mean"`` by default). Raises ValueError for
-    an unknown mode or weighting.
+    (:data:`core.normals.WEIGHTINGS`; the notes' ``"mean"`` by default). ``faces``, when given,
+    are the indices (into :func:`geometry`'s triangles) of the only faces that will be drawn,
+    e.g. those back-face culling kept: flat lights only those faces and Gouraud only their
+    vertices. Raises ValueError for an unknown mode or weighting.
     """
     if mode not in SHADERS:
         raise ValueError(f"shading must be one of {MODES}, not {mode!r}")
@@ -314,7 +350,9 @@ def prepare(mode: str, scene, eye: Eye, weighting: str = "mean") -> ShadeInput:
         face_surface=face_surface, vertex_surface=vertex_surface, vertex_offset=offset,
         surfaces=pack_surfaces([m.material for m in meshes], [not m.closed for m in meshes]),
         lights=pack_lights(scene.lights), ambient=pack_ambient(scene.ambient),
-        eye=pack_eye(eye), halfway=scene.specular == "halfway")
+        eye=pack_eye(eye), halfway=scene.specular == "halfway",
+        faces=(np.arange(len(triangles), dtype=np.int64) if faces is None
+               else np.ascontiguousarray(faces, dtype=np.int64)))
     SHADERS[mode].prepare(s, scene, meshes, weighting)
     return s
 
