@@ -15,8 +15,8 @@ Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene, ``lp_rast_tri.c``
 
 * **setup** snaps each vertex to fixed point with ``SUBPIXEL_BITS`` = 8 sub-pixel bits, finds
   each triangle's box of pixel centres (clamped to the framebuffer) and keeps only triangles
-  that can draw something: not degenerate, box not empty, and for boxes of a few pixels at
-  least one centre actually covered (in a dense mesh most triangles cover none). Each kept
+  that can draw something: box not empty, and for boxes of at most 2 x 2 pixels at least one
+  centre actually covered (in a dense mesh most triangles cover none). Each kept
   triangle goes into the *scene*: its id, the horizontal bands it meets, its fixed-point
   corners, depths and 1/W, packed so that the scan reads it in order.
 * **rast** orients each triangle counter-clockwise (either winding is drawn) and writes each
@@ -58,7 +58,6 @@ INVALID = np.int32(np.iinfo(np.int32).min)  # fixed x of a vertex no triangle ma
 MAX_SIZE = 1 << 15  # framebuffer width and height limit
 MAX_BANDS = 16  # a triangle's bands are a uint16 bit mask
 SETUP_CHUNKS = 64  # pieces of the triangle array that setup hands to the cores
-SMALL_BOX = 4  # boxes of up to this many pixels are tested for coverage during setup
 PARALLEL_SETUP = 50_000  # fewer triangles than this are set up on one core
 
 
@@ -202,21 +201,32 @@ def _snap_vertices(xy_z, inv_w, fixed):
 
 
 @njit(cache=True)
-def _covers_a_centre(edge0, edge1, edge2, i_min, i_max, j_min, j_max):
-    """Does any pixel centre of the box pass the edge test? (The scan loop, without writes.)"""
+def _quad_covers(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max):
+    """Does the triangle cover a pixel centre of its box, a box of at most 2 x 2 pixels?
+
+    The rast's edge test on the four centres of a quad (the edge functions stepped by A to
+    the right and by B upwards), masked to the box, with no branch: in a dense mesh this
+    answer is a coin toss that a branch would mispredict.
+    """
+    area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
     a0, b0, c0, _ = edge0
     a1, b1, c1, _ = edge1
     a2, b2, c2, _ = edge2
-    hit = False
-    for j in range(j_min, j_max + 1):
-        py = j * SUBPIXEL_ONE + PIXEL_CENTRE
-        for i in range(i_min, i_max + 1):
-            px = i * SUBPIXEL_ONE + PIXEL_CENTRE
-            e0 = a0 * px + b0 * py + c0
-            e1 = a1 * px + b1 * py + c1
-            e2 = a2 * px + b2 * py + c2
-            hit |= (e0 | e1 | e2) >= 0  # no early exit: the box has at most SMALL_BOX pixels
-    return hit
+    px = i_min * SUBPIXEL_ONE + PIXEL_CENTRE
+    py = j_min * SUBPIXEL_ONE + PIXEL_CENTRE
+    e0 = a0 * px + b0 * py + c0
+    e1 = a1 * px + b1 * py + c1
+    e2 = a2 * px + b2 * py + c2
+    right0, right1, right2 = a0 * SUBPIXEL_ONE, a1 * SUBPIXEL_ONE, a2 * SUBPIXEL_ONE
+    up0, up1, up2 = b0 * SUBPIXEL_ONE, b1 * SUBPIXEL_ONE, b2 * SUBPIXEL_ONE
+    wide = i_max > i_min
+    tall = j_max > j_min
+    hit = (e0 | e1 | e2) >= 0
+    hit |= wide & (((e0 + right0) | (e1 + right1) | (e2 + right2)) >= 0)
+    hit |= tall & (((e0 + up0) | (e1 + up1) | (e2 + up2)) >= 0)
+    hit |= wide & tall & (((e0 + right0 + up0) | (e1 + right1 + up1) | (e2 + right2 + up2))
+                          >= 0)
+    return hit & (area2 != 0)
 
 
 @njit(cache=True)
@@ -249,11 +259,9 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk
         i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
         if i_min > i_max or j_min > j_max:
             continue  # no pixel centre of the framebuffer in its box
-        if (i_max - i_min + 1) * (j_max - j_min + 1) <= SMALL_BOX:
-            area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
-            if area2 == 0 or not _covers_a_centre(edge0, edge1, edge2, i_min, i_max, j_min,
-                                                  j_max):
-                continue
+        if i_max - i_min <= 1 and j_max - j_min <= 1:
+            if not _quad_covers(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max):
+                continue  # a small triangle between pixel centres: most of a dense mesh
         # bands first..last: j // rows_per_band, as a multiply by band_scale = 2^32 //
         # rows_per_band + 1 (exact while j * rows_per_band < 2^32; rows are < 2^15)
         band_first = (j_min * band_scale) >> 32
