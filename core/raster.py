@@ -58,7 +58,7 @@ INVALID = np.int32(np.iinfo(np.int32).min)  # fixed x of a vertex no triangle ma
 MAX_SIZE = 1 << 15  # framebuffer width and height limit
 MAX_BANDS = 16  # a triangle's bands are a uint16 bit mask
 SETUP_CHUNKS = 64  # pieces of the triangle array that setup hands to the cores
-PARALLEL_SETUP = 50_000  # fewer triangles than this are set up on one core
+PARALLEL_SETUP = 10_000  # fewer triangles than this are set up on one core
 
 
 @dataclass
