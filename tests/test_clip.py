@@ -111,3 +111,17 @@ def test_batch_equals_one_by_one(segments, projection):
     s1 = np.vstack([o[1] for o in one]) if one else np.zeros((0, 3))
     assert np.array_equal(b0, s0) and np.array_equal(b1, s1)
     assert _inside(np.vstack([b0, b1]), projection, Z_MIN).all()
+
+
+@pytest.mark.parametrize("projection", ["parallel", "perspective"])
+def test_line_and_triangle_clippers_share_their_outcodes(projection):
+    # core.clip (numpy, so wireframes need no compiler) and core.clip_polygon (compiled, for
+    # half a million vertices a frame) must classify every point alike, planes included.
+    from core.clip_polygon import outcodes as triangle_outcodes
+    rng = np.random.default_rng(3)
+    points = rng.uniform(-1.5, 1.5, (5000, 3))
+    points[:1000, 0] = -points[:1000, 2]                  # exactly on x = -z
+    points[1000:2000, 2] = Z_MIN                          # exactly on the front plane
+    points[2000:2500] = np.round(points[2000:2500])       # on the parallel planes
+    assert np.array_equal(outcodes(points, projection, Z_MIN),
+                          triangle_outcodes(points, projection, Z_MIN).astype(np.int64))
