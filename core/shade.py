@@ -167,27 +167,46 @@ def _geometry(scene, meshes):
 # The vertex step of each mode
 
 
+# Below this many faces or vertices one core is quicker: waking the second costs ~0.1 ms.
+PARALLEL_ITEMS = 20_000
+
+
+@njit(cache=True)
+def _phong_face(positions, triangles, f, normals, face_surface, surfaces, lights, ambient, eye,
+                halfway, out):
+    """The model once for face ``f``, at its centroid with its face normal."""
+    i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
+    cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
+    cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
+    cz = (positions[i0, 2] + positions[i1, 2] + positions[i2, 2]) / 3.0
+    r, g, b = phong_point(cx, cy, cz, normals[f, 0], normals[f, 1], normals[f, 2],
+                          face_surface[f], surfaces, lights, ambient, eye, halfway)
+    out[f, 0], out[f, 1], out[f, 2] = r, g, b
+
+
 @njit(cache=True, parallel=True)
-def _phong_faces(positions, triangles, faces, normals, face_surface, surfaces, lights, ambient,
-                 eye, halfway, out):
-    """The model once per face ``faces[k]``, at its centroid with its face normal."""
+def _phong_faces_parallel(positions, triangles, faces, normals, face_surface, surfaces, lights,
+                          ambient, eye, halfway, out):
     for k in prange(faces.shape[0]):
-        f = faces[k]
-        i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
-        cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
-        cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
-        cz = (positions[i0, 2] + positions[i1, 2] + positions[i2, 2]) / 3.0
-        r, g, b = phong_point(cx, cy, cz, normals[f, 0], normals[f, 1], normals[f, 2],
-                              face_surface[f], surfaces, lights, ambient, eye, halfway)
-        out[f, 0], out[f, 1], out[f, 2] = r, g, b
+        _phong_face(positions, triangles, faces[k], normals, face_surface, surfaces, lights,
+                    ambient, eye, halfway, out)
+
+
+@njit(cache=True)
+def _phong_faces_serial(positions, triangles, faces, normals, face_surface, surfaces, lights,
+                        ambient, eye, halfway, out):
+    for k in range(faces.shape[0]):
+        _phong_face(positions, triangles, faces[k], normals, face_surface, surfaces, lights,
+                    ambient, eye, halfway, out)
 
 
 def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
     """One evaluation per face, at its centroid with its face normal (FvDFH 16.2.3)."""
     normals = _concatenated(scene, meshes, "face normals", _mesh_face_normals, 3)
     s.face_rgb = np.zeros((len(s.triangles), 3))          # faces not in s.faces stay unlit
-    _phong_faces(s.positions, s.triangles, s.faces, normals, s.face_surface, s.surfaces,
-                 s.lights, s.ambient, s.eye, s.halfway, s.face_rgb)
+    kernel = _phong_faces_parallel if len(s.faces) >= PARALLEL_ITEMS else _phong_faces_serial
+    kernel(s.positions, s.triangles, s.faces, normals, s.face_surface, s.surfaces, s.lights,
+           s.ambient, s.eye, s.halfway, s.face_rgb)
     s.computed += ["face normals", "illuminate faces"]
 
 
@@ -202,9 +221,10 @@ def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
     """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4)."""
     normals = _all_vertex_normals(s, scene, meshes, weighting)
     s.vertex_attrs = np.zeros((len(s.positions), 3))      # vertices no face uses stay unlit
-    _phong_vertices(s.positions, normals, _used_vertices(s.triangles, s.faces, len(s.positions)),
-                    s.vertex_surface, s.surfaces, s.lights, s.ambient, s.eye, s.halfway,
-                    s.vertex_attrs)
+    vertices = _used_vertices(s.triangles, s.faces, len(s.positions))
+    kernel = _phong_vertices_parallel if len(vertices) >= PARALLEL_ITEMS else _phong_vertices_serial
+    kernel(s.positions, normals, vertices, s.vertex_surface, s.surfaces, s.lights, s.ambient,
+           s.eye, s.halfway, s.vertex_attrs)
     s.computed.append("illuminate vertices")
 
 
@@ -218,16 +238,30 @@ def _used_vertices(triangles, faces, vertex_count):
     return np.flatnonzero(used)
 
 
+@njit(cache=True)
+def _phong_vertex(positions, normals, i, vertex_surface, surfaces, lights, ambient, eye, halfway,
+                  out):
+    """The model at vertex ``i`` with its vertex normal (FvDFH 16.2.4)."""
+    r, g, b = phong_point(positions[i, 0], positions[i, 1], positions[i, 2],
+                          normals[i, 0], normals[i, 1], normals[i, 2], vertex_surface[i],
+                          surfaces, lights, ambient, eye, halfway)
+    out[i, 0], out[i, 1], out[i, 2] = r, g, b
+
+
 @njit(cache=True, parallel=True)
-def _phong_vertices(positions, normals, vertices, vertex_surface, surfaces, lights, ambient, eye,
-                    halfway, out):
-    """The model at each vertex ``vertices[k]`` with its vertex normal (FvDFH 16.2.4)."""
+def _phong_vertices_parallel(positions, normals, vertices, vertex_surface, surfaces, lights,
+                             ambient, eye, halfway, out):
     for k in prange(vertices.shape[0]):
-        i = vertices[k]
-        r, g, b = phong_point(positions[i, 0], positions[i, 1], positions[i, 2],
-                              normals[i, 0], normals[i, 1], normals[i, 2], vertex_surface[i],
-                              surfaces, lights, ambient, eye, halfway)
-        out[i, 0], out[i, 1], out[i, 2] = r, g, b
+        _phong_vertex(positions, normals, vertices[k], vertex_surface, surfaces, lights, ambient,
+                      eye, halfway, out)
+
+
+@njit(cache=True)
+def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surfaces, lights,
+                           ambient, eye, halfway, out):
+    for k in range(vertices.shape[0]):
+        _phong_vertex(positions, normals, vertices[k], vertex_surface, surfaces, lights, ambient,
+                      eye, halfway, out)
 
 
 def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
