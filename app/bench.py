@@ -70,18 +70,9 @@ def _shadings(text: str) -> list[str]:
     return chosen
 
 
-def _frame_size(text: str) -> tuple[int, int]:
-    try:
-        w, h = (int(part) for part in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"size must look like 500x500, not {text!r}") from None
-    if not (1 <= w <= 8192 and 1 <= h <= 8192):
-        raise argparse.ArgumentTypeError(f"size {w}x{h} is out of range (1 to 8192 a side)")
-    return w, h
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The bench's options, added to the ``bench`` sub-parser by ``app/cli.py``."""
+    from app.cli import parse_size
     parser.add_argument("--scene", default=None,
                         help="a scene file to time instead of the generated sphere + torus "
                              "(then --sizes is ignored)")
@@ -92,7 +83,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--shading", type=_shadings, default=_shadings(DEFAULT_SHADINGS),
                         help=f"shading modes (default {DEFAULT_SHADINGS})")
     parser.add_argument("--projection", choices=("perspective", "parallel"), default="perspective")
-    parser.add_argument("--size", type=_frame_size, default=(500, 500),
+    parser.add_argument("--size", type=parse_size, default=(500, 500),
                         help="framebuffer WxH (default 500x500)")
     parser.add_argument("--out", default="out/bench", help="directory for bench.json and bench.png")
     parser.add_argument("--no-startup", action="store_true",

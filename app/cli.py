@@ -16,7 +16,8 @@ SHADING_CHOICES = ("wireframe", "flat", "gouraud", "phong")
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability")
 
 
-def _size(text: str) -> tuple[int, int]:
+def parse_size(text: str) -> tuple[int, int]:
+    """``WxH`` → ``(W, H)`` for argparse, with a message that says what was wrong."""
     try:
         w, h = (int(part) for part in text.lower().split("x"))
     except ValueError:
@@ -38,7 +39,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
 
     v = sub.add_parser("view", help="open the viewer window (renders PNGs when there is no display)")
     v.add_argument("scene", nargs="?", help=scene_help + "; default: the house")
-    v.add_argument("--size", type=_size, default=None,
+    v.add_argument("--size", type=parse_size, default=None,
                    help="framebuffer size WxH (default: the scene's, 500x500)")
     v.add_argument("--out", default=None,
                    help="where screenshots go, and the PNGs when there is no display "
@@ -49,14 +50,14 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     r.add_argument("--view", type=int, default=1, help="which valid view, counting from 1")
     r.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
     r.add_argument("--shading", choices=SHADING_CHOICES, default=None)
-    r.add_argument("--size", type=_size, default=None, help="WxH (default: the scene's, 500x500)")
+    r.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's, 500x500)")
     r.add_argument("--out", required=True, help="the PNG file to write")
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
     m.add_argument("--view", type=int, default=1, help="which valid view, counting from 1")
     m.add_argument("--projection", choices=PROJECTION_CHOICES, default="perspective")
-    m.add_argument("--size", type=_size, default=(500, 500), help="viewport for M_vv3dv")
+    m.add_argument("--size", type=parse_size, default=(500, 500), help="viewport for M_vv3dv")
 
     pl = sub.add_parser("plan", help="print, as JSON, the stages that will run and those left out")
     pl.add_argument("scene", help=scene_help)
