@@ -99,7 +99,6 @@ class ImGuiRenderer:
 
     def render(self, draw_data) -> None:
         """Draw ``draw_data`` with the viewport set to the whole framebuffer."""
-        io = self.io
         display_x, display_y = draw_data.display_pos
         display_w, display_h = draw_data.display_size
         scale_x, scale_y = draw_data.frame_buffer_scale

@@ -32,7 +32,6 @@ from pathlib import Path
 import glfw
 import imgui
 import moderngl
-import numpy as np
 
 from app.blit import Blit
 from app.imgui_backend import GlfwInput, ImGuiRenderer

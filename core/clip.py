@@ -56,7 +56,6 @@ def _cohen_sutherland(a, b, code_a, code_b, pl):
     rejected, take an endpoint that is outside, the first plane it violates, and move that
     endpoint to the plane. Returns a mask of the segments that keep a visible part.
     """
-    k = np.arange(len(a))
     code_a, code_b = code_a.astype(np.int64), code_b.astype(np.int64)
     for _ in range(12):              # each pass clears one bit; 12 bounds round-off cycling
         active = ((code_a | code_b) != 0) & ((code_a & code_b) == 0)

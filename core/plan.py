@@ -8,7 +8,7 @@ that tests can hold the two against each other.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 from core.scene import SHADINGS, Scene
 
@@ -54,7 +54,7 @@ def plan(scene: Scene, projection: str, shading: str) -> list[Stage]:
                else no_solid("flat shading needs no vertex normals"))),
         Stage("illuminate faces", solid and shading == "flat",
               "one evaluation per face, at its centroid" if solid and shading == "flat"
-              else no_solid(f"not flat shading")),
+              else no_solid("not flat shading")),
         Stage("illuminate vertices", solid and shading == "gouraud",
               "the model at each vertex; intensities are interpolated" if solid and shading == "gouraud"
               else no_solid("not Gouraud shading")),

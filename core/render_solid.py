@@ -16,7 +16,6 @@ ran in ``frame.stats``:
 
 from __future__ import annotations
 
-import numpy as np
 from threadpoolctl import threadpool_limits
 
 from core import project, shade

@@ -51,7 +51,7 @@ import numpy as np
 from numba import njit, prange
 
 from core.illumination import (Eye, eye_from_view, pack_ambient, pack_eye, pack_lights,
-                               pack_surfaces, phong_point, phong_points, quantize, to_uint8,
+                               pack_surfaces, phong_point, quantize, to_uint8,
                                unit3)
 from core.normals import WEIGHTINGS, face_normals, vertex_normals
 
