@@ -138,14 +138,15 @@ def _dispatch(args) -> int:
 def _render(args) -> int:
     from PIL import Image
 
-    from core.render import render
+    from app.state import announce_compiles, render
     scene = _load(args.scene, size=args.size)
     if scene is None:
         return 2
     index = _pick_view(scene, args.view)
     if index is None:
         return 2
-    frame = render(scene, index, args.projection, args.shading, args.size or scene.size)
+    with announce_compiles():            # the first run compiles the kernels: say so
+        frame = render(scene, index, args.projection, args.shading, args.size or scene.size)
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1

@@ -12,6 +12,7 @@ No GL and no window library here, so everything about it is testable without a d
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import sys
 import threading
@@ -67,6 +68,30 @@ def _listen_for_compiles() -> None:
             pass
 
     event.register("numba:compile", CompileListener())
+
+
+@contextlib.contextmanager
+def announce_compiles(after: float = 0.5):
+    """Print the compile notice once if numba compiles while the block runs, but not before
+    ``after`` seconds (loading cached kernels is quick and stays silent)."""
+    _compiling.clear()
+    done = threading.Event()
+
+    def watch():
+        if done.wait(after):
+            return
+        while not done.is_set():
+            if _compiling.is_set():
+                compile_notice()
+                return
+            done.wait(0.1)
+
+    watcher = threading.Thread(target=watch, daemon=True)
+    watcher.start()
+    try:
+        yield
+    finally:
+        done.set()
 
 
 def compile_notice() -> None:
@@ -233,16 +258,14 @@ class ViewerState:
         """
         if not self.dirty or not self.renderable:
             return False
-        notice = None
-        if self.shading not in self._modes_rendered:
-            _compiling.clear()
-            notice = threading.Timer(self.compile_notice_after, compile_notice)
-            notice.daemon = True
-            notice.start()
+        first_of_mode = self.shading not in self._modes_rendered
+        watch = (announce_compiles(self.compile_notice_after) if first_of_mode
+                 else contextlib.nullcontext())
         start = time.perf_counter()
         try:
-            frame = self.renderer(self.scene, self.view_index, self.projection, self.shading,
-                                  self.size)
+            with watch:
+                frame = self.renderer(self.scene, self.view_index, self.projection,
+                                      self.shading, self.size)
         except Exception as error:
             self.render_error = (f"could not render view {self.view_index + 1} "
                                  f"({self.projection}, {self.shading}): "
@@ -250,9 +273,6 @@ class ViewerState:
             log.error("%s", self.render_error, exc_info=True)
             self.dirty = False
             return False
-        finally:
-            if notice is not None:
-                notice.cancel()
         self.frame, self.render_error = frame, None
         self.frame_seconds = time.perf_counter() - start
         self._modes_rendered.add(self.shading)
