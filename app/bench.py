@@ -132,7 +132,7 @@ def time_ours(scene, projection: str, shading: str, size, frames: int, warmup: i
         t0 = time.perf_counter()
         frame = render(scene, 0, projection, shading, size)
         t1 = time.perf_counter()
-        blit.upload(frame.color)
+        blit.upload(frame.rgbx)
         t2 = time.perf_counter()
         if k >= warmup:
             cpu.append(time.process_time() - c0)

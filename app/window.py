@@ -304,7 +304,7 @@ class ViewerWindow:
 
         if allow_render and self.state.update():
             self._log_frame()
-            self.blit.upload(self.state.frame.color)
+            self.blit.upload(self.state.frame.rgbx)
             self._wake()                  # the GUI shows the new frame's plan and timing next
         self._build_gui()
         imgui.render()

@@ -25,12 +25,21 @@ from core.view import ViewError, normalizing_transform, problems
 
 @dataclass
 class Frame:
-    """One rendered picture: ``color`` is ``(H, W, 3)`` uint8, row 0 at the top."""
+    """One rendered picture: ``color`` is ``(H, W, 3)`` uint8, row 0 at the top.
 
-    color: np.ndarray
+    ``color`` is a view of ``rgbx``, ``(H, W, 4)``: the same pixels with one padding byte each
+    (undefined, never read), so that showing the frame is one aligned copy into an RGBA
+    texture (on llvmpipe 0.05 ms against 0.56 ms for packed RGB at 500 x 500).
+    """
+
+    rgbx: np.ndarray
     plan: list[Stage]
     message: str | None = None
     stats: dict = field(default_factory=dict)
+
+    @property
+    def color(self) -> np.ndarray:
+        return self.rgbx[:, :, :3]
 
 
 def to_rgb8(color) -> np.ndarray:
@@ -80,9 +89,10 @@ def render(scene: Scene, view_index: int, projection: str | None = None,
     shading = shading or scene.shading
     width, height = size or scene.size
     stages = plan(scene, projection, shading)
-    color = np.empty((max(height, 0), max(width, 0), 3), dtype=np.uint8)
-    stats = {"allocated": ["color"], "computed": [], "projection": projection, "shading": shading}
-    frame = Frame(color=color, plan=stages, stats=stats)
+    frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8), plan=stages,
+                  stats={"allocated": ["color"], "computed": [], "projection": projection,
+                         "shading": shading})
+    color, stats = frame.color, frame.stats
     solid = shading != "wireframe" and scene.triangle_count > 0
     if not solid:
         fill(color, scene.background)          # the solid path's resolve writes every pixel

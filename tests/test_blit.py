@@ -187,3 +187,27 @@ def test_imgui_buffers_grow(ctx, gui):
 
     image, _ = draw_gui(ctx, gui, build)
     assert red_mask(image)[:20].all()
+
+
+def test_a_rendered_frame_round_trips_through_its_padded_upload():
+    # The viewer uploads Frame.rgbx (a padding byte per pixel); what comes back from the screen
+    # must still be Frame.color, bit for bit, at an odd size.
+    import moderngl
+
+    from app.blit import Blit
+    from core.formats import load_scene
+    from core.paths import SCENES_DIR
+    from core.render import render
+
+    frame = render(load_scene(SCENES_DIR / "torus.toml"), 0, "perspective", "gouraud", (333, 217))
+    ctx = moderngl.create_standalone_context(backend="egl")
+    try:
+        fbo = ctx.simple_framebuffer((333, 217), components=4)
+        fbo.use()
+        blit = Blit(ctx)
+        blit.upload(frame.rgbx)
+        blit.draw()
+        shown = np.frombuffer(fbo.read(components=3, alignment=1), np.uint8).reshape(217, 333, 3)
+        assert np.array_equal(shown[::-1], frame.color)
+    finally:
+        ctx.release()
