@@ -585,3 +585,14 @@ def test_sphere_scene_is_the_analytic_unit_sphere():
     assert np.linalg.norm(mesh.positions, axis=1) == pytest.approx(1.0)
     assert np.allclose(mesh.normals, mesh.positions)
     assert len(scene.lights) == 1 and scene.lights[0].position is not None
+
+
+def test_a_missing_file_is_named_once_with_its_reason(tmp_path):
+    from core.formats import ReaderError, load_scene
+    with pytest.raises(ReaderError) as missing:
+        load_scene(tmp_path / "nowhere.toml")
+    assert str(missing.value) == f"{tmp_path / 'nowhere.toml'}: cannot read it: no such file"
+    with pytest.raises(ReaderError) as folder:
+        load_scene(tmp_path)
+    assert str(folder.value).endswith(": cannot read it: not a regular file")
+    assert str(folder.value).count("cannot read it") == 1

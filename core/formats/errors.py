@@ -59,12 +59,12 @@ def short(token: str, limit: int = 40) -> str:
 def read_file(path: Path, shown: str) -> bytes:
     """The bytes of a regular file (never a device, a FIFO or a folder), or a ReaderError."""
     try:
-        if not path.is_file():
-            reason = "no such file" if not path.exists() else "not a regular file"
-            raise ReaderError(shown, f"cannot read it: {reason}")
-        return path.read_bytes()
+        if path.is_file():
+            return path.read_bytes()
+        exists = path.exists()
     except (OSError, ValueError) as error:        # ValueError: a NUL in the path
         raise ReaderError(shown, f"cannot read it: {getattr(error, 'strerror', None) or error}") from None
+    raise ReaderError(shown, f"cannot read it: {'not a regular file' if exists else 'no such file'}")
 
 
 def file_stem(file: str) -> str:
