@@ -85,7 +85,9 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
 
     if scene_source is None:
         from core.paths import DEFAULT_SCENE
-        scene_source = str(DEFAULT_SCENE)
+        # Shown in every view's label: relative to the working directory when that is shorter.
+        relative = os.path.relpath(DEFAULT_SCENE)
+        scene_source = relative if not relative.startswith("..") else str(DEFAULT_SCENE)
     try:
         state = ViewerState.open(scene_source, size=tuple(size) if size else None)
     except reader_errors() as error:
