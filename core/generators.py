@@ -19,6 +19,7 @@ import numbers
 import numpy as np
 
 from core.scene import Light, Material, Mesh, Scene
+from core.transforms import rotate_x
 from core.view import View
 
 # No generator call makes more triangles than this (a scene file cannot ask for 10^12).
@@ -318,11 +319,6 @@ def torus_knot(p: int = 2, q: int = 3, segments: int = 1024, sides: int = 64, R:
 
 # ----------------------------------------------------------------------------- scenes
 
-def _rotate_x(points: np.ndarray, degrees: float) -> np.ndarray:
-    c, s = np.cos(np.radians(degrees)), np.sin(np.radians(degrees))
-    return points @ np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]]).T
-
-
 def sphere_torus(triangles: int = 100_000) -> Scene:
     """The benchmark scene: a UV sphere inside a tilted torus, about ``triangles`` in all.
 
@@ -338,8 +334,9 @@ def sphere_torus(triangles: int = 100_000) -> Scene:
     sides = max(3, int(round(np.sqrt(rest / 4))))
     segments = max(3, int(round(rest / (2 * sides))))
     ring = torus(R=1.7, r=0.3, segments=segments, sides=sides)
-    ring.positions = _rotate_x(ring.positions, 65.0)
-    ring.normals = _rotate_x(ring.normals, 65.0)
+    tilt = rotate_x(np.radians(65.0))[:3, :3]
+    ring.positions = ring.positions @ tilt.T
+    ring.normals = ring.normals @ tilt.T
     views = [
         View(vrp=(0.0, 0.0, 0.0), vpn=(0.3, 0.45, 1.0), vup=(0.0, 1.0, 0.0),
              window=(-2.4, 2.4, -2.4, 2.4), prp=(0.0, 0.0, 7.0), front=2.2, back=-2.2,

@@ -15,10 +15,10 @@ each other):
 
 - :func:`illuminate` — numpy, vectorised over N points: the formula as array expressions,
   the readable statement of the model that the numba form is held to;
-- :func:`phong_point` — numba, one point; called from the per-pixel kernels of
-  :mod:`core.shade` (Phong shading) and :mod:`core.reference` (the exact reference), and over
-  arrays of points on all cores by :func:`phong_points` (the flat and Gouraud steps: ten times
-  faster than the numpy form, with the same result bit for bit).
+- :func:`phong_point` — numba, one point; called from the compiled kernels of
+  :mod:`core.shade` (per face for flat, per vertex for Gouraud, per pixel for Phong, with the same
+  result as the numpy form bit for bit) and of
+  :mod:`core.reference` (the exact reference).
 
 Both read the scene through small float arrays that numba can take:
 
@@ -61,7 +61,7 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from core.view import View, vrc_basis
 
@@ -239,31 +239,6 @@ def phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfw
         g += f_att * lights[k, 5] * (kd * surfaces[s, OD + 1] * n_dot_l + ks * surfaces[s, OS + 1] * spec)
         b += f_att * lights[k, 6] * (kd * surfaces[s, OD + 2] * n_dot_l + ks * surfaces[s, OS + 2] * spec)
     return min(max(r, 0.0), 1.0), min(max(g, 0.0), 1.0), min(max(b, 0.0), 1.0)
-
-
-@njit(cache=True, parallel=True)
-def _phong_points(points, normals, surface, surfaces, lights, ambient, eye, halfway, out):
-    for i in prange(points.shape[0]):
-        r, g, b = phong_point(points[i, 0], points[i, 1], points[i, 2],
-                              normals[i, 0], normals[i, 1], normals[i, 2], surface[i],
-                              surfaces, lights, ambient, eye, halfway)
-        out[i, 0], out[i, 1], out[i, 2] = r, g, b
-
-
-def phong_points(points: np.ndarray, normals: np.ndarray, surface: np.ndarray,
-                 surfaces: np.ndarray, lights: np.ndarray, ambient: np.ndarray,
-                 eye: np.ndarray, halfway: bool) -> np.ndarray:
-    """:func:`phong_point` over ``N`` points on all cores: ``(N, 3)`` RGB in [0, 1].
-
-    Same arguments and same result, bit for bit, as :func:`illuminate`; about ten times
-    faster, so the per-face and per-vertex steps of :mod:`core.shade` use it.
-    """
-    p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
-    n = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 3)
-    out = np.empty((len(p), 3))
-    _phong_points(p, n, np.ascontiguousarray(surface, dtype=np.int64).reshape(-1), surfaces,
-                  lights, ambient, eye, bool(halfway), out)
-    return out
 
 
 # --------------------------------------------------------------------------------------------

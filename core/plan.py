@@ -21,62 +21,61 @@ class Stage:
 
 
 def plan(scene: Scene, projection: str, shading: str) -> list[Stage]:
+    """The stages for ``scene`` drawn with ``projection`` and ``shading``, in the order the
+    renderer runs them (``core/render.py``, ``core/render_solid.py``)."""
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {', '.join(SHADINGS)}, not {shading!r}")
-    n_par_or_per = "N_per" if projection == "perspective" else "N_par"
     has_tris = scene.triangle_count > 0
-    has_lines = any(len(m.edges) for m in scene.meshes)
     solid = shading != "wireframe" and has_tris
+    draws_lines = shading == "wireframe" or any(len(m.edges) for m in scene.meshes)
     closed = any(m.closed and len(m.triangles) for m in scene.meshes)
-    file_normals = all(m.normals is not None for m in scene.meshes if len(m.triangles))
-    draws_lines = shading == "wireframe" or has_lines
+    smooth = solid and shading in ("gouraud", "phong")
+    given_normals = all(m.normals is not None for m in scene.meshes if len(m.triangles))
+    # Why a triangle stage does not run when the scene draws no triangles at all.
+    no_triangles = "the scene has no triangles" if not has_tris else "wireframe draws edges only"
 
-    def no_solid(why_else: str) -> str:
-        if not has_tris:
-            return "the scene has no triangles"
-        if shading == "wireframe":
-            return "wireframe draws edges only"
-        return why_else
+    def stage(name: str, runs: bool, why: str, why_not: str) -> Stage:
+        return Stage(name, runs, why if runs else why_not)
 
-    stages = [
-        Stage("normalize", True, f"{n_par_or_per} carries world coordinates into the canonical volume"),
-        Stage("cull back faces", solid and closed,
-              "closed, consistently wound meshes: faces turned away are never visible" if solid and closed
-              else no_solid("no mesh is declared closed, so every face may be seen")),
-        Stage("face normals", solid and shading == "flat",
-              "flat shading evaluates the model once per face with its normal" if solid and shading == "flat"
-              else no_solid(f"{shading} shading uses vertex normals")),
-        Stage("vertex normals", solid and shading in ("gouraud", "phong") and not file_normals,
-              (f"{shading} shading needs a normal at each vertex (average of the adjacent faces)"
-               if solid and shading in ("gouraud", "phong") and not file_normals
-               else "given with the mesh (by its file or its generator)"
-               if solid and shading in ("gouraud", "phong")
-               else no_solid("flat shading needs no vertex normals"))),
-        Stage("illuminate faces", solid and shading == "flat",
-              "one evaluation per face, at its centroid" if solid and shading == "flat"
-              else no_solid("not flat shading")),
-        Stage("illuminate vertices", solid and shading == "gouraud",
-              "the model at each vertex; intensities are interpolated" if solid and shading == "gouraud"
-              else no_solid("not Gouraud shading")),
-        Stage("clip lines", draws_lines,
-              "Cohen–Sutherland: trivial accept/reject by outcode, the rest clipped plane by plane"
-              if draws_lines else "no edges are drawn"),
-        Stage("clip triangles", solid,
-              "outcodes first; only triangles that cross the volume go through Sutherland–Hodgman"
-              if solid else no_solid("")),
-        Stage("project", True, _projection_reason(projection, solid, draws_lines)),
-        Stage("scan-convert lines", draws_lines,
-              "midpoint line into the frame buffer" if draws_lines else "no edges are drawn"),
-        Stage("depth buffer", solid,
-              "the z-buffer needs a depth per pixel" if solid
-              else no_solid("") if not has_tris or shading == "wireframe" else ""),
-        Stage("z-buffer scan conversion", solid,
-              "scan-line z-buffer with the top-left fill rule" if solid else no_solid("")),
-        Stage("illuminate pixels", solid and shading == "phong",
-              "Phong shading: normals interpolated, renormalised, the model at every pixel"
-              if solid and shading == "phong" else no_solid("not Phong shading")),
+    def triangle_stage(name: str, runs: bool, why: str, why_not: str = "") -> Stage:
+        return stage(name, runs, why, why_not if solid else no_triangles)
+
+    return [
+        triangle_stage("cull back faces", solid and closed,
+                       "closed, consistently wound meshes: faces turned away are never visible",
+                       "no mesh is declared closed, so every face may be seen"),
+        triangle_stage("face normals", solid and shading == "flat",
+                       "flat shading evaluates the model once per face with its normal",
+                       f"{shading} shading uses vertex normals"),
+        triangle_stage("vertex normals", smooth and not given_normals,
+                       f"{shading} shading needs a normal at each vertex (average of the adjacent "
+                       "faces)",
+                       "given with the mesh (by its file or its generator)" if smooth
+                       else "flat shading needs no vertex normals"),
+        triangle_stage("illuminate faces", solid and shading == "flat",
+                       "one evaluation per face, at its centroid", "not flat shading"),
+        triangle_stage("illuminate vertices", solid and shading == "gouraud",
+                       "the model at each vertex; intensities are interpolated",
+                       "not Gouraud shading"),
+        stage("normalize", True,
+              f"{'N_per' if projection == 'perspective' else 'N_par'} carries world coordinates "
+              "into the canonical volume", ""),
+        stage("clip lines", draws_lines,
+              "Cohen–Sutherland: trivial accept/reject by outcode, the rest clipped plane by "
+              "plane", "no edges are drawn"),
+        triangle_stage("clip triangles", solid,
+                       "outcodes first; only triangles that cross the volume go through "
+                       "Sutherland–Hodgman"),
+        stage("project", True, _projection_reason(projection, solid, draws_lines), ""),
+        stage("scan-convert lines", draws_lines, "midpoint line into the frame buffer",
+              "no edges are drawn"),
+        triangle_stage("depth buffer", solid, "the z-buffer needs a depth per pixel"),
+        triangle_stage("z-buffer scan conversion", solid,
+                       "scan-line z-buffer with the top-left fill rule"),
+        triangle_stage("illuminate pixels", solid and shading == "phong",
+                       "Phong shading: normals interpolated, renormalised, the model at every "
+                       "pixel", "not Phong shading"),
     ]
-    return stages
 
 
 def _projection_reason(projection: str, solid: bool, lines: bool) -> str:

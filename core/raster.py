@@ -8,7 +8,7 @@ mapped to the device: ``xy_z`` (V, 3) float64 device coordinates (x right, **y u
 Returns a :class:`VisibilityBuffer`: ``depth`` (H, W) float64 (-inf where empty), ``tri``
 (H, W) int32 (index into ``triangles``; -1 where empty), ``b1``, ``b2`` (H, W) float64, the
 perspective-correct barycentric weights of vertex 1 and vertex 2 of that triangle at the pixel
-centre (vertex 0's weight is 1 - b1 - b2; both are 0 where empty). All arrays are in image
+centre (vertex 0's weight is 1 - b1 - b2; undefined where empty). All arrays are in image
 order: row 0 is the top, so device row j is array row H - 1 - j.
 
 Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene, ``lp_rast_tri.c`` consumes it):

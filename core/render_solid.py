@@ -9,7 +9,8 @@ ran in ``frame.stats``:
    faces that survived culling only.
 3. ``N_per`` / ``N_par`` on every vertex.
 4. ``clip_triangles``: trivial accept/reject by outcode, Sutherland–Hodgman for the rest.
-5. ``project_triangles``: perspective-to-parallel M, M_vv3dv, divide by W.
+5. ``transform_projective``: perspective-to-parallel M, M_vv3dv (``project.triangle_matrix``),
+   divide by W.
 6. ``rasterize``: the scan-line z-buffer into a visibility buffer (reused between frames).
 7. ``shade.resolve``: one colour per visible pixel.
 """
