@@ -192,6 +192,7 @@ class GlfwInput:
         self.io = imgui.get_io()
         self._time = None
         self._just_pressed = [False] * 5
+        self._press_pos = (0.0, 0.0)
         self._map_keys()
 
     def _map_keys(self) -> None:
@@ -235,6 +236,9 @@ class GlfwInput:
     def on_mouse_button(self, button: int, action: int) -> None:
         if action == self._glfw.PRESS and 0 <= button < len(self._just_pressed):
             self._just_pressed[button] = True
+            # Where the press happened: the pointer may have moved on before the next frame
+            # (a slow frame), and ImGui must judge the click where it was made.
+            self._press_pos = self._glfw.get_cursor_pos(self.window)
 
     # -- once per frame ----------------------------------------------------------------------
     def new_frame(self) -> None:
@@ -252,7 +256,9 @@ class GlfwInput:
 
         # The cursor position is used whether or not the window has the keyboard focus: a
         # window without a window manager (Xvfb) never gets it.
-        if glfw.get_window_attrib(self.window, glfw.HOVERED) or any(self._just_pressed):
+        if any(self._just_pressed):
+            io.mouse_pos = self._press_pos
+        elif glfw.get_window_attrib(self.window, glfw.HOVERED):
             io.mouse_pos = glfw.get_cursor_pos(self.window)
         else:
             io.mouse_pos = -float("inf"), -float("inf")   # ImGui's "no mouse"

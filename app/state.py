@@ -219,7 +219,10 @@ class ViewerState:
         size = (max(int(width), 0), max(int(height), 0))
         if size != self.size:
             self.size = size
-            self.dirty = True
+            # Restoring a minimised window to the size of the frame it shows needs no render.
+            shown = None if self.frame is None else self.frame.color.shape[1::-1]
+            if self.renderable and shown != size:
+                self.dirty = True
 
     def open_scene(self, source: str | Path) -> bool:
         """Replace the scene by ``source``; on a reader error keep the current one.
@@ -228,6 +231,10 @@ class ViewerState:
         scene, view and settings stay as they were. A new scene starts at its first view with
         its own default projection and shading.
         """
+        if str(source).strip() == "-":            # the viewer's stdin is the terminal: refuse
+            self.open_messages.append("could not open -: a view file on standard input can only "
+                                      "be given at start-up (python -m app view - < views)")
+            return False
         try:
             scene = self.loader(source, size=self.size if self.renderable else None)
         except reader_errors() as error:

@@ -129,14 +129,23 @@ class ViewerWindow:
             glfw.destroy_window(self.window)
             glfw.terminate()
             raise WindowError(f"no OpenGL 3.3 context: {error}") from None
-        self.blit = Blit(self.ctx)
-        self.gui_context = imgui.create_context()
-        io = imgui.get_io()
-        io.ini_file_name = None           # keep no imgui.ini in the user's directory
-        self.gui = ImGuiRenderer(self.ctx)
-        self.input = GlfwInput(self.window)
+        self.gui_context = None
+        try:
+            self.blit = Blit(self.ctx)
+            self.gui_context = imgui.create_context()
+            io = imgui.get_io()
+            io.ini_file_name = None       # keep no imgui.ini in the user's directory
+            self.gui = ImGuiRenderer(self.ctx)
+            self.input = GlfwInput(self.window)
+        except Exception as error:        # e.g. a shader that does not compile: close it all
+            if self.gui_context is not None:
+                imgui.destroy_context(self.gui_context)
+            self.ctx.release()
+            glfw.destroy_window(self.window)
+            glfw.terminate()
+            raise WindowError(f"could not set up the window: {error}") from error
         self._busy = FRAMES_AFTER_EVENT
-        self._clicks: list[int] = []      # mouse buttons pressed since the last frame
+        self._clicks: list[tuple[int, float, float]] = []   # (button, x, y) since last frame
         self._path = ""                   # File > Open: the path being typed
         self._notice = ""                 # the last screenshot, for the status line
         self._scenes = shipped_scenes()
@@ -164,7 +173,7 @@ class ViewerWindow:
         self.input.on_mouse_button(button, action)
         if action == glfw.PRESS and button in (glfw.MOUSE_BUTTON_LEFT, glfw.MOUSE_BUTTON_RIGHT):
             # Decided in the next frame, once ImGui has seen this press at this position.
-            self._clicks.append(button)
+            self._clicks.append((button, *glfw.get_cursor_pos(window)))
         self._wake()
 
     def _on_key(self, window, key, scancode, action, mods) -> None:
@@ -335,9 +344,8 @@ class ViewerWindow:
         if not clicks:
             return
         captured = imgui.get_io().want_capture_mouse
-        for button in clicks:
+        for button, x, y in clicks:
             name = "left click" if button == glfw.MOUSE_BUTTON_LEFT else "right click"
-            x, y = glfw.get_cursor_pos(self.window)
             where = f"{name} at ({x:.0f}, {y:.0f})"
             if captured:
                 log.info("action: %s -> taken by the menu/GUI, view unchanged", where)

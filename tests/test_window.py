@@ -109,6 +109,22 @@ def test_minimised_window_renders_nothing_and_resize_renders_at_new_size(state):
     assert not state.update()
 
 
+def test_restoring_a_minimised_window_reuses_its_frame(state):
+    calls = state.renderer.calls
+    state.update()
+    width, height = state.size
+    state.resize(0, 0)
+    state.resize(width, height)                  # back to the frame's size: nothing changed
+    assert not state.update() and len(calls) == 1
+
+
+def test_standard_input_cannot_be_opened_from_the_window(state):
+    before = state.scene
+    assert not state.open_scene("-")
+    assert state.scene is before
+    assert "standard input" in state.open_messages[-1]
+
+
 def test_a_failing_render_keeps_the_last_frame_and_says_why(state):
     state.update()
     good = state.frame
