@@ -22,8 +22,10 @@ def parse_size(text: str) -> tuple[int, int]:
         w, h = (int(part) for part in text.lower().split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"size must look like 500x500, not {text!r}") from None
-    if not (1 <= w <= 16384 and 1 <= h <= 16384):
-        raise argparse.ArgumentTypeError(f"size {w}x{h} is out of range (1 to 16384 a side)")
+    from core.scene import MAX_IMAGE_SIDE
+    if not (1 <= w <= MAX_IMAGE_SIDE and 1 <= h <= MAX_IMAGE_SIDE):
+        raise argparse.ArgumentTypeError(f"size {w}x{h} is out of range (1 to {MAX_IMAGE_SIDE} "
+                                         "a side)")
     return w, h
 
 

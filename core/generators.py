@@ -57,7 +57,12 @@ def _length(name: str, value, low: float = LENGTH_RANGE[0], high: float = LENGTH
     """``value`` as a float in [low, high], or ValueError naming the parameter."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise ValueError(f"{name} must be a number, got {value!r}")
-    if not low <= float(value) <= high:                     # also refuses NaN
+    try:
+        value = float(value)                                # a 400-digit integer overflows
+    except OverflowError:
+        raise ValueError(f"{name} must lie in [{low:g}, {high:g}], got a number too large "
+                         "for a float") from None
+    if not low <= value <= high:                            # also refuses NaN
         raise ValueError(f"{name} must lie in [{low:g}, {high:g}], got {value!r}")
     return float(value)
 

@@ -14,6 +14,7 @@ import numpy as np
 from core.view import View
 
 SHADINGS = ("wireframe", "flat", "gouraud", "phong")
+MAX_IMAGE_SIDE = 8192       # pixels, either side of a framebuffer any input may ask for
 
 
 @dataclass

@@ -596,3 +596,61 @@ def test_a_missing_file_is_named_once_with_its_reason(tmp_path):
         load_scene(tmp_path)
     assert str(folder.value).endswith(": cannot read it: not a regular file")
     assert str(folder.value).count("cannot read it") == 1
+
+
+# --- found in review -----------------------------------------------------------------------
+
+def test_a_huge_toml_integer_is_a_reader_error(tmp_path):
+    text = '[[geometry]]\ngenerator = "torus"\nparams = { R = ' + "9" * 400 + ' }\n'
+    with pytest.raises(ReaderError, match=r"geometry\[1\]\.params.*too large"):
+        read_scene_file(text, "big.toml", tmp_path)
+
+
+def test_huge_file_normals_are_normalised_without_overflow():
+    obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 1e200 0 0\nvn 0 1e200 0\nvn 0 0 1e200\nf 1//1 2//2 3//3\n"
+    mesh = read_mesh(obj.encode(), "big-normals.obj", ".obj")
+    assert np.allclose(mesh.normals, np.eye(3))
+
+
+def test_flat_shaded_obj_with_split_vertices_is_still_closed():
+    cube = generators.cube()
+    lines = [f"v {x} {y} {z}" for x, y, z in cube.positions]
+    normals = np.cross(cube.positions[cube.triangles[:, 1]] - cube.positions[cube.triangles[:, 0]],
+                       cube.positions[cube.triangles[:, 2]] - cube.positions[cube.triangles[:, 0]])
+    lines += [f"vn {x} {y} {z}" for x, y, z in normals]
+    lines += [f"f {a + 1}//{k + 1} {b + 1}//{k + 1} {c + 1}//{k + 1}"
+              for k, (a, b, c) in enumerate(cube.triangles)]
+    mesh = read_mesh("\n".join(lines).encode(), "flat-cube.obj", ".obj")
+    assert mesh.normals is not None and mesh.closed
+
+
+def test_closed_true_refuses_an_inside_out_mesh(tmp_path):
+    cube = generators.cube()
+    lines = [f"v {x} {y} {z}" for x, y, z in cube.positions]
+    lines += [f"f {a + 1} {c + 1} {b + 1}" for a, b, c in cube.triangles]      # wound inward
+    (tmp_path / "inside-out.obj").write_text("\n".join(lines))
+    text = '[[geometry]]\nfile = "inside-out.obj"\nclosed = true\n'
+    with pytest.raises(ReaderError, match="wind inward"):
+        read_scene_file(text, "s.toml", tmp_path)
+
+
+def test_a_tri_mesh_in_a_scene_file_keeps_the_files_coordinates(tmp_path):
+    # The viewpoint is behind the screen (read_tri mirrors such a world for its camera); as a
+    # scene's geometry the triangles must come as the file gives them.
+    (tmp_path / "behind.tri").write_text(
+        tri_text((0, 0, -5), (-1, 1, 0), (0.004, 0, 0), (0, -0.004, 0),
+                 [((0, 0, 1), (1, 0, 1), (0, 1, 1))]))
+    scene = read_scene_file('[[geometry]]\nfile = "behind.tri"\n', "s.toml", tmp_path)
+    assert sorted(scene.meshes[0].positions[:, 2].tolist()) == [1.0, 1.0, 1.0]
+
+
+def test_a_scene_of_many_big_generators_is_refused_before_it_takes_the_memory(tmp_path):
+    one = '[[geometry]]\ngenerator = "torus"\nparams = { segments = 1500, sides = 1000 }\n'
+    with pytest.raises(ReaderError, match=r"geometry\[2\].*limit is 4000000"):
+        read_scene_file(one * 3, "many.toml", tmp_path)
+
+
+@pytest.mark.parametrize("size", [(2.7, 100), (True, 100), (0, 100), (8193, 10), "big"])
+def test_image_sizes_are_whole_and_bounded(size):
+    with pytest.raises(ReaderError, match="image size"):
+        load_scene(SCENES_DIR / "house.toml", size=size)

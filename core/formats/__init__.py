@@ -17,13 +17,14 @@ listed in ``Scene.view_messages`` and the valid ones still load.
 from __future__ import annotations
 
 import sys
+from numbers import Integral      # (core.formats.numbers would shadow the module name)
 from pathlib import Path
 
 from core.formats.errors import ReaderError, decode_text, read_file, tolerant_of_underflow
 from core.formats.meshfile import MESH_EXTENSIONS, read_mesh
 from core.formats.scenefile import read_scene_file
 from core.formats.tri import read_tri
-from core.scene import Scene
+from core.scene import MAX_IMAGE_SIDE, Scene
 
 __all__ = ["ReaderError", "load_scene", "read_mesh", "read_scene_file", "read_tri",
            "MESH_EXTENSIONS"]
@@ -58,17 +59,22 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
 
 def _size(size, name: str) -> tuple[int, int]:
     try:
-        width, height = (int(s) for s in size)
+        width, height = size
+        whole = all(isinstance(s, Integral) and not isinstance(s, bool)
+                    for s in (width, height))
     except (TypeError, ValueError):
-        raise ReaderError(name, f"the image size must be two whole numbers, got {size!r}") from None
-    if not (1 <= width <= 8192 and 1 <= height <= 8192):
-        raise ReaderError(name, f"the image size {width} x {height} is outside 1..8192")
-    return width, height
+        whole = False
+    if not whole:
+        raise ReaderError(name, f"the image size must be two whole numbers, got {size!r}")
+    if not (1 <= width <= MAX_IMAGE_SIDE and 1 <= height <= MAX_IMAGE_SIDE):
+        raise ReaderError(name, f"the image size {width} x {height} is outside "
+                                f"1..{MAX_IMAGE_SIDE}")
+    return int(width), int(height)
 
 
 @tolerant_of_underflow
 def _mesh_scene(mesh, name: str, size) -> Scene:
-    """A bare mesh file: framing views, default lights, Gouraud when the mesh is smooth."""
+    """A bare mesh file: framing views, default lights, flat shading (the menu picks another)."""
     from core.formats.camera import default_lights, framing_views
     return Scene(name=mesh.name, meshes=[mesh], views=framing_views(mesh.positions, name),
                  lights=default_lights(mesh.positions), ambient=(0.15, 0.15, 0.15),

@@ -33,6 +33,7 @@ import numpy as np
 
 from core.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
                                  tolerant_of_underflow)
+from core.illumination import unit_rows
 from core.scene import Mesh
 
 MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl")
@@ -335,15 +336,18 @@ def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
     vertex_normals = None
     if all(n is not None for n in normals):
         vertex_normals = np.concatenate(normals)
-        lengths = np.linalg.norm(vertex_normals, axis=1) if np.all(np.isfinite(vertex_normals)) else None
-        if lengths is None or np.any(lengths == 0.0):
+        if np.all(np.isfinite(vertex_normals)):
+            # scaled first, so that a normal of length 1e200 neither overflows nor underflows
+            vertex_normals, lengths = unit_rows(vertex_normals)
+        if not np.all(np.isfinite(vertex_normals)) or np.any(lengths == 0.0):
             vertex_normals = None                  # unusable: computed from the faces instead
-        else:
-            vertex_normals = vertex_normals / lengths[:, None]
+    # Closed or not is a property of the surface, so it is decided on merged positions even
+    # where the file's per-corner normals keep its vertices apart (a flat-shaded OBJ).
+    merged, inverse = merge_vertices(positions)
+    closed = is_closed(merged, inverse[triangles])
     if vertex_normals is None:
         # the file's vertices may repeat (STL always does): one mesh vertex per position
-        positions, inverse = merge_vertices(positions)
-        triangles = inverse[triangles]
+        positions, triangles = merged, inverse[triangles]
     return Mesh(positions=positions, triangles=triangles, normals=vertex_normals,
-                closed=is_closed(positions, triangles), name=file_stem(file))
+                closed=closed, name=file_stem(file))
 

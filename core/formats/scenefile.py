@@ -36,13 +36,13 @@ from core import generators
 from core.formats.camera import default_lights, framing_views
 from core.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, read_file,
                                  tolerant_of_underflow)
-from core.formats.meshfile import MESH_EXTENSIONS, edge_problem, read_mesh
-from core.scene import SHADINGS, Light, Material, Mesh, Scene
+from core.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
+                                   signed_volume)
+from core.scene import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.view import PROJECTIONS, View, problems
 
 MAX_NUMBER = MAX_COORDINATE
-MAX_SIZE = 8192                        # framebuffer side, pixels
 
 TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
             "line_color", "views", "view", "geometry", "light")
@@ -170,8 +170,15 @@ class _Reader:
         self.table(doc, (), TOP_KEYS)
         if "geometry" not in doc:
             raise self.fail((), "a scene needs at least one [[geometry]] table")
-        meshes = [self.geometry(g, ("geometry", i + 1))
-                  for i, g in enumerate(self.tables(doc["geometry"], ("geometry",)))]
+        meshes, total = [], 0
+        for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
+            meshes.append(self.geometry(g, ("geometry", i + 1)))
+            # Each generator keeps to the limit; the scene as a whole must too, or a short
+            # file listing many big generators could take all the memory.
+            total += len(meshes[-1].triangles)
+            if total > generators.MAX_TRIANGLES:
+                raise self.fail(("geometry", i + 1), f"the scene would have {total} triangles "
+                                f"by here; the limit is {generators.MAX_TRIANGLES}")
         if not meshes:
             raise self.fail(("geometry",), "a scene needs at least one [[geometry]] table")
         points = np.concatenate([m.positions for m in meshes])
@@ -191,7 +198,7 @@ class _Reader:
             if key in doc:
                 setattr(scene, key, read(doc[key], (key,)))
         if "size" in doc:
-            w, h = self.vector(doc["size"], ("size",), 2, 1, MAX_SIZE)
+            w, h = self.vector(doc["size"], ("size",), 2, 1, MAX_IMAGE_SIDE)
             if w != int(w) or h != int(h):
                 raise self.fail(("size",), "expected whole numbers of pixels")
             scene.size = (int(w), int(h))
@@ -214,7 +221,12 @@ class _Reader:
         if "closed" in g:
             closed = self.boolean(g["closed"], path + ("closed",))
             if closed:
-                why = edge_problem(mesh.triangles)
+                # decided on merged positions (per-corner normals may keep vertices apart)
+                merged, inverse = merge_vertices(mesh.positions)
+                why = edge_problem(inverse[mesh.triangles])
+                if why is None and signed_volume(merged, inverse[mesh.triangles]) <= 0.0:
+                    why = ("its faces wind inward (signed volume <= 0), so culling would keep "
+                           "the inside")
                 if why is not None:
                     raise self.fail(path + ("closed",), f"the mesh is not closed: {why}")
             mesh.closed = closed
@@ -235,8 +247,8 @@ class _Reader:
         try:
             data = read_file(target, shown)
             if ext == ".tri":
-                from core.formats.tri import read_tri
-                return read_tri(data, shown).meshes[0]
+                from core.formats.tri import read_tri_mesh
+                return read_tri_mesh(data, shown)
             return read_mesh(data, shown, ext)
         except ReaderError as error:
             raise ReaderError(error.file, f"{error.reason} (the mesh of {path_text(path[:2])} "

@@ -41,8 +41,41 @@ _COUNT = re.compile(r"\+?\d+")
 @tolerant_of_underflow
 def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) -> Scene:
     """The scene of a ``.tri`` file; ``size`` (width, height) is the image, 500 x 500 by default."""
-    text = decode_text(data, file) if isinstance(data, bytes) else data
     size = tuple(size) if size is not None else DEFAULT_SIZE
+    values, positions, triangles, numbers = _parse(data, file)
+    viewpoint, top_left, right, down = (values[3 * k:3 * k + 3].copy() for k in range(4))
+    try:
+        camera = tri_view(viewpoint, top_left, right, down, size, positions,
+                          label=f"{file}: the file's camera")
+    except ValueError as error:
+        at = 0 if str(error).startswith("the viewpoint") else 6     # else: the displacements
+        raise ReaderError(file, str(error), numbers.line(at)) from None
+    light = tri_light(viewpoint, right, down)
+    if camera.mirror is not None:
+        positions = apply(camera.mirror, positions)[:, :3]
+        light = apply(camera.mirror, light[None])[0, :3]
+
+    mesh = Mesh(positions=positions, triangles=triangles, closed=False, material=Material(),
+                name=file_stem(file))
+    views = [camera.view] + framing_views(positions, f"{file}")
+    lights = [Light(intensity=(1.0, 1.0, 1.0), position=tuple(float(c) for c in light))]
+    if len(positions) == 0:
+        lights = default_lights(positions)
+    return Scene(name=file_stem(file), meshes=[mesh], views=views, lights=lights,
+                 shading="flat", projection="perspective", size=size, source=str(file))
+
+
+def read_tri_mesh(data: bytes | str, file: str) -> Mesh:
+    """Only the triangles of a ``.tri`` file, as they are in the file (a scene file's mesh):
+    its camera is neither needed nor checked, and nothing is mirrored for it."""
+    _, positions, triangles, _ = _parse(data, file)
+    return Mesh(positions=positions, triangles=triangles, closed=False, material=Material(),
+                name=file_stem(file))
+
+
+def _parse(data: bytes | str, file: str):
+    """``(header values, positions, triangles, numbers)``; every error names its line."""
+    text = decode_text(data, file) if isinstance(data, bytes) else data
     numbers = Numbers(text, file, keep=13)
     values = numbers.values
 
@@ -80,29 +113,9 @@ def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) 
                                 f"start triangle {count + 1}", numbers.line(extra))
     _check_finite(body, "a triangle", numbers, 13, file)
 
-    viewpoint, top_left, right, down = (values[3 * k:3 * k + 3].copy() for k in range(4))
     corners = body.reshape(-1, 3)           # three rows per triangle
     positions, inverse = merge_vertices(corners)
-    triangles = inverse.reshape(-1, 3)
-    try:
-        camera = tri_view(viewpoint, top_left, right, down, size, positions,
-                          label=f"{file}: the file's camera")
-    except ValueError as error:
-        at = 0 if str(error).startswith("the viewpoint") else 6     # else: the displacements
-        raise ReaderError(file, str(error), numbers.line(at)) from None
-    light = tri_light(viewpoint, right, down)
-    if camera.mirror is not None:
-        positions = apply(camera.mirror, positions)[:, :3]
-        light = apply(camera.mirror, light[None])[0, :3]
-
-    mesh = Mesh(positions=positions, triangles=triangles, closed=False, material=Material(),
-                name=file_stem(file))
-    views = [camera.view] + framing_views(positions, f"{file}")
-    lights = [Light(intensity=(1.0, 1.0, 1.0), position=tuple(float(c) for c in light))]
-    if len(positions) == 0:
-        lights = default_lights(positions)
-    return Scene(name=file_stem(file), meshes=[mesh], views=views, lights=lights,
-                 shading="flat", projection="perspective", size=size, source=str(file))
+    return values, positions, inverse.reshape(-1, 3), numbers
 
 
 def numbers_text(value: float) -> str:
