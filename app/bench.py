@@ -104,8 +104,11 @@ def bench_scene(triangles: int):
 
 def _scenes(args) -> list:
     if args.scene:
-        from core.formats import load_scene
-        scene = load_scene(args.scene, size=args.size)
+        from core.formats import ReaderError, load_scene
+        try:
+            scene = load_scene(args.scene, size=args.size)
+        except ReaderError as error:
+            raise SystemExit(f"error: {error}") from None
         if not scene.views:
             raise SystemExit(f"error: {args.scene}: no valid view to time")
         return [scene]

@@ -102,7 +102,9 @@ class ImGuiRenderer:
         display_x, display_y = draw_data.display_pos
         display_w, display_h = draw_data.display_size
         scale_x, scale_y = draw_data.frame_buffer_scale
-        fb_width, fb_height = int(display_w * scale_x), int(display_h * scale_y)
+        # rounded, not truncated: ImGui keeps these in float32, so 401 points at 501/401 is
+        # 499.99997 and int() would draw the GUI one pixel short
+        fb_width, fb_height = round(display_w * scale_x), round(display_h * scale_y)
         if fb_width <= 0 or fb_height <= 0:
             return
 

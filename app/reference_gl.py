@@ -46,10 +46,11 @@ from dataclasses import dataclass
 import moderngl
 import numpy as np
 
-from core.normals import vertex_normals
+from core.illumination import eye_from_view
+from core.normals import face_normals, vertex_normals
 from core.project import perspective_to_parallel, viewport
 from core.scene import Scene
-from core.view import View, normalizing_transform, vrc_basis
+from core.view import View, normalizing_transform
 
 MODES = ("coverage", "flat", "gouraud", "phong")
 MAX_LIGHTS = 8
@@ -258,22 +259,9 @@ def clip_from_world(view: View, projection: str, size: tuple[int, int]) -> np.nd
 
 
 def eye_of(view: View) -> tuple[np.ndarray, np.ndarray]:
-    """The PRP in world coordinates, and the unit vector towards the viewer for parallel (-DOP)."""
-    u, v, n = vrc_basis(view)
-    prp = np.asarray(view.prp, dtype=np.float64)
-    u_min, u_max, v_min, v_max = view.window
-    dop = np.array([(u_min + u_max) / 2, (v_min + v_max) / 2, 0.0]) - prp
-    eye = np.asarray(view.vrp, dtype=np.float64) + prp[0] * u + prp[1] * v + prp[2] * n
-    toward = -(dop[0] * u + dop[1] * v + dop[2] * n)
-    return eye, toward / np.linalg.norm(toward)
-
-
-def face_normals(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """Unit normals of the triangles, counter-clockwise = outward (zero for degenerate ones)."""
-    p0, p1, p2 = (positions[triangles[:, k]] for k in range(3))
-    cross = np.cross(p1 - p0, p2 - p0)
-    length = np.linalg.norm(cross, axis=1, keepdims=True)
-    return np.divide(cross, length, out=np.zeros_like(cross), where=length > 0)
+    """The PRP in world coordinates, and the unit vector towards the viewer for parallel
+    (-DOP): the viewing parameters the CPU's shading uses (``core.illumination``)."""
+    return (eye_from_view(view, "perspective").point, eye_from_view(view, "parallel").direction)
 
 
 @dataclass
@@ -300,6 +288,7 @@ class GLRenderer:
         self.size = (0, 0)
         self.fbo = None
         self.scene = None
+        self.loaded: tuple[str, ...] = ()
         self._meshes: list[_MeshBuffers] = []
         self.resize(size)
 
@@ -334,6 +323,7 @@ class GLRenderer:
         """Upload every mesh's triangles for ``modes`` (once per scene)."""
         self._release_meshes()
         self.scene = scene
+        self.loaded = tuple(modes)
         ctx = self.ctx
         for mesh in scene.meshes:
             if len(mesh.triangles) == 0:
@@ -360,7 +350,7 @@ class GLRenderer:
                 # Each triangle gets its own three corners carrying its face normal and
                 # centroid, so the flat varying is the same whichever vertex provokes.
                 corners = mesh.positions[mesh.triangles]                    # (T, 3, 3)
-                normal = face_normals(mesh.positions, mesh.triangles)
+                normal = face_normals(mesh.positions, mesh.triangles)[0]
                 centroid = corners.mean(axis=1)
                 flat = np.empty((len(corners), 3, 9), dtype="f4")
                 flat[:, :, 0:3] = corners
@@ -419,6 +409,8 @@ class GLRenderer:
             raise ValueError(f"shading must be one of {MODES}, not {shading!r}")
         scene = self.scene
         view = scene.views[view_index]
+        if shading not in self.loaded:
+            raise ValueError(f"{shading!r} was not loaded (loaded: {', '.join(self.loaded)})")
         program = self.programs[shading]
         ctx = self.ctx
         self.fbo.use()
@@ -469,17 +461,3 @@ class GLRenderer:
         t1 = time.perf_counter()
         self.read()
         return t1 - t0, time.perf_counter() - t1
-
-
-def render_gl(scene: Scene, view_index: int, projection: str, shading: str,
-              size: tuple[int, int] | None = None) -> np.ndarray:
-    """One image of ``scene`` by llvmpipe, ``(H, W, 3)`` uint8 in image order.
-
-    ``shading`` is ``"flat"``, ``"gouraud"``, ``"phong"`` or ``"coverage"`` (white on black).
-    """
-    renderer = GLRenderer(size or scene.size)
-    try:
-        renderer.load(scene, modes=(shading,))
-        return renderer.render(view_index, projection, shading)
-    finally:
-        renderer.release()

@@ -150,10 +150,18 @@ def _check_never_black(material: Material) -> None:
 # References, computed once
 
 
+def _source_hash() -> str:
+    """The code an exact image depends on: the reference itself, the model it evaluates, and
+    the viewing it shares with the pipeline. A change to any of them recomputes the cache."""
+    from core import illumination, project, view
+    text = "".join(inspect.getsource(m) for m in (reference_module, illumination, project, view))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
 def _reference_key(name: str, size: int, samples: int) -> str:
     scene, shape = analytic_scene(name, 3)
     text = json.dumps({
-        "code": hashlib.sha256(inspect.getsource(reference_module).encode()).hexdigest(),
+        "code": _source_hash(),
         "shape": repr(shape), "lights": repr(scene.lights), "ambient": scene.ambient,
         "background": scene.background, "specular": scene.specular, "view": repr(VIEWS[name]),
         "size": size, "samples": samples}, sort_keys=True)

@@ -163,12 +163,6 @@ def apply(m: Matrix, point: Vector) -> Vector:
     return tuple(sum((m[i][k] * p[k] for k in range(4)), ZERO) for i in range(4))
 
 
-def as_float(m) -> np.ndarray:
-    """A Fraction matrix, vector or scalar as the nearest float64 array (correctly rounded)."""
-    return np.array([[float(x) for x in row] for row in m]) if isinstance(m[0], tuple) \
-        else np.array([float(x) for x in m])
-
-
 # --------------------------------------------------------------------------------------------
 # The normalizing transformations (FvDFH 6.5), the same formulas as core.view
 

@@ -92,6 +92,10 @@ class Outcome:
     def check(self, text: str, ok) -> None:
         self.checks.append((text, bool(ok)))
 
+    def note(self, text: str) -> None:
+        """A measured fact shown beside the checks (an example message, say); it cannot fail."""
+        self.checks.append((text, True))
+
     def accuracy(self, error: float, condition: float, quantity: str) -> None:
         """Record an error and condition; several calls keep the worst ratio error / bound."""
         if self.error is None or _excess(error, condition) > _excess(self.error, self.condition):

@@ -16,7 +16,6 @@ from pathlib import Path
 import numpy as np
 
 from core import exact, project, shade
-from core.clip import outcodes
 from core.generators import uv_sphere
 from core.illumination import (Eye, illuminate, pack_ambient, pack_eye, pack_lights,
                                pack_surfaces, to_uint8)
@@ -433,7 +432,7 @@ def _on_plane_triangles(projection: str) -> list[tuple[str, np.ndarray, bool]]:
       "a corner or an edge exactly on any of the six planes is inside: such triangles pass the "
       "clipper unchanged; a triangle touching a plane from outside draws nothing")
 def on_clip_planes() -> Outcome:
-    from core.clip_polygon import clip_triangles
+    from core.clip_polygon import clip_triangles, outcodes
     out = Outcome()
     for projection, view in PLANE_VIEWS.items():
         n, z_min = normalizing_transform(view, projection)
@@ -739,5 +738,5 @@ def non_finite_files() -> Outcome:
     out.check("every message names the file and the reason" if not problems
               else f"{len(problems)} problems: " + "; ".join(problems[:3]), not problems)
     for suffix, message in sorted(example.items()):
-        out.check(f"e.g. {message}", True)
+        out.note(f"e.g. {message}")
     return out

@@ -94,6 +94,7 @@ def test_blit_rejects_wrong_image(ctx):
 @pytest.fixture
 def gui(ctx):
     context = imgui.create_context()
+    imgui.get_io().ini_file_name = None       # no imgui.ini left in the working directory
     renderer = ImGuiRenderer(ctx)
     yield renderer
     renderer.release()
@@ -169,7 +170,7 @@ def test_imgui_window_draws_text_inside_its_rectangle(ctx, gui):
     assert not lit[:, :30].any() and not lit[:, 150:].any()
     # Several draw commands (window, title, text), each starting at its own index offset.
     commands = np.concatenate([draw_commands(dl) for dl in draw_data.commands_lists])
-    assert len(commands) >= 1
+    assert len(commands) >= 2
     for draw_list in draw_data.commands_lists:
         records = draw_commands(draw_list)
         assert list(records["elem_count"]) == [c.elem_count for c in draw_list.commands]
@@ -189,25 +190,37 @@ def test_imgui_buffers_grow(ctx, gui):
     assert red_mask(image)[:20].all()
 
 
-def test_a_rendered_frame_round_trips_through_its_padded_upload():
+def test_a_rendered_frame_round_trips_through_its_padded_upload(ctx):
     # The viewer uploads Frame.rgbx (a padding byte per pixel); what comes back from the screen
     # must still be Frame.color, bit for bit, at an odd size.
-    import moderngl
-
-    from app.blit import Blit
     from core.formats import load_scene
     from core.paths import SCENES_DIR
     from core.render import render
 
     frame = render(load_scene(SCENES_DIR / "torus.toml"), 0, "perspective", "gouraud", (333, 217))
-    ctx = moderngl.create_standalone_context(backend="egl")
-    try:
-        fbo = ctx.simple_framebuffer((333, 217), components=4)
-        fbo.use()
-        blit = Blit(ctx)
-        blit.upload(frame.rgbx)
-        blit.draw()
-        shown = np.frombuffer(fbo.read(components=3, alignment=1), np.uint8).reshape(217, 333, 3)
-        assert np.array_equal(shown[::-1], frame.color)
-    finally:
-        ctx.release()
+    assert frame.rgbx.shape == (217, 333, 4)
+    blit = Blit(ctx)
+    assert np.array_equal(blit_through(ctx, blit, frame.rgbx), frame.color)
+    blit.release()
+
+
+def test_imgui_at_a_fractional_scale_fills_the_framebuffer_to_its_last_row(ctx, gui):
+    # 401 points at 501/401 pixels a point: float32 makes the product 500.99997. The scissor's
+    # y flip counts from the framebuffer's top, so a height one pixel short shifts it by one.
+    io = imgui.get_io()
+    io.display_size = (401, 401)
+    io.display_fb_scale = (501 / 401, 501 / 401)
+    io.delta_time = 1.0 / 60.0
+    imgui.new_frame()
+    draw_list = imgui.get_background_draw_list()
+    draw_list.push_clip_rect(0, 0, 401, 200.4)              # the top 250 framebuffer rows
+    draw_list.add_rect_filled(0, 0, 401, 401, RED)
+    draw_list.pop_clip_rect()
+    imgui.render()
+    fbo = ctx.simple_framebuffer((501, 501), components=4)
+    fbo.use()
+    fbo.clear(0.0, 0.0, 0.0, 1.0)
+    gui.render(imgui.get_draw_data())
+    rows = np.flatnonzero(red_mask(read_image(fbo)).any(axis=1))
+    fbo.release()
+    assert rows[0] == 0 and rows[-1] == 249

@@ -8,6 +8,7 @@ file are never trusted. Example counts stay modest so that the suite stays fast.
 from __future__ import annotations
 
 import re
+import struct
 import tracemalloc
 
 import pytest
@@ -25,7 +26,8 @@ MEMORY_LIMIT = 32_000_000
 NASTY = [b"nan", b"inf", b"-inf", b"-1", b"0", b"1e308", b"-1e308", b"1e-320", b"1e40",
          b"99999999999999999999", b"1000000000000", b"abc", b"#", b"\x00", b"", b"3.5", b"+",
          b"-0", b"0x10", b"1_0", "\u0661".encode(), b"\xff\xfe", b"[", b"]", b"{", b"}", b"=",
-         b'"', b"'", b"[[geometry]]", b"true", b"1e999", b"-", b"/", b"//", b"f", b"v"]
+         b'"', b"'", b"[[geometry]]", b"true", b"1e999", b"-", b"/", b"//", b"f", b"v",
+         b"9" * 400, b"vn 1e200 0 0", b"1e200"]
 
 FUZZ = settings(max_examples=60, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -94,6 +96,12 @@ f -4 -5 -1
 PLY = (b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
        b"property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
        b"0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n")
+OFF = b"OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n"
+STL_ASCII = (b"solid fuzz\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
+             b"vertex 1 1 0\nendloop\nendfacet\nendsolid fuzz\n")
+STL_BINARY = (b"\0" * 80 + struct.pack("<I", 1)
+              + struct.pack("<12fH", 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 1, 0, 0))
+SEEDS = {".ply": PLY, ".off": OFF, ".stl": STL_ASCII}
 TOML = b"""name = "fuzz"
 shading = "gouraud"
 size = [200, 100]
@@ -156,9 +164,21 @@ def test_fuzz_obj_random_bytes(data):
 
 
 @settings(FUZZ, max_examples=40)
-@given(mutated(PLY), st.sampled_from([".ply", ".off", ".stl"]))
+@given(st.data(), st.sampled_from([".ply", ".off", ".stl"]))
 def test_fuzz_other_mesh_formats(data, ext):
-    only_reader_errors(lambda d: read_mesh(d, f"fuzz{ext}", ext), data)
+    # each format mutated from a valid file of its own, so the fuzz gets past the header
+    only_reader_errors(lambda d: read_mesh(d, f"fuzz{ext}", ext), data.draw(mutated(SEEDS[ext])))
+
+
+@settings(FUZZ, max_examples=40)
+@given(st.binary(max_size=60).map(lambda tail: STL_BINARY[:84] + tail))
+def test_fuzz_binary_stl(data):
+    only_reader_errors(lambda d: read_mesh(d, "fuzz.stl", ".stl"), data)
+
+
+@pytest.mark.parametrize("ext, seed", [(".off", OFF), (".stl", STL_ASCII), (".stl", STL_BINARY)])
+def test_the_fuzz_seeds_are_valid_files(ext, seed):
+    assert len(read_mesh(seed, f"seed{ext}", ext).triangles) >= 1
 
 
 @FUZZ

@@ -67,7 +67,6 @@ def test_reference_cache_returns_the_same_image(tmp_path):
 
 @pytest.fixture(scope="module")
 def quick_points():
-    pytest.importorskip("core.clip_polygon", reason="the triangle clipper is not in the tree yet")
     return accuracy.sweep(accuracy.QUICK)
 
 

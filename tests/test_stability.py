@@ -99,7 +99,6 @@ def test_relative_error_and_condition():
 
 @pytest.fixture(scope="module")
 def results():
-    pytest.importorskip("core.clip_polygon", reason="the triangle clipper is not in the tree yet")
     return stability.run_suite()
 
 

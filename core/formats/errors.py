@@ -46,11 +46,6 @@ def decode_text(data: bytes, file: str) -> str:
     return text
 
 
-def line_of(text: str, offset: int) -> int:
-    """The 1-based line number of character ``offset`` of ``text``."""
-    return text.count("\n", 0, offset) + 1
-
-
 def short(token: str, limit: int = 40) -> str:
     """``repr`` of a token from a file, cut to ``limit`` characters so that messages stay short."""
     return repr(token if len(token) <= limit else token[:limit] + "...")

@@ -45,9 +45,6 @@ class Numbers:
         self.values = np.concatenate(parts) if parts else np.zeros(0)
         self._ends = np.cumsum(self.counts)                     # numbers up to each line
 
-    def __len__(self) -> int:
-        return len(self.values)
-
     def line(self, k: int) -> int:
         """The line that holds number ``k`` (or the last line with a number if k is past the end)."""
         if len(self.values) == 0:

@@ -34,10 +34,22 @@ import numpy as np
 
 from core import generators
 from core.formats.camera import default_lights, framing_views
-from core.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, read_file,
-                                 tolerant_of_underflow)
-from core.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
-                                   signed_volume)
+from core.formats.errors import (
+    MAX_COORDINATE,
+    ReaderError,
+    decode_text,
+    file_stem,
+    read_file,
+    tolerant_of_underflow,
+)
+from core.formats.meshfile import (
+    MESH_EXTENSIONS,
+    edge_problem,
+    merge_vertices,
+    read_mesh,
+    signed_volume,
+)
+from core.illumination import SPECULAR_FORMS
 from core.scene import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.view import PROJECTIONS, View, problems
@@ -51,7 +63,6 @@ TRANSFORM_KEYS = ("scale", "rotate", "translate")
 MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
-SPECULARS = ("reflect", "halfway")
 TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
 
 Path_ = tuple            # a key path: ("geometry", 2, "material", "kd")
@@ -194,7 +205,7 @@ class _Reader:
                           ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("shading", lambda v, p: self.choice(v, p, SHADINGS)),
                           ("projection", lambda v, p: self.choice(v, p, PROJECTIONS)),
-                          ("specular", lambda v, p: self.choice(v, p, SPECULARS))):
+                          ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS))):
             if key in doc:
                 setattr(scene, key, read(doc[key], (key,)))
         if "size" in doc:
