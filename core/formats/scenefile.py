@@ -34,21 +34,10 @@ import numpy as np
 
 from core import generators
 from core.formats.camera import default_lights, framing_views
-from core.formats.errors import (
-    MAX_COORDINATE,
-    ReaderError,
-    decode_text,
-    file_stem,
-    read_file,
-    tolerant_of_underflow,
-)
-from core.formats.meshfile import (
-    MESH_EXTENSIONS,
-    edge_problem,
-    merge_vertices,
-    read_mesh,
-    signed_volume,
-)
+from core.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, read_file,
+                                 tolerant_of_underflow)
+from core.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
+                                   signed_volume)
 from core.illumination import SPECULAR_FORMS
 from core.scene import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
