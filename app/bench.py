@@ -263,8 +263,11 @@ def first_frame_time(timeout: float = 60.0, cold: bool = False) -> dict:
         if cold:
             env["NUMBA_CACHE_DIR"] = str(tmp / "numba-cache")
         start = time.perf_counter()
+        # stderr to a file: a pipe nobody reads while the viewer runs could fill and stall it
+        errors = (tmp / "viewer.stderr").open("w")
         viewer = subprocess.Popen([sys.executable, "-m", "app", "view"], cwd=ROOT, env=env,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                                  stdout=subprocess.DEVNULL, stderr=errors)
+        errors.close()
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             text = log.read_text(errors="replace") if log.exists() else ""
@@ -277,7 +280,7 @@ def first_frame_time(timeout: float = 60.0, cold: bool = False) -> dict:
                         "line": match.group(0), "cache": "empty" if cold else "normal",
                         "log": text.splitlines()[:60]}
             if viewer.poll() is not None:
-                err = viewer.stderr.read().strip().splitlines()
+                err = (tmp / "viewer.stderr").read_text(errors="replace").strip().splitlines()
                 return {"measured": False, "reason": "the viewer exited before logging a first frame"
                         + (f": {err[-1]}" if err else f" (status {viewer.returncode})")}
             time.sleep(0.02)

@@ -86,7 +86,10 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
     if scene_source is None:
         from core.paths import DEFAULT_SCENE
         # Shown in every view's label: relative to the working directory when that is shorter.
-        relative = os.path.relpath(DEFAULT_SCENE)
+        try:
+            relative = os.path.relpath(DEFAULT_SCENE)
+        except ValueError:                    # another drive (Windows): no relative path
+            relative = ".."
         scene_source = relative if not relative.startswith("..") else str(DEFAULT_SCENE)
     try:
         state = ViewerState.open(scene_source, size=tuple(size) if size else None)
