@@ -22,7 +22,7 @@ def parse_size(text: str) -> tuple[int, int]:
         w, h = (int(part) for part in text.lower().split("x"))
     except ValueError:
         raise argparse.ArgumentTypeError(f"size must look like 500x500, not {text!r}") from None
-    from core.scene import MAX_IMAGE_SIDE
+    from core.scene.model import MAX_IMAGE_SIDE
     if not (1 <= w <= MAX_IMAGE_SIDE and 1 <= h <= MAX_IMAGE_SIDE):
         raise argparse.ArgumentTypeError(f"size {w}x{h} is out of range (1 to {MAX_IMAGE_SIDE} "
                                          "a side)")
@@ -67,8 +67,8 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     pl.add_argument("--shading", choices=SHADING_CHOICES, default=None)
 
     b = sub.add_parser("bench", help="time the CPU pipeline against llvmpipe (OpenGL in software)")
-    if command == "bench":                    # its options live with its body (app/bench.py)
-        from app.bench import add_arguments
+    if command == "bench":                    # its options live with its body (app/tools/bench.py)
+        from app.tools.bench import add_arguments
         add_arguments(b)
 
     rep = sub.add_parser("report", help="error against run time: sweep, CSV, Markdown and plot")
@@ -93,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _load(source: str, size=None):
     """The scene, or None after printing the reader's message."""
-    from core.formats import ReaderError, load_scene
+    from core.scene.formats import ReaderError, load_scene
     try:
         scene = load_scene(source, size=size)
     except ReaderError as error:
@@ -117,7 +117,7 @@ def _pick_view(scene, k: int):
 
 def _dispatch(args) -> int:
     if args.command == "view":
-        from app.viewer import main as viewer_main
+        from app.viewer.launch import main as viewer_main
         return viewer_main(args.scene, args.size, out_dir=args.out)
     if args.command == "render":
         return _render(args)
@@ -126,13 +126,13 @@ def _dispatch(args) -> int:
     if args.command == "plan":
         return _plan(args)
     if args.command == "bench":
-        from app.bench import main as bench_main
+        from app.tools.bench import main as bench_main
         return bench_main(args)
     if args.command == "report":
-        from app.report import main as report_main
+        from app.tools.report import main as report_main
         return report_main(args)
     if args.command == "stability":
-        from app.stability import main as stability_main
+        from app.tools.stability import main as stability_main
         return stability_main(args)
     raise AssertionError(args.command)
 
@@ -140,7 +140,7 @@ def _dispatch(args) -> int:
 def _render(args) -> int:
     from PIL import Image
 
-    from app.state import announce_compiles, render
+    from app.viewer.state import announce_compiles, render
     scene = _load(args.scene, size=args.size)
     if scene is None:
         return 2
@@ -165,8 +165,8 @@ def _render(args) -> int:
 
 
 def _matrices(args) -> int:
-    from core import project
-    from core.view import ViewError, n_par_factors, n_per_factors
+    from core.pipeline import project
+    from core.camera.view import ViewError, n_par_factors, n_per_factors
     scene = _load(args.scene)
     if scene is None:
         return 2

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from core.scene import SHADINGS, Scene
+from core.scene.model import SHADINGS, Scene
 
 
 @dataclass(frozen=True)
@@ -22,7 +22,7 @@ class Stage:
 
 def plan(scene: Scene, projection: str, shading: str) -> list[Stage]:
     """The stages for ``scene`` drawn with ``projection`` and ``shading``, in the order the
-    renderer runs them (``core/render.py``, ``core/render_solid.py``)."""
+    renderer runs them (``core/render.py``, ``core/renderers/zbuffer.py``)."""
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {', '.join(SHADINGS)}, not {shading!r}")
     has_tris = scene.triangle_count > 0

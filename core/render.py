@@ -16,11 +16,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from core import clip, project, raster_lines
+from core.pipeline import clip
+from core.pipeline import project
+from core.pipeline import raster_lines
 from core.plan import Stage, plan
-from core.scene import Scene
+from core.scene.model import Scene
 from core.transforms import apply
-from core.view import ViewError, normalizing_transform, problems
+from core.camera.view import ViewError, normalizing_transform, problems
 
 
 @dataclass
@@ -80,7 +82,7 @@ def render(scene: Scene, view_index: int, projection: str | None = None,
     """Render view ``view_index`` (0-based) of ``scene``.
 
     ``inspect(stage, arrays)``, when given, is called after each stage of the triangle path
-    with the arrays it produced (named as in ``core/render_solid.py``).
+    with the arrays it produced (named as in ``core/renderers/zbuffer.py``).
 
     An invalid view, a scene without views, or a zero-sized framebuffer gives a frame of the
     background colour with ``message`` saying why; it never raises for bad scene data.
@@ -114,7 +116,7 @@ def render(scene: Scene, view_index: int, projection: str | None = None,
     vp = project.viewport(view.window, width, height)
     timer.lap("normalize")
     if solid:
-        from core.render_solid import render_solid     # the triangle pipeline (numba kernels)
+        from core.renderers.zbuffer import render_solid     # the triangle pipeline (numba kernels)
         render_solid(frame, scene, view, projection, shading, n, z_min, vp, timer)
     line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
     if line_meshes:

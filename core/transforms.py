@@ -66,3 +66,15 @@ def apply(m: np.ndarray, points: np.ndarray) -> np.ndarray:
     if points.shape[-1] == 3:
         points = np.concatenate([points, np.ones(points.shape[:-1] + (1,))], axis=-1)
     return points @ m.T
+
+
+def unit_rows(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Row-wise unit vectors (as ``core.shading.illumination.unit3``): ``(unit vectors (N, 3), lengths (N,))``; zero rows stay zero."""
+    m = np.max(np.abs(v), axis=1)
+    nonzero = m > 0.0
+    inv_m = np.divide(1.0, m, out=np.zeros_like(m), where=nonzero)
+    scaled = v * inv_m[:, None]
+    x, y, z = scaled[:, 0], scaled[:, 1], scaled[:, 2]
+    s = np.sqrt(x * x + y * y + z * z)
+    inv_s = np.divide(1.0, s, out=np.zeros_like(s), where=nonzero)
+    return scaled * inv_s[:, None], m * s

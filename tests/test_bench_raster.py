@@ -16,12 +16,12 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from core import project
-from core.clip_polygon import clip_triangles, outcodes
-from core.generators import sphere_torus
-from core.raster import VisibilityBuffer, rasterize
+from core.pipeline import project
+from core.pipeline.clip_polygon import clip_triangles, outcodes
+from core.scene.generators import sphere_torus
+from core.pipeline.raster import VisibilityBuffer, rasterize
 from core.transforms import apply
-from core.view import normalizing_transform
+from core.camera.view import normalizing_transform
 
 SIZE = (500, 500)
 

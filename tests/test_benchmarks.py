@@ -18,14 +18,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from app.bench import bench_scene
-from core import project, shade
-from core.clip_polygon import clip_triangles
-from core.raster import rasterize
-from core.illumination import to_uint8
+from app.tools.bench import bench_scene
+from core.pipeline import project
+from core.shading import shade
+from core.pipeline.clip_polygon import clip_triangles
+from core.pipeline.raster import rasterize
+from core.shading.illumination import to_uint8
 from core.render import render
 from core.transforms import apply
-from core.view import View, normalizing_transform
+from core.camera.view import View, normalizing_transform
 
 SIZE = (500, 500)
 PROJECTION = "perspective"

@@ -13,8 +13,8 @@ import pytest
 moderngl = pytest.importorskip("moderngl")
 imgui = pytest.importorskip("imgui")
 
-from app.blit import Blit  # noqa: E402
-from app.imgui_backend import ImGuiRenderer, draw_commands  # noqa: E402
+from app.viewer.blit import Blit  # noqa: E402
+from app.viewer.imgui_backend import ImGuiRenderer, draw_commands  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -193,7 +193,7 @@ def test_imgui_buffers_grow(ctx, gui):
 def test_a_rendered_frame_round_trips_through_its_padded_upload(ctx):
     # The viewer uploads Frame.rgbx (a padding byte per pixel); what comes back from the screen
     # must still be Frame.color, bit for bit, at an odd size.
-    from core.formats import load_scene
+    from core.scene.formats import load_scene
     from core.paths import SCENES_DIR
     from core.render import render
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from core.clip import clip_lines, outcodes, planes
+from core.pipeline.clip import clip_lines, outcodes, planes
 
 Z_MIN = -0.25
 
@@ -115,9 +115,9 @@ def test_batch_equals_one_by_one(segments, projection):
 
 @pytest.mark.parametrize("projection", ["parallel", "perspective"])
 def test_line_and_triangle_clippers_share_their_outcodes(projection):
-    # core.clip (numpy, so wireframes need no compiler) and core.clip_polygon (compiled, for
+    # core.pipeline.clip (numpy, so wireframes need no compiler) and core.pipeline.clip_polygon (compiled, for
     # half a million vertices a frame) must classify every point alike, planes included.
-    from core.clip_polygon import outcodes as triangle_outcodes
+    from core.pipeline.clip_polygon import outcodes as triangle_outcodes
     rng = np.random.default_rng(3)
     points = rng.uniform(-1.5, 1.5, (5000, 3))
     points[:1000, 0] = -points[:1000, 2]                  # exactly on x = -z

@@ -1,4 +1,4 @@
-"""Triangle clipping in the canonical volumes (core/clip_polygon.py): outcodes, trivial
+"""Triangle clipping in the canonical volumes (core/pipeline/clip_polygon.py): outcodes, trivial
 accept and reject, Sutherland–Hodgman with attributes, and a brute-force property test."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from core.clip_polygon import (ABOVE, BEHIND, BELOW, FRONT, LEFT, RIGHT, clip_triangles,
+from core.pipeline.clip_polygon import (ABOVE, BEHIND, BELOW, FRONT, LEFT, RIGHT, clip_triangles,
                                outcodes)
 
 Z_MIN = -0.25

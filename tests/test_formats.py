@@ -1,4 +1,4 @@
-"""The readers (core.formats): .tri with its camera, mesh files, TOML scenes, view files.
+"""The readers (core.scene.formats): .tri with its camera, mesh files, TOML scenes, view files.
 
 Every reader is held against small hand-made inputs whose numbers are worked out by hand, and
 every kind of bad input must give a ReaderError naming the file, the line and the reason.
@@ -15,13 +15,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core import generators, project
-from core.formats import ReaderError, load_scene, read_mesh, read_scene_file, read_tri
-from core.formats.meshfile import edge_problem, merge_vertices, signed_volume
+from core.scene import generators
+from core.pipeline import project
+from core.scene.formats import ReaderError, load_scene, read_mesh, read_scene_file, read_tri
+from core.scene.formats.meshfile import edge_problem, merge_vertices, signed_volume
 from core.paths import SCENES_DIR
 from core.render import render
 from core.transforms import apply
-from core.view import normalizing_transform, problems
+from core.camera.view import normalizing_transform, problems
 
 DATA = Path(__file__).resolve().parent / "data"
 
@@ -588,7 +589,7 @@ def test_sphere_scene_is_the_analytic_unit_sphere():
 
 
 def test_a_missing_file_is_named_once_with_its_reason(tmp_path):
-    from core.formats import ReaderError, load_scene
+    from core.scene.formats import ReaderError, load_scene
     with pytest.raises(ReaderError) as missing:
         load_scene(tmp_path / "nowhere.toml")
     assert str(missing.value) == f"{tmp_path / 'nowhere.toml'}: cannot read it: no such file"

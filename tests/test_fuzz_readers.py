@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 import trimesh.exchange.load  # noqa: F401  (imported before tracing: importing allocates)
 
-from core.formats import ReaderError, read_mesh, read_scene_file, read_tri
+from core.scene.formats import ReaderError, read_mesh, read_scene_file, read_tri
 from core.paths import SCENES_DIR
 
 # Peak memory a reader may take for these small inputs (the inputs are a few KB).

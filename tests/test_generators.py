@@ -1,12 +1,12 @@
-"""The generators (core.generators): closed and outward where closed, counts, exact normals."""
+"""The generators (core.scene.generators): closed and outward where closed, counts, exact normals."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from core import generators as g
-from core.formats.meshfile import edge_problem, signed_volume
+from core.scene import generators as g
+from core.scene.formats.meshfile import edge_problem, signed_volume
 
 
 def directed_edges_pair_up(triangles: np.ndarray) -> bool:

@@ -6,7 +6,7 @@
   drawn, projected to the device, traced and dilated by one pixel (our own Sutherland–Hodgman
   and line tracing here, not the core's).
 - Shading (issue 4): flat, Gouraud and Phong against GLSL shaders implementing the same Phong
-  illumination model (``app/reference_gl.py``): on pixels away from triangle edges and
+  illumination model (``app/tools/reference_gl.py``): on pixels away from triangle edges and
   silhouettes, at most 2/255 per channel.
 
 A failing comparison writes the two images and the difference to ``tests/_failures/``.
@@ -23,15 +23,15 @@ import pytest
 moderngl = pytest.importorskip("moderngl")
 
 from core.render import render                                   # noqa: E402
-from core.scene import Light, Material, Mesh, Scene              # noqa: E402
+from core.scene.model import Light, Material, Mesh, Scene              # noqa: E402
 from core.transforms import apply                                # noqa: E402
-from core.formats import load_scene                              # noqa: E402
+from core.scene.formats import load_scene                              # noqa: E402
 from core.paths import SCENES_DIR                                # noqa: E402
-from core.view import View, normalizing_transform, problems      # noqa: E402
-from app.bench import bench_scene                                # noqa: E402
-from app.reference_gl import GLRenderer, eye_of                  # noqa: E402
-from core.normals import face_normals                             # noqa: E402
-from app.reference_gl import clip_from_world                      # noqa: E402
+from core.camera.view import View, normalizing_transform, problems      # noqa: E402
+from app.tools.bench import bench_scene                                # noqa: E402
+from app.tools.reference_gl import GLRenderer, eye_of                  # noqa: E402
+from core.scene.normals import face_normals                             # noqa: E402
+from app.tools.reference_gl import clip_from_world                      # noqa: E402
 
 FAILURES = Path(__file__).parent / "_failures"
 SIZE = (500, 500)

@@ -9,12 +9,12 @@ import sys
 import numpy as np
 import pytest
 
-from core.generators import house
+from core.scene.generators import house
 from core.paths import ROOT, SCENES_DIR
 from core.plan import plan
 from core.render import render
-from core.scene import Scene
-from core.viewfile import read_views
+from core.scene.model import Scene
+from core.scene.formats.viewfile import read_views
 
 VIEWS_TEXT = (SCENES_DIR / "house.views").read_text()
 

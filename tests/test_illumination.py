@@ -1,5 +1,5 @@
 """The Phong illumination model against hand-computed values, and its numpy and numba forms
-against each other (core/illumination.py).
+against each other (core/shading/illumination.py).
 
 The set-up of most tests: a surface point at the origin with normal +z; material
 k_a = 0.2, k_d = 0.5, k_s = 0.25, n = 10, O_d = (1, 0.5, 0.2), O_s = 1; ambient I_a = 0.2;
@@ -13,9 +13,9 @@ import math
 import numpy as np
 import pytest
 
-from core import illumination as il
-from core.scene import Light, Material
-from core.view import View
+from core.shading import illumination as il
+from core.scene.model import Light, Material
+from core.camera.view import View
 
 OD = np.array([1.0, 0.5, 0.2])
 MATERIAL = Material(ka=0.2, kd=0.5, ks=0.25, n=10.0, od=tuple(OD), os=(1.0, 1.0, 1.0))

@@ -1,4 +1,4 @@
-"""Face and vertex normals (core/normals.py): the notes' averaging rule, its weighted variants,
+"""Face and vertex normals (core/scene/normals.py): the notes' averaging rule, its weighted variants,
 the degenerate vertex whose face normals cancel, and orienting a randomly wound soup."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import itertools
 import numpy as np
 import pytest
 
-from core.normals import (face_normals, orient_consistently, vertex_normals,
+from core.scene.normals import (face_normals, orient_consistently, vertex_normals,
                           vertex_normals_from_faces)
-from core.scene import Mesh
+from core.scene.model import Mesh
 
 CORNERS = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))      # index = 4x + 2y + z
 

@@ -1,4 +1,4 @@
-"""The scan-line z-buffer (core/raster.py): fill rule, watertightness, depth, barycentrics.
+"""The scan-line z-buffer (core/pipeline/raster.py): fill rule, watertightness, depth, barycentrics.
 
 Coverage is counted with ``count_fragments``, which runs the rasterizer's own kernels with a
 counter beside the depth test, so "each pixel exactly once" is a statement about the real code.
@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings, strategies as st
 
-from core import raster
-from core.raster import (SUBPIXEL_ONE, VisibilityBuffer, count_fragments, default_bands,
+from core.pipeline import raster
+from core.pipeline.raster import (SUBPIXEL_ONE, VisibilityBuffer, count_fragments, default_bands,
                          rasterize)
 
 

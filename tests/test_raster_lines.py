@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.raster_lines import draw_lines, line_pixels
+from core.pipeline.raster_lines import draw_lines, line_pixels
 
 
 def midpoint_loop(x0, y0, x1, y1):

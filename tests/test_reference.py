@@ -1,4 +1,4 @@
-"""The exact analytic reference (core/reference.py), and the sphere test of issue 4: the
+"""The exact analytic reference (core/renderers/raycast.py), and the sphere test of issue 4: the
 pipeline's flat, Gouraud and Phong shading against it."""
 
 from __future__ import annotations
@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from core import generators
-from core import illumination as il
-from core.reference import (Sphere, Torus, _quartic_roots, _torus_roots, pack_shapes,
+from core.scene import generators
+from core.shading import illumination as il
+from core.renderers.raycast import (Sphere, Torus, _quartic_roots, _torus_roots, pack_shapes,
                             render_reference)
-from core.scene import Light, Material, Scene
-from core.view import View, ViewError
+from core.scene.model import Light, Material, Scene
+from core.camera.view import View, ViewError
 
 MATERIAL = Material(ka=0.2, kd=0.5, ks=0.25, n=10.0, od=(1.0, 0.5, 0.2))
 OD = np.array(MATERIAL.od)
@@ -131,7 +131,7 @@ def test_front_plane_cuts_the_sphere_open():
 
 def test_nearest_of_two_shapes_and_letterboxing():
     # A small red sphere in front of a big one; a 2:1 window on a square framebuffer leaves
-    # the top and bottom quarter empty (the viewport of core.project).
+    # the top and bottom quarter empty (the viewport of core.pipeline.project).
     red = Material(od=(1.0, 0.0, 0.0), ks=0.0)
     grey = Material(od=(0.5, 0.5, 0.5), ks=0.0)
     view = View(vrp=(0, 0, 0), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-4, 4, -2, 2),

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from core.formats import load_scene
+from core.scene.formats import load_scene
 from core.paths import SCENES_DIR
 from core.plan import plan
 from core.render import render

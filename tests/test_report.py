@@ -1,4 +1,4 @@
-"""The error-against-time sweep (core/accuracy.py) and ``python -m app report`` (app/report.py):
+"""The error-against-time sweep (core/analysis/accuracy.py) and ``python -m app report`` (app/tools/report.py):
 the reduced sweep runs once and must show the expected order of errors."""
 
 from __future__ import annotations
@@ -9,8 +9,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from core import accuracy
-from core.accuracy import Point
+from core.analysis import accuracy
+from core.analysis.accuracy import Point
 
 
 def point(ms, rmse, shading="phong", level=8, samples=1, scene="sphere") -> Point:
@@ -109,7 +109,7 @@ def test_error_falls_with_tessellation_and_samples(quick_points):
 def test_report_command_writes_csv_markdown_and_plot(quick_points, tmp_path, monkeypatch, capsys):
     from PIL import Image
 
-    from app import report
+    from app.tools import report
     monkeypatch.setattr(accuracy, "sweep", lambda config, progress=None: quick_points)
     assert report.main(SimpleNamespace(out=str(tmp_path / "out"), quick=True)) == 0
     folder = tmp_path / "out"
@@ -127,7 +127,7 @@ def test_report_command_writes_csv_markdown_and_plot(quick_points, tmp_path, mon
 
 
 def test_report_refuses_an_unwritable_folder(tmp_path, capsys):
-    from app import report
+    from app.tools import report
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
     assert report.main(SimpleNamespace(out=str(blocker / "sub"), quick=True)) == 2

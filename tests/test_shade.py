@@ -1,4 +1,4 @@
-"""Flat, Gouraud and Phong shading (core/shade.py): the vertex step (prepare) and the per-pixel
+"""Flat, Gouraud and Phong shading (core/shading/shade.py): the vertex step (prepare) and the per-pixel
 resolve on hand-built visibility buffers, then end to end through the real z-buffer."""
 
 from __future__ import annotations
@@ -8,10 +8,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from core import illumination as il
-from core import shade
-from core.scene import Light, Material, Mesh, Scene
-from core.view import View
+from core.shading import illumination as il
+from core.shading import shade
+from core.scene.model import Light, Material, Mesh, Scene
+from core.camera.view import View
 
 RED = Material(ka=0.2, kd=0.6, ks=0.3, n=10.0, od=(1.0, 0.1, 0.1))
 BLUE = Material(ka=0.2, kd=0.6, ks=0.0, n=10.0, od=(0.1, 0.1, 1.0))
@@ -206,9 +206,10 @@ def test_empty_scene_resolves_to_background():
 def render_with_raster(scene: Scene, view: View, projection: str, mode: str, size):
     """Normalize, project, rasterize and resolve (no clipping: the scene lies inside the
     view volume); what core.render does for the solid pipeline, reduced to the minimum."""
-    from core import project, raster
+    from core.pipeline import project
+    from core.pipeline import raster
     from core.transforms import apply
-    from core.view import normalizing_transform
+    from core.camera.view import normalizing_transform
     width, height = size
     n, z_min = normalizing_transform(view, projection)
     s = shade.prepare(mode, scene, shade.eye_from_view(view, projection))

@@ -1,5 +1,5 @@
-"""The stability suite (core/stability.py, the code behind ``python -m app stability``) and the
-exact rational chain it measures against (core/exact.py)."""
+"""The stability suite (core/analysis/stability.py, the code behind ``python -m app stability``) and the
+exact rational chain it measures against (core/analysis/exact.py)."""
 
 from __future__ import annotations
 
@@ -10,15 +10,16 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from core import exact, stability
-from core.view import View, n_par_factors, n_per_factors
+from core.analysis import exact
+from core.analysis import stability
+from core.camera.view import View, n_par_factors, n_per_factors
 
 WORKED = View(vrp=(0, 0, 54), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-1, 17, -1, 17),
               prp=(8, 6, 30), front=10, back=-50)
 F = Fraction
 
 
-# --- core/exact.py against hand values ---------------------------------------------------
+# --- core/analysis/exact.py against hand values ---------------------------------------------------
 
 def test_worked_example_factors_are_exact_fractions():
     f = exact.n_per_factors(WORKED)
@@ -164,7 +165,7 @@ def test_one_pixel_mismatches():
 
 @pytest.mark.slow
 def test_command_prints_the_table_and_json(results, capsys, monkeypatch):
-    from app import stability as command
+    from app.tools import stability as command
     monkeypatch.setattr(stability, "run_suite", lambda progress=None: results)
     assert command.main(SimpleNamespace(json=False)) == 0
     table = capsys.readouterr().out
@@ -175,7 +176,7 @@ def test_command_prints_the_table_and_json(results, capsys, monkeypatch):
 
 
 def test_command_exit_status_is_one_when_a_case_fails(capsys, monkeypatch):
-    from app import stability as command
+    from app.tools import stability as command
     failing = [stability.Result(name="x", expected="y", measured="z", passed=False)]
     monkeypatch.setattr(stability, "run_suite", lambda progress=None: failing)
     assert command.main(SimpleNamespace(json=False)) == 1

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from core import project
+from core.pipeline import project
 from core.transforms import apply
-from core.vertex_kernels import transform_affine, transform_projective
-from core.view import View, normalizing_transform
+from core.pipeline.vertex_kernels import transform_affine, transform_projective
+from core.camera.view import View, normalizing_transform
 
 VIEW = View((16, 0, 54), (1, 0, 1), (-0.17, 0.98, 0.17), (-20, 20, -5, 35), (0, 25, 28.3), 1, -35)
 

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, shear_xy, translate
-from core.view import View, ViewError, check, n_par_factors, n_per_factors, problems, vrc_basis
+from core.camera.view import View, ViewError, check, n_par_factors, n_per_factors, problems, vrc_basis
 
 WORKED = View(vrp=(0, 0, 54), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-1, 17, -1, 17),
               prp=(8, 6, 30), front=10, back=-50, label="worked example")

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from core.paths import SCENES_DIR
-from core.viewfile import read_views
+from core.scene.formats.viewfile import read_views
 
 EXAMPLE = "0 0 54\n0 0 1\n0 1 0\n-1 17 -1 17\n8 6 30\n1 -23\n"
 

@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.state import ViewerState
-from core.generators import house
+from app.viewer.state import ViewerState
+from core.scene.generators import house
 from core.paths import SCENES_DIR
-from core.scene import Scene
-from core.viewfile import read_views
+from core.scene.model import Scene
+from core.scene.formats.viewfile import read_views
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -150,7 +150,7 @@ def test_messages_show_invalid_views_and_the_frame_message(state):
     assert scene.view_messages, "house.views has invalid views that must give messages"
     assert state.messages == [f"invalid view: {m}" for m in scene.view_messages]
     # A view that is valid for one projection only: its frame says why it is blank.
-    from core.view import problems
+    from core.camera.view import problems
     index = next((i for i, v in enumerate(scene.views)
                   if bool(problems(v, "perspective")) != bool(problems(v, "parallel"))), None)
     assert index is not None, "house.views has a view valid for one projection only"
@@ -167,7 +167,7 @@ def test_messages_show_invalid_views_and_the_frame_message(state):
 
 
 def test_compile_notice_only_when_numba_compiles(capsys):
-    from app import state as state_module
+    from app.viewer import state as state_module
 
     state_module._compiling.clear()
     state_module.compile_notice()                 # slow, but loading cached kernels: silent
@@ -180,7 +180,7 @@ def test_compile_notice_only_when_numba_compiles(capsys):
 
 def test_gui_text_keeps_to_the_fonts_characters():
     pytest.importorskip("glfw")
-    from app.window import displayable, shipped_scenes
+    from app.viewer.window import displayable, shipped_scenes
 
     assert displayable("Cohen–Sutherland — “clip” … 1/W ≤ 0 · ok") == \
         'Cohen-Sutherland - "clip" ... 1/W ? 0 . ok'
@@ -307,7 +307,7 @@ def frames(log: str) -> list[dict]:
 def test_no_display_renders_every_view_to_png(state, tmp_path, capsys):
     from PIL import Image
 
-    from app.viewer import render_all_views
+    from app.viewer.launch import render_all_views
     from core.render import render
 
     out = tmp_path / "views"
@@ -387,10 +387,10 @@ def test_window_click_menu_and_keys_under_xvfb(tmp_path):
         assert len(np.unique(cpu.reshape(-1, 3), axis=0)) >= 2, "the saved frame is blank"
         grab = tmp_path / "screen.png"
         if shutil.which("import"):
-            subprocess.run(["import", "-window", app.window, str(grab)], env=app.env,
+            subprocess.run(["import", "-window", app.viewer.window, str(grab)], env=app.env,
                            check=True, timeout=10)
         else:
-            subprocess.run(["xwd", "-id", app.window, "-out", str(grab) + ".xwd"], env=app.env,
+            subprocess.run(["xwd", "-id", app.viewer.window, "-out", str(grab) + ".xwd"], env=app.env,
                            check=True, timeout=10)
             grab = grab.with_suffix(".png.xwd")
         screen = np.asarray(Image.open(grab).convert("RGB"))
@@ -410,11 +410,11 @@ def test_window_click_menu_and_keys_under_xvfb(tmp_path):
 
         # Resizing re-renders at the new framebuffer size (odd sizes too).
         mark = len(app.log())
-        app.xdotool("windowsize", app.window, "333", "217")
+        app.xdotool("windowsize", app.viewer.window, "333", "217")
         app.wait_for(r"frame \d+: view 3 of .* size=333x217", timeout=10, after=mark)
 
         # q quits cleanly (on the key press: xdotool's release may find the window gone).
-        subprocess.run(["xdotool", "key", "--window", app.window, "q"], env=app.env,
+        subprocess.run(["xdotool", "key", "--window", app.viewer.window, "q"], env=app.env,
                        capture_output=True, timeout=10)
         assert app.process.wait(timeout=10) == 0
     finally:

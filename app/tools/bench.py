@@ -1,0 +1,474 @@
+"""``python -m app bench``: our CPU pipeline against real OpenGL in software (issue 5).
+
+Renders a scene (default: a sphere plus a torus at 1k, 10k, 100k and 1M triangles, 500 x 500,
+flat, Gouraud and Phong) two ways in the same run:
+
+- ours: the full CPU pipeline (``core.render.render``: normalize, cull, clip, project, scan-line
+  z-buffer, shade) plus the upload the viewer does each frame (``app.viewer.blit.Blit.upload``, a
+  ``texture.write`` into a moderngl texture; no readback);
+- llvmpipe: :class:`app.tools.reference_gl.GLRenderer` with the equivalent GLSL shaders, geometry
+  uploaded once, each frame timed as draw + ``ctx.finish()`` (the readback is timed apart).
+
+Each case runs ``--warmup`` frames and then ``--frames`` timed ones (at least 20 by default);
+the table gives the median and the min–max in ms, fps, and the ratio ours / llvmpipe. The CPU
+frame's own per-stage times (``Frame.stats["ms"]``) are kept as medians, so the output says
+where the time goes. It also measures the numba JIT's cold and warm start (a fresh process
+rendering one frame with an empty and with the normal cache) and the time from
+``python -m app`` to the first frame shown (the viewer under Xvfb, read from its log).
+
+Writes ``DIR/bench.json`` and a bar chart ``DIR/bench.png``; prints progress to stderr.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from core.paths import ROOT
+
+DEFAULT_SIZES = "1k,10k,100k,1M"
+DEFAULT_SHADINGS = "flat,gouraud,phong"
+SHADINGS = ("flat", "gouraud", "phong")
+
+
+def _count(text: str) -> int:
+    """``"1k"`` → 1000, ``"1M"`` → 1000000, ``"2500"`` → 2500."""
+    text = text.strip()
+    factor = {"k": 1_000, "m": 1_000_000}.get(text[-1:].lower(), 1)
+    digits = text[:-1] if factor > 1 else text
+    try:
+        value = int(float(digits) * factor)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a triangle count: {text!r} (try 1k, 100k, 1M)") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"a triangle count must be positive, not {text!r}")
+    return value
+
+
+def _counts(text: str) -> list[int]:
+    return [_count(part) for part in text.split(",") if part.strip()]
+
+
+def _shadings(text: str) -> list[str]:
+    chosen = [part.strip() for part in text.split(",") if part.strip()]
+    for s in chosen:
+        if s not in SHADINGS:
+            raise argparse.ArgumentTypeError(f"shading must be among {', '.join(SHADINGS)}, not {s!r}")
+    return chosen
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """The bench's options, added to the ``bench`` sub-parser by ``app/cli.py``."""
+    from app.cli import parse_size
+    parser.add_argument("--scene", default=None,
+                        help="a scene file to time instead of the generated sphere + torus "
+                             "(then --sizes is ignored)")
+    parser.add_argument("--sizes", type=_counts, default=_counts(DEFAULT_SIZES),
+                        help=f"triangle counts of the sphere + torus (default {DEFAULT_SIZES})")
+    parser.add_argument("--frames", type=int, default=20, help="timed frames per case (default 20)")
+    parser.add_argument("--warmup", type=int, default=2, help="untimed frames first (default 2)")
+    parser.add_argument("--shading", type=_shadings, default=_shadings(DEFAULT_SHADINGS),
+                        help=f"shading modes (default {DEFAULT_SHADINGS})")
+    parser.add_argument("--projection", choices=("perspective", "parallel"), default="perspective")
+    parser.add_argument("--size", type=parse_size, default=(500, 500),
+                        help="framebuffer WxH (default 500x500)")
+    parser.add_argument("--out", default="out/bench", help="directory for bench.json and bench.png")
+    parser.add_argument("--no-startup", action="store_true",
+                        help="skip the JIT cold/warm start and the first-frame measurements")
+
+
+def _progress(text: str) -> None:
+    print(f"[bench] {text}", file=sys.stderr, flush=True)
+
+
+# ----------------------------------------------------------------------------- scenes
+
+def bench_scene(triangles: int):
+    """The default bench scene: a sphere plus a torus of about ``triangles`` triangles."""
+    from core.scene.generators import sphere_torus
+    return sphere_torus(triangles=triangles)
+
+
+def _scenes(args) -> list:
+    if args.scene:
+        from core.scene.formats import ReaderError, load_scene
+        try:
+            scene = load_scene(args.scene, size=args.size)
+        except ReaderError as error:
+            raise SystemExit(f"error: {error}") from None
+        if not scene.views:
+            raise SystemExit(f"error: {args.scene}: no valid view to time")
+        return [scene]
+    return [bench_scene(n) for n in args.sizes]
+
+
+# ----------------------------------------------------------------------------- timing
+
+def _summary(seconds: list[float], cpu_seconds: list[float]) -> dict:
+    """Wall-time median, min and max in ms; ``cpu_median``: the process's CPU time per frame
+    (all threads), which says how much of the wall time other processes took."""
+    ms = np.asarray(seconds) * 1e3
+    return {"median": float(np.median(ms)), "min": float(ms.min()), "max": float(ms.max()),
+            "frames": len(ms), "cpu_median": float(np.median(cpu_seconds) * 1e3)}
+
+
+def time_ours(scene, projection: str, shading: str, size, frames: int, warmup: int, blit) -> dict:
+    """Full CPU frames plus the viewer's texture upload; per-stage medians from Frame.stats."""
+    from core.render import render
+    totals, cpu, uploads, stages = [], [], [], {}
+    frame = None
+    for k in range(warmup + frames):
+        c0 = time.process_time()
+        t0 = time.perf_counter()
+        frame = render(scene, 0, projection, shading, size)
+        t1 = time.perf_counter()
+        blit.upload(frame.rgbx)
+        t2 = time.perf_counter()
+        if k >= warmup:
+            cpu.append(time.process_time() - c0)
+            totals.append(t2 - t0)
+            uploads.append(t2 - t1)
+            for stage, ms in frame.stats.get("ms", {}).items():
+                stages.setdefault(stage, []).append(ms)
+    result = _summary(totals, cpu)
+    result["upload_ms"] = float(np.median(uploads) * 1e3)
+    result["stages_ms"] = {stage: float(np.median(v)) for stage, v in stages.items()}
+    if frame is not None and frame.message:
+        result["message"] = frame.message
+    return result
+
+
+def time_llvmpipe(renderer, projection: str, shading: str, frames: int, warmup: int) -> dict:
+    """llvmpipe frames: draw + finish timed; the readback timed apart."""
+    draws, cpu, reads = [], [], []
+    for k in range(warmup + frames):
+        c0 = time.process_time()
+        draw, read = renderer.timed_frame(0, projection, shading)
+        if k >= warmup:
+            cpu.append(time.process_time() - c0)     # includes the readback
+            draws.append(draw)
+            reads.append(read)
+    result = _summary(draws, cpu)
+    result["readback_ms"] = float(np.median(reads) * 1e3)
+    return result
+
+
+# ----------------------------------------------------------------------------- start-up
+
+_JIT_PROBE = r"""
+import json, sys, time
+t0 = time.perf_counter()
+from core.render import render
+t_import = time.perf_counter()
+from app.tools.bench import bench_scene
+scene = bench_scene(1000)
+t_scene = time.perf_counter()
+first = {}
+for shading in ("flat", "gouraud", "phong"):
+    t = time.perf_counter()
+    render(scene, 0, "perspective", shading, (500, 500))
+    first[shading] = (time.perf_counter() - t) * 1e3
+t_end = time.perf_counter()
+print(json.dumps({"import_ms": (t_import - t0) * 1e3, "scene_ms": (t_scene - t_import) * 1e3,
+                  "first_frame_ms": first,
+                  "to_first_frame_ms": (t_import - t0 + first["flat"] / 1e3) * 1e3,
+                  "in_process_ms": (t_end - t0) * 1e3}))
+"""
+
+
+def _run_probe(env: dict) -> dict:
+    start = time.perf_counter()
+    done = subprocess.run([sys.executable, "-c", _JIT_PROBE], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=600)
+    wall = (time.perf_counter() - start) * 1e3
+    if done.returncode != 0:
+        raise RuntimeError(done.stderr.strip().splitlines()[-1] if done.stderr.strip() else
+                           f"exit status {done.returncode}")
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    result["process_wall_ms"] = wall
+    return result
+
+
+def jit_start_times() -> dict:
+    """A fresh process importing the core and rendering flat, Gouraud, Phong frames once each.
+
+    cold: ``NUMBA_CACHE_DIR`` is an empty directory, so every kernel compiles;
+    warm: the normal cache, filled by one untimed run first.
+    """
+    result = {}
+    with tempfile.TemporaryDirectory(prefix="fvd-numba-cold-") as empty:
+        env = dict(os.environ, NUMBA_CACHE_DIR=empty)
+        try:
+            result["cold"] = _run_probe(env)
+        except (RuntimeError, subprocess.TimeoutExpired, json.JSONDecodeError) as error:
+            result["cold"] = {"error": str(error)}
+    env = dict(os.environ)
+    try:
+        _run_probe(env)                           # fills the normal cache if it is stale
+        result["warm"] = _run_probe(env)
+    except (RuntimeError, subprocess.TimeoutExpired, json.JSONDecodeError) as error:
+        result["warm"] = {"error": str(error)}
+    return result
+
+
+def _free_display() -> int | None:
+    for number in range(90, 140):
+        if not Path(f"/tmp/.X11-unix/X{number}").exists() and not Path(f"/tmp/.X{number}-lock").exists():
+            return number
+    return None
+
+
+# The viewer logs "first frame shown 0.812 s after process start (0.650 s CPU)".
+_FIRST_FRAME = re.compile(r"first frame.*?([0-9]+(?:\.[0-9]+)?)\s*(ms|s)\b(?:.*?([0-9.]+) s CPU)?",
+                          re.IGNORECASE)
+
+
+def first_frame_time(timeout: float = 60.0, cold: bool = False) -> dict:
+    """Seconds from spawning ``python -m app view`` to the first frame the viewer logs as shown.
+
+    Runs the viewer under a private Xvfb with ``FVD_LOG`` pointing at a temporary file and reads
+    the viewer's own "first frame" line; also gives the wall time until that line appeared.
+    """
+    xvfb = shutil.which("Xvfb")
+    if xvfb is None:
+        return {"measured": False, "reason": "Xvfb is not installed"}
+    display = _free_display()
+    if display is None:
+        return {"measured": False, "reason": "no free X display number"}
+    tmp = Path(tempfile.mkdtemp(prefix="fvd-first-frame-"))
+    log = tmp / "viewer.log"
+    server = subprocess.Popen([xvfb, f":{display}", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    viewer = None
+    try:
+        deadline = time.monotonic() + 10
+        while not Path(f"/tmp/.X11-unix/X{display}").exists():
+            if server.poll() is not None or time.monotonic() > deadline:
+                return {"measured": False, "reason": "Xvfb did not start"}
+            time.sleep(0.05)
+        env = dict(os.environ, DISPLAY=f":{display}", FVD_LOG=str(log))
+        if cold:
+            env["NUMBA_CACHE_DIR"] = str(tmp / "numba-cache")
+        start = time.perf_counter()
+        # stderr to a file: a pipe nobody reads while the viewer runs could fill and stall it
+        errors = (tmp / "viewer.stderr").open("w")
+        viewer = subprocess.Popen([sys.executable, "-m", "app", "view"], cwd=ROOT, env=env,
+                                  stdout=subprocess.DEVNULL, stderr=errors)
+        errors.close()
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            text = log.read_text(errors="replace") if log.exists() else ""
+            match = _FIRST_FRAME.search(text)
+            if match:
+                wall = time.perf_counter() - start
+                value = float(match.group(1)) * (1e-3 if match.group(2).lower() == "ms" else 1.0)
+                return {"measured": True, "logged_s": value, "wall_s": wall,
+                        "cpu_s": float(match.group(3)) if match.group(3) else None,
+                        "line": match.group(0), "cache": "empty" if cold else "normal",
+                        "log": text.splitlines()[:60]}
+            if viewer.poll() is not None:
+                err = (tmp / "viewer.stderr").read_text(errors="replace").strip().splitlines()
+                return {"measured": False, "reason": "the viewer exited before logging a first frame"
+                        + (f": {err[-1]}" if err else f" (status {viewer.returncode})")}
+            time.sleep(0.02)
+        return {"measured": False, "reason": f"no 'first frame' line in FVD_LOG within {timeout:g} s"}
+    finally:
+        for proc in (viewer, server):
+            if proc is not None and proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+                try:
+                    proc.wait(timeout=5)
+                except subprocess.TimeoutExpired:
+                    proc.kill()
+                    proc.wait()
+        shutil.rmtree(tmp, ignore_errors=True)
+
+
+# ----------------------------------------------------------------------------- output
+
+def _ms(stat: dict) -> str:
+    return f"{stat['median']:9.2f} ({stat['min']:.2f}–{stat['max']:.2f})"
+
+
+def format_table(rows: list[dict]) -> str:
+    head = (f"{'scene':<20} {'triangles':>10} {'shading':<8} {'ours ms median (min–max)':>28} "
+            f"{'fps':>7} {'llvmpipe ms median (min–max)':>30} {'ours/llvmpipe':>13} "
+            f"{'CPU ms ours/llvmpipe':>21}")
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(f"{r['scene']:<20} {r['triangles']:>10,} {r['shading']:<8} "
+                     f"{_ms(r['ours']):>28} {r['ours_fps']:>7.1f} {_ms(r['llvmpipe']):>30} "
+                     f"{r['ratio']:>13.2f} "
+                     f"{r['ours']['cpu_median']:>10.1f}/{r['llvmpipe']['cpu_median']:<10.1f}")
+    return "\n".join(lines)
+
+
+def format_stages(rows: list[dict]) -> str:
+    """Where our time goes: the CPU frame's stage medians, largest first, per case."""
+    lines = []
+    for r in rows:
+        stages = sorted(r["ours"]["stages_ms"].items(), key=lambda kv: -kv[1])
+        parts = ", ".join(f"{name} {ms:.2f}" for name, ms in stages)
+        lines.append(f"{r['triangles']:>10,} {r['shading']:<8} upload {r['ours']['upload_ms']:.2f}; {parts} "
+                     f"(llvmpipe readback, not in its time: {r['llvmpipe']['readback_ms']:.2f})")
+    return "\n".join(lines)
+
+
+def format_startup(startup: dict) -> str:
+    lines = []
+    jit = startup.get("jit", {})
+    for key in ("cold", "warm"):
+        probe = jit.get(key)
+        if probe is None:
+            continue
+        if "error" in probe:
+            lines.append(f"JIT {key} start: failed: {probe['error']}")
+            continue
+        firsts = ", ".join(f"{s} {ms:.0f} ms" for s, ms in probe["first_frame_ms"].items())
+        lines.append(f"JIT {key} start: import {probe['import_ms']:.0f} ms, first frames {firsts}; "
+                     f"process wall {probe['process_wall_ms']:.0f} ms")
+    for key in ("first_frame_warm", "first_frame_cold"):
+        ff = startup.get(key)
+        if ff is None:
+            continue
+        label = "python -m app to first frame shown" + (" (empty JIT cache)" if key.endswith("cold") else "")
+        if ff.get("measured"):
+            cpu = f", {ff['cpu_s']:.2f} s CPU" if ff.get("cpu_s") is not None else ""
+            lines.append(f"{label}: {ff['logged_s']:.2f} s after process start as logged{cpu}; "
+                         f"{ff['wall_s']:.2f} s wall until the line appeared")
+        else:
+            lines.append(f"{label}: not measured: {ff['reason']}")
+    return "\n".join(lines)
+
+
+def write_chart(rows: list[dict], path: Path) -> None:
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    labels = [f"{r['triangles']:,}\n{r['shading']}" for r in rows]
+    x = np.arange(len(rows))
+    ours = [r["ours"]["median"] for r in rows]
+    gl = [r["llvmpipe"]["median"] for r in rows]
+    fig, ax = plt.subplots(figsize=(max(6.0, 0.8 * len(rows) + 2), 4.5))
+    width = 0.4
+    for offset, values, key, name in ((-width / 2, ours, "ours", "ours (CPU pipeline + upload)"),
+                                      (width / 2, gl, "llvmpipe", "llvmpipe (OpenGL, draw + finish)")):
+        lo = [v - r[key]["min"] for v, r in zip(values, rows)]
+        hi = [r[key]["max"] - v for v, r in zip(values, rows)]
+        ax.bar(x + offset, values, width, yerr=[lo, hi], capsize=2, label=name)
+    ax.set_yscale("log")
+    ax.set_ylabel("frame time, ms (median, min–max)")
+    ax.set_xticks(x, labels, fontsize=8)
+    # sphere_torus_1000, sphere_torus_10000, ... → sphere_torus
+    scene_names = sorted({re.sub(r"_\d+$", "", r["scene"]) for r in rows})
+    ax.set_title(f"{', '.join(scene_names)}: {rows[0]['size'][0]} x {rows[0]['size'][1]}, "
+                 f"{rows[0]['projection']}, ours vs llvmpipe")
+    ax.legend()
+    ax.grid(axis="y", which="both", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+
+
+# ----------------------------------------------------------------------------- main
+
+def run_cases(scenes: list, shadings: list[str], projection: str, size, frames: int, warmup: int) -> list[dict]:
+    """Every (scene, shading) case, ours and llvmpipe side by side."""
+    from app.viewer.blit import Blit
+    from app.tools.reference_gl import GLRenderer
+
+    gl = GLRenderer(size)
+    blit = Blit(gl.ctx)            # the viewer's upload path, on an EGL context like the window's
+    rows = []
+    try:
+        for scene in scenes:
+            t = time.perf_counter()
+            gl.load(scene, modes=tuple(shadings))
+            _progress(f"{scene.name}: {scene.triangle_count:,} triangles uploaded to llvmpipe "
+                      f"in {time.perf_counter() - t:.2f} s")
+            for shading in shadings:
+                _progress(f"{scene.name} {scene.triangle_count:,} {shading}: ours ...")
+                ours = time_ours(scene, projection, shading, size, frames, warmup, blit)
+                _progress(f"{scene.name} {scene.triangle_count:,} {shading}: llvmpipe ...")
+                ref = time_llvmpipe(gl, projection, shading, frames, warmup)
+                rows.append({"scene": scene.name, "triangles": scene.triangle_count,
+                             "shading": shading, "projection": projection, "size": list(size),
+                             "ours": ours, "ours_fps": 1e3 / ours["median"], "llvmpipe": ref,
+                             "llvmpipe_fps": 1e3 / ref["median"],
+                             "ratio": ours["median"] / ref["median"]})
+                _progress(f"    ours {ours['median']:.2f} ms, llvmpipe {ref['median']:.2f} ms, "
+                          f"ratio {rows[-1]['ratio']:.2f}")
+    finally:
+        blit.release()
+        gl.release()
+    return rows
+
+
+def main(args) -> int:
+    if args.frames < 1 or args.warmup < 0:
+        print("error: --frames must be at least 1 and --warmup at least 0", file=sys.stderr)
+        return 2
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+    load_before = os.getloadavg()
+    _progress("building scenes ...")
+    scenes = _scenes(args)
+    rows = run_cases(scenes, args.shading, args.projection, args.size, args.frames, args.warmup)
+
+    startup = {}
+    if not args.no_startup:
+        _progress("JIT cold and warm start (fresh processes) ...")
+        startup["jit"] = jit_start_times()
+        _progress("python -m app view under Xvfb, to the first frame ...")
+        startup["first_frame_warm"] = first_frame_time()
+        _progress("python -m app view with an empty JIT cache ...")
+        startup["first_frame_cold"] = first_frame_time(cold=True)
+
+    from app.tools.reference_gl import GLRenderer
+    info = {"machine": platform.machine(), "cpus": os.cpu_count(), "python": platform.python_version(),
+            "host": socket.gethostname(), "numpy": np.__version__,
+            # Other processes on a 2-core machine change every number here: keep the load.
+            "loadavg_before": list(load_before), "loadavg_after": list(os.getloadavg())}
+    try:
+        import numba
+        info["numba"] = numba.__version__
+    except ImportError:
+        pass
+    probe = GLRenderer((1, 1))
+    info["gl_renderer"] = probe.renderer_name
+    probe.release()
+
+    report = {"frames": args.frames, "warmup": args.warmup, "cases": rows, "startup": startup,
+              "machine": info, "bench_seconds": time.perf_counter() - t_start}
+    (out / "bench.json").write_text(json.dumps(report, indent=2))
+    write_chart(rows, out / "bench.png")
+
+    print(f"{args.frames} frames after {args.warmup} warm-up, {args.size[0]} x {args.size[1]}, "
+          f"{args.projection}; llvmpipe: {info['gl_renderer']}, {info['cpus']} CPUs; load average "
+          f"{load_before[0]:.1f} before, {info['loadavg_after'][0]:.1f} after")
+    print(format_table(rows))
+    print()
+    print("where our time goes (median ms per stage):")
+    print(format_stages(rows))
+    if startup:
+        print()
+        print(format_startup(startup))
+    print()
+    print(f"wrote {out / 'bench.json'} and {out / 'bench.png'} "
+          f"({time.perf_counter() - t_start:.0f} s in all)")
+    return 0

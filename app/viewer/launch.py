@@ -1,0 +1,158 @@
+"""``python -m app view [SCENE]``: open the viewer window, or render PNGs when there is no display.
+
+``main(scene_source, size)`` loads the scene (the house, ``core.paths.DEFAULT_SCENE``, when
+``scene_source`` is None), prints the reader's invalid-view messages on stderr, and opens
+:class:`app.viewer.window.ViewerWindow`. Without a display (no ``DISPLAY``/``WAYLAND_DISPLAY``, or glfw
+cannot make a window) it says so and renders every view with the scene's default projection
+and shading to PNG files instead (``--out`` dir, else ``$FVD_OUT``, else ``./fvd-views/``),
+naming each file.
+
+Logging: logger ``fvd`` goes to stderr and, when ``$FVD_LOG`` names a file, to that file too
+(the Xvfb test reads it). Start-up time is logged: the window shows its first frame within
+about a second when numba's cache is warm, so heavy modules are imported only when needed.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import time
+from pathlib import Path
+
+log = logging.getLogger("fvd")
+
+DEFAULT_OUT_DIR = "fvd-views"
+
+
+def process_age() -> float:
+    """Seconds since this process started (from /proc where there is one)."""
+    try:
+        with open("/proc/self/stat") as f:
+            # Field 22 is the start time in clock ticks after boot; the command name (field 2)
+            # may contain spaces, so count from the closing parenthesis.
+            start_ticks = int(f.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as f:
+            uptime = float(f.read().split()[0])
+        return max(uptime - start_ticks / os.sysconf("SC_CLK_TCK"), 0.0)
+    except (OSError, ValueError, IndexError):
+        return time.perf_counter() - _IMPORTED_AT
+
+
+_IMPORTED_AT = time.perf_counter()
+
+
+def setup_logging() -> None:
+    """Logger ``fvd`` to stderr, and to ``$FVD_LOG`` when it is set. Idempotent."""
+    if getattr(log, "_fvd_configured", False):
+        return
+    log._fvd_configured = True
+    log.setLevel(logging.INFO)
+    log.propagate = False
+    fmt = logging.Formatter("fvd %(relativeCreated)8.0fms %(message)s")
+    stderr = logging.StreamHandler(sys.stderr)
+    stderr.setFormatter(fmt)
+    log.addHandler(stderr)
+    path = os.environ.get("FVD_LOG")
+    if path:
+        try:
+            handler = logging.FileHandler(path, encoding="utf-8")
+        except OSError as error:
+            print(f"FVD_LOG={path}: cannot write the log: {error}", file=sys.stderr)
+        else:
+            handler.setFormatter(fmt)
+            log.addHandler(handler)
+
+
+def display_available() -> bool:
+    """Is there a display to open a window on? (Windows and macOS always have one.)"""
+    if sys.platform.startswith(("win", "darwin")):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def main(scene_source: str | None, size: tuple[int, int] | None = None,
+         out_dir: str | Path | None = None) -> int:
+    """Open the viewer on ``scene_source`` with a ``size`` framebuffer; 0 on success.
+
+    ``size`` None means the scene's own size (500 x 500 unless it says otherwise).
+    ``out_dir``: where screenshots go (default: the current directory) and, with no display,
+    the per-view PNGs (default ``$FVD_OUT`` or ``./fvd-views``).
+    """
+    setup_logging()
+    started = time.perf_counter() - process_age()
+    from app.viewer.state import ViewerState, reader_errors
+
+    if scene_source is None:
+        from core.paths import DEFAULT_SCENE
+        # Shown in every view's label: relative to the working directory when that is shorter.
+        try:
+            relative = os.path.relpath(DEFAULT_SCENE)
+        except ValueError:                    # another drive (Windows): no relative path
+            relative = ".."
+        scene_source = relative if not relative.startswith("..") else str(DEFAULT_SCENE)
+    try:
+        state = ViewerState.open(scene_source, size=tuple(size) if size else None)
+    except reader_errors() as error:
+        print(f"error: cannot open {scene_source}: {error}", file=sys.stderr)
+        return 2
+    for message in state.scene.view_messages:
+        print(f"invalid view: {message}", file=sys.stderr)
+    log.info("scene %s: %d valid views, %d invalid (%.3f s after process start)",
+             scene_source, state.view_count, len(state.scene.view_messages),
+             time.perf_counter() - started)
+
+    reason = None if display_available() else "DISPLAY and WAYLAND_DISPLAY are not set"
+    if reason is None:
+        try:
+            from app.viewer.window import ViewerWindow, WindowError
+            window = ViewerWindow(state, out_dir=out_dir, started=started)
+        except (WindowError, ImportError) as error:
+            reason = str(error)
+        except Exception as error:           # e.g. moderngl: no OpenGL 3.3 on this display
+            reason = f"{type(error).__name__}: {error}"
+    if reason is not None:
+        return render_all_views(state, out_dir, reason)
+    log.info("window open, %dx%d framebuffer (%.3f s after process start)",
+             state.size[0], state.size[1], time.perf_counter() - started)
+    return window.run()
+
+
+def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:
+    """No display: every view (scene's projection and shading) to a PNG; 0 if all were written."""
+    from PIL import Image
+
+    out = Path(out_dir or os.environ.get("FVD_OUT") or DEFAULT_OUT_DIR)
+    scene = state.scene
+    print(f"no display found ({reason}): rendering the {len(scene.views)} views to PNG in "
+          f"{out}{os.sep} instead", file=sys.stderr)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as error:
+        print(f"error: cannot create {out}: {error}", file=sys.stderr)
+        return 1
+    stem = Path(scene.name).stem or "scene"
+    failed = 0
+    for index in range(len(scene.views)):
+        state.set_view(index)
+        state.update()
+        if state.render_error:
+            print(f"error: view {index + 1}: {state.render_error}", file=sys.stderr)
+            failed += 1
+            continue
+        frame = state.frame
+        if frame.message:
+            print(f"view {index + 1}: {frame.message}", file=sys.stderr)
+        path = out / f"{stem}-view{index + 1:02d}-{state.projection}-{state.shading}.png"
+        try:
+            Image.fromarray(frame.color).save(path)
+        except OSError as error:
+            print(f"error: cannot write {path}: {error}", file=sys.stderr)
+            failed += 1
+            continue
+        log.info("%s", state.frame_summary())
+        print(f"wrote {path}")
+    if not scene.views:
+        print(f"{scene.name}: no valid view to render", file=sys.stderr)
+        return 1
+    return 1 if failed else 0

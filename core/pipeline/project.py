@@ -1,0 +1,101 @@
+"""Projection to the device (FvDFH 6.5.4 and 6.5.6).
+
+Takes canonical-volume points (after N_per / N_par and clipping) and returns device
+coordinates: x to the right and y up in pixels (origin at the framebuffer's bottom-left,
+pixel centres at half-integers), and z in [-1, 0] with larger z nearer.
+
+- Wireframe perspective: ``M_per`` with ``d = -1`` projects onto the back plane, then
+  ``M_vv3dv`` maps the canonical square to the viewport, and the divide by W comes last.
+- Depth for the z-buffer: FvDFH's perspective-to-parallel matrix ``M`` keeps relative depth,
+  lines and planes; after the divide the perspective volume is the parallel one. Parallel
+  views need neither matrix.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core.transforms import scale, translate
+
+
+def m_per(d: float = -1.0) -> np.ndarray:
+    """M_per: perspective projection onto the plane z = d, centre of projection at the origin."""
+    m = np.eye(4)
+    m[3, 2], m[3, 3] = 1.0 / d, 0.0
+    return m
+
+
+def perspective_to_parallel(z_min: float) -> np.ndarray:
+    """FvDFH eq. 6.48: maps the canonical perspective volume onto the parallel one (after /W)."""
+    return np.array([[1.0, 0.0, 0.0, 0.0],
+                     [0.0, 1.0, 0.0, 0.0],
+                     [0.0, 0.0, 1.0 / (1.0 + z_min), -z_min / (1.0 + z_min)],
+                     [0.0, 0.0, -1.0, 0.0]])
+
+
+def m_vv3dv(x_min, x_max, y_min, y_max, z_min=-1.0, z_max=0.0) -> np.ndarray:
+    """``T(x_min, y_min, z_min) · S((x_max-x_min)/2, (y_max-y_min)/2, z_max-z_min) · T(1, 1, 1)``.
+
+    Maps the canonical parallel volume onto the 3D viewport. The defaults keep z as it is, so
+    the z-buffer holds canonical depth in [-1, 0].
+    """
+    return (translate(x_min, y_min, z_min)
+            @ scale((x_max - x_min) / 2, (y_max - y_min) / 2, z_max - z_min)
+            @ translate(1, 1, 1))
+
+
+def viewport(window: tuple[float, float, float, float], width: int, height: int):
+    """The largest whole-pixel rectangle of the view window's aspect, centred in the framebuffer.
+
+    Returns ``(x_min, x_max, y_min, y_max)`` in device pixels. A square window on a square
+    framebuffer fills it; otherwise the picture is letterboxed rather than stretched.
+    """
+    u_min, u_max, v_min, v_max = window
+    aspect = (u_max - u_min) / (v_max - v_min)
+    if width >= height * aspect:
+        w, h = max(1, min(width, round(height * aspect))), height
+    else:
+        w, h = width, max(1, min(height, round(width / aspect)))
+    x0, y0 = (width - w) // 2, (height - h) // 2
+    return float(x0), float(x0 + w), float(y0), float(y0 + h)
+
+
+def divide_by_w(homogeneous: np.ndarray) -> np.ndarray:
+    """``(N, 4)`` → ``(N, 3)``: the homogeneous divide, last step of the chain."""
+    return homogeneous[:, :3] / homogeneous[:, 3:4]
+
+
+def _homogeneous(points: np.ndarray) -> np.ndarray:
+    return np.concatenate([points, np.ones((len(points), 1))], axis=1)
+
+
+def project_lines(points: np.ndarray, projection: str, vp) -> np.ndarray:
+    """Wireframe: canonical ``(N, 3)`` → device ``(N, 3)`` via M_per (perspective), M_vv3dv, /W."""
+    m = m_vv3dv(*vp)
+    if projection == "perspective":
+        m = m @ m_per(-1.0)
+    return divide_by_w(_homogeneous(points) @ m.T)
+
+
+def triangle_matrix(projection: str, z_min: float, vp) -> np.ndarray:
+    """The one matrix that carries canonical points to the device before the divide:
+    ``M_vv3dv · M`` (perspective, M the perspective-to-parallel matrix) or ``M_vv3dv``."""
+    m = m_vv3dv(*vp)
+    if projection == "perspective":
+        m = m @ perspective_to_parallel(z_min)
+    return m
+
+
+def project_triangles(points: np.ndarray, projection: str, z_min: float, vp):
+    """Solids: canonical ``(N, 3)`` → ``(device (N, 3), inv_w (N,))``.
+
+    Perspective goes through the perspective-to-parallel matrix so that depth stays affine in
+    screen space; ``inv_w`` (1/W) lets the rasterizer interpolate attributes perspective-
+    correctly. The clipper guarantees W = -z > 0 for every vertex a triangle uses.
+    (``core.pipeline.vertex_kernels.transform_projective`` is the compiled twin the renderer uses.)
+    """
+    h = _homogeneous(points) @ triangle_matrix(projection, z_min, vp).T
+    # The clipper keeps its input vertex array whole, so vertices no triangle uses may lie
+    # outside the volume, even at the eye (W = 0): they get inv_w = 0 instead of a division.
+    inv_w = np.divide(1.0, h[:, 3], out=np.zeros(len(h)), where=h[:, 3] > 0.0)
+    return h[:, :3] * inv_w[:, None], inv_w

@@ -1,0 +1,353 @@
+"""Mesh files (Wavefront OBJ, PLY, OFF, STL) read through trimesh into a :class:`Mesh`.
+
+Takes the bytes of a mesh file and returns a Mesh: positions (V, 3), triangles (T, 3),
+vertex normals when the file has them, and ``closed`` when every edge is shared by exactly two
+triangles of opposite orientation and the enclosed volume is positive (CCW seen from outside),
+so that back faces may be culled (FvDFH 15.2.4).
+
+Why trimesh and not a parser of our own: it is well kept and already handles the corners of
+these formats that a hand parser gets wrong: OBJ polygons fanned into triangles, negative
+(relative) indices, ``v/vt/vn`` triplets unmerged into vertices that carry their own normal;
+PLY in ASCII and both binary byte orders with any property types; binary and ASCII STL; OFF.
+We call its format loaders (``trimesh.exchange.load.mesh_loaders``) directly instead of
+``trimesh.load(..., force="mesh")``, because turning the loaded scene into one mesh drops the
+normals the file carries (trimesh 4.x); faces that are all k-gons come back from a loader
+untriangulated (trimesh's mesh constructor would fan them), so :func:`fan` does that here.
+trimesh does not validate everything, and some
+malformed input goes through silently (an OBJ face index 0 becomes vertex 1; one vertex line with
+two numbers makes it drop or shift the coordinates of the others; an ASCII PLY whose header
+over-counts its vertices loads the faces as vertices). So a short linear pass checks each
+format's structure first and reports the line, and the result is checked for NaN, infinities,
+coordinates beyond 1e30 and indices out of range.
+Every trimesh exception becomes a :class:`ReaderError` naming the file. Vertices that are equal
+are merged into one by hashing (``np.unique`` on rows), as the course's ``.tri`` reader does.
+"""
+
+from __future__ import annotations
+
+import io
+import re
+import struct
+
+import numpy as np
+
+from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
+                                 tolerant_of_underflow)
+from core.transforms import unit_rows
+from core.scene.model import Mesh
+
+MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl")
+
+
+# ----------------------------------------------------------------------------- mesh helpers
+
+def merge_vertices(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Equal rows of ``points`` become one vertex, numbered in order of first appearance.
+
+    Returns ``(positions, inverse)`` with ``positions[inverse] == points``. Hashing by sorting
+    (``np.unique`` on rows): O(N log N), never the startup code's O(N^2) scan. ``-0.0`` and
+    ``0.0`` are equal, as they are for the C ``==`` of the startup code.
+    """
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3) + 0.0    # -0.0 -> 0.0
+    if len(points) == 0:
+        return points, np.zeros(0, dtype=np.int64)
+    unique, first, inverse = np.unique(points, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")          # sorted rows -> first-appearance order
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return unique[order], rank[inverse.reshape(-1)].astype(np.int64)
+
+
+def fan(polygons: np.ndarray) -> np.ndarray:
+    """``(F, k)`` polygons as ``(F (k - 2), 3)`` triangles fanned from each first corner."""
+    k = polygons.shape[1]
+    if k == 3:
+        return polygons
+    corners = np.arange(1, k - 1)
+    return np.stack([np.repeat(polygons[:, :1], k - 2, axis=1), polygons[:, corners],
+                     polygons[:, corners + 1]], axis=-1).reshape(-1, 3)
+
+
+def edge_problem(triangles: np.ndarray) -> str | None:
+    """Why the triangles are not a closed, consistently wound surface; None when they are.
+
+    Closed and consistent means every directed edge (a, b) occurs exactly once and its
+    opposite (b, a) occurs exactly once too (two neighbours, opposite orientation).
+    """
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if len(t) == 0:
+        return "the mesh has no triangles"
+    directed = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+    if np.any(directed[:, 0] == directed[:, 1]):
+        return "a triangle repeats a vertex"
+    # One int64 key per directed edge (a, b): sorting keys is the hash here.
+    base = int(t.max()) + 1
+    keys, counts = np.unique(directed[:, 0] * base + directed[:, 1], return_counts=True)
+    if np.any(counts > 1):
+        key = int(keys[np.argmax(counts > 1)])
+        return (f"edge ({key // base}, {key % base}) is used twice in the same direction "
+                f"(inconsistent winding)")
+    reverse = (keys % base) * base + keys // base
+    found = np.isin(reverse, keys, assume_unique=True)
+    if not np.all(found):
+        key = int(keys[np.argmin(found)])
+        return f"edge ({key // base}, {key % base}) has no neighbour across it (the surface has a border)"
+    return None
+
+
+def signed_volume(positions: np.ndarray, triangles: np.ndarray) -> float:
+    """Volume enclosed by the triangles, positive when they are wound CCW seen from outside."""
+    p = np.asarray(positions, dtype=np.float64)[np.asarray(triangles, dtype=np.int64)]
+    return float(np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum() / 6.0)
+
+
+def is_closed(positions: np.ndarray, triangles: np.ndarray) -> bool:
+    """Closed, consistently wound and outward facing (positive signed volume)."""
+    return edge_problem(triangles) is None and signed_volume(positions, triangles) > 0.0
+
+
+# ----------------------------------------------------------------------------- pre-checks
+
+_OBJ_INDEX = re.compile(r"[+-]?\d+")
+
+
+def _check_obj(text: str, file: str) -> None:
+    """Line-precise structure check of an OBJ: vertex records and face indices.
+
+    Faces may refer only to vertices that exist (positive indices count from 1, negative ones
+    back from the last vertex defined so far); index 0 does not exist in OBJ.
+    """
+    vertices = 0
+    negative_at = None
+    for number, line in enumerate(text.split("\n"), start=1):
+        fields = line.split("#", 1)[0].split()
+        if not fields:
+            continue
+        key = fields[0]
+        if key in ("v", "vn"):
+            what = "vertex" if key == "v" else "normal"
+            if key == "v" and negative_at is not None:
+                raise ReaderError(file, f"a vertex defined after the negative (relative) index on "
+                                        f"line {negative_at}: the mesh library resolves relative "
+                                        f"indices against the final vertex list, so this file "
+                                        f"would be misread", number)
+            if len(fields) < 4 or (key == "v" and len(fields) not in (4, 5, 7, 8)):
+                raise ReaderError(file, f"a {what} needs 3 coordinates, got {len(fields) - 1}"
+                                  if len(fields) < 4 else
+                                  f"a vertex has 3 coordinates (plus an optional w or RGB), got "
+                                  f"{len(fields) - 1} numbers", number)
+            for token in fields[1:]:
+                try:
+                    value = float(token)
+                except ValueError:
+                    raise ReaderError(file, f"{what} coordinate {short(token)} is not a number",
+                                      number) from None
+                if not np.isfinite(value):
+                    raise ReaderError(file, f"{what} coordinate {short(token)} is NaN or infinite",
+                                      number)
+            vertices += key == "v"
+        elif key == "f":
+            if len(fields) < 4:
+                raise ReaderError(file, f"a face needs at least 3 vertices, got {len(fields) - 1}",
+                                  number)
+            for ref in fields[1:]:
+                index = ref.split("/", 1)[0]
+                if not _OBJ_INDEX.fullmatch(index):
+                    raise ReaderError(file, f"face vertex {short(ref)} is not an index", number)
+                k = int(index)
+                if k == 0 or k > vertices or -k > vertices:
+                    raise ReaderError(file, f"face index {k} is out of range: "
+                                      f"{vertices} vertices are defined before this line "
+                                      f"(indices run 1..{vertices} or -1..-{vertices})", number)
+                if k < 0 and negative_at is None:
+                    negative_at = number
+
+
+_PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
+              "int16": 2, "uint16": 2, "int": 4, "uint": 4, "int32": 4, "uint32": 4,
+              "float": 4, "float32": 4, "double": 8, "float64": 8}
+
+
+def _check_ply(data: bytes, file: str) -> None:
+    """Check a PLY header and that the data after it can hold the element counts it declares.
+
+    The smallest possible row of each element is known from its properties (binary: the bytes
+    of the scalars and of each list's count; ASCII: two characters per value), so a header that
+    promises more rows than the bytes that follow can hold is refused before any reading.
+    """
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise ReaderError(file, "not a PLY file: it must start with 'ply' and have an "
+                                "'end_header' line", 1)
+    newline = data.find(b"\n", end)
+    body = len(data) - (newline + 1 if newline >= 0 else len(data))
+    header = decode_text(data[:end], file)
+    fmt = None
+    elements: list[list] = []                 # [name, count, line, min_row_bytes_or_values]
+    for number, line in enumerate(header.split("\n"), start=1):
+        fields = line.split()
+        if not fields or fields[0] in ("comment", "obj_info", "ply"):
+            continue
+        if fields[0] == "format":
+            if len(fields) < 2 or fields[1] not in ("ascii", "binary_little_endian",
+                                                    "binary_big_endian"):
+                raise ReaderError(file, f"unknown PLY format {' '.join(fields[1:])!r}", number)
+            fmt = fields[1]
+        elif fields[0] == "element":
+            if len(fields) != 3 or not fields[2].isdigit():
+                raise ReaderError(file, "an element line is 'element NAME COUNT' with a whole "
+                                        "number COUNT", number)
+            elements.append([fields[1], int(fields[2]), number, 0])
+        elif fields[0] == "property":
+            if not elements:
+                raise ReaderError(file, "a property before any element", number)
+            types = fields[2:4] if len(fields) >= 5 and fields[1] == "list" else fields[1:2]
+            if len(fields) < 3 or any(t not in _PLY_SIZES for t in types):
+                raise ReaderError(file, f"malformed property line {line.strip()!r}", number)
+            # smallest row: a scalar, or a list with zero items (just its count)
+            elements[-1][3] += _PLY_SIZES[types[0]] if fmt != "ascii" else 2
+        else:
+            raise ReaderError(file, f"unknown PLY header keyword {short(fields[0])}", number)
+    if fmt is None:
+        raise ReaderError(file, "the PLY header has no 'format' line", 1)
+    needed = 0
+    for name, count, number, row in elements:
+        needed += count * row
+        if needed > body:
+            raise ReaderError(file, f"the header says element '{name}' has {count} rows, but "
+                                    f"only {body} bytes of data follow the header (at least "
+                                    f"{needed} needed)", number)
+
+
+def _check_off(text: str, file: str) -> None:
+    """Check the OFF keyword and that the numbers after the counts line can hold V and F."""
+    lines = text.split("\n")
+    rows = [(n, line.split("#", 1)[0].split()) for n, line in enumerate(lines, start=1)]
+    rows = [(n, fields) for n, fields in rows if fields]
+    if not rows or not rows[0][1][0].upper().endswith("OFF"):
+        raise ReaderError(file, "not an OFF file: it must start with 'OFF'", rows[0][0] if rows else 1)
+    number, fields = rows[0]
+    fields = fields[1:]
+    rest = rows[1:]
+    if not fields:
+        if not rest:
+            raise ReaderError(file, "the file ends before the vertex and face counts", number)
+        number, fields = rest[0]
+        rest = rest[1:]
+    if len(fields) < 2 or not all(f.isdigit() for f in fields[:3]):
+        raise ReaderError(file, "the counts line must hold whole numbers 'V F [E]', got "
+                                f"{' '.join(fields)!r}", number)
+    vertices, faces = int(fields[0]), int(fields[1])
+    available = sum(len(f) for _, f in rest)
+    if 3 * vertices + 4 * faces > available:
+        raise ReaderError(file, f"the counts say {vertices} vertices and {faces} faces (at "
+                                f"least {3 * vertices + 4 * faces} numbers), but only "
+                                f"{available} numbers follow", number)
+
+
+def _stl_kind(data: bytes, file: str) -> str:
+    """'binary' when the size matches the binary header's triangle count, else 'ascii'."""
+    if len(data) >= 84:
+        count = struct.unpack_from("<I", data, 80)[0]
+        if len(data) == 84 + 50 * count:
+            return "binary"
+    if data.lstrip()[:5].lower() == b"solid":
+        decode_text(data, file)
+        return "ascii"
+    if len(data) >= 84:
+        count = struct.unpack_from("<I", data, 80)[0]
+        raise ReaderError(file, f"not an STL file: as binary STL its header says {count} "
+                                f"triangles ({84 + 50 * count} bytes) but the file has "
+                                f"{len(data)} bytes; as ASCII STL it would start with 'solid'")
+    raise ReaderError(file, f"not an STL file: {len(data)} bytes, too short for binary STL, "
+                            f"and it does not start with 'solid'")
+
+
+# ----------------------------------------------------------------------------- reader
+
+def _loaded_parts(loaded: dict) -> list[dict]:
+    """The per-geometry kwargs in what a trimesh format loader returns (one mesh or several)."""
+    if "geometry" in loaded:
+        return [g for g in loaded["geometry"].values() if isinstance(g, dict)]
+    return [loaded]
+
+
+@tolerant_of_underflow
+def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
+    """The mesh in ``data``, a file of type ``ext`` (``.obj``, ``.ply``, ``.off``, ``.stl``)."""
+    ext = ext.lower()
+    if ext not in MESH_EXTENSIONS:
+        raise ReaderError(file, f"not a mesh file type we read ({', '.join(MESH_EXTENSIONS)})")
+    if not data.strip():
+        raise ReaderError(file, "the file is empty")
+    if ext == ".obj":
+        _check_obj(decode_text(data, file), file)
+    elif ext == ".ply":
+        _check_ply(data, file)
+    elif ext == ".off":
+        _check_off(decode_text(data, file), file)
+    else:
+        _stl_kind(data, file)
+
+    from trimesh.exchange.load import mesh_loaders       # slow import: only when needed
+
+    try:
+        loaded = mesh_loaders[ext[1:]](io.BytesIO(data))
+    except Exception as error:           # trimesh raises many types; each becomes ours
+        raise ReaderError(file, f"the mesh library could not read it: "
+                                f"{type(error).__name__}: {error}") from None
+    positions, triangles, normals = [], [], []
+    offset = 0
+    for part in _loaded_parts(loaded):
+        try:
+            v = np.asarray(part.get("vertices", np.zeros((0, 3))), dtype=np.float64)
+            f = np.asarray(part.get("faces", np.zeros((0, 3))))
+            if len(f) == 0:
+                continue
+            if v.ndim != 2 or v.shape[1] != 3:
+                raise ValueError(f"vertices have shape {v.shape}, not (V, 3)")
+            if f.ndim != 2 or f.shape[1] < 3 or f.dtype.kind not in "iu":
+                raise ValueError(f"faces have shape {f.shape} and type {f.dtype}, not (T, k) "
+                                 f"integers with k >= 3")
+            f = fan(f)
+        except (TypeError, ValueError) as error:
+            raise ReaderError(file, f"unexpected result from the mesh library: {error}") from None
+        n = part.get("vertex_normals")
+        n = np.asarray(n, dtype=np.float64) if n is not None else None
+        positions.append(v)
+        triangles.append(f.astype(np.int64) + offset)
+        normals.append(n if n is not None and n.shape == v.shape else None)
+        offset += len(v)
+    if not triangles:
+        raise ReaderError(file, "the file holds no triangles")
+    positions = np.concatenate(positions)
+    triangles = np.concatenate(triangles)
+    bad = ~np.all(np.isfinite(positions), axis=1)
+    if np.any(bad):
+        raise ReaderError(file, f"vertex {int(np.argmax(bad))} has a NaN or infinite coordinate")
+    bad = np.any(np.abs(positions) > MAX_COORDINATE, axis=1)
+    if np.any(bad):
+        raise ReaderError(file, f"vertex {int(np.argmax(bad))} has a coordinate beyond "
+                                f"{MAX_COORDINATE:g}")
+    if triangles.min() < 0 or triangles.max() >= len(positions):
+        k = int(np.argmax((triangles < 0).any(axis=1) | (triangles >= len(positions)).any(axis=1)))
+        raise ReaderError(file, f"triangle {k} refers to vertex {triangles[k].tolist()}, but "
+                                f"there are {len(positions)} vertices")
+    vertex_normals = None
+    if all(n is not None for n in normals):
+        vertex_normals = np.concatenate(normals)
+        if np.all(np.isfinite(vertex_normals)):
+            # scaled first, so that a normal of length 1e200 neither overflows nor underflows
+            vertex_normals, lengths = unit_rows(vertex_normals)
+        if not np.all(np.isfinite(vertex_normals)) or np.any(lengths == 0.0):
+            vertex_normals = None                  # unusable: computed from the faces instead
+    # Closed or not is a property of the surface, so it is decided on merged positions even
+    # where the file's per-corner normals keep its vertices apart (a flat-shaded OBJ).
+    merged, inverse = merge_vertices(positions)
+    closed = is_closed(merged, inverse[triangles])
+    if vertex_normals is None:
+        # the file's vertices may repeat (STL always does): one mesh vertex per position
+        positions, triangles = merged, inverse[triangles]
+    return Mesh(positions=positions, triangles=triangles, normals=vertex_normals,
+                closed=closed, name=file_stem(file))
+

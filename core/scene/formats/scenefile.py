@@ -1,0 +1,406 @@
+"""Scene files (TOML, read with the standard library's ``tomllib``) into a :class:`Scene`.
+
+Takes the text of a scene file and the folder its relative paths start from; returns the
+Scene: meshes from mesh files or generators (each with its transform, material and ``closed``
+flag), views (a view file, inline ``[[view]]`` tables, or ``"auto"``), lights, ambient light,
+background and the default shading, projection and specular form. The format is documented in
+the README ("Scene files"); in short::
+
+    name = "Torus"
+    shading = "gouraud"              # wireframe | flat | gouraud | phong
+    views = "auto"                   # or "file.views"; [[view]] tables may follow
+    [[geometry]]
+    generator = "torus"              # or file = "mesh.obj" (relative to this file)
+    params = { R = 1.0, r = 0.35 }
+    transform = { rotate = [-60, 0, 0] }
+    material = { kd = 0.7, od = [0.2, 0.45, 0.85] }
+    [[light]]
+    position = [4, 6, 8]
+
+Every key is checked: an unknown key, a wrong type or a value out of range is a
+:class:`ReaderError` naming the key's path (``geometry[2].material.kd``, tables counted from 1
+as they appear in the file) and its line; TOML syntax errors keep the line tomllib reports.
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import re
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from core.scene import generators
+from core.scene.formats.camera import default_lights, framing_views
+from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, read_file,
+                                 tolerant_of_underflow)
+from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
+                                   signed_volume)
+from core.shading.illumination import SPECULAR_FORMS
+from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
+from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
+from core.camera.view import PROJECTIONS, View, problems
+
+MAX_NUMBER = MAX_COORDINATE
+
+TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
+            "line_color", "views", "view", "geometry", "light")
+GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
+TRANSFORM_KEYS = ("scale", "rotate", "translate")
+MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
+LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
+VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
+TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
+
+Path_ = tuple            # a key path: ("geometry", 2, "material", "kd")
+
+
+def path_text(path: Path_) -> str:
+    """``("geometry", 2, "material", "kd")`` -> ``"geometry[2].material.kd"``."""
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else part)
+    return text
+
+
+class _Reader:
+    """One scene file being read: its name, its text (to find lines), and its folder."""
+
+    def __init__(self, text: str, file: str, folder: Path) -> None:
+        self.text = text
+        self.file = file
+        self.folder = folder
+        self.lines = text.split("\n")
+
+    # ------------------------------------------------------------------ errors and lines
+
+    def fail(self, path: Path_, reason: str) -> ReaderError:
+        where = path_text(path)
+        return ReaderError(self.file, f"{where}: {reason}" if where else reason, self.locate(path))
+
+    def locate(self, path: Path_) -> int | None:
+        """Best-effort line of ``path``: its ``[[table]]`` block, then the key inside it."""
+        start, stop = 0, len(self.lines)
+        keys = list(path)
+        in_block = len(keys) >= 2 and keys[0] in TABLE_ARRAYS and isinstance(keys[1], int)
+        if in_block:
+            name, index = keys[0], keys[1]
+            header = re.compile(rf"\s*\[\[\s*{re.escape(name)}\s*\]\]")
+            starts = [i for i, line in enumerate(self.lines) if header.match(line)]
+            if len(starts) < index:
+                return None
+            start = starts[index - 1]
+            own = re.compile(rf"\s*\[\s*{re.escape(name)}\s*\.")
+            stop = next((i for i in range(start + 1, len(self.lines))
+                         if self.lines[i].lstrip().startswith("[") and not own.match(self.lines[i])),
+                        len(self.lines))
+            keys = keys[2:]
+        elif keys:                            # a top-level key: before the first table
+            stop = next((i for i, line in enumerate(self.lines) if line.lstrip().startswith("[")),
+                        len(self.lines))
+        names = [k for k in keys if isinstance(k, str)]
+        for name in reversed(names):          # the key itself, else the nearest enclosing one
+            key = re.compile(rf"(^|[{{,\s.\[]){re.escape(name)}\s*[=\]]")
+            for i in range(start, stop):
+                if key.search(self.lines[i].split("#", 1)[0]):
+                    return i + 1
+        return start + 1 if in_block else None
+
+    # ------------------------------------------------------------------ typed values
+
+    def table(self, value, path: Path_, allowed: tuple[str, ...]) -> dict:
+        if not isinstance(value, dict):
+            raise self.fail(path, f"expected a table, got {_kind(value)}")
+        for key in value:
+            if key not in allowed:
+                raise self.fail(path + (key,), f"unknown key {key!r} (allowed: {', '.join(allowed)})")
+        return value
+
+    def number(self, value, path: Path_, low: float = -MAX_NUMBER, high: float = MAX_NUMBER,
+               above: float | None = None) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.fail(path, f"expected a number, got {_kind(value)}")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise self.fail(path, f"expected a finite number, got {value}")
+        if not low <= value <= high:
+            raise self.fail(path, f"{value!r} is out of range [{low:g}, {high:g}]")
+        if above is not None and not value > above:
+            raise self.fail(path, f"must be greater than {above:g}, got {value!r}")
+        return float(value)
+
+    def vector(self, value, path: Path_, length: int = 3, low: float = -MAX_NUMBER,
+               high: float = MAX_NUMBER) -> tuple[float, ...]:
+        if not isinstance(value, list) or len(value) != length:
+            raise self.fail(path, f"expected a list of {length} numbers, got {_kind(value)}")
+        return tuple(self.number(v, path + (i + 1,), low, high) for i, v in enumerate(value))
+
+    def string(self, value, path: Path_) -> str:
+        if not isinstance(value, str):
+            raise self.fail(path, f"expected a string, got {_kind(value)}")
+        return value
+
+    def choice(self, value, path: Path_, allowed: tuple[str, ...]) -> str:
+        value = self.string(value, path)
+        if value not in allowed:
+            raise self.fail(path, f"{value!r} is not one of {', '.join(allowed)}")
+        return value
+
+    def boolean(self, value, path: Path_) -> bool:
+        if not isinstance(value, bool):
+            raise self.fail(path, f"expected true or false, got {_kind(value)}")
+        return value
+
+    def tables(self, value, path: Path_) -> list[dict]:
+        if not isinstance(value, list) or not all(isinstance(v, dict) for v in value):
+            raise self.fail(path, f"expected [[{path[-1]}]] tables, got {_kind(value)}")
+        return value
+
+    # ------------------------------------------------------------------ the scene
+
+    def scene(self, size: tuple[int, int] | None) -> Scene:
+        try:
+            doc = tomllib.loads(self.text)
+        except tomllib.TOMLDecodeError as error:
+            last = max(1, self.text.count("\n") + (not self.text.endswith("\n")))
+            raise _toml_error(error, self.file, last) from None
+        except RecursionError:
+            raise ReaderError(self.file, "TOML nesting too deep") from None
+        self.table(doc, (), TOP_KEYS)
+        if "geometry" not in doc:
+            raise self.fail((), "a scene needs at least one [[geometry]] table")
+        meshes, total = [], 0
+        for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
+            meshes.append(self.geometry(g, ("geometry", i + 1)))
+            # Each generator keeps to the limit; the scene as a whole must too, or a short
+            # file listing many big generators could take all the memory.
+            total += len(meshes[-1].triangles)
+            if total > generators.MAX_TRIANGLES:
+                raise self.fail(("geometry", i + 1), f"the scene would have {total} triangles "
+                                f"by here; the limit is {generators.MAX_TRIANGLES}")
+        if not meshes:
+            raise self.fail(("geometry",), "a scene needs at least one [[geometry]] table")
+        points = np.concatenate([m.positions for m in meshes])
+        views, messages = self.views(doc, points)
+        lights = ([self.light(t, ("light", i + 1))
+                   for i, t in enumerate(self.tables(doc["light"], ("light",)))]
+                  if "light" in doc else default_lights(points))
+        scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
+                      meshes=meshes, views=views, view_messages=messages, lights=lights,
+                      source=self.file)
+        for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
+                          ("background", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
+                          ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
+                          ("shading", lambda v, p: self.choice(v, p, SHADINGS)),
+                          ("projection", lambda v, p: self.choice(v, p, PROJECTIONS)),
+                          ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS))):
+            if key in doc:
+                setattr(scene, key, read(doc[key], (key,)))
+        if "size" in doc:
+            w, h = self.vector(doc["size"], ("size",), 2, 1, MAX_IMAGE_SIDE)
+            if w != int(w) or h != int(h):
+                raise self.fail(("size",), "expected whole numbers of pixels")
+            scene.size = (int(w), int(h))
+        if size is not None:
+            scene.size = tuple(size)
+        return scene
+
+    def geometry(self, g, path: Path_) -> Mesh:
+        self.table(g, path, GEOMETRY_KEYS)
+        if ("file" in g) == ("generator" in g):
+            raise self.fail(path, "give exactly one of 'file' or 'generator'")
+        if "params" in g and "generator" not in g:
+            raise self.fail(path + ("params",), "params belong to a generator")
+        mesh = self.mesh_file(g["file"], path + ("file",)) if "file" in g else \
+            self.generate(g["generator"], g.get("params", {}), path)
+        if "transform" in g:
+            mesh = self.transform(mesh, g["transform"], path + ("transform",))
+        if not np.all(np.abs(mesh.positions) <= MAX_NUMBER):
+            raise self.fail(path, f"the geometry reaches coordinates beyond {MAX_NUMBER:g}")
+        if "closed" in g:
+            closed = self.boolean(g["closed"], path + ("closed",))
+            if closed:
+                # decided on merged positions (per-corner normals may keep vertices apart)
+                merged, inverse = merge_vertices(mesh.positions)
+                why = edge_problem(inverse[mesh.triangles])
+                if why is None and signed_volume(merged, inverse[mesh.triangles]) <= 0.0:
+                    why = ("its faces wind inward (signed volume <= 0), so culling would keep "
+                           "the inside")
+                if why is not None:
+                    raise self.fail(path + ("closed",), f"the mesh is not closed: {why}")
+            mesh.closed = closed
+        if "material" in g:
+            mesh.material = self.material(g["material"], path + ("material",), mesh.material)
+        if "name" in g:
+            mesh.name = self.string(g["name"], path + ("name",))
+        return mesh
+
+    def mesh_file(self, value, path: Path_) -> Mesh:
+        name = self.string(value, path)
+        target = self.folder / name
+        ext = target.suffix.lower()
+        if ext not in MESH_EXTENSIONS + (".tri",):
+            raise self.fail(path, f"{name!r}: not a mesh file type we read "
+                                  f"({', '.join(MESH_EXTENSIONS + ('.tri',))})")
+        shown = str(Path(self.file).parent / name)
+        try:
+            data = read_file(target, shown)
+            if ext == ".tri":
+                from core.scene.formats.tri import read_tri_mesh
+                return read_tri_mesh(data, shown)
+            return read_mesh(data, shown, ext)
+        except ReaderError as error:
+            raise ReaderError(error.file, f"{error.reason} (the mesh of {path_text(path[:2])} "
+                                          f"in {self.file})", error.line) from None
+
+    def generate(self, name, params, path: Path_) -> Mesh:
+        name = self.choice(name, path + ("generator",), tuple(generators.GENERATORS))
+        make = generators.GENERATORS[name]
+        params = self.table(params, path + ("params",),
+                            tuple(inspect.signature(make).parameters))
+        try:
+            return make(**params)
+        except (TypeError, ValueError) as error:
+            raise self.fail(path + ("params",), f"{name}: {error}") from None
+
+    def transform(self, mesh: Mesh, value, path: Path_) -> Mesh:
+        """S, then R_x, R_y, R_z (degrees), then T; normals by the inverse transpose."""
+        t = self.table(value, path, TRANSFORM_KEYS)
+        factor = t.get("scale", 1.0)
+        if isinstance(factor, list):
+            s = self.vector(factor, path + ("scale",), 3, -1e6, 1e6)
+        else:
+            s = (self.number(factor, path + ("scale",), -1e6, 1e6),) * 3
+        if any(abs(c) < 1e-6 for c in s):
+            raise self.fail(path + ("scale",), "a scale factor is zero (or below 1e-6 in size)")
+        rx, ry, rz = self.vector(t.get("rotate", [0, 0, 0]), path + ("rotate",), 3, -1e6, 1e6)
+        tx, ty, tz = self.vector(t.get("translate", [0, 0, 0]), path + ("translate",), 3)
+        m = (translate(tx, ty, tz) @ rotate_z(np.radians(rz)) @ rotate_y(np.radians(ry))
+             @ rotate_x(np.radians(rx)) @ scale(*s))
+        mesh.positions = apply(m, mesh.positions)[:, :3]
+        if mesh.normals is not None:
+            normals = mesh.normals @ np.linalg.inv(m[:3, :3])     # rows: n' = M^-T n
+            mesh.normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+        if np.linalg.det(m[:3, :3]) < 0:                          # a mirror turns winding over
+            mesh.triangles = mesh.triangles[:, [0, 2, 1]]
+        return mesh
+
+    def material(self, value, path: Path_, base: Material) -> Material:
+        t = self.table(value, path, MATERIAL_KEYS)
+        fields = {}
+        for key in ("ka", "kd", "ks"):
+            if key in t:
+                fields[key] = self.number(t[key], path + (key,), 0.0, 10.0)
+        if "n" in t:
+            fields["n"] = self.number(t["n"], path + ("n",), 0.0, 1e4, above=0.0)
+        for key in ("od", "os"):
+            if key in t:
+                fields[key] = self.vector(t[key], path + (key,), 3, 0.0, 1.0)
+        return Material(**{**base.__dict__, **fields})
+
+    def light(self, value, path: Path_) -> Light:
+        t = self.table(value, path, LIGHT_KEYS)
+        if ("position" in t) == ("direction" in t):
+            raise self.fail(path, "give exactly one of 'position' (a point light) or "
+                                  "'direction' (towards a directional light)")
+        light = Light(intensity=self.vector(t.get("intensity", [1, 1, 1]), path + ("intensity",),
+                                            3, 0.0, 1e6))
+        if "position" in t:
+            light.position = self.vector(t["position"], path + ("position",))
+        else:
+            light.direction = self.vector(t["direction"], path + ("direction",))
+            if not any(light.direction):
+                raise self.fail(path + ("direction",), "the direction is zero")
+        if "attenuation" in t:
+            light.attenuation = self.vector(t["attenuation"], path + ("attenuation",), 3, 0.0)
+            if not any(light.attenuation):
+                raise self.fail(path + ("attenuation",), "c1, c2 and c3 are all zero")
+        return light
+
+    def views(self, doc: dict, points: np.ndarray) -> tuple[list[View], list[str]]:
+        views: list[View] = []
+        messages: list[str] = []
+        source = doc.get("views", "auto" if "view" not in doc else None)
+        if source is not None:
+            source = self.string(source, ("views",))
+            if source == "auto":
+                views += framing_views(points, self.file)
+            else:
+                shown = str(Path(self.file).parent / source)
+                try:
+                    text = decode_text(read_file(self.folder / source, shown), shown)
+                except ReaderError as error:
+                    raise self.fail(("views",), str(error)) from None
+                from core.scene.formats.viewfile import read_views
+                found, said = read_views(text, shown)
+                views += found
+                messages += said
+        if "view" in doc:
+            for i, t in enumerate(self.tables(doc["view"], ("view",))):
+                view, problem = self.inline_view(t, ("view", i + 1))
+                if problem:
+                    messages.append(problem)
+                else:
+                    views.append(view)
+        return views, messages
+
+    def inline_view(self, value, path: Path_) -> tuple[View, str | None]:
+        t = self.table(value, path, VIEW_KEYS)
+        for key in VIEW_KEYS[1:]:
+            if key not in t:
+                raise self.fail(path, f"missing key {key!r} (a view needs "
+                                      f"{', '.join(VIEW_KEYS[1:])})")
+        label = f"{self.file}: view {path[1]}"
+        if "name" in t:
+            label += f" ({self.string(t['name'], path + ('name',))})"
+        line = self.locate(path)
+        view = View(vrp=self.vector(t["vrp"], path + ("vrp",)),
+                    vpn=self.vector(t["vpn"], path + ("vpn",)),
+                    vup=self.vector(t["vup"], path + ("vup",)),
+                    window=self.vector(t["window"], path + ("window",), 4),
+                    prp=self.vector(t["prp"], path + ("prp",)),
+                    front=self.number(t["front"], path + ("front",)),
+                    back=self.number(t["back"], path + ("back",)),
+                    label=label + (f" (line {line})" if line else ""))
+        found = problems(view)
+        return view, (f"{view.label}: " + "; ".join(found)) if found else None
+
+
+@tolerant_of_underflow
+def read_scene_file(data: bytes | str, file: str, folder: Path | None = None,
+                    size: tuple[int, int] | None = None) -> Scene:
+    """The scene in the TOML text ``data``; relative paths start at ``folder``."""
+    text = decode_text(data, file) if isinstance(data, bytes) else data
+    folder = Path(folder) if folder is not None else Path(file).parent
+    return _Reader(text, file, folder).scene(size)
+
+
+def _toml_error(error: tomllib.TOMLDecodeError, file: str, last_line: int) -> ReaderError:
+    """tomllib's message with its '(at line L, column C)' turned into our FILE:LINE: form."""
+    message = str(error)
+    at = re.search(r"\s*\(at line (\d+), column (\d+)\)", message)
+    if at:
+        return ReaderError(file, f"TOML: {message[:at.start()]} (column {at.group(2)})",
+                           int(at.group(1)))
+    end = re.search(r"\s*\(at end of document\)", message)
+    if end:
+        return ReaderError(file, f"TOML: {message[:end.start()]} (at the end of the file)",
+                           last_line)
+    return ReaderError(file, f"TOML: {message}")
+
+
+def _kind(value) -> str:
+    """How a TOML value is described in a message."""
+    if isinstance(value, bool):
+        return f"a boolean ({str(value).lower()})"
+    if isinstance(value, (int, float)):
+        return f"a number ({value!r})"
+    if isinstance(value, str):
+        return f"a string ({value[:30]!r})"
+    if isinstance(value, list):
+        return f"a list of {len(value)}"
+    if isinstance(value, dict):
+        return "a table"
+    return type(value).__name__
+

@@ -1,0 +1,101 @@
+"""The scene: geometry, views, lights and materials — the one place the viewer's data lives.
+
+Data only; the stages in ``core`` read it and never change it. A :class:`Mesh` is a bag of
+numpy arrays (positions ``(V, 3)``, triangles ``(T, 3)``, edges ``(E, 2)``, optional normals).
+Readers (``core.scene.formats``) and generators (``core.scene.generators``) make these objects.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from core.camera.view import View
+
+SHADINGS = ("wireframe", "flat", "gouraud", "phong")
+MAX_IMAGE_SIDE = 8192       # pixels, either side of a framebuffer any input may ask for
+
+
+@dataclass
+class Material:
+    """Phong material per mesh: ``k_a, k_d, k_s``, exponent ``n`` and diffuse colour ``O_d``."""
+
+    ka: float = 0.2
+    kd: float = 0.7
+    ks: float = 0.3
+    n: float = 20.0
+    od: tuple[float, float, float] = (0.8, 0.8, 0.8)
+    # Specular colour O_s; FvDFH 16.1.5 uses the light's colour (O_s = 1) for plastics.
+    os: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+
+@dataclass
+class Light:
+    """A point light (``position``) or a directional one (``direction`` towards the light)."""
+
+    intensity: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    position: tuple[float, float, float] | None = None
+    direction: tuple[float, float, float] | None = None
+    attenuation: tuple[float, float, float] = (1.0, 0.0, 0.0)   # c1, c2, c3
+
+
+@dataclass(eq=False)          # identity: meshes hold arrays and key the render caches
+class Mesh:
+    """Triangles and/or line edges over one vertex array.
+
+    ``closed`` says the mesh is closed and consistently wound (counter-clockwise seen from
+    outside), so back faces may be culled and lighting is one-sided; an open soup is lit from
+    both sides.
+    """
+
+    positions: np.ndarray                                   # (V, 3) float64, world
+    triangles: np.ndarray = field(default_factory=lambda: np.zeros((0, 3), np.int64))
+    edges: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    normals: np.ndarray | None = None                       # (V, 3) from the file, if any
+    closed: bool = False
+    material: Material = field(default_factory=Material)
+    name: str = "mesh"
+
+    def __post_init__(self) -> None:
+        self.positions = np.ascontiguousarray(self.positions, dtype=np.float64).reshape(-1, 3)
+        self.triangles = np.ascontiguousarray(self.triangles, dtype=np.int64).reshape(-1, 3)
+        self.edges = np.ascontiguousarray(self.edges, dtype=np.int64).reshape(-1, 2)
+        if self.normals is not None:
+            self.normals = np.ascontiguousarray(self.normals, dtype=np.float64).reshape(-1, 3)
+
+    def all_edges(self) -> np.ndarray:
+        """The line edges plus every triangle edge once (for wireframe drawing)."""
+        t = self.triangles
+        tri_edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+        both = np.concatenate([self.edges, tri_edges])
+        if len(both) == 0:
+            return both
+        return np.unique(np.sort(both, axis=1), axis=0)
+
+
+@dataclass(eq=False)          # identity: a scene keys the render caches
+class Scene:
+    """Everything one scene file describes.
+
+    ``view_messages`` holds the reader's message for every view it rejected; the valid views
+    are in ``views``. ``shading`` and ``projection`` are the scene's defaults.
+    """
+
+    name: str
+    meshes: list[Mesh]
+    views: list[View]
+    view_messages: list[str] = field(default_factory=list)
+    lights: list[Light] = field(default_factory=lambda: [Light(position=(0.0, 0.0, 100.0))])
+    ambient: tuple[float, float, float] = (0.2, 0.2, 0.2)         # I_a
+    background: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    line_color: tuple[float, float, float] = (1.0, 1.0, 1.0)      # wireframe colour
+    shading: str = "flat"
+    projection: str = "perspective"
+    specular: str = "reflect"             # "reflect": (R.V)^n; "halfway": (N.H)^n
+    size: tuple[int, int] = (500, 500)    # preferred framebuffer size, width x height
+    source: str = ""                      # file the scene came from
+
+    @property
+    def triangle_count(self) -> int:
+        return sum(len(m.triangles) for m in self.meshes)

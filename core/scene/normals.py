@@ -1,0 +1,192 @@
+"""Face and vertex normals for shading (FvDFH 16.2.4; the notes: "approximate the normal at a
+vertex by averaging all normals of abutting triangles").
+
+Takes a mesh's world positions ``(V, 3)`` and triangles ``(T, 3)``; returns unit normals.
+
+- :func:`face_normals`: ``(p1 − p0) × (p2 − p0)`` normalised (counter-clockwise = outward) and
+  twice each face's area. A zero-area face has the zero normal and contributes nothing.
+- :func:`vertex_normals_from_faces`: the average of the faces meeting at each vertex,
+  ``weighting`` named:
+    ``"mean"``  — the notes' rule: the unweighted average of the unit face normals;
+    ``"area"``  — weighted by face area (the sum of the raw cross products);
+    ``"angle"`` — weighted by the face's interior angle at the vertex (Thürmer and Wüthrich),
+  independent of how a surface happens to be split into triangles.
+  Degenerate case: where the weighted sum vanishes (faces whose normals cancel, e.g. a sheet
+  folded flat onto itself at a vertex; ``|sum| <= 1e-9 · Σ weights``) the vertex takes the
+  normal of its largest incident face instead, so it is never NaN. A vertex with no face of
+  non-zero area gets the zero normal (the model then gives it ambient light only).
+- :func:`orient_consistently`: flips triangles of an open soup (arbitrary winding, as in the
+  ``.tri`` files) so that faces sharing an edge agree, one connected piece at a time; without
+  it averaging a randomly wound soup cancels normals instead of smoothing them. The sign of a
+  whole piece stays arbitrary: two-sided lighting (:mod:`core.shading.illumination`) turns it to the
+  viewer.
+- :func:`vertex_normals`: what Gouraud and Phong shading use for a :class:`core.scene.Mesh`:
+  the file's normals when it has them (normalised; a zero one is replaced by the computed
+  normal), else the faces' average, after :func:`orient_consistently` for meshes that are not
+  closed. The GL oracle (``app/tools/reference_gl.py``) calls it too, so both draw with the same
+  normals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from core.transforms import unit_rows
+
+WEIGHTINGS = ("mean", "area", "angle")
+# A vertex's weighted normal sum this small against the weights counts as cancelled.
+CANCEL_TOLERANCE = 1e-9
+
+
+def face_normals(positions: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(unit normals (T, 3), twice the areas (T,))``; zero-area faces get the zero normal."""
+    p = np.asarray(positions, dtype=np.float64)
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    with np.errstate(under="ignore"):
+        cross = np.cross(p[t[:, 1]] - p[t[:, 0]], p[t[:, 2]] - p[t[:, 0]]).reshape(-1, 3)
+        unit, double_area = unit_rows(cross)
+    return unit, double_area
+
+
+def _corner_angles(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """``(T, 3)``: the interior angle of each triangle at each of its corners."""
+    angles = np.zeros(triangles.shape)
+    with np.errstate(under="ignore"):
+        for k in range(3):
+            corner = positions[triangles[:, k]]
+            a = positions[triangles[:, (k + 1) % 3]] - corner
+            b = positions[triangles[:, (k + 2) % 3]] - corner
+            # atan2(|a x b|, a.b) is accurate at every angle, unlike acos of a cosine.
+            sin_part = np.linalg.norm(np.cross(a, b).reshape(-1, 3), axis=1)
+            angles[:, k] = np.arctan2(sin_part, np.einsum("ij,ij->i", a, b))
+    return angles
+
+
+@njit(cache=True)
+def _largest_incident_face(triangles, double_area, vertex_count):
+    """For each vertex the incident face of largest area (-1 if it has none of area > 0)."""
+    best = np.full(vertex_count, -1, dtype=np.int64)
+    best_area = np.zeros(vertex_count)
+    for f in range(triangles.shape[0]):
+        for k in range(3):
+            i = triangles[f, k]
+            if double_area[f] > best_area[i]:
+                best_area[i] = double_area[f]
+                best[i] = f
+    return best
+
+
+def vertex_normals_from_faces(positions: np.ndarray, triangles: np.ndarray,
+                              weighting: str = "mean") -> np.ndarray:
+    """``(V, 3)`` unit vertex normals averaged from the faces (see the module docstring)."""
+    if weighting not in WEIGHTINGS:
+        raise ValueError(f"weighting must be one of {WEIGHTINGS}, not {weighting!r}")
+    p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    v_count = len(p)
+    unit, double_area = face_normals(p, t)
+    if weighting == "area":
+        weights = np.repeat(double_area[:, None], 3, axis=1)
+    elif weighting == "angle":
+        weights = _corner_angles(p, t)
+    else:
+        weights = np.repeat((double_area > 0.0).astype(np.float64)[:, None], 3, axis=1)
+    sums = np.zeros((v_count, 3))
+    total_weight = np.zeros(v_count)
+    with np.errstate(under="ignore"):
+        for k in range(3):
+            for c in range(3):
+                sums[:, c] += np.bincount(t[:, k], weights=unit[:, c] * weights[:, k],
+                                          minlength=v_count)
+            total_weight += np.bincount(t[:, k], weights=weights[:, k] * (double_area > 0.0),
+                                        minlength=v_count)
+        normals, length = unit_rows(sums)
+    cancelled = (length <= CANCEL_TOLERANCE * total_weight) & (total_weight > 0.0)
+    if np.any(cancelled):
+        best = _largest_incident_face(t, double_area, v_count)
+        normals[cancelled] = unit[best[cancelled]]
+    return normals
+
+
+@njit(cache=True)
+def _orient_pieces(triangle_count, start, neighbour, same_direction):
+    """Breadth-first over faces sharing an edge: ``flip[f]`` so that neighbours agree.
+
+    ``same_direction[j]`` says face f and ``neighbour[j]`` run their shared edge the same
+    way (inconsistent winding), so one of them must flip relative to the other.
+    """
+    flip = np.zeros(triangle_count, dtype=np.bool_)
+    seen = np.zeros(triangle_count, dtype=np.bool_)
+    queue = np.empty(triangle_count, dtype=np.int64)
+    for seed in range(triangle_count):
+        if seen[seed]:
+            continue
+        seen[seed] = True
+        head, tail = 0, 1
+        queue[0] = seed
+        while head < tail:
+            f = queue[head]
+            head += 1
+            for j in range(start[f], start[f + 1]):
+                g = neighbour[j]
+                if not seen[g]:
+                    seen[g] = True
+                    flip[g] = flip[f] != same_direction[j]
+                    queue[tail] = g
+                    tail += 1
+    return flip
+
+
+def orient_consistently(triangles: np.ndarray) -> np.ndarray:
+    """A copy of ``triangles`` in which faces sharing an edge wind it in opposite directions.
+
+    Only manifold edges (exactly two faces) link faces; each connected piece keeps the
+    winding of its lowest-numbered face. A non-orientable piece keeps the first choice met.
+    """
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    count = len(t)
+    if count == 0:
+        return t.copy()
+    a = t.reshape(-1)                                        # edge k of face f: (t[f,k], t[f,k+1])
+    b = t[:, [1, 2, 0]].reshape(-1)
+    face = np.repeat(np.arange(count), 3)
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    forward = a < b
+    order = np.lexsort((high, low))
+    low, high, forward, face = low[order], high[order], forward[order], face[order]
+    same_as_next = (low[:-1] == low[1:]) & (high[:-1] == high[1:])
+    # An edge shared by exactly two faces: a run of length 2 in the sorted edge list.
+    run_start = np.ones(len(low), dtype=bool)
+    run_start[1:] = ~same_as_next
+    run_id = np.cumsum(run_start) - 1
+    run_length = np.bincount(run_id)
+    first = np.flatnonzero(run_start & (run_length[run_id] == 2))
+    f0, f1 = face[first], face[first + 1]
+    same = forward[first] == forward[first + 1]
+    keep = f0 != f1                                          # a face using an edge twice
+    f0, f1, same = f0[keep], f1[keep], same[keep]
+    # Adjacency in compressed rows, both directions.
+    src = np.concatenate([f0, f1])
+    dst = np.concatenate([f1, f0])
+    same2 = np.concatenate([same, same])
+    by_src = np.argsort(src, kind="stable")
+    start = np.zeros(count + 1, dtype=np.int64)
+    start[1:] = np.cumsum(np.bincount(src, minlength=count))
+    flip = _orient_pieces(count, start, dst[by_src], same2[by_src])
+    out = t.copy()
+    out[flip] = out[flip][:, [0, 2, 1]]
+    return out
+
+
+def vertex_normals(mesh, weighting: str = "mean") -> np.ndarray:
+    """``(V, 3)``: the vertex normals Gouraud and Phong shading use for ``mesh``."""
+    triangles = mesh.triangles if mesh.closed else orient_consistently(mesh.triangles)
+    if mesh.normals is not None and len(mesh.normals) == len(mesh.positions):
+        with np.errstate(under="ignore", over="ignore"):
+            given, length = unit_rows(np.asarray(mesh.normals, dtype=np.float64))
+        missing = ~(length > 0.0)
+        if np.any(missing):
+            given[missing] = vertex_normals_from_faces(mesh.positions, triangles, weighting)[missing]
+        return given
+    return vertex_normals_from_faces(mesh.positions, triangles, weighting)

@@ -1,0 +1,2 @@
+"""Shading: the Phong illumination model (once) and the shading modes that evaluate it.
+"""

@@ -1,0 +1,300 @@
+"""The Phong illumination model (FvDFH 16.1–16.2; the notes of March 12–19, "Phong Illumination Model").
+
+At a surface point ``P`` (world coordinates) with unit normal ``N``, per RGB channel λ:
+
+    I_λ = I_aλ k_a O_dλ + Σ_lights f_att I_pλ [k_d O_dλ max(N·L, 0) + k_s O_sλ max(R·V, 0)^n]
+
+with ``R = 2 (N·L) N − L`` the mirror direction of ``L``, ``V`` the unit vector from ``P`` to the
+viewer, ``f_att = min(1, 1 / (c1 + c2 d + c3 d²))`` for a point light at distance ``d`` and
+``f_att = 1`` for a directional light. ``specular = "halfway"`` replaces ``(R·V)^n`` by
+``(N·H)^n`` with ``H = (L + V) / |L + V|`` (the notes: "Rather than calculating R, the halfway
+vector is used"). The result is clamped to [0, 1] per channel.
+
+The same formula exists twice, kept identical operation by operation (a test holds them to
+each other):
+
+- :func:`illuminate` — numpy, vectorised over N points: the formula as array expressions,
+  the readable statement of the model that the numba form is held to;
+- :func:`phong_point` — numba, one point; called from the compiled kernels of
+  :mod:`core.shading.shade` (per face for flat, per vertex for Gouraud, per pixel for Phong, with the same
+  result as the numpy form bit for bit) and of
+  :mod:`core.renderers.raycast` (the exact reference).
+
+Both read the scene through small float arrays that numba can take:
+
+- ``surfaces`` ``(M, 11)`` from :func:`pack_surfaces`: one row per mesh: ``k_a, k_d, k_s, n,
+  O_d (3), O_s (3), two_sided``; a triangle or vertex names its row (mixed materials).
+- ``lights`` ``(L, 10)`` from :func:`pack_lights`: ``kind`` (0 point, 1 directional), the
+  position or the unit direction towards the light (3), ``I_p`` (3), ``c1, c2, c3``.
+- ``ambient`` ``(3,)``: ``I_a``.
+- ``eye`` ``(4,)`` from :func:`pack_eye`: ``kind`` (1 a point: perspective, V = (PRP − P)/|…|;
+  0 a direction: parallel, V constant = −DOP/|DOP|) and the point or the direction.
+  :func:`eye_from_view` finds both from a :class:`core.camera.view.View`.
+
+Decisions that keep every output finite (the stability suite of issue 6 checks them):
+
+- two-sided lighting (meshes that are not closed): ``N`` is flipped when ``N·V < 0``, so the
+  side the viewer sees is the lit one whatever the winding;
+- a point light at distance 0 from ``P``: ``L`` is undefined; the light adds no diffuse or
+  specular term there (the limit of the grazing light on the points around it), only ambient;
+- ``P`` exactly at the eye (perspective): ``V`` is undefined; ``V = N`` is used;
+- ``L + V = 0`` in the halfway form: ``H`` is undefined; no specular term;
+- no specular term where ``N·L <= 0`` (the light is behind the surface);
+- the specular base is clamped to [0, 1] before ``^n``: exponents like 1e4 underflow to 0
+  instead of overflowing, and rounding above 1 cannot blow up;
+- ``c1 + c2 d + c3 d² <= 1`` (including all-zero coefficients) gives ``f_att = 1``; no division
+  by zero;
+- a zero normal (a vertex that has no non-degenerate face) gets ambient only;
+- vectors are normalised after dividing by their largest component, so tiny or huge
+  coordinates neither underflow nor overflow in the squares;
+- the numpy form ignores underflow (a term below 1e-308 is 0 for an 8-bit image) and overflow
+  (a light of 1e308 saturates to white): both only ever produce 0 or +inf in sums of
+  non-negative terms, which the clamp maps to 0 and 1. Invalid operations still raise.
+
+:func:`to_uint8` turns [0, 1] into bytes: ``floor(255 c + 0.5)``, i.e. rounded half up
+(0.5/255 → 1), the same rule as ``core.render.to_rgb8`` and the numba kernels' ``quantize``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from core.camera.view import View, vrc_basis
+from core.transforms import unit_rows  # noqa: F401  (re-exported: the model's row form)
+
+# Columns of a packed surface row (pack_surfaces).
+KA, KD, KS, EXPONENT, OD, OS, TWO_SIDED = 0, 1, 2, 3, 4, 7, 10
+SURFACE_COLUMNS = 11
+# Columns of a packed light row (pack_lights).
+LIGHT_KIND, LIGHT_XYZ, LIGHT_INTENSITY, LIGHT_ATTENUATION = 0, 1, 4, 7
+LIGHT_COLUMNS = 10
+POINT_LIGHT, DIRECTIONAL_LIGHT = 0.0, 1.0
+# eye[0]: the viewer is a point (perspective) or a direction (parallel).
+EYE_DIRECTION, EYE_POINT = 0.0, 1.0
+SPECULAR_FORMS = ("reflect", "halfway")
+
+
+class Eye(NamedTuple):
+    """Where the viewer is, in world coordinates: ``point`` (perspective: the PRP) or
+    ``direction`` (parallel: the unit vector towards the viewer, −DOP/|DOP|); the other is None."""
+
+    point: np.ndarray | None
+    direction: np.ndarray | None
+
+
+def eye_from_view(view: View, projection: str) -> Eye:
+    """The viewer of ``view`` in world coordinates (FvDFH 6.5: PRP and DOP are given in VRC).
+
+    Perspective: the PRP, ``VRP + prp_u u + prp_v v + prp_n n``. Parallel: the direction
+    opposite the DOP, ``DOP = CW − PRP`` with ``CW`` the centre of the window, turned into
+    world coordinates by the VRC basis and normalised.
+    """
+    u, v, n = vrc_basis(view)
+    prp = np.asarray(view.prp, dtype=np.float64)
+    if projection == "perspective":
+        return Eye(np.asarray(view.vrp, dtype=np.float64) + prp[0] * u + prp[1] * v + prp[2] * n,
+                   None)
+    if projection == "parallel":
+        u_min, u_max, v_min, v_max = view.window
+        dop = np.array([(u_min + u_max) / 2, (v_min + v_max) / 2, 0.0]) - prp
+        toward_viewer = -(dop[0] * u + dop[1] * v + dop[2] * n)
+        return Eye(None, toward_viewer / np.linalg.norm(toward_viewer))
+    raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
+
+
+def pack_eye(eye: Eye) -> np.ndarray:
+    """``(4,)``: ``[EYE_POINT, x, y, z]`` or ``[EYE_DIRECTION, unit direction]``."""
+    if eye.point is not None:
+        return np.array([EYE_POINT, *np.asarray(eye.point, dtype=np.float64)])
+    direction = np.asarray(eye.direction, dtype=np.float64)
+    length = np.linalg.norm(direction)
+    if not length > 0.0:
+        raise ValueError("the direction towards the viewer is zero")
+    return np.array([EYE_DIRECTION, *(direction / length)])
+
+
+def pack_surfaces(materials, two_sided) -> np.ndarray:
+    """``(M, 11)`` rows ``k_a, k_d, k_s, n, O_d, O_s, two_sided`` from ``M`` materials.
+
+    ``two_sided[i]`` is true for a mesh that is not closed (lit from both sides).
+    """
+    rows = np.zeros((len(materials), SURFACE_COLUMNS))
+    for i, (m, sided) in enumerate(zip(materials, two_sided)):
+        rows[i, KA], rows[i, KD], rows[i, KS], rows[i, EXPONENT] = m.ka, m.kd, m.ks, m.n
+        rows[i, OD:OD + 3] = m.od
+        rows[i, OS:OS + 3] = m.os
+        rows[i, TWO_SIDED] = 1.0 if sided else 0.0
+    return rows
+
+
+def pack_lights(lights) -> np.ndarray:
+    """``(L, 10)`` rows ``kind, position | unit direction, I_p (3), c1, c2, c3``.
+
+    Raises ValueError for a light with neither position nor a non-zero direction.
+    """
+    rows = np.zeros((len(lights), LIGHT_COLUMNS))
+    for i, light in enumerate(lights):
+        if light.position is not None:
+            rows[i, LIGHT_KIND] = POINT_LIGHT
+            rows[i, LIGHT_XYZ:LIGHT_XYZ + 3] = light.position
+        else:
+            direction = np.asarray(light.direction if light.direction is not None else (0, 0, 0),
+                                   dtype=np.float64)
+            length = np.linalg.norm(direction)
+            if not length > 0.0:
+                raise ValueError(f"light {i + 1}: it has no position and no direction")
+            rows[i, LIGHT_KIND] = DIRECTIONAL_LIGHT
+            rows[i, LIGHT_XYZ:LIGHT_XYZ + 3] = direction / length
+        rows[i, LIGHT_INTENSITY:LIGHT_INTENSITY + 3] = light.intensity
+        rows[i, LIGHT_ATTENUATION:LIGHT_ATTENUATION + 3] = light.attenuation
+    return rows
+
+
+def pack_ambient(ambient) -> np.ndarray:
+    return np.asarray(ambient, dtype=np.float64).reshape(3)
+
+
+def to_uint8(rgb) -> np.ndarray:
+    """Colours in [0, 1] (clamped first) → uint8, rounded half up: ``floor(255 c + 0.5)``."""
+    return np.floor(np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+
+
+# --------------------------------------------------------------------------------------------
+# numba: one point
+
+
+@njit(cache=True)
+def unit3(x, y, z):
+    """``(x, y, z) / |(x, y, z)|`` and the length; the zero vector gives ``(0, 0, 0, 0)``.
+
+    Divides by the largest component first so the squares neither underflow nor overflow.
+    """
+    m = max(abs(x), abs(y), abs(z))
+    if not m > 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    inv_m = 1.0 / m                   # one division and three products: this runs per pixel
+    x, y, z = x * inv_m, y * inv_m, z * inv_m
+    s = math.sqrt(x * x + y * y + z * z)
+    inv_s = 1.0 / s
+    return x * inv_s, y * inv_s, z * inv_s, m * s
+
+
+@njit(cache=True)
+def specular_power(base, n):
+    """``max(base, 0)^n`` with the base clamped to [0, 1] (no overflow for any n >= 0)."""
+    return min(max(base, 0.0), 1.0) ** n
+
+
+@njit(cache=True)
+def quantize(c):
+    """One channel in [0, 1] (clamped) → 0..255, rounded half up (see :func:`to_uint8`)."""
+    return np.uint8(math.floor(min(max(c, 0.0), 1.0) * 255.0 + 0.5))
+
+
+@njit(cache=True)
+def phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfway):
+    """The model at world point P with unit (or zero) normal N for surface row ``s``.
+
+    Returns ``(r, g, b)`` clamped to [0, 1]. The numba twin of :func:`illuminate`.
+    """
+    ka, kd, ks, n = surfaces[s, KA], surfaces[s, KD], surfaces[s, KS], surfaces[s, EXPONENT]
+    # V: towards the PRP (perspective) or the constant direction towards the viewer (parallel).
+    if eye[0] == EYE_POINT:
+        vx, vy, vz, dist = unit3(eye[1] - px, eye[2] - py, eye[3] - pz)
+        if dist == 0.0:                 # P at the eye: V undefined, look along the normal
+            vx, vy, vz = nx, ny, nz
+    else:
+        vx, vy, vz = eye[1], eye[2], eye[3]
+    # Two-sided lighting: the side the viewer sees is the lit side.
+    if surfaces[s, TWO_SIDED] != 0.0 and nx * vx + ny * vy + nz * vz < 0.0:
+        nx, ny, nz = -nx, -ny, -nz
+    r = ambient[0] * ka * surfaces[s, OD]
+    g = ambient[1] * ka * surfaces[s, OD + 1]
+    b = ambient[2] * ka * surfaces[s, OD + 2]
+    for k in range(lights.shape[0]):
+        if lights[k, LIGHT_KIND] == POINT_LIGHT:
+            lx, ly, lz, d = unit3(lights[k, 1] - px, lights[k, 2] - py, lights[k, 3] - pz)
+            if d == 0.0:                # light on the surface point: L undefined, ambient only
+                continue
+            den = lights[k, 7] + lights[k, 8] * d + lights[k, 9] * d * d
+            f_att = 1.0 if den <= 1.0 else 1.0 / den
+        else:
+            lx, ly, lz = lights[k, 1], lights[k, 2], lights[k, 3]
+            f_att = 1.0
+        n_dot_l = nx * lx + ny * ly + nz * lz
+        if not n_dot_l > 0.0:           # light behind the surface: no diffuse, no specular
+            continue
+        if halfway:
+            hx, hy, hz, h_len = unit3(lx + vx, ly + vy, lz + vz)
+            base = nx * hx + ny * hy + nz * hz
+        else:
+            two_n_dot_l = 2.0 * n_dot_l
+            rx, ry, rz = two_n_dot_l * nx - lx, two_n_dot_l * ny - ly, two_n_dot_l * nz - lz
+            base = rx * vx + ry * vy + rz * vz
+        spec = specular_power(base, n)
+        r += f_att * lights[k, 4] * (kd * surfaces[s, OD] * n_dot_l + ks * surfaces[s, OS] * spec)
+        g += f_att * lights[k, 5] * (kd * surfaces[s, OD + 1] * n_dot_l + ks * surfaces[s, OS + 1] * spec)
+        b += f_att * lights[k, 6] * (kd * surfaces[s, OD + 2] * n_dot_l + ks * surfaces[s, OS + 2] * spec)
+    return min(max(r, 0.0), 1.0), min(max(g, 0.0), 1.0), min(max(b, 0.0), 1.0)
+
+
+# --------------------------------------------------------------------------------------------
+# numpy: many points
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    # Same order of operations as the scalar form, so both round alike.
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+def illuminate(points: np.ndarray, normals: np.ndarray, surface: np.ndarray,
+               surfaces: np.ndarray, lights: np.ndarray, ambient: np.ndarray,
+               eye: np.ndarray, halfway: bool) -> np.ndarray:
+    """The model at ``N`` world points with unit (or zero) normals: ``(N, 3)`` RGB in [0, 1].
+
+    ``surface`` ``(N,)`` is each point's row of ``surfaces``. The vectorised twin of
+    :func:`phong_point`; the module docstring lists the degenerate cases.
+    """
+    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    nrm = np.array(normals, dtype=np.float64).reshape(-1, 3)      # a copy: it may be flipped
+    rows = surfaces[np.asarray(surface, dtype=np.int64)]
+    ka, kd, ks, n = rows[:, KA], rows[:, KD], rows[:, KS], rows[:, EXPONENT]
+    od, os_ = rows[:, OD:OD + 3], rows[:, OS:OS + 3]
+    with np.errstate(under="ignore", over="ignore"):
+        if eye[0] == EYE_POINT:
+            v, dist = unit_rows(eye[1:4] - p)
+            at_eye = dist == 0.0
+            v[at_eye] = nrm[at_eye]
+        else:
+            v = np.broadcast_to(eye[1:4], p.shape).copy()
+        flip = (rows[:, TWO_SIDED] != 0.0) & (_dot(nrm, v) < 0.0)
+        nrm[flip] = -nrm[flip]
+        color = ambient[None, :] * ka[:, None] * od
+        for light in lights:
+            if light[LIGHT_KIND] == POINT_LIGHT:
+                l, d = unit_rows(light[1:4] - p)
+                lit = d != 0.0
+                den = light[7] + light[8] * d + light[9] * d * d
+                f_att = np.where(den <= 1.0, 1.0, 1.0 / np.where(den <= 1.0, 1.0, den))
+            else:
+                l = np.broadcast_to(light[1:4], p.shape)
+                lit = np.ones(len(p), dtype=bool)
+                f_att = np.ones(len(p))
+            n_dot_l = _dot(nrm, l)
+            lit &= n_dot_l > 0.0
+            if halfway:
+                h, _ = unit_rows(l + v)
+                base = _dot(nrm, h)
+            else:
+                two_n_dot_l = 2.0 * n_dot_l
+                r = two_n_dot_l[:, None] * nrm - l
+                base = _dot(r, v)
+            spec = np.minimum(np.maximum(base, 0.0), 1.0) ** n
+            term = (f_att[:, None] * light[4:7][None, :]
+                    * (kd[:, None] * od * n_dot_l[:, None] + ks[:, None] * os_ * spec[:, None]))
+            color = np.where(lit[:, None], color + term, color)
+        return np.minimum(np.maximum(color, 0.0), 1.0)
