@@ -27,18 +27,19 @@ from core.shading.illumination import eye_from_view
 
 
 def own_primary_rays(view: View, projection: str, width: int, height: int,
-                     offsets) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                     offsets, rows=None, cols=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(origins (N, 3), unit directions (N, 3), inside (N,) bool)`` for ``offsets (S, 2)``.
 
-    ``inside`` is false for samples outside the letterboxed viewport.
+    ``inside`` is false for samples outside the letterboxed viewport. ``rows`` and ``cols``
+    (``(first, stop)`` image rows and columns, row 0 at the top) restrict the rays to a tile.
     """
     check(view, projection)
     u_axis, v_axis, _ = vrc_basis(view)
     offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
     x0, x1, y0, y1 = viewport(view.window, width, height)
     u_min, u_max, v_min, v_max = view.window
-    col = np.arange(width, dtype=np.float64)
-    row = np.arange(height, dtype=np.float64)
+    col = np.arange(*(cols or (0, width)), dtype=np.float64)
+    row = np.arange(*(rows or (0, height)), dtype=np.float64)
     # Device x grows to the right; device y grows upward while image rows grow downward.
     x = col[None, None, :] + offsets[:, 0][:, None, None]                       # (S, 1, W)
     y = (height - 1 - row)[None, :, None] + (1.0 - offsets[:, 1])[:, None, None]  # (S, H, 1)
@@ -71,16 +72,22 @@ def primary_rays(view: View, projection: str, width: int, height: int, offsets):
     return origins, directions, inside
 
 
-def clip_interval(view: View, origins: np.ndarray, directions: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """``(t_min, t_max)`` per ray: the part of the ray between the back and front planes."""
+def clip_interval(view: View, origins: np.ndarray, directions: np.ndarray,
+                  from_origin: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """``(t_min, t_max)`` per ray: the part of the ray between the back and front planes.
+
+    ``from_origin``: only ``t >= 0`` (perspective: nothing behind the PRP is seen). A parallel
+    projection sees the whole line through the view-plane point (``from_origin=False``):
+    objects between the view plane and F are in front of it."""
     _, _, n_axis = vrc_basis(view)
     n0 = (origins - np.asarray(view.vrp, dtype=np.float64)) @ n_axis    # n of the origin
     dn = directions @ n_axis                                           # dn/dt
     with np.errstate(divide="ignore", invalid="ignore"):
         t_front = (view.front - n0) / dn
         t_back = (view.back - n0) / dn
-    t_min = np.maximum(np.minimum(t_front, t_back), 0.0)
+    t_min = np.minimum(t_front, t_back)
+    if from_origin:
+        t_min = np.maximum(t_min, 0.0)
     t_max = np.maximum(t_front, t_back)
     # A ray parallel to the planes: all of it if it runs between them, none of it otherwise.
     parallel = dn == 0.0
