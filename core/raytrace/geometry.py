@@ -30,7 +30,7 @@ from core.shading.illumination import pack_surfaces
 
 # Columns of a sphere row and of a plane row.
 SPHERE_COLUMNS = 5        # cx, cy, cz, r, surface
-PLANE_COLUMNS = 11        # a, b, c, d (unit normal), surface, e1 (3), e2 (3)
+PLANE_COLUMNS = 13        # a, b, c, d (unit normal), surface, e1 (3), e2 (3), point·e1, point·e2
 
 
 class Packed(NamedTuple):
@@ -51,7 +51,7 @@ class Packed(NamedTuple):
     normals: np.ndarray        # (V, 3) unit vertex normals
     face_surface: np.ndarray   # (T,) int64: the surface row of each triangle
     spheres: np.ndarray        # (S, 5)
-    planes: np.ndarray         # (P, 11)
+    planes: np.ndarray         # (P, 13)
     surfaces: np.ndarray       # (M, 11) the Phong model's rows
     optics: np.ndarray         # (M, 3) k_r, k_t, ior
     checker: np.ndarray        # (M, 4) side, colour
@@ -146,6 +146,7 @@ def _pack(meshes, spheres, planes) -> Packing:
         plane_rows[i, :3], plane_rows[i, 3] = n, -float(n @ np.asarray(p.point, dtype=np.float64))
         plane_rows[i, 4] = len(meshes) + len(spheres) + i
         plane_rows[i, 5:8], plane_rows[i, 8:11] = e1, e2
+        plane_rows[i, 11], plane_rows[i, 12] = e1 @ p.point, e2 @ p.point   # checker origin
 
     scale = _scale(positions, sphere_rows, plane_rows)
     packed = Packed(*tree, corners, np.ascontiguousarray(normals, dtype=np.float64), face_surface,

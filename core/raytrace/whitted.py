@@ -123,10 +123,9 @@ def checker_colour(packed, kind, index, s, px, py, pz, surface_row):
     if kind != PLANE or not side > 0.0:
         return
     row = packed.planes[index]
-    # In-plane coordinates from the plane's point nearest the origin (-d n).
-    qx, qy, qz = px + row[3] * row[0], py + row[3] * row[1], pz + row[3] * row[2]
-    a = math.floor((qx * row[5] + qy * row[6] + qz * row[7]) / side)
-    b = math.floor((qx * row[8] + qy * row[9] + qz * row[10]) / side)
+    # Squares counted along the in-plane axes e1, e2 from the plane's given point.
+    a = math.floor((px * row[5] + py * row[6] + pz * row[7] - row[11]) / side)
+    b = math.floor((px * row[8] + py * row[9] + pz * row[10] - row[12]) / side)
     if (a + b) % 2 != 0:
         for c in range(3):
             surface_row[0, OD + c] = packed.checker[s, 1 + c]
