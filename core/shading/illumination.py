@@ -58,12 +58,13 @@ Decisions that keep every output finite (the stability suite of issue 6 checks t
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from core.camera.view import View, vrc_basis
+from core.camera.film import to_rgb8 as to_uint8  # noqa: F401  (one rounding rule)
+from core.camera.view import Eye, eye_from_view  # noqa: F401  (re-exported)
+from core.vectors import unit3  # noqa: F401  (re-exported)
 from core.transforms import unit_rows  # noqa: F401  (re-exported: the model's row form)
 
 # Columns of a packed surface row (pack_surfaces).
@@ -76,34 +77,6 @@ POINT_LIGHT, DIRECTIONAL_LIGHT = 0.0, 1.0
 # eye[0]: the viewer is a point (perspective) or a direction (parallel).
 EYE_DIRECTION, EYE_POINT = 0.0, 1.0
 SPECULAR_FORMS = ("reflect", "halfway")
-
-
-class Eye(NamedTuple):
-    """Where the viewer is, in world coordinates: ``point`` (perspective: the PRP) or
-    ``direction`` (parallel: the unit vector towards the viewer, −DOP/|DOP|); the other is None."""
-
-    point: np.ndarray | None
-    direction: np.ndarray | None
-
-
-def eye_from_view(view: View, projection: str) -> Eye:
-    """The viewer of ``view`` in world coordinates (FvDFH 6.5: PRP and DOP are given in VRC).
-
-    Perspective: the PRP, ``VRP + prp_u u + prp_v v + prp_n n``. Parallel: the direction
-    opposite the DOP, ``DOP = CW − PRP`` with ``CW`` the centre of the window, turned into
-    world coordinates by the VRC basis and normalised.
-    """
-    u, v, n = vrc_basis(view)
-    prp = np.asarray(view.prp, dtype=np.float64)
-    if projection == "perspective":
-        return Eye(np.asarray(view.vrp, dtype=np.float64) + prp[0] * u + prp[1] * v + prp[2] * n,
-                   None)
-    if projection == "parallel":
-        u_min, u_max, v_min, v_max = view.window
-        dop = np.array([(u_min + u_max) / 2, (v_min + v_max) / 2, 0.0]) - prp
-        toward_viewer = -(dop[0] * u + dop[1] * v + dop[2] * n)
-        return Eye(None, toward_viewer / np.linalg.norm(toward_viewer))
-    raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
 
 
 def pack_eye(eye: Eye) -> np.ndarray:
@@ -158,29 +131,8 @@ def pack_ambient(ambient) -> np.ndarray:
     return np.asarray(ambient, dtype=np.float64).reshape(3)
 
 
-def to_uint8(rgb) -> np.ndarray:
-    """Colours in [0, 1] (clamped first) → uint8, rounded half up: ``floor(255 c + 0.5)``."""
-    return np.floor(np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
-
-
 # --------------------------------------------------------------------------------------------
 # numba: one point
-
-
-@njit(cache=True)
-def unit3(x, y, z):
-    """``(x, y, z) / |(x, y, z)|`` and the length; the zero vector gives ``(0, 0, 0, 0)``.
-
-    Divides by the largest component first so the squares neither underflow nor overflow.
-    """
-    m = max(abs(x), abs(y), abs(z))
-    if not m > 0.0:
-        return 0.0, 0.0, 0.0, 0.0
-    inv_m = 1.0 / m                   # one division and three products: this runs per pixel
-    x, y, z = x * inv_m, y * inv_m, z * inv_m
-    s = math.sqrt(x * x + y * y + z * z)
-    inv_s = 1.0 / s
-    return x * inv_s, y * inv_s, z * inv_s, m * s
 
 
 @njit(cache=True)
