@@ -15,6 +15,7 @@ from core.raytrace.renderer import (TraceOptions, prepare, render_image, render_
 from core.raytrace.whitted import COUNTERS
 from core.scene.model import Light, Material, Scene
 from core.scene.primitives import Plane, Sphere
+from core.settings import RenderSettings
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENES = ROOT / "scenes"
@@ -39,7 +40,8 @@ def _agreement(path: str, projection: str, size=(240, 240)):
     from core.render import render
     from core.scene.formats import load_scene
     scene = load_scene(path)
-    zbuffer = render(scene, 0, projection, "phong", size).color.astype(int)
+    settings = RenderSettings(projection=projection, shading="phong", size=size)
+    zbuffer = render(scene, scene.views[0], settings).color.astype(int)
     traced, _, stats = render_image(scene, scene.views[0], projection, size, NO_GLOBAL)
     traced = traced.astype(int)
     background = np.floor(np.asarray(scene.background) * 255 + 0.5).astype(int)
@@ -236,7 +238,8 @@ def test_whitted_scene_reads_and_renders_in_both_renderers():
     assert glass.material.ior == 1.52
     # The z-buffer draws the tessellation: three meshes' worth (two checker colours).
     assert all(m.tessellates is not None for m in scene.meshes) and len(scene.meshes) == 4
-    zbuffer = render(scene, 0, "perspective", "phong", (80, 80)).color
+    zbuffer = render(scene, scene.views[0],
+                     RenderSettings(shading="phong", size=(80, 80))).color
     traced, raw, stats = render_image(scene, scene.views[0], "perspective", (80, 80))
     assert stats["bvh"]["triangles"] == 0                   # the primitives are traced exactly
     assert stats["rays"]["reflected"] > 0 and stats["rays"]["refracted"] > 0
@@ -257,3 +260,32 @@ def test_primitive_errors_name_the_key():
                        "geometry[1].material.kr")]:
         with pytest.raises(ReaderError, match=key.replace("[", r"\[").replace("]", r"\]")):
             read_scene_file(text, "prim.toml")
+
+
+def test_tile_rays_are_the_cameras_primary_rays():
+    from core.camera.rays import primary_rays
+    from core.raytrace.camera import tile_rays
+    from core.scene.formats import load_scene
+    scene = load_scene(str(SCENES / "whitted.toml"))
+    offsets = [[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]]
+    for projection in ("perspective", "parallel"):
+        ours = tile_rays(scene.views[0], projection, 40, 30, offsets)
+        theirs = primary_rays(scene.views[0], projection, 40, 30, offsets)
+        for a, b in zip(ours, theirs):
+            assert np.array_equal(a, b)
+
+
+def test_registered_renderer_through_the_front_door():
+    from core import render
+    from core.scene.formats import load_scene
+    scene = load_scene(str(SCENES / "whitted.toml"))
+    settings = RenderSettings.for_scene(scene, renderer="raytrace", size=(64, 48), samples=4)
+    frame = render(scene, scene.views[0], settings)
+    assert frame.message is None and frame.color.shape == (48, 64, 3)
+    assert frame.stats["rays"]["primary"] == 48 * 48 * 4        # the square viewport, letterboxed
+    assert frame.stats["samples per pixel"] == 4
+    direct, _, _ = render_image(scene, scene.views[0], "perspective", (64, 48), samples=4)
+    assert np.array_equal(frame.color, direct)
+    # The settings reach the tracer: no shadow rays when shadows are off.
+    off = render(scene, scene.views[0], settings.replace(shadows="off", samples=1))
+    assert off.stats["rays"]["shadow"] == 0

@@ -1,74 +1,52 @@
-"""Primary rays from the FvDFH view (FvDFH 6.5; the notes' "a CoP and a window selected"),
-and the front and back clipping planes as a ray interval.
+"""Primary rays for a tile of the picture, and the front and back planes as a ray interval.
 
-The sample at device point ``(x, y)`` (y up, pixel centres at half-integers) looks through
-the view-plane point ``VRP + u·u_vrc + v·v_vrc``, with ``u = u_min + (x − x0)/(x1 − x0) ·
-(u_max − u_min)`` (and ``v`` alike) over the letterboxed viewport ``(x0, x1, y0, y1)`` of
-:func:`core.pipeline.project.viewport` — the same mapping the z-buffer's ``M_vv3dv`` makes.
-Perspective rays start at the PRP; parallel rays run along the DOP through the view-plane
-point. A sample outside the viewport sees nothing (``t_min = +inf``).
+The rays are the redesign's (:mod:`core.camera.rays`: :func:`~core.camera.rays.camera_ray`
+through the view-plane point of each device sample, from the PRP or along the DOP), restricted
+to a tile so that the window can trace the picture piece by piece; with the whole image as the
+tile they are exactly :func:`core.camera.rays.primary_rays` (a test holds them together).
 
 :func:`clip_interval` turns the front and back planes (``n = F`` and ``n = B`` measured from the
 VRP along the VPN) into the interval of the ray parameter a primary hit must lie in, so the
 ray tracer sees exactly what the z-buffer's clipper leaves.
-
-When the redesign's ``core.camera.rays.primary_rays`` is on main, :func:`primary_rays` defers
-to it (same contract: ``(H·W·S, 3)`` origins and unit directions, sample-major then
-row-major, offsets in ``[0, 1)²`` from the pixel's top-left corner).
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit, prange
 
-from core.camera.view import View, check, vrc_basis
-from core.pipeline.project import viewport
-from core.shading.illumination import eye_from_view
-
-
-def own_primary_rays(view: View, projection: str, width: int, height: int,
-                     offsets, rows=None, cols=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(origins (N, 3), unit directions (N, 3), inside (N,) bool)`` for ``offsets (S, 2)``.
-
-    ``inside`` is false for samples outside the letterboxed viewport. ``rows`` and ``cols``
-    (``(first, stop)`` image rows and columns, row 0 at the top) restrict the rays to a tile.
-    """
-    check(view, projection)
-    u_axis, v_axis, _ = vrc_basis(view)
-    offsets = np.asarray(offsets, dtype=np.float64).reshape(-1, 2)
-    x0, x1, y0, y1 = viewport(view.window, width, height)
-    u_min, u_max, v_min, v_max = view.window
-    col = np.arange(*(cols or (0, width)), dtype=np.float64)
-    row = np.arange(*(rows or (0, height)), dtype=np.float64)
-    # Device x grows to the right; device y grows upward while image rows grow downward.
-    x = col[None, None, :] + offsets[:, 0][:, None, None]                       # (S, 1, W)
-    y = (height - 1 - row)[None, :, None] + (1.0 - offsets[:, 1])[:, None, None]  # (S, H, 1)
-    x, y = np.broadcast_arrays(x, y)
-    inside = ((x0 <= x) & (x <= x1) & (y0 <= y) & (y <= y1)).reshape(-1)
-    u = u_min + (x - x0) / (x1 - x0) * (u_max - u_min)
-    v = v_min + (y - y0) / (y1 - y0) * (v_max - v_min)
-    target = (np.asarray(view.vrp, dtype=np.float64)
-              + u.reshape(-1, 1) * u_axis + v.reshape(-1, 1) * v_axis)
-    eye = eye_from_view(view, projection)
-    if projection == "perspective":
-        origins = np.broadcast_to(eye.point, target.shape).copy()
-        directions = target - eye.point
-        directions /= np.linalg.norm(directions, axis=1, keepdims=True)
-    else:
-        origins = target
-        directions = np.broadcast_to(-eye.direction, target.shape).copy()
-    return origins, directions, inside
+from core.camera.rays import camera_ray, pack_camera
+from core.camera.view import View, vrc_basis
 
 
-def primary_rays(view: View, projection: str, width: int, height: int, offsets):
-    """The redesign's primary rays when on main, else :func:`own_primary_rays`; both give
-    ``(origins, directions, inside)``."""
-    try:
-        from core.camera.rays import primary_rays as lead_rays    # the redesign (issue 9)
-    except ImportError:
-        return own_primary_rays(view, projection, width, height, offsets)
-    origins, directions = lead_rays(view, projection, width, height, offsets)
-    _, _, inside = own_primary_rays(view, projection, width, height, offsets)
+@njit(cache=True, parallel=True)
+def _tile_rays(cam, height, row0, row1, col0, col1, offsets, origins, directions, inside):
+    rows, cols = row1 - row0, col1 - col0
+    for r in prange(rows):
+        j = height - 1 - (row0 + r)              # device row, counted from the bottom
+        for c in range(cols):
+            for s in range(offsets.shape[0]):
+                k = (s * rows + r) * cols + c
+                ok, ox, oy, oz, dx, dy, dz = camera_ray(cam, col0 + c + offsets[s, 0],
+                                                        j + 1.0 - offsets[s, 1])
+                inside[k] = ok
+                origins[k, 0], origins[k, 1], origins[k, 2] = ox, oy, oz
+                directions[k, 0], directions[k, 1], directions[k, 2] = dx, dy, dz
+
+
+def tile_rays(view: View, projection: str, width: int, height: int, offsets,
+              rows=None, cols=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(origins (N, 3), unit directions (N, 3), inside (N,) bool)`` for ``offsets (S, 2)``
+    over image rows ``rows = (first, stop)`` and columns ``cols`` (default: all), ordered
+    sample, then row (top first), then column. ``inside`` is false outside the viewport."""
+    offsets = np.ascontiguousarray(offsets, dtype=np.float64).reshape(-1, 2)
+    row0, row1 = rows or (0, height)
+    col0, col1 = cols or (0, width)
+    count = len(offsets) * (row1 - row0) * (col1 - col0)
+    origins, directions = np.empty((count, 3)), np.empty((count, 3))
+    inside = np.empty(count, dtype=np.bool_)
+    _tile_rays(pack_camera(view, projection, width, height), int(height), int(row0), int(row1),
+               int(col0), int(col1), offsets, origins, directions, inside)
     return origins, directions, inside
 
 

@@ -5,7 +5,7 @@
 - :func:`trace_tile` traces the image rows ``[row0, row1)`` and columns ``[col0, col1)`` at every
   sample of the pixel and returns their box-filtered colour — what a progressive driver (the
   window) calls tile by tile, coarse first (:func:`tiles` gives an order).
-- :func:`render_image` traces the whole frame; :func:`render_frame` is the renderer registered
+- :func:`render_image` traces the whole frame; :func:`draw` is the renderer registered
   as ``"raytrace"`` (``fn(scene, view, settings, frame, context)``), filling ``frame``.
 
 Options (:class:`TraceOptions`, read from :class:`core.settings.RenderSettings` where it has
@@ -16,7 +16,6 @@ control), ``shadows`` (:data:`core.raytrace.whitted.SHADOW_MODES`, default ``"tr
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass
 
@@ -25,6 +24,7 @@ import numpy as np
 from core.camera.view import View, check
 from core.raytrace import camera, geometry, whitted
 from core.raytrace.optics import AIR, index_of_refraction
+from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
                                        to_uint8)
 
@@ -77,25 +77,6 @@ class Setup:
     counts: np.ndarray           # (7,) rays of each kind so far (whitted.COUNTERS)
 
 
-def sample_offsets(samples: int = 1, pattern: str = "regular", seed: int = 0,
-                   width: int = 1, height: int = 1) -> np.ndarray:
-    """``(S, 2)`` offsets: the redesign's film when it is on main, else a regular √S x √S grid
-    of cell centres (S a square), jittered within the cells for ``"jittered"``."""
-    try:
-        from core.camera.film import Film        # the redesign (issue 9)
-        return np.asarray(Film(width, height, samples, pattern, seed).offsets, dtype=np.float64)
-    except ImportError:
-        pass
-    side = math.isqrt(samples)
-    if side * side != samples:
-        raise ValueError(f"samples per pixel must be a square (1, 4, 9, 16 ...), not {samples}")
-    a, b = np.meshgrid(np.arange(side), np.arange(side), indexing="ij")
-    cells = np.stack([b.reshape(-1), a.reshape(-1)], axis=1).astype(np.float64)
-    jitter = (np.random.default_rng(seed).random(cells.shape) if pattern == "jittered"
-              else np.full(cells.shape, 0.5))
-    return (cells + jitter) / side
-
-
 def prepare(scene, view: View, projection: str, size: tuple[int, int],
             options: TraceOptions = TraceOptions(), offsets=None) -> Setup:
     """Everything one frame needs. Raises ViewError for an invalid view and ValueError for a
@@ -134,7 +115,7 @@ def trace_rays(setup: Setup, origins, directions, t_min, t_max) -> np.ndarray:
 
 def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int):
     """Primary rays of a tile, sample-major then row-major, and their [F, B] intervals."""
-    origins, directions, inside = camera.own_primary_rays(
+    origins, directions, inside = camera.tile_rays(
         setup.view, setup.projection, setup.width, setup.height, setup.offsets,
         rows=(row0, row1), cols=(col0, col1))
     perspective = setup.projection == "perspective"
@@ -181,20 +162,26 @@ def render_image(scene, view: View, projection: str, size: tuple[int, int],
                  options: TraceOptions = TraceOptions(), samples: int = 1,
                  pattern: str = "regular", seed: int = 0) -> tuple[np.ndarray, np.ndarray, dict]:
     """``(uint8 image (H, W, 3), raw float image, stats)`` of ``view`` of ``scene``."""
-    offsets = sample_offsets(samples, pattern, seed, *size)
+    offsets = sample_offsets(samples, pattern, seed)
     setup = prepare(scene, view, projection, size, options, offsets)
     start = time.perf_counter()
     raw = render_raw(setup)
     return to_uint8(raw), raw, stats_of(setup, time.perf_counter() - start)
 
 
-def render_frame(scene, view: View, settings, frame, context=None) -> None:
-    """The ``"raytrace"`` renderer: fills ``frame.color`` and ``frame.stats`` for ``settings``."""
+def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
+    """The ``"raytrace"`` renderer (:mod:`core.renderers`): fills ``frame.color`` and
+    ``frame.stats`` for ``settings``, placing the film's samples itself."""
     options = TraceOptions.from_settings(settings)
-    image, _, stats = render_image(scene, view, settings.projection, settings.size, options,
-                                   getattr(settings, "samples", 1),
-                                   getattr(settings, "sample_pattern", "regular"),
-                                   getattr(settings, "seed", 0))
-    frame.color[...] = image
-    frame.stats.update(stats)
-    frame.stats.setdefault("computed", []).append("ray tracing")
+    offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
+               if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
+    setup = prepare(scene, view, settings.projection, settings.size, options, offsets)
+    if timer is not None:
+        timer.lap("pack scene, build BVH")
+    start = time.perf_counter()
+    frame.color[...] = to_uint8(render_raw(setup))
+    frame.stats.update(stats_of(setup, time.perf_counter() - start))
+    frame.stats["samples per pixel"] = len(offsets)
+    frame.stats["computed"].append("ray tracing")
+    if timer is not None:
+        timer.lap("ray trace")
