@@ -297,7 +297,7 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
     return r_sum, g_sum, b_sum
 
 
-CHUNK = 256     # rays per parallel work item (a few scan-line pieces: good load balance)
+CHUNK = 4096    # rays per parallel work item: 60 items at 500 x 500, enough to balance two cores
 
 
 @njit(cache=True, parallel=True)
