@@ -54,6 +54,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     r.add_argument("--shading", choices=SHADING_CHOICES, default=None)
     r.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's, 500x500)")
     r.add_argument("--out", required=True, help="the PNG file to write")
+    _renderer_arguments(r)
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -78,6 +79,28 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     st = sub.add_parser("stability", help="the stiff and extreme cases, PASS/FAIL")
     st.add_argument("--json", action="store_true", help="print JSON instead of a table")
     return p
+
+
+def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
+    """--renderer and the ray tracer's settings (issue 12); None keeps the defaults."""
+    from core.raytrace.whitted import SHADOW_MODES
+    from core.renderers import renderer_names
+    parser.add_argument("--renderer", choices=renderer_names(), default=None,
+                        help="zbuffer (default), raycast, or raytrace (Whitted: shadows, "
+                             "mirrors, glass)")
+    parser.add_argument("--samples", type=int, default=None, help="samples per pixel (1, 4, 9, 16 ...)")
+    parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
+                        help="raytrace: what an object between a point and a light does "
+                             "(default transmit: attenuate by k_t)")
+    parser.add_argument("--max-depth", type=int, default=None,
+                        help="raytrace: the ray tree's depth limit (default 7)")
+    parser.add_argument("--fresnel", action="store_true", default=None,
+                        help="raytrace: Schlick's Fresnel weighting of k_r and k_t")
+
+
+def _renderer_overrides(args) -> dict:
+    return {"renderer": args.renderer, "samples": args.samples, "shadows": args.shadows,
+            "max_depth": args.max_depth, "fresnel": args.fresnel}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -149,7 +172,7 @@ def _render(args) -> int:
         return 2
     with announce_compiles():            # the first run compiles the kernels: say so
         frame = render(scene, scene.views[index],
-                       RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading, size=args.size or scene.size))
+                       _settings(scene, args))
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1
@@ -163,6 +186,14 @@ def _render(args) -> int:
     print(f"wrote {out} ({frame.color.shape[1]}x{frame.color.shape[0]}, view {args.view} of "
           f"{len(scene.views)}, {frame.stats['projection']}, {frame.stats['shading']})")
     return 0
+
+
+def _settings(scene, args):
+    try:
+        return RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading,
+                                        size=args.size or scene.size, **_renderer_overrides(args))
+    except ValueError as error:            # e.g. --samples 0, --max-depth 100
+        raise SystemExit(f"error: {error}") from None
 
 
 def _matrices(args) -> int:

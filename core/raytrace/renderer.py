@@ -172,10 +172,19 @@ def render_image(scene, view: View, projection: str, size: tuple[int, int],
 def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
     """The ``"raytrace"`` renderer (:mod:`core.renderers`): fills ``frame.color`` and
     ``frame.stats`` for ``settings``, placing the film's samples itself."""
-    options = TraceOptions.from_settings(settings)
-    offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
-               if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
-    setup = prepare(scene, view, settings.projection, settings.size, options, offsets)
+    try:
+        options = TraceOptions.from_settings(settings)
+        offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
+                   if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
+        setup = prepare(scene, view, settings.projection, settings.size, options, offsets)
+    except ValueError as error:              # a setting or a material the tracer cannot use
+        frame.color[...] = to_uint8(scene.background)
+        frame.message = f"{scene.name}: cannot ray trace: {error}"
+        return
+    if setup.packing.build.triangles == 0 and not (len(setup.packing.packed.spheres)
+                                                   or len(setup.packing.packed.planes)):
+        frame.message = (f"{scene.name}: nothing to ray trace (line edges are drawn by the "
+                         "z-buffer only)")
     if timer is not None:
         timer.lap("pack scene, build BVH")
     start = time.perf_counter()
