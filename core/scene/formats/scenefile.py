@@ -41,7 +41,7 @@ from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_ve
 from core.shading.illumination import SPECULAR_FORMS
 from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
-from core.camera.view import PROJECTIONS, View, problems
+from core.camera.view import PROJECTIONS, View, problems, unit3
 
 MAX_NUMBER = MAX_COORDINATE
 
@@ -309,9 +309,12 @@ class _Reader:
         if "position" in t:
             light.position = self.vector(t["position"], path + ("position",))
         else:
-            light.direction = self.vector(t["direction"], path + ("direction",))
-            if not any(light.direction):
+            direction, length = unit3(self.vector(t["direction"], path + ("direction",)))
+            if length == 0.0:
                 raise self.fail(path + ("direction",), "the direction is zero")
+            # stored as a unit vector (scaled first): a direction of 1e-300 is a direction,
+            # and the renderer's plain norm of it would underflow to zero
+            light.direction = tuple(float(c) for c in direction)
         if "attenuation" in t:
             light.attenuation = self.vector(t["attenuation"], path + ("attenuation",), 3, 0.0)
             if not any(light.attenuation):
