@@ -32,7 +32,7 @@ import struct
 import numpy as np
 
 from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
-                                 tolerant_of_underflow)
+                                 tolerant_of_underflow, whole_number)
 from core.transforms import unit_rows
 from core.scene.model import Mesh
 
@@ -154,7 +154,7 @@ def _check_obj(text: str, file: str) -> None:
                 index = ref.split("/", 1)[0]
                 if not _OBJ_INDEX.fullmatch(index):
                     raise ReaderError(file, f"face vertex {short(ref)} is not an index", number)
-                k = int(index)
+                k = whole_number(index, file, number, "a face index", signed=True)
                 if k == 0 or k > vertices or -k > vertices:
                     raise ReaderError(file, f"face index {k} is out of range: "
                                       f"{vertices} vertices are defined before this line "
@@ -194,10 +194,11 @@ def _check_ply(data: bytes, file: str) -> None:
                 raise ReaderError(file, f"unknown PLY format {' '.join(fields[1:])!r}", number)
             fmt = fields[1]
         elif fields[0] == "element":
-            if len(fields) != 3 or not fields[2].isdigit():
+            if len(fields) != 3:
                 raise ReaderError(file, "an element line is 'element NAME COUNT' with a whole "
                                         "number COUNT", number)
-            elements.append([fields[1], int(fields[2]), number, 0])
+            count = whole_number(fields[2], file, number, f"the count of element {short(fields[1])}")
+            elements.append([fields[1], count, number, 0])
         elif fields[0] == "property":
             if not elements:
                 raise ReaderError(file, "a property before any element", number)
@@ -234,10 +235,12 @@ def _check_off(text: str, file: str) -> None:
             raise ReaderError(file, "the file ends before the vertex and face counts", number)
         number, fields = rest[0]
         rest = rest[1:]
-    if len(fields) < 2 or not all(f.isdigit() for f in fields[:3]):
+    if len(fields) < 2:
         raise ReaderError(file, "the counts line must hold whole numbers 'V F [E]', got "
-                                f"{' '.join(fields)!r}", number)
-    vertices, faces = int(fields[0]), int(fields[1])
+                                f"{short(' '.join(fields))}", number)
+    vertices, faces, *_ = (whole_number(f, file, number, what)
+                           for f, what in zip(fields, ("the vertex count", "the face count",
+                                                       "the edge count")))
     available = sum(len(f) for _, f in rest)
     if 3 * vertices + 4 * faces > available:
         raise ReaderError(file, f"the counts say {vertices} vertices and {faces} faces (at "

@@ -20,13 +20,11 @@ code's ``v_table`` (which finds them with an O(N^2) scan).
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from core.scene.formats.camera import default_lights, framing_views, tri_light, tri_view
 from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
-                                 tolerant_of_underflow)
+                                 tolerant_of_underflow, whole_number)
 from core.scene.formats.meshfile import merge_vertices
 from core.scene.formats.numbers import Numbers
 from core.scene.model import Light, Material, Mesh, Scene
@@ -35,7 +33,6 @@ from core.transforms import apply
 DEFAULT_SIZE = (500, 500)
 _HEADER = ("the viewpoint", "the top-left corner", "the right displacement",
            "the down displacement")
-_COUNT = re.compile(r"\+?\d+")
 
 
 @tolerant_of_underflow
@@ -89,12 +86,8 @@ def _parse(data: bytes | str, file: str):
     if len(values) < 13:
         raise ReaderError(file, "the file ends before the triangle count N",
                           numbers.line(len(values)))
-    count_token = numbers.tokens[12]
-    if not _COUNT.fullmatch(count_token):
-        raise ReaderError(file, f"the triangle count must be a whole number >= 0, got "
-                                f"{short(count_token)}", numbers.line(12))
-    count = int(count_token)
     count_line = numbers.line(12)
+    count = whole_number(numbers.tokens[12], file, count_line, "the triangle count")
 
     body = values[13:]                      # what the file holds, whatever N says
     if len(body) < 9 * count:

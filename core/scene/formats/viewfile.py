@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 
 from core.camera.view import View, problems
+from core.scene.formats.errors import printable
 
 NUMBERS_PER_VIEW = 18
 _FIELDS = ("VRP", "VRP", "VRP", "VPN", "VPN", "VPN", "VUP", "VUP", "VUP",
@@ -49,6 +50,7 @@ def read_views(text: str, source: str = "<views>") -> tuple[list[View], list[str
     only invalid for one projection (F behind the eye in perspective) loads and is reported
     when it is drawn that way.
     """
+    source = printable(source, 200)          # it names every message; it may come from a file
     views: list[View] = []
     messages: list[str] = []
     group: list[tuple[int, str]] = []
