@@ -111,13 +111,20 @@ def is_closed(positions: np.ndarray, triangles: np.ndarray) -> bool:
 _OBJ_INDEX = re.compile(r"[+-]?\d+")
 
 
-def _check_obj(text: str, file: str) -> None:
+def _over_budget(file: str, what: str, count: int, budget: int, line: int | None = None):
+    return ReaderError(file, f"{what} {count} triangles; the limit is {budget} (the triangle "
+                             f"budget of a scene)", line)
+
+
+def _check_obj(text: str, file: str, budget: int) -> None:
     """Line-precise structure check of an OBJ: vertex records and face indices.
 
     Faces may refer only to vertices that exist (positive indices count from 1, negative ones
-    back from the last vertex defined so far); index 0 does not exist in OBJ.
+    back from the last vertex defined so far); index 0 does not exist in OBJ. The triangles
+    the faces fan into are counted against ``budget`` as they come.
     """
     vertices = 0
+    triangles = 0
     negative_at = None
     for number, line in enumerate(text.split("\n"), start=1):
         fields = line.split("#", 1)[0].split()
@@ -150,6 +157,9 @@ def _check_obj(text: str, file: str) -> None:
             if len(fields) < 4:
                 raise ReaderError(file, f"a face needs at least 3 vertices, got {len(fields) - 1}",
                                   number)
+            triangles += len(fields) - 3
+            if triangles > budget:
+                raise _over_budget(file, "the faces up to here make", triangles, budget, number)
             for ref in fields[1:]:
                 index = ref.split("/", 1)[0]
                 if not _OBJ_INDEX.fullmatch(index):
@@ -168,7 +178,7 @@ _PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort"
               "float": 4, "float32": 4, "double": 8, "float64": 8}
 
 
-def _check_ply(data: bytes, file: str) -> None:
+def _check_ply(data: bytes, file: str, budget: int) -> None:
     """Check a PLY header and that the data after it can hold the element counts it declares.
 
     The smallest possible row of each element is known from its properties (binary: the bytes
@@ -213,6 +223,9 @@ def _check_ply(data: bytes, file: str) -> None:
         raise ReaderError(file, "the PLY header has no 'format' line", 1)
     needed = 0
     for name, count, number, row in elements:
+        if name == "face" and count > budget:
+            raise _over_budget(file, f"the header says {count} faces: at least", count, budget,
+                               number)
         needed += count * row
         if needed > body:
             raise ReaderError(file, f"the header says element '{name}' has {count} rows, but "
@@ -220,7 +233,7 @@ def _check_ply(data: bytes, file: str) -> None:
                                     f"{needed} needed)", number)
 
 
-def _check_off(text: str, file: str) -> None:
+def _check_off(text: str, file: str, budget: int) -> None:
     """Check the OFF keyword and that the numbers after the counts line can hold V and F."""
     lines = text.split("\n")
     rows = [(n, line.split("#", 1)[0].split()) for n, line in enumerate(lines, start=1)]
@@ -246,16 +259,25 @@ def _check_off(text: str, file: str) -> None:
         raise ReaderError(file, f"the counts say {vertices} vertices and {faces} faces (at "
                                 f"least {3 * vertices + 4 * faces} numbers), but only "
                                 f"{available} numbers follow", number)
+    if faces > budget:
+        raise _over_budget(file, f"the counts say {faces} faces: at least", faces, budget, number)
 
 
-def _stl_kind(data: bytes, file: str) -> str:
-    """'binary' when the size matches the binary header's triangle count, else 'ascii'."""
+def _stl_kind(data: bytes, file: str, budget: int) -> str:
+    """'binary' when the size matches the binary header's triangle count, else 'ascii'; the
+    count (binary: the header's; ASCII: the facets) is held to ``budget``."""
     if len(data) >= 84:
         count = struct.unpack_from("<I", data, 80)[0]
         if len(data) == 84 + 50 * count:
+            if count > budget:
+                raise _over_budget(file, f"the binary STL header says {count} triangles:",
+                                   count, budget)
             return "binary"
     if data.lstrip()[:5].lower() == b"solid":
         decode_text(data, file)
+        count = data.count(b"endfacet")
+        if count > budget:
+            raise _over_budget(file, f"the file has {count} facets:", count, budget)
         return "ascii"
     if len(data) >= 84:
         count = struct.unpack_from("<I", data, 80)[0]
@@ -276,21 +298,28 @@ def _loaded_parts(loaded: dict) -> list[dict]:
 
 
 @tolerant_of_underflow
-def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
-    """The mesh in ``data``, a file of type ``ext`` (``.obj``, ``.ply``, ``.off``, ``.stl``)."""
+def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Mesh:
+    """The mesh in ``data``, a file of type ``ext`` (``.obj``, ``.ply``, ``.off``, ``.stl``).
+
+    ``budget`` (default: ``generators.MAX_TRIANGLES``, what a scene may hold) bounds the
+    triangles; it is checked from the header, or in the pre-check's pass, before the mesh
+    library reads any data.
+    """
+    from core.scene.generators import MAX_TRIANGLES
+    budget = MAX_TRIANGLES if budget is None else budget
     ext = ext.lower()
     if ext not in MESH_EXTENSIONS:
         raise ReaderError(file, f"not a mesh file type we read ({', '.join(MESH_EXTENSIONS)})")
     if not data.strip():
         raise ReaderError(file, "the file is empty")
     if ext == ".obj":
-        _check_obj(decode_text(data, file), file)
+        _check_obj(decode_text(data, file), file, budget)
     elif ext == ".ply":
-        _check_ply(data, file)
+        _check_ply(data, file, budget)
     elif ext == ".off":
-        _check_off(decode_text(data, file), file)
+        _check_off(decode_text(data, file), file, budget)
     else:
-        _stl_kind(data, file)
+        _stl_kind(data, file, budget)
 
     from trimesh.exchange.load import mesh_loaders       # slow import: only when needed
 
@@ -325,6 +354,8 @@ def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
         raise ReaderError(file, "the file holds no triangles")
     positions = np.concatenate(positions)
     triangles = np.concatenate(triangles)
+    if len(triangles) > budget:                # polygons fanned into more than the header said
+        raise _over_budget(file, "the faces make", len(triangles), budget)
     bad = ~np.all(np.isfinite(positions), axis=1)
     if np.any(bad):
         raise ReaderError(file, f"vertex {int(np.argmax(bad))} has a NaN or infinite coordinate")

@@ -105,6 +105,7 @@ class _Reader:
         # file's: every [[view]] asks for its line, and a rescan per view was quadratic.
         self._tables = [i for i, line in enumerate(self.lines) if line.lstrip().startswith("[")]
         self._headers: dict[str, list[int]] = {}
+        self.budget = generators.MAX_TRIANGLES
 
     # ------------------------------------------------------------------ errors and lines
 
@@ -214,6 +215,7 @@ class _Reader:
             raise self.fail((), "a scene needs at least one [[geometry]] table")
         meshes, total = [], 0
         for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
+            self.budget = generators.MAX_TRIANGLES - total     # what a mesh file may still add
             meshes.append(self.geometry(g, ("geometry", i + 1)))
             # Each generator keeps to the limit; the scene as a whole must too, or a short
             # file listing many big generators could take all the memory.
@@ -290,8 +292,8 @@ class _Reader:
             data = read_file(target, shown, "tri" if ext == ".tri" else "mesh")
             if ext == ".tri":
                 from core.scene.formats.tri import read_tri_mesh
-                return read_tri_mesh(data, shown)
-            return read_mesh(data, shown, ext)
+                return read_tri_mesh(data, shown, self.budget)
+            return read_mesh(data, shown, ext, self.budget)
         except ReaderError as error:
             raise ReaderError(error.file, f"{error.reason} (the mesh of {path_text(path[:2])} "
                                           f"in {self.file})", error.line) from None

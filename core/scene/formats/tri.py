@@ -62,16 +62,18 @@ def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) 
                  shading="flat", projection="perspective", size=size, source=str(file))
 
 
-def read_tri_mesh(data: bytes | str, file: str) -> Mesh:
+def read_tri_mesh(data: bytes | str, file: str, budget: int | None = None) -> Mesh:
     """Only the triangles of a ``.tri`` file, as they are in the file (a scene file's mesh):
     its camera is neither needed nor checked, and nothing is mirrored for it."""
-    _, positions, triangles, _ = _parse(data, file)
+    _, positions, triangles, _ = _parse(data, file, budget)
     return Mesh(positions=positions, triangles=triangles, closed=False, material=Material(),
                 name=file_stem(file))
 
 
-def _parse(data: bytes | str, file: str):
+def _parse(data: bytes | str, file: str, budget: int | None = None):
     """``(header values, positions, triangles, numbers)``; every error names its line."""
+    from core.scene.generators import MAX_TRIANGLES
+    budget = MAX_TRIANGLES if budget is None else budget
     text = decode_text(data, file) if isinstance(data, bytes) else data
     numbers = Numbers(text, file, keep=13)
     values = numbers.values
@@ -104,6 +106,9 @@ def _parse(data: bytes | str, file: str):
         raise ReaderError(file, f"more numbers than the count on line {count_line} says "
                                 f"({_triangles(count)}): {short(numbers_text(values[extra]))} would "
                                 f"start triangle {count + 1}", numbers.line(extra))
+    if count > budget:          # (after the checks above: a count the data lacks says so)
+        raise ReaderError(file, f"the count says {count} triangles; the limit is {budget} (the "
+                                f"triangle budget of a scene)", count_line)
     _check_finite(body, "a triangle", numbers, 13, file)
 
     corners = body.reshape(-1, 3)           # three rows per triangle
