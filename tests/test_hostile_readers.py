@@ -245,15 +245,21 @@ def test_a_mesh_file_opened_directly_is_held_to_the_budget(tmp_path):
     assert f"{MAX_TRIANGLES + 1} triangles; the limit is {MAX_TRIANGLES}" in str(error)
 
 
+def _distinct_stl(count: int) -> bytes:
+    return b"\0" * 80 + struct.pack("<I", count) + b"".join(
+        struct.pack("<12fH", 0, 0, 1, 0, 0, k, 1, 0, k, 0, 1, k, 0) for k in range(count))
+
+
 @pytest.mark.parametrize("ext, data", [
-    (".stl", _binary_stl(3)),
-    (".stl", b"solid x\n" + b"facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
-             b"vertex 0 1 0\nendloop\nendfacet\n" * 3 + b"endsolid x\n"),
-    (".obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3 4\nf 1 2 3\n"),
-    (".off", b"OFF\n3 3 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n3 0 1 2\n"),
-    (".ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+    (".stl", _distinct_stl(3)),
+    (".stl", b"solid x\n" + b"".join(b"facet normal 0 0 1\nouter loop\nvertex 0 0 %d\nvertex 1 0 0"
+                                      b"\nvertex 0 1 0\nendloop\nendfacet\n" % k for k in range(3))
+             + b"endsolid x\n"),
+    (".obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\nf 1 3 2\n"),
+    (".off", b"OFF\n4 3 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n3 0 2 3\n"),
+    (".ply", b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
              b"property float z\nelement face 3\nproperty list uchar int vertex_indices\n"
-             b"end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 0 1 2\n3 0 1 2\n"),
+             b"end_header\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n3 0 1 3\n3 0 2 3\n"),
 ])
 def test_every_mesh_format_checks_the_budget_before_reading(ext, data):
     assert len(read_mesh(data, "ok" + ext, ext, budget=3).triangles) == 3
@@ -264,10 +270,11 @@ def test_every_mesh_format_checks_the_budget_before_reading(ext, data):
 def test_a_scene_passes_what_is_left_of_its_budget_to_a_mesh_file(tmp_path, monkeypatch):
     from core.scene import generators
     monkeypatch.setattr(generators, "MAX_TRIANGLES", 14)      # a cube is 12
-    (tmp_path / "three.stl").write_bytes(_binary_stl(3))
+    (tmp_path / "three.stl").write_bytes(_distinct_stl(3))
     (tmp_path / "s.toml").write_text(CUBE + '[[geometry]]\nfile = "three.stl"\n')
     error = refused(load_scene, tmp_path / "s.toml")
     assert "3 triangles; the limit is 2" in str(error) and "geometry[2]" in str(error)
-    (tmp_path / "two.tri").write_text(TRI_HEADER + "3\n" + "0 0 0 1 0 0 0 1 0\n" * 3)
+    (tmp_path / "two.tri").write_text(TRI_HEADER + "3\n" + "".join(f"0 0 {k} 1 0 0 0 1 0\n"
+                                                                    for k in range(3)))
     (tmp_path / "t.toml").write_text(CUBE + '[[geometry]]\nfile = "two.tri"\n')
     assert "3 triangles; the limit is 2" in str(refused(load_scene, tmp_path / "t.toml"))

@@ -44,18 +44,58 @@ MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl")
 def merge_vertices(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Equal rows of ``points`` become one vertex, numbered in order of first appearance.
 
-    Returns ``(positions, inverse)`` with ``positions[inverse] == points``. Hashing by sorting
-    (``np.unique`` on rows): O(N log N), never the startup code's O(N^2) scan. ``-0.0`` and
+    Returns ``(positions, inverse)`` with ``positions[inverse] == points``. ``-0.0`` and
     ``0.0`` are equal, as they are for the C ``==`` of the startup code.
     """
     points = np.asarray(points, dtype=np.float64).reshape(-1, 3) + 0.0    # -0.0 -> 0.0
-    if len(points) == 0:
-        return points, np.zeros(0, dtype=np.int64)
-    unique, first, inverse = np.unique(points, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first, kind="stable")          # sorted rows -> first-appearance order
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    return unique[order], rank[inverse.reshape(-1)].astype(np.int64)
+    first, inverse = _first_of_equal_rows(points)
+    return points[first], inverse
+
+
+def _first_of_equal_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(first, inverse)``: the index of the first of each set of equal rows, in order of
+    appearance, and for every row the number of its set (``rows[first][inverse] == rows``).
+
+    Hashing by sorting, O(N log N) whatever the data (never the startup code's O(N^2) scan):
+    a stable sort by the columns (``np.lexsort``; ``np.unique(axis=0)`` sorts rows as opaque
+    records, 9 s for a million copies of one triangle), then a new set wherever a row differs
+    from the one before it.
+    """
+    n = len(rows)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    order = np.lexsort(rows.T[::-1])                    # stable: equal rows keep file order
+    ordered = rows[order]
+    starts = np.ones(n, dtype=bool)
+    starts[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    group = np.cumsum(starts) - 1                       # set number, in sorted order
+    first = order[starts]                               # stable: the first of each set
+    by_appearance = np.argsort(first, kind="stable")
+    rank = np.empty_like(by_appearance)
+    rank[by_appearance] = np.arange(len(first))
+    inverse = np.empty(n, dtype=np.int64)
+    inverse[order] = rank[group]
+    return first[by_appearance], inverse
+
+
+def drop_repeated_triangles(triangles: np.ndarray) -> np.ndarray:
+    """The triangles without exact repeats (the same three vertices in the same cyclic order),
+    the first of each kept, in file order.
+
+    A repeat draws nothing: it covers the pixels of its first copy at the same depth, and the
+    z-buffer keeps the first (FvDFH's strict depth test). But it costs the raster its area
+    again, so a file of a million copies of one large triangle would cost a million times its
+    pixels; without repeats a frame costs at most its distinct triangles plus the pixels. The
+    opposite winding (b, a, c) is not a repeat: it is the other face of the triangle.
+    """
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if len(t) < 2:
+        return t
+    lowest = np.argmin(t, axis=1)                       # rotate the smallest index first
+    turn = (lowest[:, None] + np.arange(3)) % 3
+    canonical = np.take_along_axis(t, turn, axis=1)
+    first, _ = _first_of_equal_rows(canonical)
+    return t if len(first) == len(t) else t[first]
 
 
 def fan(polygons: np.ndarray) -> np.ndarray:
@@ -378,10 +418,12 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
     # Closed or not is a property of the surface, so it is decided on merged positions even
     # where the file's per-corner normals keep its vertices apart (a flat-shaded OBJ).
     merged, inverse = merge_vertices(positions)
-    closed = is_closed(merged, inverse[triangles])
     if vertex_normals is None:
         # the file's vertices may repeat (STL always does): one mesh vertex per position
         positions, triangles = merged, inverse[triangles]
+    triangles = drop_repeated_triangles(triangles)
+    surface = triangles if vertex_normals is None else drop_repeated_triangles(inverse[triangles])
+    closed = is_closed(merged, surface)
     return Mesh(positions=positions, triangles=triangles, normals=vertex_normals,
                 closed=closed, name=file_stem(file))
 

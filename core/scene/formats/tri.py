@@ -25,7 +25,7 @@ import numpy as np
 from core.scene.formats.camera import default_lights, framing_views, tri_light, tri_view
 from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
                                  tolerant_of_underflow, whole_number)
-from core.scene.formats.meshfile import merge_vertices
+from core.scene.formats.meshfile import drop_repeated_triangles, merge_vertices
 from core.scene.formats.numbers import Numbers
 from core.scene.model import Light, Material, Mesh, Scene
 from core.transforms import apply
@@ -113,7 +113,7 @@ def _parse(data: bytes | str, file: str, budget: int | None = None):
 
     corners = body.reshape(-1, 3)           # three rows per triangle
     positions, inverse = merge_vertices(corners)
-    return values, positions, inverse.reshape(-1, 3), numbers
+    return values, positions, drop_repeated_triangles(inverse.reshape(-1, 3)), numbers
 
 
 def numbers_text(value: float) -> str:
