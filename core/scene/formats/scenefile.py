@@ -453,13 +453,13 @@ def prescan(text: str, file: str) -> None:
         raise ReaderError(file, f"TOML: a dotted key of {parts} parts; keys here have at most "
                                 f"{MAX_KEY_PARTS}", _line_of(text, bare, m.start()))
     depth = 0
-    for i, char in enumerate(bare):
-        if char in "[{":
+    for bracket in re.finditer(r"[\[\]{}]", bare):
+        if bracket.group() in "[{":
             depth += 1
             if depth > MAX_NESTING:
                 raise ReaderError(file, f"TOML: brackets nested more than {MAX_NESTING} deep",
-                                  _line_of(text, bare, i))
-        elif char in "]}":
+                                  _line_of(text, bare, bracket.start()))
+        else:
             depth = max(depth - 1, 0)
 
 
