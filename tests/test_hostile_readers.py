@@ -16,6 +16,7 @@ import pytest
 
 from core.camera.view import View, n_per_factors, problems, vrc_basis
 from core.render import render
+from core.settings import RenderSettings
 from core.scene.formats import MAX_INPUT_BYTES, ReaderError, load_scene, read_mesh, read_tri
 from core.scene.formats.errors import MAX_MESSAGE, printable
 from core.scene.formats.scenefile import read_scene_file
@@ -24,6 +25,12 @@ BIG = "9" * 5000                       # past Python's 4300-digit int() limit
 
 CUBE = '[[geometry]]\ngenerator = "cube"\n'
 TRI_HEADER = "0 0 10\n-1 1 0\n0.01 0 0\n0 -0.01 0\n"
+
+
+def draw(scene, projection: str, shading: str, size=(16, 16)):
+    """The scene's first view rendered (``core.render.render``)."""
+    settings = RenderSettings.for_scene(scene, projection=projection, shading=shading, size=size)
+    return render(scene, scene.views[0], settings)
 
 
 def refused(read, *args) -> ReaderError:
@@ -96,9 +103,9 @@ def test_what_the_renderer_cannot_draw_is_refused_with_its_reason(tmp_path, prp,
     view = scene.views[0]                        # invalid for one projection: loads, and the
     assert reason in " ".join(problems(view, projection))   # renderer gives the same reason
     for shading in ("wireframe", "flat", "phong"):
-        frame = render(scene, 0, projection, shading, (16, 16))
+        frame = draw(scene, projection, shading)
         assert reason in frame.message
-        other = render(scene, 0, "parallel", shading, (16, 16))
+        other = draw(scene, "parallel", shading)
         assert other.message is None
 
 
@@ -113,7 +120,7 @@ def test_huge_and_subnormal_vpn_keep_their_direction(vpn, vup):
     assert np.allclose(n, expected / np.linalg.norm(expected), rtol=0, atol=1e-15)
     assert np.allclose(np.array([u, v, n]) @ np.array([u, v, n]).T, np.eye(3), atol=1e-15)
     for projection in ("perspective", "parallel"):
-        assert render(_house_with(view), 0, projection, "phong", (16, 16)).message is None
+        assert draw(_house_with(view), projection, "phong").message is None
 
 
 def test_vup_parallel_to_vpn_is_still_named():
@@ -127,7 +134,7 @@ def test_a_tiny_light_direction_is_a_direction(tmp_path):
     assert scene.lights[0].direction == (1.0, 0.0, 0.0)
     assert np.allclose(scene.lights[1].direction, (0, 2 ** -0.5, -2 ** -0.5))
     for projection in ("perspective", "parallel"):
-        frame = render(scene, 0, projection, "phong", (16, 16))
+        frame = draw(scene, projection, "phong")
         assert frame.message is None
 
 
