@@ -156,14 +156,23 @@ def _over_budget(file: str, what: str, count: int, budget: int, line: int | None
                              f"budget of a scene)", line)
 
 
-def _check_obj(text: str, file: str, budget: int) -> None:
-    """Line-precise structure check of an OBJ: vertex records and face indices.
+# The records an OBJ face may refer to, with the numbers each takes: a vertex 3 (plus an
+# optional w, or RGB, or both), a texture coordinate 1 to 3 (u [v [w]]), a normal exactly 3.
+_OBJ_RECORDS = {"v": ("vertex", (3, 4, 6, 7)), "vt": ("texture coordinate", (1, 2, 3)),
+                "vn": ("normal", (3,))}
+_OBJ_SLOTS = ("v", "vt", "vn")           # the parts of a face corner v/vt/vn
 
-    Faces may refer only to vertices that exist (positive indices count from 1, negative ones
-    back from the last vertex defined so far); index 0 does not exist in OBJ. The triangles
-    the faces fan into are counted against ``budget`` as they come.
+
+def _check_obj(text: str, file: str, budget: int) -> None:
+    """Line-precise structure check of an OBJ: vertex, texture and normal records, and faces.
+
+    Every index of a face corner ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn`` must refer to a
+    record that exists (positive indices count from 1, negative ones back from the last record
+    defined so far); index 0 does not exist in OBJ. A reference to a missing ``vt`` or ``vn``
+    is refused, not dropped. The triangles the faces fan into are counted against ``budget``
+    as they come.
     """
-    vertices = 0
+    defined = {"v": 0, "vt": 0, "vn": 0}
     triangles = 0
     negative_at = None
     for number, line in enumerate(text.split("\n"), start=1):
@@ -171,28 +180,14 @@ def _check_obj(text: str, file: str, budget: int) -> None:
         if not fields:
             continue
         key = fields[0]
-        if key in ("v", "vn"):
-            what = "vertex" if key == "v" else "normal"
-            if key == "v" and negative_at is not None:
-                raise ReaderError(file, f"a vertex defined after the negative (relative) index on "
-                                        f"line {negative_at}: the mesh library resolves relative "
-                                        f"indices against the final vertex list, so this file "
-                                        f"would be misread", number)
-            if len(fields) < 4 or (key == "v" and len(fields) not in (4, 5, 7, 8)):
-                raise ReaderError(file, f"a {what} needs 3 coordinates, got {len(fields) - 1}"
-                                  if len(fields) < 4 else
-                                  f"a vertex has 3 coordinates (plus an optional w or RGB), got "
-                                  f"{len(fields) - 1} numbers", number)
-            for token in fields[1:]:
-                try:
-                    value = float(token)
-                except ValueError:
-                    raise ReaderError(file, f"{what} coordinate {short(token)} is not a number",
-                                      number) from None
-                if not np.isfinite(value):
-                    raise ReaderError(file, f"{what} coordinate {short(token)} is NaN or infinite",
-                                      number)
-            vertices += key == "v"
+        if key in _OBJ_RECORDS:
+            if negative_at is not None:
+                raise ReaderError(file, f"a record defined after the negative (relative) index "
+                                        f"on line {negative_at}: the mesh library resolves "
+                                        f"relative indices against the final lists, so this "
+                                        f"file would be misread", number)
+            _check_obj_record(key, fields[1:], file, number)
+            defined[key] += 1
         elif key == "f":
             if len(fields) < 4:
                 raise ReaderError(file, f"a face needs at least 3 vertices, got {len(fields) - 1}",
@@ -201,16 +196,57 @@ def _check_obj(text: str, file: str, budget: int) -> None:
             if triangles > budget:
                 raise _over_budget(file, "the faces up to here make", triangles, budget, number)
             for ref in fields[1:]:
-                index = ref.split("/", 1)[0]
-                if not _OBJ_INDEX.fullmatch(index):
-                    raise ReaderError(file, f"face vertex {short(ref)} is not an index", number)
-                k = whole_number(index, file, number, "a face index", signed=True)
-                if k == 0 or k > vertices or -k > vertices:
-                    raise ReaderError(file, f"face index {k} is out of range: "
-                                      f"{vertices} vertices are defined before this line "
-                                      f"(indices run 1..{vertices} or -1..-{vertices})", number)
-                if k < 0 and negative_at is None:
+                if _check_obj_corner(ref, defined, file, number) and negative_at is None:
                     negative_at = number
+
+
+def _check_obj_record(key: str, numbers: list[str], file: str, line: int) -> None:
+    what, counts = _OBJ_RECORDS[key]
+    if len(numbers) not in counts:
+        if key != "vt" and len(numbers) < 3:
+            raise ReaderError(file, f"a {what} needs 3 coordinates, got {len(numbers)}", line)
+        wanted = {"v": "3 coordinates (plus an optional w, or RGB)",
+                  "vt": "1 to 3 coordinates (u [v [w]])", "vn": "exactly 3 coordinates"}[key]
+        raise ReaderError(file, f"a {what} ({key}) has {wanted}, got {len(numbers)} numbers",
+                          line)
+    for token in numbers:
+        try:
+            value = float(token)
+        except ValueError:
+            raise ReaderError(file, f"{what} coordinate {short(token)} is not a number",
+                              line) from None
+        if not np.isfinite(value):
+            raise ReaderError(file, f"{what} coordinate {short(token)} is NaN or infinite", line)
+
+
+def _check_obj_corner(ref: str, defined: dict, file: str, line: int) -> bool:
+    """Check one face corner; True when it uses a negative (relative) index."""
+    parts = ref.split("/")
+    if len(parts) > 3 or not parts[0] or (len(parts) == 3 and not parts[2]) \
+            or (len(parts) == 2 and not parts[1]):
+        raise ReaderError(file, f"face vertex {short(ref)} is not v, v/vt, v//vn or v/vt/vn",
+                          line)
+    negative = False
+    for slot, index in zip(_OBJ_SLOTS, parts):
+        if not index:
+            continue                                # v//vn: no texture coordinate
+        if not _OBJ_INDEX.fullmatch(index):
+            raise ReaderError(file, f"face vertex {short(ref)}: {short(index)} is not an index",
+                              line)
+        what = _OBJ_RECORDS[slot][0]
+        name = "a face index" if slot == "v" else f"a face's {what} index"
+        k = whole_number(index, file, line, name, signed=True)
+        n = defined[slot]
+        if k == 0 or k > n or -k > n:
+            runs = f" (indices run 1..{n} or -1..-{n})" if n else ""
+            if slot == "v":
+                raise ReaderError(file, f"face index {k} is out of range: {n} vertices are "
+                                        f"defined before this line{runs}", line)
+            raise ReaderError(file, f"face vertex {short(ref)}: {what} index {k} is out of "
+                                    f"range: {n} {what}s ({slot}) are defined before this "
+                                    f"line{runs}", line)
+        negative |= k < 0
+    return negative
 
 
 _PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
@@ -248,7 +284,7 @@ def _check_ply(data: bytes, file: str, budget: int) -> None:
                 raise ReaderError(file, "an element line is 'element NAME COUNT' with a whole "
                                         "number COUNT", number)
             count = whole_number(fields[2], file, number, f"the count of element {short(fields[1])}")
-            elements.append([fields[1], count, number, 0])
+            elements.append([fields[1], count, number, 0, []])
         elif fields[0] == "property":
             if not elements:
                 raise ReaderError(file, "a property before any element", number)
@@ -257,12 +293,13 @@ def _check_ply(data: bytes, file: str, budget: int) -> None:
                 raise ReaderError(file, f"malformed property line {line.strip()!r}", number)
             # smallest row: a scalar, or a list with zero items (just its count)
             elements[-1][3] += _PLY_SIZES[types[0]] if fmt != "ascii" else 2
+            elements[-1][4].append(fields[1] == "list")
         else:
             raise ReaderError(file, f"unknown PLY header keyword {short(fields[0])}", number)
     if fmt is None:
         raise ReaderError(file, "the PLY header has no 'format' line", 1)
     needed = 0
-    for name, count, number, row in elements:
+    for name, count, number, row, _ in elements:
         if name == "face" and count > budget:
             raise _over_budget(file, f"the header says {count} faces: at least", count, budget,
                                number)
@@ -271,15 +308,57 @@ def _check_ply(data: bytes, file: str, budget: int) -> None:
             raise ReaderError(file, f"the header says element '{name}' has {count} rows, but "
                                     f"only {body} bytes of data follow the header (at least "
                                     f"{needed} needed)", number)
+    if fmt == "ascii":
+        first_line = header.count("\n") + 2           # the line after end_header
+        _check_ply_ascii_rows(decode_text(data[newline + 1:], file) if newline >= 0 else "",
+                              elements, first_line, file)
+
+
+def _check_ply_ascii_rows(body: str, elements: list, first_line: int, file: str) -> None:
+    """Every element has exactly its count of rows, one a line, each holding its scalars and
+    its lists (a count, then that many items); nothing follows the last row. Without this an
+    over-counted element takes the next element's rows as its own."""
+    rows = ((n, line.split()) for n, line in enumerate(body.split("\n"), start=first_line))
+    rows = ((n, fields) for n, fields in rows if fields)
+    for name, count, header_line, _, lists in elements:
+        for k in range(count):
+            line, fields = next(rows, (None, None))
+            if fields is None:
+                raise ReaderError(file, f"the file ends after {k} rows of element '{name}'; "
+                                        f"the header (line {header_line}) says {count}",
+                                  first_line + body.count("\n"))
+            used = 0
+            for is_list in lists:
+                if is_list and used < len(fields):
+                    used += 1 + whole_number(fields[used], file, line,
+                                             f"element '{name}' row {k}: a list count")
+                else:
+                    used += 1
+            if used != len(fields):
+                raise ReaderError(file, f"element '{name}' row {k}: its properties take {used} "
+                                        f"numbers, the line holds {len(fields)} (the header, "
+                                        f"line {header_line}, says {count} rows)", line)
+    extra = next(rows, None)
+    if extra is not None:
+        raise ReaderError(file, f"more rows than the header's elements say "
+                                f"({', '.join(f'{e[0]} {e[1]}' for e in elements)})", extra[0])
+
+
+_OFF_KEYWORDS = ("OFF", "COFF")           # what the mesh library reads (COFF: colours)
+_OFF_COLOURS = (0, 1, 3, 4)               # trailing values after a row: none, an index, RGB(A)
 
 
 def _check_off(text: str, file: str, budget: int) -> None:
-    """Check the OFF keyword and that the numbers after the counts line can hold V and F."""
+    """Check the OFF keyword, the counts, and every row: V vertex rows of 3 coordinates and
+    F face rows ``k i_1 .. i_k`` whose k matches its indices (each followed only by an
+    optional colour), and nothing after them."""
     lines = text.split("\n")
     rows = [(n, line.split("#", 1)[0].split()) for n, line in enumerate(lines, start=1)]
     rows = [(n, fields) for n, fields in rows if fields]
-    if not rows or not rows[0][1][0].upper().endswith("OFF"):
-        raise ReaderError(file, "not an OFF file: it must start with 'OFF'", rows[0][0] if rows else 1)
+    if not rows or rows[0][1][0] not in _OFF_KEYWORDS:
+        raise ReaderError(file, f"not an OFF file: it must start with 'OFF' (or 'COFF'), not "
+                                f"{short(rows[0][1][0]) if rows else 'nothing'}",
+                          rows[0][0] if rows else 1)
     number, fields = rows[0]
     fields = fields[1:]
     rest = rows[1:]
@@ -301,6 +380,27 @@ def _check_off(text: str, file: str, budget: int) -> None:
                                 f"{available} numbers follow", number)
     if faces > budget:
         raise _over_budget(file, f"the counts say {faces} faces: at least", faces, budget, number)
+    _check_off_rows(rest, vertices, faces, file)
+
+
+def _check_off_rows(rows: list, vertices: int, faces: int, file: str) -> None:
+    for k, (line, fields) in enumerate(rows):
+        if k < vertices:
+            if len(fields) - 3 not in _OFF_COLOURS:
+                raise ReaderError(file, f"vertex {k}: a vertex row is 3 coordinates (plus an "
+                                        f"optional colour), got {len(fields)} numbers", line)
+            continue
+        face = k - vertices
+        if face >= faces:
+            raise ReaderError(file, f"more rows than the counts say ({vertices} vertices and "
+                                    f"{faces} faces): this row would be face {face}", line)
+        corners = whole_number(fields[0], file, line, f"face {face}: the corner count")
+        if corners < 3:
+            raise ReaderError(file, f"face {face}: a face needs at least 3 corners, got "
+                                    f"{corners}", line)
+        if len(fields) - 1 - corners not in _OFF_COLOURS:
+            raise ReaderError(file, f"face {face}: the row says {corners} corners but holds "
+                                    f"{len(fields) - 1} numbers after the count", line)
 
 
 def _stl_kind(data: bytes, file: str, budget: int) -> str:
@@ -353,7 +453,11 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
     if not data.strip():
         raise ReaderError(file, "the file is empty")
     if ext == ".obj":
-        _check_obj(decode_text(data, file), file, budget)
+        text = decode_text(data, file)
+        _check_obj(text, file, budget)
+        if "\t" in text or "\v" in text or "\f" in text:
+            # OBJ separates by any white space; the mesh library splits on spaces only
+            data = text.replace("\t", " ").replace("\v", " ").replace("\f", " ").encode()
     elif ext == ".ply":
         _check_ply(data, file, budget)
     elif ext == ".off":
