@@ -285,3 +285,25 @@ def test_a_scene_passes_what_is_left_of_its_budget_to_a_mesh_file(tmp_path, monk
                                                                     for k in range(3)))
     (tmp_path / "t.toml").write_text(CUBE + '[[geometry]]\nfile = "two.tri"\n')
     assert "3 triangles; the limit is 2" in str(refused(load_scene, tmp_path / "t.toml"))
+
+
+# ----------------------------------------------------------------------------- right reasons
+
+@pytest.mark.parametrize("header, reason", [
+    ("0 0 10\n-1 1 0\n1e-300 0 0\n0 -0.01 0\n", "the pixel displacements are too small next to "
+                                                 "the viewpoint's distance"),
+    ("0 0 10\n-1 1 0\n1e-320 0 0\n0 -1e-320 0\n", "the pixel displacements are too small"),
+    ("0 0 10\n-1 1 0\n0 0 0\n0 -1 0\n", "the right displacement is zero"),
+    ("0 0 1e-290\n-1e-298 1e-298 0\n1e-300 0 0\n0 -1e-300 0\n",
+     "the camera cannot be drawn: the PRP is 1e-290 from the window's centre"),
+])
+def test_tri_displacements_get_the_right_reason(header, reason):
+    error = refused(read_tri, header + "1\n0 0 0 1 0 0 0 1 0\n", "d.tri")
+    assert reason in error.reason
+
+
+def test_a_tiny_but_drawable_tri_camera_loads_and_renders():
+    scene = read_tri("0 0 1e-100\n-1e-102 1e-102 0\n1e-104 0 0\n0 -1e-104 0\n1\n"
+                     "0 0 0 1e-102 0 0 0 1e-102 0\n", "tiny.tri")
+    for projection in ("perspective", "parallel"):
+        assert draw(scene, projection, "flat").message is None

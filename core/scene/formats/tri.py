@@ -27,6 +27,7 @@ from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text,
                                  tolerant_of_underflow, whole_number)
 from core.scene.formats.meshfile import drop_repeated_triangles, merge_vertices
 from core.scene.formats.numbers import Numbers
+from core.camera.view import problems
 from core.scene.model import Light, Material, Mesh, Scene
 from core.transforms import apply
 
@@ -47,6 +48,12 @@ def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) 
     except ValueError as error:
         at = 0 if str(error).startswith("the viewpoint") else 6     # else: the displacements
         raise ReaderError(file, str(error), numbers.line(at)) from None
+    # the renderer's own rules: a camera that loads can be drawn, in both projections
+    found = list(dict.fromkeys(problems(camera.view, "perspective")
+                               + problems(camera.view, "parallel")))
+    if found:
+        raise ReaderError(file, "the camera cannot be drawn: " + "; ".join(found),
+                          numbers.line(0))
     light = tri_light(viewpoint, right, down)
     if camera.mirror is not None:
         positions = apply(camera.mirror, positions)[:, :3]
