@@ -26,6 +26,7 @@ are merged into one by hashing (``np.unique`` on rows), as the course's ``.tri``
 from __future__ import annotations
 
 import io
+import logging
 import re
 import struct
 
@@ -37,6 +38,7 @@ from core.transforms import unit_rows
 from core.scene.model import Mesh
 
 MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl")
+_QUIET = logging.NullHandler()            # added once: a logger keeps a set-like list
 
 
 # ----------------------------------------------------------------------------- mesh helpers
@@ -466,6 +468,9 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
         _stl_kind(data, file, budget)
 
     from trimesh.exchange.load import mesh_loaders       # slow import: only when needed
+    # trimesh logs what it could not read, with a traceback, as a warning; with no logging
+    # set up Python prints that on stderr. What went wrong reaches the user as our message.
+    logging.getLogger("trimesh").addHandler(_QUIET)
 
     try:
         loaded = mesh_loaders[ext[1:]](io.BytesIO(data))
