@@ -82,9 +82,29 @@ def unit3(a) -> tuple[np.ndarray, float]:
     return scaled / s, m * s
 
 
+# The largest coordinate any reader lets into a scene (core.scene.formats refuses beyond it),
+# and how far the normalizing transformation may carry such a point: the clipper and the
+# projection then work with numbers far from overflow (products of a few of them stay finite).
+MAX_WORLD = 1e30
+MAX_REACH = 1e250
+
 # The smallest |CW - PRP| the renderer can turn into a direction: the shading normalises the
 # direction of projection with a plain Euclidean norm, whose square must not underflow.
 MIN_DOP_LENGTH = float(np.sqrt(np.finfo(np.float64).tiny))
+
+
+def load_problems(view: View) -> list[str]:
+    """Why a reader must refuse ``view``: the reasons it cannot be drawn in either projection
+    (the renderer's own rules, matrices included); empty when at least one projection can draw
+    it. A view that only one projection refuses (F behind the eye in perspective) loads, and
+    the frame drawn that way says why."""
+    found = problems(view)
+    if found:
+        return found
+    perspective, parallel = problems(view, "perspective"), problems(view, "parallel")
+    if perspective and parallel:
+        return list(dict.fromkeys(perspective + parallel))
+    return []
 
 
 def _problems(view: View, projection: str | None) -> list[str]:
@@ -139,6 +159,14 @@ def _factors_or_overflow(view: View, projection: str, found: list[str]) -> dict 
     if not all(np.all(np.isfinite(m)) for m in factors.values()):
         found.append("the numbers are too large or too small: the normalizing transformation "
                      "overflows")
+        return None
+    n = factors["N_per" if projection == "perspective" else "N_par"]
+    with np.errstate(over="ignore"):
+        reach = float(np.max(np.abs(n[:3, :3]).sum(axis=1) * MAX_WORLD + np.abs(n[:3, 3])))
+    if not reach <= MAX_REACH:
+        found.append(f"the normalizing transformation carries points of the scene's range "
+                     f"(|x| <= {MAX_WORLD:g}) as far as {reach:.3g}, beyond {MAX_REACH:g}: the "
+                     f"view's numbers are too large or its window too small to compute with")
         return None
     if projection == "perspective":
         z_min = float(factors["z_min"])

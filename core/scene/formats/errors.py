@@ -13,9 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
+from core.camera.view import MAX_WORLD
+
 # Coordinates beyond this are refused by every reader: products of a few of them (cross
 # products, volumes, the normalizing transforms) must stay finite in float64.
-MAX_COORDINATE = 1e30
+MAX_COORDINATE = MAX_WORLD          # the views' validity rules assume this bound
 
 
 # A message is one line of at most this many characters (a 1 MB value once made a 2 MB message).

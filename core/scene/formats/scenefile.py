@@ -44,7 +44,7 @@ from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_ve
 from core.shading.illumination import SPECULAR_FORMS
 from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
-from core.camera.view import PROJECTIONS, View, problems, unit3
+from core.camera.view import PROJECTIONS, View, load_problems, unit3
 
 MAX_NUMBER = MAX_COORDINATE
 
@@ -410,7 +410,7 @@ class _Reader:
                     front=self.number(t["front"], path + ("front",)),
                     back=self.number(t["back"], path + ("back",)),
                     label=label + (f" (line {line})" if line else ""))
-        found = problems(view)
+        found = load_problems(view)
         return view, (f"{view.label}: " + "; ".join(found)) if found else None
 
 
