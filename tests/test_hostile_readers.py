@@ -307,3 +307,20 @@ def test_a_tiny_but_drawable_tri_camera_loads_and_renders():
                      "0 0 0 1e-102 0 0 0 1e-102 0\n", "tiny.tri")
     for projection in ("perspective", "parallel"):
         assert draw(scene, projection, "flat").message is None
+
+
+def test_the_loader_renderer_agreement_case_passes():
+    """``python -m app stability``'s case: every view the reader accepts draws (numpy set to
+    raise on overflow here, so an overflow anywhere in the renderer is an exception)."""
+    from core.analysis.stability_cases import loader_renderer_agreement
+    outcome = loader_renderer_agreement()
+    assert all(ok for _, ok in outcome.checks), outcome.checks
+
+
+def test_a_view_neither_projection_can_draw_is_refused_at_load(tmp_path):
+    path = tmp_path / "v.views"
+    # a window 1e-290 wide: N would carry the scene's range (1e30) to 1e320
+    path.write_text("0 0 0\n0 0 1\n0 1 0\n0 1e-290 0 1e-290\n0 0 5\n1 -1\n")
+    scene = load_scene(path)
+    assert not scene.views and "the normalizing transformation carries points" in \
+        scene.view_messages[0]
