@@ -8,7 +8,10 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import sys
+import tempfile
 from pathlib import Path
 
 from core.settings import RenderSettings
@@ -16,17 +19,46 @@ from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability")
 
 
+_SIZE = re.compile(r"([+-]?[0-9]+)[xX]([+-]?[0-9]+)")
+
+
 def parse_size(text: str) -> tuple[int, int]:
-    """``WxH`` → ``(W, H)`` for argparse, with a message that says what was wrong."""
-    try:
-        w, h = (int(part) for part in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"size must look like 500x500, not {text!r}") from None
+    """``WxH`` → ``(W, H)`` for argparse: ASCII digits only (``int`` would also take ``+5``,
+    ``1_0`` and fullwidth digits), with a message that says what was wrong."""
     from core.scene.model import MAX_IMAGE_SIDE
-    if not (1 <= w <= MAX_IMAGE_SIDE and 1 <= h <= MAX_IMAGE_SIDE):
-        raise argparse.ArgumentTypeError(f"size {w}x{h} is out of range (1 to {MAX_IMAGE_SIDE} "
+    match = _SIZE.fullmatch(text)
+    if not match or len(text) > 40:
+        shown = text if len(text) <= 40 else text[:40] + "..."
+        raise argparse.ArgumentTypeError(
+            f"size must be WIDTHxHEIGHT in ASCII digits, like 500x500, not {shown!r}")
+    for side, token in zip(("width", "height"), match.groups()):
+        if token[0] == "+":
+            raise argparse.ArgumentTypeError(f"the {side} {token!r} must be plain digits, "
+                                             f"without a sign")
+        if token[0] == "-" or int(token) < 1:
+            raise argparse.ArgumentTypeError(f"the {side} must be at least 1, got {token}")
+    if len(match.group(1)) > 6 or len(match.group(2)) > 6 \
+            or max(int(match.group(1)), int(match.group(2))) > MAX_IMAGE_SIDE:
+        raise argparse.ArgumentTypeError(f"size {text} is out of range (1 to {MAX_IMAGE_SIDE} "
                                          "a side)")
-    return w, h
+    return int(match.group(1)), int(match.group(2))
+
+
+def attach_values(argv: list[str], options=("--size",)) -> list[str]:
+    """``--size -5x5`` → ``--size=-5x5``: argparse takes a value that starts with ``-`` for an
+    option (and says "expected one argument"); joined, it reaches :func:`parse_size`, which
+    says what is wrong with it."""
+    out = []
+    i = 0
+    while i < len(argv):
+        if argv[i] in options and i + 1 < len(argv) and argv[i + 1].startswith("-") \
+                and argv[i + 1] != "--":
+            out.append(f"{argv[i]}={argv[i + 1]}")
+            i += 2
+        else:
+            out.append(argv[i])
+            i += 1
+    return out
 
 
 def _parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -53,7 +85,11 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     r.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
     r.add_argument("--shading", choices=SHADING_CHOICES, default=None)
     r.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's, 500x500)")
-    r.add_argument("--out", required=True, help="the PNG file to write")
+    r.add_argument("--out", required=True,
+                   help="the PNG file to write (.png only; its folder must exist; an existing "
+                        "file that is not a PNG is kept unless --force)")
+    r.add_argument("--force", action="store_true",
+                   help="overwrite --out even if it is an existing file that is not a PNG")
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -84,11 +120,21 @@ def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help")):
         argv = ["view", *argv]                # `python -m app [SCENE]` opens the viewer
-    args = _parser(argv[0]).parse_args(argv)
+    args = _parser(argv[0]).parse_args(attach_values(argv))
     try:
         return _dispatch(args)
     except KeyboardInterrupt:
         return 130
+    except MemoryError:
+        return _out_of_memory()
+
+
+def _out_of_memory() -> int:
+    """The last line of defence: every reader bounds its input, but a scene within the limits
+    may still need more memory than this machine has (a huge framebuffer of many samples)."""
+    print("error: out of memory: the input or the image is too large for this machine's "
+          "memory (see the input-size limits in the README)", file=sys.stderr)
+    return 3
 
 
 def _load(source: str, size=None):
@@ -138,9 +184,11 @@ def _dispatch(args) -> int:
 
 
 def _render(args) -> int:
-    from PIL import Image
-
     from app.viewer.state import announce_compiles, render
+    refusal = out_problem(Path(args.out), args.scene, args.force)
+    if refusal:
+        print(f"error: --out {args.out}: {refusal}", file=sys.stderr)
+        return 2
     scene = _load(args.scene, size=args.size)
     if scene is None:
         return 2
@@ -155,14 +203,69 @@ def _render(args) -> int:
         return 1
     out = Path(args.out)
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(frame.color).save(out)
+        write_png(frame.color, out)
     except OSError as error:
-        print(f"error: cannot write {out}: {error}", file=sys.stderr)
+        print(f"error: cannot write {out}: {error.strerror or error}", file=sys.stderr)
         return 2
     print(f"wrote {out} ({frame.color.shape[1]}x{frame.color.shape[0]}, view {args.view} of "
           f"{len(scene.views)}, {frame.stats['projection']}, {frame.stats['shading']})")
     return 0
+
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def out_problem(out: Path, source: str, force: bool) -> str | None:
+    """Why ``render`` must not write ``out``, or None. Only PNG is written (``.png``); the
+    folder must exist (none is created); the output is never the input (also through links or
+    another name); an existing file is replaced only if it is a PNG, or with ``--force``."""
+    if out.suffix.lower() != ".png":
+        return f"only PNG is written: the name must end in .png (got {out.suffix or 'no extension'!r})"
+    parent = out.parent
+    if not parent.is_dir():
+        return f"the folder {str(parent)!r} does not exist (it is not created)"
+    if source != "-" and _same_file(out, Path(source)):
+        return f"it is the input {source!r}: writing would destroy it"
+    if os.path.lexists(out):
+        if out.is_dir():
+            return "it is a folder"
+        if not out.is_file():
+            return "it exists and is not a regular file"
+        if not force and not _is_png(out):
+            return "it exists and is not a PNG: it is kept (--force replaces it)"
+    return None
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _is_png(path: Path) -> bool:
+    try:
+        with open(path, "rb") as f:
+            return f.read(8) == PNG_SIGNATURE
+    except OSError:
+        return False
+
+
+def write_png(color, out: Path) -> None:
+    """Write a temporary PNG beside ``out`` and rename it over ``out``: a failed write (a full
+    disk) leaves whatever was there untouched, and no half-written file behind."""
+    from PIL import Image
+    fd, temp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    try:
+        with os.fdopen(fd, "wb") as stream:
+            Image.fromarray(color).save(stream, format="PNG")
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(temp, 0o666 & ~umask)         # mkstemp made it private; a PNG is not
+        os.replace(temp, out)
+    except BaseException:
+        os.unlink(temp)
+        raise
 
 
 def _matrices(args) -> int:
