@@ -74,7 +74,7 @@ def mip_chain(image: np.ndarray) -> list[np.ndarray]:
 class Texture:
     """RGBA float32 levels (row 0 at v = 0), a wrap mode and where the texture came from."""
 
-    levels: list[np.ndarray]
+    levels: list[np.ndarray] = field(repr=False)
     wrap: str = "repeat"
     srgb: bool = False
     source: str = ""

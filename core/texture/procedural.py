@@ -136,10 +136,25 @@ def perlin_height(resolution: int = 256, scale: int = 8, octaves: int = 4, seed:
     return _octaves(_perlin_octave, resolution, scale, octaves, seed), False
 
 
+def sky(resolution: int = 256, zenith=(0.15, 0.35, 0.8), horizon=(0.85, 0.9, 0.95),
+        ground=(0.35, 0.3, 0.25), squares: int = 16, sun=(0.3, 0.75)):
+    """An equirectangular environment (u: longitude, v: latitude, up): a sky from ``horizon``
+    to ``zenith``, a sun at (u, v) = ``sun``, and a checkered ground below the horizon, so a
+    mirror shows where it reflects."""
+    u, v = _grid(resolution)
+    up = np.clip((v - 0.5) * 2, 0, 1) ** 0.6
+    image = _mix(horizon, zenith, up)
+    sun_distance = np.hypot((u - sun[0]) * 2, v - sun[1])
+    image = _mix(image, (1.0, 0.97, 0.85), np.exp(-(sun_distance / 0.03) ** 2))
+    checks = (np.floor(u * squares) + np.floor(v * squares)) % 2
+    floor = _mix(ground, np.asarray(ground) * 0.5, checks)
+    return np.where((v < 0.5)[..., None], floor, image), True
+
+
 PROCEDURALS = {
     "checker": checker, "bricks": bricks, "bricks_height": bricks_height,
     "demo_height": demo_height, "value_noise": value_noise, "perlin": perlin,
-    "perlin_height": perlin_height,
+    "perlin_height": perlin_height, "sky": sky,
 }
 
 
@@ -158,7 +173,7 @@ def make(name: str, wrap: str = "repeat", **params) -> Texture:
     resolution = params.get("resolution", 256)
     if not (isinstance(resolution, int) and 1 <= resolution <= MAX_RESOLUTION):
         raise ValueError(f"resolution must be a whole number from 1 to {MAX_RESOLUTION}")
-    for key in ("scale", "rows", "columns", "octaves"):
+    for key in ("scale", "rows", "columns", "octaves", "squares"):
         if key in params and not (isinstance(params[key], int) and 1 <= params[key] <= 1024):
             raise ValueError(f"{key} must be a whole number from 1 to 1024 (so the pattern tiles)")
     try:
