@@ -54,6 +54,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     r.add_argument("--shading", choices=SHADING_CHOICES, default=None)
     r.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's, 500x500)")
     r.add_argument("--out", required=True, help="the PNG file to write")
+    _texture_arguments(r)                     # issue 11
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -147,9 +148,11 @@ def _render(args) -> int:
     index = _pick_view(scene, args.view)
     if index is None:
         return 2
+    texture_options = _texture_options(scene, args)       # issue 11
     with announce_compiles():            # the first run compiles the kernels: say so
         frame = render(scene, scene.views[index],
-                       RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading, size=args.size or scene.size))
+                       RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading, size=args.size or scene.size,
+                                                **texture_options))
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1
@@ -163,6 +166,26 @@ def _render(args) -> int:
     print(f"wrote {out} ({frame.color.shape[1]}x{frame.color.shape[0]}, view {args.view} of "
           f"{len(scene.views)}, {frame.stats['projection']}, {frame.stats['shading']})")
     return 0
+
+
+# -- issue 11: texture filter, and the bump demo's map and mode (J3DPanel's clicks)
+def _texture_arguments(parser) -> None:
+    from core.texture.sample import FILTERS
+    parser.add_argument("--texture-filter", choices=tuple(FILTERS), default=None,
+                        help="how textures are filtered (default: trilinear)")
+    parser.add_argument("--bump-map", type=int, default=None, metavar="K",
+                        help="the bump demo's height map B(x, y), 0 to 3")
+    parser.add_argument("--no-bump", action="store_true",
+                        help="ignore bump and normal maps (the bump demo's Phong mode)")
+
+
+def _texture_options(scene, args) -> dict:
+    from core.texture.bump_demo import apply_demo_options
+    label = apply_demo_options(scene, args.bump_map, not args.no_bump)
+    if label:
+        print(label)
+    return {"texture_filter": args.texture_filter, "bump": False if args.no_bump else None}
+# --
 
 
 def _matrices(args) -> int:

@@ -93,3 +93,49 @@ def test_demo_kernel_matches_the_transcription(bump_map, bump):
             blue = demo_pixel(x / width * 100.0, y / height * -100.0, 0.0, 0.0, 0.0, 1.0,
                               light, view, bump_map, bump)
             assert java_color_byte(blue) == expected[y, x, 2]
+
+
+def _render_demo(bump_map, bump, size):
+    from core import render
+    from core.scene.formats import load_scene
+    from core.settings import RenderSettings
+    from core.texture.bump_demo import apply_demo_options
+    scene = load_scene("scenes/bump_demo.toml", size=size)
+    apply_demo_options(scene, bump_map, bump)
+    settings = RenderSettings.for_scene(scene, bump=bump)
+    frame = render(scene, scene.views[0], settings)
+    assert frame.message is None
+    return frame.color
+
+
+@pytest.mark.parametrize("size", [(500, 500), (333, 333)])
+@pytest.mark.parametrize("bump_map,bump", CASES)
+def test_renderer_draws_the_demo_pixel_for_pixel(size, bump_map, bump):
+    """The scene file through the ordinary z-buffer renderer: every pixel within 1/255."""
+    ours = _render_demo(bump_map, bump, size).astype(int)
+    expected = j3dpanel(*size, bump_map, bump).astype(int)
+    assert np.abs(ours - expected).max() <= 1
+
+
+def test_cli_render_with_bump_map(tmp_path):
+    import subprocess
+    import sys
+    from PIL import Image
+    out = tmp_path / "b1.png"
+    done = subprocess.run([sys.executable, "-m", "app", "render", "scenes/bump_demo.toml",
+                           "--bump-map", "1", "--size", "64x64", "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    assert "B(x,y) = sin(x) + cos(y)" in done.stdout
+    ours = np.asarray(Image.open(out)).astype(int)
+    assert np.abs(ours - j3dpanel(64, 64, 1, True)).max() <= 1
+    done = subprocess.run([sys.executable, "-m", "app", "render", "scenes/bump_demo.toml",
+                           "--no-bump", "--size", "64x64", "--out", str(out)],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0 and "Phong" in done.stdout
+    assert np.abs(np.asarray(Image.open(out)).astype(int) - j3dpanel(64, 64, 0, False)).max() <= 1
+
+
+def test_map_past_the_last_is_the_default_case():
+    ours = _render_demo(7, True, (40, 40)).astype(int)
+    assert np.abs(ours - j3dpanel(40, 40, 0, True)).max() <= 1

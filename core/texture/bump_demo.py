@@ -142,3 +142,28 @@ def demo_view(width: int, height: int) -> View:
     return View(vrp=(0.0, 0.0, 0.0), vpn=(0.0, 0.0, 1.0), vup=(0.0, 1.0, 0.0), window=window,
                 prp=(centre[0], centre[1], 100.0), front=10.0, back=-10.0,
                 label=f"the bump demo's panel, {width} x {height}")
+
+
+def apply_demo_options(scene, bump_map: int | None, bump: bool) -> str | None:
+    """Set every bump-demo material of ``scene`` to ``bump_map`` (when given) and ``bump``;
+    returns the demo's label text (``"Bump: B(x,y) = …"`` or ``"Phong"``), or None when the
+    scene has no demo material."""
+    from core.texture.material import maps_of
+    demos = [maps_of(m.material).demo for m in scene.meshes
+             if maps_of(m.material) is not None and maps_of(m.material).demo is not None]
+    for demo in demos:
+        if bump_map is not None:
+            demo.bump_map = int(bump_map)
+        demo.bump = bool(bump)
+    if not demos:
+        return None
+    return f"Bump: {label(demos[0].bump_map)}" if demos[0].bump else "Phong"
+
+
+def panel_views(scene) -> list[View]:
+    """The demo's panel view for the scene's image size, when a material is the demo's."""
+    from core.texture.material import maps_of
+    if any(maps_of(m.material) is not None and maps_of(m.material).demo is not None
+           for m in scene.meshes):
+        return [demo_view(*scene.size)]
+    return []

@@ -209,7 +209,11 @@ class _Reader:
             scene.size = (int(w), int(h))
         if size is not None:
             scene.size = tuple(size)
-        scene.view_messages += getattr(self, "texture_messages", [])     # issue 11
+        # -- issue 11: texture files that could not be used; the bump demo's panel view
+        scene.view_messages += getattr(self, "texture_messages", [])
+        from core.texture.bump_demo import panel_views
+        scene.views = panel_views(scene) + scene.views
+        # --
         return scene
 
     def geometry(self, g, path: Path_) -> Mesh:
