@@ -90,6 +90,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                         "file that is not a PNG is kept unless --force)")
     r.add_argument("--force", action="store_true",
                    help="overwrite --out even if it is an existing file that is not a PNG")
+    _texture_arguments(r)                     # issue 11
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -195,9 +196,11 @@ def _render(args) -> int:
     index = _pick_view(scene, args.view)
     if index is None:
         return 2
+    texture_options = _texture_options(scene, args)       # issue 11
     with announce_compiles():            # the first run compiles the kernels: say so
         frame = render(scene, scene.views[index],
-                       RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading, size=args.size or scene.size))
+                       RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading, size=args.size or scene.size,
+                                                **texture_options))
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1
@@ -266,6 +269,26 @@ def write_png(color, out: Path) -> None:
     except BaseException:
         os.unlink(temp)
         raise
+
+
+# -- issue 11: texture filter, and the bump demo's map and mode (J3DPanel's clicks)
+def _texture_arguments(parser) -> None:
+    from core.texture.sample import FILTERS
+    parser.add_argument("--texture-filter", choices=tuple(FILTERS), default=None,
+                        help="how textures are filtered (default: trilinear)")
+    parser.add_argument("--bump-map", type=int, default=None, metavar="K",
+                        help="the bump demo's height map B(x, y), 0 to 3")
+    parser.add_argument("--no-bump", action="store_true",
+                        help="ignore bump and normal maps (the bump demo's Phong mode)")
+
+
+def _texture_options(scene, args) -> dict:
+    from core.texture.bump_demo import apply_demo_options
+    label = apply_demo_options(scene, args.bump_map, not args.no_bump)
+    if label:
+        print(label)
+    return {"texture_filter": args.texture_filter, "bump": False if args.no_bump else None}
+# --
 
 
 def _matrices(args) -> int:

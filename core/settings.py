@@ -60,6 +60,10 @@ class RenderSettings:
     # Where in its pixel a one-sample frame samples (x right, y down, pixel units): the centre,
     # as the course's scan conversion does; the film moves it for each of several samples.
     pixel_offset: tuple[float, float] = (0.5, 0.5)
+    # Texture filter (core.texture.sample.FILTERS): nearest | bilinear | trilinear | anisotropic.
+    texture_filter: str = "trilinear"
+    # Bump and normal maps perturb the normal (False: the demo's "Phong" mode, maps ignored).
+    bump: bool = True
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:

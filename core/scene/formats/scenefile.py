@@ -57,6 +57,11 @@ LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
 
+# -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
+from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
+MATERIAL_KEYS = MATERIAL_KEYS + TEXTURE_KEYS
+# --
+
 Path_ = tuple            # a key path: ("geometry", 2, "material", "kd")
 
 
@@ -248,6 +253,11 @@ class _Reader:
             scene.size = (int(w), int(h))
         if size is not None:
             scene.size = tuple(size)
+        # -- issue 11: texture files that could not be used; the bump demo's panel view
+        scene.view_messages += getattr(self, "texture_messages", [])
+        from core.texture.bump_demo import panel_views
+        scene.views = panel_views(scene) + scene.views
+        # --
         return scene
 
     def geometry(self, g, path: Path_) -> Mesh:
@@ -341,7 +351,15 @@ class _Reader:
         for key in ("od", "os"):
             if key in t:
                 fields[key] = self.vector(t[key], path + (key,), 3, 0.0, 1.0)
-        return Material(**{**base.__dict__, **fields})
+        material = Material(**{**base.__dict__, **fields})
+        # -- issue 11: textures ride on Material.extra["maps"]; a file that cannot be used
+        # leaves the mesh untextured, and its message (naming file and key) is shown.
+        maps = read_maps(self, t, path)
+        if maps is not None:
+            material.extra = {**(getattr(material, "extra", None) or {}), "maps": maps}
+            self.texture_messages = getattr(self, "texture_messages", []) + maps.messages
+        # --
+        return material
 
     def light(self, value, path: Path_) -> Light:
         t = self.table(value, path, LIGHT_KEYS)
