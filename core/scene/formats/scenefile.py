@@ -51,8 +51,14 @@ MAX_NUMBER = MAX_COORDINATE
 TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
             "line_color", "views", "view", "geometry", "light")
 GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
+# Analytic primitives (issue 12: the ray tracer intersects them, the z-buffer draws them
+# tessellated): [[geometry]] primitive = "sphere" | "plane" with these keys.
+PRIMITIVE_KEYS = ("primitive", "center", "radius", "point", "normal", "checker", "checker_color",
+                  "extent", "segments")
+GEOMETRY_KEYS += PRIMITIVE_KEYS
 TRANSFORM_KEYS = ("scale", "rotate", "translate")
 MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
+MATERIAL_KEYS += ("kr", "kt", "ior")      # Whitted's global terms (issue 12)
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
@@ -221,7 +227,10 @@ class _Reader:
         meshes, total = [], 0
         for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
             self.budget = generators.MAX_TRIANGLES - total     # what a mesh file may still add
-            meshes.append(self.geometry(g, ("geometry", i + 1)))
+            if "primitive" in g:             # a sphere or plane: its tessellation, 1-2 meshes
+                meshes.extend(self.primitive(g, ("geometry", i + 1)))
+            else:
+                meshes.append(self.geometry(g, ("geometry", i + 1)))
             # Each generator keeps to the limit; the scene as a whole must too, or a short
             # file listing many big generators could take all the memory.
             total += len(meshes[-1].triangles)
@@ -238,6 +247,8 @@ class _Reader:
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
                       meshes=meshes, views=views, view_messages=messages, lights=lights,
                       source=self.file)
+        scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
+                                 if m.tessellates is not None}.values())
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
                           ("background", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
@@ -351,6 +362,7 @@ class _Reader:
         for key in ("od", "os"):
             if key in t:
                 fields[key] = self.vector(t[key], path + (key,), 3, 0.0, 1.0)
+        fields.update(self.whitted_terms(t, path))
         material = Material(**{**base.__dict__, **fields})
         # -- issue 11: textures ride on Material.extra["maps"]; a file that cannot be used
         # leaves the mesh untextured, and its message (naming file and key) is shown.
@@ -360,6 +372,57 @@ class _Reader:
             self.texture_messages = getattr(self, "texture_messages", []) + maps.messages
         # --
         return material
+
+    # ------------------------------------------------------------------ ray tracing (issue 12)
+
+    def whitted_terms(self, t: dict, path: Path_) -> dict:
+        """``kr``, ``kt`` in [0, 1] and ``ior``: a positive number or a medium's name."""
+        from core.raytrace.optics import index_of_refraction
+        fields = {}
+        for key in ("kr", "kt"):
+            if key in t:
+                fields[key] = self.number(t[key], path + (key,), 0.0, 1.0)
+        if "ior" in t:
+            try:
+                fields["ior"] = index_of_refraction(t["ior"], "ior")
+            except ValueError as error:
+                raise self.fail(path + ("ior",), str(error).removeprefix("ior: ")) from None
+        return fields
+
+    def primitive(self, g, path: Path_) -> list[Mesh]:
+        """``primitive = "sphere"`` (center, radius) or ``"plane"`` (point, normal, checker,
+        checker_color, extent): the primitive, drawn by its tessellation's meshes."""
+        from core.scene.primitives import Plane, Sphere, tessellate
+        self.table(g, path, ("primitive", "name", "material", "segments") + {
+            "sphere": ("center", "radius"),
+            "plane": ("point", "normal", "checker", "checker_color", "extent")}.get(
+                g["primitive"] if isinstance(g["primitive"], str) else "", ()))
+        kind = self.choice(g["primitive"], path + ("primitive",), ("sphere", "plane"))
+        material = (self.material(g["material"], path + ("material",), Material())
+                    if "material" in g else Material())
+        segments = int(self.number(g.get("segments", 96), path + ("segments",), 8, 1024))
+        if kind == "sphere":
+            shape = Sphere(self.vector(g.get("center", [0, 0, 0]), path + ("center",)),
+                           self.number(g.get("radius", 1.0), path + ("radius",), 1e-6, MAX_NUMBER),
+                           material)
+        else:
+            normal = self.vector(g.get("normal", [0, 1, 0]), path + ("normal",))
+            if not any(normal):
+                raise self.fail(path + ("normal",), "the plane's normal is the zero vector")
+            shape = Plane(self.vector(g.get("point", [0, 0, 0]), path + ("point",)), normal,
+                          material,
+                          self.number(g.get("checker", 0.0), path + ("checker",), 0.0, MAX_NUMBER),
+                          self.vector(g.get("checker_color", [0.1, 0.1, 0.1]),
+                                      path + ("checker_color",), 3, 0.0, 1.0),
+                          self.number(g.get("extent", 20.0), path + ("extent",), 1e-6, 1e6))
+            if shape.checker > 0.0 and (2 * shape.extent / shape.checker) ** 2 > 1e6:
+                raise self.fail(path + ("checker",), "over a million checker squares: make the "
+                                "squares bigger or the extent smaller")
+        meshes = tessellate(shape, segments)
+        for mesh in meshes:
+            if "name" in g:
+                mesh.name = self.string(g["name"], path + ("name",))
+        return meshes
 
     def light(self, value, path: Path_) -> Light:
         t = self.table(value, path, LIGHT_KEYS)
