@@ -53,6 +53,10 @@ MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
+# Animation (issue 13): [animation], [[key]] and [[emitter]] are read by core/animation/keys.py.
+from core.animation import keys as animation_keys     # noqa: E402  (after the constants it extends)
+TOP_KEYS += animation_keys.TOP_KEYS
+TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
 
 Path_ = tuple            # a key path: ("geometry", 2, "material", "kd")
 
@@ -204,6 +208,7 @@ class _Reader:
             scene.size = (int(w), int(h))
         if size is not None:
             scene.size = tuple(size)
+        animation_keys.read_animation(self, doc, scene)     # keys and emitters, if any
         return scene
 
     def geometry(self, g, path: Path_) -> Mesh:
