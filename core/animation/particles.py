@@ -193,7 +193,9 @@ def _new_particles(spec: Spec, index: int, rng, n: int, frame_dt: float, origin=
     if parent_velocity is not None:
         velocity += spec.inherit * parent_velocity
     age = rng.uniform(0.0, frame_dt, n) if origin is None else np.zeros(n)
-    position = position + velocity * age[:, None]
+    acceleration = spec.gravity + spec.wind                  # (drag is left to the steps)
+    position = position + velocity * age[:, None] + 0.5 * acceleration * (age * age)[:, None]
+    velocity = velocity + acceleration * age[:, None]
     color = np.clip(draw(rng, *spec.color, n), 0.0, 1.0)
     alpha = np.clip(draw(rng, *spec.alpha, n), 0.0, 1.0)
     return Particles(
