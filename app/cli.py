@@ -11,6 +11,7 @@ import json
 import sys
 from pathlib import Path
 
+from core.settings import RenderSettings
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate")
 
@@ -155,7 +156,8 @@ def _render(args) -> int:
     if index is None:
         return 2
     with announce_compiles():            # the first run compiles the kernels: say so
-        frame = render(scene, index, args.projection, args.shading, args.size or scene.size)
+        frame = render(scene, scene.views[index],
+                       RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading, size=args.size or scene.size))
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1

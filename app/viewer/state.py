@@ -33,16 +33,16 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
     return load(source, size=size)
 
 
-def render(scene, view_index, projection, shading, size):
+def render(scene, view, settings, context=None):
     """``core.render.render``, imported when first needed.
 
     A wireframe needs no compiled kernel, so numba is imported (to listen for compiles) only
     when a frame will draw triangles; the default scene's first frame then skips it entirely.
     """
     from core.render import render as render_frame
-    if (shading or scene.shading) != "wireframe" and scene.triangle_count:
+    if settings.shading != "wireframe" and scene.triangle_count:
         _listen_for_compiles()
-    return render_frame(scene, view_index, projection, shading, size)
+    return render_frame(scene, view, settings, context)
 
 
 # Set when numba starts compiling a kernel (a cache miss), so that the slow-frame notice
@@ -128,11 +128,24 @@ class ViewerState:
     # caches them on disk). Say so when it takes longer than this.
     compile_notice_after: float = 0.5
     _modes_rendered: set = field(default_factory=set, repr=False)
+    context: object = None          # the core.context.RenderContext of this window's frames
 
     def __post_init__(self) -> None:
         self.projection = self.projection or self.scene.projection
         self.shading = self.shading or self.scene.shading
         self.size = (int(self.size[0]), int(self.size[1]))
+        if self.context is None:
+            from core.context import RenderContext
+            self.context = RenderContext()
+
+    def current_view(self):
+        """The view shown now (None when the scene has no valid view)."""
+        return self.scene.views[self.view_index % self.view_count] if self.view_count else None
+
+    def settings(self):
+        """The :class:`core.settings.RenderSettings` of the next frame."""
+        from core.settings import RenderSettings
+        return RenderSettings(projection=self.projection, shading=self.shading, size=self.size)
 
     @classmethod
     def open(cls, source: str | Path, size: tuple[int, int] | None = None,
@@ -271,8 +284,8 @@ class ViewerState:
         start = time.perf_counter()
         try:
             with watch:
-                frame = self.renderer(self.scene, self.view_index, self.projection,
-                                      self.shading, self.size)
+                frame = self.renderer(self.scene, self.current_view(), self.settings(),
+                                      self.context)
         except Exception as error:
             self.render_error = (f"could not render view {self.view_index + 1} "
                                  f"({self.projection}, {self.shading}): "
