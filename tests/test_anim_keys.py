@@ -69,7 +69,7 @@ def test_halfway_view_is_the_hand_computed_middle_view():
 
 
 def test_halfway_frame_renders_as_the_still_middle_view():
-    from core.animation.frames import _render_opaque
+    from core import render
     from core.settings import RenderSettings
     import dataclasses
     scene, anim = load()
@@ -78,8 +78,8 @@ def test_halfway_frame_renders_as_the_still_middle_view():
     r = np.sqrt(0.5)
     hand = View(vrp=(1.0, 0.0, 0.0), vpn=(r, 0.0, r), vup=(0.0, 1.0, 0.0),
                 window=(-2.0, 2.0, -2.0, 2.0), prp=(0.0, 0.0, 8.0), front=3.0, back=-3.0)
-    keyed = _render_opaque(mid_scene, mid_scene.views[0], settings).color.copy()
-    still = _render_opaque(dataclasses.replace(mid_scene, views=[hand]), hand, settings).color
+    keyed = render(mid_scene, mid_scene.views[0], settings).color.copy()
+    still = render(dataclasses.replace(mid_scene, views=[hand]), hand, settings).color
     assert np.array_equal(keyed, still)
     assert len(np.unique(keyed.reshape(-1, 3), axis=0)) > 2           # something was drawn
 

@@ -131,12 +131,13 @@ alpha = 0.9
 """
 
 
-def render_frame(text, k, size=(64, 64)):
+def render_frame(text, k, size=(64, 64), samples=1):
     from core.animation.frames import render_at
     from core.settings import RenderSettings
     scene = read_scene_file(text, "scene.toml")
     anim = animation_of(scene)
-    return render_at(anim, anim.time_of(k), RenderSettings.for_scene(scene, size=size))
+    return render_at(anim, anim.time_of(k), RenderSettings.for_scene(scene, size=size,
+                                                                     samples=samples))
 
 
 def test_a_particle_is_never_drawn_through_an_opaque_surface():
@@ -155,6 +156,20 @@ def test_a_particle_is_never_drawn_through_an_opaque_surface():
     assert np.array_equal(behind.color[wall], without.color[wall])
     assert not np.array_equal(behind.color[~wall], without.color[~wall])
     assert not np.array_equal(with_particles.color[wall], without.color[wall])   # in front: drawn
+
+
+def test_supersampled_particles_are_hidden_by_the_wall_sample_by_sample():
+    behind_text = WALL_SCENE.replace('shape = "sphere"', 'shape = "disc"\nnormal = [0, 0, 1]\n'
+                                     'position = [0, 0, -1]').replace('radius = 2.5', 'radius = 4')
+    behind = render_frame(behind_text, 5, samples=4)
+    without = render_frame(WALL_SCENE.replace("rate = 3000", "rate = 0"), 5, samples=4)
+    inside = np.isfinite(render_frame(WALL_SCENE, 5).depth)
+    inside[1:-1] &= inside[:-2] & inside[2:]                 # away from the wall's edge
+    inside[:, 1:-1] &= inside[:, :-2] & inside[:, 2:]
+    assert inside.sum() > 200
+    assert np.array_equal(behind.color[inside], without.color[inside])
+    assert not np.array_equal(behind.color, without.color)
+    assert behind.stats["samples per pixel"] == 4
 
 
 def test_frame_100_twice_from_scratch_is_pixel_identical():

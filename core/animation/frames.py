@@ -8,7 +8,9 @@ blended over it by :func:`core.animation.draw.draw_particles`, depth-tested agai
 
 from __future__ import annotations
 
-import dataclasses
+import math
+
+import numpy as np
 
 from core.animation.draw import draw_particles
 
@@ -19,34 +21,35 @@ def settings_for(animation, **overrides):
     return RenderSettings.for_scene(animation.scene, **overrides)
 
 
-def render_at(animation, t: float, settings):
-    """The frame at time ``t``: the keyed view (or the scene's first view) of ``scene_at(t)``."""
+def render_at(animation, t: float, settings, context=None):
+    """The frame at time ``t``: the keyed view (or the scene's first view) of ``scene_at(t)``.
+
+    With particles and more than one sample a pixel, the opaque picture is drawn once at
+    ``side`` times the size (side = sqrt(samples), the regular grid), the particles are blended
+    into that big picture against its depth, and the result is box-filtered: each sample sees
+    the particles with its own depth test (the front door's supersampled frames keep no depth).
+    """
+    from core import render
+    from core.camera.film import box_filter
     scene = animation.scene_at(t)
     if not scene.views:
         raise ValueError(f"{scene.name}: no view to render")
     view = scene.views[0]
-    frame = _render_opaque(scene, view, settings)
     sprites = animation.sprites_at(t)
-    if sprites is not None and frame.message is None:
-        draw_particles(frame, sprites, view, settings)
-    return frame
-
-
-def _render_opaque(scene, view, settings):
-    """``core.render(scene, view, settings)``; until the redesign's front door lands on main,
-    the view-index form, with the z-buffer's depth taken from the renderer's buffer.
-    TODO(lead): drop this shim once ``render(scene, view, settings)`` and ``Frame.depth`` land."""
-    import inspect
-
-    from core import render
-    if not callable(render):                   # the module, before the front door is exported
-        render = render.render
-    if "view_index" not in inspect.signature(render).parameters:
-        return render(scene, view, settings)
-    frame = render(dataclasses.replace(scene, views=[view]), 0, settings.projection,
-                   settings.shading, settings.size)
-    frame.depth = None
-    if settings.shading != "wireframe" and scene.triangle_count and frame.message is None:
-        from core.renderers.zbuffer import _buffers
-        frame.depth = _buffers[tuple(settings.size)].depth.copy()
-    return frame
+    if sprites is None or settings.samples == 1:
+        frame = render(scene, view, settings, context)
+        if sprites is not None and frame.message is None:
+            draw_particles(frame, sprites, view, settings)
+        return frame
+    side = max(1, math.isqrt(settings.samples - 1) + 1)       # the smallest grid that holds them
+    width, height = settings.size
+    big = render(scene, view, settings.replace(samples=1, size=(width * side, height * side)),
+                 context)
+    if big.message is None:
+        draw_particles(big, sprites, view, settings)
+    small = np.floor(box_filter(big.color, side) + 0.5).astype(np.uint8)
+    out = type(big)(rgbx=np.empty((height, width, 4), np.uint8), plan=big.plan,
+                    message=big.message, stats={**big.stats, "samples per pixel": side * side})
+    out.color[:] = small
+    out.sample_color = big.color
+    return out
