@@ -16,6 +16,9 @@ import pytest
 from app.cli import main
 from tests.conftest import ROOT
 
+pytest.importorskip("av", reason="the animate extra (pip install 'fvd-viewer[anim]') writes MP4")
+pytest.importorskip("distributed", reason="the animate extra runs frames on Dask workers")
+
 SCENE = """
 name = "movie test"
 shading = "gouraud"

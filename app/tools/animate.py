@@ -250,7 +250,10 @@ def encode(folder: Path, count: int, out: Path, fps: float, crf: int = 18) -> No
         images[0].save(out, save_all=True, append_images=images[1:], loop=0,
                        duration=max(20, int(round(1000 / fps))))
         return
-    import av
+    try:
+        import av
+    except ImportError:
+        raise OSError("MP4 needs PyAV: pip install 'fvd-viewer[anim]' (or write .gif or PNGs)") from None
     from fractions import Fraction
     tmp = out.with_name(out.name + ".tmp.mp4")
     with av.open(str(tmp), "w") as container:
