@@ -213,29 +213,92 @@ def run_dask(job, todo, on_frame, retries: int, workers: int = 1,
              scheduler: str | None = None) -> dict[int, str]:
     """Render ``todo`` on a Dask cluster: a new local one of ``workers`` processes, or the one
     at ``scheduler``. Frames are handed out in order and written as they complete."""
-    try:
-        from dask.distributed import Client, LocalCluster, as_completed
-    except ImportError:
-        raise RuntimeError("--workers and --scheduler need Dask: pip install 'fvd-viewer[anim]'") from None
-    cluster = None
-    if scheduler is None:
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                               dashboard_address=None)
-    client = Client(scheduler or cluster)
+    with dask_client(workers, scheduler) as client:
+        return run_on(client, job, todo, on_frame, retries)
+
+
+class dask_client:
+    """A Dask client on a new ``LocalCluster`` of ``workers`` single-threaded processes, or on
+    the scheduler at ``address``; closed (with its cluster) on leaving the block."""
+
+    def __init__(self, workers: int = 1, address: str | None = None):
+        try:
+            from dask.distributed import Client, LocalCluster
+        except ImportError:
+            raise RuntimeError("--workers and --scheduler need Dask: "
+                               "pip install 'fvd-viewer[anim]'") from None
+        self.cluster = None
+        if address is None:
+            self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                        dashboard_address=None)
+        try:
+            self.client = Client(address or self.cluster)
+        except OSError as error:
+            if self.cluster is not None:
+                self.cluster.close()
+            raise RuntimeError(f"cannot reach the Dask scheduler at {address}: {error}") from None
+
+    def __enter__(self):
+        return self.client
+
+    def __exit__(self, *exc) -> None:
+        self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+
+def run_on(client, job, todo, on_frame, retries: int) -> dict[int, str]:
+    """Submit every frame of ``todo`` (retried ``retries`` times by Dask), hand each result to
+    ``on_frame`` as it completes; returns {frame: error} for frames that failed for good."""
+    from dask.distributed import as_completed
     failed = {}
-    try:
-        futures = {client.submit(render_png, job, k, retries=retries, pure=False): k for k in todo}
-        for future in as_completed(futures):
-            k = futures[future]
-            try:
-                on_frame(*future.result())
-            except Exception as error:                      # noqa: BLE001 - reported per frame
-                failed[k] = f"{type(error).__name__}: {error}"
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    futures = {client.submit(render_png, job, k, retries=retries, pure=False): k for k in todo}
+    for future in as_completed(futures):
+        k = futures[future]
+        try:
+            on_frame(*future.result())
+        except Exception as error:                          # noqa: BLE001 - reported per frame
+            failed[k] = f"{type(error).__name__}: {error}"
     return failed
+
+
+# ---------------------------------------------------------------------- the bench row
+
+
+def bench_animation(scene: str | Path | None = None, size=(500, 500), first: int = 60,
+                    frames: int = 30) -> dict:
+    """Frames per second rendering ``scenes/fountain.toml`` (frames ``first`` … ``first +
+    frames - 1``, PNG encoding included), in this process and on a local cluster of 2 workers
+    (timed after each worker has rendered a frame, so start-up and JIT are left out)."""
+    from core.paths import ROOT
+    scene = Path(scene or ROOT / "scenes" / "fountain.toml")
+    job = {"scene": str(scene.resolve()), "fps": _animation(str(scene.resolve())).fps,
+           "frames": first + frames,
+           "settings": {"size": list(size), "samples": 1, "projection": "perspective",
+                        "shading": _animation(str(scene.resolve())).scene.shading,
+                        "renderer": "zbuffer"}}
+    todo = list(range(first, first + frames))
+    render_png(job, first - 1)                                # warm: JIT, particles to first
+    t0 = time.perf_counter()
+    for k in todo:
+        render_png(job, k)
+    one = time.perf_counter() - t0
+    with dask_client(2) as client:
+        client.gather([client.submit(render_png, job, first - 2 + i, pure=False) for i in range(2)])
+        t0 = time.perf_counter()
+        run_on(client, job, todo, lambda k, data: None, 0)
+        two = time.perf_counter() - t0
+    particles = len(_animation(str(scene.resolve())).particle_system.particles)
+    return {"scene": str(scene.name), "size": list(size), "frames": frames,
+            "particles": particles, "fps_1": frames / one, "fps_2": frames / two,
+            "scaling": one / two}
+
+
+def format_animation(row: dict) -> str:
+    return (f"animation: {row['scene']} at {row['size'][0]} x {row['size'][1]}, "
+            f"{row['frames']} frames, ~{row['particles']:,} live particles: "
+            f"{row['fps_1']:.1f} frames/s on 1 process, {row['fps_2']:.1f} on 2 Dask workers "
+            f"(x{row['scaling']:.2f})")
 
 
 # ---------------------------------------------------------------------- the movie

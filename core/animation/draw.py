@@ -131,6 +131,29 @@ def _splat(image, depth, x, y, z, tx, ty, tz, r, rgb, alpha, mode):
                 _blend(image, depth, height - 1 - j, i, zq, rgb[k], alpha[k] * (1.0 - d2) * fade)
 
 
+@njit(cache=True)
+def _to_unit(color):
+    """uint8 (H, W, 3) → float64 in [0, 1] (one pass; numpy's astype-then-divide takes two)."""
+    height, width = color.shape[:2]
+    out = np.empty((height, width, 3))
+    for j in range(height):
+        for i in range(width):
+            for c in range(3):
+                out[j, i, c] = color[j, i, c] / 255.0
+    return out
+
+
+@njit(cache=True)
+def _to_bytes(image, color):
+    """float [0, 1] → uint8, rounded half up (unblended pixels come back exactly as they were)."""
+    height, width = color.shape[:2]
+    for j in range(height):
+        for i in range(width):
+            for c in range(3):
+                v = min(max(image[j, i, c], 0.0), 1.0)
+                color[j, i, c] = np.uint8(np.floor(v * 255.0 + 0.5))
+
+
 def draw_particles(frame, sprites: Sprites, view, settings) -> int:
     """Blend ``sprites`` into ``frame.color`` over its opaque picture; returns how many were
     in front of the camera. ``frame.depth`` (the z-buffer's, larger = nearer) hides particles
@@ -144,10 +167,10 @@ def draw_particles(frame, sprites: Sprites, view, settings) -> int:
     depth = getattr(frame, "depth", None)
     if depth is None:
         depth = np.full((height, width), -np.inf)
-    image = color.astype(np.float64) / 255.0
+    image = _to_unit(color)
     _splat(image, np.ascontiguousarray(depth, dtype=np.float64), p["x"], p["y"], p["z"], p["tx"],
            p["ty"], p["tz"], p["r"], np.ascontiguousarray(p["rgb"], dtype=np.float64),
            p["alpha"].astype(np.float64), p["mode"].astype(np.int64))
-    color[...] = np.floor(np.clip(image, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+    _to_bytes(image, color)
     frame.stats["particles drawn"] = int(len(p["x"]))
     return int(len(p["x"]))

@@ -164,7 +164,8 @@ class Particles:
         return Particles(**{k: getattr(self, k).copy() for k in ARRAYS})
 
     def keep(self, mask: np.ndarray) -> "Particles":
-        return Particles(**{k: getattr(self, k)[mask] for k in ARRAYS})
+        rows = np.flatnonzero(mask)                 # take() by index beats a boolean mask
+        return Particles(**{k: np.take(getattr(self, k), rows, axis=0) for k in ARRAYS})
 
     def extend(self, other: "Particles") -> "Particles":
         return Particles(**{k: np.concatenate([getattr(self, k), getattr(other, k)])
@@ -181,6 +182,74 @@ class Particles:
         rgb = self.color + (self.color_end - self.color) * f[:, None]
         alpha = self.alpha + (self.alpha_end - self.alpha) * f
         return size, rgb, alpha
+
+
+class ParticlePool:
+    """The live particles of a system: the same arrays as :class:`Particles`, kept with spare
+    capacity so that a step allocates nothing. Rows ``[0, n)`` are live; the attributes are
+    views of them. New particles are appended (capacity doubles when full); the dead are
+    squeezed out in place by one compiled pass that keeps the order of the living."""
+
+    def __init__(self, capacity: int = 1024) -> None:
+        empty = Particles()
+        self._store = {k: np.zeros((capacity,) + getattr(empty, k).shape[1:],
+                                   getattr(empty, k).dtype) for k in ARRAYS}
+        self.n = 0
+
+    def __len__(self) -> int:
+        return self.n
+
+    def __getattr__(self, name):
+        if name in ARRAYS:
+            return self._store[name][:self.n]
+        raise AttributeError(name)
+
+    fraction = Particles.fraction
+    current = Particles.current
+
+    def append(self, batch: Particles) -> None:
+        m = len(batch)
+        if self.n + m > len(self._store["age"]):
+            capacity = max(2 * len(self._store["age"]), self.n + m)
+            for k, a in self._store.items():
+                grown = np.zeros((capacity,) + a.shape[1:], a.dtype)
+                grown[:self.n] = a[:self.n]
+                self._store[k] = grown
+        for k in ARRAYS:
+            self._store[k][self.n:self.n + m] = getattr(batch, k)
+        self.n += m
+
+    def compact(self, fate: np.ndarray) -> None:
+        """Drop every particle whose ``fate`` is not 0."""
+        st = self._store
+        self.n = _compact(fate, st["position"], st["velocity"], st["color"], st["color_end"],
+                          st["age"], st["life"], st["size"], st["alpha"], st["alpha_end"],
+                          st["size_end"], st["spec"], st["generation"])
+
+
+@njit(cache=True)
+def _compact(fate, v0, v1, v2, v3, s0, s1, s2, s3, s4, s5, i0, i1):
+    """Move the living (fate 0) to the front, in order; returns how many live."""
+    w = 0
+    for r in range(fate.shape[0]):
+        if fate[r] != 0:
+            continue
+        if w != r:
+            for c in range(3):
+                v0[w, c] = v0[r, c]
+                v1[w, c] = v1[r, c]
+                v2[w, c] = v2[r, c]
+                v3[w, c] = v3[r, c]
+            s0[w] = s0[r]
+            s1[w] = s1[r]
+            s2[w] = s2[r]
+            s3[w] = s3[r]
+            s4[w] = s4[r]
+            s5[w] = s5[r]
+            i0[w] = i0[r]
+            i1[w] = i1[r]
+        w += 1
+    return w
 
 
 def _new_particles(spec: Spec, index: int, rng, n: int, frame_dt: float, origin=None,
@@ -302,11 +371,11 @@ class ParticleSystem:
         self.k_size_min = np.array([p.size_min for p in s], np.float64)
 
     def reset(self) -> None:
-        self.particles = Particles()
+        self.particles = ParticlePool()
         self.step_index = 0                 # steps done; time = step_index · dt
         self.emitted: list[list[int]] = []  # per frame, per root emitter: N(t) drawn
 
-    def state_at(self, t: float) -> Particles:
+    def state_at(self, t: float) -> "ParticlePool":
         """The particles at time t (after the last whole step at or before t)."""
         target = int(math.floor(t / self.dt + 1e-9))
         if target < self.step_index:
@@ -329,10 +398,11 @@ class ParticleSystem:
                   self.k_has_plane, self.k_plane_point, self.k_plane_normal, self.k_restitution,
                   self.k_friction, self.k_has_region, self.k_region_lo, self.k_region_hi,
                   self.k_alpha_min, self.k_size_min, fate)
-        alive = p.keep(fate == 0)
-        if np.any(fate == 1):
-            alive = alive.extend(self._children(p, fate, rng))
-        self.particles = alive
+        if np.any(fate):
+            children = self._children(p, fate, rng) if np.any(fate == 1) else None
+            p.compact(fate)
+            if children is not None:
+                p.append(children)
         self.step_index = k + 1
 
     def _emit(self, rng, t: float) -> None:
@@ -347,7 +417,7 @@ class ParticleSystem:
                 new.append(_new_particles(spec, index, rng, n, frame_dt))
         self.emitted.append(counts)
         for batch in new:
-            self.particles = self.particles.extend(batch)
+            self.particles.append(batch)
 
     def _children(self, p: Particles, fate: np.ndarray, rng) -> Particles:
         """The next generation: ``children = N_mean ± V`` for each particle that died of age."""
@@ -511,5 +581,5 @@ def sprites_of(system: ParticleSystem, particles: Particles):
     mode = modes[particles.spec] if len(particles) else np.zeros(0, np.int64)
     back = (streaks[particles.spec] * (mode == DRAW_CODES["streak"]))[:, None] if len(particles) \
         else np.zeros((0, 1))
-    return Sprites(position=particles.position, tail=particles.position - particles.velocity * back,
+    return Sprites(position=particles.position.copy(), tail=particles.position - particles.velocity * back,
                    radius=size, rgb=rgb, alpha=alpha, mode=mode)
