@@ -47,7 +47,8 @@ class Frame:
     ``-inf`` where nothing was drawn), for stages drawn after the opaque pass; ``None`` when the
     renderer keeps none or the frame is supersampled. It is the context's buffer, valid until
     the next frame drawn with the same context. ``sample_color``: for a regular grid drawn in
-    one pass, the ``(s·H, s·W, 3)`` samples before the box filter.
+    one pass, the ``(s·H, s·W, 3)`` samples before the box filter, and ``filtered`` their
+    ``(H, W, 3)`` means on 0–255 before rounding.
     """
 
     rgbx: np.ndarray
@@ -56,6 +57,7 @@ class Frame:
     stats: dict = field(default_factory=dict)
     depth: np.ndarray | None = None
     sample_color: np.ndarray | None = None
+    filtered: np.ndarray | None = None
 
     @property
     def color(self) -> np.ndarray:
@@ -137,7 +139,8 @@ def _supersample(draw, scene, view, settings, frame, context, inspect) -> None:
                     stats=frame.stats)
         draw(scene, view, settings.replace(samples=1, size=(width * side, height * side)), big,
              context, Timer(frame.stats, inspect))
-        frame.color[:] = np.floor(box_filter(big.color, side) + 0.5).astype(np.uint8)
+        frame.filtered = box_filter(big.color, side)
+        frame.color[:] = np.floor(frame.filtered + 0.5).astype(np.uint8)
         frame.sample_color = big.color
         return
     film = Film(width, height, settings.samples, settings.sample_pattern, settings.seed)

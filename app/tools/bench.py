@@ -71,9 +71,9 @@ def _shadings(text: str) -> list[str]:
     return chosen
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The bench's options, added to the ``bench`` sub-parser by ``app/cli.py``."""
-    from app.cli import parse_size
+def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
+    """The bench's options, added to the ``bench`` sub-parser by ``app/cli.py`` (which hands
+    over its ``WxH`` parser, so that there is one)."""
     parser.add_argument("--scene", default=None,
                         help="a scene file to time instead of the generated sphere + torus "
                              "(then --sizes is ignored)")

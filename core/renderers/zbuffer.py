@@ -117,6 +117,10 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
                     out=context.buffer("visibility", (width, height),
                                        lambda: stages.VisibilityBuffer.allocate(width, height)))
     stats["allocated"].append("depth")
+    vis.planes = None
+    if stages.shade.get_shader(shading).needs_derivatives:
+        vis.planes = stages.barycentric_planes(device, inv_w, clipped.triangles)
+        stats["computed"].append("barycentric derivatives")
     timer.lap("z-buffer", depth=vis.depth, tri=vis.tri, b1=vis.b1, b2=vis.b2)
 
     stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
