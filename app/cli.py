@@ -78,7 +78,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     an = sub.add_parser("animate", help="render an animation to MP4, GIF or PNGs (on many workers)")
     if command == "animate":                  # its options live with its body (app/tools/animate.py)
         from app.tools.animate import add_arguments as animate_arguments
-        animate_arguments(an)
+        animate_arguments(an, parse_size)
 
     st = sub.add_parser("stability", help="the stiff and extreme cases, PASS/FAIL")
     st.add_argument("--json", action="store_true", help="print JSON instead of a table")

@@ -41,9 +41,9 @@ FRAME_NAME = "frame_{:05d}.png"
 MAX_FRAMES = 100_000
 
 
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    """The options of ``animate`` (the sub-parser is made by ``app/cli.py``)."""
-    from app.cli import PROJECTION_CHOICES, parse_size
+def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
+    """The options of ``animate`` (the sub-parser and ``WxH`` parser come from ``app/cli.py``)."""
+    from core.settings import PROJECTIONS
     p.add_argument("scene", help="a scene file with [animation], [[key]] or [[emitter]] tables")
     p.add_argument("--out", required=True,
                    help="movie.mp4 (H.264), movie.gif, or a folder for a PNG sequence")
@@ -55,7 +55,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's)")
     p.add_argument("--renderer", default=None, help="a registered renderer (default: zbuffer)")
     p.add_argument("--samples", type=_positive(int), default=None, help="samples per pixel")
-    p.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
+    p.add_argument("--projection", choices=PROJECTIONS, default=None)
     p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
     p.add_argument("--workers", type=_positive(int), default=1,
                    help="local worker processes (a Dask LocalCluster when more than 1)")
