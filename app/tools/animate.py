@@ -98,6 +98,26 @@ def job_of(args, animation) -> dict:
             "settings": settings}
 
 
+def _settings_problem(job: dict, animation) -> str | None:
+    """What is wrong with the job's settings (a renderer, shading or sample count that does not
+    exist), found once here rather than as the same failure of every frame."""
+    from core.renderers import get_renderer
+    from core.settings import RenderSettings
+    s = job["settings"]
+    try:
+        RenderSettings.for_scene(animation.scene, size=tuple(s["size"]), samples=s["samples"],
+                                 projection=s["projection"], shading=s["shading"],
+                                 renderer=s["renderer"])
+        get_renderer(s["renderer"])
+    except ValueError as error:
+        return str(error)
+    from core.settings import SHADINGS
+    from core.shading.registry import shader_names
+    if s["shading"] not in SHADINGS[:1] + tuple(shader_names()):
+        return f"shading must be one of {', '.join(SHADINGS[:1] + tuple(shader_names()))}, not {s['shading']!r}"
+    return None
+
+
 _loaded: dict = {}
 
 
@@ -124,9 +144,7 @@ def render_png(job: dict, k: int) -> tuple[int, bytes]:
     s = job["settings"]
     settings = RenderSettings.for_scene(animation.scene, size=tuple(s["size"]),
                                         samples=s["samples"], projection=s["projection"],
-                                        shading=s["shading"],
-                                        **({"renderer": s["renderer"]}
-                                           if "renderer" in RenderSettings.__dataclass_fields__ else {}))
+                                        shading=s["shading"], renderer=s["renderer"])
     frame = render_at(animation, k / job["fps"], settings)
     if frame.message:
         raise RuntimeError(f"frame {k}: {frame.message}")
@@ -350,6 +368,10 @@ def main(args) -> int:
         print(f"error: {scene.name}: no view to render", file=sys.stderr)
         return 2
     job = job_of(args, animation)
+    problem = _settings_problem(job, animation)
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
     out = Path(args.out)
     folder = frames_folder(out)
     try:
