@@ -191,3 +191,29 @@ def test_bad_emitters_name_the_key(change, message):
     with pytest.raises(ReaderError) as error:
         read_scene_file(WALL_SCENE.replace(*change), "scene.toml")
     assert message in str(error.value)
+
+
+@pytest.mark.parametrize("projection", ["perspective", "parallel"])
+def test_depth_test_is_the_z_buffers_own_convention(projection):
+    """Sprites just in front of a wall (z = 2.1) show, those just behind it do not: the
+    particle stage's depth is the z-buffer's canonical depth, larger nearer, in both
+    projections."""
+    from core import RenderSettings, render
+    from core.animation.draw import SPRITE, Sprites, draw_particles
+    scene = read_scene_file(WALL_SCENE, "scene.toml")
+    view = scene.views[0]
+    settings = RenderSettings.for_scene(scene, size=(64, 64), projection=projection)
+    xy = np.array([[-1.0, -1.0], [1.0, 1.0]])
+    for dz, visible in ((+0.02, True), (-0.02, False)):
+        frame = render(scene, view, settings)
+        before = frame.color.copy()
+        points = np.column_stack([xy, np.full(2, 2.1 + dz)])
+        sprites = Sprites(position=points, tail=points, radius=np.full(2, 0.3),
+                          rgb=np.tile([0.0, 1.0, 0.0], (2, 1)), alpha=np.ones(2),
+                          mode=np.full(2, SPRITE))
+        assert draw_particles(frame, sprites, view, settings) == 2
+        changed = np.any(frame.color != before, axis=2)
+        assert changed.any() == visible
+        if visible:                                   # green, where the sprites are
+            drawn, under = frame.color[changed].astype(int), before[changed].astype(int)
+            assert np.all(drawn[:, 1] > under[:, 1]) and drawn[:, 1].max() > 200
