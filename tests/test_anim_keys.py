@@ -119,3 +119,20 @@ def test_bad_keys_name_the_key_and_line(change, message):
     with pytest.raises(ReaderError) as error:
         load(SCENE.replace(*change))
     assert message in str(error.value)
+
+
+def test_level_keeps_the_horizon_level_where_slerp_alone_rolls():
+    """Two level frames (VUP +y) that differ in pitch and yaw: the great arc between them
+    rolls the camera (u leaves the horizontal plane); with level the u axis stays horizontal
+    and VPN is still the slerped one."""
+    from core.camera.view import vrc_basis
+    text = SCENE.replace("vpn = [1, 0, 0], vup = [0, 1, 0] }", "vpn = [1, 0.8, 0], vup = [0, 1, 0] }")
+    rolled = max(abs(vrc_basis(load(text)[1].view_at(t))[0][1]) for t in np.linspace(0, 2, 21))
+    assert rolled > 0.05
+    scene, anim = load(text.replace('orientation = "slerp"', 'orientation = "slerp"\nlevel = [0, 1, 0]'))
+    plain = load(text)[1]
+    for t in np.linspace(0, 2, 21):
+        u = vrc_basis(anim.view_at(t))[0]
+        assert abs(u[1]) < 1e-12
+        n, n_plain = (np.array(v.vpn) / np.linalg.norm(v.vpn) for v in (anim.view_at(t), plain.view_at(t)))
+        assert np.allclose(n, n_plain, atol=1e-12)

@@ -59,6 +59,7 @@ class ViewTracks:
     prp: Track | None = None
     front: Track | None = None
     back: Track | None = None
+    level: tuple | None = None        # a fixed VUP: the camera turns but never rolls
 
     def at(self, t: float, label: str) -> View:
         b = self.base
@@ -66,6 +67,10 @@ class ViewTracks:
         if self.frame is not None:
             rows = qt.to_matrix(self.frame(t)).T        # rows u, v, n of the world→VRC rotation
             vpn, vup = tuple(rows[2]), tuple(rows[1])
+            if self.level is not None:
+                # slerp between two level frames tilts the horizon in between (the level
+                # frames are not a great circle); keeping VUP fixed re-levels u = VUP x n
+                vup = self.level
         pick = lambda track, still: still if track is None else tuple(float(x) for x in track(t))
         front = b.front if self.front is None else float(self.front(t)[0])
         back = b.back if self.back is None else float(self.back(t)[0])

@@ -11,6 +11,7 @@ that every message names the key's path and line the way the rest of the file's 
     orientation = "squad"           # slerp | squad  (VPN/VUP frames and object rotations)
     tension = 0.0                   # Kochanek–Bartels T, C, B for every track ...
     constant_speed = false          # arc-length parametrisation of the position tracks
+    level = [0, 1, 0]               # optional: the view's VUP held fixed (no roll between keys)
     seed = 1                        # particle systems
     [animation.track."view.vrp"]    # ... or per track, by its channel name
     interpolation = "kochanek-bartels"
@@ -42,7 +43,7 @@ from core.animation.tracks import METHODS, ORIENTATION_METHODS, OrientationTrack
 TOP_KEYS = ("animation", "key", "emitter")          # the scene file's top-level tables we read
 TABLE_ARRAYS = ("key", "emitter")                   # written [[key]], [[emitter]]
 ANIMATION_KEYS = ("duration", "fps", "loop", "interpolation", "orientation", "tension",
-                  "continuity", "bias", "constant_speed", "seed", "track")
+                  "continuity", "bias", "constant_speed", "seed", "level", "track")
 TRACK_KEYS = ("interpolation", "orientation", "tension", "continuity", "bias", "constant_speed")
 KEY_KEYS = ("time", "view", "object", "light", "material")
 KEY_VIEW_KEYS = ("vrp", "vpn", "vup", "window", "prp", "front", "back")
@@ -93,6 +94,13 @@ def read_animation(reader, doc: dict, scene) -> None:
             options.update(_track_settings(reader, per_track[channel],
                                            ("animation", "track", channel)))
         _install(reader, anim, channel, keys, options)
+    if "level" in settings:
+        level = reader.vector(settings["level"], ("animation", "level"))
+        if not any(level):
+            raise reader.fail(("animation", "level"), "the up vector is zero")
+        if anim.view is None or anim.view.frame is None:
+            raise reader.fail(("animation", "level"), "no key gives the view's vpn and vup")
+        anim.view.level = level
     if "emitter" in doc:
         from core.animation.particles import read_emitters
         anim.emitters = read_emitters(reader, doc["emitter"], scene)
