@@ -148,6 +148,9 @@ def test_gif_and_frames_and_refusals(scene_file, tmp_path, capsys):
     # the same folder with other settings is refused rather than mixed
     assert main(["animate", str(scene_file), "--out", str(gif), "--size", "40x32", "--frames", "6"]) == 2
     assert "other settings" in capsys.readouterr().err
+    scene_file.write_text(SCENE.replace("rate = 300", "rate = 200"))     # an edited scene too
+    assert main(["animate", str(scene_file), "--out", str(gif), "--size", "40x30", "--frames", "6"]) == 2
+    assert "other settings" in capsys.readouterr().err
     bad = tmp_path / "bad.toml"
     bad.write_text(SCENE.replace("rate = 300", "rate = 'many'"))
     assert main(["animate", str(bad), "--out", str(tmp_path / "x.mp4")]) == 2

@@ -27,6 +27,7 @@ retry-a-frame and write-as-they-complete this needs.
 from __future__ import annotations
 
 import argparse
+import hashlib
 import io
 import json
 import os
@@ -94,8 +95,11 @@ def job_of(args, animation) -> dict:
                 "projection": args.projection or scene.projection,
                 "shading": args.shading or scene.shading,
                 "renderer": args.renderer or "zbuffer"}
-    return {"scene": str(Path(args.scene).resolve()), "fps": fps, "frames": min(count, MAX_FRAMES),
-            "settings": settings}
+    path = Path(args.scene).resolve()
+    # the file's digest: frames left by a run on an edited scene are not taken as this one's
+    digest = hashlib.sha256(path.read_bytes()).hexdigest()
+    return {"scene": str(path), "scene_sha256": digest, "fps": fps,
+            "frames": min(count, MAX_FRAMES), "settings": settings}
 
 
 def _settings_problem(job: dict, animation) -> str | None:
@@ -168,7 +172,7 @@ def prepare_folder(folder: Path, job: dict) -> list[int]:
     text = json.dumps(job, indent=1, sort_keys=True)
     if record.exists():
         if json.loads(record.read_text()) != json.loads(text):
-            raise ValueError(f"{folder} holds frames rendered with other settings (see "
+            raise ValueError(f"{folder} holds frames rendered with other settings or another version of the scene (see "
                              f"{record}); remove it or choose another --out")
     else:
         record.write_text(text)
