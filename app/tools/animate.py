@@ -172,8 +172,9 @@ def prepare_folder(folder: Path, job: dict) -> list[int]:
     text = json.dumps(job, indent=1, sort_keys=True)
     if record.exists():
         if json.loads(record.read_text()) != json.loads(text):
-            raise ValueError(f"{folder} holds frames rendered with other settings or another version of the scene (see "
-                             f"{record}); remove it or choose another --out")
+            raise ValueError(f"{folder} holds frames rendered with other settings or another "
+                             f"version of the scene (see {record}); remove it or choose "
+                             "another --out")
     else:
         record.write_text(text)
     for stale in folder.glob("*.tmp"):                 # a frame half written when killed
