@@ -16,7 +16,7 @@ from pathlib import Path
 
 from core.settings import RenderSettings
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
-COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability")
+COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate")
 
 
 _SIZE = re.compile(r"([+-]?[0-9]+)[xX]([+-]?[0-9]+)")
@@ -112,6 +112,11 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     rep.add_argument("--out", default="report", help="output directory")
     rep.add_argument("--quick", action="store_true", help="a reduced sweep (for tests)")
 
+    an = sub.add_parser("animate", help="render an animation to MP4, GIF or PNGs (on many workers)")
+    if command == "animate":                  # its options live with its body (app/tools/animate.py)
+        from app.tools.animate import add_arguments as animate_arguments
+        animate_arguments(an, parse_size)
+
     st = sub.add_parser("stability", help="the stiff and extreme cases, PASS/FAIL")
     st.add_argument("--json", action="store_true", help="print JSON instead of a table")
     return p
@@ -178,6 +183,9 @@ def _dispatch(args) -> int:
     if args.command == "report":
         from app.tools.report import main as report_main
         return report_main(args)
+    if args.command == "animate":
+        from app.tools.animate import main as animate_main
+        return animate_main(args)
     if args.command == "stability":
         from app.tools.stability import main as stability_main
         return stability_main(args)

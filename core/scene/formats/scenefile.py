@@ -62,6 +62,10 @@ MATERIAL_KEYS += ("kr", "kt", "ior")      # Whitted's global terms (issue 12)
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
+# Animation (issue 13): [animation], [[key]] and [[emitter]] are read by core/animation/keys.py.
+from core.animation import keys as animation_keys     # noqa: E402  (after the constants it extends)
+TOP_KEYS += animation_keys.TOP_KEYS
+TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
 
 # -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
 from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
@@ -269,6 +273,7 @@ class _Reader:
         from core.texture.bump_demo import panel_views
         scene.views = panel_views(scene) + scene.views
         # --
+        animation_keys.read_animation(self, doc, scene)     # keys and emitters, if any
         return scene
 
     def geometry(self, g, path: Path_) -> Mesh:
