@@ -11,8 +11,7 @@ import json
 import sys
 from pathlib import Path
 
-PROJECTION_CHOICES = ("perspective", "parallel")
-SHADING_CHOICES = ("wireframe", "flat", "gouraud", "phong")
+from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability")
 
 

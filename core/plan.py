@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from core.scene.model import SHADINGS, Scene
+from core.scene.model import Scene
+from core.settings import SHADINGS
 
 
 @dataclass(frozen=True)

@@ -39,12 +39,45 @@ CLOSED = {
 def test_closed_meshes_are_closed_consistent_and_outward(name):
     make, triangles, vertices = CLOSED[name]
     mesh = make()
-    assert len(mesh.triangles) == triangles and len(mesh.positions) == vertices
+    # Texture seams double vertices (exact copies): the solid is judged on distinct positions.
+    distinct, inverse = np.unique(mesh.positions, axis=0, return_inverse=True)
+    welded = inverse.reshape(-1)[mesh.triangles]
+    assert len(mesh.triangles) == triangles and len(distinct) == vertices
     assert mesh.closed
-    assert directed_edges_pair_up(mesh.triangles)
-    assert edge_problem(mesh.triangles) is None
+    assert directed_edges_pair_up(welded)
+    assert edge_problem(welded) is None
     assert signed_volume(mesh.positions, mesh.triangles) > 0
     assert mesh.triangles.min() == 0 and mesh.triangles.max() == len(mesh.positions) - 1
+
+
+@pytest.mark.parametrize("make, u_steps, v_steps", [
+    (lambda: g.uv_sphere(segments=12, rings=7), 12, 7),
+    (lambda: g.torus(R=2.0, r=0.5, segments=10, sides=6), 10, 6),
+    (lambda: g.torus_knot(segments=90, sides=8), 90, 8),
+    (lambda: g.bezier_surface(patches=2, resolution=4), 8, 8),
+])
+def test_generators_keep_their_texture_coordinates(make, u_steps, v_steps):
+    """(u, v) in [0, 1]², one grid step across any triangle (no triangle spans the seam),
+    and every value of the grid present: u = i / u_steps, v = j / v_steps."""
+    mesh = make()
+    uv = mesh.uv
+    assert uv is not None and uv.shape == (len(mesh.positions), 2)
+    assert uv.min() >= 0.0 and uv.max() <= 1.0
+    span = np.ptp(uv[mesh.triangles], axis=1)
+    assert span[:, 0].max() <= 1.0 / u_steps + 1e-12 and span[:, 1].max() <= 1.0 / v_steps + 1e-12
+    assert np.allclose(np.unique(np.round(uv[:, 1] * v_steps, 9)) % 1, 0)
+    assert set(mesh.attributes) >= {"position", "normal", "uv"}
+
+
+def test_sphere_uv_is_longitude_and_latitude():
+    mesh = g.uv_sphere(segments=16, rings=8)
+    p, (u, v) = mesh.positions, mesh.uv.T
+    body = (v > 0) & (v < 1)
+    phi = np.mod(np.arctan2(-p[body, 2], p[body, 0]), 2 * np.pi)
+    seam = np.isclose(u[body], 1.0)
+    phi[seam & (phi < 1e-9)] = 2 * np.pi
+    assert np.allclose(u[body] * 2 * np.pi, phi)
+    assert np.allclose(np.arccos(np.clip(p[body, 1], -1, 1)), (1 - v[body]) * np.pi)
 
 
 def test_volumes_converge_to_the_true_solids():
@@ -124,7 +157,8 @@ def test_bezier_surface_is_open_smooth_and_interpolates_its_corners():
 def test_big_mesh_is_over_100k_triangles_and_closed():
     mesh = g.torus_knot()
     assert len(mesh.triangles) >= 100_000 and mesh.closed
-    assert edge_problem(mesh.triangles) is None
+    _, inverse = np.unique(mesh.positions, axis=0, return_inverse=True)
+    assert edge_problem(inverse.reshape(-1)[mesh.triangles]) is None
     assert signed_volume(mesh.positions, mesh.triangles) > 0
 
 
@@ -137,7 +171,8 @@ def test_sphere_torus_has_about_the_requested_triangles(n):
     for mesh in scene.meshes:
         assert mesh.closed and mesh.normals is not None
         if n <= 10_000:
-            assert edge_problem(mesh.triangles) is None
+            _, inverse = np.unique(mesh.positions, axis=0, return_inverse=True)
+            assert edge_problem(inverse.reshape(-1)[mesh.triangles]) is None
             assert signed_volume(mesh.positions, mesh.triangles) > 0
     sphere, ring = scene.meshes
     assert abs(len(sphere.triangles) - len(ring.triangles)) <= 0.1 * n

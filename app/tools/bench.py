@@ -41,7 +41,7 @@ from core.paths import ROOT
 
 DEFAULT_SIZES = "1k,10k,100k,1M"
 DEFAULT_SHADINGS = "flat,gouraud,phong"
-SHADINGS = ("flat", "gouraud", "phong")
+from core.settings import PROJECTIONS, SOLID_SHADINGS as SHADINGS
 
 
 def _count(text: str) -> int:
@@ -82,7 +82,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--warmup", type=int, default=2, help="untimed frames first (default 2)")
     parser.add_argument("--shading", type=_shadings, default=_shadings(DEFAULT_SHADINGS),
                         help=f"shading modes (default {DEFAULT_SHADINGS})")
-    parser.add_argument("--projection", choices=("perspective", "parallel"), default="perspective")
+    parser.add_argument("--projection", choices=PROJECTIONS, default="perspective")
     parser.add_argument("--size", type=parse_size, default=(500, 500),
                         help="framebuffer WxH (default 500x500)")
     parser.add_argument("--out", default="out/bench", help="directory for bench.json and bench.png")

@@ -21,8 +21,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
-from core.scene.model import SHADINGS, Scene
-from core.camera.view import PROJECTIONS
+from core.scene.model import Scene
+from core.settings import PROJECTIONS, SHADINGS
 
 log = logging.getLogger("fvd")
 

@@ -47,12 +47,13 @@ import numpy as np
 from numba import njit, prange
 
 from core.renderers import raycast as reference_module
+from core.settings import SOLID_SHADINGS
 from core.scene.generators import torus, uv_sphere
 from core.renderers.raycast import Reference, Sphere, Torus, render_reference
 from core.scene.model import Light, Material, Mesh, Scene
 from core.camera.view import View
 
-SHADINGS = ("flat", "gouraud", "phong")
+SHADINGS = SOLID_SHADINGS
 SCENES = ("sphere", "torus")
 CACHE = Path(tempfile.gettempdir()) / "fvdfh-reference-cache"
 REFERENCE_SAMPLES = 4                  # per axis: 16 samples a pixel

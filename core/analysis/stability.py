@@ -38,6 +38,7 @@ from typing import Callable
 
 import numpy as np
 
+from core.settings import PROJECTIONS, SOLID_SHADINGS
 from core.analysis import exact
 from core.pipeline import project
 from core.scene.generators import cube, uv_sphere
@@ -237,8 +238,8 @@ def probe(scene: Scene, projection: str, shading: str, size=SIZE, view_index: in
     return bad
 
 
-def probe_all(out: Outcome, scene: Scene, projections=("perspective", "parallel"),
-              shadings=("flat", "gouraud", "phong"), size=SIZE) -> None:
+def probe_all(out: Outcome, scene: Scene, projections=PROJECTIONS,
+              shadings=SOLID_SHADINGS, size=SIZE) -> None:
     """One check: every stage finite for every projection and shading."""
     found = []
     for projection in projections:

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from core.settings import PROJECTIONS, SOLID_SHADINGS
 from core.analysis import exact
 from core.pipeline import project
 from core.shading import shade
@@ -46,7 +47,7 @@ def worked_example() -> Outcome:
               [f["S_per"][i][i] for i in range(4)] == [Fraction(1, 24), Fraction(1, 24),
                                                         Fraction(1, 80), 1]
               and f["SH_par"][1][2] == Fraction(1, 15))
-    for projection in ("perspective", "parallel"):
+    for projection in PROJECTIONS:
         coordinate_accuracy(out, view, projection, house().positions)
     return out
 
@@ -90,7 +91,7 @@ def offset_1e8() -> Outcome:
     out = Outcome()
     base = scene_of(sphere_and_cube(), SMALL_VIEW)
     moved = scaled_scene(base, 1.0, offset=(1e8, -1e8, 1e8))
-    for projection in ("perspective", "parallel"):
+    for projection in PROJECTIONS:
         a, _ = render_image(base, projection, "gouraud", (96, 96))
         b, message = render_image(moved, projection, "gouraud", (96, 96))
         compare_images(out, projection, a, b)
@@ -118,7 +119,7 @@ def vup_1e9() -> Outcome:
     good = View(vrp=view.vrp, vpn=view.vpn, vup=tuple(float(x) for x in v),
                 window=view.window, prp=view.prp, front=view.front, back=view.back)
     meshes = sphere_and_cube()
-    for projection in ("perspective", "parallel"):
+    for projection in PROJECTIONS:
         a, message = render_image(scene_of(meshes, view), projection, "gouraud")
         b, _ = render_image(scene_of(meshes, good), projection, "gouraud")
         out.check(f"{projection}: rendered, no message", message is None)
@@ -135,7 +136,7 @@ def vup_parallel() -> Outcome:
     for view in (_vup_near_vpn(1e-13),
                  View(vrp=(0, 0, 0), vpn=(1, 2, 2), vup=(2, 4, 4), window=(-1, 1, -1, 1),
                       prp=(0, 0, 4), front=1, back=-1, label="VUP = 2 VPN")):
-        for projection in ("perspective", "parallel"):
+        for projection in PROJECTIONS:
             image, message = render_image(scene_of(sphere_and_cube(), view), projection, "phong")
             out.check(f"{view.label}, {projection}: message {message!r}",
                       message is not None and "VUP is parallel to VPN" in message
@@ -196,7 +197,7 @@ def _window_scale(s: float) -> Outcome:
                 prp=(0, 0, 4), front=1, back=-1, label="unit")
     base = scene_of(sphere_and_cube(), view)
     scaled = scaled_scene(base, s)
-    for projection in ("perspective", "parallel"):
+    for projection in PROJECTIONS:
         a, _ = render_image(base, projection, "gouraud")
         b, message = render_image(scaled, projection, "gouraud")
         out.check(f"{projection}: rendered, message {message!r}", message is None)
@@ -265,7 +266,7 @@ def slivers() -> Outcome:
     mesh = Mesh(positions=points, triangles=triangles, material=GREY, name="slivers")
     scene = scene_of([mesh], FACING_VIEW, lights=[Light(direction=tuple(FACING[:3, 2]))])
     expected = _exact_square_mask(points[:4], FACING_VIEW)
-    for shading in ("flat", "gouraud", "phong"):
+    for shading in SOLID_SHADINGS:
         image, _ = render_image(scene, "perspective", shading)
         wrong = int(np.count_nonzero(covered(image) != expected))
         out.check(f"{shading}: {wrong} pixels differ from the exact square", wrong == 0)
@@ -304,7 +305,7 @@ def edge_on() -> Outcome:
     width, height = SIZE
     for projection, mesh, axis, at in (("perspective", persp, "row", 0.4), ("parallel", par, "column", 0.3)):
         line = (at + 1) / 2 * (height if axis == "row" else width)        # device coordinate
-        for shading in ("flat", "gouraud", "phong"):
+        for shading in SOLID_SHADINGS:
             a, _ = render_image(scene_of([back], view), projection, shading)
             b, _ = render_image(scene_of([back, mesh], view), projection, shading)
             diff = np.any(a != b, axis=2)
@@ -334,8 +335,8 @@ def zero_area() -> Outcome:
     clean = scene_of([Mesh(positions=positions, triangles=good, material=GREY)], view)
     dirty = scene_of([Mesh(positions=positions, triangles=np.concatenate([good, degenerate]),
                            material=GREY)], view)
-    for projection in ("perspective", "parallel"):
-        for shading in ("flat", "gouraud", "phong"):
+    for projection in PROJECTIONS:
+        for shading in SOLID_SHADINGS:
             a, _ = render_image(clean, projection, shading)
             b, _ = render_image(dirty, projection, shading)
             out.check(f"{projection}/{shading}: {int(np.any(a != b, axis=2).sum())} pixels differ",
@@ -357,8 +358,8 @@ def duplicates() -> Outcome:
     soup = Mesh(positions=ball.positions[t].reshape(-1, 3), triangles=np.arange(t.size).reshape(-1, 3),
                 normals=ball.normals[t].reshape(-1, 3), closed=True, material=RED, name="soup")
     view = SMALL_VIEW
-    for projection in ("perspective", "parallel"):
-        for shading in ("flat", "gouraud", "phong"):
+    for projection in PROJECTIONS:
+        for shading in SOLID_SHADINGS:
             a, _ = render_image(scene_of([ball], view), projection, shading)
             b, _ = render_image(scene_of([soup], view), projection, shading)
             out.check(f"{projection}/{shading}: {int(np.any(a != b, axis=2).sum())} pixels differ",
@@ -630,8 +631,8 @@ def dark_lights() -> Outcome:
               Light(intensity=(0, 0, 0), direction=(0.0, 0.0, 1.0))]
     scene = _lit_sphere(GREY, lights)
     ambient8 = to_uint8(0.2 * GREY.ka * np.array(GREY.od))
-    for projection in ("perspective", "parallel"):
-        for shading in ("flat", "gouraud", "phong"):
+    for projection in PROJECTIONS:
+        for shading in SOLID_SHADINGS:
             image, _ = render_image(scene, projection, shading)
             mask = covered(image)
             wrong = int(np.count_nonzero(np.any(image[mask] != ambient8, axis=1)))
@@ -651,7 +652,7 @@ def bright_lights() -> Outcome:
               Light(intensity=(1e308,) * 3, direction=(0.0, 0.0, 1.0))]
     scene = _lit_sphere(material, lights)
     probe_all(out, scene)
-    for shading in ("flat", "gouraud", "phong"):
+    for shading in SOLID_SHADINGS:
         image, _ = render_image(scene, "perspective", shading)
         mask = covered(image)
         white = int(np.count_nonzero(np.all(image[mask] == 255, axis=1)))
@@ -731,7 +732,7 @@ def non_finite_files() -> Outcome:
                     problems.append(f"{name} ({bad}): views {len(scene.views)}, messages {messages}")
                 example.setdefault(".views", (messages[0] if messages else "")
                                    .replace(str(path.parent) + "/", ""))
-                for projection in ("perspective", "parallel"):
+                for projection in PROJECTIONS:
                     frame = render(scene, 0, projection, "wireframe", SIZE)
                     if frame.message is not None:
                         problems.append(f"{name}: the good view did not render: {frame.message}")

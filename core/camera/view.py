@@ -19,9 +19,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from core.settings import PROJECTIONS
 from core.transforms import rows_as_rotation, scale, shear_xy, translate
 
-PROJECTIONS = ("perspective", "parallel")
 
 
 class ViewError(ValueError):

@@ -34,6 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from core.settings import PROJECTIONS
+
 # Outcode bits, in FvDFH's order (parallel volume | perspective volume).
 ABOVE = 1  # y > 1        | y > -z
 BELOW = 2  # y < -1       | y < z
@@ -62,7 +64,7 @@ class ClippedTriangles:
 
 
 def _check_projection(projection: str) -> bool:
-    if projection not in ("perspective", "parallel"):
+    if projection not in PROJECTIONS:
         raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
     return projection == "perspective"
 

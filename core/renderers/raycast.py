@@ -48,35 +48,12 @@ from numba import njit, prange
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights, pack_surfaces,
                                phong_point, unit3)
 from core.pipeline.project import viewport
-from core.scene.model import Material
+from core.scene.primitives import Sphere, Torus  # noqa: F401  (the shapes it traces)
 from core.camera.view import View, check, vrc_basis
 
 SPHERE, TORUS = 0.0, 1.0
 # Columns of a packed shape row: kind, centre (3), R, r, surface, axis (3), e1 (3), e2 (3).
 SHAPE_COLUMNS = 16
-
-
-@dataclass(frozen=True)
-class Sphere:
-    """The sphere ``|P − center| = radius``."""
-
-    center: tuple[float, float, float]
-    radius: float
-    material: Material = field(default_factory=Material)
-    two_sided: bool = False
-
-
-@dataclass(frozen=True)
-class Torus:
-    """The ring torus around ``axis`` through ``center``: core circle radius ``major`` (R),
-    tube radius ``minor`` (r < R)."""
-
-    center: tuple[float, float, float]
-    major: float
-    minor: float
-    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
-    material: Material = field(default_factory=Material)
-    two_sided: bool = False
 
 
 @dataclass

@@ -91,6 +91,34 @@ def _grid_triangles(rows: int, cols: int, wrap_rows: bool, wrap_cols: bool) -> n
     return np.concatenate([np.stack([a, c, b], axis=1), np.stack([b, c, d], axis=1)])
 
 
+def _unwrapped(grid: np.ndarray, wrap_rows: bool, wrap_cols: bool) -> np.ndarray:
+    """A (rows, cols, k) grid of per-vertex values with its first row (column) repeated after
+    the last where the surface wraps: the seam's vertices are doubled so that each copy can
+    carry its own texture coordinate (u = 0 and u = 1). Copies are exact, so positions and
+    normals, and with them every pixel the mesh covers, are those of the wrapped grid."""
+    if wrap_rows:
+        grid = np.concatenate([grid, grid[:1]], axis=0)
+    if wrap_cols:
+        grid = np.concatenate([grid, grid[:, :1]], axis=1)
+    return grid
+
+
+def _grid_uv(rows: int, cols: int) -> np.ndarray:
+    """(u, v) = (i / (rows - 1), j / (cols - 1)) at vertex (i, j) of a rows x cols grid."""
+    u, v = np.meshgrid(np.linspace(0.0, 1.0, rows), np.linspace(0.0, 1.0, cols), indexing="ij")
+    return np.stack([u, v], axis=-1).reshape(-1, 2)
+
+
+def _seamed_mesh(positions: np.ndarray, normals: np.ndarray, **mesh) -> Mesh:
+    """A closed (rows, cols) grid surface wrapping both ways, with (u, v) over [0, 1]²."""
+    positions = _unwrapped(positions, True, True)
+    normals = _unwrapped(normals, True, True)
+    rows, cols = positions.shape[:2]
+    return Mesh(positions=positions.reshape(-1, 3), normals=normals.reshape(-1, 3),
+                triangles=_grid_triangles(rows, cols, wrap_rows=False, wrap_cols=False),
+                uv=_grid_uv(rows, cols), closed=True, **mesh)
+
+
 # ----------------------------------------------------------------------------- solids
 
 def cube(size: float = 2.0, subdivisions: int = 1) -> Mesh:
@@ -135,16 +163,26 @@ def uv_sphere(radius: float = 1.0, segments: int = 32, rings: int = 16) -> Mesh:
     t, f = np.meshgrid(theta, phi, indexing="ij")
     # phi turns from +x towards -z, so d/dtheta x d/dphi points outward
     ring = np.stack([np.sin(t) * np.cos(f), np.cos(t), -np.sin(t) * np.sin(f)], axis=-1)
-    unit = np.concatenate([[(0.0, 1.0, 0.0)], ring.reshape(-1, 3), [(0.0, -1.0, 0.0)]])
+    # The seam meridian is doubled (u = 0 and u = 1) and each pole is one vertex per segment
+    # (u at the middle of its fan triangle), so that (u, v) = (phi / 2 pi, 1 - theta / pi)
+    # is continuous on every triangle; the positions are exact copies.
+    ring = _unwrapped(ring, False, True).reshape(-1, 3)
+    cols = segments + 1
     j = np.arange(segments)
-    j1 = (j + 1) % segments
-    north = np.stack([np.zeros(segments, np.int64), 1 + j, 1 + j1], axis=1)
-    body = _grid_triangles(rings - 1, segments, wrap_rows=False, wrap_cols=True) + 1
-    south_pole = len(unit) - 1
-    last = south_pole - segments
-    south = np.stack([np.full(segments, south_pole), last + j1, last + j], axis=1)
+    poles = np.repeat([(0.0, 1.0, 0.0), (0.0, -1.0, 0.0)], segments, axis=0)
+    unit = np.concatenate([poles[:segments], ring, poles[segments:]])
+    north = np.stack([j, segments + j, segments + j + 1], axis=1)
+    body = _grid_triangles(rings - 1, cols, wrap_rows=False, wrap_cols=False) + segments
+    last = segments + len(ring) - cols
+    south = np.stack([segments + len(ring) + j, last + j + 1, last + j], axis=1)
+    u_ring = np.tile(np.linspace(0.0, 1.0, cols), rings - 1)
+    v_ring = np.repeat(1.0 - theta / np.pi, cols)
+    u_pole = (j + 0.5) / segments
+    uv = np.concatenate([np.stack([u_pole, np.ones(segments)], axis=1),
+                         np.stack([u_ring, v_ring], axis=1),
+                         np.stack([u_pole, np.zeros(segments)], axis=1)])
     return Mesh(positions=radius * unit, triangles=np.concatenate([north, body, south]),
-                normals=unit, closed=True, material=Material(od=(0.8, 0.25, 0.2)),
+                normals=unit, uv=uv, closed=True, material=Material(od=(0.8, 0.25, 0.2)),
                 name="uv_sphere")
 
 
@@ -205,11 +243,8 @@ def torus(R: float = 1.0, r: float = 0.35, segments: int = 48, sides: int = 24) 
     uu, vv = np.meshgrid(u, v, indexing="ij")
     normal = np.stack([np.cos(vv) * np.cos(uu), np.cos(vv) * np.sin(uu), np.sin(vv)], axis=-1)
     core = np.stack([np.cos(uu), np.sin(uu), np.zeros_like(uu)], axis=-1)
-    positions = (R * core + r * normal).reshape(-1, 3)
-    return Mesh(positions=positions,
-                triangles=_grid_triangles(segments, sides, wrap_rows=True, wrap_cols=True),
-                normals=normal.reshape(-1, 3), closed=True,
-                material=Material(od=(0.2, 0.45, 0.85)), name="torus")
+    return _seamed_mesh(R * core + r * normal, normal,
+                        material=Material(od=(0.2, 0.45, 0.85)), name="torus")
 
 
 # ----------------------------------------------------------------------------- Bézier surface
@@ -275,7 +310,7 @@ def bezier_surface(patches: int = 3, resolution: int = 16, size: float = 3.0,
     count = len(w)
     return Mesh(positions=point.reshape(-1, 3),
                 triangles=_grid_triangles(count, count, wrap_rows=False, wrap_cols=False)[:, [0, 2, 1]],
-                normals=normal.reshape(-1, 3), closed=False,
+                normals=normal.reshape(-1, 3), uv=_grid_uv(count, count), closed=False,
                 material=Material(od=(0.9, 0.75, 0.3), ks=0.5, n=40.0), name="bezier_surface")
 
 
@@ -315,11 +350,8 @@ def torus_knot(p: int = 2, q: int = 3, segments: int = 1024, sides: int = 64, R:
     e2 = np.cross(e1, tangent)
     a = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
     normal = (np.cos(a)[None, :, None] * e1[:, None, :] + np.sin(a)[None, :, None] * e2[:, None, :])
-    positions = centre[:, None, :] + tube * normal
-    return Mesh(positions=positions.reshape(-1, 3),
-                triangles=_grid_triangles(segments, sides, wrap_rows=True, wrap_cols=True),
-                normals=normal.reshape(-1, 3), closed=True,
-                material=Material(od=(0.75, 0.3, 0.65), ks=0.4, n=30.0), name="torus_knot")
+    return _seamed_mesh(centre[:, None, :] + tube * normal, normal,
+                        material=Material(od=(0.75, 0.3, 0.65), ks=0.4, n=30.0), name="torus_knot")
 
 
 # ----------------------------------------------------------------------------- scenes

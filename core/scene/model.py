@@ -1,7 +1,8 @@
 """The scene: geometry, views, lights and materials — the one place the viewer's data lives.
 
 Data only; the stages in ``core`` read it and never change it. A :class:`Mesh` is a bag of
-numpy arrays (positions ``(V, 3)``, triangles ``(T, 3)``, edges ``(E, 2)``, optional normals).
+numpy arrays: triangles ``(T, 3)`` and edges ``(E, 2)`` over named per-vertex attributes
+(``position`` ``(V, 3)``; optional ``normal``, ``uv`` ``(V, 2)`` and any others in ``extra``).
 Readers (``core.scene.formats``) and generators (``core.scene.generators``) make these objects.
 """
 
@@ -12,8 +13,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core.camera.view import View
+from core.settings import SHADINGS  # noqa: F401  (re-exported for the readers)
 
-SHADINGS = ("wireframe", "flat", "gouraud", "phong")
 MAX_IMAGE_SIDE = 8192       # pixels, either side of a framebuffer any input may ask for
 
 
@@ -56,6 +57,8 @@ class Mesh:
     closed: bool = False
     material: Material = field(default_factory=Material)
     name: str = "mesh"
+    uv: np.ndarray | None = None                            # (V, 2) texture coordinates
+    extra: dict = field(default_factory=dict)               # more named (V, k) arrays
 
     def __post_init__(self) -> None:
         self.positions = np.ascontiguousarray(self.positions, dtype=np.float64).reshape(-1, 3)
@@ -63,15 +66,33 @@ class Mesh:
         self.edges = np.ascontiguousarray(self.edges, dtype=np.int64).reshape(-1, 2)
         if self.normals is not None:
             self.normals = np.ascontiguousarray(self.normals, dtype=np.float64).reshape(-1, 3)
+        if self.uv is not None:
+            self.uv = np.ascontiguousarray(self.uv, dtype=np.float64).reshape(-1, 2)
+        for name, values in self.extra.items():
+            values = np.ascontiguousarray(values, dtype=np.float64)
+            self.extra[name] = values.reshape(len(self.positions), -1)
+
+    @property
+    def attributes(self) -> dict[str, np.ndarray]:
+        """Every named per-vertex array: ``position``, and ``normal``, ``uv`` and the extra
+        ones (``tangent``, ``color``, …) where the mesh has them. Rows match ``positions``."""
+        named = {"position": self.positions, "normal": self.normals, "uv": self.uv, **self.extra}
+        return {name: values for name, values in named.items() if values is not None}
 
     def all_edges(self) -> np.ndarray:
-        """The line edges plus every triangle edge once (for wireframe drawing)."""
+        """The line edges plus every triangle edge once (for wireframe drawing).
+
+        Vertices at exactly the same position (a texture seam's copies) count as one, so a
+        seam is drawn once, like any other edge."""
         t = self.triangles
         tri_edges = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
         both = np.concatenate([self.edges, tri_edges])
         if len(both) == 0:
             return both
-        return np.unique(np.sort(both, axis=1), axis=0)
+        _, first, inverse = np.unique(self.positions, axis=0, return_index=True,
+                                      return_inverse=True)
+        welded = first[inverse.reshape(-1)][both]            # each vertex → its first copy
+        return np.unique(np.sort(welded, axis=1), axis=0)
 
 
 @dataclass(eq=False)          # identity: a scene keys the render caches
@@ -95,6 +116,8 @@ class Scene:
     specular: str = "reflect"             # "reflect": (R.V)^n; "halfway": (N.H)^n
     size: tuple[int, int] = (500, 500)    # preferred framebuffer size, width x height
     source: str = ""                      # file the scene came from
+    # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
+    primitives: list = field(default_factory=list)
 
     @property
     def triangle_count(self) -> int:

@@ -1,0 +1,84 @@
+"""How to draw: the projection, shading, size, samples and renderer of one frame.
+
+The names of the projections and shading modes are listed here once (:class:`Projection`,
+:class:`Shading`); everything else — the reader, the plan, the CLI, the window — takes them from
+here. Both are ``str`` enums, so ``Shading.PHONG == "phong"`` and scene files keep their words.
+
+:class:`RenderSettings` is a frozen value: a variant is ``dataclasses.replace(settings, …)``.
+A system that needs a setting of its own adds a field here with a default that keeps every
+existing picture unchanged.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from enum import Enum
+
+
+class Projection(str, Enum):
+    PERSPECTIVE = "perspective"
+    PARALLEL = "parallel"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class Shading(str, Enum):
+    WIREFRAME = "wireframe"
+    FLAT = "flat"
+    GOURAUD = "gouraud"
+    PHONG = "phong"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+PROJECTIONS = tuple(p.value for p in Projection)
+SHADINGS = tuple(s.value for s in Shading)
+SOLID_SHADINGS = SHADINGS[1:]          # the modes that fill triangles
+SAMPLE_PATTERNS = ("regular", "jittered")
+MAX_SAMPLES = 256          # samples per pixel any input may ask for
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """Everything about a frame that is not the scene or the view.
+
+    ``samples`` per pixel are placed by :class:`core.camera.film.Film` (a regular √s x √s grid,
+    or jittered within its cells with ``seed``) and box-filtered; 1 sample is the pixel centre,
+    the course's sample point. ``renderer`` names an entry of :mod:`core.renderers`.
+    """
+
+    projection: str = "perspective"
+    shading: str = "flat"
+    size: tuple[int, int] = (500, 500)        # width, height in pixels
+    samples: int = 1
+    sample_pattern: str = "regular"
+    renderer: str = "zbuffer"
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if self.projection not in PROJECTIONS:
+            raise ValueError(f"projection must be one of {', '.join(PROJECTIONS)}, "
+                             f"not {self.projection!r}")
+        if not (isinstance(self.samples, int) and 1 <= self.samples <= MAX_SAMPLES):
+            raise ValueError(f"samples per pixel must be a whole number from 1 to {MAX_SAMPLES}, "
+                             f"not {self.samples!r}")
+        if self.sample_pattern not in SAMPLE_PATTERNS:
+            raise ValueError(f"sample pattern must be one of {', '.join(SAMPLE_PATTERNS)}, "
+                             f"not {self.sample_pattern!r}")
+        object.__setattr__(self, "projection", str(self.projection))
+        object.__setattr__(self, "shading", str(self.shading))
+        object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))
+
+    @classmethod
+    def for_scene(cls, scene, **overrides) -> "RenderSettings":
+        """The scene's own defaults (projection, shading, size), then ``overrides``; an
+        override of ``None`` keeps the scene's value."""
+        values = {"projection": scene.projection, "shading": scene.shading, "size": scene.size}
+        values.update({k: v for k, v in overrides.items() if v is not None})
+        return cls(**values)
+
+    def replace(self, **changes) -> "RenderSettings":
+        return dataclasses.replace(self, **changes)
