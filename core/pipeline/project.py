@@ -76,12 +76,28 @@ def _homogeneous(points: np.ndarray) -> np.ndarray:
     return np.concatenate([points, np.ones((len(points), 1))], axis=1)
 
 
-def project_lines(points: np.ndarray, projection: str, vp) -> np.ndarray:
-    """Wireframe: canonical ``(N, 3)`` → device ``(N, 3)`` via M_per (perspective), M_vv3dv, /W."""
+def line_matrix(projection: str, vp) -> np.ndarray:
+    """Wireframe: ``M_vv3dv · M_per`` (perspective, d = -1) or ``M_vv3dv`` (parallel)."""
     m = m_vv3dv(*vp)
     if projection == "perspective":
         m = m @ m_per(-1.0)
-    return divide_by_w(_homogeneous(points) @ m.T)
+    return m
+
+
+def project_lines(points: np.ndarray, projection: str, vp) -> np.ndarray:
+    """Wireframe: canonical ``(N, 3)`` → device ``(N, 3)`` via M_per (perspective), M_vv3dv, /W.
+
+    Each row of the matrix is applied as ``m0 x + m1 y + m2 z + m3``, left to right, not by a
+    BLAS product (whose order and fused multiply-adds vary): the compiled wireframe
+    (``core.pipeline.wireframe``) does the same sums and so lands on the same pixels.
+    """
+    m = line_matrix(projection, vp)
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    h = np.empty((len(points), 4))
+    for r in range(4):
+        h[:, r] = m[r, 0] * x + m[r, 1] * y + m[r, 2] * z + m[r, 3]
+    return divide_by_w(h)
 
 
 def triangle_matrix(projection: str, z_min: float, vp) -> np.ndarray:
