@@ -11,6 +11,7 @@ import json
 import sys
 from pathlib import Path
 
+
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "warmup")
 RASTERIZER_CHOICES = ("edge", "scanline")

@@ -1,11 +1,18 @@
 """The CPU core of the viewer: every transform, clip, z-buffer test and shading step.
 
-Read the modules in pipeline order:
+``render(scene, view, settings) -> Frame`` is the one call; read the packages in pipeline order:
 
-``transforms`` (T, S, R, shear) → ``view`` (VRC, N_per, N_par) → ``clip`` (Cohen–Sutherland
-lines, Sutherland–Hodgman triangles) → ``project`` (M_per, perspective-to-parallel, M_vv3dv,
-divide by W) → ``raster`` (scan conversion, z-buffer) → ``shade`` (Phong illumination; flat,
-Gouraud, Phong shading) → ``render`` (assembles only the stages a scene needs).
+- ``transforms`` — T, S, R, shear, unit vectors (FvDFH 5);
+- ``scene/`` — what is drawn: meshes with named attributes, materials, lights, analytic
+  primitives, generators, every file reader;
+- ``camera/`` — the view (VRC, N_per, N_par; FvDFH 6) and the film (samples per pixel);
+- ``pipeline/`` — the z-buffer's stages in order: cull → clip → project → raster;
+- ``shading/`` — the Phong model once; flat, Gouraud, Phong as registered shaders;
+- ``renderers/`` — the z-buffer and the exact ray caster, by name;
+- ``settings``, ``context``, ``plan``, ``render`` — how to draw, what outlives a frame, which
+  stages run and why, and the front door;
+- ``analysis/`` — accuracy, stability, exact arithmetic: they import the core, never the
+  other way round.
 
 ``core`` imports no GL and no window library.
 """
@@ -17,3 +24,12 @@ import os
 # 1k-triangle Gouraud frame took 43 ms with spinning threads, 6 ms with passive ones). Only
 # takes effect if set before the OpenMP runtime loads, i.e. before the first parallel kernel.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
+from core.camera.view import View, ViewError  # noqa: E402
+from core.context import RenderContext  # noqa: E402
+from core.render import Frame, render  # noqa: E402
+from core.scene.model import Light, Material, Mesh, Scene  # noqa: E402
+from core.settings import Projection, RenderSettings, Shading  # noqa: E402
+
+__all__ = ["render", "Frame", "RenderContext", "RenderSettings", "Projection", "Shading", "View",
+           "ViewError", "Scene", "Mesh", "Material", "Light"]

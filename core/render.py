@@ -1,28 +1,38 @@
-"""The renderer: assembles the stages a scene needs, in pipeline order, and runs them.
+"""The front door: ``render(scene, view, settings) -> Frame``, whatever the renderer.
 
-``render(scene, view_index, projection, shading, size) -> Frame``. The stages are those of
-:func:`core.plan.plan`; what actually ran, what was allocated and how long each stage took go
-into ``Frame.stats``. Nothing here touches GL: the frame is a numpy image, top row first.
+``view`` is any :class:`core.camera.view.View` — one of ``scene.views`` or not (an
+interpolated one, an animated one); ``settings`` a :class:`core.settings.RenderSettings`
+(default: the scene's own). The renderer named by ``settings.renderer`` (:mod:`core.renderers`)
+draws; this module checks the view, owns the frame, the film and the per-stage clock, and
+never raises for bad scene data: an invalid view or an empty framebuffer gives a frame of the
+background colour whose ``message`` says why.
 
-Per-scene work that does not depend on the view (edge lists, concatenated triangle arrays,
-normals) is computed once and kept in a cache keyed by the mesh object.
+Supersampling is the film's (:mod:`core.camera.film`): a renderer that places samples itself
+(a ray caster) gets ``settings.samples`` as it is; any other is run once per sample with the
+sample's offset in ``settings.pixel_offset`` — or, for a regular grid that fits in memory, once
+at ``s`` times the size and box-filtered, which puts the samples at exactly the same points.
+
+What outlives a frame (the z-buffer's memory, per-mesh normals and edge lists) lives in a
+:class:`RenderContext`: the viewer keeps one; calls without one share :data:`DEFAULT_CONTEXT`.
 """
 
 from __future__ import annotations
 
 import time
-import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from core.pipeline import clip
-from core.pipeline import project
-from core.pipeline import raster_lines
+from core.context import DEFAULT_CONTEXT, RenderContext
+from core.camera.film import Film, box_filter, fill, grid_side, to_rgb8  # noqa: F401
+from core.camera.view import View, ViewError, normalizing_transform, problems
 from core.plan import Stage, plan
+from core.renderers import get_renderer
 from core.scene.model import Scene
-from core.transforms import apply
-from core.camera.view import ViewError, normalizing_transform, problems
+from core.settings import RenderSettings
+
+# Above this many samples in one pass (k·W x k·H), a regular grid is drawn sample by sample.
+MAX_PASS_PIXELS = 16_000_000
 
 
 @dataclass
@@ -32,33 +42,29 @@ class Frame:
     ``color`` is a view of ``rgbx``, ``(H, W, 4)``: the same pixels with one padding byte each
     (undefined, never read), so that showing the frame is one aligned copy into an RGBA
     texture (on llvmpipe 0.05 ms against 0.56 ms for packed RGB at 500 x 500).
+
+    ``depth`` ``(H, W)``: the z-buffer's canonical depth at each pixel centre (larger is nearer,
+    ``-inf`` where nothing was drawn), for stages drawn after the opaque pass; ``None`` when the
+    renderer keeps none or the frame is supersampled. It is the context's buffer, valid until
+    the next frame drawn with the same context. ``sample_color``: for a regular grid drawn in
+    one pass, the ``(s·H, s·W, 3)`` samples before the box filter.
     """
 
     rgbx: np.ndarray
     plan: list[Stage]
     message: str | None = None
     stats: dict = field(default_factory=dict)
+    depth: np.ndarray | None = None
+    sample_color: np.ndarray | None = None
 
     @property
     def color(self) -> np.ndarray:
         return self.rgbx[:, :, :3]
 
 
-def to_rgb8(color) -> np.ndarray:
-    """A colour in [0, 1] → uint8, rounded half up."""
-    return np.floor(np.clip(np.asarray(color, dtype=np.float64), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
 
 
-_edges_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-
-
-def _edges(mesh) -> np.ndarray:
-    if mesh not in _edges_cache:
-        _edges_cache[mesh] = mesh.all_edges()
-    return _edges_cache[mesh]
-
-
-class _Timer:
+class Timer:
     """Collects per-stage wall times (ms) into a stats dict, and hands each stage's arrays to
     an ``inspect(stage, arrays)`` callback when one is given (the stability suite checks every
     intermediate array that way, on the real path)."""
@@ -76,84 +82,68 @@ class _Timer:
         self.t = time.perf_counter()
 
 
-def render(scene: Scene, view_index: int, projection: str | None = None,
-           shading: str | None = None, size: tuple[int, int] | None = None,
-           inspect=None) -> Frame:
-    """Render view ``view_index`` (0-based) of ``scene``.
+def render(scene: Scene, view: View | None, settings: RenderSettings | None = None,
+           context: RenderContext | None = None, inspect=None) -> Frame:
+    """Draw ``scene`` seen through ``view`` with ``settings``.
 
-    ``inspect(stage, arrays)``, when given, is called after each stage of the triangle path
-    with the arrays it produced (named as in ``core/renderers/zbuffer.py``).
-
-    An invalid view, a scene without views, or a zero-sized framebuffer gives a frame of the
-    background colour with ``message`` saying why; it never raises for bad scene data.
+    ``view`` ``None`` means the scene has none to show (the frame says so). ``inspect(stage,
+    arrays)``, when given, is called after each stage of the triangle path with the arrays it
+    produced (named as in :mod:`core.renderers.zbuffer`).
     """
-    projection = projection or scene.projection
-    shading = shading or scene.shading
-    width, height = size or scene.size
-    stages = plan(scene, projection, shading)
-    frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8), plan=stages,
-                  stats={"allocated": ["color"], "computed": [], "projection": projection,
-                         "shading": shading})
-    color, stats = frame.color, frame.stats
-    solid = shading != "wireframe" and scene.triangle_count > 0
-    if not solid:
-        fill(color, scene.background)          # the solid path's resolve writes every pixel
-    if not scene.views:
-        frame.message = f"{scene.name}: no valid view to show"
-        return _blank(frame, scene, filled=not solid)
-    view = scene.views[view_index % len(scene.views)]
-    try:
-        n, z_min = normalizing_transform(view, projection)
-    except ViewError:
-        frame.message = (f"{view.label}: invalid for {projection} projection: "
-                         + "; ".join(problems(view, projection)))
-        return _blank(frame, scene, filled=not solid)
-    if width <= 0 or height <= 0:
-        frame.message = f"the framebuffer is {width} x {height}: nothing to draw"
-        return frame
-
-    timer = _Timer(stats, inspect)
-    vp = project.viewport(view.window, width, height)
-    timer.lap("normalize")
-    if solid:
-        from core.renderers.zbuffer import render_solid     # the triangle pipeline (numba kernels)
-        render_solid(frame, scene, view, projection, shading, n, z_min, vp, timer)
-    line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
-    if line_meshes:
-        _render_lines(color, line_meshes, projection, n, z_min, vp, scene.line_color, timer, stats)
-    return frame
-
-
-def fill(color: np.ndarray, rgb) -> None:
-    """Fill an (H, W, 3) image with one colour: one row, then whole rows (a length-3 inner
-    broadcast over every pixel costs ~100x more)."""
-    if color.size:
-        color[0] = to_rgb8(rgb)
-        color[1:] = color[0]
-
-
-def _blank(frame: Frame, scene: Scene, filled: bool) -> Frame:
-    if not filled:
+    settings = settings or RenderSettings.for_scene(scene)
+    context = context or DEFAULT_CONTEXT
+    renderer = get_renderer(settings.renderer)
+    width, height = settings.size
+    frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8),
+                  plan=plan(scene, settings.projection, settings.shading),
+                  stats={"allocated": ["color"], "computed": [], "renderer": renderer.name,
+                         "projection": settings.projection, "shading": settings.shading})
+    message = _why_not(scene, view, settings)
+    if message:
+        frame.message = message
         fill(frame.color, scene.background)
+        return frame
+    draw = renderer.function()
+    if settings.samples == 1 or renderer.samples_itself:
+        draw(scene, view, settings, frame, context, Timer(frame.stats, inspect))
+    else:
+        _supersample(draw, scene, view, settings, frame, context, inspect)
     return frame
 
 
-def _render_lines(color, meshes, projection, n, z_min, vp, line_color, timer, stats) -> None:
-    """Wireframe: transform, Cohen–Sutherland clip, M_per · M_vv3dv, divide, scan-convert."""
-    drawn = 0
-    for mesh in meshes:
-        edges = _edges(mesh)
-        if len(edges) == 0:
-            continue
-        points = apply(n, mesh.positions)[:, :3]
-        timer.lap("normalize")
-        q0, q1 = clip.clip_lines(points[edges[:, 0]], points[edges[:, 1]], projection, z_min)
-        timer.lap("clip lines")
-        d0 = project.project_lines(q0, projection, vp)
-        d1 = project.project_lines(q1, projection, vp)
-        timer.lap("project")
-        raster_lines.draw_lines(color, d0, d1, to_rgb8(line_color))
-        timer.lap("scan-convert lines")
-        drawn += len(q0)
-    stats["segments drawn"] = drawn
-    stats["computed"].append("line clipping")
+def _why_not(scene: Scene, view: View | None, settings: RenderSettings) -> str | None:
+    """Why nothing can be drawn, or None."""
+    if view is None:
+        return f"{scene.name}: no valid view to show"
+    try:
+        normalizing_transform(view, settings.projection)
+    except ViewError:
+        return (f"{view.label}: invalid for {settings.projection} projection: "
+                + "; ".join(problems(view, settings.projection)))
+    width, height = settings.size
+    if width <= 0 or height <= 0:
+        return f"the framebuffer is {width} x {height}: nothing to draw"
+    return None
+
+
+def _supersample(draw, scene, view, settings, frame, context, inspect) -> None:
+    """Run a one-sample renderer over the film's samples and box-filter them into ``frame``."""
+    width, height = settings.size
+    side = grid_side(settings.samples)
+    frame.stats["samples per pixel"] = settings.samples
+    if (settings.sample_pattern == "regular" and side * side == settings.samples
+            and width * height * settings.samples <= MAX_PASS_PIXELS):
+        big = Frame(rgbx=np.empty((height * side, width * side, 4), np.uint8), plan=frame.plan,
+                    stats=frame.stats)
+        draw(scene, view, settings.replace(samples=1, size=(width * side, height * side)), big,
+             context, Timer(frame.stats, inspect))
+        frame.color[:] = np.floor(box_filter(big.color, side) + 0.5).astype(np.uint8)
+        frame.sample_color = big.color
+        return
+    film = Film(width, height, settings.samples, settings.sample_pattern, settings.seed)
+    one = Frame(rgbx=np.empty_like(frame.rgbx), plan=frame.plan, stats=frame.stats)
+    for offset in film.offsets:
+        draw(scene, view, settings.replace(samples=1, pixel_offset=tuple(offset)), one, context,
+             Timer(frame.stats, inspect))
+        film.add(one.color)
+    frame.color[:] = film.resolve()

@@ -61,6 +61,9 @@ class RenderSettings:
     rasterizer: str = "edge"                  # "edge" (fast) | "scanline" (the course's ET/AET, screen-linear)
     keep_aspect: bool = False                 # letterbox the window; False: stretch it over the viewport (the course)
     course_tri: bool = False                  # the .tri startup code's back-face rule (skip viewpoint . N < 0)
+    # Where in its pixel a one-sample frame samples (x right, y down, pixel units): the centre,
+    # as the course's scan conversion does; the film moves it for each of several samples.
+    pixel_offset: tuple[float, float] = (0.5, 0.5)
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
@@ -78,6 +81,8 @@ class RenderSettings:
         object.__setattr__(self, "projection", str(self.projection))
         object.__setattr__(self, "shading", str(self.shading))
         object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))
+        object.__setattr__(self, "pixel_offset", (float(self.pixel_offset[0]),
+                                                  float(self.pixel_offset[1])))
 
     @classmethod
     def for_scene(cls, scene, **overrides) -> "RenderSettings":

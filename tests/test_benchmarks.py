@@ -25,6 +25,7 @@ from core.pipeline.clip_polygon import clip_triangles
 from core.pipeline.raster import rasterize
 from core.shading.illumination import to_uint8
 from core.render import render
+from core.settings import RenderSettings
 from core.transforms import apply
 from core.camera.view import View, normalizing_transform
 
@@ -151,7 +152,8 @@ def test_shade(benchmark, staged_100k, mode):
 @pytest.mark.parametrize("triangles", [10_000, 100_000])
 def test_full_frame(benchmark, triangles, mode):
     scene = bench_scene(triangles)
-    frame = benchmark(render, scene, 0, PROJECTION, mode, SIZE)
+    settings = RenderSettings(projection=PROJECTION, shading=mode, size=SIZE)
+    frame = benchmark(render, scene, scene.views[0], settings)
     assert frame.message is None
     covered = np.any(frame.color != to_uint8(scene.background), axis=2)
     assert 0.1 < covered.mean() < 0.9

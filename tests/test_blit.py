@@ -13,6 +13,7 @@ import pytest
 moderngl = pytest.importorskip("moderngl")
 imgui = pytest.importorskip("imgui")
 
+from core.settings import RenderSettings
 from app.viewer.blit import Blit  # noqa: E402
 from app.viewer.imgui_backend import ImGuiRenderer, draw_commands  # noqa: E402
 
@@ -197,7 +198,8 @@ def test_a_rendered_frame_round_trips_through_its_padded_upload(ctx):
     from core.paths import SCENES_DIR
     from core.render import render
 
-    frame = render(load_scene(SCENES_DIR / "torus.toml"), 0, "perspective", "gouraud", (333, 217))
+    torus = load_scene(SCENES_DIR / "torus.toml")
+    frame = render(torus, torus.views[0], RenderSettings(shading="gouraud", size=(333, 217)))
     assert frame.rgbx.shape == (217, 333, 4)
     blit = Blit(ctx)
     assert np.array_equal(blit_through(ctx, blit, frame.rgbx), frame.color)

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from core.settings import RenderSettings
 from core.scene import generators
 from core.pipeline import project
 from core.scene.formats import ReaderError, load_scene, read_mesh, read_scene_file, read_tri
@@ -168,7 +169,8 @@ def test_tri_render_puts_vertices_on_their_pixels():
     corners = [viewpoint + 3.0 * (top_left + i * right + j * down - viewpoint) for i, j in pixels]
     scene = read_tri(tri_text(viewpoint, top_left, right, down, [corners]), "one.tri")
     scene.line_color = (1.0, 1.0, 1.0)
-    frame = render(scene, 0, "perspective", "wireframe", (500, 500))
+    frame = render(scene, scene.views[0],
+                   RenderSettings.for_scene(scene, projection="perspective", shading="wireframe", size=(500, 500)))
     assert frame.message is None
     lit = np.any(frame.color > 0, axis=2)
     for i, j in pixels:

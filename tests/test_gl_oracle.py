@@ -22,6 +22,7 @@ import pytest
 
 moderngl = pytest.importorskip("moderngl")
 
+from core.settings import RenderSettings
 from core.render import render                                   # noqa: E402
 from core.scene.model import Light, Material, Mesh, Scene              # noqa: E402
 from core.transforms import apply                                # noqa: E402
@@ -215,7 +216,8 @@ def valid_views(scene: Scene, projection: str) -> list[int]:
 
 def cpu_coverage(scene: Scene, view_index: int, projection: str) -> np.ndarray:
     on_magenta = dataclasses.replace(scene, background=MAGENTA)
-    frame = render(on_magenta, view_index, projection, "flat", SIZE)
+    frame = render(on_magenta, on_magenta.views[view_index],
+                   RenderSettings.for_scene(on_magenta, projection=projection, shading="flat", size=SIZE))
     assert frame.message is None, frame.message
     return np.any(frame.color != np.array([255, 0, 255], np.uint8), axis=2)
 
@@ -289,7 +291,8 @@ def test_shading_matches_llvmpipe_away_from_edges(gl, name, shading, projection,
     views = valid_views(scene, projection)
     assert views, f"{name}: no view valid for {projection}"
     for view_index in views:
-        frame = render(scene, view_index, projection, shading, SIZE)
+        frame = render(scene, scene.views[view_index],
+                       RenderSettings.for_scene(scene, projection=projection, shading=shading, size=SIZE))
         assert frame.message is None, frame.message
         theirs = gl.render(view_index, projection, shading)
         covered = gl.render(view_index, projection, "coverage")[:, :, 0] > 127
@@ -312,7 +315,8 @@ def test_shading_comparison_can_fail(gl):
     gl.load(scene, modes=("gouraud", "phong", "coverage"))
     covered = gl.render(0, "perspective", "coverage")[:, :, 0] > 127
     away = covered & ~edge_mask(scene, 0, "perspective")
-    ours_phong = render(scene, 0, "perspective", "phong", SIZE).color.astype(np.int16)
+    ours_phong = render(scene, scene.views[0],
+                        RenderSettings.for_scene(scene, projection="perspective", shading="phong", size=SIZE)).color.astype(np.int16)
     gouraud = gl.render(0, "perspective", "gouraud").astype(np.int16)
     assert np.abs(ours_phong - gouraud).max(axis=2)[away].max() > 2
     shinier = dataclasses.replace(scene, meshes=[dataclasses.replace(

@@ -9,6 +9,7 @@ import sys
 import numpy as np
 import pytest
 
+from core.settings import RenderSettings
 from core.scene.generators import house
 from core.paths import ROOT, SCENES_DIR
 from core.plan import plan
@@ -34,7 +35,8 @@ def test_house_geometry():
 @pytest.mark.parametrize("k", range(13))
 def test_golden_house_views(golden, k, projection):
     scene = house_scene()
-    frame = render(scene, k, projection, "wireframe", (500, 500))
+    frame = render(scene, scene.views[k],
+                   RenderSettings.for_scene(scene, projection=projection, shading="wireframe", size=(500, 500)))
     if frame.message:                     # view 19 of the file (F behind the eye) is not here
         pytest.fail(frame.message)
     golden(f"house_v{k + 1:02d}_{projection}", frame.color)
@@ -43,7 +45,8 @@ def test_golden_house_views(golden, k, projection):
 def test_front_view_edges_land_where_hand_math_puts_them():
     # Notes' example view (F=1, B=-23), perspective: the front wall lies in the view plane, so
     # its corners map straight through the window (-1..17) onto 500 px: x = (u+1)/18*500.
-    frame = render(house_scene(), 2, "perspective", "wireframe", (500, 500))
+    frame = render(house_scene(), house_scene().views[2],
+                   RenderSettings(projection="perspective", shading="wireframe", size=(500, 500)))
     lit = frame.color[:, :, 0] > 0
     for u, v in [(0, 0), (16, 0), (16, 10), (8, 16), (0, 10)]:
         col = int((u + 1) / 18 * 500)
@@ -52,14 +55,16 @@ def test_front_view_edges_land_where_hand_math_puts_them():
 
 
 def test_empty_picture_when_house_is_behind_the_eye():
-    frame = render(house_scene(), 11, "perspective", "wireframe", (200, 200))
+    frame = render(house_scene(), house_scene().views[11],
+                   RenderSettings(projection="perspective", shading="wireframe", size=(200, 200)))
     assert frame.message is None and not frame.color.any()
 
 
 def test_invalid_views_in_the_file_give_messages_and_the_others_render():
     scene = house_scene()
     assert len(scene.view_messages) == 6 and len(scene.views) == 14
-    lit = [render(scene, k, "parallel", "wireframe", (100, 100)).color.any() for k in range(14)]
+    lit = [render(scene, scene.views[k],
+                  RenderSettings.for_scene(scene, projection="parallel", shading="wireframe", size=(100, 100))).color.any() for k in range(14)]
     assert sum(lit) >= 12
 
 
@@ -67,14 +72,17 @@ def test_view_invalid_for_perspective_only():
     scene = house_scene()
     k = 13                                      # the file's view 19: F = 40 > PRP_n = 30
     assert "view 19" in scene.views[k].label
-    bad = render(scene, k, "perspective", "wireframe", (100, 100))
+    bad = render(scene, scene.views[k],
+                 RenderSettings.for_scene(scene, projection="perspective", shading="wireframe", size=(100, 100)))
     assert "not in front of the eye" in bad.message and not bad.color.any()
-    good = render(scene, k, "parallel", "wireframe", (100, 100))
+    good = render(scene, scene.views[k],
+                  RenderSettings.for_scene(scene, projection="parallel", shading="wireframe", size=(100, 100)))
     assert good.message is None and good.color.any()
 
 
 def test_zero_sized_framebuffer_is_a_message_not_a_crash():
-    frame = render(house_scene(), 0, "perspective", "wireframe", (0, 0))
+    frame = render(house_scene(), house_scene().views[0],
+                   RenderSettings(projection="perspective", shading="wireframe", size=(0, 0)))
     assert frame.color.shape == (0, 0, 3) and "0 x 0" in frame.message
 
 
@@ -83,7 +91,8 @@ def test_wireframe_plan_has_no_depth_buffer():
     stages = {s.name: s for s in plan(scene, "perspective", "wireframe")}
     assert not stages["depth buffer"].runs and not stages["z-buffer scan conversion"].runs
     assert stages["clip lines"].runs and stages["scan-convert lines"].runs
-    frame = render(scene, 0, "perspective", "wireframe", (50, 50))
+    frame = render(scene, scene.views[0],
+                   RenderSettings.for_scene(scene, projection="perspective", shading="wireframe", size=(50, 50)))
     assert frame.stats["allocated"] == ["color"]
 
 
@@ -123,4 +132,4 @@ def test_render_command_reads_views_from_stdin(tmp_path):
 
 def test_render_command_rejects_bad_view_number(tmp_path):
     result = _app("render", "-", "--view", "99", "--out", str(tmp_path / "x.png"), stdin=VIEWS_TEXT)
-    assert result.returncode == 2 and "has 14 valid views" in result.stderr
+    assert result.returncode == 2 and "the file has 20 views (1 to 20)" in result.stderr

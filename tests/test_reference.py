@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from core.settings import RenderSettings
 from core.scene import generators
 from core.shading import illumination as il
 from core.renderers.raycast import (Sphere, Torus, _quartic_roots, _torus_roots, pack_shapes,
@@ -181,7 +182,8 @@ def rmse_against_reference(scene: Scene, mode: str, reference) -> tuple[float, i
     """RMSE (0-255 scale) on the pixels both cover fully (the pipeline's pixel centre is
     covered, and all 16 reference samples hit)."""
     from core.render import render
-    frame = render(scene, 0, "perspective", mode, size=SIZE)
+    frame = render(scene, scene.views[0],
+                   RenderSettings.for_scene(scene, projection="perspective", shading=mode, size=SIZE))
     assert frame.message is None
     covered = np.any(frame.color != 0, axis=2)        # black background; ambient is never 0
     both = covered & (reference.coverage == 1.0)
@@ -224,7 +226,8 @@ def test_torus_phong_matches_the_reference():
                                  view, "perspective", size=SIZE, samples=4)
     errors = {}
     for mode in ("flat", "gouraud", "phong"):
-        frame = render(scene, 0, "perspective", mode, size=SIZE)
+        frame = render(scene, scene.views[0],
+                       RenderSettings.for_scene(scene, projection="perspective", shading=mode, size=SIZE))
         both = np.any(frame.color != 0, axis=2) & (reference.shape == 0)
         assert both.sum() > 10000
         error = frame.color[both].astype(np.float64) - 255.0 * reference.rgb[both]

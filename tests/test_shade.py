@@ -8,6 +8,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
+from core.settings import SOLID_SHADINGS
 from core.shading import illumination as il
 from core.shading import shade
 from core.scene.model import Light, Material, Mesh, Scene
@@ -194,7 +195,7 @@ def test_resolve_refuses_indices_that_point_nowhere():
 
 def test_empty_scene_resolves_to_background():
     scene = Scene(name="empty", meshes=[], views=[VIEW], background=(1.0, 0.5, 0.0))
-    for mode in shade.MODES:
+    for mode in SOLID_SHADINGS:
         s = shade.prepare(mode, scene, EYE)
         image = shade.resolve(s, visibility(np.full((2, 2), -1)), np.zeros((0, 3), np.int64),
                               s.vertex_attrs, np.zeros(0, np.int64), scene.background)
@@ -230,7 +231,7 @@ def test_nearer_mesh_wins_and_modes_agree_on_a_flat_face(projection):
     scene.lights = [Light(direction=(0.0, 0.0, 1.0))]
     for mesh in scene.meshes:
         mesh.material = Material(ka=0.2, kd=0.6, ks=0.0, od=mesh.material.od)
-    images = {m: render_with_raster(scene, VIEW, projection, m, (40, 40))[0] for m in shade.MODES}
+    images = {m: render_with_raster(scene, VIEW, projection, m, (40, 40))[0] for m in SOLID_SHADINGS}
     image = images["flat"]
     # device (x, y) of world (-0.25, -0.25) and (0.75, 0.75): only blue, only red
     blue, red = image[40 - 18, 18], image[40 - 28, 28]

@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from core.settings import RenderSettings
 from app.viewer.state import ViewerState
 from core.scene.generators import house
 from core.paths import SCENES_DIR
@@ -45,9 +46,10 @@ class CountingRenderer:
         self.render = render
         self.calls = []
 
-    def __call__(self, scene, view_index, projection, shading, size):
-        self.calls.append((view_index, projection, shading, size))
-        return self.render(scene, view_index, projection, shading, size)
+    def __call__(self, scene, view, settings, context=None):
+        self.calls.append((scene.views.index(view), settings.projection, settings.shading,
+                           settings.size))
+        return self.render(scene, view, settings, context)
 
 
 @pytest.fixture
@@ -130,10 +132,10 @@ def test_a_failing_render_keeps_the_last_frame_and_says_why(state):
     good = state.frame
     real = state.renderer
 
-    def broken(scene, view_index, projection, shading, size):
-        if shading == "phong":
+    def broken(scene, view, settings, context=None):
+        if settings.shading == "phong":
             raise ZeroDivisionError("a stage fell over")
-        return real(scene, view_index, projection, shading, size)
+        return real(scene, view, settings, context)
 
     state.renderer = broken
     state.set_shading("phong")
@@ -321,7 +323,8 @@ def test_no_display_renders_every_view_to_png(state, tmp_path, capsys):
                                        for k in range(1, n + 1)]
     for k, path in enumerate(files):
         assert f"wrote {path}" in captured.out
-        expected = render(state.scene, k, "perspective", "wireframe", (200, 150)).color
+        expected = render(state.scene, state.scene.views[k],
+                          RenderSettings.for_scene(state.scene, projection="perspective", shading="wireframe", size=(200, 150))).color
         assert np.array_equal(np.asarray(Image.open(path).convert("RGB")), expected)
 
 
@@ -387,10 +390,10 @@ def test_window_click_menu_and_keys_under_xvfb(tmp_path):
         assert len(np.unique(cpu.reshape(-1, 3), axis=0)) >= 2, "the saved frame is blank"
         grab = tmp_path / "screen.png"
         if shutil.which("import"):
-            subprocess.run(["import", "-window", app.viewer.window, str(grab)], env=app.env,
+            subprocess.run(["import", "-window", app.window, str(grab)], env=app.env,
                            check=True, timeout=10)
         else:
-            subprocess.run(["xwd", "-id", app.viewer.window, "-out", str(grab) + ".xwd"], env=app.env,
+            subprocess.run(["xwd", "-id", app.window, "-out", str(grab) + ".xwd"], env=app.env,
                            check=True, timeout=10)
             grab = grab.with_suffix(".png.xwd")
         screen = np.asarray(Image.open(grab).convert("RGB"))
@@ -410,11 +413,11 @@ def test_window_click_menu_and_keys_under_xvfb(tmp_path):
 
         # Resizing re-renders at the new framebuffer size (odd sizes too).
         mark = len(app.log())
-        app.xdotool("windowsize", app.viewer.window, "333", "217")
+        app.xdotool("windowsize", app.window, "333", "217")
         app.wait_for(r"frame \d+: view 3 of .* size=333x217", timeout=10, after=mark)
 
         # q quits cleanly (on the key press: xdotool's release may find the window gone).
-        subprocess.run(["xdotool", "key", "--window", app.viewer.window, "q"], env=app.env,
+        subprocess.run(["xdotool", "key", "--window", app.window, "q"], env=app.env,
                        capture_output=True, timeout=10)
         assert app.process.wait(timeout=10) == 0
     finally:

@@ -37,6 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
+from core.settings import RenderSettings
 from core.paths import ROOT
 
 DEFAULT_SIZES = "1k,10k,100k,1M"
@@ -133,7 +134,8 @@ def time_ours(scene, projection: str, shading: str, size, frames: int, warmup: i
     for k in range(warmup + frames):
         c0 = time.process_time()
         t0 = time.perf_counter()
-        frame = render(scene, 0, projection, shading, size)
+        frame = render(scene, scene.views[0],
+                       RenderSettings.for_scene(scene, projection=projection, shading=shading, size=size))
         t1 = time.perf_counter()
         blit.upload(frame.rgbx)
         t2 = time.perf_counter()
@@ -172,6 +174,7 @@ _JIT_PROBE = r"""
 import json, sys, time
 t0 = time.perf_counter()
 from core.render import render
+from core.settings import RenderSettings
 t_import = time.perf_counter()
 from app.tools.bench import bench_scene
 scene = bench_scene(1000)
@@ -179,7 +182,8 @@ t_scene = time.perf_counter()
 first = {}
 for shading in ("flat", "gouraud", "phong"):
     t = time.perf_counter()
-    render(scene, 0, "perspective", shading, (500, 500))
+    render(scene, scene.views[0],
+           RenderSettings.for_scene(scene, projection="perspective", shading=shading, size=(500, 500)))
     first[shading] = (time.perf_counter() - t) * 1e3
 t_end = time.perf_counter()
 print(json.dumps({"import_ms": (t_import - t0) * 1e3, "scene_ms": (t_scene - t_import) * 1e3,

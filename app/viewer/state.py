@@ -40,7 +40,7 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
     return load(source, size=size)
 
 
-def render(scene, view, settings):
+def render(scene, view, settings, context=None):
     """``core.render.render``, imported when first needed.
 
     A wireframe needs no compiled kernel, so numba is imported (to listen for compiles) only
@@ -49,7 +49,7 @@ def render(scene, view, settings):
     from core.render import render as render_frame
     if settings.shading != "wireframe" and scene.triangle_count:
         _listen_for_compiles()
-    return render_frame(scene, view, settings)
+    return render_frame(scene, view, settings, context)
 
 
 # Set when numba starts compiling a kernel (a cache miss), so that the slow-frame notice
@@ -151,10 +151,18 @@ class ViewerState:
     # caches them on disk). Say so when it takes longer than this.
     compile_notice_after: float = 0.5
     _modes_rendered: set = field(default_factory=set, repr=False)
+    context: object = None          # the core.context.RenderContext of this window's frames
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
         self.size = (int(self.size[0]), int(self.size[1]))
+        if self.context is None:
+            from core.context import RenderContext
+            self.context = RenderContext()
+
+    def current_view(self):
+        """The view shown now (None when the scene has no valid view)."""
+        return self.view
 
     def _scene_defaults(self, keep_settings: bool = False) -> None:
         s = self.scene
@@ -343,7 +351,8 @@ class ViewerState:
             from core.scene.course_tri import course_tri_scene
             scene = course_tri_scene(scene, view)
         what = f"{self.view_label}, {self.projection}, {self.shading}"
-        return (lambda: renderer(scene, view, settings)), what
+        context = self.context
+        return (lambda: renderer(scene, view, settings, context)), what
 
     def update(self) -> bool:
         """Render a new frame now if the picture changed; returns whether one was rendered.

@@ -46,6 +46,7 @@ from typing import Callable
 import numpy as np
 from numba import njit, prange
 
+from core.settings import RenderSettings
 from core.renderers import raycast as reference_module
 from core.settings import SOLID_SHADINGS
 from core.scene.generators import torus, uv_sphere
@@ -240,7 +241,8 @@ def sample_coverage(image: np.ndarray, k: int) -> np.ndarray:
 def render_supersampled(scene: Scene, shading: str, size: int, k: int) -> np.ndarray:
     """The 8-bit image at ``k`` times ``size`` (what gets box-filtered)."""
     from core.render import render
-    frame = render(scene, 0, "perspective", shading, (size * k, size * k))
+    frame = render(scene, scene.views[0],
+                   RenderSettings.for_scene(scene, projection="perspective", shading=shading, size=(size * k, size * k)))
     if frame.message:
         raise ValueError(frame.message)
     return frame.color

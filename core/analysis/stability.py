@@ -38,6 +38,7 @@ from typing import Callable
 
 import numpy as np
 
+from core.settings import RenderSettings
 from core.settings import PROJECTIONS, SOLID_SHADINGS
 from core.analysis import exact
 from core.pipeline import project
@@ -192,7 +193,8 @@ def run_suite(names: list[str] | None = None, progress: Callable[[str], None] | 
 def render_image(scene: Scene, projection: str, shading: str, size=SIZE, view_index: int = 0):
     """``core.render.render``'s colour image and message."""
     from core.render import render
-    frame = render(scene, view_index, projection, shading, size)
+    frame = render(scene, scene.views[view_index],
+                   RenderSettings.for_scene(scene, projection=projection, shading=shading, size=size))
     return frame.color, frame.message
 
 
@@ -207,7 +209,8 @@ def probe(scene: Scene, projection: str, shading: str, size=SIZE, view_index: in
     from core.render import render
     arrays: dict[str, np.ndarray] = {}
     # The real pipeline, each stage's arrays copied as they pass (the z-buffer is reused).
-    render(scene, view_index, projection, shading, size,
+    render(scene, scene.views[view_index],
+           RenderSettings.for_scene(scene, projection=projection, shading=shading, size=size),
            inspect=lambda stage, found: arrays.update({k: np.array(v) for k, v in found.items()}))
     bad = []
     if "vertex_attrs" not in arrays:             # no triangle stage ran (e.g. an invalid view)

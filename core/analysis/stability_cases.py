@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from core.settings import RenderSettings
 from core.settings import PROJECTIONS, SOLID_SHADINGS
 from core.analysis import exact
 from core.pipeline import project
@@ -733,7 +734,8 @@ def non_finite_files() -> Outcome:
                 example.setdefault(".views", (messages[0] if messages else "")
                                    .replace(str(path.parent) + "/", ""))
                 for projection in PROJECTIONS:
-                    frame = render(scene, 0, projection, "wireframe", SIZE)
+                    frame = render(scene, scene.views[0],
+                                   RenderSettings.for_scene(scene, projection=projection, shading="wireframe", size=SIZE))
                     if frame.message is not None:
                         problems.append(f"{name}: the good view did not render: {frame.message}")
     out.check(f"{refused} files refused by their reader, {loaded} view files loaded their good "

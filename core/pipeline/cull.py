@@ -14,24 +14,24 @@ kept triangles directly (no boolean mask, no gather afterwards).
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
 from numba import njit
 
-_planes: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+from core.context import DEFAULT_CONTEXT, RenderContext
 
 
-def face_planes(mesh) -> tuple[np.ndarray, np.ndarray]:
-    """Unnormalised outward normals ``(T, 3)`` and plane constants ``N·V0`` ``(T,)`` of a mesh."""
-    cached = _planes.get(mesh)
-    if cached is not None and cached[0] is mesh.positions and cached[1] is mesh.triangles:
-        return cached[2], cached[3]
+def face_planes(mesh, context: RenderContext = DEFAULT_CONTEXT) -> tuple[np.ndarray, np.ndarray]:
+    """Unnormalised outward normals ``(T, 3)`` and plane constants ``N·V0`` ``(T,)`` of a mesh
+    (kept in ``context`` while the mesh and its arrays live)."""
+    cache = context.cache(mesh)
+    held = cache.get("face planes")
+    if held is not None and held[0] is mesh.positions and held[1] is mesh.triangles:
+        return held[2], held[3]
     p, t = mesh.positions, mesh.triangles
     v0 = p[t[:, 0]]
     normal = np.cross(p[t[:, 1]] - v0, p[t[:, 2]] - v0)
     d = np.einsum("ij,ij->i", normal, v0)
-    _planes[mesh] = (mesh.positions, mesh.triangles, normal, d)
+    cache["face planes"] = (mesh.positions, mesh.triangles, normal, d)
     return normal, d
 
 
@@ -61,7 +61,8 @@ def _keep_all(triangles, first, n, kept, kept_triangles, count):
     return count
 
 
-def front_faces(meshes, triangles: np.ndarray, eye) -> tuple[np.ndarray, np.ndarray] | None:
+def front_faces(meshes, triangles: np.ndarray, eye,
+                context: RenderContext = DEFAULT_CONTEXT) -> tuple[np.ndarray, np.ndarray] | None:
     """The faces that may be seen: ``(kept indices (K,), kept triangles (K, 3))``.
 
     ``triangles`` are all meshes' triangles in scene order over one vertex array (what
@@ -78,7 +79,7 @@ def front_faces(meshes, triangles: np.ndarray, eye) -> tuple[np.ndarray, np.ndar
     for mesh in meshes:
         n = len(mesh.triangles)
         if mesh.closed and n:
-            normal, d = face_planes(mesh)
+            normal, d = face_planes(mesh, context)
             count = _keep_front(normal, d, triangles, first, e, eye_is_point, kept,
                                 kept_triangles, count)
         elif n:

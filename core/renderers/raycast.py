@@ -40,13 +40,14 @@ seconds on two cores.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit, prange
 
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights, pack_surfaces,
                                phong_point, unit3)
+from core.camera.film import fill, grid_side, to_rgb8
 from core.pipeline.project import viewport
 from core.scene.primitives import Sphere, Torus  # noqa: F401  (the shapes it traces)
 from core.camera.view import View, check, vrc_basis
@@ -353,7 +354,8 @@ def _trace(shapes, surfaces, lights, ambient, eye, halfway, vrp, basis, window, 
 
 
 def render_reference(shapes, scene, view: View, projection: str,
-                     size: tuple[int, int] | None = None, samples: int = 4) -> Reference:
+                     size: tuple[int, int] | None = None, samples: int = 4,
+                     keep_aspect: bool = False) -> Reference:
     """The exact image of ``shapes`` lit by ``scene``'s lights, seen through ``view``.
 
     ``scene`` supplies ``lights``, ``ambient``, ``specular`` and ``background`` (its meshes are
@@ -380,10 +382,27 @@ def render_reference(shapes, scene, view: View, projection: str,
            pack_eye(eye), scene.specular == "halfway",
            np.asarray(view.vrp, dtype=np.float64), np.array([u, v, n]),
            np.asarray(view.window, dtype=np.float64),
-           np.asarray(viewport(view.window, width, height), dtype=np.float64),
+           np.asarray(viewport(view.window, width, height, keep_aspect), dtype=np.float64),
            perspective, np.asarray(origin, dtype=np.float64), np.asarray(dop, dtype=np.float64),
            float(view.front), float(view.back), int(samples),
            np.asarray(scene.background, dtype=np.float64).reshape(3), rgb, surface_rgb, coverage,
            seen)
     return Reference(rgb=rgb, surface_rgb=surface_rgb, coverage=coverage, shape=seen,
                      samples=int(samples))
+
+
+def draw(scene, view: View, settings, frame, context, timer) -> None:
+    """The ``raycast`` renderer: ``scene.primitives`` ray-cast exactly, on a regular grid of
+    ``settings.samples`` per pixel (the smallest square grid that holds them)."""
+    if not scene.primitives:
+        fill(frame.color, scene.background)
+        frame.message = (f"{scene.name}: no analytic primitives; the ray caster draws only those "
+                         "(the meshes need the z-buffer)")
+        return
+    side = grid_side(settings.samples)
+    reference = render_reference(scene.primitives, scene, view, settings.projection,
+                                 settings.size, samples=side, keep_aspect=settings.keep_aspect)
+    frame.color[:] = to_rgb8(reference.rgb)
+    frame.stats["samples per pixel"] = side * side
+    frame.stats["computed"].append("exact ray casting")
+    timer.lap("ray cast")

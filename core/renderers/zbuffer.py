@@ -1,8 +1,10 @@
-"""The triangle pipeline: cull → shade inputs → N → clip → project → z-buffer → resolve.
+"""The z-buffer renderer: FvDFH's viewing pipeline for triangles and lines.
 
-Called by :func:`core.render.render` for solid shading modes. Each step is one call into the
-module that implements it; this file only threads arrays from one to the next and records what
-ran in ``frame.stats``:
+``draw(scene, view, settings, frame, context, timer)``, called by :func:`core.render.render`.
+Lines (every edge in wireframe; line-only meshes always): N, Cohen–Sutherland, M_per ·
+M_vv3dv, divide by W, midpoint line. Triangles: cull → shade inputs → N → clip → project →
+z-buffer → resolve. Each step is one call into the module that implements it; this file only
+threads arrays from one to the next and records what ran in ``frame.stats``:
 
 1. ``front_faces``: back-face culling, only for meshes declared closed (``core/pipeline/cull.py``).
 2. ``shade.prepare``: the mode's per-face or per-vertex work in world coordinates, for the
@@ -17,68 +19,125 @@ ran in ``frame.stats``:
 
 from __future__ import annotations
 
-from threadpoolctl import threadpool_limits
-
-from core.pipeline import project
-from core.shading import shade
-from core.pipeline.cull import front_faces
-from core.pipeline.clip_polygon import clip_triangles
-from core.pipeline.raster import VisibilityBuffer, rasterize
-from core.pipeline.vertex_kernels import transform_affine, transform_projective
-
-# Our compiled kernels run their own threads (screen bands, pixel rows). OpenBLAS's threads,
-# started by numpy's small matrix products, would spin-wait on the same two cores between our
-# calls: measured here, a 100k-triangle Gouraud frame took 92 ms with them and 17 ms without.
-threadpool_limits(limits=1, user_api="blas")
-
-_buffers: dict[tuple[int, int], VisibilityBuffer] = {}
+from core.camera.film import fill, to_rgb8
+from core.camera.view import normalizing_transform
+from core.pipeline import clip, project, raster_lines
+from core.transforms import apply
 
 
-def _visibility_buffer(width: int, height: int) -> VisibilityBuffer:
-    """One buffer per framebuffer size, reused from frame to frame (the z-buffer's memory)."""
-    if (width, height) not in _buffers:
-        _buffers.clear()                    # a resize drops the old size
-        _buffers[(width, height)] = VisibilityBuffer.allocate(width, height)
-    return _buffers[(width, height)]
+def draw(scene, view, settings, frame, context, timer) -> None:
+    """The z-buffer renderer: every triangle with ``settings.shading``, then the line edges
+    (all edges in wireframe) with the midpoint line. Fills every pixel of ``frame``."""
+    projection, shading = settings.projection, settings.shading
+    height, width = frame.color.shape[:2]
+    n, z_min = normalizing_transform(view, projection)
+    vp = _sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
+                          settings.pixel_offset)
+    timer.lap("normalize")
+    solid = shading != "wireframe" and scene.triangle_count > 0
+    if solid:
+        draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context, timer,
+                       rasterizer=settings.rasterizer)
+    else:
+        fill(frame.color, scene.background)
+    line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
+    if line_meshes:
+        draw_lines(frame.color, line_meshes, projection, n, z_min, vp, scene.line_color, context,
+                   timer, frame.stats)
 
 
-def render_solid(frame, scene, view, projection, shading, n, z_min, vp, timer) -> None:
-    """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``."""
+def _sample_viewport(vp, pixel_offset):
+    """The viewport moved so that the sample at ``pixel_offset`` (x right, y down, in its
+    pixel) lands where the scan conversion samples, the pixel centre."""
+    dx, dy = 0.5 - pixel_offset[0], pixel_offset[1] - 0.5       # device y runs up
+    if dx == 0.0 and dy == 0.0:
+        return vp
+    x0, x1, y0, y1 = vp
+    return x0 + dx, x1 + dx, y0 + dy, y1 + dy
+
+
+# From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,
+# the same pixels): below it the numpy stages take a few ms and need no numba at start-up.
+COMPILED_LINES_FROM = 5_000
+
+
+def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, timer,
+               stats) -> None:
+    """Wireframe: transform, Cohen–Sutherland clip, M_per · M_vv3dv, divide, scan-convert."""
+    drawn = 0
+    for mesh in meshes:
+        cache = context.cache(mesh)
+        if cache.get("edges", (None,))[0] is not mesh.triangles:
+            cache["edges"] = (mesh.triangles, mesh.all_edges())
+        edges = cache["edges"][1]
+        if len(edges) == 0:
+            continue
+        points = apply(n, mesh.positions)[:, :3]
+        timer.lap("normalize")
+        if len(edges) >= COMPILED_LINES_FROM:
+            from core.pipeline.wireframe import draw_edges
+            drawn += draw_edges(points, edges, clip.planes(projection, z_min),
+                                project.line_matrix(projection, vp), color, to_rgb8(line_color))
+            timer.lap("scan-convert lines")
+            continue
+        q0, q1 = clip.clip_lines(points[edges[:, 0]], points[edges[:, 1]], projection, z_min)
+        timer.lap("clip lines")
+        d0 = project.project_lines(q0, projection, vp)
+        d1 = project.project_lines(q1, projection, vp)
+        timer.lap("project")
+        raster_lines.draw_lines(color, d0, d1, to_rgb8(line_color))
+        timer.lap("scan-convert lines")
+        drawn += len(q0)
+    stats["segments drawn"] = drawn
+    stats["computed"].append("line clipping")
+
+
+def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context,
+                   timer, rasterizer: str = "edge") -> None:
+    """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``; ``rasterizer``
+    "scanline" scan-converts with the course's ET/AET algorithm (screen-linear weights)."""
+    from core.renderers import triangles as stages      # the compiled stages, on first use
     stats = frame.stats
     height, width = frame.color.shape[:2]
-    eye = shade.eye_from_view(view, projection)
-    positions, all_triangles = shade.geometry(scene)
-    culled = front_faces(scene.meshes, all_triangles, eye)
+    eye = stages.shade.eye_from_view(view, projection)
+    positions, all_triangles = stages.shade.geometry(scene, context)
+    culled = stages.front_faces(scene.meshes, all_triangles, eye, context)
     kept, triangles = (None, all_triangles) if culled is None else culled
     if kept is not None:
         stats["computed"].append("back-face culling")
         stats["culled"] = int(len(all_triangles) - len(kept))
     timer.lap("cull back faces")
 
-    inputs = shade.prepare(shading, scene, eye, faces=kept)
+    inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context)
     stats["computed"].extend(inputs.computed)
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
 
-    points = transform_affine(n, positions)
+    points = stages.transform_affine(n, positions)
     timer.lap("normalize", canonical_points=points)
 
-    clipped = clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min)
+    clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min)
     source = clipped.source if kept is None else kept[clipped.source]
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))
     timer.lap("clip triangles", clipped_points=clipped.points, clipped_attrs=clipped.attrs,
               clipped_triangles=clipped.triangles)
 
-    device, inv_w = transform_projective(project.triangle_matrix(projection, z_min, vp),
+    device, inv_w = stages.transform_projective(project.triangle_matrix(projection, z_min, vp),
                                          clipped.points)
     timer.lap("project", device_points=device, inv_w=inv_w)
 
+    rasterize = stages.rasterize
+    if rasterizer == "scanline":
+        from core.pipeline.raster_scanline import rasterize
+    stats["rasterizer"] = rasterizer
     vis = rasterize(device, inv_w, clipped.triangles, width, height,
-                    out=_visibility_buffer(width, height))
+                    out=context.buffer("visibility", (width, height),
+                                       lambda: stages.VisibilityBuffer.allocate(width, height)))
     stats["allocated"].append("depth")
     timer.lap("z-buffer", depth=vis.depth, tri=vis.tri, b1=vis.b1, b2=vis.b2)
 
-    shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
+    stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
                   out=frame.color)
+    frame.depth = vis.depth
     timer.lap("shade: pixel step")

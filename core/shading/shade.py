@@ -43,21 +43,18 @@ and turned into bytes rounded half up (:func:`core.shading.illumination.to_uint8
 
 from __future__ import annotations
 
-import weakref
 from dataclasses import dataclass, field
-from typing import Callable, NamedTuple
+from typing import Callable
 
 import numpy as np
-from numba import njit, prange
 
+from core.context import DEFAULT_CONTEXT, RenderContext
 from core.shading.illumination import (Eye, eye_from_view, pack_ambient, pack_eye, pack_lights,
-                               pack_surfaces, phong_point, quantize, to_uint8,
-                               unit3)
+                                        pack_surfaces, to_uint8)
 from core.scene.normals import WEIGHTINGS, face_normals, vertex_normals
+from core.shading.registry import get_shader
 
-__all__ = ["MODES", "ShadeInput", "Eye", "eye_from_view", "prepare", "resolve"]
-
-MODES = ("flat", "gouraud", "phong")
+__all__ = ["ShadeInput", "Eye", "eye_from_view", "prepare", "resolve"]
 
 
 @dataclass
@@ -87,15 +84,14 @@ class ShadeInput:
     eye: np.ndarray
     halfway: bool
     faces: np.ndarray          # (F,) the faces that will be drawn; only these are lit
+    context: RenderContext = field(default_factory=RenderContext, repr=False)
     computed: list[str] = field(default_factory=list)
 
 
 # --------------------------------------------------------------------------------------------
-# Work that does not depend on the view, kept while the mesh (or the scene) lives: face and
-# vertex normals per mesh; the concatenated arrays per scene. Cached arrays are read-only.
-
-_mesh_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-_scene_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+# Work that does not depend on the view, kept in the render context while the mesh (or the
+# scene) lives: face and vertex normals per mesh; the concatenated arrays per scene. Cached
+# arrays are read-only.
 
 
 def _read_only(value):
@@ -105,18 +101,20 @@ def _read_only(value):
     return value
 
 
-def _cached(cache, owner, arrays: tuple, key: str, compute: Callable[[], object]):
+def cached(context: RenderContext, owner, arrays: tuple, key: str,
+           compute: Callable[[], object]):
     """``compute()`` once per ``owner``, again whenever one of ``arrays`` is replaced.
 
     The entry holds the arrays it was computed from (so their ids cannot be reused while it
     lives) and is dropped with the owner. Arrays changed in place are not noticed: a scene is
     data that the stages never change (core.scene).
     """
-    entry = cache.get(owner)
+    cache = context.cache(owner)
+    entry = cache.get("shading")
     if entry is None or len(entry[0]) != len(arrays) or any(
             a is not b for a, b in zip(entry[0], arrays)):
         entry = (arrays, {})
-        cache[owner] = entry
+        cache["shading"] = entry
     if key not in entry[1]:
         entry[1][key] = _read_only(compute())
     return entry[1][key]
@@ -126,29 +124,36 @@ def _mesh_arrays(mesh) -> tuple:
     return (mesh.positions, mesh.triangles, mesh.normals)
 
 
-def _scene_arrays(meshes) -> tuple:
+def scene_arrays(meshes) -> tuple:
     return tuple(meshes) + tuple(a for m in meshes for a in _mesh_arrays(m))
 
 
-def _mesh_face_normals(mesh) -> np.ndarray:
-    return _cached(_mesh_cache, mesh, _mesh_arrays(mesh), "face normals",
-                   lambda: face_normals(mesh.positions, mesh.triangles)[0])
+def _mesh_face_normals(context, mesh) -> np.ndarray:
+    return cached(context, mesh, _mesh_arrays(mesh), "face normals",
+                  lambda: face_normals(mesh.positions, mesh.triangles)[0])
 
 
-def _mesh_vertex_normals(mesh, weighting: str) -> np.ndarray:
-    return _cached(_mesh_cache, mesh, _mesh_arrays(mesh), f"vertex normals {weighting}",
-                   lambda: vertex_normals(mesh, weighting))
+def _mesh_vertex_normals(context, mesh, weighting: str) -> np.ndarray:
+    return cached(context, mesh, _mesh_arrays(mesh), f"vertex normals {weighting}",
+                  lambda: vertex_normals(mesh, weighting))
 
 
-def _concatenated(scene, meshes, key: str, parts: Callable, width: int, dtype=np.float64):
+def concatenated(context, scene, meshes, key: str, parts: Callable, width: int,
+                 dtype=np.float64):
     """The per-mesh arrays ``parts(mesh)`` of all meshes, one after another (cached)."""
     def join():
         arrays = [parts(m) for m in meshes]
         return np.concatenate(arrays) if arrays else np.zeros((0, width), dtype)
-    return _cached(_scene_cache, scene, _scene_arrays(meshes), key, join)
+    return cached(context, scene, scene_arrays(meshes), key, join)
 
 
-def _geometry(scene, meshes):
+def all_face_normals(s: "ShadeInput", scene, meshes) -> np.ndarray:
+    """Every mesh's unit face normals, scene order ``(T, 3)``."""
+    return concatenated(s.context, scene, meshes, "face normals",
+                        lambda m: _mesh_face_normals(s.context, m), 3)
+
+
+def _geometry(context, scene, meshes):
     """``positions, triangles, face_surface, vertex_surface, vertex_offset`` of all meshes."""
     def build():
         sizes = np.array([len(m.positions) for m in meshes], dtype=np.int64)
@@ -160,7 +165,7 @@ def _geometry(scene, meshes):
                                  [len(m.triangles) for m in meshes])
         vertex_surface = np.repeat(np.arange(len(meshes), dtype=np.int64), sizes)
         return positions, triangles, face_surface, vertex_surface, offset[:-1].copy()
-    return _cached(_scene_cache, scene, _scene_arrays(meshes), "geometry", build)
+    return cached(context, scene, scene_arrays(meshes), "geometry", build)
 
 
 # --------------------------------------------------------------------------------------------
@@ -171,199 +176,28 @@ def _geometry(scene, meshes):
 PARALLEL_ITEMS = 20_000
 
 
-@njit(cache=True)
-def _phong_face(positions, triangles, f, normals, face_surface, surfaces, lights, ambient, eye,
-                halfway, out):
-    """The model once for face ``f``, at its centroid with its face normal."""
-    i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
-    cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
-    cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
-    cz = (positions[i0, 2] + positions[i1, 2] + positions[i2, 2]) / 3.0
-    r, g, b = phong_point(cx, cy, cz, normals[f, 0], normals[f, 1], normals[f, 2],
-                          face_surface[f], surfaces, lights, ambient, eye, halfway)
-    out[f, 0], out[f, 1], out[f, 2] = r, g, b
-
-
-@njit(cache=True, parallel=True)
-def _phong_faces_parallel(positions, triangles, faces, normals, face_surface, surfaces, lights,
-                          ambient, eye, halfway, out):
-    for k in prange(faces.shape[0]):
-        _phong_face(positions, triangles, faces[k], normals, face_surface, surfaces, lights,
-                    ambient, eye, halfway, out)
-
-
-@njit(cache=True)
-def _phong_faces_serial(positions, triangles, faces, normals, face_surface, surfaces, lights,
-                        ambient, eye, halfway, out):
-    for k in range(faces.shape[0]):
-        _phong_face(positions, triangles, faces[k], normals, face_surface, surfaces, lights,
-                    ambient, eye, halfway, out)
-
-
-def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
-    """One evaluation per face, at its centroid with its face normal (FvDFH 16.2.3)."""
-    normals = _concatenated(scene, meshes, "face normals", _mesh_face_normals, 3)
-    s.face_rgb = np.zeros((len(s.triangles), 3))          # faces not in s.faces stay unlit
-    kernel = _phong_faces_parallel if len(s.faces) >= PARALLEL_ITEMS else _phong_faces_serial
-    kernel(s.positions, s.triangles, s.faces, normals, s.face_surface, s.surfaces, s.lights,
-           s.ambient, s.eye, s.halfway, s.face_rgb)
-    s.computed += ["face normals", "illuminate faces"]
-
-
-def _all_vertex_normals(s: ShadeInput, scene, meshes, weighting) -> np.ndarray:
+def all_vertex_normals(s: ShadeInput, scene, meshes, weighting) -> np.ndarray:
+    """Every mesh's vertex normals (given, or averaged with ``weighting``), scene order."""
     if any(m.normals is None and len(m.triangles) for m in meshes):
         s.computed.append("vertex normals")
-    return _concatenated(scene, meshes, f"vertex normals {weighting}",
-                         lambda m: _mesh_vertex_normals(m, weighting), 3)
-
-
-def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
-    """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4)."""
-    normals = _all_vertex_normals(s, scene, meshes, weighting)
-    s.vertex_attrs = np.zeros((len(s.positions), 3))      # vertices no face uses stay unlit
-    vertices = _used_vertices(s.triangles, s.faces, len(s.positions))
-    kernel = _phong_vertices_parallel if len(vertices) >= PARALLEL_ITEMS else _phong_vertices_serial
-    kernel(s.positions, normals, vertices, s.vertex_surface, s.surfaces, s.lights, s.ambient,
-           s.eye, s.halfway, s.vertex_attrs)
-    s.computed.append("illuminate vertices")
-
-
-@njit(cache=True)
-def _used_vertices(triangles, faces, vertex_count):
-    """Indices of the vertices that the faces ``faces`` use, each once, in vertex order."""
-    used = np.zeros(vertex_count, dtype=np.bool_)
-    for k in range(faces.shape[0]):
-        for c in range(3):
-            used[triangles[faces[k], c]] = True
-    return np.flatnonzero(used)
-
-
-@njit(cache=True)
-def _phong_vertex(positions, normals, i, vertex_surface, surfaces, lights, ambient, eye, halfway,
-                  out):
-    """The model at vertex ``i`` with its vertex normal (FvDFH 16.2.4)."""
-    r, g, b = phong_point(positions[i, 0], positions[i, 1], positions[i, 2],
-                          normals[i, 0], normals[i, 1], normals[i, 2], vertex_surface[i],
-                          surfaces, lights, ambient, eye, halfway)
-    out[i, 0], out[i, 1], out[i, 2] = r, g, b
-
-
-@njit(cache=True, parallel=True)
-def _phong_vertices_parallel(positions, normals, vertices, vertex_surface, surfaces, lights,
-                             ambient, eye, halfway, out):
-    for k in prange(vertices.shape[0]):
-        _phong_vertex(positions, normals, vertices[k], vertex_surface, surfaces, lights, ambient,
-                      eye, halfway, out)
-
-
-@njit(cache=True)
-def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surfaces, lights,
-                           ambient, eye, halfway, out):
-    for k in range(vertices.shape[0]):
-        _phong_vertex(positions, normals, vertices[k], vertex_surface, surfaces, lights, ambient,
-                      eye, halfway, out)
-
-
-def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
-    """Normals and world positions to interpolate; the model runs per pixel (FvDFH 16.2.5).
-
-    Nothing here depends on the view, so the attribute array is kept with the scene."""
-    normals = _all_vertex_normals(s, scene, meshes, weighting)
-    s.vertex_attrs = _cached(_scene_cache, scene, _scene_arrays(meshes),
-                             f"phong attributes {weighting}",
-                             lambda: np.concatenate([normals, s.positions], axis=1))
-    s.computed.append("illuminate pixels")
-
-
-# --------------------------------------------------------------------------------------------
-# The pixel step of each mode (numba; rows in parallel, pixels in order along the scan line)
-
-
-@njit(cache=True, parallel=True)
-def _resolve_flat(tri, source, face_rgb, background8, out):
-    height, width = tri.shape
-    for row in prange(height):
-        for col in range(width):
-            t = tri[row, col]
-            if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-            else:
-                f = source[t]
-                for c in range(3):
-                    out[row, col, c] = quantize(face_rgb[f, c])
-
-
-@njit(cache=True, parallel=True)
-def _resolve_gouraud(tri, b1, b2, triangles, rgb, background8, out):
-    height, width = tri.shape
-    for row in prange(height):
-        for col in range(width):
-            t = tri[row, col]
-            if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-                continue
-            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-            w1, w2 = b1[row, col], b2[row, col]
-            w0 = 1.0 - w1 - w2
-            for c in range(3):
-                out[row, col, c] = quantize(w0 * rgb[i0, c] + w1 * rgb[i1, c] + w2 * rgb[i2, c])
-
-
-@njit(cache=True, parallel=True)
-def _resolve_phong(tri, b1, b2, triangles, attrs, source, face_surface, surfaces, lights,
-                   ambient, eye, halfway, background8, out):
-    height, width = tri.shape
-    for row in prange(height):
-        for col in range(width):
-            t = tri[row, col]
-            if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-                continue
-            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-            w1, w2 = b1[row, col], b2[row, col]
-            w0 = 1.0 - w1 - w2
-            nx = w0 * attrs[i0, 0] + w1 * attrs[i1, 0] + w2 * attrs[i2, 0]
-            ny = w0 * attrs[i0, 1] + w1 * attrs[i1, 1] + w2 * attrs[i2, 1]
-            nz = w0 * attrs[i0, 2] + w1 * attrs[i1, 2] + w2 * attrs[i2, 2]
-            px = w0 * attrs[i0, 3] + w1 * attrs[i1, 3] + w2 * attrs[i2, 3]
-            py = w0 * attrs[i0, 4] + w1 * attrs[i1, 4] + w2 * attrs[i2, 4]
-            pz = w0 * attrs[i0, 5] + w1 * attrs[i1, 5] + w2 * attrs[i2, 5]
-            nx, ny, nz, _ = unit3(nx, ny, nz)        # renormalise the interpolated normal
-            r, g, b = phong_point(px, py, pz, nx, ny, nz, face_surface[source[t]], surfaces,
-                                  lights, ambient, eye, halfway)
-            out[row, col, 0] = quantize(r)
-            out[row, col, 1] = quantize(g)
-            out[row, col, 2] = quantize(b)
-
-
-class _Shader(NamedTuple):
-    prepare: Callable
-    attribute_count: int
-
-
-SHADERS = {
-    "flat": _Shader(_prepare_flat, 0),
-    "gouraud": _Shader(_prepare_gouraud, 3),
-    "phong": _Shader(_prepare_phong, 6),
-}
+    return concatenated(s.context, scene, meshes, f"vertex normals {weighting}",
+                        lambda m: _mesh_vertex_normals(s.context, m, weighting), 3)
 
 
 # --------------------------------------------------------------------------------------------
 # What the renderer calls
 
 
-def geometry(scene) -> tuple[np.ndarray, np.ndarray]:
+def geometry(scene, context: RenderContext = DEFAULT_CONTEXT) -> tuple[np.ndarray, np.ndarray]:
     """``(positions (V, 3), triangles (T, 3))``: all meshes over one vertex array, scene order
     (cached with the scene; the same arrays :func:`prepare` puts in its ShadeInput)."""
-    positions, triangles, *_ = _geometry(scene, list(scene.meshes))
+    positions, triangles, *_ = _geometry(context, scene, list(scene.meshes))
     return positions, triangles
 
 
 def prepare(mode: str, scene, eye: Eye, weighting: str = "mean",
-            faces: np.ndarray | None = None) -> ShadeInput:
+            faces: np.ndarray | None = None,
+            context: RenderContext = DEFAULT_CONTEXT) -> ShadeInput:
     """The vertex step of ``mode`` for every mesh of ``scene`` seen from ``eye``.
 
     ``eye`` is :func:`eye_from_view`'s answer. ``weighting`` picks the vertex-normal average
@@ -372,12 +206,11 @@ def prepare(mode: str, scene, eye: Eye, weighting: str = "mean",
     e.g. those back-face culling kept: flat lights only those faces and Gouraud only their
     vertices. Raises ValueError for an unknown mode or weighting.
     """
-    if mode not in SHADERS:
-        raise ValueError(f"shading must be one of {MODES}, not {mode!r}")
+    shader = get_shader(mode)
     if weighting not in WEIGHTINGS:
         raise ValueError(f"weighting must be one of {WEIGHTINGS}, not {weighting!r}")
     meshes = list(scene.meshes)
-    positions, triangles, face_surface, vertex_surface, offset = _geometry(scene, meshes)
+    positions, triangles, face_surface, vertex_surface, offset = _geometry(context, scene, meshes)
     s = ShadeInput(
         mode=mode, positions=positions, triangles=triangles,
         vertex_attrs=np.zeros((len(positions), 0)), face_rgb=None,
@@ -386,8 +219,8 @@ def prepare(mode: str, scene, eye: Eye, weighting: str = "mean",
         lights=pack_lights(scene.lights), ambient=pack_ambient(scene.ambient),
         eye=pack_eye(eye), halfway=scene.specular == "halfway",
         faces=(np.arange(len(triangles), dtype=np.int64) if faces is None
-               else np.ascontiguousarray(faces, dtype=np.int64)))
-    SHADERS[mode].prepare(s, scene, meshes, weighting)
+               else np.ascontiguousarray(faces, dtype=np.int64)), context=context)
+    shader.vertex(s, scene, meshes, weighting)
     return s
 
 
@@ -409,7 +242,8 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
     triangles = np.ascontiguousarray(clipped_triangles, dtype=np.int64).reshape(-1, 3)
     source = np.ascontiguousarray(source, dtype=np.int64).reshape(-1)
     attrs = np.ascontiguousarray(clipped_attrs, dtype=np.float64)
-    k = SHADERS[shading.mode].attribute_count
+    shader = get_shader(shading.mode)
+    k = shader.width
     if attrs.ndim != 2 or attrs.shape[1] != k:
         raise ValueError(f"{shading.mode} shading carries {k} attributes per vertex, "
                          f"the clipper gave an array of shape {attrs.shape}")
@@ -423,16 +257,5 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
                          f"shading.triangles (0..{len(shading.triangles) - 1})")
     if k and triangles.size and not 0 <= triangles.min() <= triangles.max() < len(attrs):
         raise ValueError(f"clipped triangles index {len(attrs)} attribute rows out of range")
-    if shading.mode == "flat":
-        _resolve_flat(tri, source, np.ascontiguousarray(shading.face_rgb, dtype=np.float64),
-                      background8, out)
-    elif shading.mode == "gouraud":
-        _resolve_gouraud(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
-                         np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs,
-                         background8, out)
-    else:
-        _resolve_phong(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
-                       np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, source,
-                       shading.face_surface, shading.surfaces, shading.lights, shading.ambient,
-                       shading.eye, shading.halfway, background8, out)
+    shader.pixel(shading, vis, triangles, attrs, source, background8, out)
     return out

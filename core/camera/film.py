@@ -1,0 +1,92 @@
+"""The film: where in a pixel the samples lie, and how they become the pixel (pbrt's Film + Filter).
+
+Every renderer asks the film for its sample offsets and hands it back one image per sample;
+supersampling is therefore a setting of any renderer (``RenderSettings.samples``), not a trick
+of one of them.
+
+- Offsets are in pixel units inside ``[0, 1)²``, measured from the pixel's top-left corner,
+  x to the right and y **down** (image order). One sample is the pixel centre (0.5, 0.5), the
+  course's sample point.
+- ``regular``: the centres of an ``s x s`` grid of strata (``samples`` must be a square);
+  ``jittered``: one uniformly random point in each stratum, from ``seed`` (reproducible).
+  A non-square count with ``jittered`` takes the first ``samples`` strata of the smallest
+  ``s x s`` grid with at least that many.
+- Reconstruction is the box filter: the mean of the samples, rounded half up to 8 bits.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def grid_side(samples: int) -> int:
+    """The side of the smallest square grid with at least ``samples`` strata."""
+    return int(math.ceil(math.sqrt(samples) - 1e-9))
+
+
+def sample_offsets(samples: int, pattern: str = "regular", seed: int = 0) -> np.ndarray:
+    """``(samples, 2)`` offsets (x right, y down) in ``[0, 1)²``, row by row over the strata."""
+    if samples < 1:
+        raise ValueError(f"samples per pixel must be at least 1, not {samples}")
+    side = grid_side(samples)
+    if pattern == "regular" and side * side != samples:
+        raise ValueError(f"a regular grid needs a square number of samples (1, 4, 9, 16, …), "
+                         f"not {samples}; use the jittered pattern")
+    row, col = np.divmod(np.arange(side * side)[:samples], side)
+    if pattern == "regular":
+        jitter = np.full((samples, 2), 0.5)
+    elif pattern == "jittered":
+        jitter = np.random.default_rng(seed).random((samples, 2))
+    else:
+        raise ValueError(f"sample pattern must be 'regular' or 'jittered', not {pattern!r}")
+    return np.stack([(col + jitter[:, 0]) / side, (row + jitter[:, 1]) / side], axis=1)
+
+
+class Film:
+    """Accumulates one float image per sample and reconstructs the pixels (box filter)."""
+
+    def __init__(self, width: int, height: int, samples: int = 1, pattern: str = "regular",
+                 seed: int = 0):
+        self.width, self.height = int(width), int(height)
+        self.offsets = sample_offsets(samples, pattern, seed)
+        self._sum = np.zeros((self.height, self.width, 3))
+        self._count = 0
+
+    @property
+    def samples(self) -> int:
+        return len(self.offsets)
+
+    def add(self, rgb) -> None:
+        """One sample's image: ``(H, W, 3)`` floats in [0, 1] or uint8 in [0, 255]."""
+        rgb = np.asarray(rgb)
+        self._sum += rgb / 255.0 if rgb.dtype == np.uint8 else rgb
+        self._count += 1
+
+    def resolve(self) -> np.ndarray:
+        """The box-filtered image, ``(H, W, 3)`` uint8, rounded half up."""
+        if self._count == 0:
+            raise ValueError("the film has no samples yet")
+        mean = self._sum / self._count
+        return np.floor(np.clip(mean, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+
+
+def box_filter(samples_image: np.ndarray, side: int) -> np.ndarray:
+    """``(side·H, side·W, 3)`` samples on a regular grid → ``(H, W, 3)`` float means (0–255)."""
+    h, w = samples_image.shape[0] // side, samples_image.shape[1] // side
+    blocks = samples_image[:h * side, :w * side].reshape(h, side, w, side, -1)
+    return blocks.astype(np.float64).mean(axis=(1, 3))
+
+
+def to_rgb8(color) -> np.ndarray:
+    """A colour in [0, 1] → uint8, rounded half up."""
+    return np.floor(np.clip(np.asarray(color, dtype=np.float64), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
+
+
+def fill(color: np.ndarray, rgb) -> None:
+    """Fill an (H, W, 3) image with one colour: one row, then whole rows (a length-3 inner
+    broadcast over every pixel costs ~100x more)."""
+    if color.size:
+        color[0] = to_rgb8(rgb)
+        color[1:] = color[0]

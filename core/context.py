@@ -1,0 +1,38 @@
+"""What outlives a frame: the z-buffer's memory and the per-mesh, per-scene caches.
+
+Whoever draws frames in a row (the viewer, the bench, an animation) keeps one
+:class:`RenderContext` and passes it to :func:`core.render.render`; calls without one share
+:data:`DEFAULT_CONTEXT`. Nothing else in the core keeps state between frames.
+"""
+
+from __future__ import annotations
+
+import weakref
+
+
+class RenderContext:
+    """Memory and caches that outlive one frame, kept by whoever draws frames in a row.
+
+    ``buffer(key, make)`` keeps one object per key (e.g. the visibility buffer of a size; a
+    new size replaces it); ``cache(owner)`` is a dict that lives as long as ``owner`` (a mesh
+    or a scene) and is dropped with it.
+    """
+
+    def __init__(self) -> None:
+        self._buffers: dict = {}
+        self._caches: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+    def buffer(self, kind: str, key, make):
+        held = self._buffers.get(kind)
+        if held is None or held[0] != key:
+            self._buffers[kind] = held = (key, make())
+        return held[1]
+
+    def cache(self, owner) -> dict:
+        entry = self._caches.get(owner)
+        if entry is None:
+            entry = self._caches[owner] = {}
+        return entry
+
+
+DEFAULT_CONTEXT = RenderContext()

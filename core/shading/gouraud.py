@@ -1,0 +1,87 @@
+"""Gouraud shading (FvDFH 16.2.4): the illumination model at each vertex with its vertex normal;
+the colours are interpolated. Varyings: ``rgb`` (3)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from core.shading.illumination import phong_point, quantize
+from core.shading.registry import Shader, register_shader
+from core.shading.shade import PARALLEL_ITEMS, ShadeInput, all_vertex_normals
+
+
+def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
+    """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4)."""
+    normals = all_vertex_normals(s, scene, meshes, weighting)
+    s.vertex_attrs = np.zeros((len(s.positions), 3))      # vertices no face uses stay unlit
+    vertices = _used_vertices(s.triangles, s.faces, len(s.positions))
+    kernel = _phong_vertices_parallel if len(vertices) >= PARALLEL_ITEMS else _phong_vertices_serial
+    kernel(s.positions, normals, vertices, s.vertex_surface, s.surfaces, s.lights, s.ambient,
+           s.eye, s.halfway, s.vertex_attrs)
+    s.computed.append("illuminate vertices")
+
+
+@njit(cache=True)
+def _used_vertices(triangles, faces, vertex_count):
+    """Indices of the vertices that the faces ``faces`` use, each once, in vertex order."""
+    used = np.zeros(vertex_count, dtype=np.bool_)
+    for k in range(faces.shape[0]):
+        for c in range(3):
+            used[triangles[faces[k], c]] = True
+    return np.flatnonzero(used)
+
+
+@njit(cache=True)
+def _phong_vertex(positions, normals, i, vertex_surface, surfaces, lights, ambient, eye, halfway,
+                  out):
+    """The model at vertex ``i`` with its vertex normal (FvDFH 16.2.4)."""
+    r, g, b = phong_point(positions[i, 0], positions[i, 1], positions[i, 2],
+                          normals[i, 0], normals[i, 1], normals[i, 2], vertex_surface[i],
+                          surfaces, lights, ambient, eye, halfway)
+    out[i, 0], out[i, 1], out[i, 2] = r, g, b
+
+
+@njit(cache=True, parallel=True)
+def _phong_vertices_parallel(positions, normals, vertices, vertex_surface, surfaces, lights,
+                             ambient, eye, halfway, out):
+    for k in prange(vertices.shape[0]):
+        _phong_vertex(positions, normals, vertices[k], vertex_surface, surfaces, lights, ambient,
+                      eye, halfway, out)
+
+
+@njit(cache=True)
+def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surfaces, lights,
+                           ambient, eye, halfway, out):
+    for k in range(vertices.shape[0]):
+        _phong_vertex(positions, normals, vertices[k], vertex_surface, surfaces, lights, ambient,
+                      eye, halfway, out)
+
+
+@njit(cache=True, parallel=True)
+def _resolve_gouraud(tri, b1, b2, triangles, rgb, background8, out):
+    height, width = tri.shape
+    for row in prange(height):
+        for col in range(width):
+            t = tri[row, col]
+            if t < 0:
+                for c in range(3):
+                    out[row, col, c] = background8[c]
+                continue
+            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+            w1, w2 = b1[row, col], b2[row, col]
+            w0 = 1.0 - w1 - w2
+            for c in range(3):
+                out[row, col, c] = quantize(w0 * rgb[i0, c] + w1 * rgb[i1, c] + w2 * rgb[i2, c])
+
+
+
+def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
+    _resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
+                     np.ascontiguousarray(vis.b1, dtype=np.float64),
+                     np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs,
+                     background8, out)
+
+
+register_shader(Shader("gouraud", _prepare_gouraud, _pixel, varyings=("rgb",), width=3,
+                       description="the model at the vertices, colours interpolated"))

@@ -1,0 +1,64 @@
+"""Phong shading (FvDFH 16.2.5): normals and world positions interpolated, the normal
+renormalised and the illumination model evaluated at every pixel. Varyings: ``normal`` (3),
+``position`` (3)."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from core.shading.illumination import phong_point, quantize, unit3
+from core.shading.registry import Shader, register_shader
+from core.shading.shade import ShadeInput, all_vertex_normals, cached, scene_arrays
+
+
+def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
+    """Normals and world positions to interpolate; the model runs per pixel (FvDFH 16.2.5).
+
+    Nothing here depends on the view, so the attribute array is kept with the scene."""
+    normals = all_vertex_normals(s, scene, meshes, weighting)
+    s.vertex_attrs = cached(s.context, scene, scene_arrays(meshes),
+                             f"phong attributes {weighting}",
+                             lambda: np.concatenate([normals, s.positions], axis=1))
+    s.computed.append("illuminate pixels")
+
+
+@njit(cache=True, parallel=True)
+def _resolve_phong(tri, b1, b2, triangles, attrs, source, face_surface, surfaces, lights,
+                   ambient, eye, halfway, background8, out):
+    height, width = tri.shape
+    for row in prange(height):
+        for col in range(width):
+            t = tri[row, col]
+            if t < 0:
+                for c in range(3):
+                    out[row, col, c] = background8[c]
+                continue
+            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+            w1, w2 = b1[row, col], b2[row, col]
+            w0 = 1.0 - w1 - w2
+            nx = w0 * attrs[i0, 0] + w1 * attrs[i1, 0] + w2 * attrs[i2, 0]
+            ny = w0 * attrs[i0, 1] + w1 * attrs[i1, 1] + w2 * attrs[i2, 1]
+            nz = w0 * attrs[i0, 2] + w1 * attrs[i1, 2] + w2 * attrs[i2, 2]
+            px = w0 * attrs[i0, 3] + w1 * attrs[i1, 3] + w2 * attrs[i2, 3]
+            py = w0 * attrs[i0, 4] + w1 * attrs[i1, 4] + w2 * attrs[i2, 4]
+            pz = w0 * attrs[i0, 5] + w1 * attrs[i1, 5] + w2 * attrs[i2, 5]
+            nx, ny, nz, _ = unit3(nx, ny, nz)        # renormalise the interpolated normal
+            r, g, b = phong_point(px, py, pz, nx, ny, nz, face_surface[source[t]], surfaces,
+                                  lights, ambient, eye, halfway)
+            out[row, col, 0] = quantize(r)
+            out[row, col, 1] = quantize(g)
+            out[row, col, 2] = quantize(b)
+
+
+
+def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
+    _resolve_phong(np.ascontiguousarray(vis.tri, dtype=np.int32),
+                   np.ascontiguousarray(vis.b1, dtype=np.float64),
+                   np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, source,
+                   s.face_surface, s.surfaces, s.lights, s.ambient, s.eye, s.halfway,
+                   background8, out)
+
+
+register_shader(Shader("phong", _prepare_phong, _pixel, varyings=("normal", "position"), width=6,
+                       description="normals interpolated, the model at every pixel"))

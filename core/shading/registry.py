@@ -1,0 +1,46 @@
+"""Shading modes by name: a shader is a vertex step and a pixel step (tinyrenderer's split).
+
+A :class:`Shader` says which per-vertex values (*varyings*) it needs carried through the
+clipper, does its per-face or per-vertex work in world coordinates (``vertex``), and turns the
+visibility buffer into colours (``pixel``). The z-buffer knows nothing about light; a new way
+of shading (textured, bump-mapped) is one new module that registers one more shader.
+
+``register_shader(shader)`` adds one; ``get_shader(name)`` finds one (a ``ValueError`` names
+the modes there are); ``shader_names()`` lists them. flat, Gouraud and Phong register when
+:mod:`core.shading` is imported.
+"""
+
+from __future__ import annotations
+
+from typing import Callable, NamedTuple
+
+
+class Shader(NamedTuple):
+    """``vertex(s, scene, meshes, weighting, context)`` fills the :class:`ShadeInput` ``s``
+    (``s.vertex_attrs`` ``(V, width)`` for the clipper, or ``s.face_rgb``);
+    ``pixel(s, vis, triangles, attrs, source, background8, out)`` writes ``out`` ``(H, W, 3)``
+    uint8 for every pixel, the background where ``vis.tri`` is -1."""
+
+    name: str
+    vertex: Callable
+    pixel: Callable
+    varyings: tuple[str, ...] = ()      # what the clipper carries, in column order
+    width: int = 0                      # columns of vertex_attrs (sum of the varyings' sizes)
+    description: str = ""
+
+
+_SHADERS: dict[str, Shader] = {}
+
+
+def register_shader(shader: Shader) -> None:
+    _SHADERS[shader.name] = shader
+
+
+def get_shader(name: str) -> Shader:
+    if name not in _SHADERS:
+        raise ValueError(f"shading must be one of {', '.join(_SHADERS)}, not {name!r}")
+    return _SHADERS[name]
+
+
+def shader_names() -> tuple[str, ...]:
+    return tuple(_SHADERS)
