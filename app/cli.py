@@ -105,10 +105,10 @@ def _course_options(p: argparse.ArgumentParser) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if not argv and views_on_stdin():
+        argv = ["view", "-"]                  # `python -m app < grade.data`, as the course grades
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help")):
         argv = ["view", *argv]                # `python -m app [SCENE]` opens the viewer
-    if argv == ["view"] and views_on_stdin():
-        argv = ["view", "-"]                  # `python -m app < grade.data`, as the course grades
     args = _parser(argv[0]).parse_args(argv)
     try:
         return _dispatch(args)
