@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
@@ -220,3 +221,31 @@ def _normalizing_transform(view: View, projection: str) -> tuple[np.ndarray, flo
     if projection == "parallel":
         return n_par_factors(view)["N_par"], 0.0
     raise ValueError(f"projection must be one of {PROJECTIONS}, not {projection!r}")
+
+
+class Eye(NamedTuple):
+    """Where the viewer is, in world coordinates: ``point`` (perspective: the PRP) or
+    ``direction`` (parallel: the unit vector towards the viewer, −DOP/|DOP|); the other is None."""
+
+    point: np.ndarray | None
+    direction: np.ndarray | None
+
+
+def eye_from_view(view: View, projection: str) -> Eye:
+    """The viewer of ``view`` in world coordinates (FvDFH 6.5: PRP and DOP are given in VRC).
+
+    Perspective: the PRP, ``VRP + prp_u u + prp_v v + prp_n n``. Parallel: the direction
+    opposite the DOP, ``DOP = CW − PRP`` with ``CW`` the centre of the window, turned into
+    world coordinates by the VRC basis and normalised.
+    """
+    u, v, n = vrc_basis(view)
+    prp = np.asarray(view.prp, dtype=np.float64)
+    if projection == "perspective":
+        return Eye(np.asarray(view.vrp, dtype=np.float64) + prp[0] * u + prp[1] * v + prp[2] * n,
+                   None)
+    if projection == "parallel":
+        u_min, u_max, v_min, v_max = view.window
+        dop = np.array([(u_min + u_max) / 2, (v_min + v_max) / 2, 0.0]) - prp
+        toward_viewer = -(dop[0] * u + dop[1] * v + dop[2] * n)
+        return Eye(None, toward_viewer / np.linalg.norm(toward_viewer))
+    raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
