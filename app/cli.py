@@ -73,6 +73,8 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     pl.add_argument("scene", help=scene_help)
     pl.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
     pl.add_argument("--shading", choices=SHADING_CHOICES, default=None)
+    pl.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None)
+    pl.add_argument("--keep-aspect", action="store_true", default=None)
 
     b = sub.add_parser("bench", help="time the CPU pipeline against llvmpipe (OpenGL in software)")
     if command == "bench":                    # its options live with its body (app/tools/bench.py)
@@ -254,7 +256,10 @@ def _plan(args) -> int:
         return 2
     projection = args.projection or scene.projection
     shading = args.shading or scene.shading
+    keep = scene.keep_aspect if args.keep_aspect is None else args.keep_aspect
+    rasterizer = args.rasterizer or scene.rasterizer
     out = {"scene": scene.name, "projection": projection, "shading": shading,
-           **plan_as_dict(plan(scene, projection, shading))}
+           "rasterizer": rasterizer, "keep_aspect": keep,
+           **plan_as_dict(plan(scene, projection, shading, keep, rasterizer))}
     print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0
