@@ -72,14 +72,17 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         edges = cache["edges"][1]
         if len(edges) == 0:
             continue
-        points = apply(n, mesh.positions)[:, :3]
-        timer.lap("normalize")
         if len(edges) >= COMPILED_LINES_FROM:
+            from core.renderers import triangles as stages     # compiled, one BLAS thread
             from core.pipeline.wireframe import draw_edges
+            points = stages.transform_affine(n, mesh.positions)
+            timer.lap("normalize")
             drawn += draw_edges(points, edges, clip.planes(projection, z_min),
                                 project.line_matrix(projection, vp), color, to_rgb8(line_color))
             timer.lap("scan-convert lines")
             continue
+        points = apply(n, mesh.positions)[:, :3]
+        timer.lap("normalize")
         q0, q1 = clip.clip_lines(points[edges[:, 0]], points[edges[:, 1]], projection, z_min)
         timer.lap("clip lines")
         d0 = project.project_lines(q0, projection, vp)
