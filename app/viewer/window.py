@@ -604,10 +604,13 @@ class ViewerWindow:
     def _progress_text(self) -> str:
         """What the worker is doing, how long it has taken, and whether it compiles."""
         p = self.worker.progress()
-        if p.what and self.worker.waiting:
-            compiled = compile_count() - self._compiles_at_request
-            extra = f", compiling kernels ({compiled} so far)" if compiled else ""
+        compiled = compile_count() - self._compiles_at_request
+        extra = f", compiling kernels ({compiled} so far)" if compiled else ""
+        if p.what and p.frame:
             return f"rendering {p.what}: {time.perf_counter() - p.since:.1f} s{extra}"
+        if p.what and self.worker.waiting:
+            return (f"your frame is next; loading kernels ({p.done + 1} of {p.total}: "
+                    f"{p.what}) {time.perf_counter() - p.since:.1f} s{extra}")
         if p.done < p.total:
             return f"loading kernels in the background: {p.done} of {p.total}"
         return "ready"

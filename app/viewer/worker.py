@@ -44,6 +44,7 @@ class Progress:
 
     what: str = ""
     since: float = 0.0
+    frame: bool = False         # is the job running now a frame (not a background job)?
     done: int = 0               # background jobs done / total (the warm-up)
     total: int = 0
     background: list = field(default_factory=list)
@@ -101,8 +102,8 @@ class RenderWorker:
 
     def progress(self) -> Progress:
         with self._lock:
-            return Progress(self._running.removeprefix("frame:"), self._since, self._done,
-                            self._total)
+            return Progress(self._running.removeprefix("frame:"), self._since,
+                            self._running.startswith("frame:"), self._done, self._total)
 
     def stop(self) -> None:
         with self._lock:
