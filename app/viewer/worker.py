@@ -14,6 +14,7 @@ so that a window asleep in ``wait_events`` picks it up at once.
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from dataclasses import dataclass, field
@@ -137,6 +138,9 @@ class RenderWorker:
             except BaseException as error:          # shown by the window, never fatal here
                 result.error = error
             result.seconds = time.perf_counter() - start
+            if job.generation < 0 and result.error is not None:
+                logging.getLogger("fvd").warning("background job %r failed: %s: %s", job.what,
+                                                 type(result.error).__name__, result.error)
             with self._lock:
                 self._running = ""
                 if job.generation < 0:
