@@ -79,7 +79,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     b = sub.add_parser("bench", help="time the CPU pipeline against llvmpipe (OpenGL in software)")
     if command == "bench":                    # its options live with its body (app/tools/bench.py)
         from app.tools.bench import add_arguments
-        add_arguments(b)
+        add_arguments(b, parse_size)
 
     rep = sub.add_parser("report", help="error against run time: sweep, CSV, Markdown and plot")
     rep.add_argument("--out", default="report", help="output directory")

@@ -71,9 +71,9 @@ def _shadings(text: str) -> list[str]:
     return chosen
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """The bench's options, added to the ``bench`` sub-parser by ``app/cli.py``."""
-    from app.cli import parse_size
+def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
+    """The bench's options, added to the ``bench`` sub-parser by ``app/cli.py`` (which hands
+    over its ``WxH`` parser, so that there is one)."""
     parser.add_argument("--scene", default=None,
                         help="a scene file to time instead of the generated sphere + torus "
                              "(then --sizes is ignored)")
@@ -158,7 +158,7 @@ def time_llvmpipe(renderer, projection: str, shading: str, frames: int, warmup: 
     draws, cpu, reads = [], [], []
     for k in range(warmup + frames):
         c0 = time.process_time()
-        draw, read = renderer.timed_frame(0, projection, shading)
+        draw, read = renderer.timed_frame(renderer.scene.views[0], projection, shading)
         if k >= warmup:
             cpu.append(time.process_time() - c0)     # includes the readback
             draws.append(draw)

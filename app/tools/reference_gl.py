@@ -431,12 +431,12 @@ class GLRenderer:
             if program.get(name, None) is not None:
                 program[name].value = value
 
-    def draw(self, view_index: int, projection: str, shading: str) -> None:
-        """Issue one frame (clear and draw every mesh); does not wait for llvmpipe."""
+    def draw(self, view: View, projection: str, shading: str) -> None:
+        """Issue one frame of ``view`` (any view; clear and draw every mesh); does not wait
+        for llvmpipe."""
         if shading not in MODES:
             raise ValueError(f"shading must be one of {MODES}, not {shading!r}")
         scene = self.scene
-        view = scene.views[view_index]
         if shading not in self.loaded:
             raise ValueError(f"{shading!r} was not loaded (loaded: {', '.join(self.loaded)})")
         program = self.programs[shading]
@@ -476,15 +476,15 @@ class GLRenderer:
         data = self.fbo.read(components=3, alignment=1)
         return np.frombuffer(data, dtype=np.uint8).reshape(height, width, 3)[::-1].copy()
 
-    def render(self, view_index: int, projection: str, shading: str) -> np.ndarray:
-        self.draw(view_index, projection, shading)
+    def render(self, view: View, projection: str, shading: str) -> np.ndarray:
+        self.draw(view, projection, shading)
         self.finish()
         return self.read()
 
-    def timed_frame(self, view_index: int, projection: str, shading: str) -> tuple[float, float]:
+    def timed_frame(self, view: View, projection: str, shading: str) -> tuple[float, float]:
         """Seconds for draw + finish, and for the readback, of one frame."""
         t0 = time.perf_counter()
-        self.draw(view_index, projection, shading)
+        self.draw(view, projection, shading)
         self.finish()
         t1 = time.perf_counter()
         self.read()

@@ -26,7 +26,7 @@ from core.shading.illumination import (Eye, illuminate, pack_ambient, pack_eye, 
 from core.scene.normals import face_normals, vertex_normals
 from core.scene.model import Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y
-from core.analysis.stability import (BLUE, GREY, RED, SIZE, SMALL_VIEW, Outcome, case, compare_images,
+from core.analysis.stability_kit import (BLUE, GREY, RED, SIZE, SMALL_VIEW, Outcome, case, compare_images,
                             coordinate_accuracy, covered, one_pixel_mismatches, probe_all,
                             render_image, scaled_scene, scene_of, sphere_and_cube, square_xy)
 from core.camera.view import View, normalizing_transform

@@ -101,6 +101,9 @@ class VisibilityBuffer:
     b1: np.ndarray  # float64, perspective-correct weight of vertex 1 (undefined where tri -1)
     b2: np.ndarray  # float64, perspective-correct weight of vertex 2 (undefined where tri -1)
     _scene: _Scene = field(default_factory=_Scene, repr=False)
+    # (T, 3, 3) barycentric planes of the triangles drawn (core.pipeline.derivatives), set by
+    # the renderer when a shader needs screen derivatives; None otherwise.
+    planes: np.ndarray | None = None
 
     @classmethod
     def allocate(cls, width: int, height: int) -> "VisibilityBuffer":

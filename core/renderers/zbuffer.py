@@ -20,7 +20,6 @@ threads arrays from one to the next and records what ran in ``frame.stats``:
 from __future__ import annotations
 
 from core.camera.film import fill, to_rgb8
-from core.camera.view import normalizing_transform
 from core.pipeline import clip, project, raster_lines
 from core.transforms import apply
 
@@ -30,7 +29,7 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     (all edges in wireframe) with the midpoint line. Fills every pixel of ``frame``."""
     projection, shading = settings.projection, settings.shading
     height, width = frame.color.shape[:2]
-    n, z_min = normalizing_transform(view, projection)
+    n, z_min = context.normalizing_transform(view, projection)
     vp = _sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
     timer.lap("normalize")
@@ -138,6 +137,10 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
                     out=context.buffer("visibility", (width, height),
                                        lambda: stages.VisibilityBuffer.allocate(width, height)))
     stats["allocated"].append("depth")
+    vis.planes = None
+    if stages.shade.get_shader(shading).needs_derivatives:
+        vis.planes = stages.barycentric_planes(device, inv_w, clipped.triangles)
+        stats["computed"].append("barycentric derivatives")
     timer.lap("z-buffer", depth=vis.depth, tri=vis.tri, b1=vis.b1, b2=vis.b2)
 
     stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
