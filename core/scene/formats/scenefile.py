@@ -45,11 +45,12 @@ from core.shading.illumination import SPECULAR_FORMS
 from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
+from core.settings import RASTERIZERS
 
 MAX_NUMBER = MAX_COORDINATE
 
 TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
-            "line_color", "views", "view", "geometry", "light")
+            "line_color", "views", "view", "geometry", "light", "keep_aspect", "rasterizer")
 GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
 # Analytic primitives (issue 12: the ray tracer intersects them, the z-buffer draws them
 # tessellated): [[geometry]] primitive = "sphere" | "plane" with these keys.
@@ -244,13 +245,15 @@ class _Reader:
         if not meshes:
             raise self.fail(("geometry",), "a scene needs at least one [[geometry]] table")
         points = np.concatenate([m.positions for m in meshes])
-        views, messages = self.views(doc, points)
+        order = self.views(doc, points)
+        views = [v for v in order if isinstance(v, View)]
+        messages = [v for v in order if not isinstance(v, View)]
         lights = ([self.light(t, ("light", i + 1))
                    for i, t in enumerate(self.tables(doc["light"], ("light",)))]
                   if "light" in doc else default_lights(points))
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
-                      meshes=meshes, views=views, view_messages=messages, lights=lights,
-                      source=self.file)
+                      meshes=meshes, views=views, view_messages=messages, view_order=order,
+                      lights=lights, source=self.file)
         scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
                                  if m.tessellates is not None}.values())
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
@@ -258,7 +261,9 @@ class _Reader:
                           ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("shading", lambda v, p: self.choice(v, p, SHADINGS)),
                           ("projection", lambda v, p: self.choice(v, p, PROJECTIONS)),
-                          ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS))):
+                          ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS)),
+                          ("keep_aspect", self.boolean),
+                          ("rasterizer", lambda v, p: self.choice(v, p, RASTERIZERS))):
             if key in doc:
                 setattr(scene, key, read(doc[key], (key,)))
         if "size" in doc:
@@ -451,32 +456,28 @@ class _Reader:
                 raise self.fail(path + ("attenuation",), "c1, c2 and c3 are all zero")
         return light
 
-    def views(self, doc: dict, points: np.ndarray) -> tuple[list[View], list[str]]:
-        views: list[View] = []
-        messages: list[str] = []
+    def views(self, doc: dict, points: np.ndarray) -> list[View | str]:
+        """Every view in order (the view file's, then the [[view]] tables): the View when
+        valid, its message when not."""
+        order: list[View | str] = []
         source = doc.get("views", "auto" if "view" not in doc else None)
         if source is not None:
             source = self.string(source, ("views",))
             if source == "auto":
-                views += framing_views(points, self.file)
+                order += framing_views(points, self.file)
             else:
                 shown = str(Path(self.file).parent / source)
                 try:
                     text = decode_text(read_file(self.folder / source, shown, "views"), shown)
                 except ReaderError as error:
                     raise self.fail(("views",), str(error)) from None
-                from core.scene.formats.viewfile import read_views
-                found, said = read_views(text, shown)
-                views += found
-                messages += said
+                from core.scene.formats.viewfile import read_view_entries
+                order += read_view_entries(text, shown)
         if "view" in doc:
             for i, t in enumerate(self.tables(doc["view"], ("view",))):
                 view, problem = self.inline_view(t, ("view", i + 1))
-                if problem:
-                    messages.append(problem)
-                else:
-                    views.append(view)
-        return views, messages
+                order.append(problem or view)
+        return order
 
     def inline_view(self, value, path: Path_) -> tuple[View, str | None]:
         t = self.table(value, path, VIEW_KEYS)
