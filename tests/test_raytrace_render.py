@@ -282,10 +282,15 @@ def test_registered_renderer_through_the_front_door():
     settings = RenderSettings.for_scene(scene, renderer="raytrace", size=(64, 48), samples=4)
     frame = render(scene, scene.views[0], settings)
     assert frame.message is None and frame.color.shape == (48, 64, 3)
-    assert frame.stats["rays"]["primary"] == 48 * 48 * 4        # the square viewport, letterboxed
+    assert frame.stats["rays"]["primary"] == 64 * 48 * 4        # the window stretched
     assert frame.stats["samples per pixel"] == 4
     direct, _, _ = render_image(scene, scene.views[0], "perspective", (64, 48), samples=4)
     assert np.array_equal(frame.color, direct)
+    boxed = render(scene, scene.views[0], settings.replace(keep_aspect=True))
+    assert boxed.stats["rays"]["primary"] == 48 * 48 * 4        # the square window letterboxed
+    direct, _, _ = render_image(scene, scene.views[0], "perspective", (64, 48), samples=4,
+                                keep_aspect=True)
+    assert np.array_equal(boxed.color, direct)
     # The settings reach the tracer: no shadow rays when shadows are off.
     off = render(scene, scene.views[0], settings.replace(shadows="off", samples=1))
     assert off.stats["rays"]["shadow"] == 0

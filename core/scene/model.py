@@ -115,6 +115,9 @@ class Scene:
     meshes: list[Mesh]
     views: list[View]
     view_messages: list[str] = field(default_factory=list)
+    # Every view in file order, the View when valid and its message when not, so that "view K"
+    # means the K-th view of the file (the course's numbering). Empty: valid views, then invalid.
+    view_order: list = field(default_factory=list)
     lights: list[Light] = field(default_factory=lambda: [Light(position=(0.0, 0.0, 100.0))])
     ambient: tuple[float, float, float] = (0.2, 0.2, 0.2)         # I_a
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -124,6 +127,8 @@ class Scene:
     specular: str = "reflect"             # "reflect": (R.V)^n; "halfway": (N.H)^n
     size: tuple[int, int] = (500, 500)    # preferred framebuffer size, width x height
     source: str = ""                      # file the scene came from
+    keep_aspect: bool = False             # letterbox the window instead of stretching it
+    rasterizer: str = "edge"              # "edge" | "scanline" (the course's ET/AET algorithm)
     # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
     primitives: list = field(default_factory=list)
 
