@@ -12,6 +12,7 @@ import pytest
 from core.camera.view import View
 from core.raytrace.renderer import (TraceOptions, prepare, render_image, render_raw, tiles,
                                     trace_rays, trace_tile)
+from core.raytrace.geometry import _primitives as geometry_primitives
 from core.raytrace.whitted import COUNTERS
 from core.scene.model import Light, Material, Scene
 from core.scene.primitives import Plane, Sphere
@@ -129,7 +130,9 @@ def test_k_r_plus_k_t_at_most_one_keeps_every_pixel_in_range():
     base = load_scene(str(SCENES / "whitted.toml"))
     for trial in range(3):
         primitives = []
-        for p in base.primitives:
+        spheres, planes = geometry_primitives(base)
+        assert len(planes) == 1
+        for p in spheres + planes:
             k = rng.dirichlet(np.ones(6))[:5]              # k_a, k_d, k_s, k_r, k_t: sum < 1
             material = Material(ka=k[0], kd=k[1], ks=k[2], kr=k[3], kt=k[4], n=30.0,
                                 od=tuple(rng.uniform(0, 1, 3)), ior=float(rng.uniform(1.0, 2.4)))
@@ -233,7 +236,7 @@ def test_whitted_scene_reads_and_renders_in_both_renderers():
     from core.scene.formats import load_scene
     scene = load_scene(str(SCENES / "whitted.toml"))
     kinds = sorted(type(p).__name__ for p in scene.primitives)
-    assert kinds == ["Plane", "Sphere", "Sphere"]
+    assert kinds == ["Sphere", "Sphere"]              # the plane: through its tessellation
     glass = [p for p in scene.primitives if isinstance(p, Sphere) and p.material.kt > 0][0]
     assert glass.material.ior == 1.52
     # The z-buffer draws the tessellation: three meshes' worth (two checker colours).
