@@ -522,19 +522,24 @@ def _raytrace_scenes(args) -> list:
     return [(label, scene, scene.views[0]) for label, scene in scenes]
 
 
-def _median_seconds(run, frames: int, warmup: int) -> float:
+def _median_seconds(run, frames: int, warmup: int) -> tuple[float, float]:
+    """Median wall and CPU seconds (all threads of this process) of ``run()``. On a machine
+    shared with other work the wall time grows with the load; the CPU time hardly does, so
+    CPU seconds / cores estimates the wall time on an idle machine."""
     for _ in range(warmup):
         run()
-    times = []
+    walls, cpus = [], []
     for _ in range(frames):
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         run()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
+        walls.append(time.perf_counter() - start)
+        cpus.append(time.process_time() - cpu)
+    return float(np.median(walls)), float(np.median(cpus))
 
 
-def _embree_rays_per_second(scene, origins, directions, frames: int, warmup: int) -> float | None:
-    """Embree's closest-hit throughput on the scene's triangles (float32), or None."""
+def _embree_rays_per_second(scene, origins, directions, frames: int, warmup: int):
+    """Embree's closest-hit ``(rays per wall second, rays per CPU second)`` on the scene's
+    triangles (float32), or None."""
     try:
         from embreex import rtcore_scene
         from embreex.mesh_construction import TriangleMesh
@@ -548,8 +553,8 @@ def _embree_rays_per_second(scene, origins, directions, frames: int, warmup: int
     oracle = rtcore_scene.EmbreeScene()
     TriangleMesh(oracle, corners)
     o32, d32 = origins.astype(np.float32), directions.astype(np.float32)
-    seconds = _median_seconds(lambda: oracle.run(o32, d32, output=1), frames, warmup)
-    return len(origins) / seconds
+    wall, cpu = _median_seconds(lambda: oracle.run(o32, d32, output=1), frames, warmup)
+    return len(origins) / wall, len(origins) / cpu
 
 
 def raytrace_bench(args) -> int:
@@ -573,9 +578,9 @@ def raytrace_bench(args) -> int:
         o, d = np.ascontiguousarray(origins[live]), np.ascontiguousarray(directions[live])
         lo, hi = np.ascontiguousarray(t_min[live]), np.ascontiguousarray(t_max[live])
         kind, index, t_hit = np.empty(len(o), np.int64), np.empty(len(o), np.int64), np.empty(len(o))
-        primary_s = _median_seconds(lambda: whitted.visible_many(
+        primary_s, primary_cpu = _median_seconds(lambda: whitted.visible_many(
             setup.packing.packed, o, d, lo, hi, kind, index, t_hit), frames, warmup)
-        frame_s = _median_seconds(lambda: render_raw(prepare(scene, view, args.projection,
+        frame_s, frame_cpu = _median_seconds(lambda: render_raw(prepare(scene, view, args.projection,
                                                              args.size, TraceOptions())),
                                   frames, warmup)
         counted = prepare(scene, view, args.projection, args.size, TraceOptions())
@@ -585,8 +590,11 @@ def raytrace_bench(args) -> int:
                      "bvh_build_ms": build.seconds * 1e3, "bvh_bytes": build.bytes,
                      "primary_rays": int(live.sum()),
                      "primary_rays_per_s": len(o) / primary_s,
-                     "embree_rays_per_s": embree,
+                     "primary_rays_per_cpu_s": len(o) / primary_cpu,
+                     "embree_rays_per_s": embree[0] if embree else None,
+                     "embree_rays_per_cpu_s": embree[1] if embree else None,
                      "whitted_frame_ms": frame_s * 1e3, "whitted_fps": 1.0 / frame_s,
+                     "whitted_frame_cpu_ms": frame_cpu * 1e3,
                      "rays_per_frame": {k: int(v) for k, v in zip(
                          ("primary", "shadow", "reflected", "refracted", "TIR", "cut by depth",
                           "cut adaptive"), counted.counts)}})
@@ -597,15 +605,22 @@ def raytrace_bench(args) -> int:
     print(f"ray tracer, {args.size[0]} x {args.size[1]} {args.projection}, median of {frames}; "
           f"{os.cpu_count()} CPUs, load average {load_before[0]:.1f} before, "
           f"{report['loadavg_after'][0]:.1f} after")
+    cores = os.cpu_count() or 1
     print(f"{'scene':<14}{'triangles':>10}{'BVH build':>11}{'primary Mray/s':>16}"
-          f"{'Embree Mray/s':>15}{'ratio':>7}{'Whitted frame':>15}{'fps':>7}")
+          f"{'Embree Mray/s':>15}{'ratio':>7}{'Whitted frame':>15}{'fps':>7}"
+          f"{'frame CPU':>11}{'CPU/cores':>11}")
     for r in rows:
         embree = r["embree_rays_per_s"]
         print(f"{r['scene']:<14}{r['triangles']:>10}{r['bvh_build_ms']:>9.0f}ms"
               f"{r['primary_rays_per_s'] / 1e6:>16.2f}"
               f"{(embree / 1e6 if embree else float('nan')):>15.2f}"
               f"{(embree / r['primary_rays_per_s'] if embree else float('nan')):>7.2f}"
-              f"{r['whitted_frame_ms']:>13.0f}ms{r['whitted_fps']:>7.2f}")
+              f"{r['whitted_frame_ms']:>13.0f}ms{r['whitted_fps']:>7.2f}"
+              f"{r['whitted_frame_cpu_ms']:>9.0f}ms{r['whitted_frame_cpu_ms'] / cores:>9.0f}ms")
+        if embree:
+            print(f"{'':<14}per CPU second: ours {r['primary_rays_per_cpu_s'] / 1e6:.2f} Mray, "
+                  f"Embree {r['embree_rays_per_cpu_s'] / 1e6:.2f} Mray (ratio "
+                  f"{r['embree_rays_per_cpu_s'] / r['primary_rays_per_cpu_s']:.2f})")
         print(f"{'':<14}rays per frame: " + ", ".join(f"{k} {v}" for k, v in r["rays_per_frame"].items()))
     print(f"wrote {out / 'bench_raytrace.json'}")
     return 0
