@@ -297,3 +297,22 @@ def test_registered_renderer_through_the_front_door():
     # The settings reach the tracer: no shadow rays when shadows are off.
     off = render(scene, scene.views[0], settings.replace(shadows="off", samples=1))
     assert off.stats["rays"]["shadow"] == 0
+
+
+@pytest.mark.parametrize("name, kinds", [("whitted.toml", ("reflected", "refracted")),
+                                         ("house_mirror.toml", ("reflected",)),
+                                         ("refraction.toml", ("refracted",)),
+                                         ("glass_bunny.toml", ("refracted", "total internal reflections"))])
+def test_shipped_ray_tracing_scenes_render(name, kinds):
+    from core.scene.formats.scenefile import read_scene_file
+    path = SCENES / ("bunny/" + name if name == "glass_bunny.toml" else name)
+    text, folder = path.read_text(), path.parent
+    if name == "glass_bunny.toml":
+        if BUNNY is None:
+            pytest.skip("the Stanford bunny (shared/data/stanford-bunny) is not on this machine")
+        text, folder = text.replace("../../../shared/data/stanford-bunny/", ""), BUNNY.parent
+    scene = read_scene_file(text, str(path), folder)
+    for view in scene.views:
+        _, raw, stats = render_image(scene, view, scene.projection, (40, 40))
+        assert np.all(np.isfinite(raw)) and raw.min() >= 0.0
+    assert all(stats["rays"][k] > 0 for k in kinds)
