@@ -316,3 +316,20 @@ def test_shipped_ray_tracing_scenes_render(name, kinds):
         _, raw, stats = render_image(scene, view, scene.projection, (40, 40))
         assert np.all(np.isfinite(raw)) and raw.min() >= 0.0
     assert all(stats["rays"][k] > 0 for k in kinds)
+
+
+def test_samples_per_pixel_regular_and_jittered():
+    """The film's samples: 4 regular or 4 jittered rays a pixel, box-filtered; a flat-coloured
+    region keeps its colour, an edge gets in-between values."""
+    from core.scene.formats import load_scene
+    scene = load_scene(str(SCENES / "whitted.toml"))
+    one, _, s1 = render_image(scene, scene.views[0], "perspective", (40, 40), NO_GLOBAL)
+    for pattern in ("regular", "jittered"):
+        four, raw, s4 = render_image(scene, scene.views[0], "perspective", (40, 40), NO_GLOBAL,
+                                     samples=4, pattern=pattern, seed=2)
+        assert s4["rays"]["primary"] == 4 * s1["rays"]["primary"]
+        assert np.all(np.isfinite(raw))
+        # The sky (top rows: background only) is the same colour with any sampling.
+        assert np.array_equal(four[:3], one[:3])
+        # Along the spheres' silhouettes the filtered picture differs from one sample a pixel.
+        assert np.count_nonzero(np.abs(four.astype(int) - one.astype(int)).max(axis=2) > 8) > 20
