@@ -160,7 +160,7 @@ def time_llvmpipe(renderer, projection: str, shading: str, frames: int, warmup: 
     draws, cpu, reads = [], [], []
     for k in range(warmup + frames):
         c0 = time.process_time()
-        draw, read = renderer.timed_frame(0, projection, shading)
+        draw, read = renderer.timed_frame(renderer.scene.views[0], projection, shading)
         if k >= warmup:
             cpu.append(time.process_time() - c0)     # includes the readback
             draws.append(draw)
