@@ -199,6 +199,9 @@ def draw_particles(frame, sprites: Sprites, view, settings) -> int:
     p = project_sprites(sprites, view, projection, width, height)
     depth = getattr(frame, "depth", None)
     if depth is None:
+        # a renderer that keeps no depth (wireframe lines, the ray casters): nothing hides a
+        # particle, and the frame says so
+        frame.stats["particles depth-tested"] = False
         depth = np.full((height, width), -np.inf)
     image = _to_unit(color)
     _splat(image, np.ascontiguousarray(depth, dtype=np.float64), p["order"], p["head"],
