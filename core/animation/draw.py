@@ -84,11 +84,12 @@ def _project_all(position, tail, radius, u, n, m, z_near, head, tail_dev, pixels
         pixels[k] = np.hypot(edge[0, 0] - head[k, 0], edge[0, 1] - head[k, 1])
 
 
-def project_sprites(sprites: Sprites, view, projection: str, width: int, height: int):
+def project_sprites(sprites: Sprites, view, projection: str, width: int, height: int,
+                    keep_aspect: bool = False):
     """Device centres, tails and pixel radii of the sprites, and ``order``: the indices of
     those inside the view volume, back to front."""
     n, z_min = normalizing_transform(view, projection)
-    vp = project.viewport(view.window, width, height)
+    vp = project.viewport(view.window, width, height, keep_aspect)
     m = project.triangle_matrix(projection, z_min, vp)
     count = len(sprites)
     head, tail = np.empty((count, 3)), np.empty((count, 3))
@@ -196,7 +197,8 @@ def draw_particles(frame, sprites: Sprites, view, settings) -> int:
     if len(sprites) == 0 or width == 0 or height == 0:
         return 0
     projection = getattr(settings, "projection", None) or "perspective"
-    p = project_sprites(sprites, view, projection, width, height)
+    p = project_sprites(sprites, view, projection, width, height,
+                        getattr(settings, "keep_aspect", False))     # the z-buffer's viewport
     depth = getattr(frame, "depth", None)
     if depth is None:
         # a renderer that keeps no depth (wireframe lines, the ray casters): nothing hides a
