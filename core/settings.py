@@ -64,6 +64,17 @@ class RenderSettings:
     # Where in its pixel a one-sample frame samples (x right, y down, pixel units): the centre,
     # as the course's scan conversion does; the film moves it for each of several samples.
     pixel_offset: tuple[float, float] = (0.5, 0.5)
+    # Texture filter (core.texture.sample.FILTERS): nearest | bilinear | trilinear | anisotropic.
+    texture_filter: str = "trilinear"
+    # Bump and normal maps perturb the normal (False: the demo's "Phong" mode, maps ignored).
+    bump: bool = True
+    # The ray tracer's (core.raytrace; the z-buffer ignores them): the ray tree's depth limit
+    # (the notes' 7), the adaptive cut-off ε on the product of the k's, the notes' shadow
+    # option ("off" | "background" | "object" | "transmit") and Schlick's Fresnel weighting.
+    max_depth: int = 7
+    adaptive_epsilon: float = 1e-3
+    shadows: str = "transmit"
+    fresnel: bool = False
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:

@@ -36,7 +36,7 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     solid = shading != "wireframe" and scene.triangle_count > 0
     if solid:
         draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context, timer,
-                       rasterizer=settings.rasterizer)
+                       settings)
     else:
         fill(frame.color, scene.background)
     line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
@@ -95,10 +95,14 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
 
 
 def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context,
-                   timer, rasterizer: str = "edge") -> None:
-    """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``; ``rasterizer``
-    "scanline" scan-converts with the course's ET/AET algorithm (screen-linear weights)."""
+                   timer, settings=None) -> None:
+    """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``; with
+    ``settings.rasterizer`` "scanline" the course's ET/AET algorithm scan-converts
+    (screen-linear weights)."""
+    rasterizer = settings.rasterizer if settings is not None else "edge"
     from core.renderers import triangles as stages      # the compiled stages, on first use
+    from core.texture.shaders import shading_for        # issue 11: Phong of textured materials
+    shading = shading_for(scene, shading)
     stats = frame.stats
     height, width = frame.color.shape[:2]
     eye = stages.shade.eye_from_view(view, projection)
@@ -143,6 +147,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
         stats["computed"].append("barycentric derivatives")
     timer.lap("z-buffer", depth=vis.depth, tri=vis.tri, b1=vis.b1, b2=vis.b2)
 
+    inputs.settings = settings              # issue 11: the texture filter and the bump switch
+    inputs.device = (device, inv_w)         # issue 11: exact (u, v) derivatives per triangle
     stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
                   out=frame.color)
     frame.depth = vis.depth

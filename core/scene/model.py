@@ -29,6 +29,11 @@ class Material:
     od: tuple[float, float, float] = (0.8, 0.8, 0.8)
     # Specular colour O_s; FvDFH 16.1.5 uses the light's colour (O_s = 1) for plastics.
     os: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    # Whitted's global terms (issue 12; the ray tracer's, the z-buffer ignores them): the
+    # mirror coefficient k_r, the transmission coefficient k_t and the index of refraction.
+    kr: float = 0.0
+    kt: float = 0.0
+    ior: float = 1.52                      # glass (the notes); only used where kt > 0
 
 
 @dataclass
@@ -59,6 +64,9 @@ class Mesh:
     name: str = "mesh"
     uv: np.ndarray | None = None                            # (V, 2) texture coordinates
     extra: dict = field(default_factory=dict)               # more named (V, k) arrays
+    # The analytic primitive (core.scene.primitives) this mesh tessellates for the z-buffer;
+    # the ray tracer intersects that primitive instead of these triangles.
+    tessellates: object | None = None
 
     def __post_init__(self) -> None:
         self.positions = np.ascontiguousarray(self.positions, dtype=np.float64).reshape(-1, 3)
