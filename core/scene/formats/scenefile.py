@@ -276,7 +276,10 @@ class _Reader:
         # -- issue 11: texture files that could not be used; the bump demo's panel view
         scene.view_messages += getattr(self, "texture_messages", [])
         from core.texture.bump_demo import panel_views
-        scene.views = panel_views(scene) + scene.views
+        panel = panel_views(scene)
+        scene.views = panel + scene.views
+        if scene.view_order:                  # the panel is the file's first view
+            scene.view_order = panel + list(scene.view_order)
         # --
         animation_keys.read_animation(self, doc, scene)     # keys and emitters, if any
         return scene
