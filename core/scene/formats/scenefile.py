@@ -36,7 +36,7 @@ import numpy as np
 
 from core.scene import generators
 from core.scene.formats.camera import default_lights, framing_views
-from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
+from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
                                  read_file,
                                  tolerant_of_underflow)
 from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
@@ -99,14 +99,6 @@ def _spellings(name: str) -> str:
                 parts.append(r"\\(?:" + "|".join(re.escape(a) for a in alts) + ")")
         forms.append('"' + "".join(parts) + '"')
     return "|".join(forms)
-
-
-def path_text(path: Path_) -> str:
-    """``("geometry", 2, "material", "kd")`` -> ``"geometry[2].material.kd"``."""
-    text = ""
-    for part in path:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else part)
-    return text
 
 
 class _Reader:
