@@ -516,8 +516,8 @@ def _raytrace_scenes(args) -> list:
     if bunny is None:
         _progress("the Stanford bunny is not on this machine: its rows are left out")
     else:       # the scene file's relative path starts from the bunny's shared folder
-        path = ROOT / "scenes" / "bunny" / "glass_bunny.toml"
-        text = path.read_text().replace("../../../shared/data/stanford-bunny/", "")
+        path = ROOT / "scenes" / "glass_bunny.toml"
+        text = path.read_text().replace("../../shared/data/stanford-bunny/", "")
         scenes.append(("glass bunny", read_scene_file(text, str(path), bunny.parent)))
     return [(label, scene, scene.views[0]) for label, scene in scenes]
 
