@@ -25,7 +25,7 @@ import numpy as np
 
 from core.context import DEFAULT_CONTEXT, RenderContext
 from core.camera.film import Film, box_filter, fill, grid_side, to_rgb8  # noqa: F401
-from core.camera.view import View, ViewError, normalizing_transform, problems
+from core.camera.view import View, ViewError, problems
 from core.plan import Stage, plan
 from core.renderers import get_renderer
 from core.scene.model import Scene
@@ -47,7 +47,8 @@ class Frame:
     ``-inf`` where nothing was drawn), for stages drawn after the opaque pass; ``None`` when the
     renderer keeps none or the frame is supersampled. It is the context's buffer, valid until
     the next frame drawn with the same context. ``sample_color``: for a regular grid drawn in
-    one pass, the ``(s·H, s·W, 3)`` samples before the box filter.
+    one pass, the ``(s·H, s·W, 3)`` samples before the box filter, and ``filtered`` their
+    ``(H, W, 3)`` means on 0–255 before rounding.
     """
 
     rgbx: np.ndarray
@@ -56,6 +57,7 @@ class Frame:
     stats: dict = field(default_factory=dict)
     depth: np.ndarray | None = None
     sample_color: np.ndarray | None = None
+    filtered: np.ndarray | None = None
 
     @property
     def color(self) -> np.ndarray:
@@ -95,10 +97,11 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     renderer = get_renderer(settings.renderer)
     width, height = settings.size
     frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8),
-                  plan=plan(scene, settings.projection, settings.shading),
+                  plan=plan(scene, settings.projection, settings.shading, settings.keep_aspect,
+                            settings.rasterizer),
                   stats={"allocated": ["color"], "computed": [], "renderer": renderer.name,
                          "projection": settings.projection, "shading": settings.shading})
-    message = _why_not(scene, view, settings)
+    message = _why_not(scene, view, settings, context)
     if message:
         frame.message = message
         fill(frame.color, scene.background)
@@ -111,12 +114,13 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     return frame
 
 
-def _why_not(scene: Scene, view: View | None, settings: RenderSettings) -> str | None:
+def _why_not(scene: Scene, view: View | None, settings: RenderSettings,
+             context: RenderContext) -> str | None:
     """Why nothing can be drawn, or None."""
     if view is None:
         return f"{scene.name}: no valid view to show"
     try:
-        normalizing_transform(view, settings.projection)
+        context.normalizing_transform(view, settings.projection)
     except ViewError:
         return (f"{view.label}: invalid for {settings.projection} projection: "
                 + "; ".join(problems(view, settings.projection)))
@@ -137,7 +141,8 @@ def _supersample(draw, scene, view, settings, frame, context, inspect) -> None:
                     stats=frame.stats)
         draw(scene, view, settings.replace(samples=1, size=(width * side, height * side)), big,
              context, Timer(frame.stats, inspect))
-        frame.color[:] = np.floor(box_filter(big.color, side) + 0.5).astype(np.uint8)
+        frame.filtered = box_filter(big.color, side)
+        frame.color[:] = np.floor(frame.filtered + 0.5).astype(np.uint8)
         frame.sample_color = big.color
         return
     film = Film(width, height, settings.samples, settings.sample_pattern, settings.seed)

@@ -224,7 +224,7 @@ def cpu_coverage(scene: Scene, view_index: int, projection: str) -> np.ndarray:
 
 def gl_coverage(gl: GLRenderer, scene: Scene, view_index: int, projection: str) -> np.ndarray:
     gl.load(scene, modes=("coverage",))
-    return gl.render(view_index, projection, "coverage")[:, :, 0] > 127
+    return gl.render(gl.scene.views[view_index], projection, "coverage")[:, :, 0] > 127
 
 
 @pytest.mark.parametrize("projection", ["perspective", "parallel"])
@@ -294,8 +294,8 @@ def test_shading_matches_llvmpipe_away_from_edges(gl, name, shading, projection,
         frame = render(scene, scene.views[view_index],
                        RenderSettings.for_scene(scene, projection=projection, shading=shading, size=SIZE))
         assert frame.message is None, frame.message
-        theirs = gl.render(view_index, projection, shading)
-        covered = gl.render(view_index, projection, "coverage")[:, :, 0] > 127
+        theirs = gl.render(gl.scene.views[view_index], projection, shading)
+        covered = gl.render(gl.scene.views[view_index], projection, "coverage")[:, :, 0] > 127
         away = covered & ~edge_mask(scene, view_index, projection)
         label = f"shading-{name}-{shading}-{projection}-{variant}-view{view_index + 1}"
         # Dense meshes leave a minority of pixels off every edge; still thousands to compare.
@@ -313,14 +313,14 @@ def test_shading_comparison_can_fail(gl):
     """The control: 2/255 is tight enough to tell Gouraud from Phong, and a changed exponent."""
     scene = scene_file("sphere.toml")
     gl.load(scene, modes=("gouraud", "phong", "coverage"))
-    covered = gl.render(0, "perspective", "coverage")[:, :, 0] > 127
+    covered = gl.render(gl.scene.views[0], "perspective", "coverage")[:, :, 0] > 127
     away = covered & ~edge_mask(scene, 0, "perspective")
     ours_phong = render(scene, scene.views[0],
                         RenderSettings.for_scene(scene, projection="perspective", shading="phong", size=SIZE)).color.astype(np.int16)
-    gouraud = gl.render(0, "perspective", "gouraud").astype(np.int16)
+    gouraud = gl.render(gl.scene.views[0], "perspective", "gouraud").astype(np.int16)
     assert np.abs(ours_phong - gouraud).max(axis=2)[away].max() > 2
     shinier = dataclasses.replace(scene, meshes=[dataclasses.replace(
         scene.meshes[0], material=dataclasses.replace(scene.meshes[0].material,
                                                       n=scene.meshes[0].material.n * 1.5))])
     gl.load(shinier, modes=("phong",))
-    assert np.abs(ours_phong - gl.render(0, "perspective", "phong")).max(axis=2)[away].max() > 2
+    assert np.abs(ours_phong - gl.render(gl.scene.views[0], "perspective", "phong")).max(axis=2)[away].max() > 2

@@ -163,34 +163,58 @@ def test_degenerate_cases_stay_finite():
     np.testing.assert_allclose(rgb, 0.04 * OD + 0.5 * OD + 0.25, atol=1e-15)
 
 
-def test_numpy_and_numba_forms_are_the_same_formula():
-    """Random points, normals, two materials (one two-sided), a point light and a
-    directional one, both eyes and both specular forms: numpy, numba point by point and numba
-    over the array give bit-identical results, degenerate rows included (a zero normal, the
-    point at the light, the point at the eye)."""
+SHINY_1E4 = Material(ka=0.1, kd=0.5, ks=0.8, n=1e4, od=(1, 0.2, 0.3), os=(0.9, 1, 1))
+
+
+@pytest.mark.parametrize("material, tolerance", [(MATERIAL, 1e-14), (SHINY_1E4, 1e-11)])
+def test_the_one_model_in_float64_agrees_with_itself_run_exactly(material, tolerance):
+    """Random points and normals, a point light and a directional one, both eyes and both
+    specular forms, degenerate rows included (a zero normal, the point at the light, the point
+    at the eye): the compiled model (through the numpy entry point) against the same source run
+    in rational arithmetic (core.analysis.exact.phong). The tolerance is a few ulps, scaled by
+    the exponent n for the shiny material (d(x^n)/x^n = n dx/x)."""
+    from core.analysis import exact
     rng = np.random.default_rng(7)
-    count = 3000
+    count = 60
     p = rng.normal(size=(count, 3)) * 3.0
     n, _ = il.unit_rows(rng.normal(size=(count, 3)))
     n[0] = 0.0
     light_position = np.array([1.0, 2.0, 3.0])
     eye_point = np.array([0.0, -1.0, 8.0])
-    p[1] = light_position
-    p[2] = eye_point
-    surface = rng.integers(0, 2, count)
-    surfaces = il.pack_surfaces(
-        [MATERIAL, Material(ka=0.1, kd=0.5, ks=0.8, n=1e4, od=(1, 0.2, 0.3), os=(0.9, 1, 1))],
-        [False, True])
-    lights = il.pack_lights([Light(position=tuple(light_position), attenuation=(0.5, 0.1, 0.01)),
-                             Light(direction=(0.0, 1.0, 1.0), intensity=(0.5, 0.4, 0.3))])
-    for eye in (il.Eye(eye_point, None), il.Eye(None, np.array([0.0, 0.3, 1.0]))):
-        packed = il.pack_eye(eye)
-        for halfway in (False, True):
-            vectorised = il.illuminate(p, n, surface, surfaces, lights, AMBIENT, packed, halfway)
-            one_by_one = np.array([il.phong_point(*p[i], *n[i], surface[i], surfaces, lights,
-                                                  AMBIENT, packed, halfway) for i in range(count)])
-            assert np.array_equal(vectorised, one_by_one)
-            assert np.all((vectorised >= 0.0) & (vectorised <= 1.0))
+    p[1], p[2] = light_position, eye_point
+    lights = [Light(position=tuple(light_position), attenuation=(0.5, 0.1, 0.01)),
+              Light(direction=(0.0, 1.0, 1.0), intensity=(0.5, 0.4, 0.3))]
+    packed_lights = il.pack_lights(lights)
+    for two_sided in (False, True):
+        surfaces = il.pack_surfaces([material], [two_sided])
+        for eye in (il.Eye(eye_point, None), il.Eye(None, np.array([0.0, 0.3, 1.0]) / np.hypot(0.3, 1))):
+            packed = il.pack_eye(eye)
+            for halfway in (False, True):
+                ours = il.illuminate(p, n, np.zeros(count, np.int64), surfaces, packed_lights,
+                                     AMBIENT, packed, halfway)
+                truth = [exact_phong(exact, p[i], n[i], material, lights, eye, halfway, two_sided)
+                         for i in range(count)]
+                assert np.abs(ours - np.array(truth, dtype=float)).max() <= tolerance
+                assert np.all((ours >= 0.0) & (ours <= 1.0))
+
+
+
+def exact_phong(exact, point, normal, material, lights, eye, halfway, two_sided):
+    return exact.phong(point, normal, material, lights, AMBIENT,
+                       None if eye.point is None else eye.point,
+                       None if eye.direction is None else eye.direction, halfway, two_sided)
+
+
+def test_the_numpy_entry_point_is_the_compiled_model_point_by_point():
+    rng = np.random.default_rng(3)
+    p = rng.normal(size=(50, 3))
+    n, _ = il.unit_rows(rng.normal(size=(50, 3)))
+    surfaces = il.pack_surfaces([MATERIAL], [True])
+    lights = il.pack_lights([Light(position=(1.0, 2.0, 3.0))])
+    eye = il.pack_eye(il.Eye(np.array([0.0, 0.0, 5.0]), None))
+    many = il.illuminate(p, n, np.zeros(50, np.int64), surfaces, lights, AMBIENT, eye, False)
+    one = [il.phong_point(*p[i], *n[i], 0, surfaces, lights, AMBIENT, eye, False) for i in range(50)]
+    assert np.array_equal(many, np.array(one))
 
 
 def test_to_uint8_rounds_half_up_and_clamps():

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from core.analysis import exact
-from core.analysis import stability
+from core.analysis import stability, stability_kit
 from core.camera.view import View, n_par_factors, n_per_factors
 
 WORKED = View(vrp=(0, 0, 54), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-1, 17, -1, 17),
@@ -154,13 +154,13 @@ def test_one_pixel_mismatches():
     b = a.copy()
     a[3, 3] = 200
     b[3, 4] = 200                                 # moved by one pixel: matches
-    assert stability.one_pixel_mismatches(a, b) == 0
+    assert stability_kit.one_pixel_mismatches(a, b) == 0
     b[3, 4] = 0
     b[6, 6] = 200                                 # moved by three: both unmatched
-    assert stability.one_pixel_mismatches(a, b) == 2
+    assert stability_kit.one_pixel_mismatches(a, b) == 2
     b = a.copy()
     b[3, 3] = 199                                 # one level: matches
-    assert stability.one_pixel_mismatches(a, b) == 0
+    assert stability_kit.one_pixel_mismatches(a, b) == 0
 
 
 @pytest.mark.slow

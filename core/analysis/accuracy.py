@@ -44,17 +44,20 @@ from pathlib import Path
 from typing import Callable
 
 import numpy as np
-from numba import njit, prange
 
 from core.settings import RenderSettings
 from core.renderers import raycast as reference_module
+from core.camera import film
 from core.settings import SOLID_SHADINGS
 from core.scene.generators import torus, uv_sphere
 from core.renderers.raycast import Reference, Sphere, Torus, render_reference
 from core.scene.model import Light, Material, Mesh, Scene
 from core.camera.view import View
 
-SHADINGS = SOLID_SHADINGS
+# A series is a shading mode, drawn by the default edge rasterizer (perspective-correct), or
+# "MODE scanline": the course's scan-line rasterizer, whose interpolation is screen-linear.
+SCANLINE = " scanline"
+SHADINGS = SOLID_SHADINGS + ("gouraud" + SCANLINE,)
 SCENES = ("sphere", "torus")
 CACHE = Path(tempfile.gettempdir()) / "fvdfh-reference-cache"
 REFERENCE_SAMPLES = 4                  # per axis: 16 samples a pixel
@@ -204,31 +207,7 @@ def cached_reference(name: str, size: int, samples: int, cache: Path | None = CA
 # The pipeline at k x k samples a pixel
 
 
-@njit(cache=True, parallel=True)
-def _box_filter(image, k, out):
-    height, width = out.shape[0], out.shape[1]
-    scale = 1.0 / (k * k)
-    for row in prange(height):
-        for col in range(width):
-            for c in range(3):
-                total = 0
-                for a in range(k):
-                    for b in range(k):
-                        total += image[row * k + a, col * k + b, c]
-                out[row, col, c] = total * scale
-
-
-def box_filter(image: np.ndarray, k: int) -> np.ndarray:
-    """``(kH, kW, 3)`` uint8 → ``(H, W, 3)`` float64: the mean of each k x k block.
-
-    Part of the cost of supersampling, so it is timed with the frame: a compiled loop (numpy's
-    ``reshape(...).mean(axis=(1, 3))`` takes longer than the 4 x 4 render it filters).
-    """
-    if k == 1:
-        return image.astype(np.float64)
-    out = np.empty((image.shape[0] // k, image.shape[1] // k, 3))
-    _box_filter(np.ascontiguousarray(image), int(k), out)
-    return out
+box_filter = film.box_filter            # the film's compiled box filter
 
 
 def sample_coverage(image: np.ndarray, k: int) -> np.ndarray:
@@ -238,14 +217,21 @@ def sample_coverage(image: np.ndarray, k: int) -> np.ndarray:
     return seen.reshape(height, k, width, k).sum(axis=(1, 3))
 
 
-def render_supersampled(scene: Scene, shading: str, size: int, k: int) -> np.ndarray:
-    """The 8-bit image at ``k`` times ``size`` (what gets box-filtered)."""
+def render_supersampled(scene: Scene, shading: str, size: int, k: int):
+    """``(samples (kH, kW, 3) uint8, their box-filtered mean (H, W, 3) float64 on 0–255)``:
+    the renderer's own supersampling (``RenderSettings.samples`` = k², a regular grid).
+    ``shading`` is a series name (``"gouraud scanline"``: Gouraud, scan-line rasterizer)."""
     from core.render import render
+    mode = shading.removesuffix(SCANLINE)
+    rasterizer = "scanline" if shading.endswith(SCANLINE) else "edge"
     frame = render(scene, scene.views[0],
-                   RenderSettings.for_scene(scene, projection="perspective", shading=shading, size=(size * k, size * k)))
+                   RenderSettings(shading=mode, size=(size, size), samples=k * k,
+                                  rasterizer=rasterizer))
     if frame.message:
         raise ValueError(frame.message)
-    return frame.color
+    if k == 1:
+        return frame.color, frame.color.astype(np.float64)
+    return frame.sample_color, frame.filtered
 
 
 def errors(name: str, scene: Scene, shading: str, level: int, samples: int, size: int,
@@ -256,8 +242,7 @@ def errors(name: str, scene: Scene, shading: str, level: int, samples: int, size
     also the untimed frame that compiles and fills the caches.
     """
     k = int(round(samples ** 0.5))
-    big = render_supersampled(scene, shading, size, k)
-    image = box_filter(big, k)
+    big, image = render_supersampled(scene, shading, size, k)
     error = image - 255.0 * reference.rgb
     ours = sample_coverage(big, k)
     exact_count = np.rint(coverage_reference.coverage * k * k).astype(np.int64)
@@ -272,10 +257,10 @@ def errors(name: str, scene: Scene, shading: str, level: int, samples: int, size
 
 
 def frame_time(scene: Scene, shading: str, size: int, samples: int) -> float:
-    """Seconds for one frame: render at k times the size and box-filter."""
+    """Seconds for one frame at ``samples`` per pixel (box filter included)."""
     k = int(round(samples ** 0.5))
     start = time.perf_counter()
-    box_filter(render_supersampled(scene, shading, size, k), k)
+    render_supersampled(scene, shading, size, k)
     return time.perf_counter() - start
 
 

@@ -29,12 +29,14 @@ from __future__ import annotations
 import decimal
 import math
 import random
+import types
 from fractions import Fraction
 from typing import Callable, Sequence
 
 import numpy as np
 
 from core.camera.view import View
+from core.shading import illumination
 
 SQRT_BITS = 320          # relative precision of an inexact square root (2**-320 ~ 5e-97)
 ONE, ZERO = Fraction(1), Fraction(0)
@@ -284,49 +286,52 @@ def chain(numbers: Sequence[Fraction], points: Sequence[Vector], projection: str
 # The illumination model (core.shading.illumination), exactly
 
 
+def _exact_unit3(x, y, z):
+    """:func:`core.vectors.unit3` in exact arithmetic (square root to 2**-320)."""
+    length = norm((x, y, z))
+    if length == 0:
+        return ZERO, ZERO, ZERO, ZERO
+    return x / length, y / length, z / length, length
+
+
+def _exact_specular_power(base, n):
+    return power(min(max(base, ZERO), ONE), n)
+
+
+def _exact_model():
+    """:func:`core.shading.illumination.phong_point`'s own Python source, bound to exact
+    ``unit3`` and ``specular_power``: the model is written once, and run here in Fractions."""
+    model = illumination.phong_point.py_func
+    scope = dict(model.__globals__, unit3=_exact_unit3, specular_power=_exact_specular_power)
+    return types.FunctionType(model.__code__, scope, "exact_phong_point")
+
+
+def _exact_rows(rows) -> np.ndarray:
+    """Packed float rows → the same table of Fractions (an object array the model indexes)."""
+    rows = np.asarray(rows, dtype=np.float64)
+    return np.array([[q(x) for x in row] for row in rows.reshape(len(rows), -1)],
+                    dtype=object).reshape(rows.shape)
+
+
 def phong(point: Vector, normal: Vector, material, lights, ambient, eye: Vector | None,
           toward_viewer: Vector | None, halfway: bool, two_sided: bool = False) -> Vector:
-    """The Phong model of :mod:`core.shading.illumination` at one point, RGB clamped to [0, 1].
+    """The Phong model of :mod:`core.shading.illumination` at one point, exactly: RGB in [0, 1].
 
     ``material`` is a :class:`core.scene.Material`, ``lights`` :class:`core.scene.Light` s,
     ``eye`` the viewer's point (perspective) or None with ``toward_viewer`` the unit direction
-    (parallel). The degenerate cases follow the float model's documented rules (light at the
-    point: no diffuse or specular; point at the eye: V = N; no specular where N·L <= 0).
+    (parallel). The scene is packed as the renderer packs it, then rounded to nothing: every
+    float becomes the Fraction it is exactly, and the model runs in rational arithmetic.
     """
-    p, nrm = tuple(q(x) for x in point), tuple(q(x) for x in normal)
-    ka, kd, ks, n = q(material.ka), q(material.kd), q(material.ks), q(material.n)
-    od, os_ = [q(x) for x in material.od], [q(x) for x in material.os]
-    if eye is not None:
-        offset = tuple(q(e) - x for e, x in zip(eye, p))
-        v = unit(offset) if any(offset) else nrm
-    else:
-        v = tuple(q(x) for x in toward_viewer)
-    if two_sided and dot(nrm, v) < 0:
-        nrm = tuple(-x for x in nrm)
-    color = [q(ambient[c]) * ka * od[c] for c in range(3)]
-    for light in lights:
-        if light.position is not None:
-            to_light = tuple(q(s) - x for s, x in zip(light.position, p))
-            if not any(to_light):
-                continue
-            l, d = unit(to_light), norm(to_light)
-            c1, c2, c3 = (q(a) for a in light.attenuation)
-            den = c1 + c2 * d + c3 * d * d
-            f_att = ONE if den <= 1 else 1 / den
-        else:
-            l, f_att = unit(tuple(q(x) for x in light.direction)), ONE
-        n_dot_l = dot(nrm, l)
-        if not n_dot_l > 0:
-            continue
-        if halfway:
-            base = dot(nrm, unit(tuple(a + b for a, b in zip(l, v))))
-        else:
-            r = tuple(2 * n_dot_l * a - b for a, b in zip(nrm, l))
-            base = dot(r, v)
-        spec = power(min(max(base, ZERO), ONE), n)
-        for c in range(3):
-            color[c] += f_att * q(light.intensity[c]) * (kd * od[c] * n_dot_l + ks * os_[c] * spec)
-    return tuple(min(max(x, ZERO), ONE) for x in color)
+    packed_eye = (illumination.pack_eye(illumination.Eye(np.asarray(eye, float), None))
+                  if eye is not None else
+                  np.array([illumination.EYE_DIRECTION, *np.asarray(toward_viewer, float)]))
+    surfaces = _exact_rows(illumination.pack_surfaces([material], [two_sided]))
+    lights = _exact_rows(illumination.pack_lights(lights).reshape(-1, illumination.LIGHT_COLUMNS))
+    ambient = _exact_rows(illumination.pack_ambient(ambient).reshape(1, 3))[0]
+    p, n = tuple(q(x) for x in point), tuple(q(x) for x in normal)
+    rgb = _exact_model()(*p, *n, 0, surfaces, lights, ambient, _exact_rows([packed_eye])[0],
+                         halfway)
+    return tuple(q(c) for c in rgb)
 
 
 # --------------------------------------------------------------------------------------------

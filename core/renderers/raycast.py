@@ -48,9 +48,10 @@ from numba import njit, prange
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights, pack_surfaces,
                                phong_point, unit3)
 from core.camera.film import fill, grid_side, to_rgb8
-from core.pipeline.project import viewport
+from core.camera.rays import (CAMERA_BACK, CAMERA_BASIS, CAMERA_FRONT, CAMERA_VRP, camera_ray,
+                              pack_camera)
 from core.scene.primitives import Sphere, Torus  # noqa: F401  (the shapes it traces)
-from core.camera.view import View, check, vrc_basis
+from core.camera.view import View, check
 
 SPHERE, TORUS = 0.0, 1.0
 # Columns of a packed shape row: kind, centre (3), R, r, surface, axis (3), e1 (3), e2 (3).
@@ -283,13 +284,12 @@ def _nearest_hit(shapes, ox, oy, oz, dx, dy, dz, vrp, nvx, nvy, nvz, front, back
 
 
 @njit(cache=True, parallel=True)
-def _trace(shapes, surfaces, lights, ambient, eye, halfway, vrp, basis, window, vp,
-           perspective, origin, dop, front, back, samples, background, rgb, surface_rgb, coverage,
-           seen):
+def _trace(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, background, rgb,
+           surface_rgb, coverage, seen):
     height, width = coverage.shape
-    u_min, u_max, v_min, v_max = window[0], window[1], window[2], window[3]
-    x0, x1, y0, y1 = vp[0], vp[1], vp[2], vp[3]
-    nvx, nvy, nvz = basis[2, 0], basis[2, 1], basis[2, 2]
+    vrp = cam[CAMERA_VRP:CAMERA_VRP + 3]
+    nvx, nvy, nvz = cam[CAMERA_BASIS + 6], cam[CAMERA_BASIS + 7], cam[CAMERA_BASIS + 8]
+    front, back = cam[CAMERA_FRONT], cam[CAMERA_BACK]
     per_pixel = samples * samples
     for row in prange(height):
         roots = np.empty(4)
@@ -302,22 +302,11 @@ def _trace(shapes, surfaces, lights, ambient, eye, halfway, vrp, basis, window, 
             mixed = False
             for a in range(samples):
                 y = j + (a + 0.5) / samples
-                v = v_min + (y - y0) / (y1 - y0) * (v_max - v_min)
                 for c in range(samples):
                     x = col + (c + 0.5) / samples
                     best_shape, best_t = -1, 0.0
-                    ox, oy, oz, dx, dy, dz = 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-                    if x0 <= x <= x1 and y0 <= y <= y1:      # inside the viewport
-                        u = u_min + (x - x0) / (x1 - x0) * (u_max - u_min)
-                        tx = vrp[0] + u * basis[0, 0] + v * basis[1, 0]
-                        ty = vrp[1] + u * basis[0, 1] + v * basis[1, 1]
-                        tz = vrp[2] + u * basis[0, 2] + v * basis[1, 2]
-                        if perspective:      # from the PRP through the view-plane point
-                            ox, oy, oz = origin[0], origin[1], origin[2]
-                            dx, dy, dz, _ = unit3(tx - ox, ty - oy, tz - oz)
-                        else:                # along the DOP through the view-plane point
-                            ox, oy, oz = tx, ty, tz
-                            dx, dy, dz = dop[0], dop[1], dop[2]
+                    inside, ox, oy, oz, dx, dy, dz = camera_ray(cam, x, y)
+                    if inside:
                         best_shape, best_t = _nearest_hit(shapes, ox, oy, oz, dx, dy, dz, vrp,
                                                           nvx, nvy, nvz, front, back, breaks, roots)
                     if first == -3:
@@ -354,7 +343,8 @@ def _trace(shapes, surfaces, lights, ambient, eye, halfway, vrp, basis, window, 
 
 
 def render_reference(shapes, scene, view: View, projection: str,
-                     size: tuple[int, int] | None = None, samples: int = 4) -> Reference:
+                     size: tuple[int, int] | None = None, samples: int = 4,
+                     keep_aspect: bool = False) -> Reference:
     """The exact image of ``shapes`` lit by ``scene``'s lights, seen through ``view``.
 
     ``scene`` supplies ``lights``, ``ambient``, ``specular`` and ``background`` (its meshes are
@@ -365,11 +355,7 @@ def render_reference(shapes, scene, view: View, projection: str,
     if samples < 1:
         raise ValueError(f"samples must be at least 1, not {samples}")
     width, height = size or scene.size
-    u, v, n = vrc_basis(view)
     eye = eye_from_view(view, projection)
-    perspective = projection == "perspective"
-    origin = eye.point if perspective else np.zeros(3)
-    dop = -eye.direction if not perspective else np.zeros(3)
     shapes = list(shapes)
     packed = pack_shapes(shapes)
     surfaces = pack_surfaces([s.material for s in shapes], [s.two_sided for s in shapes])
@@ -379,11 +365,7 @@ def render_reference(shapes, scene, view: View, projection: str,
     seen = np.zeros((height, width), dtype=np.int64)
     _trace(packed, surfaces, pack_lights(scene.lights), pack_ambient(scene.ambient),
            pack_eye(eye), scene.specular == "halfway",
-           np.asarray(view.vrp, dtype=np.float64), np.array([u, v, n]),
-           np.asarray(view.window, dtype=np.float64),
-           np.asarray(viewport(view.window, width, height), dtype=np.float64),
-           perspective, np.asarray(origin, dtype=np.float64), np.asarray(dop, dtype=np.float64),
-           float(view.front), float(view.back), int(samples),
+           pack_camera(view, projection, width, height, keep_aspect), int(samples),
            np.asarray(scene.background, dtype=np.float64).reshape(3), rgb, surface_rgb, coverage,
            seen)
     return Reference(rgb=rgb, surface_rgb=surface_rgb, coverage=coverage, shape=seen,
@@ -400,7 +382,7 @@ def draw(scene, view: View, settings, frame, context, timer) -> None:
         return
     side = grid_side(settings.samples)
     reference = render_reference(scene.primitives, scene, view, settings.projection,
-                                 settings.size, samples=side)
+                                 settings.size, samples=side, keep_aspect=settings.keep_aspect)
     frame.color[:] = to_rgb8(reference.rgb)
     frame.stats["samples per pixel"] = side * side
     frame.stats["computed"].append("exact ray casting")

@@ -5,6 +5,7 @@ from threadpoolctl import threadpool_limits
 
 from core.pipeline.clip_polygon import clip_triangles  # noqa: F401
 from core.pipeline.cull import front_faces  # noqa: F401
+from core.pipeline.derivatives import barycentric_planes  # noqa: F401
 from core.pipeline.raster import VisibilityBuffer, rasterize  # noqa: F401
 from core.pipeline.vertex_kernels import transform_affine, transform_projective  # noqa: F401
 from core.shading import shade  # noqa: F401

@@ -20,7 +20,6 @@ threads arrays from one to the next and records what ran in ``frame.stats``:
 from __future__ import annotations
 
 from core.camera.film import fill, to_rgb8
-from core.camera.view import normalizing_transform
 from core.pipeline import clip, project, raster_lines
 from core.transforms import apply
 
@@ -30,8 +29,9 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     (all edges in wireframe) with the midpoint line. Fills every pixel of ``frame``."""
     projection, shading = settings.projection, settings.shading
     height, width = frame.color.shape[:2]
-    n, z_min = normalizing_transform(view, projection)
-    vp = _sample_viewport(project.viewport(view.window, width, height), settings.pixel_offset)
+    n, z_min = context.normalizing_transform(view, projection)
+    vp = _sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
+                          settings.pixel_offset)
     timer.lap("normalize")
     solid = shading != "wireframe" and scene.triangle_count > 0
     if solid:
@@ -55,6 +55,11 @@ def _sample_viewport(vp, pixel_offset):
     return x0 + dx, x1 + dx, y0 + dy, y1 + dy
 
 
+# From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,
+# the same pixels): below it the numpy stages take a few ms and need no numba at start-up.
+COMPILED_LINES_FROM = 5_000
+
+
 def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, timer,
                stats) -> None:
     """Wireframe: transform, Cohen–Sutherland clip, M_per · M_vv3dv, divide, scan-convert."""
@@ -65,6 +70,15 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
             cache["edges"] = (mesh.triangles, mesh.all_edges())
         edges = cache["edges"][1]
         if len(edges) == 0:
+            continue
+        if len(edges) >= COMPILED_LINES_FROM:
+            from core.renderers import triangles as stages     # compiled, one BLAS thread
+            from core.pipeline.wireframe import draw_edges
+            points = stages.transform_affine(n, mesh.positions)
+            timer.lap("normalize")
+            drawn += draw_edges(points, edges, clip.planes(projection, z_min),
+                                project.line_matrix(projection, vp), color, to_rgb8(line_color))
+            timer.lap("scan-convert lines")
             continue
         points = apply(n, mesh.positions)[:, :3]
         timer.lap("normalize")
@@ -82,7 +96,10 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
 
 def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context,
                    timer, settings=None) -> None:
-    """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``."""
+    """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``; with
+    ``settings.rasterizer`` "scanline" the course's ET/AET algorithm scan-converts
+    (screen-linear weights)."""
+    rasterizer = settings.rasterizer if settings is not None else "edge"
     from core.renderers import triangles as stages      # the compiled stages, on first use
     from core.texture.shaders import shading_for        # issue 11: Phong of textured materials
     shading = shading_for(scene, shading)
@@ -116,10 +133,18 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
                                          clipped.points)
     timer.lap("project", device_points=device, inv_w=inv_w)
 
-    vis = stages.rasterize(device, inv_w, clipped.triangles, width, height,
+    rasterize = stages.rasterize
+    if rasterizer == "scanline":
+        from core.pipeline.raster_scanline import rasterize
+    stats["rasterizer"] = rasterizer
+    vis = rasterize(device, inv_w, clipped.triangles, width, height,
                     out=context.buffer("visibility", (width, height),
                                        lambda: stages.VisibilityBuffer.allocate(width, height)))
     stats["allocated"].append("depth")
+    vis.planes = None
+    if stages.shade.get_shader(shading).needs_derivatives:
+        vis.planes = stages.barycentric_planes(device, inv_w, clipped.triangles)
+        stats["computed"].append("barycentric derivatives")
     timer.lap("z-buffer", depth=vis.depth, tri=vis.tri, b1=vis.b1, b2=vis.b2)
 
     inputs.settings = settings              # issue 11: the texture filter and the bump switch

@@ -10,15 +10,14 @@ viewer, ``f_att = min(1, 1 / (c1 + c2 d + c3 d²))`` for a point light at distan
 ``(N·H)^n`` with ``H = (L + V) / |L + V|`` (the notes: "Rather than calculating R, the halfway
 vector is used"). The result is clamped to [0, 1] per channel.
 
-The same formula exists twice, kept identical operation by operation (a test holds them to
-each other):
+The model is written once, as :func:`phong_point` (one point, numba), and reached three ways:
 
-- :func:`illuminate` — numpy, vectorised over N points: the formula as array expressions,
-  the readable statement of the model that the numba form is held to;
-- :func:`phong_point` — numba, one point; called from the compiled kernels of
-  :mod:`core.shading.shade` (per face for flat, per vertex for Gouraud, per pixel for Phong, with the same
-  result as the numpy form bit for bit) and of
-  :mod:`core.renderers.raycast` (the exact reference).
+- from the compiled kernels (per face for flat, per vertex for Gouraud, per pixel for Phong,
+  per hit for the ray casters), which call it directly;
+- :func:`illuminate`, the numpy entry point: the same compiled function over N points;
+- :func:`core.analysis.exact.phong`: the same Python source run in exact rational arithmetic
+  (its ``unit3`` and ``specular_power`` swapped for exact ones), the oracle the float64 result
+  is measured against. Integer literals (``2 * n_dot_l``, ``1 / den``) keep it exact there.
 
 Both read the scene through small float arrays that numba can take:
 
@@ -47,9 +46,9 @@ Decisions that keep every output finite (the stability suite of issue 6 checks t
 - a zero normal (a vertex that has no non-degenerate face) gets ambient only;
 - vectors are normalised after dividing by their largest component, so tiny or huge
   coordinates neither underflow nor overflow in the squares;
-- the numpy form ignores underflow (a term below 1e-308 is 0 for an 8-bit image) and overflow
-  (a light of 1e308 saturates to white): both only ever produce 0 or +inf in sums of
-  non-negative terms, which the clamp maps to 0 and 1. Invalid operations still raise.
+- underflow (a term below 1e-308 is 0 for an 8-bit image) and overflow (a light of 1e308
+  saturates to white) only ever produce 0 or +inf in sums of non-negative terms, which the
+  clamp maps to 0 and 1.
 
 :func:`to_uint8` turns [0, 1] into bytes: ``floor(255 c + 0.5)``, i.e. rounded half up
 (0.5/255 → 1), the same rule as ``core.render.to_rgb8`` and the numba kernels' ``quantize``.
@@ -58,12 +57,13 @@ Decisions that keep every output finite (the stability suite of issue 6 checks t
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
-from core.camera.view import View, vrc_basis
+from core.camera.film import to_rgb8 as to_uint8  # noqa: F401  (one rounding rule)
+from core.camera.view import Eye, eye_from_view  # noqa: F401  (re-exported)
+from core.vectors import unit3  # noqa: F401  (re-exported)
 from core.transforms import unit_rows  # noqa: F401  (re-exported: the model's row form)
 
 # Columns of a packed surface row (pack_surfaces).
@@ -76,34 +76,6 @@ POINT_LIGHT, DIRECTIONAL_LIGHT = 0.0, 1.0
 # eye[0]: the viewer is a point (perspective) or a direction (parallel).
 EYE_DIRECTION, EYE_POINT = 0.0, 1.0
 SPECULAR_FORMS = ("reflect", "halfway")
-
-
-class Eye(NamedTuple):
-    """Where the viewer is, in world coordinates: ``point`` (perspective: the PRP) or
-    ``direction`` (parallel: the unit vector towards the viewer, −DOP/|DOP|); the other is None."""
-
-    point: np.ndarray | None
-    direction: np.ndarray | None
-
-
-def eye_from_view(view: View, projection: str) -> Eye:
-    """The viewer of ``view`` in world coordinates (FvDFH 6.5: PRP and DOP are given in VRC).
-
-    Perspective: the PRP, ``VRP + prp_u u + prp_v v + prp_n n``. Parallel: the direction
-    opposite the DOP, ``DOP = CW − PRP`` with ``CW`` the centre of the window, turned into
-    world coordinates by the VRC basis and normalised.
-    """
-    u, v, n = vrc_basis(view)
-    prp = np.asarray(view.prp, dtype=np.float64)
-    if projection == "perspective":
-        return Eye(np.asarray(view.vrp, dtype=np.float64) + prp[0] * u + prp[1] * v + prp[2] * n,
-                   None)
-    if projection == "parallel":
-        u_min, u_max, v_min, v_max = view.window
-        dop = np.array([(u_min + u_max) / 2, (v_min + v_max) / 2, 0.0]) - prp
-        toward_viewer = -(dop[0] * u + dop[1] * v + dop[2] * n)
-        return Eye(None, toward_viewer / np.linalg.norm(toward_viewer))
-    raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
 
 
 def pack_eye(eye: Eye) -> np.ndarray:
@@ -158,35 +130,14 @@ def pack_ambient(ambient) -> np.ndarray:
     return np.asarray(ambient, dtype=np.float64).reshape(3)
 
 
-def to_uint8(rgb) -> np.ndarray:
-    """Colours in [0, 1] (clamped first) → uint8, rounded half up: ``floor(255 c + 0.5)``."""
-    return np.floor(np.clip(np.asarray(rgb, dtype=np.float64), 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
-
-
 # --------------------------------------------------------------------------------------------
 # numba: one point
 
 
 @njit(cache=True)
-def unit3(x, y, z):
-    """``(x, y, z) / |(x, y, z)|`` and the length; the zero vector gives ``(0, 0, 0, 0)``.
-
-    Divides by the largest component first so the squares neither underflow nor overflow.
-    """
-    m = max(abs(x), abs(y), abs(z))
-    if not m > 0.0:
-        return 0.0, 0.0, 0.0, 0.0
-    inv_m = 1.0 / m                   # one division and three products: this runs per pixel
-    x, y, z = x * inv_m, y * inv_m, z * inv_m
-    s = math.sqrt(x * x + y * y + z * z)
-    inv_s = 1.0 / s
-    return x * inv_s, y * inv_s, z * inv_s, m * s
-
-
-@njit(cache=True)
 def specular_power(base, n):
     """``max(base, 0)^n`` with the base clamped to [0, 1] (no overflow for any n >= 0)."""
-    return min(max(base, 0.0), 1.0) ** n
+    return min(max(base, 0), 1) ** n
 
 
 @njit(cache=True)
@@ -199,7 +150,7 @@ def quantize(c):
 def phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfway):
     """The model at world point P with unit (or zero) normal N for surface row ``s``.
 
-    Returns ``(r, g, b)`` clamped to [0, 1]. The numba twin of :func:`illuminate`.
+    Returns ``(r, g, b)`` clamped to [0, 1]. The model itself: every other form calls this.
     """
     ka, kd, ks, n = surfaces[s, KA], surfaces[s, KD], surfaces[s, KS], surfaces[s, EXPONENT]
     # V: towards the PRP (perspective) or the constant direction towards the viewer (parallel).
@@ -221,10 +172,10 @@ def phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfw
             if d == 0.0:                # light on the surface point: L undefined, ambient only
                 continue
             den = lights[k, 7] + lights[k, 8] * d + lights[k, 9] * d * d
-            f_att = 1.0 if den <= 1.0 else 1.0 / den
+            f_att = 1 if den <= 1 else 1 / den
         else:
             lx, ly, lz = lights[k, 1], lights[k, 2], lights[k, 3]
-            f_att = 1.0
+            f_att = 1
         n_dot_l = nx * lx + ny * ly + nz * lz
         if not n_dot_l > 0.0:           # light behind the surface: no diffuse, no specular
             continue
@@ -232,23 +183,27 @@ def phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfw
             hx, hy, hz, h_len = unit3(lx + vx, ly + vy, lz + vz)
             base = nx * hx + ny * hy + nz * hz
         else:
-            two_n_dot_l = 2.0 * n_dot_l
+            two_n_dot_l = 2 * n_dot_l
             rx, ry, rz = two_n_dot_l * nx - lx, two_n_dot_l * ny - ly, two_n_dot_l * nz - lz
             base = rx * vx + ry * vy + rz * vz
         spec = specular_power(base, n)
         r += f_att * lights[k, 4] * (kd * surfaces[s, OD] * n_dot_l + ks * surfaces[s, OS] * spec)
         g += f_att * lights[k, 5] * (kd * surfaces[s, OD + 1] * n_dot_l + ks * surfaces[s, OS + 1] * spec)
         b += f_att * lights[k, 6] * (kd * surfaces[s, OD + 2] * n_dot_l + ks * surfaces[s, OS + 2] * spec)
-    return min(max(r, 0.0), 1.0), min(max(g, 0.0), 1.0), min(max(b, 0.0), 1.0)
+    return min(max(r, 0), 1), min(max(g, 0), 1), min(max(b, 0), 1)
 
 
 # --------------------------------------------------------------------------------------------
 # numpy: many points
 
 
-def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    # Same order of operations as the scalar form, so both round alike.
-    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+@njit(cache=True)
+def _illuminate_points(points, normals, surface, surfaces, lights, ambient, eye, halfway, out):
+    for i in range(points.shape[0]):
+        r, g, b = phong_point(points[i, 0], points[i, 1], points[i, 2], normals[i, 0],
+                              normals[i, 1], normals[i, 2], surface[i], surfaces, lights, ambient,
+                              eye, halfway)
+        out[i, 0], out[i, 1], out[i, 2] = r, g, b
 
 
 def illuminate(points: np.ndarray, normals: np.ndarray, surface: np.ndarray,
@@ -256,45 +211,15 @@ def illuminate(points: np.ndarray, normals: np.ndarray, surface: np.ndarray,
                eye: np.ndarray, halfway: bool) -> np.ndarray:
     """The model at ``N`` world points with unit (or zero) normals: ``(N, 3)`` RGB in [0, 1].
 
-    ``surface`` ``(N,)`` is each point's row of ``surfaces``. The vectorised twin of
-    :func:`phong_point`; the module docstring lists the degenerate cases.
+    ``surface`` ``(N,)`` is each point's row of ``surfaces``. The numpy entry point: the same
+    compiled :func:`phong_point`, over every point.
     """
-    p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    nrm = np.array(normals, dtype=np.float64).reshape(-1, 3)      # a copy: it may be flipped
-    rows = surfaces[np.asarray(surface, dtype=np.int64)]
-    ka, kd, ks, n = rows[:, KA], rows[:, KD], rows[:, KS], rows[:, EXPONENT]
-    od, os_ = rows[:, OD:OD + 3], rows[:, OS:OS + 3]
-    with np.errstate(under="ignore", over="ignore"):
-        if eye[0] == EYE_POINT:
-            v, dist = unit_rows(eye[1:4] - p)
-            at_eye = dist == 0.0
-            v[at_eye] = nrm[at_eye]
-        else:
-            v = np.broadcast_to(eye[1:4], p.shape).copy()
-        flip = (rows[:, TWO_SIDED] != 0.0) & (_dot(nrm, v) < 0.0)
-        nrm[flip] = -nrm[flip]
-        color = ambient[None, :] * ka[:, None] * od
-        for light in lights:
-            if light[LIGHT_KIND] == POINT_LIGHT:
-                l, d = unit_rows(light[1:4] - p)
-                lit = d != 0.0
-                den = light[7] + light[8] * d + light[9] * d * d
-                f_att = np.where(den <= 1.0, 1.0, 1.0 / np.where(den <= 1.0, 1.0, den))
-            else:
-                l = np.broadcast_to(light[1:4], p.shape)
-                lit = np.ones(len(p), dtype=bool)
-                f_att = np.ones(len(p))
-            n_dot_l = _dot(nrm, l)
-            lit &= n_dot_l > 0.0
-            if halfway:
-                h, _ = unit_rows(l + v)
-                base = _dot(nrm, h)
-            else:
-                two_n_dot_l = 2.0 * n_dot_l
-                r = two_n_dot_l[:, None] * nrm - l
-                base = _dot(r, v)
-            spec = np.minimum(np.maximum(base, 0.0), 1.0) ** n
-            term = (f_att[:, None] * light[4:7][None, :]
-                    * (kd[:, None] * od * n_dot_l[:, None] + ks[:, None] * os_ * spec[:, None]))
-            color = np.where(lit[:, None], color + term, color)
-        return np.minimum(np.maximum(color, 0.0), 1.0)
+    p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    nrm = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 3)
+    out = np.empty((len(p), 3))
+    _illuminate_points(p, nrm, np.ascontiguousarray(surface, dtype=np.int64).reshape(-1),
+                       np.ascontiguousarray(surfaces, dtype=np.float64),
+                       np.ascontiguousarray(lights, dtype=np.float64).reshape(-1, LIGHT_COLUMNS),
+                       np.ascontiguousarray(ambient, dtype=np.float64),
+                       np.ascontiguousarray(eye, dtype=np.float64), bool(halfway), out)
+    return out

@@ -27,6 +27,9 @@ class Shader(NamedTuple):
     varyings: tuple[str, ...] = ()      # what the clipper carries, in column order
     width: int = 0                      # columns of vertex_attrs (sum of the varyings' sizes)
     description: str = ""
+    # True: the pixel step reads vis.planes (core.pipeline.derivatives), the barycentrics'
+    # screen derivatives (texture footprints, bump offsets); set up only for such shaders.
+    needs_derivatives: bool = False
 
 
 _SHADERS: dict[str, Shader] = {}

@@ -1,0 +1,111 @@
+"""Rays from an FvDFH view: the one place every ray-based renderer gets its primary rays.
+
+The sample at device point (x, y) (x right, y **up**, pixel (i, j) spanning [i, i+1] x [j, j+1])
+looks through the view-plane point ``VRP + u·u_vrc + v·v_vrc`` with
+``u = u_min + (x − x0)/(x1 − x0)·(u_max − u_min)`` (and v alike) over the viewport
+``(x0, x1, y0, y1)`` of :func:`core.pipeline.project.viewport` — the same mapping the z-buffer's
+M_vv3dv makes, run backwards. Perspective rays start at the PRP (in world coordinates) and are
+unit vectors; parallel rays start on the view plane and run along the unit DOP. A sample
+outside the viewport sees nothing. What a ray may hit is limited by the front and back planes,
+``F ≤ n ≤ B`` measured along VPN from the VRP (:func:`in_depth_range`).
+
+- :func:`pack_camera` → a float array that numba kernels take (``CAMERA_*`` name its slots);
+- :func:`camera_ray` (numba) → one ray for one device point;
+- :func:`primary_rays` (numpy entry) → all rays for a frame's pixel samples.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from core.camera.view import View, check, eye_from_view, vrc_basis
+from core.pipeline.project import viewport
+from core.vectors import unit3
+
+# Slots of a packed camera.
+CAMERA_VRP, CAMERA_BASIS, CAMERA_WINDOW, CAMERA_VIEWPORT = 0, 3, 12, 16
+CAMERA_PERSPECTIVE, CAMERA_ORIGIN, CAMERA_DOP, CAMERA_FRONT, CAMERA_BACK = 20, 21, 24, 27, 28
+CAMERA_SIZE = 29
+
+
+def pack_camera(view: View, projection: str, width: int, height: int,
+                keep_aspect: bool = False) -> np.ndarray:
+    """The view as numbers: VRP, the VRC basis (u, v, n rows), window, viewport, perspective
+    flag, ray origin (PRP in world coordinates), unit DOP towards the scene, F and B.
+    Raises :class:`core.camera.view.ViewError` for an invalid view."""
+    check(view, projection)
+    u, v, n = vrc_basis(view)
+    eye = eye_from_view(view, projection)
+    cam = np.zeros(CAMERA_SIZE)
+    cam[CAMERA_VRP:CAMERA_VRP + 3] = view.vrp
+    cam[CAMERA_BASIS:CAMERA_BASIS + 9] = np.array([u, v, n]).reshape(-1)
+    cam[CAMERA_WINDOW:CAMERA_WINDOW + 4] = view.window
+    cam[CAMERA_VIEWPORT:CAMERA_VIEWPORT + 4] = viewport(view.window, width, height, keep_aspect)
+    if projection == "perspective":
+        cam[CAMERA_PERSPECTIVE] = 1.0
+        cam[CAMERA_ORIGIN:CAMERA_ORIGIN + 3] = eye.point
+    else:
+        cam[CAMERA_DOP:CAMERA_DOP + 3] = -np.asarray(eye.direction)
+    cam[CAMERA_FRONT], cam[CAMERA_BACK] = view.front, view.back
+    return cam
+
+
+@njit(cache=True)
+def camera_ray(cam, x, y):
+    """``(inside, ox, oy, oz, dx, dy, dz)``: the ray through device point (x, y); ``inside``
+    is False (and the ray zero) outside the viewport."""
+    x0, x1 = cam[CAMERA_VIEWPORT], cam[CAMERA_VIEWPORT + 1]
+    y0, y1 = cam[CAMERA_VIEWPORT + 2], cam[CAMERA_VIEWPORT + 3]
+    if not (x0 <= x <= x1 and y0 <= y <= y1):
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    u_min, u_max = cam[CAMERA_WINDOW], cam[CAMERA_WINDOW + 1]
+    v_min, v_max = cam[CAMERA_WINDOW + 2], cam[CAMERA_WINDOW + 3]
+    v = v_min + (y - y0) / (y1 - y0) * (v_max - v_min)
+    u = u_min + (x - x0) / (x1 - x0) * (u_max - u_min)
+    b = CAMERA_BASIS
+    tx = cam[0] + u * cam[b] + v * cam[b + 3]
+    ty = cam[1] + u * cam[b + 1] + v * cam[b + 4]
+    tz = cam[2] + u * cam[b + 2] + v * cam[b + 5]
+    if cam[CAMERA_PERSPECTIVE] != 0.0:       # from the PRP through the view-plane point
+        ox, oy, oz = cam[CAMERA_ORIGIN], cam[CAMERA_ORIGIN + 1], cam[CAMERA_ORIGIN + 2]
+        dx, dy, dz, _ = unit3(tx - ox, ty - oy, tz - oz)
+        return True, ox, oy, oz, dx, dy, dz
+    return True, tx, ty, tz, cam[CAMERA_DOP], cam[CAMERA_DOP + 1], cam[CAMERA_DOP + 2]
+
+
+@njit(cache=True)
+def in_depth_range(cam, px, py, pz):
+    """Whether the point lies between the front and back planes (F ≥ n ≥ B along VPN)."""
+    b = CAMERA_BASIS + 6
+    n = (px - cam[0]) * cam[b] + (py - cam[1]) * cam[b + 1] + (pz - cam[2]) * cam[b + 2]
+    return cam[CAMERA_BACK] <= n <= cam[CAMERA_FRONT]
+
+
+@njit(cache=True, parallel=True)
+def _rays(cam, width, height, offsets, origins, directions, inside):
+    per_pixel = offsets.shape[0]
+    for row in prange(height):
+        j = height - 1 - row                     # device row, counted from the bottom
+        for col in range(width):
+            for s in range(per_pixel):
+                k = (s * height + row) * width + col
+                ok, ox, oy, oz, dx, dy, dz = camera_ray(cam, col + offsets[s, 0],
+                                                        j + 1.0 - offsets[s, 1])
+                inside[k] = ok
+                origins[k, 0], origins[k, 1], origins[k, 2] = ox, oy, oz
+                directions[k, 0], directions[k, 1], directions[k, 2] = dx, dy, dz
+
+
+def primary_rays(view: View, projection: str, width: int, height: int,
+                 offsets=((0.5, 0.5),)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(origins (N, 3), directions (N, 3), inside (N,))`` for every pixel sample, N = S·H·W,
+    ordered sample, then image row (top first), then column. ``offsets`` ``(S, 2)`` are the
+    film's (x right, y down, in the pixel); directions are unit vectors."""
+    offsets = np.ascontiguousarray(offsets, dtype=np.float64).reshape(-1, 2)
+    count = len(offsets) * height * width
+    origins, directions = np.empty((count, 3)), np.empty((count, 3))
+    inside = np.empty(count, dtype=np.bool_)
+    _rays(pack_camera(view, projection, width, height), int(width), int(height), offsets,
+          origins, directions, inside)
+    return origins, directions, inside
