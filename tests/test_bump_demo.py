@@ -108,7 +108,7 @@ def _render_demo(bump_map, bump, size):
     return frame.color
 
 
-@pytest.mark.parametrize("size", [(500, 500), (333, 333)])
+@pytest.mark.parametrize("size", [(500, 500), (333, 333), (301, 199)])
 @pytest.mark.parametrize("bump_map,bump", CASES)
 def test_renderer_draws_the_demo_pixel_for_pixel(size, bump_map, bump):
     """The scene file through the ordinary z-buffer renderer: every pixel within 1/255."""

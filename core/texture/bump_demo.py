@@ -133,8 +133,9 @@ def demo_view(width: int, height: int) -> View:
     """The parallel view that puts pixel (x, y)'s centre at ``(x/w · 100, −y/h · 100, 0)``.
 
     The renderer samples pixel centres; the demo puts pixel (x, y) at its corner, so the
-    window (the demo's 100 x 100) is moved half a pixel up and to the left. The window is
-    square, so a frame that is not square is letterboxed (the Java panel would stretch).
+    window (the demo's 100 x 100) is moved half a pixel up and to the left. A frame that is
+    not square stretches the window over it, as the Java panel does (unless the settings ask
+    to keep the aspect).
     """
     du, dv = WINDOW_SIZE / width / 2, WINDOW_SIZE / height / 2
     window = (-du, WINDOW_SIZE - du, -WINDOW_SIZE + dv, dv)
