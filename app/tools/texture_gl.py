@@ -31,10 +31,16 @@ void main() {
 _FRAGMENT = """
 #version 330
 uniform sampler2D tex;
+uniform bool encode_srgb;
 in vec2 uv;
 out vec4 frag_color;
+vec3 srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
 void main() {
-    frag_color = texture(tex, uv);
+    vec4 t = texture(tex, uv);
+    frag_color = encode_srgb ? vec4(srgb(t.rgb), t.a) : t;
 }
 """
 
@@ -70,8 +76,10 @@ class TextureGL:
         return tex
 
     def render(self, positions: np.ndarray, triangles: np.ndarray, uv: np.ndarray,
-               view, projection: str, texture: Texture, filter_name: str) -> np.ndarray:
-        """``(H, W, 4)`` float32, row 0 the top; empty pixels are −1."""
+               view, projection: str, texture: Texture, filter_name: str,
+               encode_srgb: bool = False) -> np.ndarray:
+        """``(H, W, 4)`` float32, row 0 the top; empty pixels are −1. ``encode_srgb``: the
+        filtered colour is sRGB-encoded, as the CPU's shader does for an sRGB texture."""
         tex = self._texture(texture, filter_name)
         if texture.wrap not in ("repeat", "clamp"):
             raise ValueError("the oracle draws repeat and clamp only (moderngl has no mirror)")
@@ -80,6 +88,7 @@ class TextureGL:
         ibo = self.ctx.buffer(np.ascontiguousarray(triangles, dtype=np.int32).tobytes())
         vao = self.ctx.vertex_array(self.program, [(vbo, "3f 2f", "in_position", "in_uv")],
                                     index_buffer=ibo)
+        self.program["encode_srgb"].value = bool(encode_srgb)
         self.program["clip_from_world"].write(
             clip_from_world(view, projection, self.size).T.astype(np.float32).tobytes())
         try:
