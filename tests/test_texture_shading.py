@@ -149,3 +149,29 @@ def test_textures_on_generators_and_scenes_render():
         assert not scene.view_messages
         image = _draw(scene)
         assert image.std() > 10, name
+
+
+def test_tangent_frame_of_a_plane_and_a_sphere():
+    from core.scene.generators import plane, uv_sphere
+    from core.texture.material import tangent_frames
+    m = plane(size=4.0, subdivisions=3)
+    frames = tangent_frames(m.positions, m.triangles, m.uv)
+    np.testing.assert_allclose(frames[:, :3], np.tile([4.0, 0, 0], (len(frames), 1)), atol=1e-12)
+    np.testing.assert_allclose(frames[:, 3:], np.tile([0, 0, -4.0], (len(frames), 1)), atol=1e-12)
+    s = uv_sphere(radius=1.0, segments=64, rings=32)
+    frames = tangent_frames(s.positions, s.triangles, s.uv)
+    # away from the poles, dP/du and dP/dv are perpendicular to the radius (the normal)
+    ring = np.abs(s.positions[:, 1]) < 0.7
+    for part in (frames[ring, :3], frames[ring, 3:]):
+        cos = np.abs(np.sum(part * s.positions[ring], axis=1)) / np.linalg.norm(part, axis=1)
+        assert cos.max() < 0.05
+
+
+@pytest.mark.parametrize("shading", ["flat", "gouraud"])
+def test_flat_and_gouraud_draw_textured_materials_with_their_colour(tmp_path, shading):
+    textured = _scene(tmp_path, ', texture = { procedural = "checker", scale = 8 }')
+    plain = _scene(tmp_path, "", "p.toml")
+    assert np.abs(_draw(textured, shading=shading) - _draw(plain, shading=shading)).max() == 0
+    from core.plan import plan
+    stage = [s for s in plan(textured, "perspective", shading) if s.name == "texture lookups"][0]
+    assert not stage.runs and "per-pixel" in stage.reason
