@@ -66,6 +66,24 @@ def _demo_rows(meshes) -> np.ndarray:
     return rows
 
 
+def _packed_maps(s: ShadeInput, scene, meshes):
+    """:func:`pack_maps` of the materials, kept while the same textures and numbers are used
+    (packing copies every texel: tens of MB a frame for a few large textures). Kept in the
+    context's cache of the scene under its own key, holding the textures it was made from."""
+    all_maps = [maps_of(m.material) for m in meshes]
+    textures = tuple(t for m in all_maps if m is not None
+                     for t in (m.color, m.height, m.normal_map, m.environment) if t is not None)
+    numbers = [(m.bump_scale, m.reflectivity, [t is None for t in (
+        m.color, m.height, m.normal_map, m.environment)]) if m is not None else None
+        for m in all_maps]
+    cache = s.context.cache(scene)
+    held = cache.get("texture maps")
+    if (held is None or held[1] != numbers or len(held[0]) != len(textures)
+            or any(a is not b for a, b in zip(held[0], textures))):
+        held = cache["texture maps"] = (textures, numbers, pack_maps(all_maps))
+    return held[2]
+
+
 def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
     normals = all_vertex_normals(s, scene, meshes, weighting)
     # Maps are read from the materials each frame (a window may switch the demo's map); the
@@ -73,10 +91,10 @@ def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
     extra = cached(s.context, scene, scene_arrays(meshes), "texture varyings",
                    lambda: np.concatenate([_mesh_varyings(m) for m in meshes]) if meshes
                    else np.zeros((0, 8)))
-    s.vertex_attrs = cached(s.context, scene, scene_arrays(meshes) + (extra,),
+    s.vertex_attrs = cached(s.context, scene, scene_arrays(meshes),
                             f"textured attributes {weighting}",
                             lambda: np.concatenate([normals, s.positions, extra], axis=1))
-    s.texture_maps = pack_maps([maps_of(m.material) for m in meshes])
+    s.texture_maps = _packed_maps(s, scene, meshes)
     s.demo = _demo_rows(meshes)
     s.computed += ["illuminate pixels", "texture lookups"]
 
