@@ -45,7 +45,7 @@ def _times(draw, frames: int, warmup: int) -> list[float]:
     return out
 
 
-def run(sizes=(100_000, 1_000_000), frames: int = 10, warmup: int = 2, size=(500, 500)):
+def run(sizes=(100_000, 1_000_000), frames: int = 10, warmup: int = 4, size=(500, 500)):
     from app.tools.texture_gl import TexturedPhongGL
     from core import render
     from core.settings import RenderSettings

@@ -12,9 +12,10 @@ the tangent frame ∂P/∂u, ∂P/∂v (:func:`core.texture.material.tangent_fra
 map needs it). Meshes without (u, v) (``.tri`` files, OBJ without ``vt``) get (0, 0) and are
 drawn with the material's colour.
 
-Pixel step: (u, v) derivatives come from the clipped triangles' device coordinates (the
-tutorial's plane constants, :func:`core.texture.tutorial.triangle_constants`), which the
-z-buffer hands over as ``ShadeInput.device``; the filter and the bump switch come from
+Pixel step: (u, v) derivatives come from the clipped triangles' device coordinates, which
+the z-buffer hands over as ``ShadeInput.device`` (the tutorial's plane constants,
+:func:`core.texture.tutorial.plane_constants`, made when a scan line enters a triangle, so
+only visible triangles pay for them); the filter and the bump switch come from
 ``RenderSettings.texture_filter`` and ``.bump`` (``ShadeInput.settings``).
 """
 
@@ -29,8 +30,8 @@ from core.shading.shade import ShadeInput, all_vertex_normals, cached, scene_arr
 from core.texture.bump_demo import DEMO_LIGHT, demo_pixel, java_color_byte
 from core.texture.material import maps_of, tangent_frames
 from core.texture.sample import FILTERS, TRILINEAR
-from core.texture.surface import VARYING_COLUMNS, pack_maps, textured_pixel
-from core.texture.tutorial import triangle_constants
+from core.texture.surface import UV, VARYING_COLUMNS, pack_maps, textured_pixel
+from core.texture.tutorial import plane_constants
 
 NAME = "textured"
 # Columns of a packed demo row: kind (1 = the bump demo), map, bump on, viewpoint (3).
@@ -100,12 +101,16 @@ def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
 
 
 @njit(cache=True, parallel=True)
-def _resolve(tri, b1, b2, triangles, attrs, constants, source, face_surface, surfaces, maps,
+def _resolve(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surfaces, maps,
              texels, levels, textures, demo, demo_light, filter_, bump, lights, ambient, eye,
              halfway, background8, out):
     height, width = tri.shape
     for row in prange(height):
         surf = surfaces.copy()                  # per row: a pixel writes its texture's O_d here
+        # the visible triangle's plane constants, made when the scan line enters it (per
+        # visible triangle, not for every triangle of the scene)
+        constants = np.zeros((1, 3, 3))
+        current = -1
         for col in range(width):
             t = tri[row, col]
             if t < 0:
@@ -122,7 +127,14 @@ def _resolve(tri, b1, b2, triangles, attrs, constants, source, face_surface, sur
                 out[row, col, 1] = 0
                 out[row, col, 2] = java_color_byte(blue)
                 continue
-            r, g, b = textured_pixel(attrs, i0, i1, i2, w0, w1, w2, t, col, row, constants,
+            if t != current:
+                current = t
+                constants[0, :, :] = 0.0
+                if device_h.shape[0]:
+                    plane_constants(device_h, i0, i1, i2, attrs[i0, UV], attrs[i0, UV + 1],
+                                    attrs[i1, UV], attrs[i1, UV + 1], attrs[i2, UV],
+                                    attrs[i2, UV + 1], float(height), constants, 0)
+            r, g, b = textured_pixel(attrs, i0, i1, i2, w0, w1, w2, 0, col, row, constants,
                                      s, maps, texels, levels, textures, filter_, bump, surf,
                                      lights, ambient, eye, halfway)
             for c in range(3):
@@ -148,19 +160,18 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
     bump = bool(getattr(settings, "bump", True))
     tri = np.ascontiguousarray(vis.tri, dtype=np.int32)
     device = getattr(s, "device", None)
-    if device is not None and len(triangles):
+    if device is not None:
         points, inv_w = device
         w = np.divide(1.0, inv_w, out=np.zeros_like(inv_w), where=inv_w > 0)
         device_h = np.column_stack([points * w[:, None], w])
-        constants = triangle_constants(device_h, triangles, attrs[:, 6:8], tri.shape[0])
     else:                                   # no device coordinates: no derivatives, level 0
-        constants = np.zeros((max(len(triangles), 1), 3, 3))
+        device_h = np.zeros((0, 4))
     texels, levels, textures, maps = s.texture_maps
     # the demo lights its panel with the scene's first light (J3DPanel's lightSource)
     demo_light = (s.lights[0, 1:4].copy() if len(s.lights) and s.lights[0, 0] == 0.0
                   else np.array(DEMO_LIGHT))
     _resolve(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
-             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, constants, source,
+             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, device_h, source,
              s.face_surface, s.surfaces, maps, texels, levels, textures, s.demo, demo_light, filter_, bump,
              s.lights, s.ambient, s.eye, s.halfway, background8, out)
 

@@ -72,36 +72,43 @@ def _tutorial_point(device_h, k, height):
 @njit(cache=True, parallel=True)
 def _constants(device_h, triangles, uv, height, out):
     for t in prange(triangles.shape[0]):
-        i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-        x0, y0, z0 = _tutorial_point(device_h, i0, height)
-        x1, y1, z1 = _tutorial_point(device_h, i1, height)
-        x2, y2, z2 = _tutorial_point(device_h, i2, height)
-        du1, dv1 = uv[i1, 0] - uv[i0, 0], uv[i1, 1] - uv[i0, 1]
-        du2, dv2 = uv[i2, 0] - uv[i0, 0], uv[i2, 1] - uv[i0, 1]
-        det = du1 * dv2 - dv1 * du2
-        if not abs(det) > 1e-300:
-            continue                                   # no texture frame: constants stay 0
-        # [dX/du; dX/dv] = [[du1, dv1], [du2, dv2]]^-1 [E1; E2]
-        e1x, e1y, e1z = x1 - x0, y1 - y0, z1 - z0
-        e2x, e2y, e2z = x2 - x0, y2 - y0, z2 - z0
-        ux, uy, uz = (dv2 * e1x - dv1 * e2x) / det, (dv2 * e1y - dv1 * e2y) / det, \
-            (dv2 * e1z - dv1 * e2z) / det
-        vx, vy, vz = (du1 * e2x - du2 * e1x) / det, (du1 * e2y - du2 * e1y) / det, \
-            (du1 * e2z - du2 * e1z) / det
-        Px = x0 - uv[i0, 0] * ux - uv[i0, 1] * vx
-        Py = y0 - uv[i0, 0] * uy - uv[i0, 1] * vy
-        Pz = z0 - uv[i0, 0] * uz - uv[i0, 1] * vz
-        Mx, My, Mz = -ux, -uy, -uz                     # M = −∂X/∂u (see the docstring)
-        Nx, Ny, Nz = vx, vy, vz
-        out[t, 0, 0] = Nx * Pz - Nz * Px               # O_a, O_b, O_c
-        out[t, 0, 1] = Mx * Pz - Mz * Px
-        out[t, 0, 2] = Mz * Nx - Mx * Nz
-        out[t, 1, 0] = Nz * Py - Ny * Pz               # H_a, H_b, H_c
-        out[t, 1, 1] = Mz * Py - My * Pz
-        out[t, 1, 2] = My * Nz - Mz * Ny
-        out[t, 2, 0] = Ny * Px - Nx * Py               # V_a, V_b, V_c
-        out[t, 2, 1] = My * Px - Mx * Py
-        out[t, 2, 2] = Mx * Ny - My * Nx
+        plane_constants(device_h, triangles[t, 0], triangles[t, 1], triangles[t, 2],
+                        uv[triangles[t, 0], 0], uv[triangles[t, 0], 1],
+                        uv[triangles[t, 1], 0], uv[triangles[t, 1], 1],
+                        uv[triangles[t, 2], 0], uv[triangles[t, 2], 1], height, out, t)
+
+
+@njit(cache=True)
+def plane_constants(device_h, i0, i1, i2, u0, v0, u1, v1, u2, v2, height, out, slot):
+    """The nine constants of the triangle (i0, i1, i2) with (u, v) at its corners, into
+    ``out[slot]`` (left as they are when the (u, v) are collinear: no texture frame)."""
+    x0, y0, z0 = _tutorial_point(device_h, i0, height)
+    x1, y1, z1 = _tutorial_point(device_h, i1, height)
+    x2, y2, z2 = _tutorial_point(device_h, i2, height)
+    du1, dv1 = u1 - u0, v1 - v0
+    du2, dv2 = u2 - u0, v2 - v0
+    det = du1 * dv2 - dv1 * du2
+    if not abs(det) > 1e-300:
+        return
+    # [dX/du; dX/dv] = [[du1, dv1], [du2, dv2]]^-1 [E1; E2]
+    e1x, e1y, e1z = x1 - x0, y1 - y0, z1 - z0
+    e2x, e2y, e2z = x2 - x0, y2 - y0, z2 - z0
+    ux, uy, uz = (dv2 * e1x - dv1 * e2x) / det, (dv2 * e1y - dv1 * e2y) / det, \
+        (dv2 * e1z - dv1 * e2z) / det
+    vx, vy, vz = (du1 * e2x - du2 * e1x) / det, (du1 * e2y - du2 * e1y) / det, \
+        (du1 * e2z - du2 * e1z) / det
+    Px, Py, Pz = x0 - u0 * ux - v0 * vx, y0 - u0 * uy - v0 * vy, z0 - u0 * uz - v0 * vz
+    Mx, My, Mz = -ux, -uy, -uz                         # M = −∂X/∂u (see the docstring)
+    Nx, Ny, Nz = vx, vy, vz
+    out[slot, 0, 0] = Nx * Pz - Nz * Px                # O_a, O_b, O_c
+    out[slot, 0, 1] = Mx * Pz - Mz * Px
+    out[slot, 0, 2] = Mz * Nx - Mx * Nz
+    out[slot, 1, 0] = Nz * Py - Ny * Pz                # H_a, H_b, H_c
+    out[slot, 1, 1] = Mz * Py - My * Pz
+    out[slot, 1, 2] = My * Nz - Mz * Ny
+    out[slot, 2, 0] = Ny * Px - Nx * Py                # V_a, V_b, V_c
+    out[slot, 2, 1] = My * Px - Mx * Py
+    out[slot, 2, 2] = Mx * Ny - My * Nx
 
 
 @njit(cache=True)
