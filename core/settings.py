@@ -38,6 +38,7 @@ PROJECTIONS = tuple(p.value for p in Projection)
 SHADINGS = tuple(s.value for s in Shading)
 SOLID_SHADINGS = SHADINGS[1:]          # the modes that fill triangles
 SAMPLE_PATTERNS = ("regular", "jittered")
+SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
@@ -60,7 +61,6 @@ class RenderSettings:
     seed: int = 0
     rasterizer: str = "edge"                  # "edge" (fast) | "scanline" (the course's ET/AET, screen-linear)
     keep_aspect: bool = False                 # letterbox the window; False: stretch it over the viewport (the course)
-    course_tri: bool = False                  # the .tri startup code's back-face rule (skip viewpoint . N < 0)
     # Where in its pixel a one-sample frame samples (x right, y down, pixel units): the centre,
     # as the course's scan conversion does; the film moves it for each of several samples.
     pixel_offset: tuple[float, float] = (0.5, 0.5)

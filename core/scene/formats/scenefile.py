@@ -36,16 +36,15 @@ import numpy as np
 
 from core.scene import generators
 from core.scene.formats.camera import default_lights, framing_views
-from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
+from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
                                  read_file,
                                  tolerant_of_underflow)
 from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
                                    signed_volume)
-from core.shading.illumination import SPECULAR_FORMS
 from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
-from core.settings import RASTERIZERS
+from core.settings import RASTERIZERS, SPECULAR_FORMS
 
 MAX_NUMBER = MAX_COORDINATE
 
@@ -99,14 +98,6 @@ def _spellings(name: str) -> str:
                 parts.append(r"\\(?:" + "|".join(re.escape(a) for a in alts) + ")")
         forms.append('"' + "".join(parts) + '"')
     return "|".join(forms)
-
-
-def path_text(path: Path_) -> str:
-    """``("geometry", 2, "material", "kd")`` -> ``"geometry[2].material.kd"``."""
-    text = ""
-    for part in path:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else part)
-    return text
 
 
 class _Reader:
