@@ -89,7 +89,7 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
 
 
 def _texture_stage(scene, shading, texture_filter):        # issue 11
-    from core.texture.shaders import plan_stage
+    from core.texture.material import plan_stage
     return plan_stage(scene, shading, texture_filter)
 
 

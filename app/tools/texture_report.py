@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from core.texture.sample import FILTERS
+from core.texture.modes import FILTERS
 
 SCENE = Path(__file__).resolve().parents[2] / "scenes" / "texture_floor.toml"
 SAMPLES = (1, 4, 16)

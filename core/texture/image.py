@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from core.texture.sample import WRAPS
+from core.texture.modes import WRAPS
 
 MAX_TEXTURE_SIDE = 16384          # texels on a side; larger images are refused, not read
 

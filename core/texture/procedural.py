@@ -79,7 +79,7 @@ def demo_height(resolution: int = 256, map: int = 0):
     """The bump demo's B(x, y) (``J3DPanel.bump``, maps 0 … 3) over its window: u → x = 100 u,
     v → y = −100 (1 − v), so the texture's top-left is the demo's (0, 0); B in [−2, 2] is
     mapped to [0, 1] by (B + 2) / 4."""
-    from core.texture.bump_demo import demo_bump_numpy
+    from core.texture.demo_scene import demo_bump_numpy
     u, v = _grid(resolution)
     return (demo_bump_numpy(map, 100.0 * u, -100.0 * (1.0 - v)) + 2.0) / 4.0, False
 

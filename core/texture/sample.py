@@ -40,11 +40,9 @@ import math
 import numpy as np
 from numba import njit
 
-REPEAT, CLAMP, MIRROR = 0, 1, 2
-WRAPS = {"repeat": REPEAT, "clamp": CLAMP, "mirror": MIRROR}
-NEAREST, BILINEAR, TRILINEAR, ANISOTROPIC = 0, 1, 2, 3
-FILTERS = {"nearest": NEAREST, "bilinear": BILINEAR, "trilinear": TRILINEAR,
-           "anisotropic": ANISOTROPIC}
+from core.texture.modes import (ANISOTROPIC, BILINEAR, CLAMP, FILTERS, MIRROR,  # noqa: F401
+                                NEAREST, REPEAT, TRILINEAR, WRAPS)
+
 MAX_ANISOTROPY = 16          # probes along the major axis at most (GPUs offer 2 … 16)
 
 
