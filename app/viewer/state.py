@@ -286,6 +286,21 @@ class ViewerState:
             setattr(self, name, value)
             self.dirty = True
 
+    # -- issue 11: the bump demo's mouse (J3DPanel): left click toggles bump/Phong, any other
+    # button cycles the height maps. Only in a scene with the demo's material.
+    def demo_click(self, left: bool) -> str | None:
+        """The demo's click; returns its label, or None (the click keeps its usual meaning)."""
+        from core.texture.demo_scene import apply_demo_options, demo_materials
+        demos = demo_materials(self.scene)
+        if not demos:
+            return None
+        demo = demos[0]
+        bump, bump_map = (not demo.bump, demo.bump_map) if left else \
+            (demo.bump, demo.bump_map + 1 if demo.bump_map + 1 < 4 else 0)
+        self.dirty = True
+        return apply_demo_options(self.scene, bump_map, bump)
+    # --
+
     def set_keep_aspect(self, keep: bool) -> None:
         if bool(keep) != self.keep_aspect:
             self.keep_aspect = bool(keep)

@@ -437,6 +437,8 @@ class ViewerWindow:
             where = f"{name} at ({x:.0f}, {y:.0f})"
             if captured or not self._on_picture(x, y):
                 log.info("action: %s -> taken by the menu/panel, view unchanged", where)
+            elif (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
+                log.info("action: %s -> the bump demo: %s", where, demo)   # issue 11
             elif self.state.course_tri:
                 self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
             elif button == glfw.MOUSE_BUTTON_LEFT:

@@ -52,13 +52,18 @@ def demo_view(width: int, height: int) -> View:
                 label=f"the bump demo's panel, {width} x {height}")
 
 
+def demo_materials(scene) -> list:
+    """The :class:`core.texture.material.DemoMaterial` of every mesh that has one."""
+    from core.texture.material import maps_of
+    return [maps_of(m.material).demo for m in scene.meshes
+            if maps_of(m.material) is not None and maps_of(m.material).demo is not None]
+
+
 def apply_demo_options(scene, bump_map: int | None, bump: bool) -> str | None:
     """Set every bump-demo material of ``scene`` to ``bump_map`` (when given) and ``bump``;
     returns the demo's label text (``"Bump: B(x,y) = …"`` or ``"Phong"``), or None when the
     scene has no demo material."""
-    from core.texture.material import maps_of
-    demos = [maps_of(m.material).demo for m in scene.meshes
-             if maps_of(m.material) is not None and maps_of(m.material).demo is not None]
+    demos = demo_materials(scene)
     for demo in demos:
         if bump_map is not None:
             demo.bump_map = int(bump_map)
@@ -70,8 +75,4 @@ def apply_demo_options(scene, bump_map: int | None, bump: bool) -> str | None:
 
 def panel_views(scene) -> list[View]:
     """The demo's panel view for the scene's image size, when a material is the demo's."""
-    from core.texture.material import maps_of
-    if any(maps_of(m.material) is not None and maps_of(m.material).demo is not None
-           for m in scene.meshes):
-        return [demo_view(*scene.size)]
-    return []
+    return [demo_view(*scene.size)] if demo_materials(scene) else []
