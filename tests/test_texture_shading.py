@@ -175,3 +175,13 @@ def test_flat_and_gouraud_draw_textured_materials_with_their_colour(tmp_path, sh
     from core.plan import plan
     stage = [s for s in plan(textured, "perspective", shading) if s.name == "texture lookups"][0]
     assert not stage.runs and "per-pixel" in stage.reason
+
+
+def test_viewer_texture_filter_reaches_the_settings():
+    from app.viewer.state import ViewerState
+    state = ViewerState.open("scenes/texture_floor.toml", size=(40, 40))
+    assert state.settings().texture_filter == "trilinear"
+    state.set_texture_filter("anisotropic")
+    assert state.settings().texture_filter == "anisotropic" and state.dirty
+    with pytest.raises(ValueError):
+        state.set_texture_filter("cubic")
