@@ -185,3 +185,27 @@ def test_viewer_texture_filter_reaches_the_settings():
     assert state.settings().texture_filter == "anisotropic" and state.dirty
     with pytest.raises(ValueError):
         state.set_texture_filter("cubic")
+
+
+def test_obj_vt_is_textured(tmp_path):
+    """An OBJ quad with ``vt``: the checker shows; without ``vt`` the plan says so."""
+    quad = ("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+            "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+    (tmp_path / "quad.obj").write_text(quad)
+    (tmp_path / "bare.obj").write_text("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n")
+    scene_text = SPHERE.replace('generator = "uv_sphere"', 'file = "{mesh}"').replace(
+        "params = {{ radius = 1.0, segments = 48, rings = 24 }}\n", "")
+    for mesh in ("quad.obj", "bare.obj"):
+        (tmp_path / f"{mesh}.toml").write_text(scene_text.format(
+            mesh=mesh, extra=', texture = { procedural = "checker", scale = 4 }'))
+    scene = load_scene(tmp_path / "quad.obj.toml")
+    assert scene.meshes[0].uv is not None
+    image = _draw(scene)
+    covered = (image != image[0, 0]).any(axis=2)
+    assert image[covered].mean(axis=1).std() > 20
+    from core.plan import plan
+    bare = load_scene(tmp_path / "bare.obj.toml")
+    stage = [s for s in plan(bare, "perspective", "phong") if s.name == "texture lookups"][0]
+    assert "has no (u, v)" in stage.reason
+    flat = _draw(bare)
+    assert flat[(flat != flat[0, 0]).any(axis=2)].mean(axis=1).std() < 20
