@@ -129,7 +129,9 @@ def _resolve(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surf
                 continue
             if t != current:
                 current = t
-                constants[0, :, :] = 0.0
+                for a in range(3):
+                    for b in range(3):
+                        constants[0, a, b] = 0.0
                 if device_h.shape[0]:
                     plane_constants(device_h, i0, i1, i2, attrs[i0, UV], attrs[i0, UV + 1],
                                     attrs[i1, UV], attrs[i1, UV + 1], attrs[i2, UV],
