@@ -48,8 +48,8 @@ def tile_rays(view: View, projection: str, width: int, height: int, offsets,
     count = len(offsets) * (row1 - row0) * (col1 - col0)
     origins, directions = np.empty((count, 3)), np.empty((count, 3))
     inside = np.empty(count, dtype=np.bool_)
-    _tile_rays(pack_camera(view, projection, width, height, keep_aspect), int(height), int(row0), int(row1),
-               int(col0), int(col1), offsets, origins, directions, inside)
+    _tile_rays(pack_camera(view, projection, width, height, keep_aspect), int(height),
+               int(row0), int(row1), int(col0), int(col1), offsets, origins, directions, inside)
     return origins, directions, inside
 
 
