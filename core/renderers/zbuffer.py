@@ -20,7 +20,6 @@ threads arrays from one to the next and records what ran in ``frame.stats``:
 from __future__ import annotations
 
 from core.camera.film import fill, to_rgb8
-from core.camera.view import normalizing_transform
 from core.pipeline import clip, project, raster_lines
 from core.transforms import apply
 
@@ -30,7 +29,7 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     (all edges in wireframe) with the midpoint line. Fills every pixel of ``frame``."""
     projection, shading = settings.projection, settings.shading
     height, width = frame.color.shape[:2]
-    n, z_min = normalizing_transform(view, projection)
+    n, z_min = context.normalizing_transform(view, projection)
     vp = _sample_viewport(project.viewport(view.window, width, height), settings.pixel_offset)
     timer.lap("normalize")
     solid = shading != "wireframe" and scene.triangle_count > 0
