@@ -29,7 +29,8 @@ CAMERA_PERSPECTIVE, CAMERA_ORIGIN, CAMERA_DOP, CAMERA_FRONT, CAMERA_BACK = 20, 2
 CAMERA_SIZE = 29
 
 
-def pack_camera(view: View, projection: str, width: int, height: int) -> np.ndarray:
+def pack_camera(view: View, projection: str, width: int, height: int,
+                keep_aspect: bool = False) -> np.ndarray:
     """The view as numbers: VRP, the VRC basis (u, v, n rows), window, viewport, perspective
     flag, ray origin (PRP in world coordinates), unit DOP towards the scene, F and B.
     Raises :class:`core.camera.view.ViewError` for an invalid view."""
@@ -40,7 +41,7 @@ def pack_camera(view: View, projection: str, width: int, height: int) -> np.ndar
     cam[CAMERA_VRP:CAMERA_VRP + 3] = view.vrp
     cam[CAMERA_BASIS:CAMERA_BASIS + 9] = np.array([u, v, n]).reshape(-1)
     cam[CAMERA_WINDOW:CAMERA_WINDOW + 4] = view.window
-    cam[CAMERA_VIEWPORT:CAMERA_VIEWPORT + 4] = viewport(view.window, width, height)
+    cam[CAMERA_VIEWPORT:CAMERA_VIEWPORT + 4] = viewport(view.window, width, height, keep_aspect)
     if projection == "perspective":
         cam[CAMERA_PERSPECTIVE] = 1.0
         cam[CAMERA_ORIGIN:CAMERA_ORIGIN + 3] = eye.point
@@ -97,7 +98,8 @@ def _rays(cam, width, height, offsets, origins, directions, inside):
 
 
 def primary_rays(view: View, projection: str, width: int, height: int,
-                 offsets=((0.5, 0.5),)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 offsets=((0.5, 0.5),), keep_aspect: bool = False
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(origins (N, 3), directions (N, 3), inside (N,))`` for every pixel sample, N = S·H·W,
     ordered sample, then image row (top first), then column. ``offsets`` ``(S, 2)`` are the
     film's (x right, y down, in the pixel); directions are unit vectors."""
@@ -105,6 +107,6 @@ def primary_rays(view: View, projection: str, width: int, height: int,
     count = len(offsets) * height * width
     origins, directions = np.empty((count, 3)), np.empty((count, 3))
     inside = np.empty(count, dtype=np.bool_)
-    _rays(pack_camera(view, projection, width, height), int(width), int(height), offsets,
-          origins, directions, inside)
+    _rays(pack_camera(view, projection, width, height, keep_aspect), int(width), int(height),
+          offsets, origins, directions, inside)
     return origins, directions, inside

@@ -91,7 +91,9 @@ def _mesh_scene(mesh, name: str, size) -> Scene:
 def _views_scene(text: str, name: str, size) -> Scene:
     """A bare view file: its views of the FvDFH house, in wireframe."""
     from core.scene.generators import house
-    from core.scene.formats.viewfile import read_views
-    views, messages = read_views(text, name)
-    return Scene(name="house", meshes=[house()], views=views, view_messages=messages,
+    from core.camera.view import View
+    from core.scene.formats.viewfile import read_view_entries
+    order = read_view_entries(text, name)
+    return Scene(name="house", meshes=[house()], views=[v for v in order if isinstance(v, View)],
+                 view_messages=[v for v in order if not isinstance(v, View)], view_order=order,
                  shading="wireframe", size=size or (500, 500), source=name)

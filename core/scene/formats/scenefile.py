@@ -36,26 +36,41 @@ import numpy as np
 
 from core.scene import generators
 from core.scene.formats.camera import default_lights, framing_views
-from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
+from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
                                  read_file,
                                  tolerant_of_underflow)
 from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
                                    signed_volume)
-from core.shading.illumination import SPECULAR_FORMS
 from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
+from core.settings import RASTERIZERS, SPECULAR_FORMS
 
 MAX_NUMBER = MAX_COORDINATE
 
 TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
-            "line_color", "views", "view", "geometry", "light")
+            "line_color", "views", "view", "geometry", "light", "keep_aspect", "rasterizer")
 GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
+# Analytic primitives (issue 12: the ray tracer intersects them, the z-buffer draws them
+# tessellated): [[geometry]] primitive = "sphere" | "plane" with these keys.
+PRIMITIVE_KEYS = ("primitive", "center", "radius", "point", "normal", "checker", "checker_color",
+                  "extent", "segments")
+GEOMETRY_KEYS += PRIMITIVE_KEYS
 TRANSFORM_KEYS = ("scale", "rotate", "translate")
 MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
+MATERIAL_KEYS += ("kr", "kt", "ior")      # Whitted's global terms (issue 12)
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
+# Animation (issue 13): [animation], [[key]] and [[emitter]] are read by core/animation/keys.py.
+from core.animation import keys as animation_keys     # noqa: E402  (after the constants it extends)
+TOP_KEYS += animation_keys.TOP_KEYS
+TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
+
+# -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
+from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
+MATERIAL_KEYS = MATERIAL_KEYS + TEXTURE_KEYS
+# --
 
 Path_ = tuple            # a key path: ("geometry", 2, "material", "kd")
 
@@ -83,14 +98,6 @@ def _spellings(name: str) -> str:
                 parts.append(r"\\(?:" + "|".join(re.escape(a) for a in alts) + ")")
         forms.append('"' + "".join(parts) + '"')
     return "|".join(forms)
-
-
-def path_text(path: Path_) -> str:
-    """``("geometry", 2, "material", "kd")`` -> ``"geometry[2].material.kd"``."""
-    text = ""
-    for part in path:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else part)
-    return text
 
 
 class _Reader:
@@ -216,7 +223,10 @@ class _Reader:
         meshes, total = [], 0
         for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
             self.budget = generators.MAX_TRIANGLES - total     # what a mesh file may still add
-            meshes.append(self.geometry(g, ("geometry", i + 1)))
+            if "primitive" in g:             # a sphere or plane: its tessellation, 1-2 meshes
+                meshes.extend(self.primitive(g, ("geometry", i + 1)))
+            else:
+                meshes.append(self.geometry(g, ("geometry", i + 1)))
             # Each generator keeps to the limit; the scene as a whole must too, or a short
             # file listing many big generators could take all the memory.
             total += len(meshes[-1].triangles)
@@ -226,19 +236,25 @@ class _Reader:
         if not meshes:
             raise self.fail(("geometry",), "a scene needs at least one [[geometry]] table")
         points = np.concatenate([m.positions for m in meshes])
-        views, messages = self.views(doc, points)
+        order = self.views(doc, points)
+        views = [v for v in order if isinstance(v, View)]
+        messages = [v for v in order if not isinstance(v, View)]
         lights = ([self.light(t, ("light", i + 1))
                    for i, t in enumerate(self.tables(doc["light"], ("light",)))]
                   if "light" in doc else default_lights(points))
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
-                      meshes=meshes, views=views, view_messages=messages, lights=lights,
-                      source=self.file)
+                      meshes=meshes, views=views, view_messages=messages, view_order=order,
+                      lights=lights, source=self.file)
+        scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
+                                 if m.tessellates is not None}.values())
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
                           ("background", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("shading", lambda v, p: self.choice(v, p, SHADINGS)),
                           ("projection", lambda v, p: self.choice(v, p, PROJECTIONS)),
-                          ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS))):
+                          ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS)),
+                          ("keep_aspect", self.boolean),
+                          ("rasterizer", lambda v, p: self.choice(v, p, RASTERIZERS))):
             if key in doc:
                 setattr(scene, key, read(doc[key], (key,)))
         if "size" in doc:
@@ -248,6 +264,15 @@ class _Reader:
             scene.size = (int(w), int(h))
         if size is not None:
             scene.size = tuple(size)
+        # -- issue 11: texture files that could not be used; the bump demo's panel view
+        scene.view_messages += getattr(self, "texture_messages", [])
+        from core.texture.demo_scene import panel_views
+        panel = panel_views(scene)
+        scene.views = panel + scene.views
+        if scene.view_order:                  # the panel is the file's first view
+            scene.view_order = panel + list(scene.view_order)
+        # --
+        animation_keys.read_animation(self, doc, scene)     # keys and emitters, if any
         return scene
 
     def geometry(self, g, path: Path_) -> Mesh:
@@ -341,7 +366,67 @@ class _Reader:
         for key in ("od", "os"):
             if key in t:
                 fields[key] = self.vector(t[key], path + (key,), 3, 0.0, 1.0)
-        return Material(**{**base.__dict__, **fields})
+        fields.update(self.whitted_terms(t, path))
+        material = Material(**{**base.__dict__, **fields})
+        # -- issue 11: textures ride on Material.extra["maps"]; a file that cannot be used
+        # leaves the mesh untextured, and its message (naming file and key) is shown.
+        maps = read_maps(self, t, path)
+        if maps is not None:
+            material.extra = {**(getattr(material, "extra", None) or {}), "maps": maps}
+            self.texture_messages = getattr(self, "texture_messages", []) + maps.messages
+        # --
+        return material
+
+    # ------------------------------------------------------------------ ray tracing (issue 12)
+
+    def whitted_terms(self, t: dict, path: Path_) -> dict:
+        """``kr``, ``kt`` in [0, 1] and ``ior``: a positive number or a medium's name."""
+        from core.raytrace.optics import index_of_refraction
+        fields = {}
+        for key in ("kr", "kt"):
+            if key in t:
+                fields[key] = self.number(t[key], path + (key,), 0.0, 1.0)
+        if "ior" in t:
+            try:
+                fields["ior"] = index_of_refraction(t["ior"], "ior")
+            except ValueError as error:
+                raise self.fail(path + ("ior",), str(error).removeprefix("ior: ")) from None
+        return fields
+
+    def primitive(self, g, path: Path_) -> list[Mesh]:
+        """``primitive = "sphere"`` (center, radius) or ``"plane"`` (point, normal, checker,
+        checker_color, extent): the primitive, drawn by its tessellation's meshes."""
+        from core.scene.primitives import Plane, Sphere, tessellate
+        self.table(g, path, ("primitive", "name", "material", "segments") + {
+            "sphere": ("center", "radius"),
+            "plane": ("point", "normal", "checker", "checker_color", "extent")}.get(
+                g["primitive"] if isinstance(g["primitive"], str) else "", ()))
+        kind = self.choice(g["primitive"], path + ("primitive",), ("sphere", "plane"))
+        material = (self.material(g["material"], path + ("material",), Material())
+                    if "material" in g else Material())
+        segments = int(self.number(g.get("segments", 96), path + ("segments",), 8, 1024))
+        if kind == "sphere":
+            shape = Sphere(self.vector(g.get("center", [0, 0, 0]), path + ("center",)),
+                           self.number(g.get("radius", 1.0), path + ("radius",), 1e-6, MAX_NUMBER),
+                           material)
+        else:
+            normal = self.vector(g.get("normal", [0, 1, 0]), path + ("normal",))
+            if not any(normal):
+                raise self.fail(path + ("normal",), "the plane's normal is the zero vector")
+            shape = Plane(self.vector(g.get("point", [0, 0, 0]), path + ("point",)), normal,
+                          material,
+                          self.number(g.get("checker", 0.0), path + ("checker",), 0.0, MAX_NUMBER),
+                          self.vector(g.get("checker_color", [0.1, 0.1, 0.1]),
+                                      path + ("checker_color",), 3, 0.0, 1.0),
+                          self.number(g.get("extent", 20.0), path + ("extent",), 1e-6, 1e6))
+            if shape.checker > 0.0 and (2 * shape.extent / shape.checker) ** 2 > 1e6:
+                raise self.fail(path + ("checker",), "over a million checker squares: make the "
+                                "squares bigger or the extent smaller")
+        meshes = tessellate(shape, segments)
+        for mesh in meshes:
+            if "name" in g:
+                mesh.name = self.string(g["name"], path + ("name",))
+        return meshes
 
     def light(self, value, path: Path_) -> Light:
         t = self.table(value, path, LIGHT_KEYS)
@@ -365,32 +450,28 @@ class _Reader:
                 raise self.fail(path + ("attenuation",), "c1, c2 and c3 are all zero")
         return light
 
-    def views(self, doc: dict, points: np.ndarray) -> tuple[list[View], list[str]]:
-        views: list[View] = []
-        messages: list[str] = []
+    def views(self, doc: dict, points: np.ndarray) -> list[View | str]:
+        """Every view in order (the view file's, then the [[view]] tables): the View when
+        valid, its message when not."""
+        order: list[View | str] = []
         source = doc.get("views", "auto" if "view" not in doc else None)
         if source is not None:
             source = self.string(source, ("views",))
             if source == "auto":
-                views += framing_views(points, self.file)
+                order += framing_views(points, self.file)
             else:
                 shown = str(Path(self.file).parent / source)
                 try:
                     text = decode_text(read_file(self.folder / source, shown, "views"), shown)
                 except ReaderError as error:
                     raise self.fail(("views",), str(error)) from None
-                from core.scene.formats.viewfile import read_views
-                found, said = read_views(text, shown)
-                views += found
-                messages += said
+                from core.scene.formats.viewfile import read_view_entries
+                order += read_view_entries(text, shown)
         if "view" in doc:
             for i, t in enumerate(self.tables(doc["view"], ("view",))):
                 view, problem = self.inline_view(t, ("view", i + 1))
-                if problem:
-                    messages.append(problem)
-                else:
-                    views.append(view)
-        return views, messages
+                order.append(problem or view)
+        return order
 
     def inline_view(self, value, path: Path_) -> tuple[View, str | None]:
         t = self.table(value, path, VIEW_KEYS)
