@@ -245,8 +245,12 @@ class _Reader:
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
                       meshes=meshes, views=views, view_messages=messages, view_order=order,
                       lights=lights, source=self.file)
+        # Spheres join scene.primitives (every ray caster traces them); planes stay with their
+        # tessellation only (the exact ray caster knows spheres and tori; the ray tracer finds
+        # planes through Mesh.tessellates).
+        from core.scene.primitives import Sphere
         scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
-                                 if m.tessellates is not None}.values())
+                                 if isinstance(m.tessellates, Sphere)}.values())
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
                           ("background", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
