@@ -253,7 +253,7 @@ def test_animated_frames_are_render_at_and_seeking_back_resimulates(fountain):
     again = render_animated(state.playback.animation, 0.45, state.settings(), state.context,
                             0, control)
     assert system.step_index < at_06
-    assert control.reports and "simulating the particles from 0" in control.reports[0][1]
+    assert control.reports and "simulating the particles again from 0" in control.reports[0][1]
     assert np.array_equal(again.color, render_at(fresh, 0.45, state.settings(),
                                                  view_index=0).color)
 
@@ -308,3 +308,25 @@ def test_bump_demo_clicks_change_map_and_mode_like_the_cli():
                                               bump=None if bump else False))
         assert np.array_equal(state.frame.color, cli.color)
     assert state.bump_label == "Phong"
+
+
+def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
+    from core.scene.formats import ReaderError, load_scene
+    from core.settings import RenderSettings
+
+    text = (SCENES_DIR / "whitted.toml").read_text()
+    traced = tmp_path / "traced.toml"
+    traced.write_text('renderer = "raytrace"\n' + text)
+    scene = load_scene(traced)
+    assert scene.renderer == "raytrace"
+    assert RenderSettings.for_scene(scene).renderer == "raytrace"
+    state = ViewerState.open(traced, size=(40, 30))
+    assert state.renderer_name == "raytrace"
+    # the command line's `view --renderer zbuffer` wins over the file
+    assert ViewerState.open(traced, size=(40, 30), renderer_name="zbuffer").renderer_name == \
+        "zbuffer"
+    assert load_scene(SCENES_DIR / "whitted.toml").renderer == "zbuffer"
+    bad = tmp_path / "bad.toml"
+    bad.write_text('renderer = "radiosity"\n' + text)
+    with pytest.raises(ReaderError, match=r"bad.toml:1: renderer: .*raytrace"):
+        load_scene(bad)

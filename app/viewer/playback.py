@@ -121,16 +121,16 @@ def render_animated(animation, t: float, settings, context, view_index: int, con
 def _simulate_to(system, t: float, control) -> None:
     """Step ``system`` to time ``t`` as ``state_at`` would, in chunks, reporting progress."""
     target = int(math.floor(t / system.dt + 1e-9))     # what ParticleSystem.state_at steps to
-    if target < system.step_index:
+    again = target < system.step_index
+    if again:
         system.reset()
+    how = "simulating the particles again from 0" if again else "simulating the particles"
     first = system.step_index
     while system.step_index < target:
         if control is not None:
             control.check()
-            done = system.step_index - first
             if target - first > SIMULATION_CHUNK:
-                control.report(done / (target - first),
-                               f"simulating the particles from 0: step {system.step_index} of "
-                               f"{target}")
+                control.report((system.step_index - first) / (target - first),
+                               f"{how}: step {system.step_index} of {target}")
         for _ in range(min(SIMULATION_CHUNK, target - system.step_index)):
             system.step()
