@@ -309,7 +309,8 @@ class ViewerState:
         """One log line for the last frame: which view, settings, size and time."""
         label = self.view.label if self.view_count else "-"
         message = getattr(self.frame, "message", None)
-        moment = f" t={self.playback.time:.3f}" if self.animated else ""
+        stats = getattr(self.frame, "stats", None) or {}
+        moment = f" t={stats['time']:.3f}" if "time" in stats else ""
         return (f"frame {self.frame_count}: {self.view_label} ({label}) "
                 f"projection={self.projection} shading={self.shading} "
                 f"renderer={self.renderer_name} filter={self.texture_filter}{moment} "
@@ -518,7 +519,9 @@ class ViewerState:
 
             def run(control=None):
                 prepare()
-                return render_animated(playback.animation, t, settings, context, index, control)
+                frame = render_animated(playback.animation, t, settings, context, index, control)
+                frame.stats["time"] = t           # the moment drawn (the clock moves on)
+                return frame
         elif settings.renderer == "raytrace" and view is not None:
             from app.viewer.progressive import trace_progressively
             what = f"{what}, ray traced"
