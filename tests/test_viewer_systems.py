@@ -108,6 +108,11 @@ def test_a_view_change_cancels_the_ray_traced_frame_at_its_next_tile(whitted, mo
         assert not coarse.final and state.accept(coarse) and state.frame_partial
         assert worker.waiting and worker.progress().frame
         assert first_tile.wait(30)
+        deadline = time.monotonic() + 30                  # the progress line follows the tiles
+        while not worker.progress().detail.startswith("refining") and time.monotonic() < deadline:
+            time.sleep(0.02)
+        progress = worker.progress()
+        assert progress.detail == "refining: tile 1 of 4" and progress.fraction == 0.25
         state.next_view()                                 # the user moves on
         assert state.request(worker)
         result = _wait(worker)
