@@ -294,7 +294,7 @@ def test_texture_filter_and_bump_are_settings_of_the_next_frame(whitted):
 def test_bump_demo_clicks_change_map_and_mode_like_the_cli():
     from core.scene.formats import load_scene
     from core.settings import RenderSettings
-    from core.texture.bump_demo import apply_demo_options
+    from core.texture.demo_scene import apply_demo_options
 
     path = SCENES_DIR / "bump_demo.toml"
     state = ViewerState.open(path, size=(64, 64))

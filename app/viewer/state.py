@@ -127,10 +127,9 @@ def compiling() -> bool:
 
 
 def bump_demos(scene) -> list:
-    """The bump demo's settings objects on ``scene``'s materials (empty elsewhere)."""
-    from core.texture.material import maps_of
-    return [maps_of(m.material).demo for m in scene.meshes
-            if maps_of(m.material) is not None and maps_of(m.material).demo is not None]
+    """The bump demo's materials on ``scene`` (empty elsewhere)."""
+    from core.texture.demo_scene import demo_materials
+    return demo_materials(scene)
 
 
 def reader_errors() -> tuple[type[BaseException], ...]:
@@ -151,6 +150,7 @@ class ViewerState:
     rasterizer: str = ""
     keep_aspect: bool | None = None
     course_tri: bool = False          # the .tri startup code's back-face rule and mouse buttons
+    texture_filter: str = "trilinear"   # issue 11: nearest | bilinear | trilinear | anisotropic
     view_index: int = 0                                      # into scene.views (valid views)
     open_messages: list[str] = field(default_factory=list)   # scenes that failed to open
     frame: object | None = None                              # the last core.render.Frame
@@ -166,7 +166,6 @@ class ViewerState:
     _modes_rendered: set = field(default_factory=set, repr=False)
     context: object = None          # the core.context.RenderContext of this window's frames
     renderer_name: str = ""         # RenderSettings.renderer: "zbuffer" | "raytrace" (the menu's)
-    texture_filter: str = ""        # RenderSettings.texture_filter ("": the settings' default)
     bump: bool = True               # bump and normal maps perturb the normal (the demo: Phong)
     bump_map: int = 0               # the bump demo's height map B(x, y), 0..3
     playback: object = None         # app.viewer.playback.Playback of an animated scene, or None
@@ -196,9 +195,6 @@ class ViewerState:
             self.keep_aspect = bool(getattr(s, "keep_aspect", False))
         if not keep_settings or not self.renderer_name:
             self.renderer_name = getattr(s, "renderer", None) or "zbuffer"
-        if not keep_settings or not self.texture_filter:
-            from core.settings import RenderSettings
-            self.texture_filter = RenderSettings.texture_filter
         demo = bump_demos(s)
         if demo:
             self.bump_map, self.bump = int(demo[0].bump_map), bool(demo[0].bump)
@@ -267,7 +263,7 @@ class ViewerState:
         """The demo's text: ``"Bump: B(x,y) = …"`` or ``"Phong"`` (None elsewhere)."""
         if not self.is_bump_demo:
             return None
-        from core.texture.bump_demo import label
+        from core.texture.demo_scene import label
         return f"Bump: {label(self.bump_map)}" if self.bump else "Phong"
 
     def settings(self):
@@ -363,12 +359,9 @@ class ViewerState:
         from core.renderers import renderer_names
         self._set("renderer_name", name, renderer_names())
 
-    def set_texture_filter(self, name: str) -> None:
-        from core.texture.sample import FILTERS
-        self._set("texture_filter", name, tuple(FILTERS))
-
     def next_texture_filter(self) -> str:
-        from core.texture.sample import FILTERS
+        """The texture filter after this one (nearest, bilinear, trilinear, anisotropic)."""
+        from core.texture.modes import FILTERS
         names = tuple(FILTERS)
         self.set_texture_filter(names[(names.index(self.texture_filter) + 1) % len(names)])
         return self.texture_filter
@@ -379,7 +372,7 @@ class ViewerState:
 
     def next_bump_map(self) -> int:
         """The demo's next height map (0 → 1 → 2 → 3 → 0), as its other mouse buttons do."""
-        from core.texture.bump_demo import MAPS
+        from core.texture.demo_scene import MAPS
         self.bump_map, self.dirty = (self.bump_map + 1) % MAPS, True
         return self.bump_map
 
@@ -428,6 +421,26 @@ class ViewerState:
         if value != getattr(self, name):
             setattr(self, name, value)
             self.dirty = True
+
+    def set_texture_filter(self, name: str) -> None:            # issue 11
+        from core.texture.modes import FILTERS
+        self._set("texture_filter", name, tuple(FILTERS))
+
+    # -- issue 11: the bump demo's mouse (J3DPanel): left click toggles bump/Phong, any other
+    # button cycles the height maps. Only in a scene with the demo's material.
+    def demo_click(self, left: bool) -> str | None:
+        """The demo's click; returns its label, or None (the click keeps its usual meaning).
+        The demo's material is set now and again by the next frame's job (on the worker's
+        thread, so that a frame never sees it change half-way)."""
+        if not self.is_bump_demo:
+            return None
+        if left:
+            self.set_bump(not self.bump)
+        else:
+            self.next_bump_map()
+        from core.texture.demo_scene import apply_demo_options
+        return apply_demo_options(self.scene, self.bump_map, self.bump)
+    # --
 
     def set_keep_aspect(self, keep: bool) -> None:
         if bool(keep) != self.keep_aspect:
@@ -507,7 +520,7 @@ class ViewerState:
 
         def prepare():
             if demo is not None:
-                from core.texture.bump_demo import apply_demo_options
+                from core.texture.demo_scene import apply_demo_options
                 apply_demo_options(scene, *demo)
 
         if playback is not None:

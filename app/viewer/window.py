@@ -23,7 +23,7 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
   arrows: previous / next view; ``s``: save the CPU frame as a PNG in ``screenshots/``;
 - Esc closes an open menu or pop-up, and quits only when none is open; ``q`` quits;
 - ``r``: z-buffer / ray traced (Render menu; a ray-traced picture comes coarse first, then
-  tile by tile, and the z-buffer picture stays until the coarse one is there); ``f``: the
+  tile by tile, and the z-buffer picture stays until the coarse one is there); ``t``: the
   next texture filter (nearest, bilinear, trilinear, anisotropic); ``b``: bump maps on/off;
 - an animated scene: space plays / pauses, ``,`` and ``.`` step a frame back / forward,
   ``[`` ``]`` halve / double the speed; the panel has the timeline slider; a left click
@@ -277,13 +277,16 @@ class ViewerWindow:
             self.choose(what, value, f"key {char}")
         elif char == "a":
             self.choose("keep_aspect", not self.state.keep_aspect, "key a")
+        elif char == "t":                 # issue 11: the next texture filter
+            from core.texture.modes import FILTERS
+            names = tuple(FILTERS)
+            after = names[(names.index(self.state.texture_filter) + 1) % len(names)]
+            self.choose("texture_filter", after, "key t")
         elif char == "s":
             self.save_screenshot("key s")
         elif char == "r":
             self.choose("renderer", "zbuffer" if self.state.renderer_name == "raytrace"
                         else "raytrace", "key r")
-        elif char == "f":
-            self.choose("texture_filter", self._next_filter(), "key f")
         elif char == "b":
             self.choose("bump", not self.state.bump, "key b")
         elif char in ",." and self.state.animated:
@@ -326,10 +329,6 @@ class ViewerWindow:
         log.info("action: %s -> %s %s", how, what, value)
         self._wake()
 
-    def _next_filter(self) -> str:
-        names = [value for value, _ in FILTER_LABELS]
-        return names[(names.index(self.state.texture_filter) + 1) % len(names)]
-
     # -- issue 13: an animated scene's timeline ------------------------------------------------
     def toggle_play(self, how: str) -> None:
         if not self.state.animated:
@@ -351,15 +350,6 @@ class ViewerWindow:
         speed = min(max(self.state.playback.speed * factor, SPEEDS[0]), SPEEDS[-1])
         self.state.set_speed(speed)
         log.info("action: %s -> speed %gx", how, speed)
-        self._wake()
-
-    # -- issue 11: the bump demo's mouse (J3DPanel) -----------------------------------------
-    def bump_demo_click(self, button: int, where: str) -> None:
-        if button == glfw.MOUSE_BUTTON_LEFT:
-            self.state.set_bump(not self.state.bump)
-        else:
-            self.state.next_bump_map()
-        log.info("action: %s (bump demo) -> %s", where, self.state.bump_label)
         self._wake()
 
     def open_scene(self, source: str, how: str) -> None:
@@ -507,8 +497,8 @@ class ViewerWindow:
             where = f"{name} at ({x:.0f}, {y:.0f})"
             if captured or not self._on_picture(x, y):
                 log.info("action: %s -> taken by the menu/panel, view unchanged", where)
-            elif self.state.is_bump_demo:
-                self.bump_demo_click(button, where)
+            elif (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
+                log.info("action: %s -> the bump demo: %s", where, demo)   # issue 11
             elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
                 self.toggle_play(where)
             elif self.state.course_tri:
@@ -638,7 +628,7 @@ class ViewerWindow:
         imgui.separator()
         imgui.text_disabled("Texture filter")
         for value, label in FILTER_LABELS:
-            if imgui.menu_item(label, "F", self.state.texture_filter == value)[0]:
+            if imgui.menu_item(label, "T", self.state.texture_filter == value)[0]:
                 self.choose("texture_filter", value, "menu Render")
         if imgui.menu_item("Bump and normal maps", "B", self.state.bump)[0]:
             self.choose("bump", not self.state.bump, "menu Render")
