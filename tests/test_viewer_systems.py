@@ -335,3 +335,8 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
     bad.write_text('renderer = "radiosity"\n' + text)
     with pytest.raises(ReaderError, match=r"bad.toml:1: renderer: .*raytrace"):
         load_scene(bad)
+
+
+def test_the_status_speaks_of_textures_only_where_there_are_some(whitted):
+    assert not whitted.has_textures
+    assert ViewerState.open(SCENES_DIR / "texture_floor.toml", size=(40, 30)).has_textures

@@ -254,6 +254,12 @@ class ViewerState:
         return self.playback is not None and self.playback.playing
 
     @property
+    def has_textures(self) -> bool:
+        """Has a mesh of the scene a texture, bump, normal or environment map?"""
+        from core.texture.material import maps_of
+        return any(maps_of(m.material) is not None for m in self.scene.meshes)
+
+    @property
     def is_bump_demo(self) -> bool:
         """Is this the bump demo's scene (J3DPanel's clicks apply)?"""
         return bool(bump_demos(self.scene))
@@ -346,12 +352,6 @@ class ViewerState:
         if index != self.view_index or self.keyed_view:
             self.view_index, self.keyed_view = index, False
             self.dirty = True
-
-    def show_keyed_view(self) -> None:
-        """An animation's moving camera (when it has one)."""
-        if self.playback is not None and self.playback.animation.view is not None:
-            if not self.keyed_view:
-                self.keyed_view, self.dirty = True, True
 
     # -- issue 12: the renderer; issue 11: texture filter and the bump demo ------------------
     def set_renderer(self, name: str) -> None:
@@ -526,7 +526,8 @@ class ViewerState:
         if playback is not None:
             from app.viewer.playback import render_animated
             t = playback.time
-            keyed = playback.animation.view is not None
+            # render_at numbers the keyed camera (when there is one) before the file's views
+            keyed = 1 if playback.animation.view is not None else 0
             index = 0 if self.keyed_view else self.view_index + keyed
             what = f"t = {t:.2f} s, {what}"
 

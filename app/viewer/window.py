@@ -674,9 +674,10 @@ class ViewerWindow:
             imgui.text_disabled("course .tri rules: left Phong, middle Gouraud, right flat")
         extras = [] if s.renderer_name == "zbuffer" else [
             "ray traced" + (" (refining)" if s.frame_partial else "")]
-        if s.texture_filter:
+        if s.has_textures:
             extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))
-        imgui.text(", ".join(extras))
+        if extras:
+            imgui.text(", ".join(extras))
         if s.bump_label:
             imgui.text_colored(displayable(s.bump_label), 0.6, 0.7, 1.0)
             imgui.text_disabled("left click: bump / Phong; other buttons: next map")
