@@ -79,6 +79,12 @@ def test_animated_scene_plays_pauses_and_steps(display, tmp_path):
         stepped = float(step[1])
         assert stepped == pytest.approx((int(paused * 30 + 1e-9) + 1) / 30, abs=0.006)
         app.wait_for(rf"frame \d+: .* t={stepped:.2f}\d", timeout=30, after=mark)
+        # paused, a left click on the picture still advances the view (keyed camera -> view 1)
+        mark = len(app.log())
+        app.click(100, 100)
+        app.wait_for(r"left click at \(100, 100\) -> next the keyed view .* -> view 1 of 2",
+                     timeout=10, after=mark)
+        app.wait_for(r"frame \d+: view 1 of 2 .* t=", timeout=30, after=mark)
         assert app.process.poll() is None
         picture = grab(app, tmp_path / "fountain.png", "200x200+0+0")
         assert len(np.unique(picture.reshape(-1, 3), axis=0)) > 10
@@ -120,5 +126,34 @@ def test_switch_to_ray_traced_changes_the_picture(display, tmp_path):
         else:                             # render --renderer lands with issue 12's CLI
             assert "--renderer" in done.stderr, done.stderr
         assert whole.shape[1] > 160
+    finally:
+        app.stop()
+
+
+@pytest.mark.xvfb
+@pytest.mark.slow
+def test_bump_demo_clicks_as_j3dpanel(display, tmp_path):
+    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "bump_demo.toml"), "--size", "120x120")
+    try:
+        app.wait_for(r"first frame shown", timeout=120)
+        app.find_window()
+        time.sleep(0.3)
+        rings = grab(app, tmp_path / "map0.png", "120x120+0+0")
+        mark = len(app.log())
+        app.click(60, 60, button=3)             # any button but the left: the next map
+        app.wait_for(r"right click at \(60, 60\) -> the bump demo: Bump: B\(x,y\) = sin\(x\) "
+                     r"\+ cos\(y\)", timeout=10, after=mark)
+        app.wait_for(r"frame 2: ", timeout=30, after=mark)
+        mark = len(app.log())
+        app.click(60, 60)                        # left: bump / Phong
+        app.wait_for(r"left click at \(60, 60\) -> the bump demo: Phong", timeout=10, after=mark)
+        app.wait_for(r"frame 3: ", timeout=30, after=mark)
+        time.sleep(0.3)
+        phong = grab(app, tmp_path / "phong.png", "120x120+0+0")
+        assert "pop-up menu" not in app.log()    # the demo's right button is not the pop-up
+        assert app.process.poll() is None
+        # the Phong mode is smooth: far fewer distinct blues than the rings
+        assert len(np.unique(phong.reshape(-1, 3), axis=0)) < len(
+            np.unique(rings.reshape(-1, 3), axis=0))
     finally:
         app.stop()
