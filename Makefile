@@ -8,13 +8,17 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test bench report stability clean
+.PHONY: run test bench report stability warmup clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m app warmup    # compile every kernel once now, not in front of the user
 	touch $(STAMP)
+
+warmup: $(STAMP)
+	$(PY) -m app warmup
 
 run: $(STAMP)
 	$(PY) -m app
@@ -32,4 +36,4 @@ stability: $(STAMP)
 	$(PY) -m app stability
 
 clean:
-	rm -rf $(VENV) .pytest_cache .hypothesis fvd-views
+	rm -rf $(VENV) .pytest_cache .hypothesis fvd-views screenshots

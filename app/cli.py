@@ -8,25 +8,59 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import sys
+import tempfile
 from pathlib import Path
 
-from core.settings import RenderSettings
+
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
-COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability")
+COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate",
+            "warmup")
+RASTERIZER_CHOICES = ("edge", "scanline")
+
+
+_SIZE = re.compile(r"([+-]?[0-9]+)[xX]([+-]?[0-9]+)")
 
 
 def parse_size(text: str) -> tuple[int, int]:
-    """``WxH`` → ``(W, H)`` for argparse, with a message that says what was wrong."""
-    try:
-        w, h = (int(part) for part in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"size must look like 500x500, not {text!r}") from None
+    """``WxH`` → ``(W, H)`` for argparse: ASCII digits only (``int`` would also take ``+5``,
+    ``1_0`` and fullwidth digits), with a message that says what was wrong."""
     from core.scene.model import MAX_IMAGE_SIDE
-    if not (1 <= w <= MAX_IMAGE_SIDE and 1 <= h <= MAX_IMAGE_SIDE):
-        raise argparse.ArgumentTypeError(f"size {w}x{h} is out of range (1 to {MAX_IMAGE_SIDE} "
+    match = _SIZE.fullmatch(text)
+    if not match or len(text) > 40:
+        shown = text if len(text) <= 40 else text[:40] + "..."
+        raise argparse.ArgumentTypeError(
+            f"size must be WIDTHxHEIGHT in ASCII digits, like 500x500, not {shown!r}")
+    for side, token in zip(("width", "height"), match.groups()):
+        if token[0] == "+":
+            raise argparse.ArgumentTypeError(f"the {side} {token!r} must be plain digits, "
+                                             f"without a sign")
+        if token[0] == "-" or int(token) < 1:
+            raise argparse.ArgumentTypeError(f"the {side} must be at least 1, got {token}")
+    if len(match.group(1)) > 6 or len(match.group(2)) > 6 \
+            or max(int(match.group(1)), int(match.group(2))) > MAX_IMAGE_SIDE:
+        raise argparse.ArgumentTypeError(f"size {text} is out of range (1 to {MAX_IMAGE_SIDE} "
                                          "a side)")
-    return w, h
+    return int(match.group(1)), int(match.group(2))
+
+
+def attach_values(argv: list[str], options=("--size",)) -> list[str]:
+    """``--size -5x5`` → ``--size=-5x5``: argparse takes a value that starts with ``-`` for an
+    option (and says "expected one argument"); joined, it reaches :func:`parse_size`, which
+    says what is wrong with it."""
+    out = []
+    i = 0
+    while i < len(argv):
+        if argv[i] in options and i + 1 < len(argv) and argv[i + 1].startswith("-") \
+                and argv[i + 1] != "--":
+            out.append(f"{argv[i]}={argv[i + 1]}")
+            i += 2
+        else:
+            out.append(argv[i])
+            i += 1
+    return out
 
 
 def _parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -45,26 +79,40 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="framebuffer size WxH (default: the scene's, 500x500)")
     v.add_argument("--out", default=None,
                    help="where screenshots go, and the PNGs when there is no display "
-                        "(default: ., and ./fvd-views or $FVD_OUT without a display)")
+                        "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
+    _course_options(v)
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
-    r.add_argument("--view", type=int, default=1, help="which valid view, counting from 1")
+    r.add_argument("--view", type=int, default=1,
+                   help="which view: its position in the file, counting from 1 (an invalid "
+                        "one prints its message and exits 1)")
     r.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
     r.add_argument("--shading", choices=SHADING_CHOICES, default=None)
     r.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's, 500x500)")
-    r.add_argument("--out", required=True, help="the PNG file to write")
+    r.add_argument("--out", required=True,
+                   help="the PNG file to write (.png only; its folder must exist; an existing "
+                        "file that is not a PNG is kept unless --force)")
+    r.add_argument("--force", action="store_true",
+                   help="overwrite --out even if it is an existing file that is not a PNG")
+    _texture_arguments(r)                     # issue 11
+    _course_options(r)
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
-    m.add_argument("--view", type=int, default=1, help="which valid view, counting from 1")
+    m.add_argument("--view", type=int, default=1,
+                   help="which view: its position in the file, counting from 1")
     m.add_argument("--projection", choices=PROJECTION_CHOICES, default="perspective")
     m.add_argument("--size", type=parse_size, default=(500, 500), help="viewport for M_vv3dv")
+    m.add_argument("--keep-aspect", action="store_true", default=None,
+                   help="letterbox the window in the viewport instead of stretching it")
 
     pl = sub.add_parser("plan", help="print, as JSON, the stages that will run and those left out")
     pl.add_argument("scene", help=scene_help)
     pl.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
     pl.add_argument("--shading", choices=SHADING_CHOICES, default=None)
+    pl.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None)
+    pl.add_argument("--keep-aspect", action="store_true", default=None)
 
     b = sub.add_parser("bench", help="time the CPU pipeline against llvmpipe (OpenGL in software)")
     if command == "bench":                    # its options live with its body (app/tools/bench.py)
@@ -75,20 +123,66 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     rep.add_argument("--out", default="report", help="output directory")
     rep.add_argument("--quick", action="store_true", help="a reduced sweep (for tests)")
 
+    an = sub.add_parser("animate", help="render an animation to MP4, GIF or PNGs (on many workers)")
+    if command == "animate":                  # its options live with its body (app/tools/animate.py)
+        from app.tools.animate import add_arguments as animate_arguments
+        animate_arguments(an, parse_size)
+
     st = sub.add_parser("stability", help="the stiff and extreme cases, PASS/FAIL")
     st.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+    sub.add_parser("warmup", help="compile every kernel once (make does it), with progress")
     return p
+
+
+def _course_options(p: argparse.ArgumentParser) -> None:
+    """The course's options shared by ``view`` and ``render`` (None: the scene's own)."""
+    p.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None,
+                   help="edge: edge functions, perspective-correct (default); scanline: the "
+                        "course's edge table / active edge table, screen-linear shading")
+    p.add_argument("--keep-aspect", action="store_true", default=None,
+                   help="letterbox the view window instead of stretching it over the viewport "
+                        "(the course's mapping stretches)")
+    p.add_argument("--course-tri", action="store_true",
+                   help="the .tri startup code's rules: skip triangles with viewpoint . N < 0, "
+                        "and mouse buttons left Phong, middle Gouraud, right flat")
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
+    if not argv and views_on_stdin():
+        argv = ["view", "-"]                  # `python -m app < grade.data`, as the course grades
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help")):
         argv = ["view", *argv]                # `python -m app [SCENE]` opens the viewer
-    args = _parser(argv[0]).parse_args(argv)
+    args = _parser(argv[0]).parse_args(attach_values(argv))
     try:
         return _dispatch(args)
     except KeyboardInterrupt:
         return 130
+    except MemoryError:
+        return _out_of_memory()
+
+
+def _out_of_memory() -> int:
+    """The last line of defence: every reader bounds its input, but a scene within the limits
+    may still need more memory than this machine has (a huge framebuffer of many samples)."""
+    print("error: out of memory: the input or the image is too large for this machine's "
+          "memory (see the input-size limits in the README)", file=sys.stderr)
+    return 3
+
+
+def views_on_stdin() -> bool:
+    """Is standard input a file or a pipe (``prog < grade.data``, ``cat x | prog``) rather than
+    a terminal or /dev/null? Then the views come from it, as the course's grader ran programs."""
+    import os
+    import stat
+    try:
+        if sys.stdin is None or sys.stdin.isatty():
+            return False
+        mode = os.fstat(sys.stdin.fileno()).st_mode
+    except (OSError, ValueError, AttributeError):
+        return False
+    return stat.S_ISREG(mode) or stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
 
 
 def _load(source: str, size=None):
@@ -105,20 +199,22 @@ def _load(source: str, size=None):
 
 
 def _pick_view(scene, k: int):
-    if not scene.views:
-        print(f"error: {scene.name}: no valid view to show", file=sys.stderr)
+    """``scene.views`` index of the file's view ``k``, or None after printing why not."""
+    from core.scene.view_numbers import ViewNumberError, index_of
+    try:
+        return index_of(scene, k)
+    except ViewNumberError as error:
+        print(f"error: {error}", file=sys.stderr)
         return None
-    if not 1 <= k <= len(scene.views):
-        print(f"error: --view {k}: the scene has {len(scene.views)} valid views (1 to "
-              f"{len(scene.views)})", file=sys.stderr)
-        return None
-    return k - 1
 
 
 def _dispatch(args) -> int:
     if args.command == "view":
         from app.viewer.launch import main as viewer_main
-        return viewer_main(args.scene, args.size, out_dir=args.out)
+        return viewer_main(args.scene, args.size, out_dir=args.out,
+                           options={"rasterizer": args.rasterizer,
+                                    "keep_aspect": args.keep_aspect,
+                                    "course_tri": args.course_tri})
     if args.command == "render":
         return _render(args)
     if args.command == "matrices":
@@ -131,6 +227,12 @@ def _dispatch(args) -> int:
     if args.command == "report":
         from app.tools.report import main as report_main
         return report_main(args)
+    if args.command == "animate":
+        from app.tools.animate import main as animate_main
+        return animate_main(args)
+    if args.command == "warmup":
+        from app.tools.warmup import main as warmup_main
+        return warmup_main(args)
     if args.command == "stability":
         from app.tools.stability import main as stability_main
         return stability_main(args)
@@ -138,31 +240,118 @@ def _dispatch(args) -> int:
 
 
 def _render(args) -> int:
-    from PIL import Image
-
     from app.viewer.state import announce_compiles, render
+    refusal = out_problem(Path(args.out), args.scene, args.force)
+    if refusal:
+        print(f"error: --out {args.out}: {refusal}", file=sys.stderr)
+        return 2
     scene = _load(args.scene, size=args.size)
     if scene is None:
         return 2
     index = _pick_view(scene, args.view)
     if index is None:
         return 2
+    from core.settings import RenderSettings
+    texture_options = _texture_options(scene, args)       # issue 11
+    view = scene.views[index]
+    settings = RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading,
+                                        size=args.size, rasterizer=args.rasterizer,
+                                        keep_aspect=args.keep_aspect, **texture_options)
+    if args.course_tri:
+        from core.scene.course_tri import course_tri_scene
+        scene = course_tri_scene(scene, view)
     with announce_compiles():            # the first run compiles the kernels: say so
-        frame = render(scene, scene.views[index],
-                       RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading, size=args.size or scene.size))
+        frame = render(scene, view, settings)
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1
     out = Path(args.out)
     try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        Image.fromarray(frame.color).save(out)
+        write_png(frame.color, out)
     except OSError as error:
-        print(f"error: cannot write {out}: {error}", file=sys.stderr)
+        print(f"error: cannot write {out}: {error.strerror or error}", file=sys.stderr)
         return 2
-    print(f"wrote {out} ({frame.color.shape[1]}x{frame.color.shape[0]}, view {args.view} of "
-          f"{len(scene.views)}, {frame.stats['projection']}, {frame.stats['shading']})")
+    from core.scene.view_numbers import label
+    print(f"wrote {out} ({frame.color.shape[1]}x{frame.color.shape[0]}, {label(scene, index)}, "
+          f"{settings.projection}, {settings.shading}, {settings.rasterizer} rasterizer, "
+          f"aspect {'kept' if settings.keep_aspect else 'stretched'})")
     return 0
+
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def out_problem(out: Path, source: str, force: bool) -> str | None:
+    """Why ``render`` must not write ``out``, or None. Only PNG is written (``.png``); the
+    folder must exist (none is created); the output is never the input (also through links or
+    another name); an existing file is replaced only if it is a PNG, or with ``--force``."""
+    if out.suffix.lower() != ".png":
+        return f"only PNG is written: the name must end in .png (got {out.suffix or 'no extension'!r})"
+    parent = out.parent
+    if not parent.is_dir():
+        return f"the folder {str(parent)!r} does not exist (it is not created)"
+    if source != "-" and _same_file(out, Path(source)):
+        return f"it is the input {source!r}: writing would destroy it"
+    if os.path.lexists(out):
+        if out.is_dir():
+            return "it is a folder"
+        if not out.is_file():
+            return "it exists and is not a regular file"
+        if not force and not _is_png(out):
+            return "it exists and is not a PNG: it is kept (--force replaces it)"
+    return None
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.exists() and b.exists() and os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _is_png(path: Path) -> bool:
+    try:
+        with open(path, "rb") as f:
+            return f.read(8) == PNG_SIGNATURE
+    except OSError:
+        return False
+
+
+def write_png(color, out: Path) -> None:
+    """Write a temporary PNG beside ``out`` and rename it over ``out``: a failed write (a full
+    disk) leaves whatever was there untouched, and no half-written file behind."""
+    from PIL import Image
+    fd, temp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+    try:
+        with os.fdopen(fd, "wb") as stream:
+            Image.fromarray(color).save(stream, format="PNG")
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(temp, 0o666 & ~umask)         # mkstemp made it private; a PNG is not
+        os.replace(temp, out)
+    except BaseException:
+        os.unlink(temp)
+        raise
+
+
+# -- issue 11: texture filter, and the bump demo's map and mode (J3DPanel's clicks)
+def _texture_arguments(parser) -> None:
+    from core.texture.sample import FILTERS
+    parser.add_argument("--texture-filter", choices=tuple(FILTERS), default=None,
+                        help="how textures are filtered (default: trilinear)")
+    parser.add_argument("--bump-map", type=int, default=None, metavar="K",
+                        help="the bump demo's height map B(x, y), 0 to 3")
+    parser.add_argument("--no-bump", action="store_true",
+                        help="ignore bump and normal maps (the bump demo's Phong mode)")
+
+
+def _texture_options(scene, args) -> dict:
+    from core.texture.bump_demo import apply_demo_options
+    label = apply_demo_options(scene, args.bump_map, not args.no_bump)
+    if label:
+        print(label)
+    return {"texture_filter": args.texture_filter, "bump": False if args.no_bump else None}
+# --
 
 
 def _matrices(args) -> int:
@@ -183,7 +372,8 @@ def _matrices(args) -> int:
     out = {"view": view.label, "projection": args.projection}
     for name, m in factors.items():
         out[name] = float(m) if m.ndim == 0 else m.tolist()
-    vp = project.viewport(view.window, *args.size)
+    keep = scene.keep_aspect if args.keep_aspect is None else args.keep_aspect
+    vp = project.viewport(view.window, *args.size, keep_aspect=keep)
     out["viewport"] = list(vp)
     out["M_vv3dv"] = project.m_vv3dv(*vp).tolist()
     if args.projection == "perspective":
@@ -200,7 +390,10 @@ def _plan(args) -> int:
         return 2
     projection = args.projection or scene.projection
     shading = args.shading or scene.shading
+    keep = scene.keep_aspect if args.keep_aspect is None else args.keep_aspect
+    rasterizer = args.rasterizer or scene.rasterizer
     out = {"scene": scene.name, "projection": projection, "shading": shading,
-           **plan_as_dict(plan(scene, projection, shading))}
+           "rasterizer": rasterizer, "keep_aspect": keep,
+           **plan_as_dict(plan(scene, projection, shading, keep, rasterizer))}
     print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0

@@ -21,9 +21,11 @@ class Stage:
     reason: str
 
 
-def plan(scene: Scene, projection: str, shading: str) -> list[Stage]:
+def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
+         rasterizer: str = "edge") -> list[Stage]:
     """The stages for ``scene`` drawn with ``projection`` and ``shading``, in the order the
-    renderer runs them (``core/render.py``, ``core/renderers/zbuffer.py``)."""
+    renderer runs them (``core/render.py``, ``core/renderers/zbuffer.py``); ``keep_aspect``
+    and ``rasterizer`` as in :class:`core.settings.RenderSettings`."""
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {', '.join(SHADINGS)}, not {shading!r}")
     has_tris = scene.triangle_count > 0
@@ -67,12 +69,18 @@ def plan(scene: Scene, projection: str, shading: str) -> list[Stage]:
         triangle_stage("clip triangles", solid,
                        "outcodes first; only triangles that cross the volume go through "
                        "Sutherland–Hodgman"),
-        stage("project", True, _projection_reason(projection, solid, draws_lines), ""),
+        stage("project", True, _projection_reason(projection, solid, draws_lines) + "; "
+              + ("the window letterboxed in the viewport (aspect kept)" if keep_aspect else
+                 "the window stretched over the whole viewport (the course's M_vv3dv)"), ""),
         stage("scan-convert lines", draws_lines, "midpoint line into the frame buffer",
               "no edges are drawn"),
         triangle_stage("depth buffer", solid, "the z-buffer needs a depth per pixel"),
         triangle_stage("z-buffer scan conversion", solid,
-                       "scan-line z-buffer with the top-left fill rule"),
+                       "the course's scan-line algorithm (edge table, active edge table, spans; "
+                       "screen-linear interpolation) with the top-left fill rule"
+                       if rasterizer == "scanline" else
+                       "edge functions over each triangle's box, top-left fill rule, "
+                       "perspective-correct interpolation"),
         triangle_stage("illuminate pixels", solid and shading == "phong",
                        "Phong shading: normals interpolated, renormalised, the model at every "
                        "pixel", "not Phong shading"),

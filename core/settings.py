@@ -38,6 +38,7 @@ PROJECTIONS = tuple(p.value for p in Projection)
 SHADINGS = tuple(s.value for s in Shading)
 SOLID_SHADINGS = SHADINGS[1:]          # the modes that fill triangles
 SAMPLE_PATTERNS = ("regular", "jittered")
+RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
@@ -57,9 +58,23 @@ class RenderSettings:
     sample_pattern: str = "regular"
     renderer: str = "zbuffer"
     seed: int = 0
+    rasterizer: str = "edge"                  # "edge" (fast) | "scanline" (the course's ET/AET, screen-linear)
+    keep_aspect: bool = False                 # letterbox the window; False: stretch it over the viewport (the course)
+    course_tri: bool = False                  # the .tri startup code's back-face rule (skip viewpoint . N < 0)
     # Where in its pixel a one-sample frame samples (x right, y down, pixel units): the centre,
     # as the course's scan conversion does; the film moves it for each of several samples.
     pixel_offset: tuple[float, float] = (0.5, 0.5)
+    # Texture filter (core.texture.sample.FILTERS): nearest | bilinear | trilinear | anisotropic.
+    texture_filter: str = "trilinear"
+    # Bump and normal maps perturb the normal (False: the demo's "Phong" mode, maps ignored).
+    bump: bool = True
+    # The ray tracer's (core.raytrace; the z-buffer ignores them): the ray tree's depth limit
+    # (the notes' 7), the adaptive cut-off ε on the product of the k's, the notes' shadow
+    # option ("off" | "background" | "object" | "transmit") and Schlick's Fresnel weighting.
+    max_depth: int = 7
+    adaptive_epsilon: float = 1e-3
+    shadows: str = "transmit"
+    fresnel: bool = False
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
@@ -68,6 +83,9 @@ class RenderSettings:
         if not (isinstance(self.samples, int) and 1 <= self.samples <= MAX_SAMPLES):
             raise ValueError(f"samples per pixel must be a whole number from 1 to {MAX_SAMPLES}, "
                              f"not {self.samples!r}")
+        if self.rasterizer not in RASTERIZERS:
+            raise ValueError(f"rasterizer must be one of {', '.join(RASTERIZERS)}, "
+                             f"not {self.rasterizer!r}")
         if self.sample_pattern not in SAMPLE_PATTERNS:
             raise ValueError(f"sample pattern must be one of {', '.join(SAMPLE_PATTERNS)}, "
                              f"not {self.sample_pattern!r}")
@@ -81,7 +99,8 @@ class RenderSettings:
     def for_scene(cls, scene, **overrides) -> "RenderSettings":
         """The scene's own defaults (projection, shading, size), then ``overrides``; an
         override of ``None`` keeps the scene's value."""
-        values = {"projection": scene.projection, "shading": scene.shading, "size": scene.size}
+        values = {"projection": scene.projection, "shading": scene.shading, "size": scene.size,
+                  "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect}
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)
 

@@ -1,15 +1,17 @@
 #version 330 core
 // Copies the CPU framebuffer to the screen texel for pixel: no filtering, no lighting.
 // The texture holds the image in its row order (row 0 = top) and GL counts window rows from
-// the bottom, so window row y shows image row H-1-y.
+// the bottom, so window row y shows image row H-1-y. ``origin`` is the picture's bottom-left
+// corner in window pixels (the picture sits beside the panels, never under them).
 uniform sampler2D frame;
+uniform ivec2 origin;
 out vec4 color;
 
 void main() {
     ivec2 size = textureSize(frame, 0);
-    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    ivec2 pixel = ivec2(gl_FragCoord.xy) - origin;
     ivec2 texel = ivec2(pixel.x, size.y - 1 - pixel.y);
-    if (texel.x >= size.x || texel.y < 0) {
+    if (texel.x < 0 || texel.x >= size.x || texel.y < 0 || texel.y >= size.y) {
         // The window grew and the new frame is not rendered yet: show black, not garbage.
         color = vec4(0.0, 0.0, 0.0, 1.0);
         return;

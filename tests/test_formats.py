@@ -523,8 +523,9 @@ CUBE = '[[geometry]]\ngenerator = "cube"\n'
     (CUBE + '[[view]]\nvrp = [0, 0, 0]\n', 3, "view[1]: missing key 'vpn'"),
     (CUBE + 'generator = "torus"\n', 3, "TOML: Cannot overwrite a value (column"),
     ('a = [[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[[\n', 1,
-     "TOML: Invalid value (at the end of the file)"),
-    ('a = ' + '[' * 5000 + ']' * 5000 + '\n', None, "TOML nesting too deep"),
+     "TOML: brackets nested more than 64 deep"),
+    ('a = [[[[[[[[[[\n', 1, "TOML: Invalid value (at the end of the file)"),
+    ('a = ' + '[' * 5000 + ']' * 5000 + '\n', 1, "TOML: brackets nested more than 64 deep"),
 ])
 def test_toml_messages(text, line, reason):
     error = _toml_error(text)

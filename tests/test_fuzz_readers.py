@@ -1,8 +1,11 @@
-"""Fuzzing the readers: mutated valid files and random bytes give a Scene or a ReaderError.
+"""Fuzzing the readers: mutated valid files and random bytes give a ReaderError or a scene
+that renders (the invariant of ``tests/fuzz_targets.py``, issue 15).
 
 Nothing else may escape (no IndexError, no FloatingPointError, no MemoryError), every
-ReaderError has a message, and no input makes a reader allocate much: the counts written in a
-file are never trusted. Example counts stay modest so that the suite stays fast.
+ReaderError has a one-line message, every scene a reader returns is drawn in both projections
+through ``core.render.render`` without an exception, and no input makes a reader allocate
+much: the counts written in a file are never trusted. Example counts stay modest so that the
+suite stays fast; ``tests/fuzz_long.py`` runs the same targets 100k times each.
 """
 
 from __future__ import annotations
@@ -19,15 +22,11 @@ import trimesh.exchange.load  # noqa: F401  (imported before tracing: importing 
 
 from core.scene.formats import ReaderError, read_mesh, read_scene_file, read_tri
 from core.paths import SCENES_DIR
+from fuzz_targets import (NASTY, OBJ, OFF, PLY, STL_ASCII, STL_BINARY, TARGETS, TOML, TRI,
+                          renders)
 
 # Peak memory a reader may take for these small inputs (the inputs are a few KB).
 MEMORY_LIMIT = 32_000_000
-
-NASTY = [b"nan", b"inf", b"-inf", b"-1", b"0", b"1e308", b"-1e308", b"1e-320", b"1e40",
-         b"99999999999999999999", b"1000000000000", b"abc", b"#", b"\x00", b"", b"3.5", b"+",
-         b"-0", b"0x10", b"1_0", "\u0661".encode(), b"\xff\xfe", b"[", b"]", b"{", b"}", b"=",
-         b'"', b"'", b"[[geometry]]", b"true", b"1e999", b"-", b"/", b"//", b"f", b"v",
-         b"9" * 400, b"vn 1e200 0 0", b"1e200"]
 
 FUZZ = settings(max_examples=60, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -61,75 +60,24 @@ def mutated(draw, base: bytes) -> bytes:
 def only_reader_errors(read, data: bytes) -> None:
     """``read(data)`` returns something or raises ReaderError with a message; memory stays low."""
     tracemalloc.start()
+    result = None
     try:
         try:
             result = read(data)
         except ReaderError as error:
             assert str(error).strip() and error.reason.strip()
+            assert "\n" not in str(error) and "\x1b" not in str(error)
         else:
             assert result is not None
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
     assert peak < MEMORY_LIMIT, f"{peak} bytes for a {len(data)}-byte input"
+    if result is not None:
+        renders(result)            # what loads, renders (outside the trace: it compiles)
 
 
-TRI = (SCENES_DIR / "interpenetrating.tri").read_bytes()
-OBJ = b"""# a cube: quads, a triangle pair with negative indices, normals
-v -1 -1 -1
-v 1 -1 -1
-v 1 1 -1
-v -1 1 -1
-v -1 -1 1
-v 1 -1 1
-v 1 1 1
-v -1 1 1
-vn 0 0 1
-f 5 6 7 8
-f 1 4 3 2
-f 1 2 6 5
-f 2 3 7 6
-f 3 4 8 7
-f -4 -8 -5
-f -4 -5 -1
-"""
-PLY = (b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
-       b"property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
-       b"0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n")
-OFF = b"OFF\n4 2 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n"
-STL_ASCII = (b"solid fuzz\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n"
-             b"vertex 1 1 0\nendloop\nendfacet\nendsolid fuzz\n")
-STL_BINARY = (b"\0" * 80 + struct.pack("<I", 1)
-              + struct.pack("<12fH", 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 1, 0, 0))
 SEEDS = {".ply": PLY, ".off": OFF, ".stl": STL_ASCII}
-TOML = b"""name = "fuzz"
-shading = "gouraud"
-size = [200, 100]
-background = [0.1, 0.1, 0.1]
-
-[[geometry]]
-generator = "uv_sphere"
-params = { radius = 1.0, segments = 8, rings = 5 }
-transform = { scale = 0.5, rotate = [10, 20, 30], translate = [1, 0, 0] }
-material = { ka = 0.2, kd = 0.7, ks = 0.3, n = 10, od = [1, 0.5, 0.2] }
-
-[[geometry]]
-generator = "cube"
-closed = true
-
-[[view]]
-vrp = [0, 0, 0]
-vpn = [0, 0, 1]
-vup = [0, 1, 0]
-window = [-2, 2, -2, 2]
-prp = [0, 0, 5]
-front = 2
-back = -2
-
-[[light]]
-position = [1, 2, 3]
-attenuation = [1, 0.1, 0]
-"""
 
 
 def test_the_seeds_are_valid():
@@ -200,3 +148,17 @@ def test_huge_counts_in_headers_take_no_memory(count):
     only_reader_errors(lambda d: read_mesh(d, "x.off", ".off"), b"OFF\n" + count + b" 1 0\n0 0 0\n3 0 0 0\n")
     stl = b"\0" * 80 + (int(count) % 2 ** 32).to_bytes(4, "little") + b"\0" * 100
     only_reader_errors(lambda d: read_mesh(d, "x.stl", ".stl"), stl)
+
+
+@settings(FUZZ, max_examples=30)
+@given(st.data())
+@pytest.mark.parametrize("name", list(TARGETS))
+def test_fuzz_every_reader_mutated_from_its_seed(name, data):
+    read, seed = TARGETS[name]
+    only_reader_errors(read, data.draw(mutated(seed)))
+
+
+@pytest.mark.parametrize("name", list(TARGETS))
+def test_every_fuzz_seed_renders(name):
+    read, seed = TARGETS[name]
+    assert renders(read(seed)) == "rendered"

@@ -132,4 +132,4 @@ def test_render_command_reads_views_from_stdin(tmp_path):
 
 def test_render_command_rejects_bad_view_number(tmp_path):
     result = _app("render", "-", "--view", "99", "--out", str(tmp_path / "x.png"), stdin=VIEWS_TEXT)
-    assert result.returncode == 2 and "has 14 valid views" in result.stderr
+    assert result.returncode == 2 and "the file has 20 views (1 to 20)" in result.stderr

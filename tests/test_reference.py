@@ -132,13 +132,14 @@ def test_front_plane_cuts_the_sphere_open():
 
 def test_nearest_of_two_shapes_and_letterboxing():
     # A small red sphere in front of a big one; a 2:1 window on a square framebuffer leaves
-    # the top and bottom quarter empty (the viewport of core.pipeline.project).
+    # the top and bottom quarter empty when the aspect is kept (keep_aspect: letterbox).
     red = Material(od=(1.0, 0.0, 0.0), ks=0.0)
     grey = Material(od=(0.5, 0.5, 0.5), ks=0.0)
     view = View(vrp=(0, 0, 0), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-4, 4, -2, 2),
                 prp=(0, 0, 10), front=5, back=-5)
     ref = render_reference([Sphere((0, 0, 0), 1.5, grey), Sphere((0, 0, 2.0), 0.5, red)],
-                           scene_with(), view, "perspective", size=(40, 40), samples=2)
+                           scene_with(), view, "perspective", size=(40, 40), samples=2,
+                           keep_aspect=True)
     assert ref.coverage[:10].sum() == 0 and ref.coverage[30:].sum() == 0
     centre = ref.rgb[20, 20]
     assert centre[0] > 0 and centre[1] == 0 and centre[2] == 0          # the red one is nearer

@@ -26,15 +26,17 @@ from app.viewer.state import ViewerState
 from core.scene.generators import house
 from core.paths import SCENES_DIR
 from core.scene.model import Scene
-from core.scene.formats.viewfile import read_views
+from core.camera.view import View
+from core.scene.formats.viewfile import read_view_entries
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def house_scene() -> Scene:
     """The default scene's content, built without the scene-file reader."""
-    views, messages = read_views((SCENES_DIR / "house.views").read_text(), "house.views")
-    return Scene(name="house", meshes=[house()], views=views, view_messages=messages,
+    order = read_view_entries((SCENES_DIR / "house.views").read_text(), "house.views")
+    return Scene(name="house", meshes=[house()], views=[v for v in order if isinstance(v, View)],
+                 view_messages=[v for v in order if not isinstance(v, View)], view_order=order,
                  shading="wireframe", projection="perspective")
 
 
@@ -61,10 +63,15 @@ def state():
 # -- ViewerState, no window ---------------------------------------------------------------
 
 def test_views_wrap_both_ways(state):
+    # house.views: 20 views, 6 invalid (14-18 and 20); the window steps over those and
+    # numbers the others by their place in the file
     n = state.view_count
-    assert n >= 5 and state.view_label == f"view 1 of {n}"
+    assert n == 14 and state.view_label == "view 1 of 20 (6 invalid)"
     state.prev_view()
-    assert state.view_index == n - 1 and state.view_label == f"view {n} of {n}"
+    assert state.view_index == n - 1 and state.view_label == "view 19 of 20 (6 invalid)"
+    state.prev_view()
+    assert state.view_label == "view 13 of 20 (6 invalid)"
+    state.next_view()
     state.next_view()
     assert state.view_index == 0
     for _ in range(n):
@@ -140,7 +147,7 @@ def test_a_failing_render_keeps_the_last_frame_and_says_why(state):
     state.renderer = broken
     state.set_shading("phong")
     assert not state.update() and state.frame is good and not state.dirty
-    assert state.messages[-1] == ("could not render view 1 (perspective, phong): "
+    assert state.messages[-1] == ("could not render view 1 of 20 (6 invalid) (perspective, phong): "
                                   "ZeroDivisionError: a stage fell over")
     state.set_shading("wireframe")                          # the user carries on
     assert state.update() and state.frame is not good and state.render_error is None
@@ -176,7 +183,7 @@ def test_compile_notice_only_when_numba_compiles(capsys):
     assert capsys.readouterr().err == ""
     state_module._compiling.set()
     state_module.compile_notice()
-    assert capsys.readouterr().err == "compiling the rasterizer (first start only)…\n"
+    assert "compiling the kernels" in capsys.readouterr().err
     state_module._compiling.clear()
 
 
@@ -225,7 +232,7 @@ XVFB_TOOLS = ("Xvfb", "xdotool")
 def start_xvfb():
     """A virtual X display on a free number; returns (process, ':N')."""
     read_fd, write_fd = os.pipe()
-    xvfb = subprocess.Popen(["Xvfb", "-displayfd", str(write_fd), "-screen", "0", "640x560x24",
+    xvfb = subprocess.Popen(["Xvfb", "-displayfd", str(write_fd), "-screen", "0", "1024x768x24",
                              "-nolisten", "tcp"], pass_fds=(write_fd,),
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     os.close(write_fd)
@@ -252,8 +259,10 @@ class App:
         self.env = {**os.environ, "DISPLAY": display, "FVD_LOG": str(self.log_path),
                     "PYTHONPATH": str(ROOT)}
         self.env.pop("WAYLAND_DISPLAY", None)
+        # stdin /dev/null: a terminal's stand-in (a file or pipe there would be read as views)
         self.process = subprocess.Popen([sys.executable, "-m", "app"], cwd=workdir, env=self.env,
-                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+                                        stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                                        stderr=subprocess.PIPE)
         self.window = None
 
     def log(self) -> str:
@@ -301,7 +310,7 @@ class App:
 def frames(log: str) -> list[dict]:
     """Every 'frame N: view k of N ... projection=P shading=S size=WxH' line, parsed."""
     pattern = re.compile(r"frame (\d+): view (\d+) of (\d+) .*?projection=(\w+) shading=(\w+) "
-                         r"size=(\d+)x(\d+)")
+                         r".*?size=(\d+)x(\d+)")
     return [dict(n=int(m[1]), view=int(m[2]), of=int(m[3]), projection=m[4], shading=m[5],
                  size=(int(m[6]), int(m[7]))) for m in pattern.finditer(log)]
 
@@ -319,8 +328,9 @@ def test_no_display_renders_every_view_to_png(state, tmp_path, capsys):
     assert (f"no display found (DISPLAY and WAYLAND_DISPLAY are not set): rendering the {n} "
             f"views to PNG in {out}") in captured.err
     files = sorted(out.glob("*.png"))
+    # named by their place in the file: 1-13, then 19 (14-18 and 20 are invalid)
     assert [f.name for f in files] == [f"house-view{k:02d}-perspective-wireframe.png"
-                                       for k in range(1, n + 1)]
+                                       for k in [*range(1, 14), 19]]
     for k, path in enumerate(files):
         assert f"wrote {path}" in captured.out
         expected = render(state.scene, state.scene.views[k],
@@ -342,13 +352,24 @@ def test_view_command_without_display_falls_back_to_png(tmp_path):
     assert all(f"wrote {f}" in done.stdout for f in files)
 
 
+def grab(app, path: Path, crop: str | None = None) -> np.ndarray:
+    """The window as the X server shows it (``crop``: ImageMagick's WxH+X+Y)."""
+    from PIL import Image
+    args = ["import", "-window", app.window] + (["-crop", crop, "+repage"] if crop else [])
+    subprocess.run([*args, str(path)], env=app.env, check=True, timeout=10)
+    return np.asarray(Image.open(path).convert("RGB"))
+
+
 @pytest.mark.xvfb
 @pytest.mark.slow
 def test_window_click_menu_and_keys_under_xvfb(tmp_path):
-    missing = [tool for tool in XVFB_TOOLS if shutil.which(tool) is None]
+    missing = [tool for tool in (*XVFB_TOOLS, "import") if shutil.which(tool) is None]
     if missing:
-        pytest.skip(f"{' and '.join(missing)} not installed (apt-get install xvfb xdotool)")
+        pytest.skip(f"{' and '.join(missing)} not installed (apt-get install xvfb xdotool "
+                    "imagemagick)")
     from PIL import Image
+
+    from app.viewer.window import PANEL_WIDTH
 
     xvfb, display = start_xvfb()
     app = App(display, tmp_path)
@@ -357,67 +378,80 @@ def test_window_click_menu_and_keys_under_xvfb(tmp_path):
         app.wait_for(r"first frame shown", timeout=90)
         app.find_window()
         first = frames(app.log())[-1]
-        assert (first["view"], first["size"]) == (1, (500, 500))
-        n = first["of"]
+        assert (first["view"], first["of"], first["size"]) == (1, 20, (500, 500))
+        # the picture is 500 x 500 at the top-left, the panel beside it: nothing on the picture
+        assert "Geometry: %dx500" % (500 + PANEL_WIDTH) in app.xdotool("getwindowgeometry",
+                                                                         app.window)
 
         # A left click on the picture advances the view.
         mark = len(app.log())
         app.click(250, 250)
-        app.wait_for(r"frame \d+: view 2 of", timeout=10, after=mark)
+        app.wait_for(r"frame \d+: view 2 of 20", timeout=10, after=mark)
 
-        # A click on the menu bar (its empty middle) is ImGui's: the view stays.
+        # A click on the panel's menu bar (its empty right end) is ImGui's: the view stays.
         mark = len(app.log())
-        app.click(250, 6)
-        app.wait_for(r"left click at \(250, 6\) -> taken by the menu/GUI", timeout=10, after=mark)
+        app.click(500 + PANEL_WIDTH - 12, 8)
+        app.wait_for(r"left click at \(\d+, 8\) -> taken by the menu/panel", timeout=10,
+                     after=mark)
 
-        # 'o' (parallel) or 'p' (perspective) switches at once; that frame is still view 2, so
-        # the menu click above (handled before it, in order) did not advance the view.
+        # Right click: the pop-up; Esc closes it and the app keeps running.
+        mark = len(app.log())
+        app.click(250, 250, button=3)
+        app.wait_for(r"right click at \(250, 250\) -> pop-up menu", timeout=10, after=mark)
+        time.sleep(0.5)
+        app.key("Escape")
+        app.wait_for(r"key Esc -> close the open menu", timeout=10, after=mark)
+        time.sleep(0.5)
+        assert app.process.poll() is None, "Esc with the pop-up open must not quit"
+        assert "-> quit" not in app.log()[mark:]
+
+        # 'o' (parallel) or 'p' (perspective) switches at once; that frame is still view 2.
         key, other = (("o", "parallel") if first["projection"] == "perspective"
                       else ("p", "perspective"))
         mark = len(app.log())
         app.key(key)
         app.wait_for(rf"projection={other}", timeout=10, after=mark)
         last = frames(app.log())[-1]
-        assert (last["view"], last["of"], last["projection"]) == (2, n, other)
+        assert (last["view"], last["of"], last["projection"]) == (2, 20, other)
         assert all(f["view"] in (1, 2) for f in frames(app.log()))
 
-        # 's' saves the CPU frame; the screen shows exactly that frame where no panel covers it.
+        # The picture area on screen is `python -m app render` of the same view, pixel for
+        # pixel; 's' saves the same frame into screenshots/.
+        time.sleep(0.5)
+        screen = grab(app, tmp_path / "picture.png", "500x500+0+0")
+        rendered = tmp_path / "render.png"
+        done = subprocess.run([sys.executable, "-m", "app", "render", "scenes/house.toml",
+                               "--view", "2", "--projection", other, "--out", str(rendered)],
+                              cwd=ROOT, capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        cli = np.asarray(Image.open(rendered).convert("RGB"))
+        assert len(np.unique(cli.reshape(-1, 3), axis=0)) >= 2, "the rendered frame is blank"
+        assert np.array_equal(screen, cli)
         mark = len(app.log())
         app.key("s")
         saved = Path(app.wait_for(r"screenshot saved to (.+\.png)$", timeout=10, after=mark)[1])
-        cpu = np.asarray(Image.open(saved).convert("RGB"))
-        assert cpu.shape == (500, 500, 3)
-        assert len(np.unique(cpu.reshape(-1, 3), axis=0)) >= 2, "the saved frame is blank"
-        grab = tmp_path / "screen.png"
-        if shutil.which("import"):
-            subprocess.run(["import", "-window", app.window, str(grab)], env=app.env,
-                           check=True, timeout=10)
-        else:
-            subprocess.run(["xwd", "-id", app.window, "-out", str(grab) + ".xwd"], env=app.env,
-                           check=True, timeout=10)
-            grab = grab.with_suffix(".png.xwd")
-        screen = np.asarray(Image.open(grab).convert("RGB"))
-        assert screen.shape == (500, 500, 3)
-        middle = (slice(150, 350), slice(100, 400))      # below the panels, above the messages
-        assert len(np.unique(cpu[middle].reshape(-1, 3), axis=0)) >= 2, "nothing to compare"
-        assert np.array_equal(screen[middle], cpu[middle])
-        assert len(np.unique(screen.reshape(-1, 3), axis=0)) > 10  # picture and GUI text
+        assert saved.parent == tmp_path / "screenshots"
+        assert np.array_equal(np.asarray(Image.open(saved).convert("RGB")), cli)
+        whole = grab(app, tmp_path / "window.png")
+        assert whole.shape == (500, 500 + PANEL_WIDTH, 3)
+        assert len(np.unique(whole[:, 500:].reshape(-1, 3), axis=0)) > 5   # the panel's text
 
         # Keys: '3' is Phong, the right arrow the next view; each re-renders at once.
         mark = len(app.log())
         app.key("3")
         app.wait_for(r"shading=phong", timeout=20, after=mark)
         app.key("Right")
-        app.wait_for(rf"frame \d+: view 3 of .*projection={other} shading=phong", timeout=10,
+        app.wait_for(rf"frame \d+: view 3 of 20 .*projection={other} shading=phong", timeout=10,
                      after=mark)
 
-        # Resizing re-renders at the new framebuffer size (odd sizes too).
+        # Resizing: the picture takes what the panel leaves (odd sizes too).
         mark = len(app.log())
-        app.xdotool("windowsize", app.window, "333", "217")
+        app.xdotool("windowsize", app.window, str(333 + PANEL_WIDTH), "217")
         app.wait_for(r"frame \d+: view 3 of .* size=333x217", timeout=10, after=mark)
 
-        # q quits cleanly (on the key press: xdotool's release may find the window gone).
-        subprocess.run(["xdotool", "key", "--window", app.window, "q"], env=app.env,
+        # Esc with nothing open quits cleanly (on the key press: xdotool's release may find
+        # the window gone).
+        subprocess.run(["xdotool", "key", "--window", app.window, "Escape"], env=app.env,
                        capture_output=True, timeout=10)
         assert app.process.wait(timeout=10) == 0
     finally:

@@ -89,6 +89,8 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
     parser.add_argument("--out", default="out/bench", help="directory for bench.json and bench.png")
     parser.add_argument("--no-startup", action="store_true",
                         help="skip the JIT cold/warm start and the first-frame measurements")
+    parser.add_argument("--no-animation", action="store_true",
+                        help="skip the animation row (the fountain on 1 process and 2 workers)")
 
 
 def _progress(text: str) -> None:
@@ -443,6 +445,12 @@ def main(args) -> int:
         _progress("python -m app view with an empty JIT cache ...")
         startup["first_frame_cold"] = first_frame_time(cold=True)
 
+    animation = None
+    if not args.no_animation:                  # issue 13: the fountain, 1 process and 2 workers
+        _progress("animation: the fountain at 500 x 500 on 1 process and 2 Dask workers ...")
+        from app.tools.animate import bench_animation
+        animation = bench_animation(size=args.size)
+
     from app.tools.reference_gl import GLRenderer
     info = {"machine": platform.machine(), "cpus": os.cpu_count(), "python": platform.python_version(),
             "host": socket.gethostname(), "numpy": np.__version__,
@@ -458,7 +466,7 @@ def main(args) -> int:
     probe.release()
 
     report = {"frames": args.frames, "warmup": args.warmup, "cases": rows, "startup": startup,
-              "machine": info, "bench_seconds": time.perf_counter() - t_start}
+              "animation": animation, "machine": info, "bench_seconds": time.perf_counter() - t_start}
     (out / "bench.json").write_text(json.dumps(report, indent=2))
     write_chart(rows, out / "bench.png")
 
@@ -472,6 +480,10 @@ def main(args) -> int:
     if startup:
         print()
         print(format_startup(startup))
+    if animation:
+        from app.tools.animate import format_animation
+        print()
+        print(format_animation(animation))
     print()
     print(f"wrote {out / 'bench.json'} and {out / 'bench.png'} "
           f"({time.perf_counter() - t_start:.0f} s in all)")

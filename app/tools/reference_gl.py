@@ -32,6 +32,9 @@ the scene says ``specular = "halfway"``; meshes that are not closed are lit from
            CPU (:func:`core.scene.normals.vertex_normals`), clamped, then interpolated
            perspective-correctly;
 - phong:   world position and normal interpolated, renormalised, evaluated per fragment;
+- gouraud_linear: Gouraud with ``noperspective`` varyings: the vertex intensities interpolated
+           linearly in screen space, as the course notes do and as the scan-line rasterizer
+           (``core/pipeline/raster_scanline.py``) does;
 - coverage: one flat colour (white on black), for the coverage oracle.
 
 Buffers are uploaded once per scene (:meth:`GLRenderer.load`), so that a timed frame is only
@@ -52,7 +55,7 @@ from core.pipeline.project import perspective_to_parallel, viewport
 from core.scene.model import Scene
 from core.camera.view import View, normalizing_transform
 
-MODES = ("coverage", "flat", "gouraud", "phong")
+MODES = ("coverage", "flat", "gouraud", "phong", "gouraud_linear")
 MAX_LIGHTS = 8
 
 _LIGHTING_GLSL = """
@@ -204,6 +207,27 @@ void main() {
     frag_color = vec4(vertex_color, 1.0);
 }
 """ % _DISCARD_GLSL),
+    "gouraud_linear": ("""
+#version 330
+uniform mat4 clip_from_world;
+%s
+in vec3 in_position;
+in vec3 in_normal;
+noperspective out vec3 vertex_color;
+void main() {
+    gl_Position = clip_from_world * vec4(in_position, 1.0);
+    vertex_color = illuminate(in_position, unit(in_normal));
+}
+""" % _LIGHTING_GLSL, """
+#version 330
+%s
+noperspective in vec3 vertex_color;
+out vec4 frag_color;
+void main() {
+    clip_to_viewport();
+    frag_color = vec4(vertex_color, 1.0);
+}
+""" % _DISCARD_GLSL),
     "phong": ("""
 #version 330
 uniform mat4 clip_from_world;
@@ -231,21 +255,24 @@ void main() {
 }
 
 
-def viewport_rect(view: View, size: tuple[int, int]) -> tuple[float, float, float, float]:
+def viewport_rect(view: View, size: tuple[int, int],
+                  keep_aspect: bool = False) -> tuple[float, float, float, float]:
     """``(x0, y0, w, h)`` in device pixels: the canonical square's image on the framebuffer.
 
-    The CPU's own rule (:func:`core.pipeline.project.viewport`): the largest whole-pixel rectangle of
-    the window's aspect, centred (letterboxing).
+    The CPU's own rule (:func:`core.pipeline.project.viewport`): the whole framebuffer (the
+    window stretched, the course's mapping), or with ``keep_aspect`` the largest whole-pixel
+    rectangle of the window's aspect, centred (letterboxing).
     """
-    x_min, x_max, y_min, y_max = viewport(view.window, *size)
+    x_min, x_max, y_min, y_max = viewport(view.window, *size, keep_aspect=keep_aspect)
     return x_min, y_min, x_max - x_min, y_max - y_min
 
 
-def clip_from_world(view: View, projection: str, size: tuple[int, int]) -> np.ndarray:
+def clip_from_world(view: View, projection: str, size: tuple[int, int],
+                    keep_aspect: bool = False) -> np.ndarray:
     """``L · M · N``: world coordinates to GL clip coordinates (float64, column vectors)."""
     n, z_min = normalizing_transform(view, projection)
     m = perspective_to_parallel(z_min) if projection == "perspective" else np.eye(4)
-    x0, y0, w, h = viewport_rect(view, size)
+    x0, y0, w, h = viewport_rect(view, size, keep_aspect)
     width, height = size
     # x_ndc = 2 (x0 + (x + 1) w / 2) / width - 1, likewise y; z_ndc = -2 z - 1. Each row acts
     # on (X, Y, Z, W) before the divide, so the constant terms multiply W.
@@ -289,6 +316,7 @@ class GLRenderer:
         self.fbo = None
         self.scene = None
         self.loaded: tuple[str, ...] = ()
+        self.keep_aspect = False          # letterbox like RenderSettings.keep_aspect
         self._meshes: list[_MeshBuffers] = []
         self.resize(size)
 
@@ -337,10 +365,10 @@ class GLRenderer:
             if "coverage" in modes:
                 vaos["coverage"] = ctx.vertex_array(
                     self.programs["coverage"], [(pos_buf, "3f", "in_position")], idx_buf)
-            if "gouraud" in modes or "phong" in modes:
+            if {"gouraud", "phong", "gouraud_linear"} & set(modes):
                 nrm_buf = ctx.buffer(vertex_normals(mesh).astype("f4").tobytes())
                 buffers.append(nrm_buf)
-                for mode in ("gouraud", "phong"):
+                for mode in ("gouraud", "phong", "gouraud_linear"):
                     if mode in modes:
                         vaos[mode] = ctx.vertex_array(
                             self.programs[mode],
@@ -423,9 +451,9 @@ class GLRenderer:
         ctx.depth_func = "<"
         ctx.front_face = "ccw"
         ctx.cull_face = "back"
-        m = clip_from_world(view, projection, self.size)
+        m = clip_from_world(view, projection, self.size, self.keep_aspect)
         program["clip_from_world"].write(m.T.astype("f4").tobytes())   # GL is column-major
-        x0, y0, w, h = viewport_rect(view, self.size)
+        x0, y0, w, h = viewport_rect(view, self.size, self.keep_aspect)
         program["viewport_rect"].value = (x0, y0, x0 + w, y0 + h)
         if shading != "coverage":
             self._set_lighting(program, view, projection)

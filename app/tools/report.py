@@ -23,7 +23,8 @@ from pathlib import Path
 from core.analysis import accuracy
 from core.analysis.accuracy import Point
 
-COLOURS = {"flat": "tab:orange", "gouraud": "tab:green", "phong": "tab:blue"}
+COLOURS = {"flat": "tab:orange", "gouraud": "tab:green", "phong": "tab:blue",
+           "gouraud scanline": "tab:red"}
 MARKERS = {1: "o", 4: "s", 16: "^"}
 LINES = {1: "-", 4: "--", 16: ":"}
 

@@ -62,11 +62,13 @@ class Blit:
         # Image row 0 goes to texture row 0; the fragment shader flips rows when it fetches.
         self.texture.write(np.ascontiguousarray(color))
 
-    def draw(self) -> None:
-        """Draw the last uploaded frame over the current viewport (does nothing before one)."""
+    def draw(self, origin: tuple[int, int] = (0, 0)) -> None:
+        """Draw the last uploaded frame over the current viewport (does nothing before one),
+        its bottom-left pixel at window pixel ``origin`` (set the viewport to the same rect)."""
         if self.texture is None:
             return
         self.ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND | moderngl.CULL_FACE)
+        self.program["origin"].value = (int(origin[0]), int(origin[1]))
         self.texture.use(location=0)
         self.vao.render(moderngl.TRIANGLES, vertices=3)
 

@@ -72,12 +72,13 @@ def display_available() -> bool:
 
 
 def main(scene_source: str | None, size: tuple[int, int] | None = None,
-         out_dir: str | Path | None = None) -> int:
+         out_dir: str | Path | None = None, options: dict | None = None) -> int:
     """Open the viewer on ``scene_source`` with a ``size`` framebuffer; 0 on success.
 
     ``size`` None means the scene's own size (500 x 500 unless it says otherwise).
-    ``out_dir``: where screenshots go (default: the current directory) and, with no display,
-    the per-view PNGs (default ``$FVD_OUT`` or ``./fvd-views``).
+    ``out_dir``: where screenshots go (default: ``./screenshots``) and, with no display,
+    the per-view PNGs (default ``$FVD_OUT`` or ``./fvd-views``). ``options``: ``rasterizer``,
+    ``keep_aspect``, ``course_tri`` (None: the scene's own).
     """
     setup_logging()
     started = time.perf_counter() - process_age()
@@ -92,7 +93,8 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
             relative = ".."
         scene_source = relative if not relative.startswith("..") else str(DEFAULT_SCENE)
     try:
-        state = ViewerState.open(scene_source, size=tuple(size) if size else None)
+        chosen = {k: v for k, v in (options or {}).items() if v is not None}
+        state = ViewerState.open(scene_source, size=tuple(size) if size else None, **chosen)
     except reader_errors() as error:
         print(f"error: cannot open {scene_source}: {error}", file=sys.stderr)
         return 2
@@ -136,14 +138,15 @@ def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:
     for index in range(len(scene.views)):
         state.set_view(index)
         state.update()
+        number = state.view_number               # its position in the file
         if state.render_error:
-            print(f"error: view {index + 1}: {state.render_error}", file=sys.stderr)
+            print(f"error: view {number}: {state.render_error}", file=sys.stderr)
             failed += 1
             continue
         frame = state.frame
         if frame.message:
-            print(f"view {index + 1}: {frame.message}", file=sys.stderr)
-        path = out / f"{stem}-view{index + 1:02d}-{state.projection}-{state.shading}.png"
+            print(f"view {number}: {frame.message}", file=sys.stderr)
+        path = out / f"{stem}-view{number:02d}-{state.projection}-{state.shading}.png"
         try:
             Image.fromarray(frame.color).save(path)
         except OSError as error:

@@ -1,11 +1,17 @@
 """The viewer's state: the one place it lives, and the only thing that asks the core for frames.
 
-:class:`ViewerState` holds the scene and where it came from, the view index, projection and
-shading, the framebuffer size, the messages to show (invalid views from the reader, scenes
-that could not be opened, the current frame's own message), the last :class:`core.render.Frame`
-and a ``dirty`` flag. The window changes it through its methods and reads it to draw; a frame
-is rendered (``core.render.render``) only when something that changes the picture changed, and
-never for a zero-sized (minimised) framebuffer.
+:class:`ViewerState` holds the scene and where it came from, the view index, the render
+settings the user chose (projection, shading, rasterizer, kept aspect, the ``.tri`` startup
+code's rules), the picture's size, the messages to show (invalid views from the reader, in
+their own collapsed strip; scenes that could not be opened; the current frame's own message),
+the last :class:`core.render.Frame` and a ``dirty`` flag. The window changes it through its
+methods and reads it to draw; a frame is rendered only when something that changes the
+picture changed, and never for a zero-sized (minimised) framebuffer: at once
+(:meth:`ViewerState.update`, for the PNG path and the tests) or on the render worker's thread
+(:meth:`ViewerState.request`, then :meth:`ViewerState.accept`, for the window).
+
+Views are numbered by their position in the file (``core.scene.view_numbers``): the window
+steps over invalid ones and says "view 7 of 20 (6 invalid)".
 
 No GL and no window library here, so everything about it is testable without a display.
 """
@@ -22,7 +28,8 @@ from pathlib import Path
 from typing import Callable
 
 from core.scene.model import Scene
-from core.settings import PROJECTIONS, SHADINGS
+from core.scene import view_numbers
+from core.settings import PROJECTIONS, RASTERIZERS, SHADINGS
 
 log = logging.getLogger("fvd")
 
@@ -49,6 +56,12 @@ def render(scene, view, settings, context=None):
 # speaks of compiling only when it is true: loading cached kernels takes ~0.5 s too.
 _compiling = threading.Event()
 _listening: list[bool] = []
+_compiles = [0]                 # kernels compiled so far in this process (the window's progress)
+
+
+def compile_count() -> int:
+    """How many numba compilations have started in this process (once listening)."""
+    return _compiles[0]
 
 
 def _listen_for_compiles() -> None:
@@ -62,6 +75,7 @@ def _listen_for_compiles() -> None:
 
     class CompileListener(event.Listener):
         def on_start(self, ev):
+            _compiles[0] += 1
             _compiling.set()
 
         def on_end(self, ev):
@@ -97,7 +111,13 @@ def announce_compiles(after: float = 0.5):
 def compile_notice() -> None:
     """Printed while a first frame is slow because numba is compiling kernels."""
     if _compiling.is_set():
-        print("compiling the rasterizer (first start only)…", file=sys.stderr, flush=True)
+        print("compiling the kernels (once; `python -m app warmup` does it ahead)…",
+              file=sys.stderr, flush=True)
+
+
+def compiling() -> bool:
+    """Has numba started compiling a kernel since the flag was last cleared?"""
+    return _compiling.is_set()
 
 
 def reader_errors() -> tuple[type[BaseException], ...]:
@@ -115,7 +135,10 @@ class ViewerState:
     size: tuple[int, int]
     projection: str = ""
     shading: str = ""
-    view_index: int = 0
+    rasterizer: str = ""
+    keep_aspect: bool | None = None
+    course_tri: bool = False          # the .tri startup code's back-face rule and mouse buttons
+    view_index: int = 0                                      # into scene.views (valid views)
     open_messages: list[str] = field(default_factory=list)   # scenes that failed to open
     frame: object | None = None                              # the last core.render.Frame
     frame_seconds: float = 0.0                               # how long that frame took
@@ -131,8 +154,7 @@ class ViewerState:
     context: object = None          # the core.context.RenderContext of this window's frames
 
     def __post_init__(self) -> None:
-        self.projection = self.projection or self.scene.projection
-        self.shading = self.shading or self.scene.shading
+        self._scene_defaults(keep_settings=True)
         self.size = (int(self.size[0]), int(self.size[1]))
         if self.context is None:
             from core.context import RenderContext
@@ -140,12 +162,18 @@ class ViewerState:
 
     def current_view(self):
         """The view shown now (None when the scene has no valid view)."""
-        return self.scene.views[self.view_index % self.view_count] if self.view_count else None
+        return self.view
 
-    def settings(self):
-        """The :class:`core.settings.RenderSettings` of the next frame."""
-        from core.settings import RenderSettings
-        return RenderSettings(projection=self.projection, shading=self.shading, size=self.size)
+    def _scene_defaults(self, keep_settings: bool = False) -> None:
+        s = self.scene
+        if not keep_settings or not self.projection:
+            self.projection = s.projection
+        if not keep_settings or not self.shading:
+            self.shading = s.shading
+        if not keep_settings or not self.rasterizer:
+            self.rasterizer = getattr(s, "rasterizer", "edge")
+        if not keep_settings or self.keep_aspect is None:
+            self.keep_aspect = bool(getattr(s, "keep_aspect", False))
 
     @classmethod
     def open(cls, source: str | Path, size: tuple[int, int] | None = None,
@@ -158,19 +186,40 @@ class ViewerState:
     # -- what the window shows ---------------------------------------------------------------
     @property
     def view_count(self) -> int:
+        """How many views can be shown (the valid ones)."""
         return len(self.scene.views)
 
     @property
-    def view_label(self) -> str:
-        """``"view k of N"`` (k counts from 1), or why there is nothing to show."""
-        if not self.view_count:
-            return "no valid view"
-        return f"view {self.view_index + 1} of {self.view_count}"
+    def view_number(self) -> int:
+        """The current view's position in its file (from 1), 0 when there is none."""
+        return view_numbers.file_number(self.scene, self.view_index) if self.view_count else 0
 
     @property
-    def messages(self) -> list[str]:
-        """Everything the user should read: reader messages, failed opens, this frame's message."""
-        found = [f"invalid view: {m}" for m in self.scene.view_messages] + list(self.open_messages)
+    def view_label(self) -> str:
+        """``"view 7 of 20 (6 invalid)"``: positions in the file, or why there is nothing."""
+        return view_numbers.label(self.scene, self.view_index)
+
+    @property
+    def view(self):
+        return self.scene.views[self.view_index] if self.view_count else None
+
+    def settings(self):
+        """The :class:`core.settings.RenderSettings` of the next frame."""
+        from core.settings import RenderSettings
+        return RenderSettings.for_scene(self.scene, projection=self.projection,
+                                        shading=self.shading, size=self.size,
+                                        rasterizer=self.rasterizer,
+                                        keep_aspect=bool(self.keep_aspect))
+
+    @property
+    def invalid_messages(self) -> list[str]:
+        """The reader's message for each invalid view (the window's collapsed strip)."""
+        return [f"invalid view: {m}" for m in self.scene.view_messages]
+
+    @property
+    def notices(self) -> list[str]:
+        """Everything else to read: failed opens, this frame's message, a failed render."""
+        found = list(self.open_messages)
         message = getattr(self.frame, "message", None)
         if message:
             found.append(message)
@@ -178,14 +227,23 @@ class ViewerState:
             found.append(self.render_error)
         return found
 
+    @property
+    def messages(self) -> list[str]:
+        """Every message: the invalid views first, then :attr:`notices`."""
+        return self.invalid_messages + self.notices
+
+    @property
+    def has_triangles(self) -> bool:
+        return self.scene.triangle_count > 0
+
     def frame_summary(self) -> str:
-        """One log line for the last frame: which view, projection, shading, size and time."""
-        label = self.scene.views[self.view_index].label if self.view_count else "-"
+        """One log line for the last frame: which view, settings, size and time."""
+        label = self.view.label if self.view_count else "-"
         message = getattr(self.frame, "message", None)
-        return (f"frame {self.frame_count}: view {self.view_index + 1 if self.view_count else 0} "
-                f"of {self.view_count} ({label}) projection={self.projection} "
-                f"shading={self.shading} size={self.size[0]}x{self.size[1]} "
-                f"render={self.frame_seconds * 1e3:.1f}ms"
+        return (f"frame {self.frame_count}: {self.view_label} ({label}) "
+                f"projection={self.projection} shading={self.shading} "
+                f"rasterizer={self.rasterizer} aspect={'kept' if self.keep_aspect else 'stretched'} "
+                f"size={self.size[0]}x{self.size[1]} render={self.frame_seconds * 1e3:.1f}ms"
                 + (f" message={message!r}" if message else ""))
 
     @property
@@ -213,22 +271,33 @@ class ViewerState:
             self.dirty = True
 
     def set_projection(self, projection: str) -> None:
-        if projection not in PROJECTIONS:
-            raise ValueError(
-                f"projection must be one of {', '.join(PROJECTIONS)}, not {projection!r}")
-        if projection != self.projection:
-            self.projection = projection
-            self.dirty = True
+        self._set("projection", projection, PROJECTIONS)
 
     def set_shading(self, shading: str) -> None:
-        if shading not in SHADINGS:
-            raise ValueError(f"shading must be one of {', '.join(SHADINGS)}, not {shading!r}")
-        if shading != self.shading:
-            self.shading = shading
+        self._set("shading", shading, SHADINGS)
+
+    def set_rasterizer(self, rasterizer: str) -> None:
+        self._set("rasterizer", rasterizer, RASTERIZERS)
+
+    def _set(self, name: str, value: str, allowed) -> None:
+        if value not in allowed:
+            raise ValueError(f"{name} must be one of {', '.join(allowed)}, not {value!r}")
+        if value != getattr(self, name):
+            setattr(self, name, value)
+            self.dirty = True
+
+    def set_keep_aspect(self, keep: bool) -> None:
+        if bool(keep) != self.keep_aspect:
+            self.keep_aspect = bool(keep)
+            self.dirty = True
+
+    def set_course_tri(self, on: bool) -> None:
+        if bool(on) != self.course_tri:
+            self.course_tri = bool(on)
             self.dirty = True
 
     def resize(self, width: int, height: int) -> None:
-        """The framebuffer's new size in pixels; 0 x 0 (minimised) is kept but never rendered."""
+        """The picture's new size in pixels; 0 x 0 (minimised) is kept but never rendered."""
         size = (max(int(width), 0), max(int(height), 0))
         if size != self.size:
             self.size = size
@@ -241,8 +310,9 @@ class ViewerState:
         """Replace the scene by ``source``; on a reader error keep the current one.
 
         Returns whether it opened. A failure's message goes into :attr:`messages` — the user's
-        scene, view and settings stay as they were. A new scene starts at its first view with
-        its own default projection and shading.
+        scene, view and settings stay as they were; so does a file whose views are all
+        invalid (its messages are shown, there is nothing of it to draw). A new scene starts
+        at its first valid view with its own default settings.
         """
         if str(source).strip() == "-":            # the viewer's stdin is the terminal: refuse
             self.open_messages.append("could not open -: a view file on standard input can only "
@@ -255,11 +325,16 @@ class ViewerState:
             self.open_messages.append(f"could not open {reason}" if reason.startswith(str(source))
                                       else f"could not open {source}: {reason}")
             return False
+        if not scene.views:
+            self.open_messages.append(f"did not open {source}: none of its "
+                                      f"{view_numbers.total(scene)} views is valid; "
+                                      f"{self.scene.name} stays")
+            self.open_messages.extend(f"invalid view: {m}" for m in scene.view_messages)
+            return False
         self.scene = scene
         self.scene_source = str(source)
         self.view_index = 0
-        self.projection = scene.projection
-        self.shading = scene.shading
+        self._scene_defaults()
         self.open_messages.clear()
         self.frame = None
         self.dirty = True
@@ -269,8 +344,18 @@ class ViewerState:
         self.open_messages.clear()
 
     # -- frames ------------------------------------------------------------------------------
+    def _job(self):
+        """What the next frame needs: a callable that renders it, and a short description."""
+        scene, view, settings, renderer = self.scene, self.view, self.settings(), self.renderer
+        if self.course_tri and view is not None:
+            from core.scene.course_tri import course_tri_scene
+            scene = course_tri_scene(scene, view)
+        what = f"{self.view_label}, {self.projection}, {self.shading}"
+        context = self.context
+        return (lambda: renderer(scene, view, settings, context)), what
+
     def update(self) -> bool:
-        """Render a new frame if the picture changed; returns whether one was rendered.
+        """Render a new frame now if the picture changed; returns whether one was rendered.
 
         A stage that raises does not end the session: the error becomes a message (and its
         traceback goes to the log), the last good frame stays, and another mode or view can
@@ -281,21 +366,46 @@ class ViewerState:
         first_of_mode = self.shading not in self._modes_rendered
         watch = (announce_compiles(self.compile_notice_after) if first_of_mode
                  else contextlib.nullcontext())
+        run, _ = self._job()
         start = time.perf_counter()
         try:
             with watch:
-                frame = self.renderer(self.scene, self.current_view(), self.settings(),
-                                      self.context)
+                frame = run()
         except Exception as error:
-            self.render_error = (f"could not render view {self.view_index + 1} "
-                                 f"({self.projection}, {self.shading}): "
-                                 f"{type(error).__name__}: {error}")
-            log.error("%s", self.render_error, exc_info=True)
-            self.dirty = False
+            self._failed(error)
             return False
+        self._shown(frame, time.perf_counter() - start)
+        return True
+
+    def request(self, worker) -> bool:
+        """Hand the next frame to ``worker`` (an :class:`app.viewer.worker.RenderWorker`) if
+        the picture changed; a request still waiting there is replaced. Returns whether one
+        was made; the frame arrives through :meth:`accept`."""
+        if not self.dirty or not self.renderable:
+            return False
+        run, what = self._job()
+        worker.submit(run, what)
+        self.dirty = False
+        return True
+
+    def accept(self, result) -> bool:
+        """Take a finished request from the worker; returns whether a new frame is shown."""
+        if result.error is not None:
+            self._failed(result.error)
+            return False
+        self._shown(result.frame, result.seconds)
+        return True
+
+    def _failed(self, error: BaseException) -> None:
+        self.render_error = (f"could not render {self.view_label} "
+                             f"({self.projection}, {self.shading}): "
+                             f"{type(error).__name__}: {error}")
+        log.error("%s", self.render_error, exc_info=error)
+        self.dirty = False
+
+    def _shown(self, frame, seconds: float) -> None:
         self.frame, self.render_error = frame, None
-        self.frame_seconds = time.perf_counter() - start
+        self.frame_seconds = seconds
         self._modes_rendered.add(self.shading)
         self.frame_count += 1
         self.dirty = False
-        return True

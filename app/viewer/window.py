@@ -1,24 +1,31 @@
-"""The window: glfw, a moderngl context, the blit of the CPU frame, Dear ImGui menus and input.
+"""The window: the CPU frame beside a side panel of menus, status, plan and messages.
 
-Takes a :class:`app.viewer.state.ViewerState` and shows it: each time the state says the picture
-changed, the core renders a frame on the CPU (``ViewerState.update``) and :class:`app.viewer.blit.Blit`
-copies it to the screen texel for pixel; ImGui draws the menu bar, the right-click pop-up (the
-course's GLUT pop-up menu), the status line, the plan of the current frame and the messages
-on top. Nothing here computes geometry or colour.
+Takes a :class:`app.viewer.state.ViewerState` and shows it. The picture is exactly the frame
+the core rendered, ``W x H`` pixels at the window's top-left corner, and nothing lies on it:
+the side panel to its right holds the menu bar (File, Projection, Shading, Render, View), the
+status lines, and collapsed strips for the plan of the frame, the invalid views of the file and
+other messages; the window is created ``W + panel`` wide to hold it, and when the user resizes
+the window the picture takes what the panel leaves. Frames are rendered off the window's thread
+(:class:`app.viewer.worker.RenderWorker`): the window keeps drawing, says what is being
+rendered and for how long (and whether kernels are being compiled), and a newer request
+supersedes a stale one. After the first frame the worker loads every other kernel in the
+background (``app/tools/warmup.py``), so a later change of mode does not stall.
 
 Input (the course's Assignment #1 controls, plus shading from Assignment #3):
 
-- left click on the picture: next view (wraps); a click ImGui takes (the menu bar, a panel)
-  does not also advance the view — ImGui's own ``WantCaptureMouse`` decides, for that click;
-- right click: pop-up menu with projection and shading;
+- left click on the picture: next view (wraps, stepping over invalid views); a click ImGui
+  takes (an open menu) does not also advance the view;
+- right click: pop-up menu with projection and shading, at the click;
+- with ``--course-tri``, the startup code's buttons instead: left Phong, middle Gouraud,
+  right flat;
 - ``p`` / ``o``: perspective / parallel; ``w``, ``1``, ``2``, ``3``: wireframe, flat,
-  Gouraud, Phong; arrows: previous / next view; ``s``: save the CPU frame as a PNG;
-  ``q`` / Esc: quit.
+  Gouraud, Phong; ``a``: keep the window's aspect (letterbox) or stretch it (the course);
+  arrows: previous / next view; ``s``: save the CPU frame as a PNG in ``screenshots/``;
+- Esc closes an open menu or pop-up, and quits only when none is open; ``q`` quits.
 
 Every user action and every new frame is logged (logger ``fvd``; ``app.viewer`` sends it to
-stderr and to ``$FVD_LOG``). The window asks for a framebuffer of the requested size (on HiDPI
-screens the window size in points is scaled to get it) and always renders at the real
-framebuffer size; a minimised (0 x 0) window renders nothing.
+stderr and to ``$FVD_LOG``). On HiDPI screens sizes in points are scaled so that the picture
+gets the requested pixels; a minimised (0 x 0) window renders nothing.
 """
 
 from __future__ import annotations
@@ -35,7 +42,8 @@ import moderngl
 
 from app.viewer.blit import Blit
 from app.viewer.imgui_backend import GlfwInput, ImGuiRenderer
-from app.viewer.state import ViewerState
+from app.viewer.state import ViewerState, compile_count
+from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
 
 log = logging.getLogger("fvd")
@@ -43,15 +51,27 @@ log = logging.getLogger("fvd")
 PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel", "O"))
 SHADING_LABELS = (("wireframe", "Wireframe", "W"), ("flat", "Flat", "1"),
                   ("gouraud", "Gouraud", "2"), ("phong", "Phong", "3"))
+RASTERIZER_LABELS = (("edge", "Edge functions (perspective-correct)"),
+                     ("scanline", "Scan line, ET/AET (course, screen-linear)"))
 CHAR_SHORTCUTS = {"p": ("projection", "perspective"), "o": ("projection", "parallel"),
                   "w": ("shading", "wireframe"), "1": ("shading", "flat"),
                   "2": ("shading", "gouraud"), "3": ("shading", "phong")}
+# The startup code's mouse (Assignment 3): left Phong, middle Gouraud, right flat.
+COURSE_BUTTONS = {glfw.MOUSE_BUTTON_LEFT: "phong", glfw.MOUSE_BUTTON_MIDDLE: "gouraud",
+                  glfw.MOUSE_BUTTON_RIGHT: "flat"}
+PANEL_WIDTH = 340            # the side panel, in screen points
+NO_TRIANGLES = ("This scene has no triangles: it is drawn as lines whatever the shading, "
+                "so the shading modes change nothing.")
+SCREENSHOTS_DIR = "screenshots"
 # Files in scenes/ that are not scenes.
 NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
 # After an event, draw a few frames so that ImGui's hover and menu states settle; then sleep
 # until the next event (a busy loop would take the CPU the rasterizer needs).
 FRAMES_AFTER_EVENT = 3
-PANEL_FLAGS = imgui.WINDOW_NO_SAVED_SETTINGS | imgui.WINDOW_NO_FOCUS_ON_APPEARING
+PANEL_FLAGS = (imgui.WINDOW_NO_TITLE_BAR | imgui.WINDOW_NO_RESIZE | imgui.WINDOW_NO_MOVE
+               | imgui.WINDOW_NO_COLLAPSE | imgui.WINDOW_MENU_BAR | imgui.WINDOW_NO_SAVED_SETTINGS
+               | imgui.WINDOW_NO_BRING_TO_FRONT_ON_FOCUS)
+ANY_POPUP = imgui.POPUP_ANY_POPUP_ID | imgui.POPUP_ANY_POPUP_LEVEL
 
 
 # ImGui's built-in font covers Latin-1 only; the core's messages use a few typographic marks.
@@ -79,7 +99,8 @@ def shipped_scenes() -> list[Path]:
 
 
 def create_window(size: tuple[int, int], title: str):
-    """A glfw window with an OpenGL 3.3 core context whose framebuffer is ``size`` pixels.
+    """A glfw window with an OpenGL 3.3 core context whose framebuffer is ``size`` pixels
+    (the picture and the panel beside it).
 
     Raises :class:`WindowError` with glfw's reason when there is no display or no context.
     """
@@ -113,16 +134,19 @@ def create_window(size: tuple[int, int], title: str):
     return window
 
 
+
 class ViewerWindow:
     """The window around one :class:`ViewerState`. ``run()`` returns when the user quits."""
 
     def __init__(self, state: ViewerState, out_dir: Path | None = None,
                  started: float | None = None):
         self.state = state
-        self.out_dir = Path(out_dir) if out_dir is not None else Path.cwd()
+        self.out_dir = Path(out_dir) if out_dir is not None else Path.cwd() / SCREENSHOTS_DIR
         self.started = started            # process start, in time.perf_counter() seconds
-        self.window = create_window(state.size, self._title())
+        width, height = state.size
+        self.window = create_window((width + PANEL_WIDTH, height), self._title())
         glfw.ERROR_REPORTING = "log"      # later glfw errors are not fatal
+        self._fit_window(width, height)
         try:
             self.ctx = moderngl.create_context(require=330)
         except Exception as error:        # e.g. a display whose OpenGL is older than 3.3
@@ -144,14 +168,47 @@ class ViewerWindow:
             glfw.destroy_window(self.window)
             glfw.terminate()
             raise WindowError(f"could not set up the window: {error}") from error
+        self.worker = RenderWorker(wake=glfw.post_empty_event)
         self._busy = FRAMES_AFTER_EVENT
         self._clicks: list[tuple[int, float, float]] = []   # (button, x, y) since last frame
         self._path = ""                   # File > Open: the path being typed
         self._notice = ""                 # the last screenshot, for the status line
         self._scenes = shipped_scenes()
         self._first_frame_logged = False
-        self._plan_open = False
+        self._warming = False
+        self._popup_open = False          # a menu or the pop-up was open in the last frame
+        self._close_popups = False        # Esc: close them in the next frame
+        self._compiles_at_request = 0
         self._install_callbacks()
+
+    # -- geometry: the picture at the top-left, the panel to its right -----------------------
+    def _scale(self) -> float:
+        """Framebuffer pixels per screen point (1 except on HiDPI screens)."""
+        window_w, _ = glfw.get_window_size(self.window)
+        fb_w, _ = glfw.get_framebuffer_size(self.window)
+        return fb_w / window_w if window_w > 0 and fb_w > 0 else 1.0
+
+    def _panel_pixels(self) -> int:
+        return round(PANEL_WIDTH * self._scale())
+
+    def _fit_window(self, width: int, height: int) -> None:
+        """Size the window so the picture gets ``width x height`` framebuffer pixels."""
+        scale = self._scale()
+        glfw.set_window_size(self.window, max(1, round(width / scale) + PANEL_WIDTH),
+                             max(1, round(height / scale)))
+        glfw.set_window_size_limits(self.window, PANEL_WIDTH + 16, 120, glfw.DONT_CARE,
+                                    glfw.DONT_CARE)
+
+    def picture_size(self) -> tuple[int, int]:
+        """The picture's size in framebuffer pixels: the window less the panel."""
+        fb_w, fb_h = glfw.get_framebuffer_size(self.window)
+        return max(fb_w - self._panel_pixels(), 0), max(fb_h, 0)
+
+    def _on_picture(self, x: float, y: float) -> bool:
+        """Is the screen point (x, y) (from the window's top-left) on the picture?"""
+        scale = self._scale()
+        width, height = self.state.size
+        return 0 <= x * scale < width and 0 <= y * scale < height
 
     # -- glfw callbacks: forward to ImGui, then act unless ImGui took the event ---------------
     def _install_callbacks(self) -> None:
@@ -171,7 +228,8 @@ class ViewerWindow:
 
     def _on_mouse_button(self, window, button, action, mods) -> None:
         self.input.on_mouse_button(button, action)
-        if action == glfw.PRESS and button in (glfw.MOUSE_BUTTON_LEFT, glfw.MOUSE_BUTTON_RIGHT):
+        if action == glfw.PRESS and button in (glfw.MOUSE_BUTTON_LEFT, glfw.MOUSE_BUTTON_RIGHT,
+                                               glfw.MOUSE_BUTTON_MIDDLE):
             # Decided in the next frame, once ImGui has seen this press at this position.
             self._clicks.append((button, *glfw.get_cursor_pos(window)))
         self._wake()
@@ -179,8 +237,14 @@ class ViewerWindow:
     def _on_key(self, window, key, scancode, action, mods) -> None:
         self.input.on_key(key, action, mods)
         self._wake()
-        if action not in (glfw.PRESS, glfw.REPEAT) or imgui.get_io().want_capture_keyboard:
+        if action not in (glfw.PRESS, glfw.REPEAT):
             return
+        if key == glfw.KEY_ESCAPE and self._popup_open:
+            self._close_popups = True     # Esc closes the open menu or pop-up, nothing more
+            log.info("action: key Esc -> close the open menu")
+            return
+        if imgui.get_io().want_capture_keyboard:
+            return                        # typing in a text field
         if key == glfw.KEY_ESCAPE:
             self.quit("key Esc")
         elif key in (glfw.KEY_RIGHT, glfw.KEY_DOWN):
@@ -198,6 +262,8 @@ class ViewerWindow:
         if char in CHAR_SHORTCUTS:
             what, value = CHAR_SHORTCUTS[char]
             self.choose(what, value, f"key {char}")
+        elif char == "a":
+            self.choose("keep_aspect", not self.state.keep_aspect, "key a")
         elif char == "s":
             self.save_screenshot("key s")
         elif char == "q":
@@ -208,26 +274,28 @@ class ViewerWindow:
         self._wake()
 
     def _on_framebuffer_size(self, window, width, height) -> None:
-        self.state.resize(width, height)
+        self.state.resize(*self.picture_size())
         self._wake()
 
     # -- actions -----------------------------------------------------------------------------
     def step_view(self, step: int, how: str) -> None:
-        before = self.state.view_index
+        before = self.state.view_label
         self.state.next_view() if step > 0 else self.state.prev_view()
-        log.info("action: %s -> %s view %d -> %d of %d", how, "next" if step > 0 else "previous",
-                 before + 1, self.state.view_index + 1, self.state.view_count)
+        log.info("action: %s -> %s %s -> %s", how, "next" if step > 0 else "previous",
+                 before, self.state.view_label)
 
     def go_to_view(self, index: int, how: str) -> None:
         self.state.set_view(index)
-        log.info("action: %s -> view %d of %d", how, index + 1, self.state.view_count)
+        log.info("action: %s -> %s", how, self.state.view_label)
 
-    def choose(self, what: str, value: str, how: str) -> None:
-        """Set the projection or the shading; the frame is re-rendered at once."""
-        if what == "projection":
-            self.state.set_projection(value)
-        else:
-            self.state.set_shading(value)
+    def choose(self, what: str, value, how: str) -> None:
+        """Set the projection, shading, rasterizer, kept aspect or course rules; the frame is
+        re-rendered at once."""
+        setter = {"projection": self.state.set_projection, "shading": self.state.set_shading,
+                  "rasterizer": self.state.set_rasterizer,
+                  "keep_aspect": self.state.set_keep_aspect,
+                  "course_tri": self.state.set_course_tri}[what]
+        setter(value)
         log.info("action: %s -> %s %s", how, what, value)
         self._wake()
 
@@ -242,11 +310,11 @@ class ViewerWindow:
             glfw.set_window_title(self.window, self._title())
         else:
             log.info("action: %s -> %s", how, self.state.open_messages[-1])
-            print(self.state.open_messages[-1], file=sys.stderr)
+            print("\n".join(self.state.open_messages), file=sys.stderr)
         self._wake()
 
     def save_screenshot(self, how: str) -> Path | None:
-        """The CPU frame (not the screen: no menus) as a PNG in the output directory."""
+        """The CPU frame (not the screen: no panel) as a PNG in ``screenshots/``."""
         frame = self.state.frame
         if frame is None:
             log.info("action: %s -> no frame to save yet", how)
@@ -254,8 +322,8 @@ class ViewerWindow:
         from PIL import Image
 
         s = self.state
-        stem = (f"{Path(s.scene.name).stem or 'scene'}-view{s.view_index + 1}"
-                f"-{s.projection}-{s.shading}")
+        stem = f"{Path(s.scene.name).stem or 'scene'}"[:24].replace(" ", "_")
+        stem = f"{stem}-v{s.view_number:02d}-{s.shading}"
         path = self.out_dir / f"{stem}.png"
         n = 1
         while path.exists():
@@ -281,16 +349,18 @@ class ViewerWindow:
     # -- the loop ----------------------------------------------------------------------------
     def run(self) -> int:
         try:
-            # Show the window (menus, status, the scene's background) before the first CPU
-            # frame: that frame may wait for numba to load or compile its kernels.
-            self.draw_frame(allow_render=False)
+            # Show the window (panel, the scene's background) before the first CPU frame: that
+            # frame may wait for numba to load or compile its kernels.
+            self.draw_frame()
             self._log_since_start("window shown")
             shown = True
             while not glfw.window_should_close(self.window):
-                # Sleep until an event unless a frame is due; a minimised window always sleeps
-                # (it stays "dirty" until it has a size again).
+                # Sleep until an event unless a frame is due; while the worker renders, wake
+                # ten times a second to show how long it has taken (it wakes us when done).
                 if shown and (self._busy > 0 or self.state.dirty):
                     glfw.poll_events()
+                elif self.worker.waiting:
+                    glfw.wait_events_timeout(0.1)
                 else:
                     glfw.wait_events_timeout(0.5)
                 shown = self.draw_frame()
@@ -298,11 +368,11 @@ class ViewerWindow:
             self.close()
         return 0
 
-    def draw_frame(self, allow_render: bool = True) -> bool:
-        """Input, clicks, re-render if needed, GUI, blit, swap; False when minimised."""
+    def draw_frame(self) -> bool:
+        """Input, clicks, ask for / collect a frame, GUI, blit, swap; False when minimised."""
         fb_w, fb_h = glfw.get_framebuffer_size(self.window)
-        self.state.resize(fb_w, fb_h)
-        if not self.state.renderable or glfw.get_window_attrib(self.window, glfw.ICONIFIED):
+        self.state.resize(*self.picture_size())
+        if fb_w <= 0 or fb_h <= 0 or glfw.get_window_attrib(self.window, glfw.ICONIFIED):
             self._clicks.clear()
             self._busy = 0
             return False                  # minimised: nothing to render or draw
@@ -311,23 +381,39 @@ class ViewerWindow:
         imgui.new_frame()
         self._handle_clicks()
 
-        if allow_render and self.state.update():
+        if self.state.request(self.worker):
+            self._compiles_at_request = compile_count()
+        result = self.worker.collect()
+        if result is not None and self.state.accept(result):
             self._log_frame()
             self.blit.upload(self.state.frame.rgbx)
             self._wake()                  # the GUI shows the new frame's plan and timing next
+            self._start_warm_up()
         self._build_gui()
         imgui.render()
 
         self.ctx.viewport = (0, 0, fb_w, fb_h)
-        self.ctx.clear(*self.state.scene.background[:3], 1.0)
+        self.ctx.clear(0.11, 0.11, 0.13, 1.0)
         if self.state.frame is not None:  # after a scene change, never the old scene's picture
-            self.blit.draw()
+            width, height = self.state.frame.color.shape[1::-1]
+            origin = (0, fb_h - height)   # the picture's bottom-left, GL counts rows up
+            self.ctx.viewport = (*origin, width, height)
+            self.blit.draw(origin)
+            self.ctx.viewport = (0, 0, fb_w, fb_h)
         self.gui.render(imgui.get_draw_data())
         glfw.swap_buffers(self.window)
         if not self._first_frame_logged and self.state.frame is not None:
             self._first_frame_logged = True
             self._log_since_start("first frame shown")
         return True
+
+    def _start_warm_up(self) -> None:
+        """After the first frame: load (or compile) every other kernel in the background."""
+        if self._warming:
+            return
+        self._warming = True
+        from app.tools.warmup import steps
+        self.worker.add_background(steps())
 
     def _log_since_start(self, what: str) -> None:
         if self.started is None:
@@ -339,19 +425,23 @@ class ViewerWindow:
                      time.perf_counter() - self.started, user + system)
 
     def _handle_clicks(self) -> None:
-        """Left click: next view; right click: the pop-up — unless ImGui wants this click."""
+        """Left click: next view; right click: the pop-up (or, with the course's rules, the
+        startup code's buttons) — only on the picture, and unless ImGui wants this click."""
         clicks, self._clicks = self._clicks, []
         if not clicks:
             return
-        captured = imgui.get_io().want_capture_mouse
+        captured = imgui.get_io().want_capture_mouse or self._popup_open
         for button, x, y in clicks:
-            name = "left click" if button == glfw.MOUSE_BUTTON_LEFT else "right click"
+            name = {glfw.MOUSE_BUTTON_LEFT: "left", glfw.MOUSE_BUTTON_RIGHT: "right"}.get(
+                button, "middle") + " click"
             where = f"{name} at ({x:.0f}, {y:.0f})"
-            if captured:
-                log.info("action: %s -> taken by the menu/GUI, view unchanged", where)
+            if captured or not self._on_picture(x, y):
+                log.info("action: %s -> taken by the menu/panel, view unchanged", where)
+            elif self.state.course_tri:
+                self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
             elif button == glfw.MOUSE_BUTTON_LEFT:
                 self.step_view(+1, where)
-            else:
+            elif button == glfw.MOUSE_BUTTON_RIGHT:
                 log.info("action: %s -> pop-up menu", where)
                 imgui.open_popup("popup")
 
@@ -365,13 +455,17 @@ class ViewerWindow:
         s = self.state
         return f"FvD viewer - {s.scene.name} - {s.view_label} - {s.projection} - {s.shading}"
 
-    # -- the GUI -----------------------------------------------------------------------------
+    # -- the GUI: the side panel and the pop-up ----------------------------------------------
     def _build_gui(self) -> None:
-        self._menu_bar()
+        self._panel()
         self._popup()
-        self._status_panel()
-        self._plan_panel()
-        self._messages_panel()
+        self._popup_open = imgui.is_popup_open("", ANY_POPUP)
+        self._close_popups = False
+
+    def _closing(self) -> None:
+        """Inside an open menu or pop-up: close it if Esc was pressed."""
+        if self._close_popups:
+            imgui.close_current_popup()
 
     def _projection_items(self, how: str) -> None:
         for value, label, key in PROJECTION_LABELS:
@@ -380,16 +474,37 @@ class ViewerWindow:
                 self.choose("projection", value, how)
 
     def _shading_items(self, how: str) -> None:
+        solid = self.state.has_triangles
+        if not solid:
+            imgui.push_text_wrap_pos(imgui.get_font_size() * 22)
+            imgui.text_disabled(NO_TRIANGLES)
+            imgui.pop_text_wrap_pos()
         for value, label, key in SHADING_LABELS:
-            clicked, _ = imgui.menu_item(label, key, self.state.shading == value)
+            clicked, _ = imgui.menu_item(label, key, self.state.shading == value, solid)
             if clicked:
                 self.choose("shading", value, how)
 
+    def _panel(self) -> None:
+        scale = self._scale()
+        width, height = self.state.size
+        _, fb_h = glfw.get_framebuffer_size(self.window)
+        imgui.set_next_window_position(width / scale, 0, imgui.ALWAYS)
+        imgui.set_next_window_size(PANEL_WIDTH, fb_h / scale, imgui.ALWAYS)
+        imgui.begin("panel", False, PANEL_FLAGS)
+        self._menu_bar()
+        self._status()
+        self._plan_strip()
+        self._invalid_views_strip()
+        self._messages_strip()
+        imgui.end()
+
     def _menu_bar(self) -> None:
-        if not imgui.begin_main_menu_bar().opened:
+        if not imgui.begin_menu_bar().opened:
             return
         if imgui.begin_menu("File").opened:
+            self._closing()
             if imgui.begin_menu("Open scene").opened:
+                self._closing()
                 for path in self._scenes:
                     if imgui.menu_item(path.name, None, str(path) == self.state.scene_source)[0]:
                         self.open_scene(str(path), "menu File > Open")
@@ -409,34 +524,51 @@ class ViewerWindow:
                 self.quit("menu File > Quit")
             imgui.end_menu()
         if imgui.begin_menu("Projection").opened:
+            self._closing()
             self._projection_items("menu Projection")
             imgui.end_menu()
         if imgui.begin_menu("Shading").opened:
+            self._closing()
             self._shading_items("menu Shading")
             imgui.end_menu()
+        if imgui.begin_menu("Render").opened:
+            self._closing()
+            self._render_items()
+            imgui.end_menu()
         if imgui.begin_menu("View", self.state.view_count > 0).opened:
+            self._closing()
             if imgui.menu_item("Next view", "Right")[0]:
                 self.step_view(+1, "menu View > Next")
             if imgui.menu_item("Previous view", "Left")[0]:
                 self.step_view(-1, "menu View > Previous")
             imgui.separator()
+            from core.scene.view_numbers import file_number
             for i, view in enumerate(self.state.scene.views):
-                label = displayable(f"{i + 1}: {view.label}###view{i}")
+                number = file_number(self.state.scene, i)
+                label = displayable(f"{number}: {view.label}###view{i}")
                 if imgui.menu_item(label, None, i == self.state.view_index)[0]:
                     self.go_to_view(i, "menu View")
             imgui.end_menu()
-        # Always visible on the bar: where we are and how it is drawn.
-        status = f"{self.state.view_label}  {self.state.projection}  {self.state.shading}"
-        width = imgui.calc_text_size(status).x
-        x = imgui.get_window_width() - width - 8
-        if x > imgui.get_cursor_pos_x():
-            imgui.set_cursor_pos_x(x)
-        imgui.text(status)
-        imgui.end_main_menu_bar()
+        imgui.end_menu_bar()
+
+    def _render_items(self) -> None:
+        imgui.text_disabled("Rasterizer")
+        for value, label in RASTERIZER_LABELS:
+            if imgui.menu_item(label, None, self.state.rasterizer == value,
+                               self.state.has_triangles)[0]:
+                self.choose("rasterizer", value, "menu Render")
+        imgui.separator()
+        if imgui.menu_item("Keep the window's aspect (letterbox)", "A",
+                           bool(self.state.keep_aspect))[0]:
+            self.choose("keep_aspect", not self.state.keep_aspect, "menu Render")
+        if imgui.menu_item("Course .tri rules (back faces, mouse)", None,
+                           self.state.course_tri)[0]:
+            self.choose("course_tri", not self.state.course_tri, "menu Render")
 
     def _popup(self) -> None:
         # The course's GLUT pop-up menu: projection and shading at the click.
         if imgui.begin_popup("popup").opened:
+            self._closing()
             imgui.text_disabled("Projection")
             self._projection_items("pop-up")
             imgui.separator()
@@ -447,85 +579,94 @@ class ViewerWindow:
                 self.step_view(+1, "pop-up Next view")
             imgui.end_popup()
 
-    def _status_panel(self) -> None:
+    def _status(self) -> None:
         s = self.state
-        top = imgui.get_frame_height()
-        imgui.set_next_window_position(4, top + 4)
-        imgui.set_next_window_bg_alpha(0.55)
-        flags = (imgui.WINDOW_NO_TITLE_BAR | imgui.WINDOW_ALWAYS_AUTO_RESIZE | imgui.WINDOW_NO_MOVE
-                 | imgui.WINDOW_NO_SAVED_SETTINGS | imgui.WINDOW_NO_FOCUS_ON_APPEARING
-                 | imgui.WINDOW_NO_NAV)
-        imgui.begin("status", False, flags)
+        imgui.push_text_wrap_pos(0.0)
         imgui.text(displayable(f"{s.scene.name}: {s.view_label}"))
         if s.view_count:
-            imgui.text_disabled(displayable(s.scene.views[s.view_index].label))
-        imgui.text(f"{s.projection}, {s.shading}")
+            imgui.text_disabled(displayable(s.view.label))
+        rasterizer = f", {s.rasterizer} rasterizer" if s.has_triangles else ""
+        imgui.text(f"{s.projection}, {s.shading}{rasterizer}")
+        imgui.text("aspect kept (letterbox)" if s.keep_aspect
+                   else "window stretched over the viewport")
+        if s.course_tri:
+            imgui.text_disabled("course .tri rules: left Phong, middle Gouraud, right flat")
         if s.frame is None:
-            imgui.text("rendering the first frame..." if s.dirty else "no frame to show")
+            imgui.text("no frame to show" if not s.renderable else "")
         else:
             imgui.text(f"{s.size[0]} x {s.size[1]}, frame {s.frame_seconds * 1e3:.1f} ms")
+        imgui.text_colored(displayable(self._progress_text()), 0.55, 0.8, 1.0)
         if self._notice:
             imgui.text_disabled(displayable(self._notice))
-        imgui.end()
+        imgui.pop_text_wrap_pos()
+        imgui.separator()
 
-    def _plan_panel(self) -> None:
+    def _progress_text(self) -> str:
+        """What the worker is doing, how long it has taken, and whether it compiles."""
+        p = self.worker.progress()
+        compiled = compile_count() - self._compiles_at_request
+        extra = f", compiling kernels ({compiled} so far)" if compiled else ""
+        if p.what and p.frame:
+            return f"rendering {p.what}: {time.perf_counter() - p.since:.1f} s{extra}"
+        if p.what and self.worker.waiting:
+            return (f"your frame is next; loading kernels ({p.done + 1} of {p.total}: "
+                    f"{p.what}) {time.perf_counter() - p.since:.1f} s{extra}")
+        if p.done < p.total:
+            return f"loading kernels in the background: {p.done} of {p.total}"
+        return "ready"
+
+    def _plan_strip(self) -> None:
         frame = self.state.frame
         if frame is None:
             return
-        width, height = imgui.get_io().display_size
-        title = f"Plan  {self.state.frame_seconds * 1e3:.1f} ms"
-        # Pinned to the top-right corner; narrow while collapsed so it hides little of the
-        # picture, wide enough for the reasons when open (height 0: fit the contents).
-        imgui.set_next_window_position(width - 4, imgui.get_frame_height() + 4,
-                                       imgui.ALWAYS, pivot_x=1.0, pivot_y=0.0)
-        panel_width = (min(320, width - 8) if self._plan_open
-                       else imgui.calc_text_size(title).x + 40)
-        imgui.set_next_window_size(panel_width, 0, imgui.ALWAYS)
-        imgui.set_next_window_collapsed(True, imgui.FIRST_USE_EVER)
-        imgui.set_next_window_bg_alpha(0.85)
-        expanded, _ = imgui.begin(f"{title}###plan", False, PANEL_FLAGS | imgui.WINDOW_NO_MOVE)
-        # Not ``expanded``: a window that auto-fits its height still takes items when collapsed.
-        self._plan_open = expanded and not imgui.is_window_collapsed()
-        if self._plan_open:
-            stage_ms = frame.stats.get("ms", {}) if isinstance(frame.stats, dict) else {}
-            for stage in frame.plan:
-                name = getattr(stage, "name", str(stage))
-                runs = getattr(stage, "runs", True)
-                ms = stage_ms.get(name)
-                timing = f" ({ms:.1f} ms)" if ms is not None else ""
-                if runs:
-                    imgui.text_colored(displayable(f"run   {name}{timing}"), 0.55, 0.9, 0.55)
-                else:
-                    imgui.text_colored(displayable(f"skip  {name}"), 0.6, 0.6, 0.6)
-                reason = getattr(stage, "reason", "")
-                if reason:
-                    imgui.indent(24)
-                    imgui.push_text_wrap_pos(0.0)
-                    imgui.text_disabled(displayable(reason))
-                    imgui.pop_text_wrap_pos()
-                    imgui.unindent(24)
-        imgui.end()
-
-    def _messages_panel(self) -> None:
-        messages = self.state.messages
-        if not messages:
+        expanded, _ = imgui.collapsing_header(f"Plan  {self.state.frame_seconds * 1e3:.1f} ms"
+                                              "###plan")
+        if not expanded:
             return
-        width, height = imgui.get_io().display_size
-        imgui.set_next_window_position(4, height - 4, imgui.FIRST_USE_EVER,
-                                       pivot_x=0.0, pivot_y=1.0)
-        imgui.set_next_window_size(max(width - 8, 100), min(120, height / 3), imgui.FIRST_USE_EVER)
-        imgui.set_next_window_bg_alpha(0.8)
-        expanded, _ = imgui.begin(f"Messages ({len(messages)})###messages", False, PANEL_FLAGS)
+        stage_ms = frame.stats.get("ms", {}) if isinstance(frame.stats, dict) else {}
+        imgui.push_text_wrap_pos(0.0)
+        for stage in frame.plan:
+            name = getattr(stage, "name", str(stage))
+            ms = stage_ms.get(name)
+            timing = f" ({ms:.1f} ms)" if ms is not None else ""
+            if getattr(stage, "runs", True):
+                imgui.text_colored(displayable(f"run   {name}{timing}"), 0.55, 0.9, 0.55)
+            else:
+                imgui.text_colored(displayable(f"skip  {name}"), 0.6, 0.6, 0.6)
+            reason = getattr(stage, "reason", "")
+            if reason:
+                imgui.indent(16)
+                imgui.text_disabled(displayable(reason))
+                imgui.unindent(16)
+        imgui.pop_text_wrap_pos()
+
+    def _invalid_views_strip(self) -> None:
+        invalid = self.state.invalid_messages
+        if not invalid:
+            return
+        expanded, _ = imgui.collapsing_header(f"Invalid views ({len(invalid)})###invalid")
+        if expanded:
+            imgui.push_text_wrap_pos(0.0)
+            for message in invalid:
+                imgui.text_colored(displayable(message), 1.0, 0.75, 0.4)
+            imgui.pop_text_wrap_pos()
+
+    def _messages_strip(self) -> None:
+        notices = self.state.notices
+        if not notices:
+            return
+        expanded, _ = imgui.collapsing_header(f"Messages ({len(notices)})###messages",
+                                              flags=imgui.TREE_NODE_DEFAULT_OPEN)
         if expanded:
             if self.state.open_messages and imgui.small_button("Clear"):
                 self.state.clear_messages()
             imgui.push_text_wrap_pos(0.0)
-            for message in messages:
+            for message in notices:
                 imgui.text_colored(displayable(message), 1.0, 0.75, 0.4)
             imgui.pop_text_wrap_pos()
-        imgui.end()
 
     def close(self) -> None:
+        self.worker.stop()
         self.gui.release()
         self.blit.release()
         imgui.destroy_context(self.gui_context)

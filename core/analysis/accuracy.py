@@ -54,7 +54,10 @@ from core.renderers.raycast import Reference, Sphere, Torus, render_reference
 from core.scene.model import Light, Material, Mesh, Scene
 from core.camera.view import View
 
-SHADINGS = SOLID_SHADINGS
+# A series is a shading mode, drawn by the default edge rasterizer (perspective-correct), or
+# "MODE scanline": the course's scan-line rasterizer, whose interpolation is screen-linear.
+SCANLINE = " scanline"
+SHADINGS = SOLID_SHADINGS + ("gouraud" + SCANLINE,)
 SCENES = ("sphere", "torus")
 CACHE = Path(tempfile.gettempdir()) / "fvdfh-reference-cache"
 REFERENCE_SAMPLES = 4                  # per axis: 16 samples a pixel
@@ -216,10 +219,14 @@ def sample_coverage(image: np.ndarray, k: int) -> np.ndarray:
 
 def render_supersampled(scene: Scene, shading: str, size: int, k: int):
     """``(samples (kH, kW, 3) uint8, their box-filtered mean (H, W, 3) float64 on 0–255)``:
-    the renderer's own supersampling (``RenderSettings.samples`` = k², a regular grid)."""
+    the renderer's own supersampling (``RenderSettings.samples`` = k², a regular grid).
+    ``shading`` is a series name (``"gouraud scanline"``: Gouraud, scan-line rasterizer)."""
     from core.render import render
+    mode = shading.removesuffix(SCANLINE)
+    rasterizer = "scanline" if shading.endswith(SCANLINE) else "edge"
     frame = render(scene, scene.views[0],
-                   RenderSettings(shading=shading, size=(size, size), samples=k * k))
+                   RenderSettings(shading=mode, size=(size, size), samples=k * k,
+                                  rasterizer=rasterizer))
     if frame.message:
         raise ValueError(frame.message)
     if k == 1:

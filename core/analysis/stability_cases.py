@@ -745,3 +745,89 @@ def non_finite_files() -> Outcome:
     for suffix, message in sorted(example.items()):
         out.note(f"e.g. {message}")
     return out
+
+
+# --------------------------------------------------------------------------------------------
+# Loader and renderer agree (issue 15): what loads, renders
+
+# Numbers an attacker would write into a view: huge, subnormal, one ulp apart, signed zeros.
+_EXTREMES = (0.0, -0.0, 1.0, -1.0, 5.0, 0.9999999999999999, 1.0000000000000002, 1e-300,
+             -1e-301, 1e-320, 5e-324, 1e-160, 1e154, 1e200, -1e200, 1e308, -1e308, 3.0, 1e-9)
+_AGREEMENT_VIEWS = 300      # seeded random views besides the issue's reproducers
+_REPRODUCERS = (
+    # VRP, VPN, VUP, window, PRP, F, B — the views the reader accepted and the renderer crashed on
+    ((0, 0, 0), (0, 0, 1), (0, 1, 0), (-1, 1, -1, 1), (0, 0, 5), 1, 0.9999999999999999),
+    ((0, 0, 0), (0, 0, 1), (0, 1, 0), (-1, 1, -1, 1), (0, 0, 1e-300), 1e-301, -1),
+    ((0, 0, 0), (1e308, 1e308, 1e308), (0, 0, 1), (-1, 1, -1, 1), (0, 0, 5), 1, -1),
+    ((0, 0, 0), (1e-320, 0, 0), (0, 1, 0), (-1, 1, -1, 1), (0, 0, 5), 1, -1),
+)
+
+
+def _agreement_views_text() -> str:
+    """A view file: the reproducers, then random views that mix sane and extreme numbers."""
+    rng = np.random.default_rng(15)
+    sane = (0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, -1.0, 1.0, -1.0, 1.0, 0.0, 0.0, 5.0,
+            1.0, -1.0)
+    lines = []
+    for view in _REPRODUCERS:
+        numbers = [c for part in view for c in (part if isinstance(part, tuple) else (part,))]
+        lines.append(" ".join(repr(float(c)) for c in numbers))
+    for _ in range(_AGREEMENT_VIEWS):
+        numbers = list(sane)
+        for slot in rng.choice(18, size=rng.integers(1, 5), replace=False):
+            numbers[slot] = float(rng.choice(_EXTREMES)) * (1 if rng.random() < 0.7 else -1)
+        lines.append(" ".join(repr(c) for c in numbers))
+    return "\n".join(lines) + "\n"
+
+
+@case("loader and renderer agree on every view",
+      "the issue's four views and 300 seeded views of huge, subnormal and one-ulp numbers, read "
+      "from a view file: every view the reader accepts renders in both projections (wireframe, "
+      "flat, Phong) without an exception; a frame that refuses a view gives the same reason the "
+      "validity rules give; a view neither projection can draw is refused at load, with its "
+      "reason")
+def loader_renderer_agreement() -> Outcome:
+    from core.camera.view import problems
+    from core.render import render
+    from core.scene.formats import load_scene
+    out = Outcome()
+    crashes, disagreements, refused_frames = [], [], 0
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / "agreement.views"
+        path.write_text(_agreement_views_text())
+        scene = load_scene(path)
+    unrenderable = []
+    for view in scene.views:
+        if all(problems(view, projection) for projection in PROJECTIONS):
+            unrenderable.append(view.label)
+        for projection in PROJECTIONS:
+            for shading in ("wireframe", "flat", "phong"):
+                settings = RenderSettings.for_scene(scene, projection=projection,
+                                                    shading=shading, size=(24, 24))
+                try:
+                    frame = render(scene, view, settings)
+                except Exception as error:            # the very thing this case looks for
+                    crashes.append(f"{view.label} {projection} {shading}: "
+                                   f"{type(error).__name__}: {error}")
+                    continue
+                if frame.message:
+                    refused_frames += 1
+                    reasons = problems(view, projection)
+                    if not reasons or not all(r in frame.message for r in reasons):
+                        disagreements.append(f"{view.label} {projection}: {frame.message}")
+    total = len(scene.views) + len(scene.view_messages)
+    out.check(f"{len(scene.views)} of {total} views loaded, {len(scene.view_messages)} refused "
+              f"with a reason", total == _AGREEMENT_VIEWS + len(_REPRODUCERS)
+              and all(": " in m for m in scene.view_messages))
+    out.check("every loaded view can be drawn in at least one projection" if not unrenderable
+              else f"{len(unrenderable)} loaded views draw in neither: {unrenderable[:3]}",
+              not unrenderable)
+    out.check("every loaded view rendered in both projections without an exception" if not
+              crashes else f"{len(crashes)} exceptions: " + "; ".join(crashes[:3]), not crashes)
+    out.check(f"{refused_frames} frames refused a view for one projection, each with the rules' "
+              f"reason" if not disagreements else
+              f"{len(disagreements)} frames disagree: " + "; ".join(disagreements[:3]),
+              not disagreements)
+    for message in scene.view_messages[:2]:
+        out.note(f"e.g. {message.replace(str(path.parent) + '/', '')}")
+    return out

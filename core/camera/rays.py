@@ -29,7 +29,8 @@ CAMERA_PERSPECTIVE, CAMERA_ORIGIN, CAMERA_DOP, CAMERA_FRONT, CAMERA_BACK = 20, 2
 CAMERA_SIZE = 29
 
 
-def pack_camera(view: View, projection: str, width: int, height: int) -> np.ndarray:
+def pack_camera(view: View, projection: str, width: int, height: int,
+                keep_aspect: bool = False) -> np.ndarray:
     """The view as numbers: VRP, the VRC basis (u, v, n rows), window, viewport, perspective
     flag, ray origin (PRP in world coordinates), unit DOP towards the scene, F and B.
     Raises :class:`core.camera.view.ViewError` for an invalid view."""
@@ -40,7 +41,7 @@ def pack_camera(view: View, projection: str, width: int, height: int) -> np.ndar
     cam[CAMERA_VRP:CAMERA_VRP + 3] = view.vrp
     cam[CAMERA_BASIS:CAMERA_BASIS + 9] = np.array([u, v, n]).reshape(-1)
     cam[CAMERA_WINDOW:CAMERA_WINDOW + 4] = view.window
-    cam[CAMERA_VIEWPORT:CAMERA_VIEWPORT + 4] = viewport(view.window, width, height)
+    cam[CAMERA_VIEWPORT:CAMERA_VIEWPORT + 4] = viewport(view.window, width, height, keep_aspect)
     if projection == "perspective":
         cam[CAMERA_PERSPECTIVE] = 1.0
         cam[CAMERA_ORIGIN:CAMERA_ORIGIN + 3] = eye.point

@@ -69,27 +69,70 @@ def problems(view: View, projection: str | None = None) -> list[str]:
     return found
 
 
+def unit3(a) -> tuple[np.ndarray, float]:
+    """``(a / |a|, |a|)`` for a 3-vector, scaled first by its largest component so that neither
+    a subnormal vector (1e-320, whose square underflows) nor a huge one (1e308, whose square
+    overflows) loses its direction; ``|a|`` may be 0.0 or inf, the direction is exact."""
+    a = np.asarray(a, dtype=np.float64)
+    m = float(np.max(np.abs(a)))
+    if not m > 0.0 or not np.isfinite(m):
+        return np.zeros(3), m
+    scaled = a / m                        # division, not * (1/m): 1/1e-320 overflows
+    s = float(np.sqrt(scaled @ scaled))
+    return scaled / s, m * s
+
+
+# The largest coordinate any reader lets into a scene (core.scene.formats refuses beyond it),
+# and how far the normalizing transformation may carry such a point: the clipper and the
+# projection then work with numbers far from overflow (products of a few of them stay finite).
+MAX_WORLD = 1e30
+MAX_REACH = 1e250
+
+# The smallest |CW - PRP| the renderer can turn into a direction: the shading normalises the
+# direction of projection with a plain Euclidean norm, whose square must not underflow.
+MIN_DOP_LENGTH = float(np.sqrt(np.finfo(np.float64).tiny))
+
+
+def load_problems(view: View) -> list[str]:
+    """Why a reader must refuse ``view``: the reasons it cannot be drawn in either projection
+    (the renderer's own rules, matrices included); empty when at least one projection can draw
+    it. A view that only one projection refuses (F behind the eye in perspective) loads, and
+    the frame drawn that way says why."""
+    found = problems(view)
+    if found:
+        return found
+    perspective, parallel = problems(view, "perspective"), problems(view, "parallel")
+    if perspective and parallel:
+        return list(dict.fromkeys(perspective + parallel))
+    return []
+
+
 def _problems(view: View, projection: str | None) -> list[str]:
-    """The checks of pipeline.md that need no matrix."""
+    """The checks of pipeline.md that need no matrix, and those the renderer relies on."""
     if not np.all(np.isfinite(view.numbers)):
         return ["a number is NaN or infinite"]
     with np.errstate(all="ignore"):            # huge or tiny numbers are reported, not raised
-        vpn, vup, prp = (np.array(a, dtype=np.float64) for a in (view.vpn, view.vup, view.prp))
+        prp = np.array(view.prp, dtype=np.float64)
         u_min, u_max, v_min, v_max = view.window
         found = []
-        vpn_len = np.sqrt(vpn @ vpn)
-        vup_len = np.sqrt(vup @ vup)
+        n, vpn_len = unit3(view.vpn)           # a direction: its length does not matter
+        up, vup_len = unit3(view.vup)
         if vpn_len == 0.0:
             found.append("VPN is zero")
         if vup_len == 0.0:
             found.append("VUP is zero")
         elif vpn_len > 0.0:
-            across = cross3(vup, vpn / vpn_len)
-            if np.sqrt(across @ across) <= PARALLEL_TOLERANCE * vup_len:
+            across = cross3(up, n)
+            if np.sqrt(across @ across) <= PARALLEL_TOLERANCE:
                 found.append("VUP is parallel to VPN")
+        dop = np.array([(u_min + u_max) / 2, (v_min + v_max) / 2, 0.0]) - prp
+        dop_len = float(np.sqrt(dop @ dop))
     if prp[2] == 0.0:
         found.append("PRP lies on the view plane (PRP_n = 0), so the direction of projection "
                      "is parallel to the view plane")
+    elif not dop_len >= MIN_DOP_LENGTH:
+        found.append(f"the PRP is {unit3(dop)[1]:.3g} from the window's centre: too close to "
+                     f"give a direction of projection in float64 (under {MIN_DOP_LENGTH:.3g})")
     if not u_max > u_min:
         found.append(f"the window is degenerate: u_max ({u_max:g}) <= u_min ({u_min:g})")
     if not v_max > v_min:
@@ -103,15 +146,37 @@ def _problems(view: View, projection: str | None) -> list[str]:
 
 
 def _factors_or_overflow(view: View, projection: str, found: list[str]) -> dict | None:
-    """The chain's factors, or None after adding the overflow message to ``found``."""
+    """The chain's factors, or None after adding the reason they cannot be used to ``found``.
+
+    Besides overflow, perspective needs -1 < z_min < 0 in float64: the perspective-to-parallel
+    matrix (FvDFH eq. 6.48) divides by 1 + z_min, and the divide by W = -z needs the front
+    plane off the eye. F and B that are equal to the last bits next to the eye's distance round
+    z_min to -1 (or a far B rounds it to 0) although F > B.
+    """
     build = _n_per if projection == "perspective" else _n_par
     with np.errstate(all="ignore"):            # overflow is detected below, not raised
         factors = build(view)
-    if all(np.all(np.isfinite(m)) for m in factors.values()):
-        return factors
-    found.append("the numbers are too large or too small: the normalizing transformation "
-                 "overflows")
-    return None
+    if not all(np.all(np.isfinite(m)) for m in factors.values()):
+        found.append("the numbers are too large or too small: the normalizing transformation "
+                     "overflows")
+        return None
+    n = factors["N_per" if projection == "perspective" else "N_par"]
+    with np.errstate(over="ignore"):
+        reach = float(np.max(np.abs(n[:3, :3]).sum(axis=1) * MAX_WORLD + np.abs(n[:3, 3])))
+    if not reach <= MAX_REACH:
+        found.append(f"the normalizing transformation carries points of the scene's range "
+                     f"(|x| <= {MAX_WORLD:g}) as far as {reach:.3g}, beyond {MAX_REACH:g}: the "
+                     f"view's numbers are too large or its window too small to compute with")
+        return None
+    if projection == "perspective":
+        z_min = float(factors["z_min"])
+        if not -1.0 < z_min < 0.0:
+            found.append(f"F ({view.front:.17g}) and B ({view.back:.17g}) are too close together "
+                         f"(or too far apart) next to the eye's distance PRP_n = "
+                         f"{view.prp[2]:.17g}: z_min = {z_min:.17g} rounds to "
+                         f"{'-1' if z_min <= -1.0 else '0'}, and perspective needs -1 < z_min < 0")
+            return None
+    return factors
 
 
 def check(view: View, projection: str | None = None) -> None:
@@ -128,10 +193,8 @@ def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def vrc_basis(view: View) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """u, v, n of the VRC: ``n = VPN/|VPN|``, ``u = VUP x n / |VUP x n|``, ``v = n x u``."""
-    vpn = np.asarray(view.vpn, dtype=np.float64)
-    n = vpn / np.linalg.norm(vpn)
-    u = cross3(np.asarray(view.vup, dtype=np.float64), n)
-    u /= np.linalg.norm(u)
+    n = unit3(view.vpn)[0]                   # scaled: a subnormal or huge VPN keeps its direction
+    u = unit3(cross3(unit3(view.vup)[0], n))[0]
     v = cross3(n, u)
     return u, v, n
 

@@ -5,7 +5,8 @@ coordinates: x to the right and y up in pixels (origin at the framebuffer's bott
 pixel centres at half-integers), and z in [-1, 0] with larger z nearer.
 
 - Wireframe perspective: ``M_per`` with ``d = -1`` projects onto the back plane, then
-  ``M_vv3dv`` maps the canonical square to the viewport, and the divide by W comes last.
+  ``M_vv3dv`` maps the canonical square to the viewport (the whole framebuffer, or a
+  letterboxed part of it when the aspect is kept), and the divide by W comes last.
 - Depth for the z-buffer: FvDFH's perspective-to-parallel matrix ``M`` keeps relative depth,
   lines and planes; after the divide the perspective volume is the parallel one. Parallel
   views need neither matrix.
@@ -44,12 +45,18 @@ def m_vv3dv(x_min, x_max, y_min, y_max, z_min=-1.0, z_max=0.0) -> np.ndarray:
             @ translate(1, 1, 1))
 
 
-def viewport(window: tuple[float, float, float, float], width: int, height: int):
-    """The largest whole-pixel rectangle of the view window's aspect, centred in the framebuffer.
+def viewport(window: tuple[float, float, float, float], width: int, height: int,
+             keep_aspect: bool = False):
+    """The device rectangle the view window maps onto: ``(x_min, x_max, y_min, y_max)`` pixels.
 
-    Returns ``(x_min, x_max, y_min, y_max)`` in device pixels. A square window on a square
-    framebuffer fills it; otherwise the picture is letterboxed rather than stretched.
+    The course's mapping (the notes: "if Window + viewport have different dimensions, a
+    scaling is done"; M_vv3dv) is the default: the window fills the whole framebuffer, each
+    axis scaled on its own, so a window whose aspect differs from the framebuffer's is
+    stretched. ``keep_aspect`` instead gives the largest whole-pixel rectangle of the window's
+    aspect, centred (letterboxed), so that a circle stays round.
     """
+    if not keep_aspect:
+        return 0.0, float(width), 0.0, float(height)
     u_min, u_max, v_min, v_max = window
     aspect = (u_max - u_min) / (v_max - v_min)
     if width >= height * aspect:
@@ -69,12 +76,28 @@ def _homogeneous(points: np.ndarray) -> np.ndarray:
     return np.concatenate([points, np.ones((len(points), 1))], axis=1)
 
 
-def project_lines(points: np.ndarray, projection: str, vp) -> np.ndarray:
-    """Wireframe: canonical ``(N, 3)`` → device ``(N, 3)`` via M_per (perspective), M_vv3dv, /W."""
+def line_matrix(projection: str, vp) -> np.ndarray:
+    """Wireframe: ``M_vv3dv · M_per`` (perspective, d = -1) or ``M_vv3dv`` (parallel)."""
     m = m_vv3dv(*vp)
     if projection == "perspective":
         m = m @ m_per(-1.0)
-    return divide_by_w(_homogeneous(points) @ m.T)
+    return m
+
+
+def project_lines(points: np.ndarray, projection: str, vp) -> np.ndarray:
+    """Wireframe: canonical ``(N, 3)`` → device ``(N, 3)`` via M_per (perspective), M_vv3dv, /W.
+
+    Each row of the matrix is applied as ``m0 x + m1 y + m2 z + m3``, left to right, not by a
+    BLAS product (whose order and fused multiply-adds vary): the compiled wireframe
+    (``core.pipeline.wireframe``) does the same sums and so lands on the same pixels.
+    """
+    m = line_matrix(projection, vp)
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    x, y, z = points[:, 0], points[:, 1], points[:, 2]
+    h = np.empty((len(points), 4))
+    for r in range(4):
+        h[:, r] = m[r, 0] * x + m[r, 1] * y + m[r, 2] * z + m[r, 3]
+    return divide_by_w(h)
 
 
 def triangle_matrix(projection: str, z_min: float, vp) -> np.ndarray:

@@ -26,8 +26,8 @@ Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene, ``lp_rast_tri.c``
   numbers, so the edge is neither drawn twice nor left open. The box is walked row by row,
   the edge functions stepped by A per pixel (FvDFH's incremental scan line, in integers).
   Depth is interpolated linearly in screen space (after the perspective-to-parallel divide it
-  is an affine function of x and y, FvDFH 6.5.4) and tested strictly: a pixel is written only
-  when nearer. Barycentrics are perspective-corrected with 1/W.
+  is an affine function of x and y, FvDFH 6.5.4) and tested as the notes write it,
+  ``z >= zbuffer``: on a tie the later triangle wins. Barycentrics are perspective-corrected with 1/W.
 
 Both cores: setup works on chunks of the triangle array, rast on horizontal bands of the
 framebuffer, handed out one at a time. Each band draws the scene's triangles that meet it in
@@ -361,7 +361,7 @@ def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b
                 l1 = float(e1 + bias1)
                 l2 = float(e2 + bias2)
                 z = z0 + (l1 * dz1 + l2 * dz2) * inv_area  # depth is affine in screen space
-                if z > depth[row, i]:
+                if z >= depth[row, i]:  # the notes' test: a tie goes to the later triangle
                     depth[row, i] = z
                     tri[row, i] = t
                     # perspective correction: weights ~ lambda_k / W_k, renormalised

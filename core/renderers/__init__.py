@@ -57,3 +57,5 @@ register_renderer("zbuffer", "core.renderers.zbuffer:draw",
                   description="the FvDFH viewing pipeline: clip, project, scan-line z-buffer")
 register_renderer("raycast", "core.renderers.raycast:draw", samples_itself=True,
                   description="the analytic surfaces ray-cast exactly (the reference)")
+register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
+                  description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)")

@@ -343,7 +343,8 @@ def _trace(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, backgr
 
 
 def render_reference(shapes, scene, view: View, projection: str,
-                     size: tuple[int, int] | None = None, samples: int = 4) -> Reference:
+                     size: tuple[int, int] | None = None, samples: int = 4,
+                     keep_aspect: bool = False) -> Reference:
     """The exact image of ``shapes`` lit by ``scene``'s lights, seen through ``view``.
 
     ``scene`` supplies ``lights``, ``ambient``, ``specular`` and ``background`` (its meshes are
@@ -364,7 +365,7 @@ def render_reference(shapes, scene, view: View, projection: str,
     seen = np.zeros((height, width), dtype=np.int64)
     _trace(packed, surfaces, pack_lights(scene.lights), pack_ambient(scene.ambient),
            pack_eye(eye), scene.specular == "halfway",
-           pack_camera(view, projection, width, height), int(samples),
+           pack_camera(view, projection, width, height, keep_aspect), int(samples),
            np.asarray(scene.background, dtype=np.float64).reshape(3), rgb, surface_rgb, coverage,
            seen)
     return Reference(rgb=rgb, surface_rgb=surface_rgb, coverage=coverage, shape=seen,
@@ -381,7 +382,7 @@ def draw(scene, view: View, settings, frame, context, timer) -> None:
         return
     side = grid_side(settings.samples)
     reference = render_reference(scene.primitives, scene, view, settings.projection,
-                                 settings.size, samples=side)
+                                 settings.size, samples=side, keep_aspect=settings.keep_aspect)
     frame.color[:] = to_rgb8(reference.rgb)
     frame.stats["samples per pixel"] = side * side
     frame.stats["computed"].append("exact ray casting")

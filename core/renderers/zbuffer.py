@@ -30,11 +30,13 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     projection, shading = settings.projection, settings.shading
     height, width = frame.color.shape[:2]
     n, z_min = context.normalizing_transform(view, projection)
-    vp = _sample_viewport(project.viewport(view.window, width, height), settings.pixel_offset)
+    vp = _sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
+                          settings.pixel_offset)
     timer.lap("normalize")
     solid = shading != "wireframe" and scene.triangle_count > 0
     if solid:
-        draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context, timer)
+        draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context, timer,
+                       settings)
     else:
         fill(frame.color, scene.background)
     line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
@@ -53,6 +55,11 @@ def _sample_viewport(vp, pixel_offset):
     return x0 + dx, x1 + dx, y0 + dy, y1 + dy
 
 
+# From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,
+# the same pixels): below it the numpy stages take a few ms and need no numba at start-up.
+COMPILED_LINES_FROM = 5_000
+
+
 def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, timer,
                stats) -> None:
     """Wireframe: transform, Cohen–Sutherland clip, M_per · M_vv3dv, divide, scan-convert."""
@@ -63,6 +70,15 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
             cache["edges"] = (mesh.triangles, mesh.all_edges())
         edges = cache["edges"][1]
         if len(edges) == 0:
+            continue
+        if len(edges) >= COMPILED_LINES_FROM:
+            from core.renderers import triangles as stages     # compiled, one BLAS thread
+            from core.pipeline.wireframe import draw_edges
+            points = stages.transform_affine(n, mesh.positions)
+            timer.lap("normalize")
+            drawn += draw_edges(points, edges, clip.planes(projection, z_min),
+                                project.line_matrix(projection, vp), color, to_rgb8(line_color))
+            timer.lap("scan-convert lines")
             continue
         points = apply(n, mesh.positions)[:, :3]
         timer.lap("normalize")
@@ -79,9 +95,14 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
 
 
 def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context,
-                   timer) -> None:
-    """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``."""
+                   timer, settings=None) -> None:
+    """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``; with
+    ``settings.rasterizer`` "scanline" the course's ET/AET algorithm scan-converts
+    (screen-linear weights)."""
+    rasterizer = settings.rasterizer if settings is not None else "edge"
     from core.renderers import triangles as stages      # the compiled stages, on first use
+    from core.texture.shaders import shading_for        # issue 11: Phong of textured materials
+    shading = shading_for(scene, shading)
     stats = frame.stats
     height, width = frame.color.shape[:2]
     eye = stages.shade.eye_from_view(view, projection)
@@ -112,7 +133,11 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
                                          clipped.points)
     timer.lap("project", device_points=device, inv_w=inv_w)
 
-    vis = stages.rasterize(device, inv_w, clipped.triangles, width, height,
+    rasterize = stages.rasterize
+    if rasterizer == "scanline":
+        from core.pipeline.raster_scanline import rasterize
+    stats["rasterizer"] = rasterizer
+    vis = rasterize(device, inv_w, clipped.triangles, width, height,
                     out=context.buffer("visibility", (width, height),
                                        lambda: stages.VisibilityBuffer.allocate(width, height)))
     stats["allocated"].append("depth")
@@ -122,6 +147,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
         stats["computed"].append("barycentric derivatives")
     timer.lap("z-buffer", depth=vis.depth, tri=vis.tri, b1=vis.b1, b2=vis.b2)
 
+    inputs.settings = settings              # issue 11: the texture filter and the bump switch
+    inputs.device = (device, inv_w)         # issue 11: exact (u, v) derivatives per triangle
     stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
                   out=frame.color)
     frame.depth = vis.depth

@@ -389,6 +389,25 @@ def sphere_torus(triangles: int = 100_000) -> Scene:
                  source=f"generators.sphere_torus(triangles={n})")
 
 
+# -- issue 11: a textured floor needs a plane with (u, v)
+def plane(size: float = 2.0, subdivisions: int = 1) -> Mesh:
+    """The square of side ``size`` in the xz-plane, centred at the origin, facing +y, split
+    into n x n cells; (u, v) run from (0, 0) at (−size/2, 0, +size/2) to (1, 1) at
+    (+size/2, 0, −size/2): u along +x, v along −z (away from a viewer on +z). Open."""
+    size = _length("size", size)
+    n = _whole("subdivisions", subdivisions, 1, 2048)
+    _budget("plane", 2 * n * n)
+    t = np.linspace(0.0, 1.0, n + 1)
+    u, v = np.meshgrid(t, t, indexing="ij")              # vertex (i, j): u = t_i, v = t_j
+    positions = np.stack([(u - 0.5) * size, np.zeros_like(u), (0.5 - v) * size], axis=-1)
+    normals = np.tile([0.0, 1.0, 0.0], (n + 1, n + 1, 1))
+    return Mesh(positions=positions.reshape(-1, 3), normals=normals.reshape(-1, 3),
+                triangles=_grid_triangles(n + 1, n + 1, wrap_rows=False, wrap_cols=False),
+                uv=_grid_uv(n + 1, n + 1), closed=False, material=Material(od=(0.8, 0.8, 0.8)),
+                name="plane")
+# --
+
+
 # The names a scene file may give as ``generator = "..."``.
 GENERATORS = {
     "house": house,
@@ -398,4 +417,5 @@ GENERATORS = {
     "torus": torus,
     "bezier_surface": bezier_surface,
     "torus_knot": torus_knot,
+    "plane": plane,             # issue 11
 }

@@ -29,6 +29,11 @@ class Material:
     od: tuple[float, float, float] = (0.8, 0.8, 0.8)
     # Specular colour O_s; FvDFH 16.1.5 uses the light's colour (O_s = 1) for plastics.
     os: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    # Whitted's global terms (issue 12; the ray tracer's, the z-buffer ignores them): the
+    # mirror coefficient k_r, the transmission coefficient k_t and the index of refraction.
+    kr: float = 0.0
+    kt: float = 0.0
+    ior: float = 1.52                      # glass (the notes); only used where kt > 0
 
 
 @dataclass
@@ -59,6 +64,9 @@ class Mesh:
     name: str = "mesh"
     uv: np.ndarray | None = None                            # (V, 2) texture coordinates
     extra: dict = field(default_factory=dict)               # more named (V, k) arrays
+    # The analytic primitive (core.scene.primitives) this mesh tessellates for the z-buffer;
+    # the ray tracer intersects that primitive instead of these triangles.
+    tessellates: object | None = None
 
     def __post_init__(self) -> None:
         self.positions = np.ascontiguousarray(self.positions, dtype=np.float64).reshape(-1, 3)
@@ -107,6 +115,9 @@ class Scene:
     meshes: list[Mesh]
     views: list[View]
     view_messages: list[str] = field(default_factory=list)
+    # Every view in file order, the View when valid and its message when not, so that "view K"
+    # means the K-th view of the file (the course's numbering). Empty: valid views, then invalid.
+    view_order: list = field(default_factory=list)
     lights: list[Light] = field(default_factory=lambda: [Light(position=(0.0, 0.0, 100.0))])
     ambient: tuple[float, float, float] = (0.2, 0.2, 0.2)         # I_a
     background: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -116,6 +127,8 @@ class Scene:
     specular: str = "reflect"             # "reflect": (R.V)^n; "halfway": (N.H)^n
     size: tuple[int, int] = (500, 500)    # preferred framebuffer size, width x height
     source: str = ""                      # file the scene came from
+    keep_aspect: bool = False             # letterbox the window instead of stretching it
+    rasterizer: str = "edge"              # "edge" | "scanline" (the course's ET/AET algorithm)
     # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
     primitives: list = field(default_factory=list)
 

@@ -20,13 +20,14 @@ import sys
 from numbers import Integral      # (core.scene.formats.numbers would shadow the module name)
 from pathlib import Path
 
-from core.scene.formats.errors import ReaderError, decode_text, read_file, tolerant_of_underflow
+from core.scene.formats.errors import (MAX_INPUT_BYTES, ReaderError, decode_text, read_file,
+                                      read_stream, tolerant_of_underflow)
 from core.scene.formats.meshfile import MESH_EXTENSIONS, read_mesh
 from core.scene.formats.scenefile import read_scene_file
 from core.scene.formats.tri import read_tri
 from core.scene.model import MAX_IMAGE_SIDE, Scene
 
-__all__ = ["ReaderError", "load_scene", "read_mesh", "read_scene_file", "read_tri",
+__all__ = ["MAX_INPUT_BYTES", "ReaderError", "load_scene", "read_mesh", "read_scene_file", "read_tri",
            "MESH_EXTENSIONS"]
 
 STDIN = "-"
@@ -42,12 +43,12 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
     if size is not None:
         size = _size(size, name)
     if name == STDIN:
-        stream = getattr(sys.stdin, "buffer", None)         # bytes, so junk is reported
-        text = decode_text(stream.read(), "<stdin>") if stream else sys.stdin.read()
+        stream = getattr(sys.stdin, "buffer", sys.stdin)    # bytes, so junk is reported
+        text = decode_text(read_stream(stream, "<stdin>", "views"), "<stdin>")
         return _views_scene(text, "<stdin>", size)
     path = Path(source)
-    data = read_file(path, name)
     ext = path.suffix.lower()
+    data = read_file(path, name, input_kind(ext))
     if ext == ".toml":
         return read_scene_file(data, name, path.parent, size)
     if ext == ".tri":
@@ -55,6 +56,11 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
     if ext in MESH_EXTENSIONS:
         return _mesh_scene(read_mesh(data, name, ext), name, size)
     return _views_scene(decode_text(data, name), name, size)
+
+
+def input_kind(ext: str) -> str:
+    """Which input-size limit (``errors.MAX_INPUT_BYTES``) a file with extension ``ext`` has."""
+    return {".toml": "scene", ".tri": "tri"}.get(ext, "mesh" if ext in MESH_EXTENSIONS else "views")
 
 
 def _size(size, name: str) -> tuple[int, int]:
@@ -85,7 +91,9 @@ def _mesh_scene(mesh, name: str, size) -> Scene:
 def _views_scene(text: str, name: str, size) -> Scene:
     """A bare view file: its views of the FvDFH house, in wireframe."""
     from core.scene.generators import house
-    from core.scene.formats.viewfile import read_views
-    views, messages = read_views(text, name)
-    return Scene(name="house", meshes=[house()], views=views, view_messages=messages,
+    from core.camera.view import View
+    from core.scene.formats.viewfile import read_view_entries
+    order = read_view_entries(text, name)
+    return Scene(name="house", meshes=[house()], views=[v for v in order if isinstance(v, View)],
+                 view_messages=[v for v in order if not isinstance(v, View)], view_order=order,
                  shading="wireframe", size=size or (500, 500), source=name)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.scene.model import Light
-from core.camera.view import View
+from core.camera.view import View, unit3
 
 # The front plane is kept at least this fraction of the depth range in front of the eye, so
 # that z_min (and with it the z-buffer's precision) stays reasonable when geometry crosses it.
@@ -40,19 +40,18 @@ def screen_basis(right: np.ndarray, down: np.ndarray) -> tuple[np.ndarray, np.nd
 
     Raises ValueError with the reason when the two displacements cannot span a pixel grid.
     """
-    len_r, len_d = np.linalg.norm(right), np.linalg.norm(down)
+    u, len_r = unit3(right)            # scaled: a displacement of 1e-300 is not zero
+    unit_down, len_d = unit3(down)
     if not len_r > 0.0:
         raise ValueError("the right displacement is zero")
     if not len_d > 0.0:
         raise ValueError("the down displacement is zero")
-    u = right / len_r
-    cosine = float(np.dot(u, down / len_d))
+    cosine = float(np.dot(u, unit_down))
     if abs(cosine) > PERPENDICULAR_TOLERANCE:
         raise ValueError(f"the right and down displacements are not perpendicular (the angle "
                          f"between them is {np.degrees(np.arccos(np.clip(cosine, -1, 1))):.6g} "
                          f"degrees); a VRC window needs a rectangular pixel grid")
-    v = -(down - np.dot(down, u) * u)          # drop the rounding-sized slant, then point up
-    v /= np.linalg.norm(v)
+    v = unit3(-(unit_down - np.dot(unit_down, u) * u))[0]   # drop the rounding-sized slant
     return u + 0.0, v + 0.0, np.cross(u, v) + 0.0      # + 0.0: no -0.0 in messages
 
 
@@ -90,9 +89,9 @@ def tri_view(viewpoint: np.ndarray, top_left: np.ndarray, right: np.ndarray, dow
     """
     u, v, n = screen_basis(right, down)
     width, height = size
-    len_r, len_d = float(np.linalg.norm(right)), float(np.linalg.norm(down))
+    len_r, len_d = unit3(right)[1], unit3(down)[1]
     eye = viewpoint - top_left
-    if min(len_r, len_d) < 1e-12 * float(np.linalg.norm(eye)):
+    if min(len_r, len_d) < 1e-12 * unit3(eye)[1]:
         raise ValueError("the pixel displacements are too small next to the viewpoint's "
                          "distance from the screen (less than 1e-12 of it): the image would "
                          "be one point")

@@ -8,24 +8,75 @@ names the file, the line (where the problem has one) and the reason, in the form
 from __future__ import annotations
 
 import functools
+import re
 from pathlib import Path
 
 import numpy as np
 
+from core.camera.view import MAX_WORLD
+
 # Coordinates beyond this are refused by every reader: products of a few of them (cross
 # products, volumes, the normalizing transforms) must stay finite in float64.
-MAX_COORDINATE = 1e30
+MAX_COORDINATE = MAX_WORLD          # the views' validity rules assume this bound
+
+
+# A message is one line of at most this many characters (a 1 MB value once made a 2 MB message).
+MAX_MESSAGE = 400
+
+
+def printable(text: str, limit: int = MAX_MESSAGE) -> str:
+    """``text`` safe to print on a terminal, on one line: control characters (newlines, escape
+    sequences), bidirectional overrides and other invisible format characters become escapes
+    (``\\n``, ``\\x1b``, ``\\u202e``), and the result is cut to ``limit`` characters."""
+    text = str(text)
+    if not text.isprintable():
+        text = "".join(c if c.isprintable() else _escape(c) for c in text)
+    if len(text) > limit:
+        cut = len(text) - limit
+        text = f"{text[:limit]}... ({cut} more characters)"
+    return text
+
+
+def _escape(c: str) -> str:
+    code = ord(c)
+    if c in "\n\r\t":
+        return {"\n": "\\n", "\r": "\\r", "\t": "\\t"}[c]
+    return f"\\x{code:02x}" if code < 0x100 else f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}"
 
 
 class ReaderError(ValueError):
-    """A file that cannot be read; ``str(error)`` is ``FILE:LINE: REASON`` (or ``FILE: REASON``)."""
+    """A file that cannot be read; ``str(error)`` is ``FILE:LINE: REASON`` (or ``FILE: REASON``).
+
+    The file name and the reason are made :func:`printable`: both may hold text from the input.
+    """
 
     def __init__(self, file: str, reason: str, line: int | None = None) -> None:
-        self.file = str(file)
+        self.file = printable(file, 200)
         self.line = line
-        self.reason = reason
+        self.reason = printable(reason)
         where = self.file if line is None else f"{self.file}:{line}"
-        super().__init__(f"{where}: {reason}")
+        super().__init__(f"{where}: {self.reason}")
+
+
+# A count or index is at most this many digits (10^18 > anything 64-bit memory can hold). Python's
+# int() refuses strings over 4300 digits with a ValueError, and a long one is slow to convert:
+# the digits are counted before any conversion.
+MAX_WHOLE_DIGITS = 18
+_WHOLE = re.compile(r"[+-]?[0-9]+")       # ASCII digits only (str.isdigit() takes '²' and '١')
+
+
+def whole_number(token: str, file: str, line: int | None, what: str,
+                 signed: bool = False) -> int:
+    """``token`` as an int: ASCII digits with an optional ``+`` (or ``-`` when ``signed``), at
+    most MAX_WHOLE_DIGITS significant digits; otherwise a ReaderError naming ``what``."""
+    if not _WHOLE.fullmatch(token) or (token[0] == "-" and not signed):
+        kind = "a whole number" if signed else "a whole number >= 0"
+        raise ReaderError(file, f"{what} must be {kind}, got {short(token)}", line)
+    digits = token.lstrip("+-").lstrip("0")
+    if len(digits) > MAX_WHOLE_DIGITS:
+        raise ReaderError(file, f"{what} has {len(digits)} digits: more than any file can hold "
+                                f"(at most {MAX_WHOLE_DIGITS})", line)
+    return int(token)
 
 
 def decode_text(data: bytes, file: str) -> str:
@@ -51,15 +102,59 @@ def short(token: str, limit: int = 40) -> str:
     return repr(token if len(token) <= limit else token[:limit] + "...")
 
 
-def read_file(path: Path, shown: str) -> bytes:
-    """The bytes of a regular file (never a device, a FIFO or a folder), or a ReaderError."""
+# The most bytes read from one input, by kind. A file or a stream is refused beyond its limit
+# before it is read (a file by its size, a stream by reading one byte more than the limit), so
+# that `/dev/zero`, `yes |` or a sparse 6 GB file end in a message, not in MemoryError. The
+# limits sit well above the largest input each kind can usefully hold: a mesh or .tri is held
+# to the 4M-triangle budget anyway (a binary STL of 4M triangles is 200 MB).
+MiB = 1 << 20
+MAX_INPUT_BYTES = {"scene": 16 * MiB, "views": 16 * MiB, "tri": 256 * MiB, "mesh": 512 * MiB}
+
+
+def _too_big(shown: str, size: int | str, kind: str) -> ReaderError:
+    limit = MAX_INPUT_BYTES[kind]
+    return ReaderError(shown, f"the input is {size} bytes; a {kind} input may have at most "
+                              f"{limit} bytes ({limit // MiB} MiB)")
+
+
+def read_file(path: Path, shown: str, kind: str = "views") -> bytes:
+    """The bytes of a regular file (never a device, a FIFO or a folder) of at most
+    ``MAX_INPUT_BYTES[kind]`` bytes, or a ReaderError."""
+    limit = MAX_INPUT_BYTES[kind]
     try:
         if path.is_file():
-            return path.read_bytes()
+            size = path.stat().st_size
+            if size > limit:
+                raise _too_big(shown, size, kind)
+            with open(path, "rb") as stream:
+                data = stream.read(limit + 1)       # the file may have grown since stat()
+            if len(data) > limit:
+                raise _too_big(shown, f"more than {limit}", kind)
+            return data
         exists = path.exists()
     except (OSError, ValueError) as error:        # ValueError: a NUL in the path
+        if isinstance(error, ReaderError):
+            raise
         raise ReaderError(shown, f"cannot read it: {getattr(error, 'strerror', None) or error}") from None
     raise ReaderError(shown, f"cannot read it: {'not a regular file' if exists else 'no such file'}")
+
+
+def read_stream(stream, shown: str, kind: str = "views") -> bytes:
+    """At most ``MAX_INPUT_BYTES[kind]`` bytes of a binary stream (standard input), or a
+    ReaderError: the stream is closed, unreadable, or longer than the limit (one byte more
+    than the limit is read to know, never the whole of an endless stream)."""
+    limit = MAX_INPUT_BYTES[kind]
+    if stream is None or getattr(stream, "closed", False):
+        raise ReaderError(shown, "cannot read it: standard input is closed")
+    try:
+        data = stream.read(limit + 1)
+    except (OSError, ValueError) as error:      # EBADF; ValueError: closed underneath us
+        raise ReaderError(shown, f"cannot read it: {getattr(error, 'strerror', None) or error}") from None
+    if isinstance(data, str):                   # a text stream (a test's StringIO)
+        data = data.encode("utf-8", "surrogateescape")
+    if len(data) > limit:
+        raise _too_big(shown, f"more than {limit}", kind)
+    return data
 
 
 def file_stem(file: str) -> str:

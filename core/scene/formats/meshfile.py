@@ -26,17 +26,19 @@ are merged into one by hashing (``np.unique`` on rows), as the course's ``.tri``
 from __future__ import annotations
 
 import io
+import logging
 import re
 import struct
 
 import numpy as np
 
 from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
-                                 tolerant_of_underflow)
+                                 tolerant_of_underflow, whole_number)
 from core.transforms import unit_rows
 from core.scene.model import Mesh
 
 MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl")
+_QUIET = logging.NullHandler()            # added once: a logger keeps a set-like list
 
 
 # ----------------------------------------------------------------------------- mesh helpers
@@ -44,18 +46,58 @@ MESH_EXTENSIONS = (".obj", ".ply", ".off", ".stl")
 def merge_vertices(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Equal rows of ``points`` become one vertex, numbered in order of first appearance.
 
-    Returns ``(positions, inverse)`` with ``positions[inverse] == points``. Hashing by sorting
-    (``np.unique`` on rows): O(N log N), never the startup code's O(N^2) scan. ``-0.0`` and
+    Returns ``(positions, inverse)`` with ``positions[inverse] == points``. ``-0.0`` and
     ``0.0`` are equal, as they are for the C ``==`` of the startup code.
     """
     points = np.asarray(points, dtype=np.float64).reshape(-1, 3) + 0.0    # -0.0 -> 0.0
-    if len(points) == 0:
-        return points, np.zeros(0, dtype=np.int64)
-    unique, first, inverse = np.unique(points, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first, kind="stable")          # sorted rows -> first-appearance order
-    rank = np.empty_like(order)
-    rank[order] = np.arange(len(order))
-    return unique[order], rank[inverse.reshape(-1)].astype(np.int64)
+    first, inverse = _first_of_equal_rows(points)
+    return points[first], inverse
+
+
+def _first_of_equal_rows(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(first, inverse)``: the index of the first of each set of equal rows, in order of
+    appearance, and for every row the number of its set (``rows[first][inverse] == rows``).
+
+    Hashing by sorting, O(N log N) whatever the data (never the startup code's O(N^2) scan):
+    a stable sort by the columns (``np.lexsort``; ``np.unique(axis=0)`` sorts rows as opaque
+    records, 9 s for a million copies of one triangle), then a new set wherever a row differs
+    from the one before it.
+    """
+    n = len(rows)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    order = np.lexsort(rows.T[::-1])                    # stable: equal rows keep file order
+    ordered = rows[order]
+    starts = np.ones(n, dtype=bool)
+    starts[1:] = np.any(ordered[1:] != ordered[:-1], axis=1)
+    group = np.cumsum(starts) - 1                       # set number, in sorted order
+    first = order[starts]                               # stable: the first of each set
+    by_appearance = np.argsort(first, kind="stable")
+    rank = np.empty_like(by_appearance)
+    rank[by_appearance] = np.arange(len(first))
+    inverse = np.empty(n, dtype=np.int64)
+    inverse[order] = rank[group]
+    return first[by_appearance], inverse
+
+
+def drop_repeated_triangles(triangles: np.ndarray) -> np.ndarray:
+    """The triangles without exact repeats (the same three vertices in the same cyclic order),
+    the first of each kept, in file order.
+
+    A repeat draws nothing: it covers the pixels of its first copy at the same depth, and the
+    z-buffer keeps the first (FvDFH's strict depth test). But it costs the raster its area
+    again, so a file of a million copies of one large triangle would cost a million times its
+    pixels; without repeats a frame costs at most its distinct triangles plus the pixels. The
+    opposite winding (b, a, c) is not a repeat: it is the other face of the triangle.
+    """
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if len(t) < 2:
+        return t
+    lowest = np.argmin(t, axis=1)                       # rotate the smallest index first
+    turn = (lowest[:, None] + np.arange(3)) % 3
+    canonical = np.take_along_axis(t, turn, axis=1)
+    first, _ = _first_of_equal_rows(canonical)
+    return t if len(first) == len(t) else t[first]
 
 
 def fan(polygons: np.ndarray) -> np.ndarray:
@@ -111,56 +153,102 @@ def is_closed(positions: np.ndarray, triangles: np.ndarray) -> bool:
 _OBJ_INDEX = re.compile(r"[+-]?\d+")
 
 
-def _check_obj(text: str, file: str) -> None:
-    """Line-precise structure check of an OBJ: vertex records and face indices.
+def _over_budget(file: str, what: str, count: int, budget: int, line: int | None = None):
+    return ReaderError(file, f"{what} {count} triangles; the limit is {budget} (the triangle "
+                             f"budget of a scene)", line)
 
-    Faces may refer only to vertices that exist (positive indices count from 1, negative ones
-    back from the last vertex defined so far); index 0 does not exist in OBJ.
+
+# The records an OBJ face may refer to, with the numbers each takes: a vertex 3 (plus an
+# optional w, or RGB, or both), a texture coordinate 1 to 3 (u [v [w]]), a normal exactly 3.
+_OBJ_RECORDS = {"v": ("vertex", (3, 4, 6, 7)), "vt": ("texture coordinate", (1, 2, 3)),
+                "vn": ("normal", (3,))}
+_OBJ_SLOTS = ("v", "vt", "vn")           # the parts of a face corner v/vt/vn
+
+
+def _check_obj(text: str, file: str, budget: int) -> None:
+    """Line-precise structure check of an OBJ: vertex, texture and normal records, and faces.
+
+    Every index of a face corner ``v``, ``v/vt``, ``v//vn`` or ``v/vt/vn`` must refer to a
+    record that exists (positive indices count from 1, negative ones back from the last record
+    defined so far); index 0 does not exist in OBJ. A reference to a missing ``vt`` or ``vn``
+    is refused, not dropped. The triangles the faces fan into are counted against ``budget``
+    as they come.
     """
-    vertices = 0
+    defined = {"v": 0, "vt": 0, "vn": 0}
+    triangles = 0
     negative_at = None
     for number, line in enumerate(text.split("\n"), start=1):
         fields = line.split("#", 1)[0].split()
         if not fields:
             continue
         key = fields[0]
-        if key in ("v", "vn"):
-            what = "vertex" if key == "v" else "normal"
-            if key == "v" and negative_at is not None:
-                raise ReaderError(file, f"a vertex defined after the negative (relative) index on "
-                                        f"line {negative_at}: the mesh library resolves relative "
-                                        f"indices against the final vertex list, so this file "
-                                        f"would be misread", number)
-            if len(fields) < 4 or (key == "v" and len(fields) not in (4, 5, 7, 8)):
-                raise ReaderError(file, f"a {what} needs 3 coordinates, got {len(fields) - 1}"
-                                  if len(fields) < 4 else
-                                  f"a vertex has 3 coordinates (plus an optional w or RGB), got "
-                                  f"{len(fields) - 1} numbers", number)
-            for token in fields[1:]:
-                try:
-                    value = float(token)
-                except ValueError:
-                    raise ReaderError(file, f"{what} coordinate {short(token)} is not a number",
-                                      number) from None
-                if not np.isfinite(value):
-                    raise ReaderError(file, f"{what} coordinate {short(token)} is NaN or infinite",
-                                      number)
-            vertices += key == "v"
+        if key in _OBJ_RECORDS:
+            if negative_at is not None:
+                raise ReaderError(file, f"a record defined after the negative (relative) index "
+                                        f"on line {negative_at}: the mesh library resolves "
+                                        f"relative indices against the final lists, so this "
+                                        f"file would be misread", number)
+            _check_obj_record(key, fields[1:], file, number)
+            defined[key] += 1
         elif key == "f":
             if len(fields) < 4:
                 raise ReaderError(file, f"a face needs at least 3 vertices, got {len(fields) - 1}",
                                   number)
+            triangles += len(fields) - 3
+            if triangles > budget:
+                raise _over_budget(file, "the faces up to here make", triangles, budget, number)
             for ref in fields[1:]:
-                index = ref.split("/", 1)[0]
-                if not _OBJ_INDEX.fullmatch(index):
-                    raise ReaderError(file, f"face vertex {short(ref)} is not an index", number)
-                k = int(index)
-                if k == 0 or k > vertices or -k > vertices:
-                    raise ReaderError(file, f"face index {k} is out of range: "
-                                      f"{vertices} vertices are defined before this line "
-                                      f"(indices run 1..{vertices} or -1..-{vertices})", number)
-                if k < 0 and negative_at is None:
+                if _check_obj_corner(ref, defined, file, number) and negative_at is None:
                     negative_at = number
+
+
+def _check_obj_record(key: str, numbers: list[str], file: str, line: int) -> None:
+    what, counts = _OBJ_RECORDS[key]
+    if len(numbers) not in counts:
+        if key != "vt" and len(numbers) < 3:
+            raise ReaderError(file, f"a {what} needs 3 coordinates, got {len(numbers)}", line)
+        wanted = {"v": "3 coordinates (plus an optional w, or RGB)",
+                  "vt": "1 to 3 coordinates (u [v [w]])", "vn": "exactly 3 coordinates"}[key]
+        raise ReaderError(file, f"a {what} ({key}) has {wanted}, got {len(numbers)} numbers",
+                          line)
+    for token in numbers:
+        try:
+            value = float(token)
+        except ValueError:
+            raise ReaderError(file, f"{what} coordinate {short(token)} is not a number",
+                              line) from None
+        if not np.isfinite(value):
+            raise ReaderError(file, f"{what} coordinate {short(token)} is NaN or infinite", line)
+
+
+def _check_obj_corner(ref: str, defined: dict, file: str, line: int) -> bool:
+    """Check one face corner; True when it uses a negative (relative) index."""
+    parts = ref.split("/")
+    if len(parts) > 3 or not parts[0] or (len(parts) == 3 and not parts[2]) \
+            or (len(parts) == 2 and not parts[1]):
+        raise ReaderError(file, f"face vertex {short(ref)} is not v, v/vt, v//vn or v/vt/vn",
+                          line)
+    negative = False
+    for slot, index in zip(_OBJ_SLOTS, parts):
+        if not index:
+            continue                                # v//vn: no texture coordinate
+        if not _OBJ_INDEX.fullmatch(index):
+            raise ReaderError(file, f"face vertex {short(ref)}: {short(index)} is not an index",
+                              line)
+        what = _OBJ_RECORDS[slot][0]
+        name = "a face index" if slot == "v" else f"a face's {what} index"
+        k = whole_number(index, file, line, name, signed=True)
+        n = defined[slot]
+        if k == 0 or k > n or -k > n:
+            runs = f" (indices run 1..{n} or -1..-{n})" if n else ""
+            if slot == "v":
+                raise ReaderError(file, f"face index {k} is out of range: {n} vertices are "
+                                        f"defined before this line{runs}", line)
+            raise ReaderError(file, f"face vertex {short(ref)}: {what} index {k} is out of "
+                                    f"range: {n} {what}s ({slot}) are defined before this "
+                                    f"line{runs}", line)
+        negative |= k < 0
+    return negative
 
 
 _PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2,
@@ -168,7 +256,7 @@ _PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort"
               "float": 4, "float32": 4, "double": 8, "float64": 8}
 
 
-def _check_ply(data: bytes, file: str) -> None:
+def _check_ply(data: bytes, file: str, budget: int) -> None:
     """Check a PLY header and that the data after it can hold the element counts it declares.
 
     The smallest possible row of each element is known from its properties (binary: the bytes
@@ -194,10 +282,11 @@ def _check_ply(data: bytes, file: str) -> None:
                 raise ReaderError(file, f"unknown PLY format {' '.join(fields[1:])!r}", number)
             fmt = fields[1]
         elif fields[0] == "element":
-            if len(fields) != 3 or not fields[2].isdigit():
+            if len(fields) != 3:
                 raise ReaderError(file, "an element line is 'element NAME COUNT' with a whole "
                                         "number COUNT", number)
-            elements.append([fields[1], int(fields[2]), number, 0])
+            count = whole_number(fields[2], file, number, f"the count of element {short(fields[1])}")
+            elements.append([fields[1], count, number, 0, []])
         elif fields[0] == "property":
             if not elements:
                 raise ReaderError(file, "a property before any element", number)
@@ -206,26 +295,72 @@ def _check_ply(data: bytes, file: str) -> None:
                 raise ReaderError(file, f"malformed property line {line.strip()!r}", number)
             # smallest row: a scalar, or a list with zero items (just its count)
             elements[-1][3] += _PLY_SIZES[types[0]] if fmt != "ascii" else 2
+            elements[-1][4].append(fields[1] == "list")
         else:
             raise ReaderError(file, f"unknown PLY header keyword {short(fields[0])}", number)
     if fmt is None:
         raise ReaderError(file, "the PLY header has no 'format' line", 1)
     needed = 0
-    for name, count, number, row in elements:
+    for name, count, number, row, _ in elements:
+        if name == "face" and count > budget:
+            raise _over_budget(file, f"the header says {count} faces: at least", count, budget,
+                               number)
         needed += count * row
         if needed > body:
             raise ReaderError(file, f"the header says element '{name}' has {count} rows, but "
                                     f"only {body} bytes of data follow the header (at least "
                                     f"{needed} needed)", number)
+    if fmt == "ascii":
+        first_line = header.count("\n") + 2           # the line after end_header
+        _check_ply_ascii_rows(decode_text(data[newline + 1:], file) if newline >= 0 else "",
+                              elements, first_line, file)
 
 
-def _check_off(text: str, file: str) -> None:
-    """Check the OFF keyword and that the numbers after the counts line can hold V and F."""
+def _check_ply_ascii_rows(body: str, elements: list, first_line: int, file: str) -> None:
+    """Every element has exactly its count of rows, one a line, each holding its scalars and
+    its lists (a count, then that many items); nothing follows the last row. Without this an
+    over-counted element takes the next element's rows as its own."""
+    rows = ((n, line.split()) for n, line in enumerate(body.split("\n"), start=first_line))
+    rows = ((n, fields) for n, fields in rows if fields)
+    for name, count, header_line, _, lists in elements:
+        for k in range(count):
+            line, fields = next(rows, (None, None))
+            if fields is None:
+                raise ReaderError(file, f"the file ends after {k} rows of element '{name}'; "
+                                        f"the header (line {header_line}) says {count}",
+                                  first_line + body.count("\n"))
+            used = 0
+            for is_list in lists:
+                if is_list and used < len(fields):
+                    used += 1 + whole_number(fields[used], file, line,
+                                             f"element '{name}' row {k}: a list count")
+                else:
+                    used += 1
+            if used != len(fields):
+                raise ReaderError(file, f"element '{name}' row {k}: its properties take {used} "
+                                        f"numbers, the line holds {len(fields)} (the header, "
+                                        f"line {header_line}, says {count} rows)", line)
+    extra = next(rows, None)
+    if extra is not None:
+        raise ReaderError(file, f"more rows than the header's elements say "
+                                f"({', '.join(f'{e[0]} {e[1]}' for e in elements)})", extra[0])
+
+
+_OFF_KEYWORDS = ("OFF", "COFF")           # what the mesh library reads (COFF: colours)
+_OFF_COLOURS = (0, 1, 3, 4)               # trailing values after a row: none, an index, RGB(A)
+
+
+def _check_off(text: str, file: str, budget: int) -> None:
+    """Check the OFF keyword, the counts, and every row: V vertex rows of 3 coordinates and
+    F face rows ``k i_1 .. i_k`` whose k matches its indices (each followed only by an
+    optional colour), and nothing after them."""
     lines = text.split("\n")
     rows = [(n, line.split("#", 1)[0].split()) for n, line in enumerate(lines, start=1)]
     rows = [(n, fields) for n, fields in rows if fields]
-    if not rows or not rows[0][1][0].upper().endswith("OFF"):
-        raise ReaderError(file, "not an OFF file: it must start with 'OFF'", rows[0][0] if rows else 1)
+    if not rows or rows[0][1][0] not in _OFF_KEYWORDS:
+        raise ReaderError(file, f"not an OFF file: it must start with 'OFF' (or 'COFF'), not "
+                                f"{short(rows[0][1][0]) if rows else 'nothing'}",
+                          rows[0][0] if rows else 1)
     number, fields = rows[0]
     fields = fields[1:]
     rest = rows[1:]
@@ -234,25 +369,57 @@ def _check_off(text: str, file: str) -> None:
             raise ReaderError(file, "the file ends before the vertex and face counts", number)
         number, fields = rest[0]
         rest = rest[1:]
-    if len(fields) < 2 or not all(f.isdigit() for f in fields[:3]):
+    if len(fields) < 2:
         raise ReaderError(file, "the counts line must hold whole numbers 'V F [E]', got "
-                                f"{' '.join(fields)!r}", number)
-    vertices, faces = int(fields[0]), int(fields[1])
+                                f"{short(' '.join(fields))}", number)
+    vertices, faces, *_ = (whole_number(f, file, number, what)
+                           for f, what in zip(fields, ("the vertex count", "the face count",
+                                                       "the edge count")))
     available = sum(len(f) for _, f in rest)
     if 3 * vertices + 4 * faces > available:
         raise ReaderError(file, f"the counts say {vertices} vertices and {faces} faces (at "
                                 f"least {3 * vertices + 4 * faces} numbers), but only "
                                 f"{available} numbers follow", number)
+    if faces > budget:
+        raise _over_budget(file, f"the counts say {faces} faces: at least", faces, budget, number)
+    _check_off_rows(rest, vertices, faces, file)
 
 
-def _stl_kind(data: bytes, file: str) -> str:
-    """'binary' when the size matches the binary header's triangle count, else 'ascii'."""
+def _check_off_rows(rows: list, vertices: int, faces: int, file: str) -> None:
+    for k, (line, fields) in enumerate(rows):
+        if k < vertices:
+            if len(fields) - 3 not in _OFF_COLOURS:
+                raise ReaderError(file, f"vertex {k}: a vertex row is 3 coordinates (plus an "
+                                        f"optional colour), got {len(fields)} numbers", line)
+            continue
+        face = k - vertices
+        if face >= faces:
+            raise ReaderError(file, f"more rows than the counts say ({vertices} vertices and "
+                                    f"{faces} faces): this row would be face {face}", line)
+        corners = whole_number(fields[0], file, line, f"face {face}: the corner count")
+        if corners < 3:
+            raise ReaderError(file, f"face {face}: a face needs at least 3 corners, got "
+                                    f"{corners}", line)
+        if len(fields) - 1 - corners not in _OFF_COLOURS:
+            raise ReaderError(file, f"face {face}: the row says {corners} corners but holds "
+                                    f"{len(fields) - 1} numbers after the count", line)
+
+
+def _stl_kind(data: bytes, file: str, budget: int) -> str:
+    """'binary' when the size matches the binary header's triangle count, else 'ascii'; the
+    count (binary: the header's; ASCII: the facets) is held to ``budget``."""
     if len(data) >= 84:
         count = struct.unpack_from("<I", data, 80)[0]
         if len(data) == 84 + 50 * count:
+            if count > budget:
+                raise _over_budget(file, f"the binary STL header says {count} triangles:",
+                                   count, budget)
             return "binary"
     if data.lstrip()[:5].lower() == b"solid":
         decode_text(data, file)
+        count = data.count(b"endfacet")
+        if count > budget:
+            raise _over_budget(file, f"the file has {count} facets:", count, budget)
         return "ascii"
     if len(data) >= 84:
         count = struct.unpack_from("<I", data, 80)[0]
@@ -273,23 +440,37 @@ def _loaded_parts(loaded: dict) -> list[dict]:
 
 
 @tolerant_of_underflow
-def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
-    """The mesh in ``data``, a file of type ``ext`` (``.obj``, ``.ply``, ``.off``, ``.stl``)."""
+def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Mesh:
+    """The mesh in ``data``, a file of type ``ext`` (``.obj``, ``.ply``, ``.off``, ``.stl``).
+
+    ``budget`` (default: ``generators.MAX_TRIANGLES``, what a scene may hold) bounds the
+    triangles; it is checked from the header, or in the pre-check's pass, before the mesh
+    library reads any data.
+    """
+    from core.scene.generators import MAX_TRIANGLES
+    budget = MAX_TRIANGLES if budget is None else budget
     ext = ext.lower()
     if ext not in MESH_EXTENSIONS:
         raise ReaderError(file, f"not a mesh file type we read ({', '.join(MESH_EXTENSIONS)})")
     if not data.strip():
         raise ReaderError(file, "the file is empty")
     if ext == ".obj":
-        _check_obj(decode_text(data, file), file)
+        text = decode_text(data, file)
+        _check_obj(text, file, budget)
+        if "\t" in text or "\v" in text or "\f" in text:
+            # OBJ separates by any white space; the mesh library splits on spaces only
+            data = text.replace("\t", " ").replace("\v", " ").replace("\f", " ").encode()
     elif ext == ".ply":
-        _check_ply(data, file)
+        _check_ply(data, file, budget)
     elif ext == ".off":
-        _check_off(decode_text(data, file), file)
+        _check_off(decode_text(data, file), file, budget)
     else:
-        _stl_kind(data, file)
+        _stl_kind(data, file, budget)
 
     from trimesh.exchange.load import mesh_loaders       # slow import: only when needed
+    # trimesh logs what it could not read, with a traceback, as a warning; with no logging
+    # set up Python prints that on stderr. What went wrong reaches the user as our message.
+    logging.getLogger("trimesh").addHandler(_QUIET)
 
     try:
         loaded = mesh_loaders[ext[1:]](io.BytesIO(data))
@@ -322,6 +503,8 @@ def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
         raise ReaderError(file, "the file holds no triangles")
     positions = np.concatenate(positions)
     triangles = np.concatenate(triangles)
+    if len(triangles) > budget:                # polygons fanned into more than the header said
+        raise _over_budget(file, "the faces make", len(triangles), budget)
     bad = ~np.all(np.isfinite(positions), axis=1)
     if np.any(bad):
         raise ReaderError(file, f"vertex {int(np.argmax(bad))} has a NaN or infinite coordinate")
@@ -344,10 +527,12 @@ def read_mesh(data: bytes, file: str, ext: str) -> Mesh:
     # Closed or not is a property of the surface, so it is decided on merged positions even
     # where the file's per-corner normals keep its vertices apart (a flat-shaded OBJ).
     merged, inverse = merge_vertices(positions)
-    closed = is_closed(merged, inverse[triangles])
     if vertex_normals is None:
         # the file's vertices may repeat (STL always does): one mesh vertex per position
         positions, triangles = merged, inverse[triangles]
+    triangles = drop_repeated_triangles(triangles)
+    surface = triangles if vertex_normals is None else drop_repeated_triangles(inverse[triangles])
+    closed = is_closed(merged, surface)
     return Mesh(positions=positions, triangles=triangles, normals=vertex_normals,
                 closed=closed, name=file_stem(file))
 

@@ -24,7 +24,9 @@ as they appear in the file) and its line; TOML syntax errors keep the line tomll
 
 from __future__ import annotations
 
+import bisect
 import inspect
+import json
 import math
 import re
 import tomllib
@@ -34,27 +36,69 @@ import numpy as np
 
 from core.scene import generators
 from core.scene.formats.camera import default_lights, framing_views
-from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, read_file,
+from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
+                                 read_file,
                                  tolerant_of_underflow)
 from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
                                    signed_volume)
 from core.shading.illumination import SPECULAR_FORMS
 from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
-from core.camera.view import PROJECTIONS, View, problems
+from core.camera.view import PROJECTIONS, View, load_problems, unit3
+from core.settings import RASTERIZERS
 
 MAX_NUMBER = MAX_COORDINATE
 
 TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
-            "line_color", "views", "view", "geometry", "light")
+            "line_color", "views", "view", "geometry", "light", "keep_aspect", "rasterizer")
 GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
+# Analytic primitives (issue 12: the ray tracer intersects them, the z-buffer draws them
+# tessellated): [[geometry]] primitive = "sphere" | "plane" with these keys.
+PRIMITIVE_KEYS = ("primitive", "center", "radius", "point", "normal", "checker", "checker_color",
+                  "extent", "segments")
+GEOMETRY_KEYS += PRIMITIVE_KEYS
 TRANSFORM_KEYS = ("scale", "rotate", "translate")
 MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
+MATERIAL_KEYS += ("kr", "kt", "ior")      # Whitted's global terms (issue 12)
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
+# Animation (issue 13): [animation], [[key]] and [[emitter]] are read by core/animation/keys.py.
+from core.animation import keys as animation_keys     # noqa: E402  (after the constants it extends)
+TOP_KEYS += animation_keys.TOP_KEYS
+TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
+
+# -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
+from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
+MATERIAL_KEYS = MATERIAL_KEYS + TEXTURE_KEYS
+# --
 
 Path_ = tuple            # a key path: ("geometry", 2, "material", "kd")
+
+
+_BARE = re.compile(r"[A-Za-z0-9_-]+")
+
+
+def _spellings(name: str) -> str:
+    """A regex for the ways ``name`` may be written as a key: bare, or quoted with TOML's
+    escapes (a control character as ``\\n`` or ``\\u000a``), so that a key such as
+    ``"x\\ny"`` is found on its own line and never on another."""
+    forms = [re.escape(f"'{name}'"), re.escape(json.dumps(name, ensure_ascii=False))]
+    if _BARE.fullmatch(name):
+        forms.append(re.escape(name))
+    if not name.isprintable():            # control characters: any escape TOML allows
+        parts = []
+        for c in name:
+            if c.isprintable() and c not in '"\\':
+                parts.append(re.escape(c))
+            else:
+                code = ord(c)
+                short_form = {"\n": "n", "\t": "t", "\r": "r", "\b": "b", "\f": "f",
+                              '"': '"', "\\": "\\"}.get(c)
+                alts = [f"u{code:04x}", f"U{code:08x}"] + ([short_form] if short_form else [])
+                parts.append(r"\\(?:" + "|".join(re.escape(a) for a in alts) + ")")
+        forms.append('"' + "".join(parts) + '"')
+    return "|".join(forms)
 
 
 def path_text(path: Path_) -> str:
@@ -73,12 +117,24 @@ class _Reader:
         self.file = file
         self.folder = folder
         self.lines = text.split("\n")
+        # Indexed once, so that locating a key costs the lines of its own table, not the
+        # file's: every [[view]] asks for its line, and a rescan per view was quadratic.
+        self._tables = [i for i, line in enumerate(self.lines) if line.lstrip().startswith("[")]
+        self._headers: dict[str, list[int]] = {}
+        self.budget = generators.MAX_TRIANGLES
 
     # ------------------------------------------------------------------ errors and lines
 
     def fail(self, path: Path_, reason: str) -> ReaderError:
         where = path_text(path)
         return ReaderError(self.file, f"{where}: {reason}" if where else reason, self.locate(path))
+
+    def _starts(self, name: str) -> list[int]:
+        """The lines (0-based) of every ``[[name]]`` header, found on first use."""
+        if name not in self._headers:
+            header = re.compile(rf"\s*\[\[\s*{re.escape(name)}\s*\]\]")
+            self._headers[name] = [i for i in self._tables if header.match(self.lines[i])]
+        return self._headers[name]
 
     def locate(self, path: Path_) -> int | None:
         """Best-effort line of ``path``: its ``[[table]]`` block, then the key inside it."""
@@ -87,24 +143,22 @@ class _Reader:
         in_block = len(keys) >= 2 and keys[0] in TABLE_ARRAYS and isinstance(keys[1], int)
         if in_block:
             name, index = keys[0], keys[1]
-            header = re.compile(rf"\s*\[\[\s*{re.escape(name)}\s*\]\]")
-            starts = [i for i, line in enumerate(self.lines) if header.match(line)]
+            starts = self._starts(name)
             if len(starts) < index:
                 return None
             start = starts[index - 1]
             own = re.compile(rf"\s*\[\s*{re.escape(name)}\s*\.")
-            stop = next((i for i in range(start + 1, len(self.lines))
-                         if self.lines[i].lstrip().startswith("[") and not own.match(self.lines[i])),
-                        len(self.lines))
+            later = self._tables[bisect.bisect_right(self._tables, start):]
+            stop = next((i for i in later if not own.match(self.lines[i])), len(self.lines))
             keys = keys[2:]
         elif keys:                            # a top-level key: before the first table
-            stop = next((i for i, line in enumerate(self.lines) if line.lstrip().startswith("[")),
-                        len(self.lines))
+            stop = self._tables[0] if self._tables else len(self.lines)
         names = [k for k in keys if isinstance(k, str)]
         for name in reversed(names):          # the key itself, else the nearest enclosing one
-            key = re.compile(rf"(^|[{{,\s.\[]){re.escape(name)}\s*[=\]]")
+            key = re.compile(rf"(^|[{{,\s.\[])({_spellings(name)})\s*[=\].]")
             for i in range(start, stop):
-                if key.search(self.lines[i].split("#", 1)[0]):
+                if key.search(self.lines[i] if not _BARE.fullmatch(name) else
+                              self.lines[i].split("#", 1)[0]):
                     return i + 1
         return start + 1 if in_block else None
 
@@ -160,6 +214,7 @@ class _Reader:
     # ------------------------------------------------------------------ the scene
 
     def scene(self, size: tuple[int, int] | None) -> Scene:
+        prescan(self.text, self.file)
         try:
             doc = tomllib.loads(self.text)
         except tomllib.TOMLDecodeError as error:
@@ -167,12 +222,20 @@ class _Reader:
             raise _toml_error(error, self.file, last) from None
         except RecursionError:
             raise ReaderError(self.file, "TOML nesting too deep") from None
+        except ValueError as error:        # int() inside tomllib: more than 4300 digits
+            raise ReaderError(self.file, f"TOML: a number cannot be read: "
+                                         f"{str(error).split(':')[0]}",
+                              _long_number_line(self.text)) from None
         self.table(doc, (), TOP_KEYS)
         if "geometry" not in doc:
             raise self.fail((), "a scene needs at least one [[geometry]] table")
         meshes, total = [], 0
         for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
-            meshes.append(self.geometry(g, ("geometry", i + 1)))
+            self.budget = generators.MAX_TRIANGLES - total     # what a mesh file may still add
+            if "primitive" in g:             # a sphere or plane: its tessellation, 1-2 meshes
+                meshes.extend(self.primitive(g, ("geometry", i + 1)))
+            else:
+                meshes.append(self.geometry(g, ("geometry", i + 1)))
             # Each generator keeps to the limit; the scene as a whole must too, or a short
             # file listing many big generators could take all the memory.
             total += len(meshes[-1].triangles)
@@ -182,19 +245,25 @@ class _Reader:
         if not meshes:
             raise self.fail(("geometry",), "a scene needs at least one [[geometry]] table")
         points = np.concatenate([m.positions for m in meshes])
-        views, messages = self.views(doc, points)
+        order = self.views(doc, points)
+        views = [v for v in order if isinstance(v, View)]
+        messages = [v for v in order if not isinstance(v, View)]
         lights = ([self.light(t, ("light", i + 1))
                    for i, t in enumerate(self.tables(doc["light"], ("light",)))]
                   if "light" in doc else default_lights(points))
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
-                      meshes=meshes, views=views, view_messages=messages, lights=lights,
-                      source=self.file)
+                      meshes=meshes, views=views, view_messages=messages, view_order=order,
+                      lights=lights, source=self.file)
+        scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
+                                 if m.tessellates is not None}.values())
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
                           ("background", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("shading", lambda v, p: self.choice(v, p, SHADINGS)),
                           ("projection", lambda v, p: self.choice(v, p, PROJECTIONS)),
-                          ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS))):
+                          ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS)),
+                          ("keep_aspect", self.boolean),
+                          ("rasterizer", lambda v, p: self.choice(v, p, RASTERIZERS))):
             if key in doc:
                 setattr(scene, key, read(doc[key], (key,)))
         if "size" in doc:
@@ -204,6 +273,12 @@ class _Reader:
             scene.size = (int(w), int(h))
         if size is not None:
             scene.size = tuple(size)
+        # -- issue 11: texture files that could not be used; the bump demo's panel view
+        scene.view_messages += getattr(self, "texture_messages", [])
+        from core.texture.bump_demo import panel_views
+        scene.views = panel_views(scene) + scene.views
+        # --
+        animation_keys.read_animation(self, doc, scene)     # keys and emitters, if any
         return scene
 
     def geometry(self, g, path: Path_) -> Mesh:
@@ -245,11 +320,11 @@ class _Reader:
                                   f"({', '.join(MESH_EXTENSIONS + ('.tri',))})")
         shown = str(Path(self.file).parent / name)
         try:
-            data = read_file(target, shown)
+            data = read_file(target, shown, "tri" if ext == ".tri" else "mesh")
             if ext == ".tri":
                 from core.scene.formats.tri import read_tri_mesh
-                return read_tri_mesh(data, shown)
-            return read_mesh(data, shown, ext)
+                return read_tri_mesh(data, shown, self.budget)
+            return read_mesh(data, shown, ext, self.budget)
         except ReaderError as error:
             raise ReaderError(error.file, f"{error.reason} (the mesh of {path_text(path[:2])} "
                                           f"in {self.file})", error.line) from None
@@ -297,7 +372,67 @@ class _Reader:
         for key in ("od", "os"):
             if key in t:
                 fields[key] = self.vector(t[key], path + (key,), 3, 0.0, 1.0)
-        return Material(**{**base.__dict__, **fields})
+        fields.update(self.whitted_terms(t, path))
+        material = Material(**{**base.__dict__, **fields})
+        # -- issue 11: textures ride on Material.extra["maps"]; a file that cannot be used
+        # leaves the mesh untextured, and its message (naming file and key) is shown.
+        maps = read_maps(self, t, path)
+        if maps is not None:
+            material.extra = {**(getattr(material, "extra", None) or {}), "maps": maps}
+            self.texture_messages = getattr(self, "texture_messages", []) + maps.messages
+        # --
+        return material
+
+    # ------------------------------------------------------------------ ray tracing (issue 12)
+
+    def whitted_terms(self, t: dict, path: Path_) -> dict:
+        """``kr``, ``kt`` in [0, 1] and ``ior``: a positive number or a medium's name."""
+        from core.raytrace.optics import index_of_refraction
+        fields = {}
+        for key in ("kr", "kt"):
+            if key in t:
+                fields[key] = self.number(t[key], path + (key,), 0.0, 1.0)
+        if "ior" in t:
+            try:
+                fields["ior"] = index_of_refraction(t["ior"], "ior")
+            except ValueError as error:
+                raise self.fail(path + ("ior",), str(error).removeprefix("ior: ")) from None
+        return fields
+
+    def primitive(self, g, path: Path_) -> list[Mesh]:
+        """``primitive = "sphere"`` (center, radius) or ``"plane"`` (point, normal, checker,
+        checker_color, extent): the primitive, drawn by its tessellation's meshes."""
+        from core.scene.primitives import Plane, Sphere, tessellate
+        self.table(g, path, ("primitive", "name", "material", "segments") + {
+            "sphere": ("center", "radius"),
+            "plane": ("point", "normal", "checker", "checker_color", "extent")}.get(
+                g["primitive"] if isinstance(g["primitive"], str) else "", ()))
+        kind = self.choice(g["primitive"], path + ("primitive",), ("sphere", "plane"))
+        material = (self.material(g["material"], path + ("material",), Material())
+                    if "material" in g else Material())
+        segments = int(self.number(g.get("segments", 96), path + ("segments",), 8, 1024))
+        if kind == "sphere":
+            shape = Sphere(self.vector(g.get("center", [0, 0, 0]), path + ("center",)),
+                           self.number(g.get("radius", 1.0), path + ("radius",), 1e-6, MAX_NUMBER),
+                           material)
+        else:
+            normal = self.vector(g.get("normal", [0, 1, 0]), path + ("normal",))
+            if not any(normal):
+                raise self.fail(path + ("normal",), "the plane's normal is the zero vector")
+            shape = Plane(self.vector(g.get("point", [0, 0, 0]), path + ("point",)), normal,
+                          material,
+                          self.number(g.get("checker", 0.0), path + ("checker",), 0.0, MAX_NUMBER),
+                          self.vector(g.get("checker_color", [0.1, 0.1, 0.1]),
+                                      path + ("checker_color",), 3, 0.0, 1.0),
+                          self.number(g.get("extent", 20.0), path + ("extent",), 1e-6, 1e6))
+            if shape.checker > 0.0 and (2 * shape.extent / shape.checker) ** 2 > 1e6:
+                raise self.fail(path + ("checker",), "over a million checker squares: make the "
+                                "squares bigger or the extent smaller")
+        meshes = tessellate(shape, segments)
+        for mesh in meshes:
+            if "name" in g:
+                mesh.name = self.string(g["name"], path + ("name",))
+        return meshes
 
     def light(self, value, path: Path_) -> Light:
         t = self.table(value, path, LIGHT_KEYS)
@@ -309,41 +444,40 @@ class _Reader:
         if "position" in t:
             light.position = self.vector(t["position"], path + ("position",))
         else:
-            light.direction = self.vector(t["direction"], path + ("direction",))
-            if not any(light.direction):
+            direction, length = unit3(self.vector(t["direction"], path + ("direction",)))
+            if length == 0.0:
                 raise self.fail(path + ("direction",), "the direction is zero")
+            # stored as a unit vector (scaled first): a direction of 1e-300 is a direction,
+            # and the renderer's plain norm of it would underflow to zero
+            light.direction = tuple(float(c) for c in direction)
         if "attenuation" in t:
             light.attenuation = self.vector(t["attenuation"], path + ("attenuation",), 3, 0.0)
             if not any(light.attenuation):
                 raise self.fail(path + ("attenuation",), "c1, c2 and c3 are all zero")
         return light
 
-    def views(self, doc: dict, points: np.ndarray) -> tuple[list[View], list[str]]:
-        views: list[View] = []
-        messages: list[str] = []
+    def views(self, doc: dict, points: np.ndarray) -> list[View | str]:
+        """Every view in order (the view file's, then the [[view]] tables): the View when
+        valid, its message when not."""
+        order: list[View | str] = []
         source = doc.get("views", "auto" if "view" not in doc else None)
         if source is not None:
             source = self.string(source, ("views",))
             if source == "auto":
-                views += framing_views(points, self.file)
+                order += framing_views(points, self.file)
             else:
                 shown = str(Path(self.file).parent / source)
                 try:
-                    text = decode_text(read_file(self.folder / source, shown), shown)
+                    text = decode_text(read_file(self.folder / source, shown, "views"), shown)
                 except ReaderError as error:
                     raise self.fail(("views",), str(error)) from None
-                from core.scene.formats.viewfile import read_views
-                found, said = read_views(text, shown)
-                views += found
-                messages += said
+                from core.scene.formats.viewfile import read_view_entries
+                order += read_view_entries(text, shown)
         if "view" in doc:
             for i, t in enumerate(self.tables(doc["view"], ("view",))):
                 view, problem = self.inline_view(t, ("view", i + 1))
-                if problem:
-                    messages.append(problem)
-                else:
-                    views.append(view)
-        return views, messages
+                order.append(problem or view)
+        return order
 
     def inline_view(self, value, path: Path_) -> tuple[View, str | None]:
         t = self.table(value, path, VIEW_KEYS)
@@ -351,9 +485,9 @@ class _Reader:
             if key not in t:
                 raise self.fail(path, f"missing key {key!r} (a view needs "
                                       f"{', '.join(VIEW_KEYS[1:])})")
-        label = f"{self.file}: view {path[1]}"
+        label = f"{printable(self.file, 200)}: view {path[1]}"
         if "name" in t:
-            label += f" ({self.string(t['name'], path + ('name',))})"
+            label += f" ({printable(self.string(t['name'], path + ('name',)), 80)})"
         line = self.locate(path)
         view = View(vrp=self.vector(t["vrp"], path + ("vrp",)),
                     vpn=self.vector(t["vpn"], path + ("vpn",)),
@@ -363,7 +497,7 @@ class _Reader:
                     front=self.number(t["front"], path + ("front",)),
                     back=self.number(t["back"], path + ("back",)),
                     label=label + (f" (line {line})" if line else ""))
-        found = problems(view)
+        found = load_problems(view)
         return view, (f"{view.label}: " + "; ".join(found)) if found else None
 
 
@@ -374,6 +508,56 @@ def read_scene_file(data: bytes | str, file: str, folder: Path | None = None,
     text = decode_text(data, file) if isinstance(data, bytes) else data
     folder = Path(folder) if folder is not None else Path(file).parent
     return _Reader(text, file, folder).scene(size)
+
+
+# Bounds checked before tomllib sees the text. A scene needs keys four deep
+# (geometry.material.od) and a few dozen keys per table; tomllib's cost grows with the square
+# of a dotted key's length (20,000 parts: 23 s and 1.7 GB), so longer chains are refused.
+MAX_KEY_PARTS = 16
+MAX_NESTING = 64                 # [ and { open at once
+MAX_KEYS = 1_000_000             # key = value pairs and table headers in one file
+_STRING_OR_COMMENT = re.compile(r'''"""(?:[^\\]|\\.)*?"""|\'\'\'.*?\'\'\'|"(?:[^"\\\n]|\\.)*"|'[^'\n]*'|#[^\n]*''',
+                                re.S)
+_DOTS = re.compile(r"\s*\.\s*")
+# A chain of more than MAX_KEY_PARTS bare parts, tried only at the start of a word and without
+# backtracking (possessive), so that the scan stays linear in the text.
+_LONG_KEY = re.compile(r"(?<![A-Za-z0-9_-])[A-Za-z0-9_-]++(?:[ \t]*+\.[ \t]*+[A-Za-z0-9_-]++){%d,}"
+                       % MAX_KEY_PARTS)
+
+
+def prescan(text: str, file: str) -> None:
+    """Refuse, before parsing, a key of more than MAX_KEY_PARTS dotted parts, brackets nested
+    deeper than MAX_NESTING, or more than MAX_KEYS keys: one linear pass over the text with
+    strings and comments blanked out (a quoted key counts as one part)."""
+    bare = _STRING_OR_COMMENT.sub(lambda m: ("s" if m.group(0)[0] in "\"'" else "")
+                                  + "\n" * m.group(0).count("\n"), text)
+    keys = bare.count("=") + bare.count("[")
+    if keys > MAX_KEYS:
+        raise ReaderError(file, f"TOML: {keys} keys and tables; a scene may have at most "
+                                f"{MAX_KEYS}")
+    for m in _LONG_KEY.finditer(bare):
+        parts = len(_DOTS.findall(m.group(0))) + 1
+        raise ReaderError(file, f"TOML: a dotted key of {parts} parts; keys here have at most "
+                                f"{MAX_KEY_PARTS}", _line_of(text, bare, m.start()))
+    depth = 0
+    for bracket in re.finditer(r"[\[\]{}]", bare):
+        if bracket.group() in "[{":
+            depth += 1
+            if depth > MAX_NESTING:
+                raise ReaderError(file, f"TOML: brackets nested more than {MAX_NESTING} deep",
+                                  _line_of(text, bare, bracket.start()))
+        else:
+            depth = max(depth - 1, 0)
+
+
+def _line_of(text: str, bare: str, at: int) -> int:
+    """The line of offset ``at`` of ``bare`` (blanking keeps every line break)."""
+    return bare.count("\n", 0, at) + 1
+
+
+def _long_number_line(text: str) -> int | None:
+    m = re.search(r"[0-9_]{4300}", text)
+    return text.count("\n", 0, m.start()) + 1 if m else None
 
 
 def _toml_error(error: tomllib.TOMLDecodeError, file: str, last_line: int) -> ReaderError:

@@ -20,22 +20,20 @@ code's ``v_table`` (which finds them with an O(N^2) scan).
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from core.scene.formats.camera import default_lights, framing_views, tri_light, tri_view
 from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
-                                 tolerant_of_underflow)
-from core.scene.formats.meshfile import merge_vertices
+                                 tolerant_of_underflow, whole_number)
+from core.scene.formats.meshfile import drop_repeated_triangles, merge_vertices
 from core.scene.formats.numbers import Numbers
+from core.camera.view import problems
 from core.scene.model import Light, Material, Mesh, Scene
 from core.transforms import apply
 
 DEFAULT_SIZE = (500, 500)
 _HEADER = ("the viewpoint", "the top-left corner", "the right displacement",
            "the down displacement")
-_COUNT = re.compile(r"\+?\d+")
 
 
 @tolerant_of_underflow
@@ -50,6 +48,12 @@ def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) 
     except ValueError as error:
         at = 0 if str(error).startswith("the viewpoint") else 6     # else: the displacements
         raise ReaderError(file, str(error), numbers.line(at)) from None
+    # the renderer's own rules: a camera that loads can be drawn, in both projections
+    found = list(dict.fromkeys(problems(camera.view, "perspective")
+                               + problems(camera.view, "parallel")))
+    if found:
+        raise ReaderError(file, "the camera cannot be drawn: " + "; ".join(found),
+                          numbers.line(0))
     light = tri_light(viewpoint, right, down)
     if camera.mirror is not None:
         positions = apply(camera.mirror, positions)[:, :3]
@@ -65,16 +69,18 @@ def read_tri(data: bytes | str, file: str, size: tuple[int, int] | None = None) 
                  shading="flat", projection="perspective", size=size, source=str(file))
 
 
-def read_tri_mesh(data: bytes | str, file: str) -> Mesh:
+def read_tri_mesh(data: bytes | str, file: str, budget: int | None = None) -> Mesh:
     """Only the triangles of a ``.tri`` file, as they are in the file (a scene file's mesh):
     its camera is neither needed nor checked, and nothing is mirrored for it."""
-    _, positions, triangles, _ = _parse(data, file)
+    _, positions, triangles, _ = _parse(data, file, budget)
     return Mesh(positions=positions, triangles=triangles, closed=False, material=Material(),
                 name=file_stem(file))
 
 
-def _parse(data: bytes | str, file: str):
+def _parse(data: bytes | str, file: str, budget: int | None = None):
     """``(header values, positions, triangles, numbers)``; every error names its line."""
+    from core.scene.generators import MAX_TRIANGLES
+    budget = MAX_TRIANGLES if budget is None else budget
     text = decode_text(data, file) if isinstance(data, bytes) else data
     numbers = Numbers(text, file, keep=13)
     values = numbers.values
@@ -89,12 +95,8 @@ def _parse(data: bytes | str, file: str):
     if len(values) < 13:
         raise ReaderError(file, "the file ends before the triangle count N",
                           numbers.line(len(values)))
-    count_token = numbers.tokens[12]
-    if not _COUNT.fullmatch(count_token):
-        raise ReaderError(file, f"the triangle count must be a whole number >= 0, got "
-                                f"{short(count_token)}", numbers.line(12))
-    count = int(count_token)
     count_line = numbers.line(12)
+    count = whole_number(numbers.tokens[12], file, count_line, "the triangle count")
 
     body = values[13:]                      # what the file holds, whatever N says
     if len(body) < 9 * count:
@@ -111,11 +113,14 @@ def _parse(data: bytes | str, file: str):
         raise ReaderError(file, f"more numbers than the count on line {count_line} says "
                                 f"({_triangles(count)}): {short(numbers_text(values[extra]))} would "
                                 f"start triangle {count + 1}", numbers.line(extra))
+    if count > budget:          # (after the checks above: a count the data lacks says so)
+        raise ReaderError(file, f"the count says {count} triangles; the limit is {budget} (the "
+                                f"triangle budget of a scene)", count_line)
     _check_finite(body, "a triangle", numbers, 13, file)
 
     corners = body.reshape(-1, 3)           # three rows per triangle
     positions, inverse = merge_vertices(corners)
-    return values, positions, inverse.reshape(-1, 3), numbers
+    return values, positions, drop_repeated_triangles(inverse.reshape(-1, 3)), numbers
 
 
 def numbers_text(value: float) -> str:

@@ -7,14 +7,16 @@ as a stream, so blank lines and ``#`` comments may fall anywhere between them.
 
 A bad token (not a number, NaN, inf) spoils only its own view: it takes that number's slot, so
 the views after it stay aligned and still load. A truncated last view is reported, as is every
-invalid or unreasonable view (:func:`core.camera.view.problems`). Nothing in the text can raise.
+invalid or unreasonable view (:func:`core.camera.view.load_problems`: the renderer's own rules, so
+that every view that loads can be drawn). Nothing in the text can raise.
 """
 
 from __future__ import annotations
 
 import math
 
-from core.camera.view import View, problems
+from core.camera.view import View, load_problems
+from core.scene.formats.errors import printable
 
 NUMBERS_PER_VIEW = 18
 _FIELDS = ("VRP", "VRP", "VRP", "VPN", "VPN", "VPN", "VUP", "VUP", "VUP",
@@ -45,26 +47,35 @@ def read_views(text: str, source: str = "<views>") -> tuple[list[View], list[str
 
     Each message names the file, the view number (counting every view in the file, valid or
     not), the line, and the reason, e.g. ``"house.views: view 9 (line 61): VUP is parallel to
-    VPN"``. The views are checked for the problems common to both projections; a view that is
-    only invalid for one projection (F behind the eye in perspective) loads and is reported
-    when it is drawn that way.
+    VPN"``. A view is refused when neither projection can draw it (the renderer's rules,
+    matrices included); a view that only one projection refuses (F behind the eye in
+    perspective) loads and is reported when it is drawn that way.
     """
-    views: list[View] = []
-    messages: list[str] = []
+    entries = read_view_entries(text, source)
+    return ([e for e in entries if isinstance(e, View)],
+            [e for e in entries if not isinstance(e, View)])
+
+
+def read_view_entries(text: str, source: str = "<views>") -> list[View | str]:
+    """Every view of ``text`` in file order: the :class:`View` when valid, its message when
+    not (so that view K of the file is entry K - 1, as the course numbers them)."""
+    source = printable(source, 200)          # it names every message; it may come from a file
+    entries: list[View | str] = []
     group: list[tuple[int, str]] = []
     for item in _tokens(text):
         group.append(item)
         if len(group) == NUMBERS_PER_VIEW:
-            _finish(group, len(views) + len(messages) + 1, source, views, messages)
+            entries.append(_finish(group, len(entries) + 1, source))
             group = []
     if group:
-        index = len(views) + len(messages) + 1
-        messages.append(f"{source}: view {index} (line {group[0][0]}): truncated: expected "
-                        f"{NUMBERS_PER_VIEW} numbers, found {len(group)} before the end of the input")
-    return views, messages
+        entries.append(f"{source}: view {len(entries) + 1} (line {group[0][0]}): truncated: "
+                       f"expected {NUMBERS_PER_VIEW} numbers, found {len(group)} before the end "
+                       "of the input")
+    return entries
 
 
-def _finish(group, index, source, views, messages) -> None:
+def _finish(group, index, source) -> View | str:
+    """The view of one group of 18 tokens, or the message saying why it is invalid."""
     label = f"{source}: view {index} (line {group[0][0]})"
     values, errors = [], []
     for slot, (line, token) in enumerate(group):
@@ -73,13 +84,9 @@ def _finish(group, index, source, views, messages) -> None:
         if reason:
             errors.append(f"line {line}: {_FIELDS[slot]}: {reason}")
     if errors:
-        messages.append(f"{label}: " + "; ".join(errors))
-        return
+        return f"{label}: " + "; ".join(errors)
     v = values
     view = View(vrp=tuple(v[0:3]), vpn=tuple(v[3:6]), vup=tuple(v[6:9]), window=tuple(v[9:13]),
                 prp=tuple(v[13:16]), front=v[16], back=v[17], label=label)
-    found = problems(view)
-    if found:
-        messages.append(f"{label}: " + "; ".join(found))
-    else:
-        views.append(view)
+    found = load_problems(view)
+    return f"{label}: " + "; ".join(found) if found else view

@@ -1,0 +1,90 @@
+"""``python -m app warmup``: compile every kernel once, saying how far along it is.
+
+numba compiles a kernel the first time it runs with given argument types and keeps the machine
+code on disk (``cache=True``); later processes load it in a fraction of a second. Without this
+step the first frame of each shading mode would compile in front of the user (seconds each).
+``make`` runs it when it creates ``.venv``; the window runs the same steps in the background
+after its first frame, so that switching modes later loads cached kernels off the UI thread.
+
+:func:`steps` lists one small render per path through the renderers: every shading mode, both
+projections and both rasterizers, a closed mesh large enough for the parallel set-up (back-face
+culling, ≥ 10 000 triangles), an open one (two-sided lighting), lines, and several samples a
+pixel.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from typing import Callable
+
+SIZE = (64, 48)
+
+
+def _scenes():
+    """A closed sphere of 12 288 triangles, the same sphere open, and the house (lines)."""
+    import dataclasses
+
+    from core.camera.view import View
+    from core.scene.generators import house, uv_sphere
+    from core.scene.model import Scene
+
+    view = View(vrp=(0, 0, 0), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-1.5, 1.5, -1.5, 1.5),
+                prp=(0, 0, 5), front=2, back=-2, label="warm-up view")
+    sphere = uv_sphere(1.0, segments=128, rings=48)
+    closed = Scene(name="warm-up sphere", meshes=[dataclasses.replace(sphere, closed=True)],
+                   views=[view])
+    opened = Scene(name="warm-up open sphere", meshes=[dataclasses.replace(sphere, closed=False),
+                                                       house()], views=[view])
+    return closed, opened
+
+
+def steps() -> list[tuple[str, Callable[[], object]]]:
+    """(label, run) for every path the window can take; each ``run`` renders one small frame."""
+    from core.render import render
+    from core.settings import RASTERIZERS, SHADINGS, RenderSettings
+
+    closed, opened = _scenes()
+    out = []
+
+    def add(label, scene, **settings):
+        s = RenderSettings.for_scene(scene, size=SIZE, **settings)
+        out.append((label, lambda: render(scene, scene.views[0], s)))
+
+    for projection in ("perspective", "parallel"):
+        add(f"wireframe, {projection}", opened, shading="wireframe", projection=projection)
+        for shading in SHADINGS[1:]:
+            for rasterizer in RASTERIZERS:
+                add(f"{shading}, {projection}, {rasterizer} rasterizer", closed,
+                    shading=shading, projection=projection, rasterizer=rasterizer)
+            add(f"{shading}, {projection}, open mesh and lines", opened, shading=shading,
+                projection=projection)
+    add("flat, 4 samples a pixel", closed, shading="flat", samples=4)
+    return out
+
+
+def run(progress: Callable[[int, int, str, float], None] | None = None) -> float:
+    """Run every step; ``progress(k, n, label, seconds)`` after each. Returns the total."""
+    todo = steps()
+    start = time.perf_counter()
+    for k, (label, job) in enumerate(todo, start=1):
+        t = time.perf_counter()
+        job()
+        if progress is not None:
+            progress(k, len(todo), label, time.perf_counter() - t)
+    return time.perf_counter() - start
+
+
+def main(args=None) -> int:
+    print("warming up: compiling the kernels once (numba keeps them on disk)", flush=True)
+
+    def say(k, n, label, seconds):
+        print(f"  [{k:2d}/{n}] {label}: {seconds:.2f} s", flush=True)
+
+    total = run(say)
+    print(f"warm: {total:.1f} s in all; later starts load the compiled kernels", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,150 @@
+"""Frames rendered off the window's thread, newest request first.
+
+The window asks for a frame (:meth:`RenderWorker.submit`) and keeps drawing; one background
+thread renders it. A request made while another is waiting replaces it (a stale request is
+never rendered), and a result that a newer request has overtaken is dropped when it is
+collected (:meth:`RenderWorker.collect`), so the picture always ends up showing the latest
+choice. While nothing is asked, the thread works through background jobs (the kernels'
+warm-up), one short job at a time, so that a frame request waits at most for one of them.
+
+No GL here: a job returns a :class:`core.render.Frame` (or raises), and the window thread
+uploads it. ``wake`` (glfw.post_empty_event in the window) is called when a result is ready,
+so that a window asleep in ``wait_events`` picks it up at once.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+
+@dataclass
+class Job:
+    """One frame to render: ``run()`` returns the frame; ``what`` is shown while it runs."""
+
+    run: Callable
+    what: str
+    generation: int = 0
+
+
+@dataclass
+class Result:
+    generation: int
+    what: str
+    frame: object | None = None
+    error: BaseException | None = None
+    seconds: float = 0.0
+
+
+@dataclass
+class Progress:
+    """What the worker is doing now, for the status line."""
+
+    what: str = ""
+    since: float = 0.0
+    frame: bool = False         # is the job running now a frame (not a background job)?
+    done: int = 0               # background jobs done / total (the warm-up)
+    total: int = 0
+    background: list = field(default_factory=list)
+
+
+class RenderWorker:
+    """One daemon thread; ``submit`` a :class:`Job`, ``collect`` its :class:`Result`."""
+
+    def __init__(self, wake: Callable[[], None] = lambda: None):
+        self._wake = wake
+        self._lock = threading.Condition()
+        self._pending: Job | None = None
+        self._result: Result | None = None
+        self._background: list[tuple[str, Callable]] = []
+        self._generation = 0
+        self._running: str = ""
+        self._since = 0.0
+        self._done = 0
+        self._total = 0
+        self._stop = False
+        self._thread = threading.Thread(target=self._loop, name="render", daemon=True)
+        self._thread.start()
+
+    # -- the window's side ---------------------------------------------------------------
+    def submit(self, run: Callable, what: str) -> int:
+        """Ask for a frame; replaces any request still waiting. Returns its generation."""
+        with self._lock:
+            self._generation += 1
+            self._pending = Job(run, what, self._generation)
+            self._lock.notify()
+            return self._generation
+
+    def add_background(self, jobs: list[tuple[str, Callable]]) -> None:
+        """Jobs to run while no frame is asked for (label, callable), in order."""
+        with self._lock:
+            self._background.extend(jobs)
+            self._total += len(jobs)
+            self._lock.notify()
+
+    def collect(self) -> Result | None:
+        """The newest finished frame, or None; results overtaken by a newer request are
+        dropped here (the newer one is on its way)."""
+        with self._lock:
+            result, self._result = self._result, None
+            if result is None or result.generation != self._generation:
+                return None
+            return result
+
+    @property
+    def waiting(self) -> bool:
+        """Is a frame request not yet collected (queued, running, or done but not shown)?"""
+        with self._lock:
+            return self._pending is not None or self._running.startswith("frame:") or (
+                self._result is not None and self._result.generation == self._generation)
+
+    def progress(self) -> Progress:
+        with self._lock:
+            return Progress(self._running.removeprefix("frame:"), self._since,
+                            self._running.startswith("frame:"), self._done, self._total)
+
+    def stop(self) -> None:
+        with self._lock:
+            self._stop = True
+            self._lock.notify()
+
+    # -- the thread's side ---------------------------------------------------------------
+    def _next(self):
+        with self._lock:
+            while not self._stop and self._pending is None and not self._background:
+                self._lock.wait()
+            if self._stop:
+                return None
+            if self._pending is not None:
+                job, self._pending = self._pending, None
+                self._running, self._since = "frame:" + job.what, time.perf_counter()
+                return job
+            label, run = self._background.pop(0)
+            self._running, self._since = label, time.perf_counter()
+            return Job(run, label, generation=-1)
+
+    def _loop(self) -> None:
+        while True:
+            job = self._next()
+            if job is None:
+                return
+            start = time.perf_counter()
+            result = Result(job.generation, job.what)
+            try:
+                result.frame = job.run()
+            except BaseException as error:          # shown by the window, never fatal here
+                result.error = error
+            result.seconds = time.perf_counter() - start
+            if job.generation < 0 and result.error is not None:
+                logging.getLogger("fvd").warning("background job %r failed: %s: %s", job.what,
+                                                 type(result.error).__name__, result.error)
+            with self._lock:
+                self._running = ""
+                if job.generation < 0:
+                    self._done += 1
+                else:
+                    self._result = result
+            self._wake()

@@ -1,0 +1,55 @@
+"""One frame of an animation: the opaque picture of ``scene_at(t)``, then the particle stage.
+
+``render_at(animation, t, settings) -> Frame`` is what the movie writer and the window call.
+The opaque picture comes from ``core.render`` (any registered renderer); the particles are
+blended over it by :func:`core.animation.draw.draw_particles`, depth-tested against
+``Frame.depth``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from core.animation.draw import draw_particles
+
+
+def settings_for(animation, **overrides):
+    """The render settings of the animation's scene, with ``overrides`` (size, samples, …)."""
+    from core import RenderSettings
+    return RenderSettings.for_scene(animation.scene, **overrides)
+
+
+def render_at(animation, t: float, settings, context=None):
+    """The frame at time ``t``: the keyed view (or the scene's first view) of ``scene_at(t)``.
+
+    With particles and more than one sample a pixel, the opaque picture is drawn once at
+    ``side`` times the size (side = sqrt(samples), the regular grid), the particles are blended
+    into that big picture against its depth, and the result is box-filtered: each sample sees
+    the particles with its own depth test (the front door's supersampled frames keep no depth).
+    """
+    from core import render
+    from core.camera.film import box_filter
+    scene = animation.scene_at(t)
+    if not scene.views:
+        raise ValueError(f"{scene.name}: no view to render")
+    view = scene.views[0]
+    sprites = animation.sprites_at(t)
+    if sprites is None or settings.samples == 1:
+        frame = render(scene, view, settings, context)
+        if sprites is not None and frame.message is None:
+            draw_particles(frame, sprites, view, settings)
+        return frame
+    side = max(1, math.isqrt(settings.samples - 1) + 1)       # the smallest grid that holds them
+    width, height = settings.size
+    big = render(scene, view, settings.replace(samples=1, size=(width * side, height * side)),
+                 context)
+    if big.message is None:
+        draw_particles(big, sprites, view, settings)
+    small = np.floor(box_filter(big.color, side) + 0.5).astype(np.uint8)
+    out = type(big)(rgbx=np.empty((height, width, 4), np.uint8), plan=big.plan,
+                    message=big.message, stats={**big.stats, "samples per pixel": side * side})
+    out.color[:] = small
+    out.sample_color = big.color
+    return out

@@ -1,0 +1,233 @@
+"""The scene file's ``[animation]``, ``[[key]]`` and ``[[emitter]]`` tables → an :class:`Animation`.
+
+Called from the TOML scene reader (``core/scene/formats/scenefile.py``) with its reader, so
+that every message names the key's path and line the way the rest of the file's do::
+
+    [animation]
+    duration = 8.0              # seconds (default: the last key's time)
+    fps = 30
+    loop = true
+    interpolation = "catmull-rom"   # linear | ease | catmull-rom | kochanek-bartels | double
+    orientation = "squad"           # slerp | squad  (VPN/VUP frames and object rotations)
+    tension = 0.0                   # Kochanek–Bartels T, C, B for every track ...
+    constant_speed = false          # arc-length parametrisation of the position tracks
+    level = [0, 1, 0]               # optional: the view's VUP held fixed (no roll between keys)
+    seed = 1                        # particle systems
+    [animation.track."view.vrp"]    # ... or per track, by its channel name
+    interpolation = "kochanek-bartels"
+    tension = 0.5
+
+    [[key]]
+    time = 0.0
+    view = { vrp = [0, 0, 0], vpn = [0, 0, 1], vup = [0, 1, 0], prp = [0, 0, 8] }
+    object.ring = { translate = [0, 0, 0], rotate = [0, 0, 0], scale = 1.0 }
+    light.1 = { position = [3, 4, 6] }
+    material.ring = { od = [0.2, 0.4, 0.9] }
+
+A key gives any subset of the channels; each channel's track is made of the keys that give it.
+``vpn`` and ``vup`` come together (they are one orientation). Channel names: ``view.vrp``,
+``view.frame``, ``view.window``, ``view.prp``, ``view.front``, ``view.back``,
+``object.NAME.translate|rotate|scale``, ``light.N.position``, ``material.NAME.od``.
+"""
+
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+
+from core.animation import quaternion as qt
+from core.animation.animation import Animation, ObjectTracks, ViewTracks, frame_quaternion
+from core.animation.tracks import METHODS, ORIENTATION_METHODS, OrientationTrack, Track
+
+TOP_KEYS = ("animation", "key", "emitter")          # the scene file's top-level tables we read
+TABLE_ARRAYS = ("key", "emitter")                   # written [[key]], [[emitter]]
+ANIMATION_KEYS = ("duration", "fps", "loop", "interpolation", "orientation", "tension",
+                  "continuity", "bias", "constant_speed", "seed", "level", "track")
+TRACK_KEYS = ("interpolation", "orientation", "tension", "continuity", "bias", "constant_speed")
+KEY_KEYS = ("time", "view", "object", "light", "material")
+KEY_VIEW_KEYS = ("vrp", "vpn", "vup", "window", "prp", "front", "back")
+KEY_OBJECT_KEYS = ("translate", "rotate", "scale")
+MAX_FPS = 1000.0
+MAX_DURATION = 24 * 3600.0
+
+_animations: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
+def animation_of(scene) -> Animation | None:
+    """The animation a scene file described for ``scene`` (None for a still scene)."""
+    return _animations.get(scene)
+
+
+def attach(scene, animation: Animation) -> None:
+    _animations[scene] = animation
+
+
+def read_animation(reader, doc: dict, scene) -> None:
+    """Read the animation tables of ``doc`` (a parsed scene file) and attach them to ``scene``."""
+    if not any(k in doc for k in TOP_KEYS):
+        return
+    settings = reader.table(doc.get("animation", {}), ("animation",), ANIMATION_KEYS)
+    samples = _samples(reader, doc, scene)
+    defaults = _track_settings(reader, settings, ("animation",))
+    per_track = settings.get("track", {})        # channel names are checked below
+    if not isinstance(per_track, dict):
+        raise reader.fail(("animation", "track"), "expected a table of channels")
+    for name in per_track:
+        if name not in samples:
+            raise reader.fail(("animation", "track", name),
+                              f"no key gives the channel {name!r} (keyed: "
+                              f"{', '.join(sorted(samples)) or 'none'})")
+    last = max((t for ks in samples.values() for t, _, _ in ks), default=0.0)
+    anim = Animation(scene=scene)
+    anim.duration = reader.number(settings.get("duration", last), ("animation", "duration"),
+                                  0.0, MAX_DURATION)
+    anim.fps = reader.number(settings.get("fps", 30), ("animation", "fps"), 0.0, MAX_FPS, above=0.0)
+    anim.loop = reader.boolean(settings.get("loop", False), ("animation", "loop"))
+    seed = reader.number(settings.get("seed", 0), ("animation", "seed"), 0, 2**63 - 1)
+    if seed != int(seed):
+        raise reader.fail(("animation", "seed"), "expected a whole number")
+    anim.seed = int(seed)
+    for channel, keys in samples.items():
+        options = dict(defaults)
+        if channel in per_track:
+            options.update(_track_settings(reader, per_track[channel],
+                                           ("animation", "track", channel)))
+        _install(reader, anim, channel, keys, options)
+    if "level" in settings:
+        level = reader.vector(settings["level"], ("animation", "level"))
+        if not any(level):
+            raise reader.fail(("animation", "level"), "the up vector is zero")
+        if anim.view is None or anim.view.frame is None:
+            raise reader.fail(("animation", "level"), "no key gives the view's vpn and vup")
+        anim.view.level = level
+    if "emitter" in doc:
+        from core.animation.particles import read_emitters
+        anim.emitters = read_emitters(reader, doc["emitter"], scene)
+    attach(scene, anim)
+
+
+def _track_settings(reader, table, path) -> dict:
+    keys = TRACK_KEYS if path != ("animation",) else ANIMATION_KEYS
+    t = reader.table(table, path, keys)
+    out = {}
+    if "interpolation" in t:
+        out["method"] = reader.choice(t["interpolation"], path + ("interpolation",), METHODS)
+    if "orientation" in t:
+        out["orientation"] = reader.choice(t["orientation"], path + ("orientation",),
+                                           ORIENTATION_METHODS)
+    for key in ("tension", "continuity", "bias"):
+        if key in t:
+            out[key] = reader.number(t[key], path + (key,), -1.0, 1.0)
+    if "constant_speed" in t:
+        out["constant_speed"] = reader.boolean(t["constant_speed"], path + ("constant_speed",))
+    return out
+
+
+def _samples(reader, doc: dict, scene) -> dict[str, list]:
+    """channel → [(time, value, path)] from every ``[[key]]``, in file order."""
+    names = {m.name: i for i, m in enumerate(scene.meshes)}
+    out: dict[str, list] = {}
+    add = lambda channel, time, value, path: out.setdefault(channel, []).append((time, value, path))
+    for i, key in enumerate(reader.tables(doc.get("key", []), ("key",))):
+        path = ("key", i + 1)
+        reader.table(key, path, KEY_KEYS)
+        if "time" not in key:
+            raise reader.fail(path, "a key needs a time (seconds)")
+        time = reader.number(key["time"], path + ("time",), 0.0, MAX_DURATION)
+        if "view" in key:
+            _view_key(reader, key["view"], path + ("view",), time, add)
+        for name, value in reader.table(key.get("object", {}), path + ("object",), tuple(names)).items():
+            p = path + ("object", name)
+            for what, v in reader.table(value, p, KEY_OBJECT_KEYS).items():
+                add(f"object.{name}.{what}", time, _object_value(reader, what, v, p + (what,)), p + (what,))
+        lights = key.get("light", {})
+        allowed = tuple(str(k + 1) for k in range(len(scene.lights)))
+        for number, value in reader.table(lights, path + ("light",), allowed).items():
+            p = path + ("light", number)
+            t = reader.table(value, p, ("position",))
+            if "position" in t:
+                if scene.lights[int(number) - 1].position is None:
+                    raise reader.fail(p, "a directional light has no position to key")
+                add(f"light.{number}.position", time,
+                    np.array(reader.vector(t["position"], p + ("position",))), p + ("position",))
+        for name, value in reader.table(key.get("material", {}), path + ("material",), tuple(names)).items():
+            p = path + ("material", name)
+            t = reader.table(value, p, ("od",))
+            if "od" in t:
+                add(f"material.{name}.od", time, np.array(reader.vector(t["od"], p + ("od",), 3, 0.0, 1.0)),
+                    p + ("od",))
+    return out
+
+
+def _view_key(reader, value, path, time, add) -> None:
+    t = reader.table(value, path, KEY_VIEW_KEYS)
+    if ("vpn" in t) != ("vup" in t):
+        raise reader.fail(path, "vpn and vup are keyed together (they are one orientation)")
+    if "vpn" in t:
+        vpn, vup = reader.vector(t["vpn"], path + ("vpn",)), reader.vector(t["vup"], path + ("vup",))
+        n = np.linalg.norm(vpn)
+        if n == 0.0 or np.linalg.norm(np.cross(vup, np.asarray(vpn) / n)) <= 1e-12 * np.linalg.norm(vup):
+            raise reader.fail(path, "VPN is zero or VUP is parallel to it: no frame to key")
+        add("view.frame", time, frame_quaternion(vpn, vup), path + ("vpn",))
+    for what in ("vrp", "prp"):
+        if what in t:
+            add(f"view.{what}", time, np.array(reader.vector(t[what], path + (what,))), path + (what,))
+    if "window" in t:
+        add("view.window", time, np.array(reader.vector(t["window"], path + ("window",), 4)),
+            path + ("window",))
+    for what in ("front", "back"):
+        if what in t:
+            add(f"view.{what}", time, np.array([reader.number(t[what], path + (what,))]), path + (what,))
+
+
+def _object_value(reader, what, value, path) -> np.ndarray:
+    if what == "translate":
+        return np.array(reader.vector(value, path))
+    if what == "rotate":
+        return qt.from_euler_degrees(*reader.vector(value, path, 3, -1e6, 1e6))
+    s = reader.vector(value, path, 3, -1e6, 1e6) if isinstance(value, list) else \
+        (reader.number(value, path, -1e6, 1e6),) * 3
+    if any(abs(c) < 1e-6 for c in s):
+        raise reader.fail(path, "a scale factor is zero (or below 1e-6 in size)")
+    return np.array(s)
+
+
+def _install(reader, anim: Animation, channel: str, keys: list, options: dict) -> None:
+    keys = sorted(keys, key=lambda k: k[0])
+    for (t0, _, _), (t1, _, p1) in zip(keys, keys[1:]):
+        if t1 == t0:
+            raise reader.fail(p1, f"a second key for {channel} at time {t1:g}")
+    times = np.array([k[0] for k in keys])
+    values = np.array([k[1] for k in keys])
+    if channel in ("view.frame",) or channel.endswith(".rotate"):
+        track = OrientationTrack(times, values, options.get("orientation", "squad"))
+    else:
+        position = channel in ("view.vrp", "view.prp") or channel.endswith(".translate") \
+            or channel.endswith(".position")
+        track = Track(times, values, options.get("method", "catmull-rom"),
+                      options.get("tension", 0.0), options.get("continuity", 0.0),
+                      options.get("bias", 0.0), position and options.get("constant_speed", False))
+    kind, _, rest = channel.partition(".")
+    scene = anim.scene
+    if kind == "view":
+        if anim.view is None:
+            anim.view = ViewTracks(base=_base_view(reader, scene, keys[0][2]))
+        setattr(anim.view, rest, track)
+    elif kind == "object":
+        name, what = rest.rsplit(".", 1)
+        index = [m.name for m in scene.meshes].index(name)
+        setattr(anim.objects.setdefault(index, ObjectTracks()), what, track)
+    elif kind == "light":
+        anim.lights[int(rest.split(".")[0]) - 1] = track
+    else:
+        index = [m.name for m in scene.meshes].index(rest.split(".")[0])
+        anim.colors[index] = track
+
+
+def _base_view(reader, scene, path):
+    """The view whose unkeyed fields the keyed view keeps: the scene's first view."""
+    if not scene.views:
+        raise reader.fail(path, "a keyed view needs a still view for the fields no key gives "
+                                "(add a [[view]] or views = \"auto\")")
+    return scene.views[0]

@@ -1,0 +1,418 @@
+"""A bounding-volume hierarchy over triangles: built with the binned surface-area heuristic,
+flattened to arrays, traversed with an explicit stack (numba).
+
+The notes (April 4) answer "the hard part is to determine intersections" with bounding
+volumes; a BVH of axis-aligned boxes is that idea applied recursively, so a ray tests
+O(log T) boxes and a handful of triangles instead of all T.
+
+Build (:func:`build`), top down, in one numba loop over a stack of pending node ranges:
+
+- each node's triangles are sorted into ``BINS`` equal bins along each axis of their
+  centroids' bounds; for every one of the ``BINS − 1`` planes between bins the surface-area
+  heuristic ``cost = C_trav + (A_L N_L + A_R N_R) / A`` (Wald 2007) is evaluated from
+  prefix sums of the bins' boxes and counts, and the cheapest plane over the three axes wins;
+- a node becomes a leaf when it has at most ``MIN_SPLIT`` triangles, or when no split is
+  cheaper than intersecting all its triangles (``N``) and it has at most ``MAX_LEAF``;
+- triangles whose centroids coincide (no bin can separate them), and nodes deeper than
+  ``SAH_DEPTH``, are split at the median by index, so the tree stays at most ~``MAX_DEPTH``
+  deep and the traversal stack (``STACK``) cannot overflow.
+
+Layout (:class:`BVH`): node ``k`` has its box in ``box[k] = (min xyz, max xyz)``; an inner
+node's children are ``first[k]`` and ``first[k] + 1`` (``count[k] == 0``), a leaf holds
+triangles ``first[k] .. first[k] + count[k] − 1`` of the BVH's own order. Triangles are stored
+in that order as ``V0, E1, E2`` (what Möller–Trumbore reads) with ``prim`` mapping back to the
+scene's triangle index, so a leaf's data is contiguous in memory.
+
+Traversal (:func:`closest`, :func:`occluded`): the slab test against the box with the ray's
+reciprocal direction, the nearer child first, nodes whose entry lies beyond the best hit so
+far skipped. ``occluded`` stops at the first hit (shadow rays).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit, prange
+
+from core.raytrace import intersect
+
+BINS = 16
+MIN_SPLIT = 2          # a node of this many triangles or fewer is always a leaf
+MAX_LEAF = 8           # above this many a node is always split
+TRAVERSAL_COST = 1.0   # the cost of one box test, in units of one triangle test
+SAH_DEPTH = 48         # below this depth, median splits only (bounds the tree's depth)
+STACK = 128            # traversal stack; >= the deepest tree SAH_DEPTH + log2(2^40) allows
+
+
+class BVH(NamedTuple):
+    """The flattened tree (numba takes it as one argument)."""
+
+    box: np.ndarray      # (nodes, 6) float64: min x, y, z, max x, y, z
+    first: np.ndarray    # (nodes,) int64: first child (inner) or first triangle (leaf)
+    count: np.ndarray    # (nodes,) int64: 0 for an inner node, else the leaf's triangles
+    v0: np.ndarray       # (T, 3) float64, in BVH order
+    e1: np.ndarray       # (T, 3) V1 - V0
+    e2: np.ndarray       # (T, 3) V2 - V0
+    prim: np.ndarray     # (T,) int64: the scene triangle at each BVH position
+
+
+class BuildReport(NamedTuple):
+    triangles: int
+    nodes: int
+    leaves: int
+    depth: int
+    seconds: float
+    bytes: int
+
+
+# --------------------------------------------------------------------------------------------
+# Build
+
+
+@njit(cache=True)
+def _area(bx0, by0, bz0, bx1, by1, bz1):
+    """Half the surface area of a box (the factor 2 cancels in the heuristic)."""
+    ex, ey, ez = bx1 - bx0, by1 - by0, bz1 - bz0
+    if ex < 0.0:                       # an empty box (no triangle grew it)
+        return 0.0
+    return ex * ey + ey * ez + ez * ex
+
+
+@njit(cache=True)
+def _range_bounds(lo, hi, cent, index, start, end, box, cbox):
+    """The box of triangles ``index[start:end]`` and the box of their centroids."""
+    for a in range(3):
+        box[a], box[a + 3] = np.inf, -np.inf
+        cbox[a], cbox[a + 3] = np.inf, -np.inf
+    for i in range(start, end):
+        t = index[i]
+        for a in range(3):
+            box[a] = min(box[a], lo[t, a])
+            box[a + 3] = max(box[a + 3], hi[t, a])
+            cbox[a] = min(cbox[a], cent[t, a])
+            cbox[a + 3] = max(cbox[a + 3], cent[t, a])
+
+
+@njit(cache=True)
+def _bin_of(c, c_min, scale):
+    b = int((c - c_min) * scale)
+    return min(max(b, 0), BINS - 1)
+
+
+@njit(cache=True)
+def _best_split(lo, hi, cent, index, start, end, cbox, bin_box, bin_count, right_area,
+                right_count):
+    """``(cost, axis, bin)`` of the cheapest SAH plane: the split puts bins ``< bin`` left.
+
+    ``cost`` is ``sum(A_side N_side)``; ``axis = -1`` when the centroids cannot be separated.
+    """
+    best_cost, best_axis, best_bin = np.inf, -1, 0
+    for axis in range(3):
+        c_min, extent = cbox[axis], cbox[axis + 3] - cbox[axis]
+        if not extent > 0.0:
+            continue
+        scale = BINS / extent
+        for b in range(BINS):
+            bin_count[b] = 0
+            for a in range(3):
+                bin_box[b, a], bin_box[b, a + 3] = np.inf, -np.inf
+        for i in range(start, end):
+            t = index[i]
+            b = _bin_of(cent[t, axis], c_min, scale)
+            bin_count[b] += 1
+            for a in range(3):
+                bin_box[b, a] = min(bin_box[b, a], lo[t, a])
+                bin_box[b, a + 3] = max(bin_box[b, a + 3], hi[t, a])
+        # Sweep from the right: the area and count of bins b .. BINS-1.
+        x0, y0, z0, x1, y1, z1 = np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf
+        n = 0
+        for b in range(BINS - 1, 0, -1):
+            x0, y0, z0 = min(x0, bin_box[b, 0]), min(y0, bin_box[b, 1]), min(z0, bin_box[b, 2])
+            x1, y1, z1 = max(x1, bin_box[b, 3]), max(y1, bin_box[b, 4]), max(z1, bin_box[b, 5])
+            n += bin_count[b]
+            right_area[b], right_count[b] = _area(x0, y0, z0, x1, y1, z1), n
+        # Sweep from the left, pricing the plane before bin b.
+        x0, y0, z0, x1, y1, z1 = np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf
+        n = 0
+        for b in range(1, BINS):
+            x0, y0, z0 = min(x0, bin_box[b - 1, 0]), min(y0, bin_box[b - 1, 1]), min(z0, bin_box[b - 1, 2])
+            x1, y1, z1 = max(x1, bin_box[b - 1, 3]), max(y1, bin_box[b - 1, 4]), max(z1, bin_box[b - 1, 5])
+            n += bin_count[b - 1]
+            if n == 0 or right_count[b] == 0:
+                continue
+            cost = _area(x0, y0, z0, x1, y1, z1) * n + right_area[b] * right_count[b]
+            if cost < best_cost:
+                best_cost, best_axis, best_bin = cost, axis, b
+    return best_cost, best_axis, best_bin
+
+
+@njit(cache=True)
+def _partition(cent, index, start, end, axis, split_bin, c_min, scale):
+    """Reorder ``index[start:end]`` so triangles in bins ``< split_bin`` come first."""
+    i, j = start, end - 1
+    while i <= j:
+        if _bin_of(cent[index[i], axis], c_min, scale) < split_bin:
+            i += 1
+        else:
+            index[i], index[j] = index[j], index[i]
+            j -= 1
+    return i
+
+
+@njit(cache=True)
+def _push(pending, i, node, start, end, depth):
+    pending[i, 0], pending[i, 1], pending[i, 2], pending[i, 3] = node, start, end, depth
+
+
+@njit(cache=True)
+def _build(lo, hi, cent):
+    """Nodes ``(box, first, count)``, the triangle order ``index`` and the tree's depth."""
+    n = cent.shape[0]
+    max_nodes = max(2 * n - 1, 1)
+    box = np.empty((max_nodes, 6))
+    first = np.zeros(max_nodes, dtype=np.int64)
+    count = np.zeros(max_nodes, dtype=np.int64)
+    index = np.arange(n).astype(np.int64)
+    cbox = np.empty(6)
+    bin_box = np.empty((BINS, 6))
+    bin_count = np.zeros(BINS, dtype=np.int64)
+    right_area = np.zeros(BINS)
+    right_count = np.zeros(BINS, dtype=np.int64)
+    # Pending nodes: (node, start, end, depth); at most one per level of the tree is pending.
+    pending = np.empty((4 * STACK, 4), dtype=np.int64)
+    _push(pending, 0, 0, 0, n, 0)
+    top = 1
+    used = 1
+    depth_max = 0
+    while top > 0:
+        top -= 1
+        node, start, end, depth = pending[top, 0], pending[top, 1], pending[top, 2], pending[top, 3]
+        depth_max = max(depth_max, depth)
+        _range_bounds(lo, hi, cent, index, start, end, box[node], cbox)
+        size = end - start
+        first[node], count[node] = start, size
+        if size <= MIN_SPLIT:
+            continue
+        mid = start
+        if depth < SAH_DEPTH:
+            cost, axis, split_bin = _best_split(lo, hi, cent, index, start, end, cbox, bin_box,
+                                                bin_count, right_area, right_count)
+            parent_area = _area(box[node, 0], box[node, 1], box[node, 2],
+                                box[node, 3], box[node, 4], box[node, 5])
+            if axis >= 0:
+                split_cost = TRAVERSAL_COST + cost / parent_area if parent_area > 0.0 else size
+                if split_cost >= size and size <= MAX_LEAF:
+                    continue                          # intersecting them all is cheaper
+                scale = BINS / (cbox[axis + 3] - cbox[axis])
+                mid = _partition(cent, index, start, end, axis, split_bin, cbox[axis], scale)
+        if mid == start or mid == end:               # inseparable centroids, or too deep
+            if size <= MAX_LEAF:
+                continue
+            mid = start + size // 2                   # the median by index
+        left = used
+        used += 2
+        first[node], count[node] = left, 0
+        _push(pending, top, left + 1, mid, end, depth + 1)
+        _push(pending, top + 1, left, start, mid, depth + 1)
+        top += 2
+    return box[:used].copy(), first[:used].copy(), count[:used].copy(), index, depth_max
+
+
+@njit(cache=True, parallel=True)
+def _triangle_arrays(positions, triangles, order, v0, e1, e2):
+    for k in prange(order.shape[0]):
+        t = order[k]
+        a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        for ax in range(3):
+            v0[k, ax] = positions[a, ax]
+            e1[k, ax] = positions[b, ax] - positions[a, ax]
+            e2[k, ax] = positions[c, ax] - positions[a, ax]
+
+
+def build(positions: np.ndarray, triangles: np.ndarray) -> tuple[BVH, BuildReport]:
+    """The BVH of ``triangles`` ``(T, 3)`` over ``positions`` ``(V, 3)``, and how its build went.
+
+    Degenerate triangles are kept (Möller–Trumbore never reports a hit on them); triangles
+    with a non-finite vertex are left out of the tree (no ray can hit them).
+    """
+    start_time = time.perf_counter()
+    positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    corners = positions[triangles]                       # (T, 3, 3)
+    finite = np.isfinite(corners).all(axis=(1, 2))
+    keep = np.flatnonzero(finite)
+    lo = np.ascontiguousarray(corners[keep].min(axis=1))
+    hi = np.ascontiguousarray(corners[keep].max(axis=1))
+    cent = (lo + hi) * 0.5                                # the box centre: one pass, no division
+    del corners
+    if len(keep) == 0:                                    # a tree with one empty leaf
+        box = np.array([[np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf]])
+        nodes = (box, np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64), 0)
+    else:
+        nodes = _build(lo, hi, cent)
+    box, first, count, index, depth = nodes
+    order = keep[index]
+    v0, e1, e2 = (np.empty((len(order), 3)) for _ in range(3))
+    _triangle_arrays(positions, triangles, order, v0, e1, e2)
+    bvh = BVH(box, first, count, v0, e1, e2, order.astype(np.int64))
+    seconds = time.perf_counter() - start_time
+    size = sum(a.nbytes for a in bvh)
+    leaves = int(np.count_nonzero(count > 0)) if len(order) else 0
+    return bvh, BuildReport(len(order), len(box), leaves, int(depth), seconds, size)
+
+
+# --------------------------------------------------------------------------------------------
+# Traversal
+
+
+@njit(cache=True)
+def _box_entry(box, k, ox, oy, oz, ix, iy, iz, t_max):
+    """Where the ray enters box ``k`` (slab test), or +inf when it misses it before ``t_max``."""
+    tx0, tx1 = (box[k, 0] - ox) * ix, (box[k, 3] - ox) * ix
+    ty0, ty1 = (box[k, 1] - oy) * iy, (box[k, 4] - oy) * iy
+    tz0, tz1 = (box[k, 2] - oz) * iz, (box[k, 5] - oz) * iz
+    t_enter = max(min(tx0, tx1), min(ty0, ty1), min(tz0, tz1), 0.0)
+    t_exit = min(max(tx0, tx1), max(ty0, ty1), max(tz0, tz1), t_max)
+    # NaN (origin on a slab of a zero direction) compares false: the box is kept, safely.
+    if t_enter > t_exit:
+        return np.inf
+    return t_enter
+
+
+@njit(cache=True)
+def _reciprocal(d):
+    """1/d with 1/0 = a huge number of the right sign: the slab test then needs no branch."""
+    if d == 0.0:
+        return 1e300
+    return 1.0 / d
+
+
+@njit(cache=True)
+def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
+    """``(k, t, u, v)``: BVH position ``k`` of the nearest triangle hit in ``(t_min, t_max)``
+    (``bvh.prim[k]`` is the scene's triangle), or ``k = -1``. ``stack``: ``STACK`` int64s."""
+    box = bvh.box
+    if box.shape[0] == 0 or bvh.v0.shape[0] == 0:
+        return -1, np.inf, 0.0, 0.0
+    ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
+    best_k, best_t, best_u, best_v = -1, t_max, 0.0, 0.0
+    if _box_entry(box, 0, ox, oy, oz, ix, iy, iz, best_t) == np.inf:
+        return -1, np.inf, 0.0, 0.0
+    stack[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        n = bvh.count[node]
+        if n > 0:                                         # a leaf: test its triangles
+            f = bvh.first[node]
+            for k in range(f, f + n):
+                t, u, v = intersect.triangle(ox, oy, oz, dx, dy, dz, bvh.v0[k], bvh.e1[k],
+                                             bvh.e2[k], t_min, best_t)
+                if t < best_t:
+                    best_k, best_t, best_u, best_v = k, t, u, v
+            continue
+        left = bvh.first[node]
+        t_left = _box_entry(box, left, ox, oy, oz, ix, iy, iz, best_t)
+        t_right = _box_entry(box, left + 1, ox, oy, oz, ix, iy, iz, best_t)
+        # Push the farther child first, so the nearer one is visited next.
+        if t_left <= t_right:
+            if t_right != np.inf:
+                stack[top] = left + 1
+                top += 1
+            if t_left != np.inf:
+                stack[top] = left
+                top += 1
+        else:
+            if t_left != np.inf:
+                stack[top] = left
+                top += 1
+            stack[top] = left + 1
+            top += 1
+    if best_k < 0:
+        return -1, np.inf, 0.0, 0.0
+    return best_k, best_t, best_u, best_v
+
+
+@njit(cache=True)
+def occluded(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
+    """BVH position of any triangle hit in ``(t_min, t_max)``, or -1 (the shadow-ray query)."""
+    box = bvh.box
+    if bvh.v0.shape[0] == 0:
+        return -1
+    ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
+    stack[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if _box_entry(box, node, ox, oy, oz, ix, iy, iz, t_max) == np.inf:
+            continue
+        n = bvh.count[node]
+        if n > 0:
+            f = bvh.first[node]
+            for k in range(f, f + n):
+                t, _, _ = intersect.triangle(ox, oy, oz, dx, dy, dz, bvh.v0[k], bvh.e1[k],
+                                             bvh.e2[k], t_min, t_max)
+                if t < t_max:
+                    return k
+            continue
+        stack[top] = bvh.first[node] + 1
+        stack[top + 1] = bvh.first[node]
+        top += 2
+    return -1
+
+
+@njit(cache=True, parallel=True)
+def closest_many(bvh, origins, directions, t_min, t_max, prim, t_hit, u_hit, v_hit):
+    """:func:`closest` for every ray (in parallel): the scene triangle (-1: none), t, u, v."""
+    n = origins.shape[0]
+    chunks = (n + 1023) // 1024
+    for c in prange(chunks):
+        stack = np.empty(STACK, dtype=np.int64)
+        for i in range(c * 1024, min(n, (c + 1) * 1024)):
+            k, t, u, v = closest(bvh, origins[i, 0], origins[i, 1], origins[i, 2],
+                                 directions[i, 0], directions[i, 1], directions[i, 2],
+                                 t_min[i], t_max[i], stack)
+            prim[i] = bvh.prim[k] if k >= 0 else -1
+            t_hit[i], u_hit[i], v_hit[i] = t, u, v
+
+
+@njit(cache=True, parallel=True)
+def occluded_many(bvh, origins, directions, t_min, t_max, hit):
+    """:func:`occluded` for every ray (in parallel): true where something is in the way."""
+    n = origins.shape[0]
+    chunks = (n + 1023) // 1024
+    for c in prange(chunks):
+        stack = np.empty(STACK, dtype=np.int64)
+        for i in range(c * 1024, min(n, (c + 1) * 1024)):
+            hit[i] = occluded(bvh, origins[i, 0], origins[i, 1], origins[i, 2],
+                              directions[i, 0], directions[i, 1], directions[i, 2],
+                              t_min[i], t_max[i], stack) >= 0
+
+
+def intersect_rays(bvh: BVH, origins, directions, t_min=0.0, t_max=np.inf):
+    """Nearest hits of many rays: ``(triangle (N,) int64, -1 none; t; u; v)``."""
+    origins = np.ascontiguousarray(origins, dtype=np.float64).reshape(-1, 3)
+    directions = np.ascontiguousarray(directions, dtype=np.float64).reshape(-1, 3)
+    n = len(origins)
+    lo = np.broadcast_to(np.asarray(t_min, dtype=np.float64), (n,)).copy()
+    hi = np.broadcast_to(np.asarray(t_max, dtype=np.float64), (n,)).copy()
+    prim = np.empty(n, np.int64)
+    t, u, v = np.empty(n), np.empty(n), np.empty(n)
+    closest_many(bvh, origins, directions, lo, hi, prim, t, u, v)
+    return prim, t, u, v
+
+
+def occluded_rays(bvh: BVH, origins, directions, t_min=0.0, t_max=np.inf) -> np.ndarray:
+    """Whether anything lies on each ray inside ``(t_min, t_max)``: ``(N,)`` bool."""
+    origins = np.ascontiguousarray(origins, dtype=np.float64).reshape(-1, 3)
+    directions = np.ascontiguousarray(directions, dtype=np.float64).reshape(-1, 3)
+    n = len(origins)
+    lo = np.broadcast_to(np.asarray(t_min, dtype=np.float64), (n,)).copy()
+    hi = np.broadcast_to(np.asarray(t_max, dtype=np.float64), (n,)).copy()
+    hit = np.empty(n, np.bool_)
+    occluded_many(bvh, origins, directions, lo, hi, hit)
+    return hit

@@ -1,0 +1,187 @@
+"""The ray tracer's front door: a scene, a view and settings → a picture, whole or by tiles.
+
+- :func:`prepare` packs the scene (BVH, primitives, materials; kept while the scene lives), the
+  lights, the eye and the options once per frame: a :class:`Setup`.
+- :func:`trace_tile` traces the image rows ``[row0, row1)`` and columns ``[col0, col1)`` at every
+  sample of the pixel and returns their box-filtered colour — what a progressive driver (the
+  window) calls tile by tile, coarse first (:func:`tiles` gives an order).
+- :func:`render_image` traces the whole frame; :func:`draw` is the renderer registered
+  as ``"raytrace"`` (``fn(scene, view, settings, frame, context)``), filling ``frame``.
+
+Options (:class:`TraceOptions`, read from :class:`core.settings.RenderSettings` where it has
+them): ``max_depth`` (7, the notes), ``adaptive_epsilon`` (ε of the notes' adaptive depth
+control), ``shadows`` (:data:`core.raytrace.whitted.SHADOW_MODES`, default ``"transmit"``),
+``fresnel`` (Schlick, off), and ``medium`` (the index of the space between objects: air).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.camera.view import View, check
+from core.raytrace import camera, geometry, whitted
+from core.raytrace.optics import AIR, index_of_refraction
+from core.camera.film import sample_offsets
+from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
+                                       to_uint8)
+
+MAX_DEPTH_LIMIT = 64
+
+
+@dataclass(frozen=True)
+class TraceOptions:
+    max_depth: int = 7
+    adaptive_epsilon: float = 1e-3
+    shadows: str = "transmit"
+    fresnel: bool = False
+    medium: float = AIR
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.max_depth, int) and 1 <= self.max_depth <= MAX_DEPTH_LIMIT):
+            raise ValueError(f"max_depth must be a whole number from 1 to {MAX_DEPTH_LIMIT}, "
+                             f"not {self.max_depth!r}")
+        if not (isinstance(self.adaptive_epsilon, (int, float))
+                and 0.0 <= self.adaptive_epsilon <= 1.0):
+            raise ValueError(f"adaptive_epsilon must be a number in [0, 1], "
+                             f"not {self.adaptive_epsilon!r}")
+        if self.shadows not in whitted.SHADOW_MODES:
+            raise ValueError(f"shadows must be one of {', '.join(whitted.SHADOW_MODES)}, "
+                             f"not {self.shadows!r}")
+        object.__setattr__(self, "medium", index_of_refraction(self.medium, "medium"))
+
+    @classmethod
+    def from_settings(cls, settings) -> "TraceOptions":
+        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel")
+        return cls(**{n: getattr(settings, n) for n in names if hasattr(settings, n)})
+
+
+@dataclass
+class Setup:
+    """One frame's inputs, ready for the kernel."""
+
+    packing: geometry.Packing
+    view: View
+    projection: str
+    width: int
+    height: int
+    offsets: np.ndarray          # (S, 2) sample offsets in the pixel, from its top-left corner
+    lights: np.ndarray
+    ambient: np.ndarray
+    eye: np.ndarray
+    halfway: bool
+    background: np.ndarray
+    options: TraceOptions
+    counts: np.ndarray           # (7,) rays of each kind so far (whitted.COUNTERS)
+
+
+def prepare(scene, view: View, projection: str, size: tuple[int, int],
+            options: TraceOptions = TraceOptions(), offsets=None) -> Setup:
+    """Everything one frame needs. Raises ViewError for an invalid view and ValueError for a
+    material or primitive the tracer cannot use."""
+    check(view, projection)
+    width, height = size
+    packing = geometry.pack(scene)
+    return Setup(packing=packing, view=view, projection=projection, width=int(width),
+                 height=int(height),
+                 offsets=(np.array([[0.5, 0.5]]) if offsets is None
+                          else np.asarray(offsets, dtype=np.float64).reshape(-1, 2)),
+                 lights=pack_lights(scene.lights), ambient=pack_ambient(scene.ambient),
+                 eye=pack_eye(eye_from_view(view, projection)),
+                 halfway=scene.specular == "halfway",
+                 background=np.asarray(scene.background, dtype=np.float64).reshape(3),
+                 options=options, counts=np.zeros(len(whitted.COUNTERS), dtype=np.int64))
+
+
+def trace_rays(setup: Setup, origins, directions, t_min, t_max) -> np.ndarray:
+    """Colours ``(N, 3)`` (unclamped) of primary rays; adds their ray counts to ``setup``."""
+    o = setup.options
+    n = len(origins)
+    raw = np.empty((n, 3))
+    counts = np.zeros(((n + whitted.CHUNK - 1) // whitted.CHUNK, len(whitted.COUNTERS)),
+                      dtype=np.int64)
+    offset = 1e-9 * setup.packing.scale
+    whitted.trace_many(setup.packing.packed, np.ascontiguousarray(origins),
+                       np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
+                       np.ascontiguousarray(t_max), setup.eye, setup.lights, setup.ambient,
+                       setup.halfway, setup.background, whitted.SHADOW_MODES.index(o.shadows),
+                       o.max_depth, float(o.adaptive_epsilon), bool(o.fresnel), o.medium,
+                       offset, raw, counts)
+    setup.counts += counts.sum(axis=0)
+    return raw
+
+
+def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int):
+    """Primary rays of a tile, sample-major then row-major, and their [F, B] intervals."""
+    origins, directions, inside = camera.tile_rays(
+        setup.view, setup.projection, setup.width, setup.height, setup.offsets,
+        rows=(row0, row1), cols=(col0, col1))
+    perspective = setup.projection == "perspective"
+    t_min, t_max = camera.clip_interval(setup.view, origins, directions, from_origin=perspective)
+    if not perspective:
+        # Start each parallel ray on the front plane, so that t >= 0 along every ray.
+        start = np.where(inside & np.isfinite(t_min), t_min, 0.0)
+        origins = origins + start[:, None] * directions
+        t_min, t_max = t_min - start, t_max - start
+    t_min[~inside] = np.inf
+    return origins, directions, t_min, t_max
+
+
+def trace_tile(setup: Setup, row0: int, row1: int, col0: int, col1: int) -> np.ndarray:
+    """The box-filtered, unclamped colour ``(row1 − row0, col1 − col0, 3)`` of a tile."""
+    origins, directions, t_min, t_max = primary(setup, row0, row1, col0, col1)
+    raw = trace_rays(setup, origins, directions, t_min, t_max)
+    return raw.reshape(len(setup.offsets), row1 - row0, col1 - col0, 3).mean(axis=0)
+
+
+def tiles(width: int, height: int, tile: int = 32) -> list[tuple[int, int, int, int]]:
+    """``(row0, row1, col0, col1)`` tiles covering the image, centre first (what the viewer
+    looks at), spiralling out by distance — the order a progressive display fills in."""
+    boxes = [(r, min(r + tile, height), c, min(c + tile, width))
+             for r in range(0, height, tile) for c in range(0, width, tile)]
+    cy, cx = height / 2, width / 2
+    return sorted(boxes, key=lambda b: ((b[0] + b[1]) / 2 - cy) ** 2 + ((b[2] + b[3]) / 2 - cx) ** 2)
+
+
+def render_raw(setup: Setup) -> np.ndarray:
+    """The whole frame, ``(H, W, 3)`` unclamped float colours, row 0 at the top."""
+    return trace_tile(setup, 0, setup.height, 0, setup.width)
+
+
+def stats_of(setup: Setup, seconds: float) -> dict:
+    b = setup.packing.build
+    rays = {name: int(c) for name, c in zip(whitted.COUNTERS, setup.counts)}
+    return {"rays": rays, "bvh": {"triangles": b.triangles, "nodes": b.nodes, "depth": b.depth,
+                                  "build ms": b.seconds * 1e3, "bytes": b.bytes},
+            "trace ms": seconds * 1e3, "renderer": "raytrace"}
+
+
+def render_image(scene, view: View, projection: str, size: tuple[int, int],
+                 options: TraceOptions = TraceOptions(), samples: int = 1,
+                 pattern: str = "regular", seed: int = 0) -> tuple[np.ndarray, np.ndarray, dict]:
+    """``(uint8 image (H, W, 3), raw float image, stats)`` of ``view`` of ``scene``."""
+    offsets = sample_offsets(samples, pattern, seed)
+    setup = prepare(scene, view, projection, size, options, offsets)
+    start = time.perf_counter()
+    raw = render_raw(setup)
+    return to_uint8(raw), raw, stats_of(setup, time.perf_counter() - start)
+
+
+def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
+    """The ``"raytrace"`` renderer (:mod:`core.renderers`): fills ``frame.color`` and
+    ``frame.stats`` for ``settings``, placing the film's samples itself."""
+    options = TraceOptions.from_settings(settings)
+    offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
+               if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
+    setup = prepare(scene, view, settings.projection, settings.size, options, offsets)
+    if timer is not None:
+        timer.lap("pack scene, build BVH")
+    start = time.perf_counter()
+    frame.color[...] = to_uint8(render_raw(setup))
+    frame.stats.update(stats_of(setup, time.perf_counter() - start))
+    frame.stats["samples per pixel"] = len(offsets)
+    frame.stats["computed"].append("ray tracing")
+    if timer is not None:
+        timer.lap("ray trace")

@@ -1,0 +1,183 @@
+"""Procedural textures: checker, bricks, the bump demo's height functions, value and Perlin noise.
+
+Each is a function of (u, v) in [0, 1]² evaluated at the texel centres of a ``resolution`` x
+``resolution`` image (numpy, vectorised), so that it is sampled, filtered and MIP-mapped like
+an image file. All of them tile: the pattern repeats exactly across u = 1 and v = 1 (checker
+and bricks by whole counts, noise by a lattice that wraps), so ``wrap = "repeat"`` shows no
+seam. Colours are display values (what one would paint), so :func:`make` builds the texture
+with ``srgb = True``; height fields are data in [0, 1] (``srgb = False``).
+
+``texture = { procedural = "checker", scale = 8 }`` in a scene file calls :func:`make` with the
+table's other keys as parameters; :data:`PROCEDURALS` lists every name with its parameters.
+"""
+
+from __future__ import annotations
+
+import inspect
+
+import numpy as np
+
+from core.texture.image import Texture
+
+MAX_RESOLUTION = 4096
+
+
+def _grid(resolution: int) -> tuple[np.ndarray, np.ndarray]:
+    """(u, v) at the texel centres, arrays (resolution, resolution), row 0 at v = 0."""
+    c = (np.arange(resolution) + 0.5) / resolution
+    return np.meshgrid(c, c)
+
+
+def _mix(a, b, t):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    return a + (b - a) * np.asarray(t, float)[..., None]
+
+
+def checker(resolution: int = 256, scale: int = 8, a=(0.9, 0.9, 0.9), b=(0.1, 0.1, 0.1)):
+    """``scale`` x ``scale`` squares, colour ``a`` where (⌊u scale⌋ + ⌊v scale⌋) is even."""
+    u, v = _grid(resolution)
+    odd = (np.floor(u * scale) + np.floor(v * scale)) % 2
+    return _mix(a, b, odd), True
+
+
+def _bricks_mask(resolution, rows, columns, mortar):
+    """1 on a brick, 0 in the mortar; every other row shifted by half a brick."""
+    u, v = _grid(resolution)
+    y = v * rows
+    row = np.floor(y)
+    x = u * columns + 0.5 * (row % 2)
+    fx, fy = x - np.floor(x), y - row
+    half = mortar / 2
+    return ((fx > half) & (fx < 1 - half) & (fy > half) & (fy < 1 - half)).astype(float)
+
+
+def bricks(resolution: int = 256, rows: int = 8, columns: int = 4, mortar: float = 0.08,
+           brick=(0.62, 0.22, 0.14), joint=(0.78, 0.76, 0.72)):
+    """Running-bond bricks: ``rows`` courses of ``columns`` bricks, ``mortar`` joints
+    (a fraction of a brick's height)."""
+    return _mix(joint, brick, _bricks_mask(resolution, rows, columns, mortar)), True
+
+
+def bricks_height(resolution: int = 256, rows: int = 8, columns: int = 4, mortar: float = 0.08):
+    """The bricks as a height field: 1 on the bricks, 0 in the joints."""
+    return _bricks_mask(resolution, rows, columns, mortar), False
+
+
+def demo_height(resolution: int = 256, map: int = 0):
+    """The bump demo's B(x, y) (``J3DPanel.bump``, maps 0 … 3) over its window: u → x = 100 u,
+    v → y = −100 (1 − v), so the texture's top-left is the demo's (0, 0); B in [−2, 2] is
+    mapped to [0, 1] by (B + 2) / 4."""
+    from core.texture.bump_demo import demo_bump_numpy
+    u, v = _grid(resolution)
+    return (demo_bump_numpy(map, 100.0 * u, -100.0 * (1.0 - v)) + 2.0) / 4.0, False
+
+
+def _lattice(seed: int, period: int, dims=(1,)):
+    rng = np.random.default_rng(seed)
+    return rng.random((period, period) + dims)
+
+
+def _fade(t):
+    return t * t * t * (t * (t * 6 - 15) + 10)       # Perlin's quintic: C2 across cells
+
+
+def _value_octave(resolution, period, seed):
+    u, v = _grid(resolution)
+    x, y = u * period, v * period
+    i, j = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = _fade(x - i), _fade(y - j)
+    table = _lattice(seed, period)[..., 0]
+    c = lambda di, dj: table[(j + dj) % period, (i + di) % period]   # noqa: E731
+    return (c(0, 0) * (1 - fx) * (1 - fy) + c(1, 0) * fx * (1 - fy)
+            + c(0, 1) * (1 - fx) * fy + c(1, 1) * fx * fy)
+
+
+def _perlin_octave(resolution, period, seed):
+    u, v = _grid(resolution)
+    x, y = u * period, v * period
+    i, j = np.floor(x).astype(int), np.floor(y).astype(int)
+    dx, dy = x - i, y - j
+    angle = 2 * np.pi * _lattice(seed, period)[..., 0]
+    gx, gy = np.cos(angle), np.sin(angle)
+
+    def corner(di, dj):
+        a, b = (j + dj) % period, (i + di) % period
+        return gx[a, b] * (dx - di) + gy[a, b] * (dy - dj)
+    fx, fy = _fade(dx), _fade(dy)
+    bottom = corner(0, 0) * (1 - fx) + corner(1, 0) * fx
+    top = corner(0, 1) * (1 - fx) + corner(1, 1) * fx
+    return 0.5 + (bottom * (1 - fy) + top * fy) / np.sqrt(2)   # |noise| <= sqrt(1/2)
+
+
+def _octaves(octave, resolution, scale, octaves, seed):
+    total, amplitude, weight = 0.0, 1.0, 0.0
+    for k in range(octaves):
+        total = total + amplitude * octave(resolution, scale * 2 ** k, seed + k)
+        weight += amplitude
+        amplitude /= 2
+    return total / weight
+
+
+def value_noise(resolution: int = 256, scale: int = 8, octaves: int = 4, seed: int = 1,
+                a=(0.0, 0.0, 0.0), b=(1.0, 1.0, 1.0)):
+    """Value noise: random values on a ``scale`` x ``scale`` lattice, smoothly interpolated,
+    ``octaves`` octaves of halving amplitude; coloured from ``a`` (0) to ``b`` (1)."""
+    return _mix(a, b, _octaves(_value_octave, resolution, scale, octaves, seed)), True
+
+
+def perlin(resolution: int = 256, scale: int = 8, octaves: int = 4, seed: int = 1,
+           a=(0.0, 0.0, 0.0), b=(1.0, 1.0, 1.0)):
+    """Perlin's gradient noise (1985, with his 2002 quintic fade), ``octaves`` octaves."""
+    return _mix(a, b, _octaves(_perlin_octave, resolution, scale, octaves, seed)), True
+
+
+def perlin_height(resolution: int = 256, scale: int = 8, octaves: int = 4, seed: int = 1):
+    """Perlin noise as a height field in [0, 1]."""
+    return _octaves(_perlin_octave, resolution, scale, octaves, seed), False
+
+
+def sky(resolution: int = 256, zenith=(0.15, 0.35, 0.8), horizon=(0.85, 0.9, 0.95),
+        ground=(0.35, 0.3, 0.25), squares: int = 16, sun=(0.3, 0.75)):
+    """An equirectangular environment (u: longitude, v: latitude, up): a sky from ``horizon``
+    to ``zenith``, a sun at (u, v) = ``sun``, and a checkered ground below the horizon, so a
+    mirror shows where it reflects."""
+    u, v = _grid(resolution)
+    up = np.clip((v - 0.5) * 2, 0, 1) ** 0.6
+    image = _mix(horizon, zenith, up)
+    sun_distance = np.hypot((u - sun[0]) * 2, v - sun[1])
+    image = _mix(image, (1.0, 0.97, 0.85), np.exp(-(sun_distance / 0.03) ** 2))
+    checks = (np.floor(u * squares) + np.floor(v * squares)) % 2
+    floor = _mix(ground, np.asarray(ground) * 0.5, checks)
+    return np.where((v < 0.5)[..., None], floor, image), True
+
+
+PROCEDURALS = {
+    "checker": checker, "bricks": bricks, "bricks_height": bricks_height,
+    "demo_height": demo_height, "value_noise": value_noise, "perlin": perlin,
+    "perlin_height": perlin_height, "sky": sky,
+}
+
+
+def parameters(name: str) -> tuple[str, ...]:
+    """The parameters procedural texture ``name`` takes (for the scene reader's checks)."""
+    return tuple(inspect.signature(PROCEDURALS[name]).parameters)
+
+
+def make(name: str, wrap: str = "repeat", **params) -> Texture:
+    """The procedural texture ``name`` with ``params``, as a MIP-mapped :class:`Texture`.
+
+    Raises ValueError for an unknown name, parameter or a resolution out of range.
+    """
+    if name not in PROCEDURALS:
+        raise ValueError(f"unknown procedural texture {name!r} (known: {', '.join(PROCEDURALS)})")
+    resolution = params.get("resolution", 256)
+    if not (isinstance(resolution, int) and 1 <= resolution <= MAX_RESOLUTION):
+        raise ValueError(f"resolution must be a whole number from 1 to {MAX_RESOLUTION}")
+    for key in ("scale", "rows", "columns", "octaves", "squares"):
+        if key in params and not (isinstance(params[key], int) and 1 <= params[key] <= 1024):
+            raise ValueError(f"{key} must be a whole number from 1 to 1024 (so the pattern tiles)")
+    try:
+        image, srgb = PROCEDURALS[name](**params)
+    except TypeError as error:
+        raise ValueError(f"{name}: {error}") from None
+    return Texture.from_array(image, wrap=wrap, srgb=srgb, source=f"procedural {name}")

@@ -1,0 +1,103 @@
+"""The scene file's texture keys, inside a ``material`` table (read by core.scene.formats.scenefile).
+
+::
+
+    material = { kd = 0.8, texture = "wood.png" }                 # an image, sRGB, repeat
+    material = { texture = { file = "wood.png", wrap = "mirror" } }
+    material = { texture = { procedural = "checker", scale = 8 } }  # core.texture.procedural
+    material = { bump = { procedural = "bricks_height", rows = 8 }, bump_scale = 0.03 }
+    material = { normal_map = "normals.png" }                      # tangent space, not sRGB
+    material = { environment = { procedural = "sky" }, reflectivity = 0.6 }
+    material = { uv_scale = [4, 4] }                               # (u, v) multiplied first
+    material = { bump_demo = { map = 0, bump = true, viewpoint = [50, -50, 50] } }
+
+A texture value is a file name (relative to the scene file) or a table with ``file`` or
+``procedural`` (plus ``wrap``: repeat | clamp | mirror; ``srgb`` for files; the procedural
+texture's own parameters). Keys and types are checked like every other key (a message naming
+the key and its line). A texture *file* that cannot be used — missing, not an image, corrupt,
+over 16384 texels on a side — is not an error of the scene: the message names the file and the
+key, goes into ``SurfaceMaps.messages`` (the reader shows it), and the mesh is drawn without it.
+"""
+
+from __future__ import annotations
+
+from core.texture import procedural
+from core.texture.image import TextureError, load_image
+from core.texture.material import DemoMaterial, SurfaceMaps
+from core.texture.sample import WRAPS
+
+TEXTURE_KEYS = ("texture", "bump", "bump_scale", "normal_map", "environment", "reflectivity",
+                "uv_scale", "bump_demo")
+_FILE_KEYS = ("file", "wrap", "srgb")
+_DEMO_KEYS = ("map", "bump", "viewpoint")
+_ROLES = {"texture": ("color", True), "bump": ("height", False),
+          "normal_map": ("normal_map", False), "environment": ("environment", True)}
+
+
+def read_maps(reader, table: dict, path: tuple) -> SurfaceMaps | None:
+    """The :class:`SurfaceMaps` of a material table (None when it names no texture key).
+
+    ``reader`` is the scene reader (its ``fail``, ``number``, ``vector``, ``string``,
+    ``choice``, ``table``, ``boolean`` checks and ``folder``/``file``).
+    """
+    if not any(key in table for key in TEXTURE_KEYS):
+        return None
+    maps = SurfaceMaps()
+    for key, (role, srgb) in _ROLES.items():
+        if key in table:
+            setattr(maps, role, _texture(reader, table[key], path + (key,), srgb, maps))
+    if "bump_scale" in table:
+        maps.bump_scale = reader.number(table["bump_scale"], path + ("bump_scale",), -1e3, 1e3)
+    if "reflectivity" in table:
+        maps.reflectivity = reader.number(table["reflectivity"], path + ("reflectivity",),
+                                          0.0, 1.0)
+    if "uv_scale" in table:
+        maps.uv_scale = reader.vector(table["uv_scale"], path + ("uv_scale",), 2, -1e6, 1e6)
+    if "bump_demo" in table:
+        maps.demo = _demo(reader, table["bump_demo"], path + ("bump_demo",))
+    return maps
+
+
+def _texture(reader, value, path: tuple, srgb: bool, maps: SurfaceMaps):
+    from core.scene.formats.scenefile import path_text
+    key = path_text(path)
+    if isinstance(value, str):
+        value = {"file": value}
+    if not isinstance(value, dict):
+        raise reader.fail(path, "expected a file name or a table (file = … or procedural = …)")
+    if ("file" in value) == ("procedural" in value):
+        raise reader.fail(path, "give exactly one of 'file' or 'procedural'")
+    wrap = reader.choice(value.get("wrap", "repeat"), path + ("wrap",), tuple(WRAPS))
+    if "file" in value:
+        reader.table(value, path, _FILE_KEYS)
+        name = reader.string(value["file"], path + ("file",))
+        srgb = reader.boolean(value.get("srgb", srgb), path + ("srgb",))
+        shown = f"{reader.file}: {name}" if not name.startswith("/") else name
+        try:
+            return load_image(reader.folder / name, key, wrap=wrap, srgb=srgb, shown=shown)
+        except TextureError as error:
+            maps.messages.append(str(error))
+            return None
+    name = reader.choice(value["procedural"], path + ("procedural",), tuple(procedural.PROCEDURALS))
+    allowed = ("procedural", "wrap") + procedural.parameters(name)
+    params = {k: v for k, v in reader.table(value, path, allowed).items()
+              if k not in ("procedural", "wrap")}
+    try:
+        return procedural.make(name, wrap=wrap, **params)
+    except ValueError as error:
+        raise reader.fail(path, str(error)) from None
+
+
+def _demo(reader, value, path: tuple) -> DemoMaterial:
+    t = reader.table(value, path, _DEMO_KEYS)
+    demo = DemoMaterial()
+    if "map" in t:
+        number = reader.number(t["map"], path + ("map",), 0, 1e6)
+        if number != int(number):
+            raise reader.fail(path + ("map",), "expected a whole number")
+        demo.bump_map = int(number)
+    if "bump" in t:
+        demo.bump = reader.boolean(t["bump"], path + ("bump",))
+    if "viewpoint" in t:
+        demo.viewpoint = reader.vector(t["viewpoint"], path + ("viewpoint",))
+    return demo

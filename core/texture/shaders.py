@@ -1,0 +1,154 @@
+"""The ``textured`` shader: Phong with a material's maps, and the course's bump demo material.
+
+Registered in :mod:`core.shading.registry` as ``"textured"``; the z-buffer also uses it for
+``phong`` whenever a mesh's material has maps (:func:`shading_for`), so a scene asks for Phong
+shading and gets its textures. Flat and Gouraud shading draw textured materials untextured:
+a texture, a bump map and a normal map all need a value per pixel, which those modes do not
+compute (the plan says so).
+
+Vertex step (world coordinates, kept with the scene): the varyings of
+:mod:`core.texture.surface` — normal, position, (u, v) times the material's ``uv_scale``, and
+the tangent frame ∂P/∂u, ∂P/∂v (:func:`core.texture.material.tangent_frames`; zero where no
+map needs it). Meshes without (u, v) (``.tri`` files, OBJ without ``vt``) get (0, 0) and are
+drawn with the material's colour.
+
+Pixel step: (u, v) derivatives come from the clipped triangles' device coordinates (the
+tutorial's plane constants, :func:`core.texture.tutorial.triangle_constants`), which the
+z-buffer hands over as ``ShadeInput.device``; the filter and the bump switch come from
+``RenderSettings.texture_filter`` and ``.bump`` (``ShadeInput.settings``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from core.shading.illumination import OD, quantize
+from core.shading.registry import Shader, register_shader
+from core.shading.shade import ShadeInput, all_vertex_normals, cached, scene_arrays
+from core.texture.bump_demo import DEMO_LIGHT, demo_pixel, java_color_byte
+from core.texture.material import maps_of, tangent_frames
+from core.texture.sample import FILTERS, TRILINEAR
+from core.texture.surface import VARYING_COLUMNS, pack_maps, textured_pixel
+from core.texture.tutorial import triangle_constants
+
+NAME = "textured"
+# Columns of a packed demo row: kind (1 = the bump demo), map, bump on, viewpoint (3).
+DEMO_COLUMNS = 6
+
+
+def shading_for(scene, shading: str) -> str:
+    """``"textured"`` for Phong shading of a scene with any mapped or demo material."""
+    if shading == "phong" and any(maps_of(m.material) is not None for m in scene.meshes):
+        return NAME
+    return shading
+
+
+def _mesh_varyings(mesh) -> np.ndarray:
+    """``(V, 8)``: (u, v) scaled, ∂P/∂u, ∂P/∂v of one mesh (zeros where it has no (u, v))."""
+    out = np.zeros((len(mesh.positions), 8))
+    maps = maps_of(mesh.material)
+    if mesh.uv is None or maps is None:
+        return out
+    uv = mesh.uv * np.asarray(maps.uv_scale)
+    out[:, :2] = uv
+    if maps.needs_tangents and len(mesh.triangles):
+        out[:, 2:] = tangent_frames(mesh.positions, mesh.triangles, uv)
+    return out
+
+
+def _demo_rows(meshes) -> np.ndarray:
+    rows = np.zeros((len(meshes), DEMO_COLUMNS))
+    for s, mesh in enumerate(meshes):
+        maps = maps_of(mesh.material)
+        if maps is not None and maps.demo is not None:
+            rows[s] = (1.0, maps.demo.bump_map, float(maps.demo.bump), *maps.demo.viewpoint)
+    return rows
+
+
+def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
+    normals = all_vertex_normals(s, scene, meshes, weighting)
+    # Maps are read from the materials each frame (a window may switch the demo's map); the
+    # arrays that depend only on the geometry are kept with the scene.
+    extra = cached(s.context, scene, scene_arrays(meshes), "texture varyings",
+                   lambda: np.concatenate([_mesh_varyings(m) for m in meshes]) if meshes
+                   else np.zeros((0, 8)))
+    s.vertex_attrs = cached(s.context, scene, scene_arrays(meshes) + (extra,),
+                            f"textured attributes {weighting}",
+                            lambda: np.concatenate([normals, s.positions, extra], axis=1))
+    s.texture_maps = pack_maps([maps_of(m.material) for m in meshes])
+    s.demo = _demo_rows(meshes)
+    s.computed += ["illuminate pixels", "texture lookups"]
+
+
+@njit(cache=True, parallel=True)
+def _resolve(tri, b1, b2, triangles, attrs, constants, source, face_surface, surfaces, maps,
+             texels, levels, textures, demo, demo_light, filter_, bump, lights, ambient, eye,
+             halfway, background8, out):
+    height, width = tri.shape
+    for row in prange(height):
+        surf = surfaces.copy()                  # per row: a pixel writes its texture's O_d here
+        for col in range(width):
+            t = tri[row, col]
+            if t < 0:
+                for c in range(3):
+                    out[row, col, c] = background8[c]
+                continue
+            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+            w1, w2 = b1[row, col], b2[row, col]
+            w0 = 1.0 - w1 - w2
+            s = face_surface[source[t]]
+            if demo[s, 0] > 0.5:                # the course's bump demo: its own model
+                blue = _demo(attrs, i0, i1, i2, w0, w1, w2, demo, s, demo_light)
+                out[row, col, 0] = 0
+                out[row, col, 1] = 0
+                out[row, col, 2] = java_color_byte(blue)
+                continue
+            r, g, b = textured_pixel(attrs, i0, i1, i2, w0, w1, w2, t, col, row, constants,
+                                     s, maps, texels, levels, textures, filter_, bump, surf,
+                                     lights, ambient, eye, halfway)
+            for c in range(3):
+                surf[s, OD + c] = surfaces[s, OD + c]
+            out[row, col, 0] = quantize(r)
+            out[row, col, 1] = quantize(g)
+            out[row, col, 2] = quantize(b)
+
+
+@njit(cache=True)
+def _demo(attrs, i0, i1, i2, w0, w1, w2, demo, s, light):
+    """The demo's pixel step at the interpolated point and normal."""
+    n = np.empty(6)                 # normal, position: the first six varyings
+    for c in range(6):
+        n[c] = w0 * attrs[i0, c] + w1 * attrs[i1, c] + w2 * attrs[i2, c]
+    return demo_pixel(n[3], n[4], n[5], n[0], n[1], n[2], light, demo[s, 3:6],
+                      int(demo[s, 1]), demo[s, 2] > 0.5)
+
+
+def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
+    settings = getattr(s, "settings", None)
+    filter_ = FILTERS.get(getattr(settings, "texture_filter", "trilinear"), TRILINEAR)
+    bump = bool(getattr(settings, "bump", True))
+    tri = np.ascontiguousarray(vis.tri, dtype=np.int32)
+    device = getattr(s, "device", None)
+    if device is not None and len(triangles):
+        points, inv_w = device
+        w = np.divide(1.0, inv_w, out=np.zeros_like(inv_w), where=inv_w > 0)
+        device_h = np.column_stack([points * w[:, None], w])
+        constants = triangle_constants(device_h, triangles, attrs[:, 6:8], tri.shape[0])
+    else:                                   # no device coordinates: no derivatives, level 0
+        constants = np.zeros((max(len(triangles), 1), 3, 3))
+    texels, levels, textures, maps = s.texture_maps
+    # the demo lights its panel with the scene's first light (J3DPanel's lightSource)
+    demo_light = (s.lights[0, 1:4].copy() if len(s.lights) and s.lights[0, 0] == 0.0
+                  else np.array(DEMO_LIGHT))
+    _resolve(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
+             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, constants, source,
+             s.face_surface, s.surfaces, maps, texels, levels, textures, s.demo, demo_light, filter_, bump,
+             s.lights, s.ambient, s.eye, s.halfway, background8, out)
+
+
+register_shader(Shader(NAME, _vertex, _pixel,
+                       varyings=("normal", "position", "uv", "dpdu", "dpdv"),
+                       width=VARYING_COLUMNS,
+                       description="Phong with the material's textures, bump/normal and "
+                                   "environment maps (and the bump demo's material)"))

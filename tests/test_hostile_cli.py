@@ -1,0 +1,158 @@
+"""Hostile use of the command line (issue 15): --out never destroys what the user owns,
+--size says what is wrong, and MemoryError or a closed standard input end in a message."""
+
+from __future__ import annotations
+
+import argparse
+import errno
+import io
+import os
+import sys
+
+import pytest
+
+from app import cli
+from core.paths import SCENES_DIR
+
+VIEWS = SCENES_DIR / "house.views"
+
+
+def run(capsys, *argv) -> tuple[int, str]:
+    """``python -m app ARGV`` in process: (exit status, stderr)."""
+    try:
+        status = cli.main(list(argv))
+    except SystemExit as exit_:                  # argparse's own errors
+        status = exit_.code
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return status, err
+
+
+def render(capsys, source, out, *more) -> tuple[int, str]:
+    return run(capsys, "render", str(source), "--size", "16x16", "--out", str(out), *more)
+
+
+def test_out_equal_to_the_input_is_refused(tmp_path, capsys):
+    views = tmp_path / "hv.png"
+    views.write_bytes(VIEWS.read_bytes())
+    status, err = render(capsys, views, views)
+    assert status == 2 and "it is the input" in err
+    assert views.read_bytes() == VIEWS.read_bytes()
+
+
+def test_out_equal_to_the_input_through_a_link_is_refused(tmp_path, capsys):
+    views = tmp_path / "hv.png"
+    views.write_bytes(VIEWS.read_bytes())
+    (tmp_path / "link.png").symlink_to(views)
+    os.link(views, tmp_path / "hard.png")
+    for source, out in (("link.png", "hv.png"), ("hv.png", "link.png"), ("hard.png", "hv.png")):
+        status, err = render(capsys, tmp_path / source, tmp_path / out)
+        assert status == 2 and "it is the input" in err
+    assert views.read_bytes() == VIEWS.read_bytes()
+
+
+@pytest.mark.parametrize("name, reason", [
+    ("x.jpg", "only PNG is written"), ("x.gif", "only PNG is written"),
+    ("x.pdf", "only PNG is written"), ("x.eps", "only PNG is written"),
+    ("x", "only PNG is written"), ("missing/x.png", "does not exist (it is not created)"),
+    ("folder.png", "it is a folder"),
+])
+def test_out_is_refused_cleanly(tmp_path, capsys, name, reason):
+    (tmp_path / "folder.png").mkdir()
+    status, err = render(capsys, VIEWS, tmp_path / name)
+    assert status == 2 and reason in err
+    assert not (tmp_path / "missing").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["folder.png"]
+
+
+def test_a_device_is_not_written(tmp_path, capsys):
+    (tmp_path / "full.png").symlink_to("/dev/full")
+    status, err = render(capsys, VIEWS, tmp_path / "full.png")
+    assert status == 2 and "not a regular file" in err
+
+
+def test_an_existing_file_that_is_not_a_png_is_kept_unless_forced(tmp_path, capsys):
+    notes = tmp_path / "notes.png"
+    notes.write_text("my notes")
+    status, err = render(capsys, VIEWS, notes)
+    assert status == 2 and "--force" in err and notes.read_text() == "my notes"
+    status, _ = render(capsys, VIEWS, notes, "--force")
+    assert status == 0 and notes.read_bytes().startswith(cli.PNG_SIGNATURE)
+    status, _ = render(capsys, VIEWS, notes)          # now a PNG: replaced without --force
+    assert status == 0
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path, capsys, monkeypatch):
+    out = tmp_path / "old.png"
+    status, _ = render(capsys, VIEWS, out)
+    before = out.read_bytes()
+
+    def disk_full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+    from PIL import Image
+    monkeypatch.setattr(Image.Image, "save", disk_full)
+    status, err = render(capsys, VIEWS, out)
+    assert status == 2 and "No space left on device" in err
+    assert out.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["old.png"]
+
+
+def test_the_written_png_has_ordinary_permissions(tmp_path, capsys):
+    out = tmp_path / "a.png"
+    assert render(capsys, VIEWS, out)[0] == 0
+    umask = os.umask(0)
+    os.umask(umask)
+    assert out.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+@pytest.mark.parametrize("text, reason", [
+    ("-5x5", "the width must be at least 1, got -5"),
+    ("5x-5", "the height must be at least 1, got -5"),
+    ("0x5", "the width must be at least 1, got 0"),
+    ("+5x+5", "without a sign"),
+    ("1_0x1_0", "ASCII digits"),
+    ("\uff15x\uff15", "ASCII digits"),            # fullwidth 5
+    ("\u0665x5", "ASCII digits"),                 # Arabic-Indic 5
+    ("5x5x5", "ASCII digits"),
+    ("9" * 5000 + "x1", "ASCII digits"),
+    ("99999x1", "out of range"),
+])
+def test_size_accepts_ascii_digits_only_and_says_what_is_wrong(text, reason):
+    with pytest.raises(argparse.ArgumentTypeError, match=reason):
+        cli.parse_size(text)
+
+
+def test_size_with_a_leading_minus_reaches_the_parser(tmp_path, capsys):
+    for argv in (("--size", "-5x5"), ("--size=-5x5",)):
+        status, err = run(capsys, "render", str(VIEWS), "--out", str(tmp_path / "a.png"), *argv)
+        assert status == 2 and "the width must be at least 1, got -5" in err
+        assert "expected one argument" not in err
+
+
+def test_memory_error_is_a_message(capsys, monkeypatch):
+    def exhausted(args):
+        raise MemoryError
+    monkeypatch.setattr(cli, "_dispatch", exhausted)
+    status, err = run(capsys, "render", str(VIEWS), "--out", "x.png")
+    assert status == 3 and "out of memory" in err
+
+
+def test_closed_stdin_is_a_message(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(sys, "stdin", None)
+    status, err = render(capsys, "-", tmp_path / "a.png")
+    assert status == 2 and "standard input is closed" in err
+    stream = io.TextIOWrapper(io.BytesIO(b""))
+    stream.close()
+    monkeypatch.setattr(sys, "stdin", stream)
+    status, err = render(capsys, "-", tmp_path / "a.png")
+    assert status == 2 and "standard input is closed" in err
+
+
+def test_render_from_dev_zero_ends_in_a_message(tmp_path):
+    import subprocess
+    with open("/dev/zero", "rb") as zero:
+        done = subprocess.run([sys.executable, "-m", "app", "render", "-", "--out",
+                               str(tmp_path / "a.png")], stdin=zero, capture_output=True,
+                              text=True, timeout=120, cwd=str(SCENES_DIR.parent))
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert "a views input may have at most" in done.stderr
