@@ -140,6 +140,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     vis = rasterize(device, inv_w, clipped.triangles, width, height,
                     out=context.buffer("visibility", (width, height),
                                        lambda: stages.VisibilityBuffer.allocate(width, height)))
+    if rasterize is not stages.rasterize:
+        vis.forget_spans()       # speed: the edge rasterizer clears and shades only its spans
     stats["allocated"].append("depth")
     vis.planes = None
     if stages.shade.get_shader(shading).needs_derivatives:

@@ -8,7 +8,7 @@ from numba import njit, prange
 
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
-from core.shading.shade import PARALLEL_ITEMS, ShadeInput, all_face_normals
+from core.shading.shade import PARALLEL_ITEMS, ShadeInput, all_face_normals, covered_spans
 
 
 @njit(cache=True)
@@ -51,15 +51,12 @@ def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
 
 
 @njit(cache=True, parallel=True)
-def _resolve_flat(tri, source, face_rgb, background8, out):
-    height, width = tri.shape
-    for row in prange(height):
-        for col in range(width):
+def _resolve_flat(tri, span, source, face_rgb, out):
+    """Each covered pixel of each row's span gets its face's colour (the rest is background)."""
+    for row in prange(tri.shape[0]):
+        for col in range(span[row, 0], span[row, 1] + 1):
             t = tri[row, col]
-            if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-            else:
+            if t >= 0:
                 f = source[t]
                 for c in range(3):
                     out[row, col, c] = quantize(face_rgb[f, c])
@@ -67,8 +64,8 @@ def _resolve_flat(tri, source, face_rgb, background8, out):
 
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
-    _resolve_flat(np.ascontiguousarray(vis.tri, dtype=np.int32), source,
-                  np.ascontiguousarray(s.face_rgb, dtype=np.float64), background8, out)
+    _resolve_flat(np.ascontiguousarray(vis.tri, dtype=np.int32), covered_spans(vis), source,
+                  np.ascontiguousarray(s.face_rgb, dtype=np.float64), out)
 
 
 register_shader(Shader("flat", _prepare_flat, _pixel, description="one colour per face"))

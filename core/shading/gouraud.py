@@ -8,7 +8,7 @@ from numba import njit, prange
 
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
-from core.shading.shade import PARALLEL_ITEMS, ShadeInput, all_vertex_normals
+from core.shading.shade import PARALLEL_ITEMS, ShadeInput, all_vertex_normals, covered_spans
 
 
 def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
@@ -59,15 +59,13 @@ def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surface
 
 
 @njit(cache=True, parallel=True)
-def _resolve_gouraud(tri, b1, b2, triangles, rgb, background8, out):
-    height, width = tri.shape
-    for row in prange(height):
-        for col in range(width):
+def _resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
+    """Interpolate the vertex colours over each row's covered span (the rest is background)."""
+    for row in prange(tri.shape[0]):
+        for col in range(span[row, 0], span[row, 1] + 1):
             t = tri[row, col]
             if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-                continue
+                continue                # background, filled before
             i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
             w1, w2 = b1[row, col], b2[row, col]
             w0 = 1.0 - w1 - w2
@@ -79,8 +77,8 @@ def _resolve_gouraud(tri, b1, b2, triangles, rgb, background8, out):
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
     _resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
                      np.ascontiguousarray(vis.b1, dtype=np.float64),
-                     np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs,
-                     background8, out)
+                     np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
+                     triangles, attrs, out)
 
 
 register_shader(Shader("gouraud", _prepare_gouraud, _pixel, varyings=("rgb",), width=3,

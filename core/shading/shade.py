@@ -48,6 +48,7 @@ from typing import Callable
 
 import numpy as np
 
+from core.camera.film import fill_bytes
 from core.context import DEFAULT_CONTEXT, RenderContext
 from core.shading.illumination import (Eye, eye_from_view, pack_ambient, pack_eye, pack_lights,
                                         pack_surfaces, to_uint8)
@@ -257,5 +258,18 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
                          f"shading.triangles (0..{len(shading.triangles) - 1})")
     if k and triangles.size and not 0 <= triangles.min() <= triangles.max() < len(attrs):
         raise ValueError(f"clipped triangles index {len(attrs)} attribute rows out of range")
+    fill_bytes(out, background8)        # one memset; the pixel steps shade covered spans only
     shader.pixel(shading, vis, triangles, attrs, source, background8, out)
     return out
+
+
+def covered_spans(vis) -> np.ndarray:
+    """``(H, 2)`` int32: per row, the first and last column a pixel step must look at (the
+    rasterizer's spans when it kept them, else whole rows); the rest is background."""
+    if getattr(vis, "spans_known", False) and vis.span is not None:
+        return vis.span
+    height, width = vis.tri.shape
+    spans = np.empty((height, 2), np.int32)
+    spans[:, 0] = 0
+    spans[:, 1] = width - 1
+    return spans
