@@ -114,7 +114,7 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
         stats["culled"] = int(len(all_triangles) - len(kept))
     timer.lap("cull back faces")
 
-    inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context)
+    inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context, lazy=True)
     stats["computed"].extend(inputs.computed)
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
@@ -122,7 +122,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     points = stages.transform_affine(n, positions)
     timer.lap("normalize", canonical_points=points)
 
-    clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min)
+    clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min,
+                                    before_clip=inputs.before_clip)
     source = clipped.source if kept is None else kept[clipped.source]
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))
