@@ -104,8 +104,8 @@ class VisibilityBuffer:
     # (T, 3, 3) barycentric planes of the triangles drawn (core.pipeline.derivatives), set by
     # the renderer when a shader needs screen derivatives; None otherwise.
     planes: np.ndarray | None = None
-    # (H, 2) int32: per image row, the first and last column the last rasterize() wrote
-    # (first > last: none). Outside its span a row is empty. The next frame clears only the
+    # (H, 2) int32: per image row, the first and last column the last rasterize() may have
+    # written (first > last: none; the columns of the boxes drawn in the row's band). Outside its span a row is empty. The next frame clears only the
     # spans and the resolve shades only them: at 1k triangles most of the 500 x 500 pixels
     # are never touched. ``spans_known`` False (a buffer written by anyone else) makes the
     # next rasterize() clear every row.
@@ -339,9 +339,11 @@ def _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tr
 
 
 @njit(cache=True)
-def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b2, span,
+def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b2,
                    count_fragments, fragments):
-    """Scan-convert triangle t (scene slot ``slot``) into the device rows of one band."""
+    """Scan-convert triangle t (scene slot ``slot``) into the device rows of one band.
+
+    Returns the columns of its box (first > last when it drew nothing)."""
     height, width = depth.shape
     x0 = np.int64(s_xy[slot, 0])
     y0 = np.int64(s_xy[slot, 1])
@@ -354,7 +356,7 @@ def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b
     j_max = min(j_max, band_last)
     area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
     if area2 == 0 or j_min > j_max:
-        return
+        return width, -1
     a0, b0, c0, bias0 = edge0
     a1, b1_, c1, bias1 = edge1
     a2, b2_, c2, bias2 = edge2
@@ -373,14 +375,9 @@ def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b
         e2 = a2 * px + b2_ * py + c2
         row = height - 1 - j  # image order: row 0 is the top
         entered = False
-        first_i = i_max + 1
-        last_i = i_min - 1
         for i in range(i_min, i_max + 1):
             if (e0 | e1 | e2) >= 0:  # inside all three edges, fill rule included
-                if not entered:
-                    first_i = i
                 entered = True
-                last_i = i
                 if count_fragments:
                     fragments[row, i] += 1
                 # unbiased edge values: exact integers, the screen-space barycentrics * area2
@@ -402,9 +399,7 @@ def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b
             e0 += a0 * SUBPIXEL_ONE  # one pixel to the right
             e1 += a1 * SUBPIXEL_ONE
             e2 += a2 * SUBPIXEL_ONE
-        if entered:  # the row's span grows to hold what this scan line covered
-            span[row, 0] = min(span[row, 0], first_i)
-            span[row, 1] = max(span[row, 1], last_i)
+    return i_min, i_max
 
 
 @njit(cache=True)
@@ -414,7 +409,8 @@ def _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chu
 
     Only what the last frame wrote is cleared (each row's span; the rest of the row is still
     empty), and only depth and tri: b1 and b2 mean nothing where tri is -1 and nobody reads
-    them there."""
+    them there. The band's new span is the columns of the boxes drawn in it: two registers
+    per band, nothing per pixel."""
     height, width = depth.shape
     first = band * rows_per_band
     last = min(height, first + rows_per_band) - 1
@@ -427,11 +423,18 @@ def _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chu
         span[row, 1] = -1
     bit = np.uint16(1 << band)
     n_chunks = chunk_end.shape[0]
+    lo = width
+    hi = -1
     for chunk in range(n_chunks):
         for slot in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
             if s_bands[slot] & bit:
-                _scan_triangle(s_xy, s_zw, slot, s_tri[slot], first, last, depth, tri, b1,
-                               b2, span, count_fragments, fragments)
+                i_min, i_max = _scan_triangle(s_xy, s_zw, slot, s_tri[slot], first, last,
+                                              depth, tri, b1, b2, count_fragments, fragments)
+                lo = min(lo, i_min)
+                hi = max(hi, i_max)
+    for j in range(first, last + 1):
+        span[height - 1 - j, 0] = lo
+        span[height - 1 - j, 1] = hi
 
 
 @njit(cache=True, parallel=True)
