@@ -97,6 +97,9 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="overwrite --out even if it is an existing file that is not a PNG")
     _texture_arguments(r)                     # issue 11
     _course_options(r)
+    r.add_argument("--time", type=float, default=None, metavar="SECONDS",
+                   help="for an animated scene: the moment to draw, particles included "
+                        "(the keyed view, objects and lights at that time)")
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -239,8 +242,20 @@ def _dispatch(args) -> int:
     raise AssertionError(args.command)
 
 
+def _draw_still(scene, view, settings, time):
+    """The frame of ``view``, or with ``time`` an animated scene's frame at that moment
+    (core.animation.frames.render_at: keyed view, particles and all)."""
+    from app.viewer.state import render          # listens for compiles, to announce them
+    from core.animation.keys import animation_of
+    animation = animation_of(scene) if time is not None else None
+    if animation is None:
+        return render(scene, view, settings)
+    from core.animation.frames import render_at
+    return render_at(animation, time, settings)
+
+
 def _render(args) -> int:
-    from app.viewer.state import announce_compiles, render
+    from app.viewer.state import announce_compiles
     refusal = out_problem(Path(args.out), args.scene, args.force)
     if refusal:
         print(f"error: --out {args.out}: {refusal}", file=sys.stderr)
@@ -261,7 +276,7 @@ def _render(args) -> int:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
     with announce_compiles():            # the first run compiles the kernels: say so
-        frame = render(scene, view, settings)
+        frame = _draw_still(scene, view, settings, args.time)
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1

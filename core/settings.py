@@ -60,7 +60,6 @@ class RenderSettings:
     seed: int = 0
     rasterizer: str = "edge"                  # "edge" (fast) | "scanline" (the course's ET/AET, screen-linear)
     keep_aspect: bool = False                 # letterbox the window; False: stretch it over the viewport (the course)
-    course_tri: bool = False                  # the .tri startup code's back-face rule (skip viewpoint . N < 0)
     # Where in its pixel a one-sample frame samples (x right, y down, pixel units): the centre,
     # as the course's scan conversion does; the film moves it for each of several samples.
     pixel_offset: tuple[float, float] = (0.5, 0.5)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -136,3 +138,24 @@ def test_level_keeps_the_horizon_level_where_slerp_alone_rolls():
         assert abs(u[1]) < 1e-12
         n, n_plain = (np.array(v.vpn) / np.linalg.norm(v.vpn) for v in (anim.view_at(t), plain.view_at(t)))
         assert np.allclose(n, n_plain, atol=1e-12)
+
+
+def test_the_eye_path_passes_through_the_keyed_eyes_and_is_drawn():
+    from core import RenderSettings
+    from core.animation.frames import render_at
+    from core.animation.paths import eye_of, paths_of
+    scene, anim = load()
+    path = paths_of(anim, samples_per_second=10)["view.eye"]          # t = 0, 0.1, … 2
+    # key 1: VRP 0, VPN +z, PRP (0, 0, 8) → eye (0, 0, 8); key 2: VRP (2, 0, 0), VPN +x → (10, 0, 0)
+    assert np.allclose(path[0], [0, 0, 8]) and np.allclose(path[-1], [10, 0, 0])
+    assert np.allclose(path[10], eye_of(anim.view_at(1.0)))
+    assert np.allclose(np.linalg.norm(path - [1, 0, 0] * np.linspace(0, 2, 21)[:, None], axis=1), 8)
+    settings = RenderSettings.for_scene(scene, size=(64, 64), projection="parallel")
+    top = dataclasses.replace(scene.views[0], vrp=(5.0, 0.0, 4.0), vpn=(0.0, 1.0, 0.0),
+                              vup=(0.0, 0.0, -1.0), window=(-8.0, 8.0, -8.0, 8.0), prp=(0.0, 0.0, 20.0),
+                              front=10.0, back=-10.0)
+    scene.views.append(top)                                      # a still view from above
+    plain = render_at(anim, 1.0, settings, view_index=2).color.copy()
+    drawn = render_at(anim, 1.0, settings, view_index=2, paths=True).color
+    changed = np.any(drawn != plain, axis=2)
+    assert changed.sum() > 20 and np.all(drawn[changed] == [255, 217, 51])

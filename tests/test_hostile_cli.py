@@ -156,3 +156,23 @@ def test_render_from_dev_zero_ends_in_a_message(tmp_path):
                               text=True, timeout=120, cwd=str(SCENES_DIR.parent))
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert "a views input may have at most" in done.stderr
+
+
+def test_render_time_draws_an_animated_scene_with_its_particles(tmp_path):
+    """``render --time T`` on an animated scene draws that moment: the fountain's water is
+    there at 3 s, and the still frame (no --time) has only a few such pixels (highlights on the basin)."""
+    import subprocess
+    import sys
+
+    import numpy as np
+    from PIL import Image
+    images = {}
+    for name, extra in (("still", []), ("moment", ["--time", "3"])):
+        out = tmp_path / f"{name}.png"
+        done = subprocess.run([sys.executable, "-m", "app", "render", "scenes/fountain.toml",
+                               "--size", "120x120", "--out", str(out), *extra],
+                              capture_output=True, text=True, timeout=600)
+        assert done.returncode == 0, done.stderr
+        images[name] = np.asarray(Image.open(out)).astype(int)
+    spray = lambda im: ((im[:, :, 2] > 180) & (im[:, :, 0] > 120)).sum()  # noqa: E731
+    assert spray(images["still"]) < 20 and spray(images["moment"]) > 10 * spray(images["still"]) + 100

@@ -217,3 +217,25 @@ def test_depth_test_is_the_z_buffers_own_convention(projection):
         if visible:                                   # green, where the sprites are
             drawn, under = frame.color[changed].astype(int), before[changed].astype(int)
             assert np.all(drawn[:, 1] > under[:, 1]) and drawn[:, 1].max() > 200
+
+
+@pytest.mark.parametrize("keep_aspect", [False, True])
+def test_a_point_lands_on_the_pixel_the_z_buffer_uses(keep_aspect):
+    """A point particle just in front of the wall's face near its corner lands on a wall pixel;
+    one just beyond the corner lands on the background: the stage maps to the device as the
+    z-buffer does, letterboxed or stretched, on a framebuffer of another aspect."""
+    from core import RenderSettings, render
+    from core.animation.draw import POINT, Sprites, draw_particles
+    scene = read_scene_file(WALL_SCENE, "scene.toml")
+    view = scene.views[0]
+    settings = RenderSettings.for_scene(scene, size=(96, 64), keep_aspect=keep_aspect)
+    for corner, on_wall in ((1.85, True), (2.15, False)):
+        frame = render(scene, view, settings)
+        depth, before = frame.depth.copy(), frame.color.copy()
+        point = np.array([[corner, corner, 2.11]])
+        sprites = Sprites(position=point, tail=point, radius=np.ones(1), rgb=np.ones((1, 3)),
+                          alpha=np.ones(1), mode=np.full(1, POINT))
+        draw_particles(frame, sprites, view, settings)
+        rows, cols = np.nonzero(np.any(frame.color != before, axis=2))
+        assert len(rows) == 1
+        assert np.isfinite(depth[rows[0], cols[0]]) == on_wall

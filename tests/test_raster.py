@@ -86,7 +86,7 @@ def test_nearer_wins_in_either_order():
     assert np.all(vis.depth == -0.2) and np.all(vis.tri >= 2)
     vis = _draw(pts, tris[2:] + tris[:2], 8, 8, z=z)
     assert np.all(vis.depth == -0.2) and np.all(vis.tri <= 1)
-    # Equal depth: the notes' test z >= zbuffer gives the pixel to the later triangle.
+    # Equal depth: the notes' test z >= zbuffer lets the later triangle win.
     vis = _draw(pts, tris, 8, 8, z=[-0.3] * 8)
     assert np.all(vis.tri >= 2)
 

@@ -282,7 +282,7 @@ def test_registered_renderer_through_the_front_door():
     settings = RenderSettings.for_scene(scene, renderer="raytrace", size=(64, 48), samples=4)
     frame = render(scene, scene.views[0], settings)
     assert frame.message is None and frame.color.shape == (48, 64, 3)
-    assert frame.stats["rays"]["primary"] == 48 * 48 * 4        # the square viewport, letterboxed
+    assert frame.stats["rays"]["primary"] == 64 * 48 * 4        # the window stretched over all
     assert frame.stats["samples per pixel"] == 4
     direct, _, _ = render_image(scene, scene.views[0], "perspective", (64, 48), samples=4)
     assert np.array_equal(frame.color, direct)

@@ -116,7 +116,7 @@ def test_report_command_writes_csv_markdown_and_plot(quick_points, tmp_path, mon
     with open(folder / "error_vs_time.csv") as f:
         rows = list(csv.DictReader(f))
     assert len(rows) == len(quick_points) and set(rows[0]) == set(accuracy.COLUMNS)
-    assert {r["shading"] for r in rows} == {"flat", "gouraud", "phong"}
+    assert {r["shading"] for r in rows} == set(accuracy.QUICK.shadings)
     text = (folder / "error_vs_time.md").read_text()
     assert text.index("## Reading") < text.index("## Table")
     assert "which setting for a frame-time budget" in text

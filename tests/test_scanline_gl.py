@@ -36,8 +36,8 @@ def test_scanline_gouraud_matches_noperspective_llvmpipe(gl, name, projection, v
     gl.load(scene, modes=("gouraud_linear", "coverage"))
     for view_index in valid_views(scene, projection):
         ours = _scanline(scene, view_index, projection)
-        theirs = gl.render(view_index, projection, "gouraud_linear").astype(np.int16)
-        covered = gl.render(view_index, projection, "coverage")[:, :, 0] > 127
+        theirs = gl.render(gl.scene.views[view_index], projection, "gouraud_linear").astype(np.int16)
+        covered = gl.render(gl.scene.views[view_index], projection, "coverage")[:, :, 0] > 127
         away = covered & ~edge_mask(scene, view_index, projection)
         label = f"scanline-{name}-{projection}-{variant}-view{view_index + 1}"
         assert away.sum() >= 2000, f"{label}: only {away.sum()} pixels away from edges"
@@ -54,9 +54,9 @@ def test_the_comparison_tells_screen_linear_from_perspective_correct(gl):
     # interpenetrating.tri: big triangles in depth, seen in perspective
     scene = scene_file("interpenetrating.tri")
     gl.load(scene, modes=("gouraud", "gouraud_linear", "coverage"))
-    covered = gl.render(0, "perspective", "coverage")[:, :, 0] > 127
+    covered = gl.render(gl.scene.views[0], "perspective", "coverage")[:, :, 0] > 127
     away = covered & ~edge_mask(scene, 0, "perspective")
-    linear = gl.render(0, "perspective", "gouraud_linear").astype(np.int16)
-    correct = gl.render(0, "perspective", "gouraud").astype(np.int16)
+    linear = gl.render(gl.scene.views[0], "perspective", "gouraud_linear").astype(np.int16)
+    correct = gl.render(gl.scene.views[0], "perspective", "gouraud").astype(np.int16)
     assert np.abs(_scanline(scene, 0, "perspective") - correct).max(axis=2)[away].max() > 2
     assert np.abs(_scanline(scene, 0, "perspective", "edge") - linear).max(axis=2)[away].max() > 2

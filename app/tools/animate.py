@@ -58,6 +58,11 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     p.add_argument("--samples", type=_positive(int), default=None, help="samples per pixel")
     p.add_argument("--projection", choices=PROJECTIONS, default=None)
     p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
+    p.add_argument("--view", type=_positive(int), default=1,
+                   help="which view, counting from 1: the keyed view first (when the scene keys "
+                        "one), then the file's views (default 1)")
+    p.add_argument("--paths", action="store_true",
+                   help="draw the keyed paths (the eye, objects, lights) over every frame")
     p.add_argument("--workers", type=_positive(int), default=1,
                    help="local worker processes (a Dask LocalCluster when more than 1)")
     p.add_argument("--scheduler", default=None,
@@ -94,7 +99,7 @@ def job_of(args, animation) -> dict:
     settings = {"size": list(args.size or scene.size), "samples": args.samples or 1,
                 "projection": args.projection or scene.projection,
                 "shading": args.shading or scene.shading,
-                "renderer": args.renderer or "zbuffer"}
+                "renderer": args.renderer or "zbuffer", "view": args.view, "paths": args.paths}
     path = Path(args.scene).resolve()
     # the file's digest: frames left by a run on an edited scene are not taken as this one's
     digest = hashlib.sha256(path.read_bytes()).hexdigest()
@@ -115,6 +120,9 @@ def _settings_problem(job: dict, animation) -> str | None:
         get_renderer(s["renderer"])
     except ValueError as error:
         return str(error)
+    views = (animation.view is not None) + len(animation.scene.views)
+    if not 1 <= s["view"] <= views:
+        return f"--view {s['view']}: the animation has {views} views (1 to {views})"
     from core.settings import SHADINGS
     from core.shading.registry import shader_names
     if s["shading"] not in SHADINGS[:1] + tuple(shader_names()):
@@ -149,7 +157,8 @@ def render_png(job: dict, k: int) -> tuple[int, bytes]:
     settings = RenderSettings.for_scene(animation.scene, size=tuple(s["size"]),
                                         samples=s["samples"], projection=s["projection"],
                                         shading=s["shading"], renderer=s["renderer"])
-    frame = render_at(animation, k / job["fps"], settings)
+    frame = render_at(animation, k / job["fps"], settings, view_index=s["view"] - 1,
+                      paths=s["paths"])
     if frame.message:
         raise RuntimeError(f"frame {k}: {frame.message}")
     out = io.BytesIO()
@@ -299,7 +308,7 @@ def bench_animation(scene: str | Path | None = None, size=(500, 500), first: int
            "frames": first + frames,
            "settings": {"size": list(size), "samples": 1, "projection": "perspective",
                         "shading": _animation(str(scene.resolve())).scene.shading,
-                        "renderer": "zbuffer"}}
+                        "renderer": "zbuffer", "view": 1, "paths": False}}
     todo = list(range(first, first + frames))
     render_png(job, first - 1)                                # warm: JIT, particles to first
     t0 = time.perf_counter()

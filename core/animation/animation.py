@@ -100,8 +100,9 @@ class Animation:
     objects: dict[int, ObjectTracks] = field(default_factory=dict)      # mesh index → tracks
     lights: dict[int, Track] = field(default_factory=dict)              # light index → position
     colors: dict[int, Track] = field(default_factory=dict)              # mesh index → O_d
-    emitters: list = field(default_factory=list)                        # particles.Emitter
+    emitters: list = field(default_factory=list)                        # particles.Spec, one per [[emitter]]
     seed: int = 0
+    _system: object = field(default=None, repr=False, compare=False)   # made on first use
 
     @property
     def frame_count(self) -> int:
@@ -168,7 +169,7 @@ class Animation:
         made once and kept, so that playing forward steps on from the last frame."""
         if not self.emitters:
             return None
-        if getattr(self, "_system", None) is None:
+        if self._system is None:
             from core.animation.particles import ParticleSystem
             self._system = ParticleSystem(self.emitters, self.fps, self.seed)
         return self._system

@@ -50,39 +50,62 @@ class Sprites:
         return len(self.alpha)
 
 
-def _device(points, n, projection, z_min, vp):
-    """World points → device (x, y, z) and a mask of those inside the front/back planes."""
-    h = np.concatenate([points, np.ones((len(points), 1))], axis=1)
-    canonical = h @ n.T
-    canonical = canonical[:, :3] / canonical[:, 3:4]
-    z = canonical[:, 2]
-    inside = (z >= -1.0) & (z <= (z_min if projection == "perspective" else 0.0))
-    dev = np.concatenate([canonical, np.ones((len(points), 1))], axis=1) @ \
-        project.triangle_matrix(projection, z_min, vp).T
-    w = dev[:, 3]
-    inside &= w > 0.0
-    safe = np.where(w > 0.0, w, 1.0)
-    return dev[:, :3] / safe[:, None], inside
+@njit(cache=True)
+def _to_device(p0, p1, p2, n, m, z_near, out, k):
+    """One world point → device (x, y, z) in ``out[k]``: N_per/N_par, then the
+    perspective-to-parallel matrix and M_vv3dv (``m``), then the divide by W. Returns whether
+    it lies between the back (z = -1) and front (z = z_near) planes, in front of the eye."""
+    w = n[3, 0] * p0 + n[3, 1] * p1 + n[3, 2] * p2 + n[3, 3]
+    c0 = (n[0, 0] * p0 + n[0, 1] * p1 + n[0, 2] * p2 + n[0, 3]) / w
+    c1 = (n[1, 0] * p0 + n[1, 1] * p1 + n[1, 2] * p2 + n[1, 3]) / w
+    c2 = (n[2, 0] * p0 + n[2, 1] * p1 + n[2, 2] * p2 + n[2, 3]) / w
+    dw = m[3, 0] * c0 + m[3, 1] * c1 + m[3, 2] * c2 + m[3, 3]
+    if not dw > 0.0:
+        out[k, 0] = out[k, 1] = out[k, 2] = 0.0
+        return False
+    out[k, 0] = (m[0, 0] * c0 + m[0, 1] * c1 + m[0, 2] * c2 + m[0, 3]) / dw
+    out[k, 1] = (m[1, 0] * c0 + m[1, 1] * c1 + m[1, 2] * c2 + m[1, 3]) / dw
+    out[k, 2] = (m[2, 0] * c0 + m[2, 1] * c1 + m[2, 2] * c2 + m[2, 3]) / dw
+    return -1.0 <= c2 <= z_near
 
 
-def project_sprites(sprites: Sprites, view, projection: str, width: int, height: int):
-    """Device centres, tails and pixel radii of the sprites in front of the camera, back to
-    front: ``(order-sorted arrays dict)``."""
+@njit(cache=True)
+def _project_all(position, tail, radius, u, n, m, z_near, head, tail_dev, pixels, inside,
+                 tail_inside):
+    """Every sprite's centre, tail and radius in pixels (the distance between the projections
+    of the centre and of the centre moved by its size along the VRC's u axis)."""
+    edge = np.empty((1, 3))
+    for k in range(position.shape[0]):
+        x, y, z = position[k, 0], position[k, 1], position[k, 2]
+        inside[k] = _to_device(x, y, z, n, m, z_near, head, k)
+        tail_inside[k] = _to_device(tail[k, 0], tail[k, 1], tail[k, 2], n, m, z_near, tail_dev, k)
+        s = radius[k]
+        _to_device(x + s * u[0], y + s * u[1], z + s * u[2], n, m, z_near, edge, 0)
+        pixels[k] = np.hypot(edge[0, 0] - head[k, 0], edge[0, 1] - head[k, 1])
+
+
+def project_sprites(sprites: Sprites, view, projection: str, width: int, height: int,
+                    keep_aspect: bool = False):
+    """Device centres, tails and pixel radii of the sprites, and ``order``: the indices of
+    those inside the view volume, back to front."""
     n, z_min = normalizing_transform(view, projection)
-    vp = project.viewport(view.window, width, height)
-    head, inside = _device(sprites.position, n, projection, z_min, vp)
-    u = vrc_basis(view)[0]
-    edge, _ = _device(sprites.position + sprites.radius[:, None] * u, n, projection, z_min, vp)
-    radius = np.hypot(edge[:, 0] - head[:, 0], edge[:, 1] - head[:, 1])
-    tail, tail_inside = _device(sprites.tail, n, projection, z_min, vp)
-    mode = sprites.mode.copy()
+    vp = project.viewport(view.window, width, height, keep_aspect)
+    m = project.triangle_matrix(projection, z_min, vp)
+    count = len(sprites)
+    head, tail = np.empty((count, 3)), np.empty((count, 3))
+    pixels = np.empty(count)
+    inside, tail_inside = np.empty(count, np.bool_), np.empty(count, np.bool_)
+    _project_all(np.ascontiguousarray(sprites.position, dtype=np.float64),
+                 np.ascontiguousarray(sprites.tail, dtype=np.float64),
+                 np.ascontiguousarray(sprites.radius, dtype=np.float64), vrc_basis(view)[0],
+                 n, m, z_min if projection == "perspective" else 0.0, head, tail, pixels,
+                 inside, tail_inside)
+    mode = sprites.mode.astype(np.int64)
     mode[(mode == STREAK) & ~tail_inside] = SPRITE        # a tail behind the eye: no streak
     keep = np.flatnonzero(inside)
     order = keep[np.argsort(head[keep, 2], kind="stable")]  # far (small z) first
-    return {"x": head[order, 0], "y": head[order, 1], "z": head[order, 2],
-            "tx": tail[order, 0], "ty": tail[order, 1], "tz": tail[order, 2],
-            "r": np.minimum(radius[order], float(max(width, height))),
-            "rgb": sprites.rgb[order], "alpha": sprites.alpha[order], "mode": mode[order]}
+    return {"head": head, "tail": tail, "r": np.minimum(pixels, float(max(width, height))),
+            "mode": mode, "order": order}
 
 
 @njit(cache=True)
@@ -94,25 +117,28 @@ def _blend(image, depth, row, col, z, rgb, a):
 
 
 @njit(cache=True)
-def _splat(image, depth, x, y, z, tx, ty, tz, r, rgb, alpha, mode):
-    """Draw every sprite in the given (back-to-front) order."""
+def _splat_rows(image, depth, order, head, tail, r, rgb, alpha, mode, row_first, row_last):
+    """Draw the sprites ``order`` names, in that (back-to-front) order, into device rows
+    ``row_first`` … ``row_last`` only."""
     height, width = depth.shape
-    for k in range(x.shape[0]):
+    for o in range(order.shape[0]):
+        k = order[o]
+        x, y, z = head[k, 0], head[k, 1], head[k, 2]
         if mode[k] == 0:                                   # a point: the pixel under it
-            i, j = int(np.floor(x[k])), int(np.floor(y[k]))
-            if 0 <= i < width and 0 <= j < height:
-                _blend(image, depth, height - 1 - j, i, z[k], rgb[k], alpha[k])
+            i, j = int(np.floor(x)), int(np.floor(y))
+            if 0 <= i < width and row_first <= j <= row_last:
+                _blend(image, depth, height - 1 - j, i, z, rgb[k], alpha[k])
             continue
         radius = max(r[k], 0.75)                           # at least the pixel under it
-        ax, ay = tx[k], ty[k]
-        if mode[k] == 1:
-            ax, ay = x[k], y[k]
-        dx, dy = x[k] - ax, y[k] - ay
+        ax, ay, az = x, y, z
+        if mode[k] == 2:
+            ax, ay, az = tail[k, 0], tail[k, 1], tail[k, 2]
+        dx, dy = x - ax, y - ay
         length2 = dx * dx + dy * dy
-        i0 = max(int(np.floor(min(x[k], ax) - radius)), 0)
-        i1 = min(int(np.ceil(max(x[k], ax) + radius)), width - 1)
-        j0 = max(int(np.floor(min(y[k], ay) - radius)), 0)
-        j1 = min(int(np.ceil(max(y[k], ay) + radius)), height - 1)
+        i0 = max(int(np.floor(min(x, ax) - radius)), 0)
+        i1 = min(int(np.ceil(max(x, ax) + radius)), width - 1)
+        j0 = max(int(np.floor(min(y, ay) - radius)), row_first)
+        j1 = min(int(np.ceil(max(y, ay) + radius)), row_last)
         for j in range(j0, j1 + 1):
             py = j + 0.5
             for i in range(i0, i1 + 1):
@@ -126,9 +152,17 @@ def _splat(image, depth, x, y, z, tx, ty, tz, r, rgb, alpha, mode):
                 d2 = ((px - qx) * (px - qx) + (py - qy) * (py - qy)) / (radius * radius)
                 if d2 >= 1.0:
                     continue
-                zq = tz[k] + s * (z[k] - tz[k]) if mode[k] == 2 else z[k]
+                zq = az + s * (z - az)
                 fade = s if mode[k] == 2 else 1.0          # a streak thins out to its tail
                 _blend(image, depth, height - 1 - j, i, zq, rgb[k], alpha[k] * (1.0 - d2) * fade)
+
+
+@njit(cache=True)
+def _splat(image, depth, order, head, tail, r, rgb, alpha, mode):
+    """All sprites, back to front, over every row. (Bands drawn in parallel would be
+    bit-identical, each going through the sprites in the same order, but every band scans all
+    sprites: on two busy cores that cost more CPU than it saved, measured at 100k sprites.)"""
+    _splat_rows(image, depth, order, head, tail, r, rgb, alpha, mode, 0, depth.shape[0] - 1)
 
 
 @njit(cache=True)
@@ -163,14 +197,18 @@ def draw_particles(frame, sprites: Sprites, view, settings) -> int:
     if len(sprites) == 0 or width == 0 or height == 0:
         return 0
     projection = getattr(settings, "projection", None) or "perspective"
-    p = project_sprites(sprites, view, projection, width, height)
+    p = project_sprites(sprites, view, projection, width, height,
+                        getattr(settings, "keep_aspect", False))     # the z-buffer's viewport
     depth = getattr(frame, "depth", None)
     if depth is None:
+        # a renderer that keeps no depth (wireframe lines, the ray casters): nothing hides a
+        # particle, and the frame says so
+        frame.stats["particles depth-tested"] = False
         depth = np.full((height, width), -np.inf)
     image = _to_unit(color)
-    _splat(image, np.ascontiguousarray(depth, dtype=np.float64), p["x"], p["y"], p["z"], p["tx"],
-           p["ty"], p["tz"], p["r"], np.ascontiguousarray(p["rgb"], dtype=np.float64),
-           p["alpha"].astype(np.float64), p["mode"].astype(np.int64))
+    _splat(image, np.ascontiguousarray(depth, dtype=np.float64), p["order"], p["head"],
+           p["tail"], p["r"], np.ascontiguousarray(sprites.rgb, dtype=np.float64),
+           np.ascontiguousarray(sprites.alpha, dtype=np.float64), p["mode"])
     _to_bytes(image, color)
-    frame.stats["particles drawn"] = int(len(p["x"]))
-    return int(len(p["x"]))
+    frame.stats["particles drawn"] = int(len(p["order"]))
+    return int(len(p["order"]))

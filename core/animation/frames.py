@@ -21,20 +21,33 @@ def settings_for(animation, **overrides):
     return RenderSettings.for_scene(animation.scene, **overrides)
 
 
-def render_at(animation, t: float, settings, context=None):
-    """The frame at time ``t``: the keyed view (or the scene's first view) of ``scene_at(t)``.
-
-    With particles and more than one sample a pixel, the opaque picture is drawn once at
-    ``side`` times the size (side = sqrt(samples), the regular grid), the particles are blended
-    into that big picture against its depth, and the result is box-filtered: each sample sees
-    the particles with its own depth test (the front door's supersampled frames keep no depth).
+def render_at(animation, t: float, settings, context=None, view_index: int = 0,
+              paths: bool = False):
+    """The frame at time ``t`` of ``scene_at(t)``, seen through its view ``view_index`` (0: the
+    keyed view, or the scene's first view when none is keyed; then the file's views). With
+    ``paths`` the keyed paths are drawn over it (:mod:`core.animation.paths`).
     """
-    from core import render
-    from core.camera.film import box_filter
     scene = animation.scene_at(t)
     if not scene.views:
         raise ValueError(f"{scene.name}: no view to render")
-    view = scene.views[0]
+    view = scene.views[view_index % len(scene.views)]
+    frame = _with_particles(animation, t, scene, view, settings, context)
+    if paths and frame.message is None:
+        from core.animation.paths import draw_paths, paths_of
+        draw_paths(frame, paths_of(animation), view, settings)
+    return frame
+
+
+def _with_particles(animation, t, scene, view, settings, context):
+    """The opaque frame, then the particle stage.
+
+    With more than one sample a pixel, the opaque picture is drawn once at ``side`` times the
+    size (side = sqrt(samples), the regular grid), the particles are blended into that big
+    picture against its depth, and the result is box-filtered: each sample sees the particles
+    with its own depth test (the front door's supersampled frames keep no depth).
+    """
+    from core import render
+    from core.camera.film import box_filter
     sprites = animation.sprites_at(t)
     if sprites is None or settings.samples == 1:
         frame = render(scene, view, settings, context)

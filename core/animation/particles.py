@@ -160,13 +160,6 @@ class Particles:
     def __len__(self) -> int:
         return len(self.age)
 
-    def copy(self) -> "Particles":
-        return Particles(**{k: getattr(self, k).copy() for k in ARRAYS})
-
-    def keep(self, mask: np.ndarray) -> "Particles":
-        rows = np.flatnonzero(mask)                 # take() by index beats a boolean mask
-        return Particles(**{k: np.take(getattr(self, k), rows, axis=0) for k in ARRAYS})
-
     def extend(self, other: "Particles") -> "Particles":
         return Particles(**{k: np.concatenate([getattr(self, k), getattr(other, k)])
                             for k in ARRAYS})

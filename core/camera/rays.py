@@ -98,7 +98,8 @@ def _rays(cam, width, height, offsets, origins, directions, inside):
 
 
 def primary_rays(view: View, projection: str, width: int, height: int,
-                 offsets=((0.5, 0.5),)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 offsets=((0.5, 0.5),), keep_aspect: bool = False
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(origins (N, 3), directions (N, 3), inside (N,))`` for every pixel sample, N = S·H·W,
     ordered sample, then image row (top first), then column. ``offsets`` ``(S, 2)`` are the
     film's (x right, y down, in the pixel); directions are unit vectors."""
@@ -106,6 +107,6 @@ def primary_rays(view: View, projection: str, width: int, height: int,
     count = len(offsets) * height * width
     origins, directions = np.empty((count, 3)), np.empty((count, 3))
     inside = np.empty(count, dtype=np.bool_)
-    _rays(pack_camera(view, projection, width, height), int(width), int(height), offsets,
-          origins, directions, inside)
+    _rays(pack_camera(view, projection, width, height, keep_aspect), int(width), int(height),
+          offsets, origins, directions, inside)
     return origins, directions, inside

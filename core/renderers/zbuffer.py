@@ -72,9 +72,9 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         if len(edges) == 0:
             continue
         if len(edges) >= COMPILED_LINES_FROM:
-            from core.renderers import triangles as stages     # compiled, one BLAS thread
+            from core.renderers import triangles  # noqa: F401 (one BLAS thread, see there)
             from core.pipeline.wireframe import draw_edges
-            points = stages.transform_affine(n, mesh.positions)
+            points = apply(n, mesh.positions)[:, :3]     # as the numpy path: the same pixels
             timer.lap("normalize")
             drawn += draw_edges(points, edges, clip.planes(projection, z_min),
                                 project.line_matrix(projection, vp), color, to_rgb8(line_color))

@@ -59,7 +59,7 @@ def read_maps(reader, table: dict, path: tuple) -> SurfaceMaps | None:
 
 
 def _texture(reader, value, path: tuple, srgb: bool, maps: SurfaceMaps):
-    from core.scene.formats.scenefile import path_text
+    from core.scene.formats.errors import path_text
     key = path_text(path)
     if isinstance(value, str):
         value = {"file": value}

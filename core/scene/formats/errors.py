@@ -173,3 +173,11 @@ def tolerant_of_underflow(read):
         with np.errstate(under="ignore"):
             return read(*args, **kwargs)
     return guarded
+
+
+def path_text(path: tuple) -> str:
+    """``("geometry", 2, "material", "kd")`` -> ``"geometry[2].material.kd"``."""
+    text = ""
+    for part in path:
+        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else part)
+    return text

@@ -44,12 +44,14 @@ _QUIET = logging.NullHandler()            # added once: a logger keeps a set-lik
 # ----------------------------------------------------------------------------- mesh helpers
 
 def merge_vertices(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Equal rows of ``points`` become one vertex, numbered in order of first appearance.
+    """Equal rows of ``points`` ``(N, k)`` (positions, or positions with more columns such as
+    (u, v)) become one vertex, numbered in order of first appearance.
 
     Returns ``(positions, inverse)`` with ``positions[inverse] == points``. ``-0.0`` and
     ``0.0`` are equal, as they are for the C ``==`` of the startup code.
     """
-    points = np.asarray(points, dtype=np.float64).reshape(-1, 3) + 0.0    # -0.0 -> 0.0
+    points = np.asarray(points, dtype=np.float64)
+    points = (points.reshape(-1, 3) if points.ndim != 2 else points) + 0.0    # -0.0 -> 0.0
     first, inverse = _first_of_equal_rows(points)
     return points[first], inverse
 
@@ -477,7 +479,7 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
     except Exception as error:           # trimesh raises many types; each becomes ours
         raise ReaderError(file, f"the mesh library could not read it: "
                                 f"{type(error).__name__}: {error}") from None
-    positions, triangles, normals = [], [], []
+    positions, triangles, normals, uvs = [], [], [], []
     offset = 0
     for part in _loaded_parts(loaded):
         try:
@@ -498,6 +500,7 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
         positions.append(v)
         triangles.append(f.astype(np.int64) + offset)
         normals.append(n if n is not None and n.shape == v.shape else None)
+        uvs.append(_texture_coordinates(part, len(v)))
         offset += len(v)
     if not triangles:
         raise ReaderError(file, "the file holds no triangles")
@@ -526,13 +529,39 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
             vertex_normals = None                  # unusable: computed from the faces instead
     # Closed or not is a property of the surface, so it is decided on merged positions even
     # where the file's per-corner normals keep its vertices apart (a flat-shaded OBJ).
+    uv = np.concatenate(uvs) if all(u is not None for u in uvs) else None
     merged, inverse = merge_vertices(positions)
-    if vertex_normals is None:
+    if vertex_normals is None and uv is None:
         # the file's vertices may repeat (STL always does): one mesh vertex per position
         positions, triangles = merged, inverse[triangles]
+    elif vertex_normals is None:
+        # ... but a texture seam keeps its copies apart: merge equal (position, uv) pairs
+        rows, seams = merge_vertices(np.concatenate([positions, uv], axis=1))
+        positions, uv, triangles = rows[:, :3], rows[:, 3:], seams[triangles]
     triangles = drop_repeated_triangles(triangles)
-    surface = triangles if vertex_normals is None else drop_repeated_triangles(inverse[triangles])
+    surface = (triangles if vertex_normals is None and uv is None
+               else drop_repeated_triangles(inverse_of(positions, merged, inverse, triangles)))
     closed = is_closed(merged, surface)
-    return Mesh(positions=positions, triangles=triangles, normals=vertex_normals,
+    return Mesh(positions=positions, triangles=triangles, normals=vertex_normals, uv=uv,
                 closed=closed, name=file_stem(file))
+
+
+def inverse_of(positions, merged, inverse, triangles):
+    """``triangles`` over ``positions`` re-indexed onto ``merged`` (one vertex per position)."""
+    if len(positions) == len(inverse):
+        return inverse[triangles]
+    _, where = merge_vertices(np.concatenate([merged, positions]))
+    return where[len(merged):][triangles]
+
+
+def _texture_coordinates(part: dict, count: int) -> np.ndarray | None:
+    """The (u, v) per vertex that the mesh library found (OBJ ``vt``; PLY ``s t``/``u v``
+    /``texture_u texture_v``), or None; finite values only."""
+    uv = getattr(part.get("visual"), "uv", None)
+    if uv is None:
+        return None
+    uv = np.asarray(uv, dtype=np.float64)
+    if uv.shape != (count, 2) or not np.all(np.isfinite(uv)):
+        return None
+    return uv
 

@@ -36,7 +36,7 @@ import numpy as np
 
 from core.scene import generators
 from core.scene.formats.camera import default_lights, framing_views
-from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
+from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
                                  read_file,
                                  tolerant_of_underflow)
 from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
@@ -99,14 +99,6 @@ def _spellings(name: str) -> str:
                 parts.append(r"\\(?:" + "|".join(re.escape(a) for a in alts) + ")")
         forms.append('"' + "".join(parts) + '"')
     return "|".join(forms)
-
-
-def path_text(path: Path_) -> str:
-    """``("geometry", 2, "material", "kd")`` -> ``"geometry[2].material.kd"``."""
-    text = ""
-    for part in path:
-        text += f"[{part}]" if isinstance(part, int) else (f".{part}" if text else part)
-    return text
 
 
 class _Reader:
@@ -276,7 +268,10 @@ class _Reader:
         # -- issue 11: texture files that could not be used; the bump demo's panel view
         scene.view_messages += getattr(self, "texture_messages", [])
         from core.texture.bump_demo import panel_views
-        scene.views = panel_views(scene) + scene.views
+        panel = panel_views(scene)
+        scene.views = panel + scene.views
+        if scene.view_order:                  # the panel is the file's first view
+            scene.view_order = panel + list(scene.view_order)
         # --
         animation_keys.read_animation(self, doc, scene)     # keys and emitters, if any
         return scene
