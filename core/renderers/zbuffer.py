@@ -57,7 +57,7 @@ def _sample_viewport(vp, pixel_offset):
 
 # From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,
 # the same pixels): below it the numpy stages take a few ms and need no numba at start-up.
-COMPILED_LINES_FROM = 5_000
+COMPILED_LINES_FROM = 256
 
 
 def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, timer,
