@@ -56,7 +56,8 @@ def _sample_viewport(vp, pixel_offset):
 
 
 # From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,
-# the same pixels): below it the numpy stages take a few ms and need no numba at start-up.
+# the same pixels): below it the numpy stages need no numba at start-up (the house: 15 edges).
+# speed (issue 14): at 5,000 a 1k-triangle wireframe took 4.4 ms CPU in numpy, 0.85 compiled.
 COMPILED_LINES_FROM = 256
 
 
