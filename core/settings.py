@@ -38,6 +38,7 @@ PROJECTIONS = tuple(p.value for p in Projection)
 SHADINGS = tuple(s.value for s in Shading)
 SOLID_SHADINGS = SHADINGS[1:]          # the modes that fill triangles
 SAMPLE_PATTERNS = ("regular", "jittered")
+SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 

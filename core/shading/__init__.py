@@ -5,7 +5,8 @@
 - :mod:`core.shading.shade` — what every mode shares: the scene's arrays, normals, caches,
   and :func:`~core.shading.shade.prepare` / :func:`~core.shading.shade.resolve`;
 - :mod:`core.shading.flat`, :mod:`~core.shading.gouraud`, :mod:`~core.shading.phong` — FvDFH
-  16.2.3–16.2.5, registered on import.
-"""
+  16.2.3–16.2.5, registered when first needed.
 
-from core.shading import flat, gouraud, phong  # noqa: F401  (register the modes)
+Importing this package loads no numba: the built-in modes are imported (and register
+themselves) the first time a mode is looked up.
+"""

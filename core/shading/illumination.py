@@ -75,7 +75,7 @@ LIGHT_COLUMNS = 10
 POINT_LIGHT, DIRECTIONAL_LIGHT = 0.0, 1.0
 # eye[0]: the viewer is a point (perspective) or a direction (parallel).
 EYE_DIRECTION, EYE_POINT = 0.0, 1.0
-SPECULAR_FORMS = ("reflect", "halfway")
+from core.settings import SPECULAR_FORMS  # noqa: E402,F401  (listed once, with the other names)
 
 
 def pack_eye(eye: Eye) -> np.ndarray:

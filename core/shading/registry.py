@@ -6,8 +6,8 @@ visibility buffer into colours (``pixel``). The z-buffer knows nothing about lig
 of shading (textured, bump-mapped) is one new module that registers one more shader.
 
 ``register_shader(shader)`` adds one; ``get_shader(name)`` finds one (a ``ValueError`` names
-the modes there are); ``shader_names()`` lists them. flat, Gouraud and Phong register when
-:mod:`core.shading` is imported.
+the modes there are); ``shader_names()`` lists them. flat, Gouraud and Phong register the first
+time a mode is looked up.
 """
 
 from __future__ import annotations
@@ -39,11 +39,25 @@ def register_shader(shader: Shader) -> None:
     _SHADERS[shader.name] = shader
 
 
+BUILT_IN = ("core.shading.flat", "core.shading.gouraud", "core.shading.phong")
+
+
+def _load_built_in() -> None:
+    """Import the built-in modes (they register themselves), once, on the first lookup: a
+    scene can be read and a wireframe drawn without loading numba."""
+    import importlib
+    for module in BUILT_IN:
+        importlib.import_module(module)
+
+
 def get_shader(name: str) -> Shader:
+    if name not in _SHADERS:
+        _load_built_in()
     if name not in _SHADERS:
         raise ValueError(f"shading must be one of {', '.join(_SHADERS)}, not {name!r}")
     return _SHADERS[name]
 
 
 def shader_names() -> tuple[str, ...]:
+    _load_built_in()
     return tuple(_SHADERS)

@@ -41,11 +41,10 @@ from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, d
                                  tolerant_of_underflow)
 from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
                                    signed_volume)
-from core.shading.illumination import SPECULAR_FORMS
 from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
-from core.settings import RASTERIZERS
+from core.settings import RASTERIZERS, SPECULAR_FORMS
 
 MAX_NUMBER = MAX_COORDINATE
 
