@@ -351,7 +351,7 @@ def write_png(color, out: Path) -> None:
 
 # -- issue 11: texture filter, and the bump demo's map and mode (J3DPanel's clicks)
 def _texture_arguments(parser) -> None:
-    from core.texture.sample import FILTERS
+    from core.texture.modes import FILTERS
     parser.add_argument("--texture-filter", choices=tuple(FILTERS), default=None,
                         help="how textures are filtered (default: trilinear)")
     parser.add_argument("--bump-map", type=int, default=None, metavar="K",
@@ -361,7 +361,7 @@ def _texture_arguments(parser) -> None:
 
 
 def _texture_options(scene, args) -> dict:
-    from core.texture.bump_demo import apply_demo_options
+    from core.texture.demo_scene import apply_demo_options
     label = apply_demo_options(scene, args.bump_map, not args.no_bump)
     if label:
         print(label)

@@ -22,7 +22,7 @@ class Stage:
 
 
 def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
-         rasterizer: str = "edge") -> list[Stage]:
+         rasterizer: str = "edge", texture_filter: str = "trilinear") -> list[Stage]:
     """The stages for ``scene`` drawn with ``projection`` and ``shading``, in the order the
     renderer runs them (``core/render.py``, ``core/renderers/zbuffer.py``); ``keep_aspect``
     and ``rasterizer`` as in :class:`core.settings.RenderSettings`."""
@@ -84,7 +84,13 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
         triangle_stage("illuminate pixels", solid and shading == "phong",
                        "Phong shading: normals interpolated, renormalised, the model at every "
                        "pixel", "not Phong shading"),
+        triangle_stage("texture lookups", *_texture_stage(scene, shading, texture_filter)),
     ]
+
+
+def _texture_stage(scene, shading, texture_filter):        # issue 11
+    from core.texture.material import plan_stage
+    return plan_stage(scene, shading, texture_filter)
 
 
 def _projection_reason(projection: str, solid: bool, lines: bool) -> str:

@@ -108,7 +108,7 @@ def _render_demo(bump_map, bump, size):
     return frame.color
 
 
-@pytest.mark.parametrize("size", [(500, 500), (333, 333)])
+@pytest.mark.parametrize("size", [(500, 500), (333, 333), (301, 199)])
 @pytest.mark.parametrize("bump_map,bump", CASES)
 def test_renderer_draws_the_demo_pixel_for_pixel(size, bump_map, bump):
     """The scene file through the ordinary z-buffer renderer: every pixel within 1/255."""
@@ -139,3 +139,19 @@ def test_cli_render_with_bump_map(tmp_path):
 def test_map_past_the_last_is_the_default_case():
     ours = _render_demo(7, True, (40, 40)).astype(int)
     assert np.abs(ours - j3dpanel(40, 40, 0, True)).max() <= 1
+
+
+def test_window_clicks_toggle_bump_and_cycle_maps():
+    """J3DPanel's mouse: button 1 toggles bump/Phong, any other button the next map (wraps)."""
+    from app.viewer.state import ViewerState
+    from core.texture.demo_scene import demo_materials
+    state = ViewerState.open("scenes/bump_demo.toml", size=(40, 40))
+    demo = demo_materials(state.scene)[0]
+    assert state.demo_click(left=False) == "Bump: B(x,y) = sin(x) + cos(y)" and demo.bump_map == 1
+    assert state.demo_click(left=True) == "Phong" and not demo.bump
+    assert state.demo_click(left=True).startswith("Bump:") and demo.bump
+    for _ in range(3):
+        state.demo_click(left=False)
+    assert demo.bump_map == 0 and state.dirty
+    other = ViewerState.open("scenes/texture_floor.toml", size=(40, 40))
+    assert other.demo_click(left=True) is None       # elsewhere clicks keep their meaning

@@ -124,3 +124,58 @@ def test_trilinear_level_of_detail_against_llvmpipe(gl):
     assert np.abs(gl_lambda - ours_lambda)[minified].max() < 0.15
     diff, inner, *_ = _compare(gl, base, "trilinear")
     assert diff[inner].max() <= 12 and diff[inner].mean() < 0.5
+
+
+FLOOR_SCENE = """
+name = "oracle floor"
+shading = "phong"
+ambient = [1, 1, 1]
+background = [0, 0, 0]
+[[geometry]]
+generator = "plane"
+params = {{ size = 10, subdivisions = 3 }}
+transform = {{ translate = [0.0123, -1, 0.0456] }}
+material = {{ ka = 1, kd = 0, ks = 0, od = [1, 1, 1], texture = "noise.png", uv_scale = [3, 3] }}
+[[view]]
+vrp = [0, 0, 0]
+vpn = [0, 0.3, 1]
+vup = [0, 1, 0]
+window = [-1, 1, -1, 1]
+prp = [0, 0, 2.5]
+front = 2
+back = -40
+[[light]]
+direction = [0, 1, 0]
+"""
+
+
+@pytest.mark.parametrize("filter_name,tolerance", [("nearest", 2), ("bilinear", 2),
+                                                   ("trilinear", 16)])
+def test_the_renderer_against_llvmpipe_on_a_textured_floor(gl, tmp_path, filter_name, tolerance):
+    """The whole path: a PNG (sRGB) read by the scene reader, the plane generator's (u, v),
+    the textured shader in the z-buffer renderer (unlit: ambient 1, k_a 1, so the pixel is the
+    filtered texture encoded back to sRGB) against llvmpipe drawing the same mesh and MIP chain
+    and encoding the same way."""
+    from core import render
+    from core.scene.formats import load_scene
+    from core.settings import RenderSettings
+    from core.texture.material import maps_of
+    rng = np.random.default_rng(5)
+    Image = pytest.importorskip("PIL.Image")
+    Image.fromarray(rng.integers(0, 256, (64, 64, 3), dtype=np.uint8)).save(tmp_path / "noise.png")
+    (tmp_path / "floor.toml").write_text(FLOOR_SCENE.format())
+    scene = load_scene(tmp_path / "floor.toml")
+    assert not scene.view_messages
+    frame = render(scene, scene.views[0], RenderSettings.for_scene(
+        scene, size=(SIZE, SIZE), texture_filter=filter_name))
+    mesh = scene.meshes[0]
+    maps = maps_of(mesh.material)
+    theirs = gl.render(mesh.positions, mesh.triangles, mesh.uv * np.asarray(maps.uv_scale),
+                       scene.views[0], "perspective", maps.color, filter_name, encode_srgb=True)
+    covered = (frame.depth > -np.inf) & (theirs[..., 0] >= 0)
+    inner = _inner(covered)
+    assert inner.sum() > 20_000
+    gl8 = np.floor(np.clip(theirs[..., :3], 0, 1) * 255 + 0.5)
+    diff = np.abs(frame.color.astype(int) - gl8).max(axis=2)[inner]
+    assert diff.max() <= tolerance, (diff.max(), diff.mean())
+    assert diff.mean() < 0.6            # measured: nearest 0, bilinear 0.003, trilinear 0.34

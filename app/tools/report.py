@@ -177,6 +177,10 @@ def main(args) -> int:
     except OSError as error:
         print(f"error: cannot write the report into {out}: {error}", file=sys.stderr)
         return 2
+    if config != accuracy.QUICK:     # -- issue 11: the texture rows (the quick sweep has none)
+        from app.tools.texture_report import write as texture_rows
+        paths += tuple(texture_rows(out, progress=lambda line: print(line, file=sys.stderr,
+                                                                        flush=True)))
     for line in accuracy.reading(points):
         print(line)
     print(f"wrote {', '.join(str(p) for p in paths)} ({wall:.0f} s sweep)")

@@ -31,10 +31,16 @@ void main() {
 _FRAGMENT = """
 #version 330
 uniform sampler2D tex;
+uniform bool encode_srgb;
 in vec2 uv;
 out vec4 frag_color;
+vec3 srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
 void main() {
-    frag_color = texture(tex, uv);
+    vec4 t = texture(tex, uv);
+    frag_color = encode_srgb ? vec4(srgb(t.rgb), t.a) : t;
 }
 """
 
@@ -70,8 +76,10 @@ class TextureGL:
         return tex
 
     def render(self, positions: np.ndarray, triangles: np.ndarray, uv: np.ndarray,
-               view, projection: str, texture: Texture, filter_name: str) -> np.ndarray:
-        """``(H, W, 4)`` float32, row 0 the top; empty pixels are −1."""
+               view, projection: str, texture: Texture, filter_name: str,
+               encode_srgb: bool = False) -> np.ndarray:
+        """``(H, W, 4)`` float32, row 0 the top; empty pixels are −1. ``encode_srgb``: the
+        filtered colour is sRGB-encoded, as the CPU's shader does for an sRGB texture."""
         tex = self._texture(texture, filter_name)
         if texture.wrap not in ("repeat", "clamp"):
             raise ValueError("the oracle draws repeat and clamp only (moderngl has no mirror)")
@@ -80,6 +88,7 @@ class TextureGL:
         ibo = self.ctx.buffer(np.ascontiguousarray(triangles, dtype=np.int32).tobytes())
         vao = self.ctx.vertex_array(self.program, [(vbo, "3f 2f", "in_position", "in_uv")],
                                     index_buffer=ibo)
+        self.program["encode_srgb"].value = bool(encode_srgb)
         self.program["clip_from_world"].write(
             clip_from_world(view, projection, self.size).T.astype(np.float32).tobytes())
         try:
@@ -99,3 +108,120 @@ class TextureGL:
     def release(self) -> None:
         self.ctx.release()
 
+
+
+# --------------------------------------------------------------------------------------------
+# Textured Phong in GLSL, for the bench: the project's lighting GLSL (app/tools/reference_gl.py)
+# with O_d from the texture (trilinear, our MIP chain, sRGB encoded back as our shader does).
+
+def _textured_phong_program(ctx):
+    from app.tools.reference_gl import _DISCARD_GLSL, _LIGHTING_GLSL
+    lighting = _LIGHTING_GLSL.replace("uniform vec3 od;", "vec3 od;     // from the texture")
+    vertex = """
+#version 330
+uniform mat4 clip_from_world;
+in vec3 in_position;
+in vec3 in_normal;
+in vec2 in_uv;
+out vec3 world_position;
+out vec3 world_normal;
+out vec2 uv;
+void main() {
+    gl_Position = clip_from_world * vec4(in_position, 1.0);
+    world_position = in_position;
+    world_normal = in_normal;
+    uv = in_uv;
+}
+"""
+    fragment = """
+#version 330
+%s
+%s
+uniform sampler2D tex;
+in vec3 world_position;
+in vec3 world_normal;
+in vec2 uv;
+out vec4 frag_color;
+vec3 srgb(vec3 c) {
+    c = clamp(c, 0.0, 1.0);
+    return mix(c * 12.92, 1.055 * pow(c, vec3(1.0 / 2.4)) - 0.055, step(0.0031308, c));
+}
+void main() {
+    clip_to_viewport();
+    od = srgb(texture(tex, uv).rgb);
+    frag_color = vec4(illuminate(world_position, unit(world_normal)), 1.0);
+}
+""" % (_DISCARD_GLSL, lighting)
+    return ctx.program(vertex_shader=vertex, fragment_shader=fragment)
+
+
+class TexturedPhongGL:
+    """llvmpipe drawing a scene whose meshes have (u, v) and a colour texture, textured Phong
+    with GL_LINEAR_MIPMAP_LINEAR; geometry and textures uploaded once (:meth:`load`)."""
+
+    def __init__(self, size: tuple[int, int]) -> None:
+        from app.tools.reference_gl import GLRenderer
+        self.gl = GLRenderer(size)            # its context, framebuffer and uniform setters
+        self.program = _textured_phong_program(self.gl.ctx)
+        self._objects: list = []
+        self._draws: list = []
+
+    def load(self, scene) -> None:
+        from core.scene.normals import vertex_normals
+        from core.texture.material import maps_of
+        self.gl.scene = scene
+        ctx = self.gl.ctx
+        for mesh in scene.meshes:
+            maps = maps_of(mesh.material)
+            if not len(mesh.triangles) or maps is None or maps.color is None or mesh.uv is None:
+                raise ValueError(f"{mesh.name}: the textured GL bench needs (u, v) and a texture")
+            normals = mesh.normals if mesh.normals is not None else vertex_normals(mesh)
+            data = np.column_stack([mesh.positions, normals,
+                                    mesh.uv * np.asarray(maps.uv_scale)]).astype("f4")
+            vbo = ctx.buffer(data.tobytes())
+            ibo = ctx.buffer(mesh.triangles.astype("i4").tobytes())
+            vao = ctx.vertex_array(self.program, [(vbo, "3f 3f 2f", "in_position", "in_normal",
+                                                   "in_uv")], ibo)
+            tex = ctx.texture(maps.color.size, 4, dtype="f4")
+            tex.build_mipmaps()
+            for k, level in enumerate(maps.color.levels):
+                tex.write(np.ascontiguousarray(level, dtype=np.float32).tobytes(), level=k)
+            tex.filter = FILTERS["trilinear"]
+            tex.repeat_x = tex.repeat_y = maps.color.wrap == "repeat"
+            self._objects += [vao, vbo, ibo, tex]
+            self._draws.append((mesh, vao, tex))
+
+    def draw(self, view, projection: str) -> None:
+        from app.tools.reference_gl import clip_from_world, viewport_rect
+        gl, ctx, program = self.gl, self.gl.ctx, self.program
+        gl.fbo.use()
+        ctx.viewport = (0, 0, *gl.size)
+        gl.fbo.clear(*gl.scene.background, 1.0, depth=1.0)
+        ctx.enable(moderngl.DEPTH_TEST)
+        ctx.depth_func = "<"
+        ctx.front_face = "ccw"
+        ctx.cull_face = "back"
+        program["clip_from_world"].write(
+            clip_from_world(view, projection, gl.size).T.astype("f4").tobytes())
+        x0, y0, w, h = viewport_rect(view, gl.size)
+        program["viewport_rect"].value = (x0, y0, x0 + w, y0 + h)
+        gl._set_lighting(program, view, projection)
+        for mesh, vao, tex in self._draws:
+            if mesh.closed:
+                ctx.enable(moderngl.CULL_FACE)
+            else:
+                ctx.disable(moderngl.CULL_FACE)
+            gl._set_material(program, mesh.material, two_sided=not mesh.closed)
+            tex.use(0)
+            vao.render(moderngl.TRIANGLES)
+
+    def render(self, view, projection: str) -> np.ndarray:
+        self.draw(view, projection)
+        self.gl.finish()
+        return self.gl.read()
+
+    def release(self) -> None:
+        for obj in self._objects:
+            obj.release()
+        self.program.release()
+        self.gl.release()

@@ -138,6 +138,7 @@ class ViewerState:
     rasterizer: str = ""
     keep_aspect: bool | None = None
     course_tri: bool = False          # the .tri startup code's back-face rule and mouse buttons
+    texture_filter: str = "trilinear"   # issue 11: nearest | bilinear | trilinear | anisotropic
     view_index: int = 0                                      # into scene.views (valid views)
     open_messages: list[str] = field(default_factory=list)   # scenes that failed to open
     frame: object | None = None                              # the last core.render.Frame
@@ -209,7 +210,8 @@ class ViewerState:
         return RenderSettings.for_scene(self.scene, projection=self.projection,
                                         shading=self.shading, size=self.size,
                                         rasterizer=self.rasterizer,
-                                        keep_aspect=bool(self.keep_aspect))
+                                        keep_aspect=bool(self.keep_aspect),
+                                        texture_filter=self.texture_filter)
 
     @property
     def invalid_messages(self) -> list[str]:
@@ -285,6 +287,25 @@ class ViewerState:
         if value != getattr(self, name):
             setattr(self, name, value)
             self.dirty = True
+
+    def set_texture_filter(self, name: str) -> None:            # issue 11
+        from core.texture.modes import FILTERS
+        self._set("texture_filter", name, tuple(FILTERS))
+
+    # -- issue 11: the bump demo's mouse (J3DPanel): left click toggles bump/Phong, any other
+    # button cycles the height maps. Only in a scene with the demo's material.
+    def demo_click(self, left: bool) -> str | None:
+        """The demo's click; returns its label, or None (the click keeps its usual meaning)."""
+        from core.texture.demo_scene import apply_demo_options, demo_materials
+        demos = demo_materials(self.scene)
+        if not demos:
+            return None
+        demo = demos[0]
+        bump, bump_map = (not demo.bump, demo.bump_map) if left else \
+            (demo.bump, demo.bump_map + 1 if demo.bump_map + 1 < 4 else 0)
+        self.dirty = True
+        return apply_demo_options(self.scene, bump_map, bump)
+    # --
 
     def set_keep_aspect(self, keep: bool) -> None:
         if bool(keep) != self.keep_aspect:

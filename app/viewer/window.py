@@ -264,6 +264,11 @@ class ViewerWindow:
             self.choose(what, value, f"key {char}")
         elif char == "a":
             self.choose("keep_aspect", not self.state.keep_aspect, "key a")
+        elif char == "t":                 # issue 11: the next texture filter
+            from core.texture.modes import FILTERS
+            names = tuple(FILTERS)
+            after = names[(names.index(self.state.texture_filter) + 1) % len(names)]
+            self.choose("texture_filter", after, "key t")
         elif char == "s":
             self.save_screenshot("key s")
         elif char == "q":
@@ -294,7 +299,8 @@ class ViewerWindow:
         setter = {"projection": self.state.set_projection, "shading": self.state.set_shading,
                   "rasterizer": self.state.set_rasterizer,
                   "keep_aspect": self.state.set_keep_aspect,
-                  "course_tri": self.state.set_course_tri}[what]
+                  "course_tri": self.state.set_course_tri,
+                  "texture_filter": self.state.set_texture_filter}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
         self._wake()
@@ -437,6 +443,8 @@ class ViewerWindow:
             where = f"{name} at ({x:.0f}, {y:.0f})"
             if captured or not self._on_picture(x, y):
                 log.info("action: %s -> taken by the menu/panel, view unchanged", where)
+            elif (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
+                log.info("action: %s -> the bump demo: %s", where, demo)   # issue 11
             elif self.state.course_tri:
                 self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
             elif button == glfw.MOUSE_BUTTON_LEFT:
@@ -564,6 +572,12 @@ class ViewerWindow:
         if imgui.menu_item("Course .tri rules (back faces, mouse)", None,
                            self.state.course_tri)[0]:
             self.choose("course_tri", not self.state.course_tri, "menu Render")
+        imgui.separator()                 # issue 11
+        imgui.text_disabled("Texture filter (T)")
+        from core.texture.modes import FILTERS
+        for name in FILTERS:
+            if imgui.menu_item(name, None, self.state.texture_filter == name)[0]:
+                self.choose("texture_filter", name, "menu Render")
 
     def _popup(self) -> None:
         # The course's GLUT pop-up menu: projection and shading at the click.

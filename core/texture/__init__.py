@@ -10,6 +10,6 @@
 """
 
 from core.texture.image import MAX_TEXTURE_SIDE, Texture, TextureError, load_image
-from core.texture.sample import FILTERS, WRAPS
+from core.texture.modes import FILTERS, WRAPS
 
 __all__ = ["FILTERS", "MAX_TEXTURE_SIDE", "Texture", "TextureError", "WRAPS", "load_image"]

@@ -34,23 +34,12 @@ import math
 import numpy as np
 from numba import njit
 
-from core.camera.view import View
+from core.texture.demo_scene import (DEMO_LIGHT, DEMO_VIEWPOINT, LABELS, MAPS,  # noqa: F401
+                                     WINDOW_SIZE, apply_demo_options, demo_bump_numpy,
+                                     demo_view, label, panel_views)
 
 EPSILON = 1e-4
-DEMO_LIGHT = (50.0, -50.0, 50.0)
-DEMO_VIEWPOINT = (50.0, -50.0, 50.0)
-WINDOW_SIZE = 100.0                        # the panel spans (0, 0) … (100, −100)
-LABELS = ("B(x,y) = sin((x^2 + y^2)^0.5)",
-          "B(x,y) = sin(x) + cos(y)",
-          "B(x,y) = sin(x) + Math.sin(y)",
-          "B(x,y) = sin(((x-50)^2 + (y+50)^2)^0.5)")
-MAPS = len(LABELS)
 
-
-def label(bump_map: int) -> str:
-    """The text the demo shows for ``bump_map`` (past the last map, the default case: map 0's
-    function, and the demo leaves the label as it was; we show map 0's)."""
-    return LABELS[bump_map if 0 <= bump_map < MAPS else 0]
 
 
 @njit(cache=True)
@@ -63,18 +52,6 @@ def demo_bump(bump_map, x, y):
     if bump_map == 3:
         return math.sin(math.pow((x - 50) * (x - 50) + (y + 50) * (y + 50), 0.5))
     return math.sin(math.pow(x * x + y * y, 0.5))       # case 0 and the default case
-
-
-def demo_bump_numpy(bump_map: int, x, y):
-    """:func:`demo_bump` on arrays (for the height-map texture of the same functions)."""
-    x, y = np.asarray(x, float), np.asarray(y, float)
-    if bump_map == 1:
-        return np.sin(x) + np.cos(y)
-    if bump_map == 2:
-        return np.sin(x) + np.sin(y)
-    if bump_map == 3:
-        return np.sin(np.sqrt((x - 50) ** 2 + (y + 50) ** 2))
-    return np.sin(np.sqrt(x * x + y * y))
 
 
 @njit(cache=True)
@@ -129,41 +106,3 @@ def java_color_byte(c):
     return int(np.float64(np.float32(c) * np.float32(255.0)) + 0.5)
 
 
-def demo_view(width: int, height: int) -> View:
-    """The parallel view that puts pixel (x, y)'s centre at ``(x/w · 100, −y/h · 100, 0)``.
-
-    The renderer samples pixel centres; the demo puts pixel (x, y) at its corner, so the
-    window (the demo's 100 x 100) is moved half a pixel up and to the left. The window is
-    square, so a frame that is not square is letterboxed (the Java panel would stretch).
-    """
-    du, dv = WINDOW_SIZE / width / 2, WINDOW_SIZE / height / 2
-    window = (-du, WINDOW_SIZE - du, -WINDOW_SIZE + dv, dv)
-    centre = ((window[0] + window[1]) / 2, (window[2] + window[3]) / 2)
-    return View(vrp=(0.0, 0.0, 0.0), vpn=(0.0, 0.0, 1.0), vup=(0.0, 1.0, 0.0), window=window,
-                prp=(centre[0], centre[1], 100.0), front=10.0, back=-10.0,
-                label=f"the bump demo's panel, {width} x {height}")
-
-
-def apply_demo_options(scene, bump_map: int | None, bump: bool) -> str | None:
-    """Set every bump-demo material of ``scene`` to ``bump_map`` (when given) and ``bump``;
-    returns the demo's label text (``"Bump: B(x,y) = …"`` or ``"Phong"``), or None when the
-    scene has no demo material."""
-    from core.texture.material import maps_of
-    demos = [maps_of(m.material).demo for m in scene.meshes
-             if maps_of(m.material) is not None and maps_of(m.material).demo is not None]
-    for demo in demos:
-        if bump_map is not None:
-            demo.bump_map = int(bump_map)
-        demo.bump = bool(bump)
-    if not demos:
-        return None
-    return f"Bump: {label(demos[0].bump_map)}" if demos[0].bump else "Phong"
-
-
-def panel_views(scene) -> list[View]:
-    """The demo's panel view for the scene's image size, when a material is the demo's."""
-    from core.texture.material import maps_of
-    if any(maps_of(m.material) is not None and maps_of(m.material).demo is not None
-           for m in scene.meshes):
-        return [demo_view(*scene.size)]
-    return []

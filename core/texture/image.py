@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from core.texture.sample import WRAPS
+from core.texture.modes import WRAPS
 
 MAX_TEXTURE_SIDE = 16384          # texels on a side; larger images are refused, not read
 
@@ -64,8 +64,12 @@ def mip_chain(image: np.ndarray) -> list[np.ndarray]:
     while levels[-1].shape[0] > 1 or levels[-1].shape[1] > 1:
         fine = levels[-1].astype(np.float64)
         h, w = fine.shape[:2]
-        rows, cols = _box_weights(h, max(1, h // 2)), _box_weights(w, max(1, w // 2))
-        coarse = np.einsum("ij,jkc,lk->ilc", rows, fine, cols)
+        h2, w2 = max(1, h // 2), max(1, w // 2)
+        if h == 2 * h2 and w == 2 * w2:                   # even sizes: the 2 x 2 box
+            coarse = fine.reshape(h2, 2, w2, 2, -1).mean(axis=(1, 3))
+        else:                                             # one axis at a time, by area
+            coarse = np.tensordot(_box_weights(h, h2), fine, axes=(1, 0))
+            coarse = np.tensordot(_box_weights(w, w2), coarse, axes=(1, 1)).transpose(1, 0, 2)
         levels.append(np.ascontiguousarray(coarse, dtype=np.float32))
     return levels
 

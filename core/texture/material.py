@@ -85,3 +85,23 @@ def tangent_frames(positions: np.ndarray, triangles: np.ndarray, uv: np.ndarray)
     used = weight > 0
     frames[used] /= weight[used, None]
     return frames
+
+
+def plan_stage(scene, shading: str, texture_filter: str = "trilinear") -> tuple[bool, str, str]:
+    """``(runs, why, why_not)`` of the plan's "texture lookups" stage (core.plan)."""
+    mapped = [m for m in scene.meshes if maps_of(m.material) is not None and len(m.triangles)]
+    if not mapped:
+        return False, "", "no material has a texture, bump, normal or environment map"
+    if shading in ("flat", "gouraud"):
+        return False, "", (f"{shading} shading computes no per-pixel values, which textures, bump "
+                           "and normal maps need: textured materials are drawn with their colour "
+                           "(use phong)")
+    if shading != "phong" and shading != "textured":
+        return False, "", f"{shading} draws no textures"
+    without_uv = [m.name for m in mapped if m.uv is None and maps_of(m.material).needs_uv]
+    why = (f"{texture_filter} filtering of the material maps, (u, v) derivatives exact per "
+           "pixel; bump/normal maps perturb the Phong normal")
+    if without_uv:
+        why += (f"; {', '.join(without_uv)} has no (u, v) (a .tri file or an OBJ without vt "
+                "has none) and is drawn with its material colour")
+    return True, why, ""

@@ -63,11 +63,23 @@ def bricks_height(resolution: int = 256, rows: int = 8, columns: int = 4, mortar
     return _bricks_mask(resolution, rows, columns, mortar), False
 
 
+def bricks_normal(resolution: int = 256, rows: int = 8, columns: int = 4, mortar: float = 0.08,
+                  strength: float = 4.0):
+    """A tangent-space normal map of the bricks (rgb = (n + 1) / 2, z out of the surface):
+    the height's gradient by central differences that wrap, ``strength`` times steeper."""
+    height = _bricks_mask(resolution, rows, columns, mortar)
+    dhdu = (np.roll(height, -1, axis=1) - np.roll(height, 1, axis=1)) / 2 * strength
+    dhdv = (np.roll(height, -1, axis=0) - np.roll(height, 1, axis=0)) / 2 * strength
+    n = np.stack([-dhdu, -dhdv, np.ones_like(height)], axis=-1)
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    return (n + 1) / 2, False
+
+
 def demo_height(resolution: int = 256, map: int = 0):
     """The bump demo's B(x, y) (``J3DPanel.bump``, maps 0 … 3) over its window: u → x = 100 u,
     v → y = −100 (1 − v), so the texture's top-left is the demo's (0, 0); B in [−2, 2] is
     mapped to [0, 1] by (B + 2) / 4."""
-    from core.texture.bump_demo import demo_bump_numpy
+    from core.texture.demo_scene import demo_bump_numpy
     u, v = _grid(resolution)
     return (demo_bump_numpy(map, 100.0 * u, -100.0 * (1.0 - v)) + 2.0) / 4.0, False
 
@@ -153,6 +165,7 @@ def sky(resolution: int = 256, zenith=(0.15, 0.35, 0.8), horizon=(0.85, 0.9, 0.9
 
 PROCEDURALS = {
     "checker": checker, "bricks": bricks, "bricks_height": bricks_height,
+    "bricks_normal": bricks_normal,
     "demo_height": demo_height, "value_noise": value_noise, "perlin": perlin,
     "perlin_height": perlin_height, "sky": sky,
 }

@@ -40,11 +40,9 @@ import math
 import numpy as np
 from numba import njit
 
-REPEAT, CLAMP, MIRROR = 0, 1, 2
-WRAPS = {"repeat": REPEAT, "clamp": CLAMP, "mirror": MIRROR}
-NEAREST, BILINEAR, TRILINEAR, ANISOTROPIC = 0, 1, 2, 3
-FILTERS = {"nearest": NEAREST, "bilinear": BILINEAR, "trilinear": TRILINEAR,
-           "anisotropic": ANISOTROPIC}
+from core.texture.modes import (ANISOTROPIC, BILINEAR, CLAMP, FILTERS, MIRROR,  # noqa: F401
+                                NEAREST, REPEAT, TRILINEAR, WRAPS)
+
 MAX_ANISOTROPY = 16          # probes along the major axis at most (GPUs offer 2 … 16)
 
 
@@ -107,18 +105,19 @@ def bilinear(texels, levels, wrap, level, u, v):
 
 
 @njit(cache=True)
-def footprint(levels, dudx, dvdx, dudy, dvdy):
-    """``(ρ_x, ρ_y)``: texels of level 0 a step of one pixel along x and along y covers."""
-    w, h = levels[0, 1], levels[0, 2]
+def footprint(levels, dudx, dvdx, dudy, dvdy, base=0):
+    """``(ρ_x, ρ_y)``: texels of level 0 (row ``base``) a step of one pixel along x and
+    along y covers."""
+    w, h = levels[base, 1], levels[base, 2]
     rho_x = math.sqrt((dudx * w) ** 2 + (dvdx * h) ** 2)
     rho_y = math.sqrt((dudy * w) ** 2 + (dvdy * h) ** 2)
     return rho_x, rho_y
 
 
 @njit(cache=True)
-def level_of_detail(levels, dudx, dvdx, dudy, dvdy):
+def level_of_detail(levels, dudx, dvdx, dudy, dvdy, base=0):
     """λ = log2 ρ with ρ = max(ρ_x, ρ_y) (GL eq. 8.5); −inf for a zero footprint."""
-    rho_x, rho_y = footprint(levels, dudx, dvdx, dudy, dvdy)
+    rho_x, rho_y = footprint(levels, dudx, dvdx, dudy, dvdy, base)
     rho = max(rho_x, rho_y)
     if not rho > 0.0:
         return -np.inf
@@ -128,61 +127,66 @@ def level_of_detail(levels, dudx, dvdx, dudy, dvdy):
 
 
 @njit(cache=True)
-def mip_at(texels, levels, wrap, lam, u, v):
-    """Bilinear on the two levels around λ, blended (GL_LINEAR_MIPMAP_LINEAR)."""
-    last = levels.shape[0] - 1
+def mip_at(texels, levels, wrap, lam, u, v, base=0, count=-1):
+    """Bilinear on the two levels around λ, blended (GL_LINEAR_MIPMAP_LINEAR). The texture's
+    levels are rows ``base`` … ``base + count − 1`` of ``levels`` (default: all of them)."""
+    last = (levels.shape[0] - base if count < 0 else count) - 1
     if not lam > 0.0:                         # magnification (or no footprint): level 0
-        return bilinear(texels, levels, wrap, 0, u, v)
+        return bilinear(texels, levels, wrap, base, u, v)
     if lam >= last:
-        return bilinear(texels, levels, wrap, last, u, v)
+        return bilinear(texels, levels, wrap, base + last, u, v)
     d1 = int(math.floor(lam))
     f = lam - d1
-    r1, g1, b1, a1 = bilinear(texels, levels, wrap, d1, u, v)
-    r2, g2, b2, a2 = bilinear(texels, levels, wrap, d1 + 1, u, v)
+    r1, g1, b1, a1 = bilinear(texels, levels, wrap, base + d1, u, v)
+    r2, g2, b2, a2 = bilinear(texels, levels, wrap, base + d1 + 1, u, v)
     return ((1.0 - f) * r1 + f * r2, (1.0 - f) * g1 + f * g2,
             (1.0 - f) * b1 + f * b2, (1.0 - f) * a1 + f * a2)
 
 
 @njit(cache=True)
-def trilinear(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy):
+def trilinear(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy, base=0, count=-1):
     """GL_LINEAR_MIPMAP_LINEAR with the level from the derivatives of (u, v)."""
-    return mip_at(texels, levels, wrap, level_of_detail(levels, dudx, dvdx, dudy, dvdy), u, v)
+    return mip_at(texels, levels, wrap, level_of_detail(levels, dudx, dvdx, dudy, dvdy, base),
+                  u, v, base, count)
 
 
 @njit(cache=True)
-def anisotropic(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy):
+def anisotropic(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy, base=0, count=-1):
     """Several trilinear probes along the footprint's major axis, averaged."""
-    rho_x, rho_y = footprint(levels, dudx, dvdx, dudy, dvdy)
+    rho_x, rho_y = footprint(levels, dudx, dvdx, dudy, dvdy, base)
     if rho_x >= rho_y:
         major, minor, du, dv = rho_x, rho_y, dudx, dvdx
     else:
         major, minor, du, dv = rho_y, rho_x, dudy, dvdy
     if not (major > 0.0 and math.isfinite(major)):
-        return trilinear(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy)
+        return trilinear(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy, base, count)
     n = MAX_ANISOTROPY if not minor > 0.0 else int(min(math.ceil(major / minor), MAX_ANISOTROPY))
     n = max(n, 1)
     lam = math.log2(major / n)
     r, g, b, a = 0.0, 0.0, 0.0, 0.0
     for k in range(n):
         t = (k + 0.5) / n - 0.5              # probes spread over one pixel step of the major axis
-        pr, pg, pb, pa = mip_at(texels, levels, wrap, lam, u + t * du, v + t * dv)
+        pr, pg, pb, pa = mip_at(texels, levels, wrap, lam, u + t * du, v + t * dv, base, count)
         r, g, b, a = r + pr, g + pg, b + pb, a + pa
     return r / n, g / n, b / n, a / n
 
 
 @njit(cache=True)
-def sample(texels, levels, wrap, filter_, u, v, dudx, dvdx, dudy, dvdy):
+def sample(texels, levels, wrap, filter_, u, v, dudx, dvdx, dudy, dvdy, base=0, count=-1):
     """The texture at (u, v) with filter ``filter_`` (NEAREST … ANISOTROPIC): ``(r, g, b, a)``.
 
     Nearest and bilinear read level 0 only (GL_NEAREST, GL_LINEAR) and ignore the derivatives.
+    ``base``, ``count``: the texture's rows of a shared level table (several textures packed
+    together); default, the whole table. (Passing rows rather than a slice of the table keeps
+    the pixel loops free of array views, whose reference counts both cores would contend for.)
     """
     if filter_ == NEAREST:
-        return nearest(texels, levels, wrap, 0, u, v)
+        return nearest(texels, levels, wrap, base, u, v)
     if filter_ == BILINEAR:
-        return bilinear(texels, levels, wrap, 0, u, v)
+        return bilinear(texels, levels, wrap, base, u, v)
     if filter_ == TRILINEAR:
-        return trilinear(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy)
-    return anisotropic(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy)
+        return trilinear(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy, base, count)
+    return anisotropic(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy, base, count)
 
 
 @njit(cache=True)

@@ -24,7 +24,7 @@ from __future__ import annotations
 from core.texture import procedural
 from core.texture.image import TextureError, load_image
 from core.texture.material import DemoMaterial, SurfaceMaps
-from core.texture.sample import WRAPS
+from core.texture.modes import WRAPS
 
 TEXTURE_KEYS = ("texture", "bump", "bump_scale", "normal_map", "environment", "reflectivity",
                 "uv_scale", "bump_demo")

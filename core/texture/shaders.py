@@ -12,9 +12,10 @@ the tangent frame ∂P/∂u, ∂P/∂v (:func:`core.texture.material.tangent_fra
 map needs it). Meshes without (u, v) (``.tri`` files, OBJ without ``vt``) get (0, 0) and are
 drawn with the material's colour.
 
-Pixel step: (u, v) derivatives come from the clipped triangles' device coordinates (the
-tutorial's plane constants, :func:`core.texture.tutorial.triangle_constants`), which the
-z-buffer hands over as ``ShadeInput.device``; the filter and the bump switch come from
+Pixel step: (u, v) derivatives come from the clipped triangles' device coordinates, which
+the z-buffer hands over as ``ShadeInput.device`` (the tutorial's plane constants,
+:func:`core.texture.tutorial.plane_constants`, made when a scan line enters a triangle, so
+only visible triangles pay for them); the filter and the bump switch come from
 ``RenderSettings.texture_filter`` and ``.bump`` (``ShadeInput.settings``).
 """
 
@@ -29,8 +30,8 @@ from core.shading.shade import ShadeInput, all_vertex_normals, cached, scene_arr
 from core.texture.bump_demo import DEMO_LIGHT, demo_pixel, java_color_byte
 from core.texture.material import maps_of, tangent_frames
 from core.texture.sample import FILTERS, TRILINEAR
-from core.texture.surface import VARYING_COLUMNS, pack_maps, textured_pixel
-from core.texture.tutorial import triangle_constants
+from core.texture.surface import UV, VARYING_COLUMNS, pack_maps, textured_pixel
+from core.texture.tutorial import plane_constants
 
 NAME = "textured"
 # Columns of a packed demo row: kind (1 = the bump demo), map, bump on, viewpoint (3).
@@ -66,6 +67,24 @@ def _demo_rows(meshes) -> np.ndarray:
     return rows
 
 
+def _packed_maps(s: ShadeInput, scene, meshes):
+    """:func:`pack_maps` of the materials, kept while the same textures and numbers are used
+    (packing copies every texel: tens of MB a frame for a few large textures). Kept in the
+    context's cache of the scene under its own key, holding the textures it was made from."""
+    all_maps = [maps_of(m.material) for m in meshes]
+    textures = tuple(t for m in all_maps if m is not None
+                     for t in (m.color, m.height, m.normal_map, m.environment) if t is not None)
+    numbers = [(m.bump_scale, m.reflectivity, [t is None for t in (
+        m.color, m.height, m.normal_map, m.environment)]) if m is not None else None
+        for m in all_maps]
+    cache = s.context.cache(scene)
+    held = cache.get("texture maps")
+    if (held is None or held[1] != numbers or len(held[0]) != len(textures)
+            or any(a is not b for a, b in zip(held[0], textures))):
+        held = cache["texture maps"] = (textures, numbers, pack_maps(all_maps))
+    return held[2]
+
+
 def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
     normals = all_vertex_normals(s, scene, meshes, weighting)
     # Maps are read from the materials each frame (a window may switch the demo's map); the
@@ -73,21 +92,25 @@ def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
     extra = cached(s.context, scene, scene_arrays(meshes), "texture varyings",
                    lambda: np.concatenate([_mesh_varyings(m) for m in meshes]) if meshes
                    else np.zeros((0, 8)))
-    s.vertex_attrs = cached(s.context, scene, scene_arrays(meshes) + (extra,),
+    s.vertex_attrs = cached(s.context, scene, scene_arrays(meshes),
                             f"textured attributes {weighting}",
                             lambda: np.concatenate([normals, s.positions, extra], axis=1))
-    s.texture_maps = pack_maps([maps_of(m.material) for m in meshes])
+    s.texture_maps = _packed_maps(s, scene, meshes)
     s.demo = _demo_rows(meshes)
     s.computed += ["illuminate pixels", "texture lookups"]
 
 
 @njit(cache=True, parallel=True)
-def _resolve(tri, b1, b2, triangles, attrs, constants, source, face_surface, surfaces, maps,
+def _resolve(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surfaces, maps,
              texels, levels, textures, demo, demo_light, filter_, bump, lights, ambient, eye,
              halfway, background8, out):
     height, width = tri.shape
     for row in prange(height):
         surf = surfaces.copy()                  # per row: a pixel writes its texture's O_d here
+        # the visible triangle's plane constants, made when the scan line enters it (per
+        # visible triangle, not for every triangle of the scene)
+        constants = np.zeros((1, 3, 3))
+        current = -1
         for col in range(width):
             t = tri[row, col]
             if t < 0:
@@ -104,7 +127,16 @@ def _resolve(tri, b1, b2, triangles, attrs, constants, source, face_surface, sur
                 out[row, col, 1] = 0
                 out[row, col, 2] = java_color_byte(blue)
                 continue
-            r, g, b = textured_pixel(attrs, i0, i1, i2, w0, w1, w2, t, col, row, constants,
+            if t != current:
+                current = t
+                for a in range(3):
+                    for b in range(3):
+                        constants[0, a, b] = 0.0
+                if device_h.shape[0]:
+                    plane_constants(device_h, i0, i1, i2, attrs[i0, UV], attrs[i0, UV + 1],
+                                    attrs[i1, UV], attrs[i1, UV + 1], attrs[i2, UV],
+                                    attrs[i2, UV + 1], float(height), constants, 0)
+            r, g, b = textured_pixel(attrs, i0, i1, i2, w0, w1, w2, 0, col, row, constants,
                                      s, maps, texels, levels, textures, filter_, bump, surf,
                                      lights, ambient, eye, halfway)
             for c in range(3):
@@ -130,19 +162,18 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
     bump = bool(getattr(settings, "bump", True))
     tri = np.ascontiguousarray(vis.tri, dtype=np.int32)
     device = getattr(s, "device", None)
-    if device is not None and len(triangles):
+    if device is not None:
         points, inv_w = device
         w = np.divide(1.0, inv_w, out=np.zeros_like(inv_w), where=inv_w > 0)
         device_h = np.column_stack([points * w[:, None], w])
-        constants = triangle_constants(device_h, triangles, attrs[:, 6:8], tri.shape[0])
     else:                                   # no device coordinates: no derivatives, level 0
-        constants = np.zeros((max(len(triangles), 1), 3, 3))
+        device_h = np.zeros((0, 4))
     texels, levels, textures, maps = s.texture_maps
     # the demo lights its panel with the scene's first light (J3DPanel's lightSource)
     demo_light = (s.lights[0, 1:4].copy() if len(s.lights) and s.lights[0, 0] == 0.0
                   else np.array(DEMO_LIGHT))
     _resolve(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
-             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, constants, source,
+             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, device_h, source,
              s.face_surface, s.surfaces, maps, texels, levels, textures, s.demo, demo_light, filter_, bump,
              s.lights, s.ambient, s.eye, s.halfway, background8, out)
 

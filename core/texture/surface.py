@@ -90,8 +90,7 @@ def pack_maps(maps_per_surface: list) -> tuple[np.ndarray, np.ndarray, np.ndarra
 @njit(cache=True)
 def _lookup(texels, levels, textures, k, filter_, u, v, dudx, dvdx, dudy, dvdy):
     first, count, wrap = textures[k, 0], textures[k, 1], textures[k, 2]
-    return sample(texels, levels[first:first + count], wrap, filter_, u, v,
-                  dudx, dvdx, dudy, dvdy)
+    return sample(texels, levels, wrap, filter_, u, v, dudx, dvdx, dudy, dvdy, first, count)
 
 
 @njit(cache=True)

@@ -48,41 +48,67 @@ def nine_constants(P: np.ndarray, M: np.ndarray, N: np.ndarray) -> np.ndarray:
     ])
 
 
-def tutorial_space(device_h: np.ndarray, height: int) -> np.ndarray:
-    """Homogeneous device points ``(V, 4)`` (x_dev W, y_dev W, z W, W; y up) → the tutorial's
-    camera space ``(V, 3)``: ``((x_dev − ½) W, W, (height − y_dev − ½) W)``."""
-    xw, yw, w = device_h[:, 0], device_h[:, 1], device_h[:, 3]
-    return np.stack([xw - 0.5 * w, w, (height - 0.5) * w - yw], axis=1)
-
-
 def triangle_constants(device_h: np.ndarray, triangles: np.ndarray, uv: np.ndarray,
                        height: int) -> np.ndarray:
     """``(T, 3, 3)``: each triangle's nine constants (u, v in texture units, not texels).
 
-    Vectorised over the triangles (a million take about a second). A triangle whose (u, v)
-    are collinear has no texture frame: its constants are 0 (c = 0, so u = v = nan there).
+    A triangle whose (u, v) are collinear has no texture frame: its constants are 0 (c = 0,
+    so u = v = nan there). Compiled, one triangle per iteration (100k in a few ms).
     """
-    X = tutorial_space(device_h, height)[triangles]            # (T, 3, 3)
-    t_uv = uv[triangles]                                        # (T, 3, 2)
-    duv = np.stack([t_uv[:, 1] - t_uv[:, 0], t_uv[:, 2] - t_uv[:, 0]], axis=1)   # (T, 2, 2)
-    edges = np.stack([X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]], axis=1)             # (T, 2, 3)
-    det = duv[:, 0, 0] * duv[:, 1, 1] - duv[:, 0, 1] * duv[:, 1, 0]
-    ok = np.abs(det) > 1e-300
-    safe = np.where(ok, det, 1.0)[:, None]
-    # rows of the inverse of [[du1, dv1], [du2, dv2]] applied to the edges: dX/du, dX/dv
-    dXdu = (duv[:, 1, 1, None] * edges[:, 0] - duv[:, 0, 1, None] * edges[:, 1]) / safe
-    dXdv = (-duv[:, 1, 0, None] * edges[:, 0] + duv[:, 0, 0, None] * edges[:, 1]) / safe
-    P = X[:, 0] - t_uv[:, 0, 0, None] * dXdu - t_uv[:, 0, 1, None] * dXdv
-    M, N = -dXdu, dXdv                                          # M = −∂X/∂u (see the docstring)
-    out = np.stack([
-        np.stack([N[:, 0] * P[:, 2] - N[:, 2] * P[:, 0], M[:, 0] * P[:, 2] - M[:, 2] * P[:, 0],
-                  M[:, 2] * N[:, 0] - M[:, 0] * N[:, 2]], axis=1),
-        np.stack([N[:, 2] * P[:, 1] - N[:, 1] * P[:, 2], M[:, 2] * P[:, 1] - M[:, 1] * P[:, 2],
-                  M[:, 1] * N[:, 2] - M[:, 2] * N[:, 1]], axis=1),
-        np.stack([N[:, 1] * P[:, 0] - N[:, 0] * P[:, 1], M[:, 1] * P[:, 0] - M[:, 0] * P[:, 1],
-                  M[:, 0] * N[:, 1] - M[:, 1] * N[:, 0]], axis=1)], axis=1)
-    out[~ok] = 0.0
-    return np.ascontiguousarray(out)
+    out = np.zeros((len(triangles), 3, 3))
+    _constants(np.ascontiguousarray(device_h, dtype=np.float64),
+               np.ascontiguousarray(triangles, dtype=np.int64),
+               np.ascontiguousarray(uv, dtype=np.float64), float(height), out)
+    return out
+
+
+@njit(cache=True)
+def _tutorial_point(device_h, k, height):
+    """Vertex k of the device (x W, y W, z W, W) in the tutorial's camera space."""
+    w = device_h[k, 3]
+    return device_h[k, 0] - 0.5 * w, w, (height - 0.5) * w - device_h[k, 1]
+
+
+@njit(cache=True, parallel=True)
+def _constants(device_h, triangles, uv, height, out):
+    for t in prange(triangles.shape[0]):
+        plane_constants(device_h, triangles[t, 0], triangles[t, 1], triangles[t, 2],
+                        uv[triangles[t, 0], 0], uv[triangles[t, 0], 1],
+                        uv[triangles[t, 1], 0], uv[triangles[t, 1], 1],
+                        uv[triangles[t, 2], 0], uv[triangles[t, 2], 1], height, out, t)
+
+
+@njit(cache=True)
+def plane_constants(device_h, i0, i1, i2, u0, v0, u1, v1, u2, v2, height, out, slot):
+    """The nine constants of the triangle (i0, i1, i2) with (u, v) at its corners, into
+    ``out[slot]`` (left as they are when the (u, v) are collinear: no texture frame)."""
+    x0, y0, z0 = _tutorial_point(device_h, i0, height)
+    x1, y1, z1 = _tutorial_point(device_h, i1, height)
+    x2, y2, z2 = _tutorial_point(device_h, i2, height)
+    du1, dv1 = u1 - u0, v1 - v0
+    du2, dv2 = u2 - u0, v2 - v0
+    det = du1 * dv2 - dv1 * du2
+    if not abs(det) > 1e-300:
+        return
+    # [dX/du; dX/dv] = [[du1, dv1], [du2, dv2]]^-1 [E1; E2]
+    e1x, e1y, e1z = x1 - x0, y1 - y0, z1 - z0
+    e2x, e2y, e2z = x2 - x0, y2 - y0, z2 - z0
+    ux, uy, uz = (dv2 * e1x - dv1 * e2x) / det, (dv2 * e1y - dv1 * e2y) / det, \
+        (dv2 * e1z - dv1 * e2z) / det
+    vx, vy, vz = (du1 * e2x - du2 * e1x) / det, (du1 * e2y - du2 * e1y) / det, \
+        (du1 * e2z - du2 * e1z) / det
+    Px, Py, Pz = x0 - u0 * ux - v0 * vx, y0 - u0 * uy - v0 * vy, z0 - u0 * uz - v0 * vz
+    Mx, My, Mz = -ux, -uy, -uz                         # M = −∂X/∂u (see the docstring)
+    Nx, Ny, Nz = vx, vy, vz
+    out[slot, 0, 0] = Nx * Pz - Nz * Px                # O_a, O_b, O_c
+    out[slot, 0, 1] = Mx * Pz - Mz * Px
+    out[slot, 0, 2] = Mz * Nx - Mx * Nz
+    out[slot, 1, 0] = Nz * Py - Ny * Pz                # H_a, H_b, H_c
+    out[slot, 1, 1] = Mz * Py - My * Pz
+    out[slot, 1, 2] = My * Nz - Mz * Ny
+    out[slot, 2, 0] = Ny * Px - Nx * Py                # V_a, V_b, V_c
+    out[slot, 2, 1] = My * Px - Mx * Py
+    out[slot, 2, 2] = Mx * Ny - My * Nx
 
 
 @njit(cache=True)

@@ -266,7 +266,7 @@ class _Reader:
             scene.size = tuple(size)
         # -- issue 11: texture files that could not be used; the bump demo's panel view
         scene.view_messages += getattr(self, "texture_messages", [])
-        from core.texture.bump_demo import panel_views
+        from core.texture.demo_scene import panel_views
         panel = panel_views(scene)
         scene.views = panel + scene.views
         if scene.view_order:                  # the panel is the file's first view
