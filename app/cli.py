@@ -81,6 +81,8 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="where screenshots go, and the PNGs when there is no display "
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
+    v.add_argument("--renderer", choices=("zbuffer", "raytrace"), default=None,   # issue 12
+                   help="draw with the z-buffer (default) or the ray tracer (progressive)")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
@@ -240,7 +242,8 @@ def _dispatch(args) -> int:
         return viewer_main(args.scene, args.size, out_dir=args.out,
                            options={"rasterizer": args.rasterizer,
                                     "keep_aspect": args.keep_aspect,
-                                    "course_tri": args.course_tri})
+                                    "course_tri": args.course_tri,
+                                    "renderer_name": args.renderer})
     if args.command == "render":
         return _render(args)
     if args.command == "matrices":

@@ -12,6 +12,9 @@ GOLDEN = Path(__file__).resolve().parent / "golden"
 FAILURES = Path(__file__).resolve().parent / "_failures"
 SHARED = ROOT.parent / "shared"
 BUNNY = SHARED / "data" / "stanford-bunny" / "bun_zipper.ply"
+# Golden images: a pixel may differ by one level (1/255) per channel, on at most 0.1 % of them.
+GOLDEN_LEVELS = 1
+GOLDEN_PIXEL_SHARE = 0.001
 
 
 def pytest_addoption(parser):
@@ -32,8 +35,13 @@ def _numpy_strict():
 def golden(request):
     """``golden(name, image)``: compare an (H, W, 3) uint8 image with tests/golden/NAME.png.
 
-    The comparison is exact (the pipeline is deterministic). On a mismatch the actual image and
-    a diff image are written to tests/_failures/ and the test fails with the count of pixels.
+    The comparison has a stated tolerance (README, "Tests"): at most ``GOLDEN_PIXEL_SHARE`` of
+    the pixels may differ, each channel by at most ``GOLDEN_LEVELS`` (1/255). The pipeline is
+    deterministic, but its twins (serial and parallel kernels, float32 and float64 shading,
+    pow and repeated squaring) are no longer held to bit-identity: a rounding that tips a
+    value across a half level changes a byte by one. On a failure the actual image and a diff
+    image (white: beyond tolerance, grey: within it) are written to tests/_failures/ and the
+    test fails with the counts.
     """
     from PIL import Image
     update = request.config.getoption("--update-golden")
@@ -46,15 +54,20 @@ def golden(request):
             return
         assert path.exists(), f"no golden image {path}; run pytest --update-golden and look at it"
         expected = np.asarray(Image.open(path).convert("RGB"))
-        if expected.shape == image.shape and np.array_equal(expected, image):
-            return
+        if expected.shape == image.shape:
+            error = np.abs(expected.astype(np.int16) - image.astype(np.int16)).max(axis=2)
+            differ = int(np.count_nonzero(error))
+            beyond = int(np.count_nonzero(error > GOLDEN_LEVELS))
+            if beyond == 0 and differ <= GOLDEN_PIXEL_SHARE * error.size:
+                return
         FAILURES.mkdir(exist_ok=True)
         Image.fromarray(image).save(FAILURES / f"{name}.actual.png")
         if expected.shape == image.shape:
-            diff = (np.any(expected != image, axis=2) * 255).astype(np.uint8)
+            diff = np.where(error > GOLDEN_LEVELS, 255, np.where(error > 0, 96, 0)).astype(np.uint8)
             Image.fromarray(diff).save(FAILURES / f"{name}.diff.png")
-            count = int(np.count_nonzero(diff))
-            pytest.fail(f"{name}: {count} pixels differ from {path} (see {FAILURES})")
+            pytest.fail(f"{name}: {differ} pixels differ from {path} ({beyond} by more than "
+                        f"{GOLDEN_LEVELS}/255; allowed: none beyond, at most "
+                        f"{GOLDEN_PIXEL_SHARE:.1%} of {error.size} within) (see {FAILURES})")
         pytest.fail(f"{name}: shape {image.shape} != golden {expected.shape}")
 
     return check

@@ -89,6 +89,8 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
     parser.add_argument("--out", default="out/bench", help="directory for bench.json and bench.png")
     parser.add_argument("--no-startup", action="store_true",
                         help="skip the JIT cold/warm start and the first-frame measurements")
+    parser.add_argument("--no-threads", action="store_true",
+                        help="skip the thread-scaling table (every case again on one thread)")
     parser.add_argument("--no-animation", action="store_true",
                         help="skip the animation row (the fountain on 1 process and 2 workers)")
     parser.add_argument("--renderer", choices=("zbuffer", "raytrace"), default="zbuffer",
@@ -170,6 +172,41 @@ def time_llvmpipe(renderer, projection: str, shading: str, frames: int, warmup: 
     result = _summary(draws, cpu)
     result["readback_ms"] = float(np.median(reads) * 1e3)
     return result
+
+
+def time_floor(floor, view, frames: int, warmup: int) -> dict:
+    """The bare numba Gouraud rasterizer (app.tools.floor): whole frames."""
+    totals, cpu = [], []
+    for k in range(warmup + frames):
+        c0 = time.process_time()
+        t0 = time.perf_counter()
+        floor.frame(view)
+        if k >= warmup:
+            totals.append(time.perf_counter() - t0)
+            cpu.append(time.process_time() - c0)
+    return _summary(totals, cpu)
+
+
+def thread_scaling(scene, projection: str, shading: str, size, frames: int, warmup: int,
+                   blit) -> dict:
+    """Per-stage medians on one thread and on all (numba.set_num_threads), and the speed-up."""
+    import numba
+    most = numba.config.NUMBA_NUM_THREADS
+    runs = {}
+    try:
+        for threads in (1, most):
+            numba.set_num_threads(threads)
+            runs[threads] = time_ours(scene, projection, shading, size, frames, warmup, blit)
+    finally:
+        numba.set_num_threads(most)
+    one, all_ = runs[1], runs[most]
+    stages = {name: {"1": ms, str(most): all_["stages_ms"].get(name, float("nan")),
+                     "speedup": ms / all_["stages_ms"][name]
+                     if all_["stages_ms"].get(name) else float("nan")}
+              for name, ms in one["stages_ms"].items()}
+    return {"threads": most, "total": {"1": one["median"], str(most): all_["median"],
+                                       "speedup": one["median"] / all_["median"]},
+            "stages": stages}
 
 
 # ----------------------------------------------------------------------------- start-up
@@ -314,13 +351,37 @@ def _ms(stat: dict) -> str:
 def format_table(rows: list[dict]) -> str:
     head = (f"{'scene':<20} {'triangles':>10} {'shading':<8} {'ours ms median (min–max)':>28} "
             f"{'fps':>7} {'llvmpipe ms median (min–max)':>30} {'ours/llvmpipe':>13} "
-            f"{'CPU ms ours/llvmpipe':>21}")
+            f"{'CPU ms ours/llvmpipe':>21} {'lean GL ms':>10} {'ours/lean':>9} "
+            f"{'floor ms':>8} {'ours/floor':>10}")
     lines = [head, "-" * len(head)]
     for r in rows:
+        lean, floor = r.get("lean"), r.get("floor")
+        lean_text = (f"{lean['median']:>10.2f} {r['ratio_lean']:>9.2f}" if lean
+                     else f"{'—':>10} {'—':>9}")
+        floor_text = (f"{floor['median']:>8.2f} {r['ratio_floor']:>10.2f}" if floor
+                      else f"{'—':>8} {'—':>10}")
         lines.append(f"{r['scene']:<20} {r['triangles']:>10,} {r['shading']:<8} "
                      f"{_ms(r['ours']):>28} {r['ours_fps']:>7.1f} {_ms(r['llvmpipe']):>30} "
                      f"{r['ratio']:>13.2f} "
-                     f"{r['ours']['cpu_median']:>10.1f}/{r['llvmpipe']['cpu_median']:<10.1f}")
+                     f"{r['ours']['cpu_median']:>10.1f}/{r['llvmpipe']['cpu_median']:<10.1f} "
+                     f"{lean_text} {floor_text}")
+    return "\n".join(lines)
+
+
+def format_threads(rows: list[dict]) -> str:
+    """Speed-up from one thread to all, per stage (medians of the same frames)."""
+    lines = []
+    for r in rows:
+        scaling = r.get("threads")
+        if not scaling:
+            continue
+        n = scaling["threads"]
+        total = scaling["total"]
+        parts = ", ".join(f"{name} {v['speedup']:.2f}x ({v['1']:.2f}→{v[str(n)]:.2f})"
+                          for name, v in sorted(scaling["stages"].items(),
+                                                key=lambda kv: -kv[1]["1"]))
+        lines.append(f"{r['triangles']:>10,} {r['shading']:<8} 1→{n} threads: frame "
+                     f"{total['speedup']:.2f}x ({total['1']:.2f}→{total[str(n)]:.2f} ms); {parts}")
     return "\n".join(lines)
 
 
@@ -394,12 +455,18 @@ def write_chart(rows: list[dict], path: Path) -> None:
 
 # ----------------------------------------------------------------------------- main
 
-def run_cases(scenes: list, shadings: list[str], projection: str, size, frames: int, warmup: int) -> list[dict]:
-    """Every (scene, shading) case, ours and llvmpipe side by side."""
+def run_cases(scenes: list, shadings: list[str], projection: str, size, frames: int, warmup: int,
+              threads: bool = False) -> list[dict]:
+    """Every (scene, shading) case: ours, the GLSL oracle on llvmpipe, the lean llvmpipe row
+    (one light, indexed, culled: app.tools.lean_gl) and, for a scene with lights and closed
+    meshes, the bare numba floor (app.tools.floor, Gouraud, one light), all in this run."""
     from app.viewer.blit import Blit
+    from app.tools.floor import Floor
+    from app.tools.lean_gl import MODES as LEAN_MODES, LeanGL
     from app.tools.reference_gl import GLRenderer
 
     gl = GLRenderer(size)
+    lean = LeanGL(size)
     blit = Blit(gl.ctx)            # the viewer's upload path, on an EGL context like the window's
     rows = []
     try:
@@ -408,20 +475,39 @@ def run_cases(scenes: list, shadings: list[str], projection: str, size, frames: 
             gl.load(scene, modes=tuple(shadings))
             _progress(f"{scene.name}: {scene.triangle_count:,} triangles uploaded to llvmpipe "
                       f"in {time.perf_counter() - t:.2f} s")
+            comparable = bool(scene.lights) and projection == "perspective"
+            if comparable:
+                lean.load(scene)
+                _progress(f"{scene.name} {scene.triangle_count:,}: the numba floor ...")
+                floor = time_floor(Floor(scene, size), scene.views[0], frames, warmup)
             for shading in shadings:
                 _progress(f"{scene.name} {scene.triangle_count:,} {shading}: ours ...")
                 ours = time_ours(scene, projection, shading, size, frames, warmup, blit)
                 _progress(f"{scene.name} {scene.triangle_count:,} {shading}: llvmpipe ...")
                 ref = time_llvmpipe(gl, projection, shading, frames, warmup)
-                rows.append({"scene": scene.name, "triangles": scene.triangle_count,
-                             "shading": shading, "projection": projection, "size": list(size),
-                             "ours": ours, "ours_fps": 1e3 / ours["median"], "llvmpipe": ref,
-                             "llvmpipe_fps": 1e3 / ref["median"],
-                             "ratio": ours["median"] / ref["median"]})
+                row = {"scene": scene.name, "triangles": scene.triangle_count,
+                       "shading": shading, "projection": projection, "size": list(size),
+                       "ours": ours, "ours_fps": 1e3 / ours["median"], "llvmpipe": ref,
+                       "llvmpipe_fps": 1e3 / ref["median"],
+                       "ratio": ours["median"] / ref["median"]}
+                if comparable and shading in LEAN_MODES:
+                    lean.scene = scene
+                    row["lean"] = time_llvmpipe(lean, projection, shading, frames, warmup)
+                    row["ratio_lean"] = ours["median"] / row["lean"]["median"]
+                    row["floor"] = floor
+                    row["ratio_floor"] = ours["median"] / floor["median"]
+                if threads:
+                    _progress(f"{scene.name} {scene.triangle_count:,} {shading}: 1 thread ...")
+                    row["threads"] = thread_scaling(scene, projection, shading, size, frames,
+                                                    warmup, blit)
+                rows.append(row)
                 _progress(f"    ours {ours['median']:.2f} ms, llvmpipe {ref['median']:.2f} ms, "
-                          f"ratio {rows[-1]['ratio']:.2f}")
+                          f"ratio {rows[-1]['ratio']:.2f}"
+                          + (f", lean {row['lean']['median']:.2f} ms, floor "
+                             f"{row['floor']['median']:.2f} ms" if "lean" in row else ""))
     finally:
         blit.release()
+        lean.release()
         gl.release()
     return rows
 
@@ -438,7 +524,8 @@ def main(args) -> int:
     load_before = os.getloadavg()
     _progress("building scenes ...")
     scenes = _scenes(args)
-    rows = run_cases(scenes, args.shading, args.projection, args.size, args.frames, args.warmup)
+    rows = run_cases(scenes, args.shading, args.projection, args.size, args.frames, args.warmup,
+                     threads=not getattr(args, "no_threads", False))
 
     startup = {}
     if not args.no_startup:
@@ -481,6 +568,10 @@ def main(args) -> int:
     print()
     print("where our time goes (median ms per stage):")
     print(format_stages(rows))
+    if any("threads" in r for r in rows):
+        print()
+        print("thread scaling (median ms per stage, one thread → all):")
+        print(format_threads(rows))
     if startup:
         print()
         print(format_startup(startup))

@@ -90,8 +90,27 @@ def to_rgb8(color) -> np.ndarray:
 
 
 def fill(color: np.ndarray, rgb) -> None:
-    """Fill an (H, W, 3) image with one colour: one row, then whole rows (a length-3 inner
-    broadcast over every pixel costs ~100x more)."""
-    if color.size:
-        color[0] = to_rgb8(rgb)
-        color[1:] = color[0]
+    """Fill an (H, W, 3) image with one colour in [0, 1]."""
+    fill_bytes(color, to_rgb8(rgb))
+
+
+def fill_bytes(color: np.ndarray, rgb8) -> None:
+    """Fill an (H, W, 3) uint8 image with one colour given as 3 bytes.
+
+    A frame's colour is the first three bytes of each 4-byte pixel of ``Frame.rgbx``: then
+    the fill is one 32-bit memset over the whole frame (0.03 ms at 500 x 500, where copying
+    3 bytes in every 4 took 1–2 ms). Any other image is filled one row, then whole rows.
+    """
+    if not color.size:
+        return
+    rgb8 = np.asarray(rgb8, dtype=np.uint8).reshape(3)
+    base = color.base
+    if (isinstance(base, np.ndarray) and base.dtype == np.uint8 and base.ndim == 3
+            and base.shape == color.shape[:2] + (4,) and base.flags.c_contiguous
+            and color.strides == base.strides
+            and color.__array_interface__["data"][0] == base.__array_interface__["data"][0]):
+        word = np.array([rgb8[0], rgb8[1], rgb8[2], 255], np.uint8).view(np.uint32)[0]
+        base.view(np.uint32).fill(word)
+        return
+    color[0] = rgb8
+    color[1:] = color[0]

@@ -312,14 +312,16 @@ def _arange(n: int) -> np.ndarray:
 
 
 def clip_triangles(points, triangles, attrs, projection: str,
-                   z_min: float = 0.0) -> ClippedTriangles:
+                   z_min: float = 0.0, before_clip=None) -> ClippedTriangles:
     """Clip triangles to the canonical view volume (see the module docstring).
 
     ``attrs`` may be None (no attributes: (V, 0)). ``z_min`` is the front plane of the
     perspective volume (-1 < z_min < 0); it is ignored for the parallel one. When every
     vertex is inside, the inputs come back unchanged (no copy, and the triangles' indices are
     not even read: the rasterizer checks them), with ``source`` a read-only 0..T-1.
-    Otherwise a vertex index out of range raises ValueError.
+    Otherwise a vertex index out of range raises ValueError. ``before_clip(vertices)``, when
+    given, is called with the vertex indices of the triangles about to be clipped, before
+    their attributes are read (a shader that computes attributes lazily fills those rows).
     """
     perspective = _check_projection(projection)
     points = np.asarray(points, dtype=np.float64)       # a strided view is fine: no copy
@@ -343,6 +345,8 @@ def clip_triangles(points, triangles, attrs, projection: str,
     if todo.size == 0:
         return ClippedTriangles(points, triangles[kept], attrs, kept)
 
+    if before_clip is not None:
+        before_clip(triangles[todo].reshape(-1))
     new_points, new_attrs, new_triangles, new_source = _sutherland_hodgman(
         points, triangles, attrs, codes, todo, perspective, float(z_min))
     return ClippedTriangles(

@@ -104,13 +104,30 @@ class VisibilityBuffer:
     # (T, 3, 3) barycentric planes of the triangles drawn (core.pipeline.derivatives), set by
     # the renderer when a shader needs screen derivatives; None otherwise.
     planes: np.ndarray | None = None
+    # (H, 2) int32: per image row, the first and last column the last rasterize() may have
+    # written (first > last: none; the columns of the boxes drawn in the row's band). Outside its span a row is empty. The next frame clears only the
+    # spans and the resolve shades only them: at 1k triangles most of the 500 x 500 pixels
+    # are never touched. ``spans_known`` False (a buffer written by anyone else) makes the
+    # next rasterize() clear every row.
+    span: np.ndarray | None = None
+    spans_known: bool = False
 
     @classmethod
     def allocate(cls, width: int, height: int) -> "VisibilityBuffer":
         """A cleared buffer of ``height`` rows and ``width`` columns."""
         shape = (int(height), int(width))
-        return cls(depth=np.full(shape, -np.inf), tri=np.full(shape, -1, np.int32),
-                   b1=np.zeros(shape), b2=np.zeros(shape))
+        buffer = cls(depth=np.full(shape, -np.inf), tri=np.full(shape, -1, np.int32),
+                     b1=np.zeros(shape), b2=np.zeros(shape))
+        buffer.forget_spans()
+        return buffer
+
+    def forget_spans(self) -> None:
+        """Say that something other than :func:`rasterize` wrote into the buffer (or may
+        have): every row counts as written, so the next frame clears it whole."""
+        self.span = np.empty((self.height, 2), np.int32)
+        self.span[:, 0] = 0
+        self.span[:, 1] = self.width - 1
+        self.spans_known = False
 
     @property
     def width(self) -> int:
@@ -126,6 +143,10 @@ class VisibilityBuffer:
         self.tri.fill(-1)
         self.b1.fill(0.0)
         self.b2.fill(0.0)
+        self.forget_spans()
+        self.span[:, 0] = self.width          # every row empty
+        self.span[:, 1] = -1
+        self.spans_known = True
 
 
 # --------------------------------------------------------------------------------------------
@@ -320,7 +341,9 @@ def _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tr
 @njit(cache=True)
 def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b2,
                    count_fragments, fragments):
-    """Scan-convert triangle t (scene slot ``slot``) into the device rows of one band."""
+    """Scan-convert triangle t (scene slot ``slot``) into the device rows of one band.
+
+    Returns the columns of its box (first > last when it drew nothing)."""
     height, width = depth.shape
     x0 = np.int64(s_xy[slot, 0])
     y0 = np.int64(s_xy[slot, 1])
@@ -333,7 +356,7 @@ def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b
     j_max = min(j_max, band_last)
     area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
     if area2 == 0 or j_min > j_max:
-        return
+        return width, -1
     a0, b0, c0, bias0 = edge0
     a1, b1_, c1, bias1 = edge1
     a2, b2_, c2, bias2 = edge2
@@ -376,46 +399,58 @@ def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b
             e0 += a0 * SUBPIXEL_ONE  # one pixel to the right
             e1 += a1 * SUBPIXEL_ONE
             e2 += a2 * SUBPIXEL_ONE
+    return i_min, i_max
 
 
 @njit(cache=True)
 def _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end, depth,
-               tri, b1, b2, count_fragments, fragments):
+               tri, b1, b2, span, count_fragments, fragments):
     """Clear one band of rows, then draw into it every scene triangle that meets it, in order.
 
-    Only depth and tri are cleared: b1 and b2 mean nothing where tri is -1 and nobody reads
-    them there (half the bytes of a clear saved every frame)."""
+    Only what the last frame wrote is cleared (each row's span; the rest of the row is still
+    empty), and only depth and tri: b1 and b2 mean nothing where tri is -1 and nobody reads
+    them there. The band's new span is the columns of the boxes drawn in it: two registers
+    per band, nothing per pixel."""
     height, width = depth.shape
     first = band * rows_per_band
     last = min(height, first + rows_per_band) - 1
     for j in range(first, last + 1):
         row = height - 1 - j
-        for i in range(width):
+        for i in range(max(span[row, 0], 0), min(span[row, 1], width - 1) + 1):
             depth[row, i] = -np.inf
             tri[row, i] = -1
+        span[row, 0] = width
+        span[row, 1] = -1
     bit = np.uint16(1 << band)
     n_chunks = chunk_end.shape[0]
+    lo = width
+    hi = -1
     for chunk in range(n_chunks):
         for slot in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
             if s_bands[slot] & bit:
-                _scan_triangle(s_xy, s_zw, slot, s_tri[slot], first, last, depth, tri, b1,
-                               b2, count_fragments, fragments)
+                i_min, i_max = _scan_triangle(s_xy, s_zw, slot, s_tri[slot], first, last,
+                                              depth, tri, b1, b2, count_fragments, fragments)
+                lo = min(lo, i_min)
+                hi = max(hi, i_max)
+    for j in range(first, last + 1):
+        span[height - 1 - j, 0] = lo
+        span[height - 1 - j, 1] = hi
 
 
 @njit(cache=True, parallel=True)
 def _rast_parallel(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
-                   depth, tri, b1, b2, count_fragments, fragments):
+                   depth, tri, b1, b2, span, count_fragments, fragments):
     for band in prange(n_bands):
         _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
-                   depth, tri, b1, b2, count_fragments, fragments)
+                   depth, tri, b1, b2, span, count_fragments, fragments)
 
 
 @njit(cache=True)
 def _rast_serial(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
-                 depth, tri, b1, b2, count_fragments, fragments):
+                 depth, tri, b1, b2, span, count_fragments, fragments):
     for band in range(n_bands):
         _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
-                   depth, tri, b1, b2, count_fragments, fragments)
+                   depth, tri, b1, b2, span, count_fragments, fragments)
 
 
 # --------------------------------------------------------------------------------------------
@@ -472,8 +507,12 @@ def _run(xy_z, inv_w, triangles, width, height, out, parallel, n_bands, fragment
                     scene.bands, scene.xy, scene.zw, scene.chunk_end)
         if bad:
             raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
+        if not out.spans_known or out.span is None or out.span.shape != (height, 2):
+            out.forget_spans()
+        out.spans_known = False             # until the rast has run to its end
         rast(n_bands, rows_per_band, n_triangles, scene.tri, scene.bands, scene.xy, scene.zw,
-             scene.chunk_end, out.depth, out.tri, out.b1, out.b2, count, frag)
+             scene.chunk_end, out.depth, out.tri, out.b1, out.b2, out.span, count, frag)
+        out.spans_known = True
     return out
 
 

@@ -56,8 +56,9 @@ def _sample_viewport(vp, pixel_offset):
 
 
 # From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,
-# the same pixels): below it the numpy stages take a few ms and need no numba at start-up.
-COMPILED_LINES_FROM = 5_000
+# the same pixels): below it the numpy stages need no numba at start-up (the house: 15 edges).
+# speed (issue 14): at 5,000 a 1k-triangle wireframe took 4.4 ms CPU in numpy, 0.85 compiled.
+COMPILED_LINES_FROM = 256
 
 
 def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, timer,
@@ -114,7 +115,7 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
         stats["culled"] = int(len(all_triangles) - len(kept))
     timer.lap("cull back faces")
 
-    inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context)
+    inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context, lazy=True)
     stats["computed"].extend(inputs.computed)
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
@@ -122,7 +123,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     points = stages.transform_affine(n, positions)
     timer.lap("normalize", canonical_points=points)
 
-    clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min)
+    clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min,
+                                    before_clip=inputs.before_clip)
     source = clipped.source if kept is None else kept[clipped.source]
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))
@@ -140,6 +142,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     vis = rasterize(device, inv_w, clipped.triangles, width, height,
                     out=context.buffer("visibility", (width, height),
                                        lambda: stages.VisibilityBuffer.allocate(width, height)))
+    if rasterize is not stages.rasterize:
+        vis.forget_spans()       # speed: the edge rasterizer clears and shades only its spans
     stats["allocated"].append("depth")
     vis.planes = None
     if stages.shade.get_shader(shading).needs_derivatives:

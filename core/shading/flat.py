@@ -8,7 +8,8 @@ from numba import njit, prange
 
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
-from core.shading.shade import PARALLEL_ITEMS, ShadeInput, all_face_normals
+from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_face_normals, covered_spans,
+                                 visible_items)
 
 
 @njit(cache=True)
@@ -41,25 +42,31 @@ def _phong_faces_serial(positions, triangles, faces, normals, face_surface, surf
 
 
 def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
-    """One evaluation per face, at its centroid with its face normal (FvDFH 16.2.3)."""
-    normals = all_face_normals(s, scene, meshes)
+    """One evaluation per face, at its centroid with its face normal (FvDFH 16.2.3).
+
+    Lazy (the z-buffer's way): no face is lit here; the pixel step lights the visible ones."""
+    s.normals = all_face_normals(s, scene, meshes)
     s.face_rgb = np.zeros((len(s.triangles), 3))          # faces not in s.faces stay unlit
-    kernel = _phong_faces_parallel if len(s.faces) >= PARALLEL_ITEMS else _phong_faces_serial
-    kernel(s.positions, s.triangles, s.faces, normals, s.face_surface, s.surfaces, s.lights,
-           s.ambient, s.eye, s.halfway, s.face_rgb)
     s.computed += ["face normals", "illuminate faces"]
+    if s.lazy:
+        s.lit = np.zeros(len(s.triangles), np.uint8)
+        return
+    _light(s, s.faces)
+
+
+def _light(s: ShadeInput, faces) -> None:
+    kernel = _phong_faces_parallel if len(faces) >= PARALLEL_ITEMS else _phong_faces_serial
+    kernel(s.positions, s.triangles, faces, s.normals, s.face_surface, s.surfaces, s.lights,
+           s.ambient, s.eye, s.halfway, s.face_rgb)
 
 
 @njit(cache=True, parallel=True)
-def _resolve_flat(tri, source, face_rgb, background8, out):
-    height, width = tri.shape
-    for row in prange(height):
-        for col in range(width):
+def _resolve_flat(tri, span, source, face_rgb, out):
+    """Each covered pixel of each row's span gets its face's colour (the rest is background)."""
+    for row in prange(tri.shape[0]):
+        for col in range(span[row, 0], span[row, 1] + 1):
             t = tri[row, col]
-            if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-            else:
+            if t >= 0:
                 f = source[t]
                 for c in range(3):
                     out[row, col, c] = quantize(face_rgb[f, c])
@@ -67,8 +74,10 @@ def _resolve_flat(tri, source, face_rgb, background8, out):
 
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
-    _resolve_flat(np.ascontiguousarray(vis.tri, dtype=np.int32), source,
-                  np.ascontiguousarray(s.face_rgb, dtype=np.float64), background8, out)
+    if s.lazy:                          # light the faces that some pixel shows
+        _light(s, visible_items(vis, source.reshape(-1, 1), 1, s.lit))
+    _resolve_flat(np.ascontiguousarray(vis.tri, dtype=np.int32), covered_spans(vis), source,
+                  np.ascontiguousarray(s.face_rgb, dtype=np.float64), out)
 
 
 register_shader(Shader("flat", _prepare_flat, _pixel, description="one colour per face"))

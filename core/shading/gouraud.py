@@ -8,18 +8,32 @@ from numba import njit, prange
 
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
-from core.shading.shade import PARALLEL_ITEMS, ShadeInput, all_vertex_normals
+from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_vertex_normals, covered_spans,
+                                 unlit, visible_items)
 
 
 def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
-    """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4)."""
+    """The model at each vertex; the clipper and the resolve interpolate RGB (FvDFH 16.2.4).
+
+    Lazy (the z-buffer's way): no vertex is lit here; the clipper lights the vertices of the
+    triangles it cuts (``before_clip``) and the pixel step those of the visible triangles."""
     normals = all_vertex_normals(s, scene, meshes, weighting)
     s.vertex_attrs = np.zeros((len(s.positions), 3))      # vertices no face uses stay unlit
-    vertices = _used_vertices(s.triangles, s.faces, len(s.positions))
-    kernel = _phong_vertices_parallel if len(vertices) >= PARALLEL_ITEMS else _phong_vertices_serial
-    kernel(s.positions, normals, vertices, s.vertex_surface, s.surfaces, s.lights, s.ambient,
-           s.eye, s.halfway, s.vertex_attrs)
     s.computed.append("illuminate vertices")
+    if s.lazy:
+        s.normals = normals
+        s.lit = np.zeros(len(s.positions), np.uint8)
+        s.before_clip = lambda vertices: _light(s, unlit(vertices, s.lit), s.vertex_attrs)
+        return
+    s.normals = normals
+    _light(s, _used_vertices(s.triangles, s.faces, len(s.positions)), s.vertex_attrs)
+
+
+def _light(s: ShadeInput, vertices, out) -> None:
+    """The model at ``vertices`` into the rows of ``out`` (their first rows are the mesh's)."""
+    kernel = _phong_vertices_parallel if len(vertices) >= PARALLEL_ITEMS else _phong_vertices_serial
+    kernel(s.positions, s.normals, vertices, s.vertex_surface, s.surfaces, s.lights, s.ambient,
+           s.eye, s.halfway, out)
 
 
 @njit(cache=True)
@@ -59,15 +73,13 @@ def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surface
 
 
 @njit(cache=True, parallel=True)
-def _resolve_gouraud(tri, b1, b2, triangles, rgb, background8, out):
-    height, width = tri.shape
-    for row in prange(height):
-        for col in range(width):
+def _resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
+    """Interpolate the vertex colours over each row's covered span (the rest is background)."""
+    for row in prange(tri.shape[0]):
+        for col in range(span[row, 0], span[row, 1] + 1):
             t = tri[row, col]
             if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-                continue
+                continue                # background, filled before
             i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
             w1, w2 = b1[row, col], b2[row, col]
             w0 = 1.0 - w1 - w2
@@ -77,10 +89,12 @@ def _resolve_gouraud(tri, b1, b2, triangles, rgb, background8, out):
 
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
+    if s.lazy:      # light the mesh vertices that visible triangles use (new ones are done)
+        _light(s, visible_items(vis, triangles, 3, s.lit), attrs)
     _resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
                      np.ascontiguousarray(vis.b1, dtype=np.float64),
-                     np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs,
-                     background8, out)
+                     np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
+                     triangles, attrs, out)
 
 
 register_shader(Shader("gouraud", _prepare_gouraud, _pixel, varyings=("rgb",), width=3,

@@ -9,7 +9,8 @@ from numba import njit, prange
 
 from core.shading.illumination import phong_point, quantize, unit3
 from core.shading.registry import Shader, register_shader
-from core.shading.shade import ShadeInput, all_vertex_normals, cached, scene_arrays
+from core.shading.shade import (ShadeInput, all_vertex_normals, cached, covered_spans,
+                                 scene_arrays)
 
 
 def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
@@ -24,16 +25,14 @@ def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
 
 
 @njit(cache=True, parallel=True)
-def _resolve_phong(tri, b1, b2, triangles, attrs, source, face_surface, surfaces, lights,
-                   ambient, eye, halfway, background8, out):
-    height, width = tri.shape
-    for row in prange(height):
-        for col in range(width):
+def _resolve_phong(tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces, lights,
+                   ambient, eye, halfway, out):
+    """The model at every covered pixel of each row's span (the rest is background)."""
+    for row in prange(tri.shape[0]):
+        for col in range(span[row, 0], span[row, 1] + 1):
             t = tri[row, col]
             if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-                continue
+                continue                # background, filled before
             i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
             w1, w2 = b1[row, col], b2[row, col]
             w0 = 1.0 - w1 - w2
@@ -55,9 +54,9 @@ def _resolve_phong(tri, b1, b2, triangles, attrs, source, face_surface, surfaces
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
     _resolve_phong(np.ascontiguousarray(vis.tri, dtype=np.int32),
                    np.ascontiguousarray(vis.b1, dtype=np.float64),
-                   np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, source,
-                   s.face_surface, s.surfaces, s.lights, s.ambient, s.eye, s.halfway,
-                   background8, out)
+                   np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
+                   triangles, attrs, source, s.face_surface, s.surfaces, s.lights, s.ambient,
+                   s.eye, s.halfway, out)
 
 
 register_shader(Shader("phong", _prepare_phong, _pixel, varyings=("normal", "position"), width=6,
