@@ -81,6 +81,8 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="where screenshots go, and the PNGs when there is no display "
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
+    v.add_argument("--renderer", choices=("zbuffer", "raytrace"), default=None,   # issue 12
+                   help="draw with the z-buffer (default) or the ray tracer (progressive)")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
@@ -100,6 +102,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     r.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
+    _renderer_arguments(r)                    # issue 12
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -136,6 +139,28 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
 
     sub.add_parser("warmup", help="compile every kernel once (make does it), with progress")
     return p
+
+
+def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
+    """--renderer and the ray tracer's settings (issue 12); None keeps the defaults."""
+    from core.raytrace.whitted import SHADOW_MODES
+    from core.renderers import renderer_names
+    parser.add_argument("--renderer", choices=renderer_names(), default=None,
+                        help="zbuffer (default), raycast, or raytrace (Whitted: shadows, "
+                             "mirrors, glass)")
+    parser.add_argument("--samples", type=int, default=None, help="samples per pixel (1, 4, 9, 16 ...)")
+    parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
+                        help="raytrace: what an object between a point and a light does "
+                             "(default transmit: attenuate by k_t)")
+    parser.add_argument("--max-depth", type=int, default=None,
+                        help="raytrace: the ray tree's depth limit (default 7)")
+    parser.add_argument("--fresnel", action="store_true", default=None,
+                        help="raytrace: Schlick's Fresnel weighting of k_r and k_t")
+
+
+def _renderer_overrides(args) -> dict:
+    return {"renderer": args.renderer, "samples": args.samples, "shadows": args.shadows,
+            "max_depth": args.max_depth, "fresnel": args.fresnel}
 
 
 def _course_options(p: argparse.ArgumentParser) -> None:
@@ -217,7 +242,8 @@ def _dispatch(args) -> int:
         return viewer_main(args.scene, args.size, out_dir=args.out,
                            options={"rasterizer": args.rasterizer,
                                     "keep_aspect": args.keep_aspect,
-                                    "course_tri": args.course_tri})
+                                    "course_tri": args.course_tri,
+                                    "renderer_name": args.renderer})
     if args.command == "render":
         return _render(args)
     if args.command == "matrices":
@@ -269,9 +295,15 @@ def _render(args) -> int:
     from core.settings import RenderSettings
     texture_options = _texture_options(scene, args)       # issue 11
     view = scene.views[index]
-    settings = RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading,
-                                        size=args.size, rasterizer=args.rasterizer,
-                                        keep_aspect=args.keep_aspect, **texture_options)
+    try:
+        settings = RenderSettings.for_scene(scene, projection=args.projection,
+                                            shading=args.shading, size=args.size,
+                                            rasterizer=args.rasterizer,
+                                            keep_aspect=args.keep_aspect, **texture_options,
+                                            **_renderer_overrides(args))
+    except ValueError as error:            # e.g. --samples 0 (issue 12's options)
+        print(f"error: {error}", file=sys.stderr)
+        return 2
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)

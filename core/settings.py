@@ -40,6 +40,7 @@ SOLID_SHADINGS = SHADINGS[1:]          # the modes that fill triangles
 SAMPLE_PATTERNS = ("regular", "jittered")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
+SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace")   # a scene file's `renderer` (core.renderers)
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
@@ -100,7 +101,8 @@ class RenderSettings:
         """The scene's own defaults (projection, shading, size), then ``overrides``; an
         override of ``None`` keeps the scene's value."""
         values = {"projection": scene.projection, "shading": scene.shading, "size": scene.size,
-                  "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect}
+                  "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect,
+                  "renderer": getattr(scene, "renderer", "zbuffer")}
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)
 

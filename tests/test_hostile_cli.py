@@ -176,3 +176,16 @@ def test_render_time_draws_an_animated_scene_with_its_particles(tmp_path):
         images[name] = np.asarray(Image.open(out)).astype(int)
     spray = lambda im: ((im[:, :, 2] > 180) & (im[:, :, 0] > 120)).sum()  # noqa: E731
     assert spray(images["still"]) < 20 and spray(images["moment"]) > 10 * spray(images["still"]) + 100
+
+
+def test_a_view_only_parallel_can_draw_is_explained_by_every_command(tmp_path, capsys):
+    views = tmp_path / "z.views"
+    views.write_text("0 0 0\n0 0 1\n0 1 0\n-1 1 -1 1\n0 0 5\n1 0.9999999999999999\n")
+    for argv in (("matrices", str(views), "--projection", "perspective"),
+                 ("render", str(views), "--projection", "perspective", "--shading", "flat",
+                  "--size", "8x8", "--out", str(tmp_path / "p.png"))):
+        status, err = run(capsys, *argv)
+        assert status == 1 and "z_min = -1 rounds to -1" in err
+    status, _ = run(capsys, "render", str(views), "--projection", "parallel", "--size", "8x8",
+                    "--out", str(tmp_path / "q.png"))
+    assert status == 0 and (tmp_path / "q.png").exists()

@@ -324,3 +324,14 @@ def test_a_view_neither_projection_can_draw_is_refused_at_load(tmp_path):
     scene = load_scene(path)
     assert not scene.views and "the normalizing transformation carries points" in \
         scene.view_messages[0]
+
+
+def test_the_line_locator_finds_the_last_of_thousands_of_views():
+    table = ('[[view]]\nvrp = [0, 0, 0]\nvpn = [0, 0, 1]\nvup = [0, 1, 0]\n'
+             'window = [-2, 2, -2, 2]\nprp = [0, 0, 5]\nfront = 2\nback = -2\n')
+    text = CUBE + table * 3000 + table.replace("front = 2", 'front = "near"')
+    error = refused(read_scene_file, text, "many.toml")
+    assert error.line == 2 + 8 * 3000 + 7
+    assert "view[3001].front: expected a number" in error.reason
+    scene = read_scene_file(CUBE + table * 3000, "many.toml")
+    assert scene.views[-1].label == "many.toml: view 3000 (line 23995)"

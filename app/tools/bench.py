@@ -93,6 +93,8 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
                         help="skip the thread-scaling table (every case again on one thread)")
     parser.add_argument("--no-animation", action="store_true",
                         help="skip the animation row (the fountain on 1 process and 2 workers)")
+    parser.add_argument("--renderer", choices=("zbuffer", "raytrace"), default="zbuffer",
+                        help="raytrace: the ray tracer's rows beside Embree (issue 12)")
 
 
 def _progress(text: str) -> None:
@@ -514,6 +516,8 @@ def main(args) -> int:
     if args.frames < 1 or args.warmup < 0:
         print("error: --frames must be at least 1 and --warmup at least 0", file=sys.stderr)
         return 2
+    if args.renderer == "raytrace":
+        return raytrace_bench(args)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
@@ -579,3 +583,136 @@ def main(args) -> int:
     print(f"wrote {out / 'bench.json'} and {out / 'bench.png'} "
           f"({time.perf_counter() - t_start:.0f} s in all)")
     return 0
+
+
+# ----------------------------------------------------------------------------- the ray tracer (issue 12)
+
+def _bunny_file() -> Path | None:
+    for folder in ROOT.parents:
+        candidate = folder / "shared" / "data" / "stanford-bunny" / "bun_zipper.ply"
+        if candidate.exists():
+            return candidate
+    return None
+
+
+def _raytrace_scenes(args) -> list:
+    """``[(label, scene, view)]``: the classic Whitted scene and the glass bunny (or --scene)."""
+    from core.scene.formats import load_scene
+    from core.scene.formats.scenefile import read_scene_file
+    if args.scene:
+        scene = load_scene(args.scene, size=args.size)
+        return [(scene.name, scene, scene.views[0])] if scene.views else []
+    scenes = [("whitted", load_scene(str(ROOT / "scenes" / "whitted.toml")))]
+    bunny = _bunny_file()
+    if bunny is None:
+        _progress("the Stanford bunny is not on this machine: its rows are left out")
+    else:       # the scene file's relative path starts from the bunny's shared folder
+        path = ROOT / "scenes" / "glass_bunny.toml"
+        text = path.read_text().replace("../../shared/data/stanford-bunny/", "")
+        scenes.append(("glass bunny", read_scene_file(text, str(path), bunny.parent)))
+    return [(label, scene, scene.views[0]) for label, scene in scenes]
+
+
+def _median_seconds(run, frames: int, warmup: int) -> tuple[float, float]:
+    """Median wall and CPU seconds (all threads of this process) of ``run()``. On a machine
+    shared with other work the wall time grows with the load; the CPU time hardly does, so
+    CPU seconds / cores estimates the wall time on an idle machine."""
+    for _ in range(warmup):
+        run()
+    walls, cpus = [], []
+    for _ in range(frames):
+        start, cpu = time.perf_counter(), time.process_time()
+        run()
+        walls.append(time.perf_counter() - start)
+        cpus.append(time.process_time() - cpu)
+    return float(np.median(walls)), float(np.median(cpus))
+
+
+def _embree_rays_per_second(scene, origins, directions, frames: int, warmup: int):
+    """Embree's closest-hit ``(rays per wall second, rays per CPU second)`` on the scene's
+    triangles (float32), or None."""
+    try:
+        from embreex import rtcore_scene
+        from embreex.mesh_construction import TriangleMesh
+    except ImportError:
+        return None
+    from core.raytrace.geometry import _traced_meshes
+    meshes = _traced_meshes(scene)
+    if not meshes:
+        return None                                      # spheres and planes only
+    corners = np.concatenate([m.positions[m.triangles] for m in meshes]).astype(np.float32)
+    oracle = rtcore_scene.EmbreeScene()
+    TriangleMesh(oracle, corners)
+    o32, d32 = origins.astype(np.float32), directions.astype(np.float32)
+    wall, cpu = _median_seconds(lambda: oracle.run(o32, d32, output=1), frames, warmup)
+    return len(origins) / wall, len(origins) / cpu
+
+
+def raytrace_bench(args) -> int:
+    """Primary visibility rays/s (ours and Embree's, same rays, same run) and full Whitted
+    frames/s at ``--size``, for the classic Whitted scene and the glass bunny."""
+    from core.raytrace import bvh, geometry, whitted
+    from core.raytrace.renderer import TraceOptions, prepare, primary, render_raw
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    load_before = os.getloadavg()
+    frames, warmup = max(1, min(args.frames, 5)), max(1, args.warmup)
+    rows = []
+    for label, scene, view in _raytrace_scenes(args):
+        _progress(f"{label}: build, primary rays, Whitted frames ...")
+        bvh.build(np.eye(3), [[0, 1, 2]])                 # load the compiled build first
+        geometry._cache.pop(scene, None)                  # time the build from nothing
+        setup = prepare(scene, view, args.projection, args.size, TraceOptions())
+        build = setup.packing.build
+        origins, directions, t_min, t_max = primary(setup, 0, args.size[1], 0, args.size[0])
+        live = np.isfinite(t_min)
+        o, d = np.ascontiguousarray(origins[live]), np.ascontiguousarray(directions[live])
+        lo, hi = np.ascontiguousarray(t_min[live]), np.ascontiguousarray(t_max[live])
+        kind, index, t_hit = np.empty(len(o), np.int64), np.empty(len(o), np.int64), np.empty(len(o))
+        primary_s, primary_cpu = _median_seconds(lambda: whitted.visible_many(
+            setup.packing.packed, o, d, lo, hi, kind, index, t_hit), frames, warmup)
+        frame_s, frame_cpu = _median_seconds(lambda: render_raw(prepare(scene, view, args.projection,
+                                                             args.size, TraceOptions())),
+                                  frames, warmup)
+        counted = prepare(scene, view, args.projection, args.size, TraceOptions())
+        render_raw(counted)
+        embree = _embree_rays_per_second(scene, o, d, frames, warmup)
+        rows.append({"scene": label, "triangles": build.triangles,
+                     "bvh_build_ms": build.seconds * 1e3, "bvh_bytes": build.bytes,
+                     "primary_rays": int(live.sum()),
+                     "primary_rays_per_s": len(o) / primary_s,
+                     "primary_rays_per_cpu_s": len(o) / primary_cpu,
+                     "embree_rays_per_s": embree[0] if embree else None,
+                     "embree_rays_per_cpu_s": embree[1] if embree else None,
+                     "whitted_frame_ms": frame_s * 1e3, "whitted_fps": 1.0 / frame_s,
+                     "whitted_frame_cpu_ms": frame_cpu * 1e3,
+                     "rays_per_frame": {k: int(v) for k, v in zip(
+                         ("primary", "shadow", "reflected", "refracted", "TIR", "cut by depth",
+                          "cut adaptive"), counted.counts)}})
+    report = {"size": list(args.size), "projection": args.projection, "frames": frames,
+              "rows": rows, "loadavg_before": list(load_before),
+              "loadavg_after": list(os.getloadavg()), "cpus": os.cpu_count()}
+    (out / "bench_raytrace.json").write_text(json.dumps(report, indent=2))
+    print(f"ray tracer, {args.size[0]} x {args.size[1]} {args.projection}, median of {frames}; "
+          f"{os.cpu_count()} CPUs, load average {load_before[0]:.1f} before, "
+          f"{report['loadavg_after'][0]:.1f} after")
+    cores = os.cpu_count() or 1
+    print(f"{'scene':<14}{'triangles':>10}{'BVH build':>11}{'primary Mray/s':>16}"
+          f"{'Embree Mray/s':>15}{'ratio':>7}{'Whitted frame':>15}{'fps':>7}"
+          f"{'frame CPU':>11}{'CPU/cores':>11}")
+    for r in rows:
+        embree = r["embree_rays_per_s"]
+        print(f"{r['scene']:<14}{r['triangles']:>10}{r['bvh_build_ms']:>9.0f}ms"
+              f"{r['primary_rays_per_s'] / 1e6:>16.2f}"
+              f"{(embree / 1e6 if embree else float('nan')):>15.2f}"
+              f"{(embree / r['primary_rays_per_s'] if embree else float('nan')):>7.2f}"
+              f"{r['whitted_frame_ms']:>13.0f}ms{r['whitted_fps']:>7.2f}"
+              f"{r['whitted_frame_cpu_ms']:>9.0f}ms{r['whitted_frame_cpu_ms'] / cores:>9.0f}ms")
+        if embree:
+            print(f"{'':<14}per CPU second: ours {r['primary_rays_per_cpu_s'] / 1e6:.2f} Mray, "
+                  f"Embree {r['embree_rays_per_cpu_s'] / 1e6:.2f} Mray (ratio "
+                  f"{r['embree_rays_per_cpu_s'] / r['primary_rays_per_cpu_s']:.2f})")
+        print(f"{'':<14}rays per frame: " + ", ".join(f"{k} {v}" for k, v in r["rays_per_frame"].items()))
+    print(f"wrote {out / 'bench_raytrace.json'}")
+    return 0
+

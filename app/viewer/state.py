@@ -13,6 +13,12 @@ picture changed, and never for a zero-sized (minimised) framebuffer: at once
 Views are numbered by their position in the file (``core.scene.view_numbers``): the window
 steps over invalid ones and says "view 7 of 20 (6 invalid)".
 
+Beyond the course's settings it holds the renderer (``"zbuffer"`` or ``"raytrace"``: a
+ray-traced still is drawn progressively, :mod:`app.viewer.progressive`), the texture filter and
+whether bump maps are used (issue 11; in the bump demo's scene also the demo's map, which its
+clicks change), and for an animated scene its :class:`app.viewer.playback.Playback` (issue 13:
+the moment shown, playing or paused, the speed) and whether the keyed camera is the view.
+
 No GL and no window library here, so everything about it is testable without a display.
 """
 
@@ -120,6 +126,12 @@ def compiling() -> bool:
     return _compiling.is_set()
 
 
+def bump_demos(scene) -> list:
+    """The bump demo's materials on ``scene`` (empty elsewhere)."""
+    from core.texture.demo_scene import demo_materials
+    return demo_materials(scene)
+
+
 def reader_errors() -> tuple[type[BaseException], ...]:
     """What a failed open raises: the readers' own error, and the OS's for unreadable paths."""
     from core.scene.formats import ReaderError
@@ -153,6 +165,12 @@ class ViewerState:
     compile_notice_after: float = 0.5
     _modes_rendered: set = field(default_factory=set, repr=False)
     context: object = None          # the core.context.RenderContext of this window's frames
+    renderer_name: str = ""         # RenderSettings.renderer: "zbuffer" | "raytrace" (the menu's)
+    bump: bool = True               # bump and normal maps perturb the normal (the demo: Phong)
+    bump_map: int = 0               # the bump demo's height map B(x, y), 0..3
+    playback: object = None         # app.viewer.playback.Playback of an animated scene, or None
+    keyed_view: bool = False        # an animated scene: show the keyed camera (not a file view)
+    frame_partial: bool = False     # the frame shown is a ray-traced one still being refined
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -175,6 +193,21 @@ class ViewerState:
             self.rasterizer = getattr(s, "rasterizer", "edge")
         if not keep_settings or self.keep_aspect is None:
             self.keep_aspect = bool(getattr(s, "keep_aspect", False))
+        if not keep_settings or not self.renderer_name:
+            self.renderer_name = getattr(s, "renderer", None) or "zbuffer"
+        demo = bump_demos(s)
+        if demo:
+            self.bump_map, self.bump = int(demo[0].bump_map), bool(demo[0].bump)
+        elif not keep_settings:
+            self.bump = True
+        from core.animation.keys import animation_of
+        animation = animation_of(s)
+        if animation is None:
+            self.playback, self.keyed_view = None, False
+        else:
+            from app.viewer.playback import Playback
+            self.playback = Playback(animation)
+            self.keyed_view = animation.view is not None
 
     @classmethod
     def open(cls, source: str | Path, size: tuple[int, int] | None = None,
@@ -192,17 +225,52 @@ class ViewerState:
 
     @property
     def view_number(self) -> int:
-        """The current view's position in its file (from 1), 0 when there is none."""
+        """The current view's position in its file (from 1), 0 when there is none (or when
+        the animation's keyed camera is shown)."""
+        if self.keyed_view:
+            return 0
         return view_numbers.file_number(self.scene, self.view_index) if self.view_count else 0
 
     @property
     def view_label(self) -> str:
-        """``"view 7 of 20 (6 invalid)"``: positions in the file, or why there is nothing."""
+        """``"view 7 of 20 (6 invalid)"``: positions in the file, or why there is nothing;
+        ``"the keyed view"`` for an animation's moving camera."""
+        if self.keyed_view:
+            return f"the keyed view (then the file's {self.view_count})"
         return view_numbers.label(self.scene, self.view_index)
 
     @property
     def view(self):
+        if self.keyed_view:
+            return self.playback.animation.view_at(self.playback.time)
         return self.scene.views[self.view_index] if self.view_count else None
+
+    @property
+    def animated(self) -> bool:
+        return self.playback is not None
+
+    @property
+    def playing(self) -> bool:
+        return self.playback is not None and self.playback.playing
+
+    @property
+    def has_textures(self) -> bool:
+        """Has a mesh of the scene a texture, bump, normal or environment map?"""
+        from core.texture.material import maps_of
+        return any(maps_of(m.material) is not None for m in self.scene.meshes)
+
+    @property
+    def is_bump_demo(self) -> bool:
+        """Is this the bump demo's scene (J3DPanel's clicks apply)?"""
+        return bool(bump_demos(self.scene))
+
+    @property
+    def bump_label(self) -> str | None:
+        """The demo's text: ``"Bump: B(x,y) = …"`` or ``"Phong"`` (None elsewhere)."""
+        if not self.is_bump_demo:
+            return None
+        from core.texture.demo_scene import label
+        return f"Bump: {label(self.bump_map)}" if self.bump else "Phong"
 
     def settings(self):
         """The :class:`core.settings.RenderSettings` of the next frame."""
@@ -211,7 +279,8 @@ class ViewerState:
                                         shading=self.shading, size=self.size,
                                         rasterizer=self.rasterizer,
                                         keep_aspect=bool(self.keep_aspect),
-                                        texture_filter=self.texture_filter)
+                                        renderer=self.renderer_name,
+                                        texture_filter=self.texture_filter, bump=self.bump)
 
     @property
     def invalid_messages(self) -> list[str]:
@@ -242,8 +311,11 @@ class ViewerState:
         """One log line for the last frame: which view, settings, size and time."""
         label = self.view.label if self.view_count else "-"
         message = getattr(self.frame, "message", None)
+        stats = getattr(self.frame, "stats", None) or {}
+        moment = f" t={stats['time']:.3f}" if "time" in stats else ""
         return (f"frame {self.frame_count}: {self.view_label} ({label}) "
                 f"projection={self.projection} shading={self.shading} "
+                f"renderer={self.renderer_name} filter={self.texture_filter}{moment} "
                 f"rasterizer={self.rasterizer} aspect={'kept' if self.keep_aspect else 'stretched'} "
                 f"size={self.size[0]}x{self.size[1]} render={self.frame_seconds * 1e3:.1f}ms"
                 + (f" message={message!r}" if message else ""))
@@ -261,16 +333,78 @@ class ViewerState:
         self._step_view(-1)
 
     def _step_view(self, step: int) -> None:
-        if self.view_count:
-            self.view_index = (self.view_index + step) % self.view_count
-            self.dirty = True
+        """Next / previous view; an animation with a keyed camera has it before the file's
+        views (keyed, 1, 2, …, keyed)."""
+        keyed = self.playback is not None and self.playback.animation.view is not None
+        positions = ([-1] if keyed else []) + list(range(self.view_count))
+        if not positions:
+            return
+        here = positions.index(-1 if self.keyed_view else self.view_index)
+        there = positions[(here + step) % len(positions)]
+        self.keyed_view = there < 0
+        if there >= 0:
+            self.view_index = there
+        self.dirty = True
 
     def set_view(self, index: int) -> None:
         if not 0 <= index < max(self.view_count, 1):
             raise ValueError(f"view index must be in 0..{self.view_count - 1}, not {index}")
-        if index != self.view_index:
-            self.view_index = index
+        if index != self.view_index or self.keyed_view:
+            self.view_index, self.keyed_view = index, False
             self.dirty = True
+
+    # -- issue 12: the renderer; issue 11: texture filter and the bump demo ------------------
+    def set_renderer(self, name: str) -> None:
+        """``"zbuffer"`` or ``"raytrace"`` (any registered renderer)."""
+        from core.renderers import renderer_names
+        self._set("renderer_name", name, renderer_names())
+
+    def next_texture_filter(self) -> str:
+        """The texture filter after this one (nearest, bilinear, trilinear, anisotropic)."""
+        from core.texture.modes import FILTERS
+        names = tuple(FILTERS)
+        self.set_texture_filter(names[(names.index(self.texture_filter) + 1) % len(names)])
+        return self.texture_filter
+
+    def set_bump(self, on: bool) -> None:
+        if bool(on) != self.bump:
+            self.bump, self.dirty = bool(on), True
+
+    def next_bump_map(self) -> int:
+        """The demo's next height map (0 → 1 → 2 → 3 → 0), as its other mouse buttons do."""
+        from core.texture.demo_scene import MAPS
+        self.bump_map, self.dirty = (self.bump_map + 1) % MAPS, True
+        return self.bump_map
+
+    # -- issue 13: playing an animated scene -------------------------------------------------
+    def toggle_play(self, now: float) -> None:
+        if self.playback is not None:
+            self.playback.toggle(now)
+            self.dirty = True
+
+    def step_frame(self, frames: int) -> None:
+        if self.playback is not None:
+            self.playback.step(frames)
+            self.dirty = True
+
+    def seek(self, t: float, now: float | None = None) -> None:
+        if self.playback is not None and float(t) != self.playback.time:
+            self.playback.seek(t, now)
+            self.dirty = True
+
+    def set_speed(self, speed: float) -> None:
+        if self.playback is not None:
+            self.playback.set_speed(speed)
+
+    def tick(self, now: float, busy: bool) -> bool:
+        """While playing: move time on (the wall clock times the speed) unless the last frame
+        asked for is still being drawn (``busy``: the picture then skips ahead)."""
+        if self.playback is None or busy or not self.renderable:
+            return False
+        if self.playback.tick(now):
+            self.dirty = True
+            return True
+        return False
 
     def set_projection(self, projection: str) -> None:
         self._set("projection", projection, PROJECTIONS)
@@ -295,16 +429,17 @@ class ViewerState:
     # -- issue 11: the bump demo's mouse (J3DPanel): left click toggles bump/Phong, any other
     # button cycles the height maps. Only in a scene with the demo's material.
     def demo_click(self, left: bool) -> str | None:
-        """The demo's click; returns its label, or None (the click keeps its usual meaning)."""
-        from core.texture.demo_scene import apply_demo_options, demo_materials
-        demos = demo_materials(self.scene)
-        if not demos:
+        """The demo's click; returns its label, or None (the click keeps its usual meaning).
+        The demo's material is set now and again by the next frame's job (on the worker's
+        thread, so that a frame never sees it change half-way)."""
+        if not self.is_bump_demo:
             return None
-        demo = demos[0]
-        bump, bump_map = (not demo.bump, demo.bump_map) if left else \
-            (demo.bump, demo.bump_map + 1 if demo.bump_map + 1 < 4 else 0)
-        self.dirty = True
-        return apply_demo_options(self.scene, bump_map, bump)
+        if left:
+            self.set_bump(not self.bump)
+        else:
+            self.next_bump_map()
+        from core.texture.demo_scene import apply_demo_options
+        return apply_demo_options(self.scene, self.bump_map, self.bump)
     # --
 
     def set_keep_aspect(self, keep: bool) -> None:
@@ -366,14 +501,53 @@ class ViewerState:
 
     # -- frames ------------------------------------------------------------------------------
     def _job(self):
-        """What the next frame needs: a callable that renders it, and a short description."""
+        """What the next frame needs: ``run(control=None)`` that renders it (a
+        :class:`app.viewer.worker.Control` lets it report progress, hand over pictures on the
+        way and stop when superseded), and a short description.
+
+        An animated scene draws the moment shown (particles and all); a ray-traced still is
+        drawn progressively; everything else is one ``core.render``. The bump demo's map and
+        mode are set on its material here, on the thread that renders.
+        """
         scene, view, settings, renderer = self.scene, self.view, self.settings(), self.renderer
         if self.course_tri and view is not None:
             from core.scene.course_tri import course_tri_scene
             scene = course_tri_scene(scene, view)
         what = f"{self.view_label}, {self.projection}, {self.shading}"
         context = self.context
-        return (lambda: renderer(scene, view, settings, context)), what
+        demo = (self.bump_map, self.bump) if self.is_bump_demo else None
+        playback = self.playback
+
+        def prepare():
+            if demo is not None:
+                from core.texture.demo_scene import apply_demo_options
+                apply_demo_options(scene, *demo)
+
+        if playback is not None:
+            from app.viewer.playback import render_animated
+            t = playback.time
+            # render_at numbers the keyed camera (when there is one) before the file's views
+            keyed = 1 if playback.animation.view is not None else 0
+            index = 0 if self.keyed_view else self.view_index + keyed
+            what = f"t = {t:.2f} s, {what}"
+
+            def run(control=None):
+                prepare()
+                frame = render_animated(playback.animation, t, settings, context, index, control)
+                frame.stats["time"] = t           # the moment drawn (the clock moves on)
+                return frame
+        elif settings.renderer == "raytrace" and view is not None:
+            from app.viewer.progressive import trace_progressively
+            what = f"{what}, ray traced"
+
+            def run(control=None):
+                prepare()
+                return trace_progressively(scene, view, settings, context, renderer, control)
+        else:
+            def run(control=None):
+                prepare()
+                return renderer(scene, view, settings, context)
+        return run, what
 
     def update(self) -> bool:
         """Render a new frame now if the picture changed; returns whether one was rendered.
@@ -405,15 +579,20 @@ class ViewerState:
         if not self.dirty or not self.renderable:
             return False
         run, what = self._job()
-        worker.submit(run, what)
+        worker.submit(run, what, control=True)
         self.dirty = False
         return True
 
     def accept(self, result) -> bool:
-        """Take a finished request from the worker; returns whether a new frame is shown."""
+        """Take a finished request (or a picture on its way: ``result.final`` False) from the
+        worker; returns whether a new frame is shown."""
         if result.error is not None:
             self._failed(result.error)
             return False
+        if not getattr(result, "final", True):
+            self.frame, self.frame_partial = result.frame, True
+            self.frame_seconds = result.seconds
+            return True
         self._shown(result.frame, result.seconds)
         return True
 
@@ -425,7 +604,7 @@ class ViewerState:
         self.dirty = False
 
     def _shown(self, frame, seconds: float) -> None:
-        self.frame, self.render_error = frame, None
+        self.frame, self.render_error, self.frame_partial = frame, None, False
         self.frame_seconds = seconds
         self._modes_rendered.add(self.shading)
         self.frame_count += 1

@@ -21,7 +21,15 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
 - ``p`` / ``o``: perspective / parallel; ``w``, ``1``, ``2``, ``3``: wireframe, flat,
   Gouraud, Phong; ``a``: keep the window's aspect (letterbox) or stretch it (the course);
   arrows: previous / next view; ``s``: save the CPU frame as a PNG in ``screenshots/``;
-- Esc closes an open menu or pop-up, and quits only when none is open; ``q`` quits.
+- Esc closes an open menu or pop-up, and quits only when none is open; ``q`` quits;
+- ``r``: z-buffer / ray traced (Render menu; a ray-traced picture comes coarse first, then
+  tile by tile, and the z-buffer picture stays until the coarse one is there); ``t``: the
+  next texture filter (nearest, bilinear, trilinear, anisotropic); ``b``: bump maps on/off;
+- an animated scene: space plays / pauses, ``,`` and ``.`` step a frame back / forward,
+  ``[`` ``]`` halve / double the speed; the panel has the timeline slider; a left click
+  advances the view when paused and pauses when playing;
+- the bump demo's scene (J3DPanel): a left click toggles bump / Phong, any other button
+  cycles the four height maps, as in the demo.
 
 Every user action and every new frame is logged (logger ``fvd``; ``app.viewer`` sends it to
 stderr and to ``$FVD_LOG``). On HiDPI screens sizes in points are scaled so that the picture
@@ -51,6 +59,9 @@ log = logging.getLogger("fvd")
 PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel", "O"))
 SHADING_LABELS = (("wireframe", "Wireframe", "W"), ("flat", "Flat", "1"),
                   ("gouraud", "Gouraud", "2"), ("phong", "Phong", "3"))
+RENDERER_LABELS = (("zbuffer", "Z-buffer", "R"), ("raytrace", "Ray traced", "R"))
+FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),
+                 ("trilinear", "Trilinear (MIP map)"), ("anisotropic", "Anisotropic"))
 RASTERIZER_LABELS = (("edge", "Edge functions (perspective-correct)"),
                      ("scanline", "Scan line, ET/AET (course, screen-linear)"))
 CHAR_SHORTCUTS = {"p": ("projection", "perspective"), "o": ("projection", "parallel"),
@@ -247,6 +258,8 @@ class ViewerWindow:
             return                        # typing in a text field
         if key == glfw.KEY_ESCAPE:
             self.quit("key Esc")
+        elif key == glfw.KEY_SPACE and action == glfw.PRESS:
+            self.toggle_play("key Space")
         elif key in (glfw.KEY_RIGHT, glfw.KEY_DOWN):
             self.step_view(+1, "key Right" if key == glfw.KEY_RIGHT else "key Down")
         elif key in (glfw.KEY_LEFT, glfw.KEY_UP):
@@ -271,6 +284,15 @@ class ViewerWindow:
             self.choose("texture_filter", after, "key t")
         elif char == "s":
             self.save_screenshot("key s")
+        elif char == "r":
+            self.choose("renderer", "zbuffer" if self.state.renderer_name == "raytrace"
+                        else "raytrace", "key r")
+        elif char == "b":
+            self.choose("bump", not self.state.bump, "key b")
+        elif char in ",." and self.state.animated:
+            self.step_frame(-1 if char == "," else +1, f"key {char}")
+        elif char in "[]" and self.state.animated:
+            self.change_speed(0.5 if char == "[" else 2.0, f"key {char}")
         elif char == "q":
             self.quit("key q")
 
@@ -300,9 +322,34 @@ class ViewerWindow:
                   "rasterizer": self.state.set_rasterizer,
                   "keep_aspect": self.state.set_keep_aspect,
                   "course_tri": self.state.set_course_tri,
-                  "texture_filter": self.state.set_texture_filter}[what]
+                  "renderer": self.state.set_renderer,
+                  "texture_filter": self.state.set_texture_filter,
+                  "bump": self.state.set_bump}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
+        self._wake()
+
+    # -- issue 13: an animated scene's timeline ------------------------------------------------
+    def toggle_play(self, how: str) -> None:
+        if not self.state.animated:
+            log.info("action: %s -> nothing to play (the scene is not animated)", how)
+            return
+        self.state.toggle_play(time.perf_counter())
+        log.info("action: %s -> %s at t=%.3f", how, "play" if self.state.playing else "pause",
+                 self.state.playback.time)
+        self._wake()
+
+    def step_frame(self, frames: int, how: str) -> None:
+        self.state.step_frame(frames)
+        log.info("action: %s -> %s frame: %s", how, "next" if frames > 0 else "previous",
+                 self.state.playback.label())
+        self._wake()
+
+    def change_speed(self, factor: float, how: str) -> None:
+        from app.viewer.playback import SPEEDS
+        speed = min(max(self.state.playback.speed * factor, SPEEDS[0]), SPEEDS[-1])
+        self.state.set_speed(speed)
+        log.info("action: %s -> speed %gx", how, speed)
         self._wake()
 
     def open_scene(self, source: str, how: str) -> None:
@@ -365,6 +412,8 @@ class ViewerWindow:
                 # ten times a second to show how long it has taken (it wakes us when done).
                 if shown and (self._busy > 0 or self.state.dirty):
                     glfw.poll_events()
+                elif self.state.playing:
+                    glfw.wait_events_timeout(1 / 60)     # the movie's clock moves on
                 elif self.worker.waiting:
                     glfw.wait_events_timeout(0.1)
                 else:
@@ -387,14 +436,19 @@ class ViewerWindow:
         imgui.new_frame()
         self._handle_clicks()
 
+        self.state.tick(time.perf_counter(), busy=self.worker.waiting)
         if self.state.request(self.worker):
             self._compiles_at_request = compile_count()
         result = self.worker.collect()
         if result is not None and self.state.accept(result):
-            self._log_frame()
+            if getattr(result, "final", True):
+                self._log_frame()
+                self._start_warm_up()
+            else:
+                log.info("partial frame: %s (%s)", result.what,
+                         self.state.frame.stats.get("pass", "on its way"))
             self.blit.upload(self.state.frame.rgbx)
             self._wake()                  # the GUI shows the new frame's plan and timing next
-            self._start_warm_up()
         self._build_gui()
         imgui.render()
 
@@ -445,6 +499,8 @@ class ViewerWindow:
                 log.info("action: %s -> taken by the menu/panel, view unchanged", where)
             elif (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
                 log.info("action: %s -> the bump demo: %s", where, demo)   # issue 11
+            elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
+                self.toggle_play(where)
             elif self.state.course_tri:
                 self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
             elif button == glfw.MOUSE_BUTTON_LEFT:
@@ -461,7 +517,9 @@ class ViewerWindow:
 
     def _title(self) -> str:
         s = self.state
-        return f"FvD viewer - {s.scene.name} - {s.view_label} - {s.projection} - {s.shading}"
+        renderer = " - ray traced" if s.renderer_name == "raytrace" else ""
+        return (f"FvD viewer - {s.scene.name} - {s.view_label} - {s.projection} - "
+                f"{s.shading}{renderer}")
 
     # -- the GUI: the side panel and the pop-up ----------------------------------------------
     def _build_gui(self) -> None:
@@ -501,6 +559,7 @@ class ViewerWindow:
         imgui.begin("panel", False, PANEL_FLAGS)
         self._menu_bar()
         self._status()
+        self._timeline()
         self._plan_strip()
         self._invalid_views_strip()
         self._messages_strip()
@@ -560,6 +619,20 @@ class ViewerWindow:
         imgui.end_menu_bar()
 
     def _render_items(self) -> None:
+        from core.renderers import renderer_names
+        imgui.text_disabled("Renderer")
+        for value, label, key in RENDERER_LABELS:
+            if value in renderer_names() and imgui.menu_item(
+                    label, key, self.state.renderer_name == value)[0]:
+                self.choose("renderer", value, "menu Render")
+        imgui.separator()
+        imgui.text_disabled("Texture filter")
+        for value, label in FILTER_LABELS:
+            if imgui.menu_item(label, "T", self.state.texture_filter == value)[0]:
+                self.choose("texture_filter", value, "menu Render")
+        if imgui.menu_item("Bump and normal maps", "B", self.state.bump)[0]:
+            self.choose("bump", not self.state.bump, "menu Render")
+        imgui.separator()
         imgui.text_disabled("Rasterizer")
         for value, label in RASTERIZER_LABELS:
             if imgui.menu_item(label, None, self.state.rasterizer == value,
@@ -572,12 +645,6 @@ class ViewerWindow:
         if imgui.menu_item("Course .tri rules (back faces, mouse)", None,
                            self.state.course_tri)[0]:
             self.choose("course_tri", not self.state.course_tri, "menu Render")
-        imgui.separator()                 # issue 11
-        imgui.text_disabled("Texture filter (T)")
-        from core.texture.modes import FILTERS
-        for name in FILTERS:
-            if imgui.menu_item(name, None, self.state.texture_filter == name)[0]:
-                self.choose("texture_filter", name, "menu Render")
 
     def _popup(self) -> None:
         # The course's GLUT pop-up menu: projection and shading at the click.
@@ -605,6 +672,15 @@ class ViewerWindow:
                    else "window stretched over the viewport")
         if s.course_tri:
             imgui.text_disabled("course .tri rules: left Phong, middle Gouraud, right flat")
+        extras = [] if s.renderer_name == "zbuffer" else [
+            "ray traced" + (" (refining)" if s.frame_partial else "")]
+        if s.has_textures:
+            extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))
+        if extras:
+            imgui.text(", ".join(extras))
+        if s.bump_label:
+            imgui.text_colored(displayable(s.bump_label), 0.6, 0.7, 1.0)
+            imgui.text_disabled("left click: bump / Phong; other buttons: next map")
         if s.frame is None:
             imgui.text("no frame to show" if not s.renderable else "")
         else:
@@ -621,13 +697,47 @@ class ViewerWindow:
         compiled = compile_count() - self._compiles_at_request
         extra = f", compiling kernels ({compiled} so far)" if compiled else ""
         if p.what and p.frame:
-            return f"rendering {p.what}: {time.perf_counter() - p.since:.1f} s{extra}"
+            how_far = (f", {p.detail}" if p.detail else "") + (
+                f" ({p.fraction * 100:.0f}%)" if p.fraction is not None else "")
+            return f"rendering {p.what}: {time.perf_counter() - p.since:.1f} s{how_far}{extra}"
         if p.what and self.worker.waiting:
             return (f"your frame is next; loading kernels ({p.done + 1} of {p.total}: "
                     f"{p.what}) {time.perf_counter() - p.since:.1f} s{extra}")
         if p.done < p.total:
             return f"loading kernels in the background: {p.done} of {p.total}"
         return "ready"
+
+    def _timeline(self) -> None:
+        """An animated scene: play / pause, step, the timeline slider and the speed."""
+        playback = self.state.playback
+        if playback is None:
+            return
+        from app.viewer.playback import SPEEDS
+        if imgui.button("Pause" if playback.playing else "Play"):
+            self.toggle_play("button Play")
+        imgui.same_line()
+        if imgui.button("<"):
+            self.step_frame(-1, "button <")
+        imgui.same_line()
+        if imgui.button(">"):
+            self.step_frame(+1, "button >")
+        imgui.same_line()
+        imgui.text(f"frame {playback.frame_index + 1} of {playback.frame_count}")
+        imgui.push_item_width(-1)
+        changed, t = imgui.slider_float("##time", playback.time, 0.0,
+                                        max(playback.duration, 1e-6), "%.2f s")
+        if changed:
+            self.state.seek(t, time.perf_counter())
+            self._wake()
+        labels = [f"{v:g}x" for v in SPEEDS]
+        current = min(range(len(SPEEDS)), key=lambda i: abs(SPEEDS[i] - playback.speed))
+        changed, chosen = imgui.combo("##speed", current, labels)
+        if changed:
+            self.state.set_speed(SPEEDS[chosen])
+            log.info("action: speed -> %gx", SPEEDS[chosen])
+        imgui.pop_item_width()
+        imgui.text_disabled("space play/pause, , . step, [ ] speed")
+        imgui.separator()
 
     def _plan_strip(self) -> None:
         frame = self.state.frame

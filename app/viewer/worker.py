@@ -7,6 +7,13 @@ collected (:meth:`RenderWorker.collect`), so the picture always ends up showing 
 choice. While nothing is asked, the thread works through background jobs (the kernels'
 warm-up), one short job at a time, so that a frame request waits at most for one of them.
 
+A job submitted with ``control=True`` is called with a :class:`Control`: it can report how far
+it is (the progress line), hand over pictures before it is done (:meth:`Control.partial`: the
+ray tracer's coarse pass and each refined tile, collected like a finished frame but marked
+``final=False``) and learn that a newer request has superseded it (:attr:`Control.cancelled`,
+or :meth:`Control.check`, which raises :class:`Cancelled`), so that a long frame stops at its
+next tile instead of finishing a picture nobody will see.
+
 No GL here: a job returns a :class:`core.render.Frame` (or raises), and the window thread
 uploads it. ``wake`` (glfw.post_empty_event in the window) is called when a result is ready,
 so that a window asleep in ``wait_events`` picks it up at once.
@@ -28,6 +35,7 @@ class Job:
     run: Callable
     what: str
     generation: int = 0
+    control: bool = False       # call run(Control) instead of run()
 
 
 @dataclass
@@ -37,6 +45,37 @@ class Result:
     frame: object | None = None
     error: BaseException | None = None
     seconds: float = 0.0
+    final: bool = True          # False: a picture on the way (more follow for this request)
+
+
+class Cancelled(Exception):
+    """Raised inside a job by :meth:`Control.check` once a newer request superseded it."""
+
+
+class Control:
+    """What a running job may ask of the worker (given to jobs submitted with control=True)."""
+
+    def __init__(self, worker: "RenderWorker", job: Job):
+        self._worker, self._job = worker, job
+        self._start = time.perf_counter()
+
+    @property
+    def cancelled(self) -> bool:
+        """Has a newer request (or the window's closing) made this job's picture stale?"""
+        return self._worker._superseded(self._job)
+
+    def check(self) -> None:
+        if self.cancelled:
+            raise Cancelled(self._job.what)
+
+    def report(self, fraction: float, detail: str) -> None:
+        """How far the job is (0..1) and what it does now, for the progress line."""
+        self._worker._report(self._job, fraction, detail)
+
+    def partial(self, frame) -> None:
+        """A picture before the final one; the window shows it when it collects it."""
+        self._worker._post(Result(self._job.generation, self._job.what, frame,
+                                  seconds=time.perf_counter() - self._start, final=False))
 
 
 @dataclass
@@ -49,6 +88,8 @@ class Progress:
     done: int = 0               # background jobs done / total (the warm-up)
     total: int = 0
     background: list = field(default_factory=list)
+    fraction: float | None = None   # how far the running frame is, when its job reports it
+    detail: str = ""                # what it does now ("tile 40 of 256", "simulating …")
 
 
 class RenderWorker:
@@ -65,16 +106,19 @@ class RenderWorker:
         self._since = 0.0
         self._done = 0
         self._total = 0
+        self._fraction: float | None = None
+        self._detail = ""
         self._stop = False
         self._thread = threading.Thread(target=self._loop, name="render", daemon=True)
         self._thread.start()
 
     # -- the window's side ---------------------------------------------------------------
-    def submit(self, run: Callable, what: str) -> int:
-        """Ask for a frame; replaces any request still waiting. Returns its generation."""
+    def submit(self, run: Callable, what: str, control: bool = False) -> int:
+        """Ask for a frame; replaces any request still waiting and cancels a running one
+        that watches its :class:`Control`. Returns its generation."""
         with self._lock:
             self._generation += 1
-            self._pending = Job(run, what, self._generation)
+            self._pending = Job(run, what, self._generation, control)
             self._lock.notify()
             return self._generation
 
@@ -104,7 +148,8 @@ class RenderWorker:
     def progress(self) -> Progress:
         with self._lock:
             return Progress(self._running.removeprefix("frame:"), self._since,
-                            self._running.startswith("frame:"), self._done, self._total)
+                            self._running.startswith("frame:"), self._done, self._total,
+                            fraction=self._fraction, detail=self._detail)
 
     def stop(self) -> None:
         with self._lock:
@@ -112,6 +157,23 @@ class RenderWorker:
             self._lock.notify()
 
     # -- the thread's side ---------------------------------------------------------------
+    def _superseded(self, job: Job) -> bool:
+        with self._lock:
+            return self._stop or job.generation != self._generation
+
+    def _report(self, job: Job, fraction: float, detail: str) -> None:
+        with self._lock:
+            if job.generation == self._generation:
+                self._fraction, self._detail = float(fraction), detail
+        self._wake()
+
+    def _post(self, result: Result) -> None:
+        with self._lock:
+            if result.generation != self._generation:
+                return
+            self._result = result
+        self._wake()
+
     def _next(self):
         with self._lock:
             while not self._stop and self._pending is None and not self._background:
@@ -121,6 +183,7 @@ class RenderWorker:
             if self._pending is not None:
                 job, self._pending = self._pending, None
                 self._running, self._since = "frame:" + job.what, time.perf_counter()
+                self._fraction, self._detail = None, ""
                 return job
             label, run = self._background.pop(0)
             self._running, self._since = label, time.perf_counter()
@@ -134,9 +197,15 @@ class RenderWorker:
             start = time.perf_counter()
             result = Result(job.generation, job.what)
             try:
-                result.frame = job.run()
+                result.frame = job.run(Control(self, job)) if job.control else job.run()
+            except Cancelled:                       # superseded: its picture is not wanted
+                result = None
             except BaseException as error:          # shown by the window, never fatal here
                 result.error = error
+            if result is None:
+                with self._lock:
+                    self._running = ""
+                continue
             result.seconds = time.perf_counter() - start
             if job.generation < 0 and result.error is not None:
                 logging.getLogger("fvd").warning("background job %r failed: %s: %s", job.what,

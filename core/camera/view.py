@@ -14,6 +14,7 @@ can hold each one against a hand calculation (``python -m app matrices``).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -72,14 +73,16 @@ def problems(view: View, projection: str | None = None) -> list[str]:
 def unit3(a) -> tuple[np.ndarray, float]:
     """``(a / |a|, |a|)`` for a 3-vector, scaled first by its largest component so that neither
     a subnormal vector (1e-320, whose square underflows) nor a huge one (1e308, whose square
-    overflows) loses its direction; ``|a|`` may be 0.0 or inf, the direction is exact."""
-    a = np.asarray(a, dtype=np.float64)
-    m = float(np.max(np.abs(a)))
-    if not m > 0.0 or not np.isfinite(m):
+    overflows) loses its direction; ``|a|`` may be 0.0 or inf, the direction is exact.
+    Plain floats: it runs a few times per view, and numpy's per-call cost on 3 numbers
+    would be most of a view file's reading time."""
+    x, y, z = (float(c) for c in a)
+    m = max(abs(x), abs(y), abs(z))
+    if not 0.0 < m < math.inf:
         return np.zeros(3), m
-    scaled = a / m                        # division, not * (1/m): 1/1e-320 overflows
-    s = float(np.sqrt(scaled @ scaled))
-    return scaled / s, m * s
+    x, y, z = x / m, y / m, z / m             # division, not * (1/m): 1/1e-320 overflows
+    s = math.sqrt(x * x + y * y + z * z)
+    return np.array([x / s, y / s, z / s]), m * s
 
 
 # The largest coordinate any reader lets into a scene (core.scene.formats refuses beyond it),
@@ -98,13 +101,17 @@ def load_problems(view: View) -> list[str]:
     (the renderer's own rules, matrices included); empty when at least one projection can draw
     it. A view that only one projection refuses (F behind the eye in perspective) loads, and
     the frame drawn that way says why."""
-    found = problems(view)
-    if found:
-        return found
-    perspective, parallel = problems(view, "perspective"), problems(view, "parallel")
-    if perspective and parallel:
-        return list(dict.fromkeys(perspective + parallel))
-    return []
+    common = _problems(view, None)
+    if common:
+        return common
+    perspective = _eye_problems(view)
+    parallel: list[str] = []
+    _factors_or_overflow(view, "parallel", parallel)
+    if not parallel:
+        return []                              # parallel draws it: it loads
+    if not perspective:
+        _factors_or_overflow(view, "perspective", perspective)
+    return list(dict.fromkeys(perspective + parallel)) if perspective else []
 
 
 def _problems(view: View, projection: str | None) -> list[str]:
@@ -139,10 +146,17 @@ def _problems(view: View, projection: str | None) -> list[str]:
         found.append(f"the window is degenerate: v_max ({v_max:g}) <= v_min ({v_min:g})")
     if not view.back < view.front:
         found.append(f"B ({view.back:g}) is not behind F ({view.front:g})")
-    if projection == "perspective" and not view.front < prp[2]:
-        found.append(f"the front plane F = {view.front:g} is not in front of the eye "
-                     f"(PRP_n = {prp[2]:g})")
+    if projection == "perspective":
+        found += _eye_problems(view)
     return found
+
+
+def _eye_problems(view: View) -> list[str]:
+    """The check only perspective makes without a matrix: F in front of the eye."""
+    if view.front < view.prp[2]:
+        return []
+    return [f"the front plane F = {view.front:g} is not in front of the eye "
+            f"(PRP_n = {view.prp[2]:g})"]
 
 
 def _factors_or_overflow(view: View, projection: str, found: list[str]) -> dict | None:
@@ -156,11 +170,12 @@ def _factors_or_overflow(view: View, projection: str, found: list[str]) -> dict 
     build = _n_per if projection == "perspective" else _n_par
     with np.errstate(all="ignore"):            # overflow is detected below, not raised
         factors = build(view)
-    if not all(np.all(np.isfinite(m)) for m in factors.values()):
+    n = factors["N_per" if projection == "perspective" else "N_par"]
+    # N is the product of every factor: an inf in any of them leaves an inf or a NaN in N
+    if not (np.isfinite(n).all() and np.isfinite(factors.get("z_min", 0.0))):
         found.append("the numbers are too large or too small: the normalizing transformation "
                      "overflows")
         return None
-    n = factors["N_per" if projection == "perspective" else "N_par"]
     with np.errstate(over="ignore"):
         reach = float(np.max(np.abs(n[:3, :3]).sum(axis=1) * MAX_WORLD + np.abs(n[:3, 3])))
     if not reach <= MAX_REACH:

@@ -35,18 +35,21 @@ def _tile_rays(cam, height, row0, row1, col0, col1, offsets, origins, directions
 
 
 def tile_rays(view: View, projection: str, width: int, height: int, offsets,
-              rows=None, cols=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              rows=None, cols=None, keep_aspect: bool = False
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(origins (N, 3), unit directions (N, 3), inside (N,) bool)`` for ``offsets (S, 2)``
     over image rows ``rows = (first, stop)`` and columns ``cols`` (default: all), ordered
-    sample, then row (top first), then column. ``inside`` is false outside the viewport."""
+    sample, then row (top first), then column. ``inside`` is false outside the viewport
+    (``keep_aspect``: the window letterboxed; else stretched over the framebuffer, the course's
+    mapping — as :func:`core.camera.rays.pack_camera`)."""
     offsets = np.ascontiguousarray(offsets, dtype=np.float64).reshape(-1, 2)
     row0, row1 = rows or (0, height)
     col0, col1 = cols or (0, width)
     count = len(offsets) * (row1 - row0) * (col1 - col0)
     origins, directions = np.empty((count, 3)), np.empty((count, 3))
     inside = np.empty(count, dtype=np.bool_)
-    _tile_rays(pack_camera(view, projection, width, height), int(height), int(row0), int(row1),
-               int(col0), int(col1), offsets, origins, directions, inside)
+    _tile_rays(pack_camera(view, projection, width, height, keep_aspect), int(height),
+               int(row0), int(row1), int(col0), int(col1), offsets, origins, directions, inside)
     return origins, directions, inside
 
 

@@ -75,10 +75,12 @@ class Setup:
     background: np.ndarray
     options: TraceOptions
     counts: np.ndarray           # (7,) rays of each kind so far (whitted.COUNTERS)
+    keep_aspect: bool = False    # letterbox the window (else stretch it: the course's mapping)
 
 
 def prepare(scene, view: View, projection: str, size: tuple[int, int],
-            options: TraceOptions = TraceOptions(), offsets=None) -> Setup:
+            options: TraceOptions = TraceOptions(), offsets=None,
+            keep_aspect: bool = False) -> Setup:
     """Everything one frame needs. Raises ViewError for an invalid view and ValueError for a
     material or primitive the tracer cannot use."""
     check(view, projection)
@@ -92,7 +94,8 @@ def prepare(scene, view: View, projection: str, size: tuple[int, int],
                  eye=pack_eye(eye_from_view(view, projection)),
                  halfway=scene.specular == "halfway",
                  background=np.asarray(scene.background, dtype=np.float64).reshape(3),
-                 options=options, counts=np.zeros(len(whitted.COUNTERS), dtype=np.int64))
+                 options=options, counts=np.zeros(len(whitted.COUNTERS), dtype=np.int64),
+                 keep_aspect=bool(keep_aspect))
 
 
 def trace_rays(setup: Setup, origins, directions, t_min, t_max) -> np.ndarray:
@@ -117,7 +120,7 @@ def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int):
     """Primary rays of a tile, sample-major then row-major, and their [F, B] intervals."""
     origins, directions, inside = camera.tile_rays(
         setup.view, setup.projection, setup.width, setup.height, setup.offsets,
-        rows=(row0, row1), cols=(col0, col1))
+        rows=(row0, row1), cols=(col0, col1), keep_aspect=setup.keep_aspect)
     perspective = setup.projection == "perspective"
     t_min, t_max = camera.clip_interval(setup.view, origins, directions, from_origin=perspective)
     if not perspective:
@@ -160,10 +163,11 @@ def stats_of(setup: Setup, seconds: float) -> dict:
 
 def render_image(scene, view: View, projection: str, size: tuple[int, int],
                  options: TraceOptions = TraceOptions(), samples: int = 1,
-                 pattern: str = "regular", seed: int = 0) -> tuple[np.ndarray, np.ndarray, dict]:
+                 pattern: str = "regular", seed: int = 0, keep_aspect: bool = False
+                 ) -> tuple[np.ndarray, np.ndarray, dict]:
     """``(uint8 image (H, W, 3), raw float image, stats)`` of ``view`` of ``scene``."""
     offsets = sample_offsets(samples, pattern, seed)
-    setup = prepare(scene, view, projection, size, options, offsets)
+    setup = prepare(scene, view, projection, size, options, offsets, keep_aspect)
     start = time.perf_counter()
     raw = render_raw(setup)
     return to_uint8(raw), raw, stats_of(setup, time.perf_counter() - start)
@@ -172,10 +176,20 @@ def render_image(scene, view: View, projection: str, size: tuple[int, int],
 def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
     """The ``"raytrace"`` renderer (:mod:`core.renderers`): fills ``frame.color`` and
     ``frame.stats`` for ``settings``, placing the film's samples itself."""
-    options = TraceOptions.from_settings(settings)
-    offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
-               if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
-    setup = prepare(scene, view, settings.projection, settings.size, options, offsets)
+    try:
+        options = TraceOptions.from_settings(settings)
+        offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
+                   if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
+        setup = prepare(scene, view, settings.projection, settings.size, options, offsets,
+                        getattr(settings, "keep_aspect", False))
+    except ValueError as error:              # a setting or a material the tracer cannot use
+        frame.color[...] = to_uint8(scene.background)
+        frame.message = f"{scene.name}: cannot ray trace: {error}"
+        return
+    if setup.packing.build.triangles == 0 and not (len(setup.packing.packed.spheres)
+                                                   or len(setup.packing.packed.planes)):
+        frame.message = (f"{scene.name}: nothing to ray trace (line edges are drawn by the "
+                         "z-buffer only)")
     if timer is not None:
         timer.lap("pack scene, build BVH")
     start = time.perf_counter()

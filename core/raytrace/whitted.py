@@ -322,3 +322,20 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
                             max_depth, epsilon, fresnel, medium, offset, rays, scaled,
                             surface_row, eye, stack, counts[c])
             raw[i, 0], raw[i, 1], raw[i, 2] = r, g, b
+
+
+@njit(cache=True, parallel=True)
+def visible_many(packed, origins, directions, t_min, t_max, kind, index, t_hit):
+    """Primary visibility only (no shading): what each ray sees first — :func:`nearest` for
+    every ray, in parallel. ``kind`` NOTHING / TRIANGLE (``index`` the scene's triangle) /
+    SPHERE / PLANE (``index`` the row)."""
+    n = origins.shape[0]
+    chunks = (n + CHUNK - 1) // CHUNK
+    for c in prange(chunks):
+        stack = np.empty(bvh.STACK, dtype=np.int64)
+        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+            k, j, t, _, _ = nearest(packed, origins[i, 0], origins[i, 1], origins[i, 2],
+                                    directions[i, 0], directions[i, 1], directions[i, 2],
+                                    t_min[i], t_max[i], stack)
+            kind[i], t_hit[i] = k, t
+            index[i] = packed.prim[j] if k == TRIANGLE else j

@@ -129,6 +129,7 @@ class Scene:
     source: str = ""                      # file the scene came from
     keep_aspect: bool = False             # letterbox the window instead of stretching it
     rasterizer: str = "edge"              # "edge" | "scanline" (the course's ET/AET algorithm)
+    renderer: str = "zbuffer"             # the scene file's renderer (settings.SCENE_RENDERERS)
     # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
     primitives: list = field(default_factory=list)
 

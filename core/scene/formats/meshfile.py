@@ -25,6 +25,8 @@ are merged into one by hashing (``np.unique`` on rows), as the course's ``.tri``
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import io
 import logging
 import re
@@ -352,42 +354,50 @@ _OFF_KEYWORDS = ("OFF", "COFF")           # what the mesh library reads (COFF: c
 _OFF_COLOURS = (0, 1, 3, 4)               # trailing values after a row: none, an index, RGB(A)
 
 
+def _off_rows(text: str):
+    """``(line number, fields)`` of every line with numbers, made as they are needed: the rows
+    of a large file are never all held at once (millions of small lists also make Python's
+    garbage collector pass over them again and again)."""
+    for number, line in enumerate(text.split("\n"), start=1):
+        fields = line.split("#", 1)[0].split()
+        if fields:
+            yield number, fields
+
+
 def _check_off(text: str, file: str, budget: int) -> None:
     """Check the OFF keyword, the counts, and every row: V vertex rows of 3 coordinates and
     F face rows ``k i_1 .. i_k`` whose k matches its indices (each followed only by an
     optional colour), and nothing after them."""
-    lines = text.split("\n")
-    rows = [(n, line.split("#", 1)[0].split()) for n, line in enumerate(lines, start=1)]
-    rows = [(n, fields) for n, fields in rows if fields]
-    if not rows or rows[0][1][0] not in _OFF_KEYWORDS:
+    rows = _off_rows(text)
+    number, fields = next(rows, (1, None))
+    if fields is None or fields[0] not in _OFF_KEYWORDS:
         raise ReaderError(file, f"not an OFF file: it must start with 'OFF' (or 'COFF'), not "
-                                f"{short(rows[0][1][0]) if rows else 'nothing'}",
-                          rows[0][0] if rows else 1)
-    number, fields = rows[0]
+                                f"{short(fields[0]) if fields else 'nothing'}", number)
     fields = fields[1:]
-    rest = rows[1:]
+    header_rows = 1                        # the keyword's row, and the counts' if apart
     if not fields:
-        if not rest:
+        header_rows = 2
+        counts_line = next(rows, None)
+        if counts_line is None:
             raise ReaderError(file, "the file ends before the vertex and face counts", number)
-        number, fields = rest[0]
-        rest = rest[1:]
+        number, fields = counts_line
     if len(fields) < 2:
         raise ReaderError(file, "the counts line must hold whole numbers 'V F [E]', got "
                                 f"{short(' '.join(fields))}", number)
     vertices, faces, *_ = (whole_number(f, file, number, what)
                            for f, what in zip(fields, ("the vertex count", "the face count",
                                                        "the edge count")))
-    available = sum(len(f) for _, f in rest)
+    available = sum(len(f) for k, (_, f) in enumerate(_off_rows(text)) if k >= header_rows)
     if 3 * vertices + 4 * faces > available:
         raise ReaderError(file, f"the counts say {vertices} vertices and {faces} faces (at "
                                 f"least {3 * vertices + 4 * faces} numbers), but only "
                                 f"{available} numbers follow", number)
     if faces > budget:
         raise _over_budget(file, f"the counts say {faces} faces: at least", faces, budget, number)
-    _check_off_rows(rest, vertices, faces, file)
+    _check_off_rows(rows, vertices, faces, file)
 
 
-def _check_off_rows(rows: list, vertices: int, faces: int, file: str) -> None:
+def _check_off_rows(rows, vertices: int, faces: int, file: str) -> None:
     for k, (line, fields) in enumerate(rows):
         if k < vertices:
             if len(fields) - 3 not in _OFF_COLOURS:
@@ -434,6 +444,21 @@ def _stl_kind(data: bytes, file: str, budget: int) -> str:
 
 # ----------------------------------------------------------------------------- reader
 
+@contextlib.contextmanager
+def _collector_paused():
+    """Python's cyclic garbage collector paused while the mesh library parses: its ASCII
+    loaders build a small list per row, and the collector, passing over all of them again as
+    they pile up, made reading grow faster than the file (16k to 64k OFF rows: x6 with it,
+    x4.5 without). The lists hold no cycles; reference counting frees them either way."""
+    was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was_enabled:
+            gc.enable()
+
+
 def _loaded_parts(loaded: dict) -> list[dict]:
     """The per-geometry kwargs in what a trimesh format loader returns (one mesh or several)."""
     if "geometry" in loaded:
@@ -475,7 +500,8 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
     logging.getLogger("trimesh").addHandler(_QUIET)
 
     try:
-        loaded = mesh_loaders[ext[1:]](io.BytesIO(data))
+        with _collector_paused():
+            loaded = mesh_loaders[ext[1:]](io.BytesIO(data))
     except Exception as error:           # trimesh raises many types; each becomes ours
         raise ReaderError(file, f"the mesh library could not read it: "
                                 f"{type(error).__name__}: {error}") from None

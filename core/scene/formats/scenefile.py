@@ -44,12 +44,13 @@ from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_ve
 from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
-from core.settings import RASTERIZERS, SPECULAR_FORMS
+from core.settings import RASTERIZERS, SCENE_RENDERERS, SPECULAR_FORMS
 
 MAX_NUMBER = MAX_COORDINATE
 
 TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
-            "line_color", "views", "view", "geometry", "light", "keep_aspect", "rasterizer")
+            "line_color", "views", "view", "geometry", "light", "keep_aspect", "rasterizer",
+            "renderer")
 GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
 # Analytic primitives (issue 12: the ray tracer intersects them, the z-buffer draws them
 # tessellated): [[geometry]] primitive = "sphere" | "plane" with these keys.
@@ -245,8 +246,12 @@ class _Reader:
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
                       meshes=meshes, views=views, view_messages=messages, view_order=order,
                       lights=lights, source=self.file)
+        # Spheres join scene.primitives (every ray caster traces them); planes stay with their
+        # tessellation only (the exact ray caster knows spheres and tori; the ray tracer finds
+        # planes through Mesh.tessellates).
+        from core.scene.primitives import Sphere
         scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
-                                 if m.tessellates is not None}.values())
+                                 if isinstance(m.tessellates, Sphere)}.values())
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
                           ("background", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
                           ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
@@ -254,7 +259,8 @@ class _Reader:
                           ("projection", lambda v, p: self.choice(v, p, PROJECTIONS)),
                           ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS)),
                           ("keep_aspect", self.boolean),
-                          ("rasterizer", lambda v, p: self.choice(v, p, RASTERIZERS))):
+                          ("rasterizer", lambda v, p: self.choice(v, p, RASTERIZERS)),
+                          ("renderer", lambda v, p: self.choice(v, p, SCENE_RENDERERS))):
             if key in doc:
                 setattr(scene, key, read(doc[key], (key,)))
         if "size" in doc:

@@ -1,0 +1,136 @@
+"""Playing an animated scene in the window: the clock, and the frame at a moment.
+
+:class:`Playback` is the timeline of one :class:`core.animation.animation.Animation`: the time
+shown, playing or paused, the speed, frame steps (the animation's own frames, ``k / fps``) and
+seeking. Time runs on the wall clock while playing (``tick(now)``): a slow frame makes the next
+one jump ahead instead of slowing the movie down. An animation that does not loop stops at its
+end; one that loops wraps.
+
+:func:`render_animated` draws the frame at a moment (``core.animation.frames.render_at``: the
+opaque picture and the particles). Particles are a simulation: playing forward continues from
+the last frame (cheap), but a moment before the simulation's present (a seek back, a loop
+wrapping) starts again from time 0; that re-simulation is done here in steps, reporting its
+progress and stopping when a newer request supersedes it.
+
+No GL and no window library here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+SPEEDS = (0.125, 0.25, 0.5, 1.0, 2.0, 4.0)      # the speed control's choices (x real time)
+SIMULATION_CHUNK = 50                           # particle steps between progress reports
+
+
+@dataclass
+class Playback:
+    """The timeline of an animation: ``time`` in seconds, ``playing``, ``speed``."""
+
+    animation: object
+    time: float = 0.0
+    playing: bool = False
+    speed: float = 1.0
+    _clock: float | None = None       # wall time when ``time`` was last advanced
+
+    @property
+    def duration(self) -> float:
+        return float(self.animation.duration)
+
+    @property
+    def fps(self) -> float:
+        return float(self.animation.fps)
+
+    @property
+    def frame_index(self) -> int:
+        """The animation frame at or just before ``time`` (frame k is at k / fps)."""
+        return int(math.floor(self.time * self.fps + 1e-9))
+
+    @property
+    def frame_count(self) -> int:
+        return int(self.animation.frame_count)
+
+    def label(self) -> str:
+        state = "playing" if self.playing else "paused"
+        return (f"t = {self.time:.2f} s of {self.duration:.2f} s, frame {self.frame_index + 1} "
+                f"of {self.frame_count}, {state}, speed {self.speed:g}x")
+
+    def toggle(self, now: float) -> None:
+        """Play or pause. Playing from the end of a movie that does not loop starts it again."""
+        self.playing = not self.playing
+        if self.playing and not self.animation.loop and self.time >= self.duration:
+            self.time = 0.0
+        self._clock = now if self.playing else None
+
+    def step(self, frames: int) -> None:
+        """Pause and move ``frames`` animation frames (``,`` back, ``.`` forward)."""
+        self.playing, self._clock = False, None
+        self.time = self._fit((self.frame_index + frames) / self.fps)
+
+    def seek(self, t: float, now: float | None = None) -> None:
+        """Go to ``t`` seconds (the timeline slider); playing carries on from there."""
+        self.time = self._fit(float(t))
+        if self.playing:
+            self._clock = now
+
+    def set_speed(self, speed: float) -> None:
+        if not (isinstance(speed, (int, float)) and 0.0 < speed <= 64.0):
+            raise ValueError(f"speed must be a number in (0, 64], not {speed!r}")
+        self.speed = float(speed)
+
+    def tick(self, now: float) -> bool:
+        """While playing: advance ``time`` by the wall time since the last tick times the
+        speed; returns whether it moved. A movie that does not loop pauses at its end."""
+        if not self.playing:
+            return False
+        if self._clock is None:
+            self._clock = now
+            return False
+        elapsed, self._clock = now - self._clock, now
+        if elapsed <= 0.0:
+            return False
+        t = self.time + elapsed * self.speed
+        if self.animation.loop and self.duration > 0.0:
+            t = math.fmod(t, self.duration)
+        elif t >= self.duration:
+            t, self.playing, self._clock = self.duration, False, None
+        self.time = t
+        return True
+
+    def _fit(self, t: float) -> float:
+        """``t`` inside the timeline: wrapped when the movie loops, else clamped."""
+        if self.duration <= 0.0:
+            return 0.0
+        if self.animation.loop:
+            return t % self.duration
+        return min(max(t, 0.0), self.duration)
+
+
+def render_animated(animation, t: float, settings, context, view_index: int, control=None):
+    """The frame at ``t`` seen through ``view_index`` (``render_at``'s numbering: the keyed
+    view first), re-simulating the particles from 0 with progress when ``t`` lies before the
+    simulation's present."""
+    from core.animation.frames import render_at
+    system = animation.particle_system
+    if system is not None:
+        _simulate_to(system, animation.local_time(t), control)
+    return render_at(animation, t, settings, context, view_index=view_index)
+
+
+def _simulate_to(system, t: float, control) -> None:
+    """Step ``system`` to time ``t`` as ``state_at`` would, in chunks, reporting progress."""
+    target = int(math.floor(t / system.dt + 1e-9))     # what ParticleSystem.state_at steps to
+    again = target < system.step_index
+    if again:
+        system.reset()
+    how = "simulating the particles again from 0" if again else "simulating the particles"
+    first = system.step_index
+    while system.step_index < target:
+        if control is not None:
+            control.check()
+            if target - first > SIMULATION_CHUNK:
+                control.report((system.step_index - first) / (target - first),
+                               f"{how}: step {system.step_index} of {target}")
+        for _ in range(min(SIMULATION_CHUNK, target - system.step_index)):
+            system.step()

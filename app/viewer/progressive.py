@@ -1,0 +1,107 @@
+"""The window's ray-traced frames, progressive: a coarse picture first, then tile by tile.
+
+A Whitted frame takes seconds on a small machine; the window should not show nothing (or a
+frozen z-buffer picture) for that long. :func:`trace_progressively` therefore
+
+1. traces a picture at 1/``COARSE`` of the size in each direction (one ray per ``COARSE`` x
+   ``COARSE`` block: every 8th pixel) through the front door (``core.render`` with the
+   ``"raytrace"`` renderer, so its checks and messages are the usual ones) and hands it over
+   upscaled by pixel repetition — the first picture the user sees;
+2. then traces the full-size frame tile by tile (``core.raytrace.renderer.trace_tile``, in
+   :func:`core.raytrace.renderer.tiles`' order: the centre first), writing each finished tile
+   over the coarse picture and handing the picture over every few tiles;
+3. returns the finished frame, which is pixel for pixel what ``core.render`` would give
+   (the same rays, the same box filter, the same rounding; a test holds them equal).
+
+Between tiles it asks its :class:`app.viewer.worker.Control` whether a newer request has
+superseded it (the view or a setting changed) and stops there (:class:`Cancelled`).
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+import time
+
+import numpy as np
+
+COARSE = 8                # the first picture: one ray per COARSE x COARSE pixels
+TILE = 32                 # refinement tiles, pixels a side
+PARTIAL_EVERY = 0.25      # seconds between refined pictures handed to the window
+
+
+class _Quiet:
+    """A control for callers without a window (ViewerState.update, tests): never cancelled."""
+
+    cancelled = False
+
+    def check(self) -> None:
+        pass
+
+    def report(self, fraction: float, detail: str) -> None:
+        pass
+
+    def partial(self, frame) -> None:
+        pass
+
+
+def upscale(color: np.ndarray, factor: int, width: int, height: int) -> np.ndarray:
+    """``color`` with each pixel repeated ``factor`` x ``factor`` times, cut to the size."""
+    big = np.repeat(np.repeat(color, factor, axis=0), factor, axis=1)
+    return big[:height, :width]
+
+
+def _prepare(scene, view, settings):
+    """The tracer's per-frame setup for ``settings`` (its film's samples, letterboxing when the
+    tracer knows it)."""
+    from core.camera.film import sample_offsets
+    from core.raytrace.renderer import TraceOptions, prepare
+    offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
+               if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
+    extra = ({"keep_aspect": bool(settings.keep_aspect)}
+             if "keep_aspect" in inspect.signature(prepare).parameters else {})
+    return prepare(scene, view, settings.projection, settings.size,
+                   TraceOptions.from_settings(settings), offsets, **extra)
+
+
+def trace_progressively(scene, view, settings, context=None, render=None, control=None):
+    """The ray-traced frame of ``view`` for ``settings`` (``settings.renderer`` is taken as
+    ``"raytrace"``), handing pictures on the way to ``control.partial``."""
+    from core.raytrace.renderer import stats_of, tiles, trace_tile
+    from core.shading.illumination import to_uint8
+    if render is None:
+        from core.render import render
+    control = control or _Quiet()
+    settings = settings.replace(renderer="raytrace")
+    width, height = settings.size
+    small = (max(1, math.ceil(width / COARSE)), max(1, math.ceil(height / COARSE)))
+    control.report(0.0, "coarse pass (every 8th pixel)")
+    coarse = render(scene, view, settings.replace(size=small, samples=1), context)
+    frame = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
+                         message=coarse.message, stats=dict(coarse.stats))
+    frame.color[:] = upscale(coarse.color, COARSE, width, height)
+    if coarse.message:                        # an invalid view, nothing to trace: said once
+        return frame
+    frame.stats["pass"] = "coarse"
+    control.partial(_copy(frame))
+    setup = _prepare(scene, view, settings)
+    boxes = tiles(width, height, TILE)
+    start = last = time.perf_counter()
+    for k, (r0, r1, c0, c1) in enumerate(boxes):
+        control.check()
+        frame.color[r0:r1, c0:c1] = to_uint8(trace_tile(setup, r0, r1, c0, c1))
+        control.report((k + 1) / len(boxes), f"refining: tile {k + 1} of {len(boxes)}")
+        if time.perf_counter() - last >= PARTIAL_EVERY and k + 1 < len(boxes):
+            last = time.perf_counter()
+            frame.stats["pass"] = f"tile {k + 1} of {len(boxes)}"
+            control.partial(_copy(frame))
+    frame.stats.update(stats_of(setup, time.perf_counter() - start))
+    frame.stats["pass"] = "final"
+    frame.stats["samples per pixel"] = len(setup.offsets)
+    return frame
+
+
+def _copy(frame):
+    """A snapshot of ``frame`` (the window uploads it while the tracer writes the next tiles)."""
+    return type(frame)(rgbx=frame.rgbx.copy(), plan=frame.plan, message=frame.message,
+                       stats=dict(frame.stats))
