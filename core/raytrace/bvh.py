@@ -365,14 +365,30 @@ def occluded(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     return -1
 
 
+SPREAD = 7919          # a prime: work item j handles chunk (j * SPREAD) mod chunks
+
+
+@njit(cache=True)
+def spread(j, chunks):
+    """The chunk that parallel work item ``j`` of ``chunks`` handles: a permutation that deals
+    neighbouring chunks to different threads. numba hands each thread one contiguous block of
+    a prange; without it one core gets the sky and the other the model (measured on the
+    bunny: wall time 1.7x the CPU time per core)."""
+    j, chunks = np.int64(j), np.int64(chunks)     # a prange index may be unsigned
+    if chunks % SPREAD == 0:
+        return j
+    return (j * SPREAD) % chunks
+
+
 @njit(cache=True, parallel=True)
 def closest_many(bvh, origins, directions, t_min, t_max, prim, t_hit, u_hit, v_hit):
     """:func:`closest` for every ray (in parallel): the scene triangle (-1: none), t, u, v."""
     n = origins.shape[0]
     chunks = (n + 1023) // 1024
-    for c in prange(chunks):
+    for j in prange(chunks):
+        chunk = spread(j, chunks)
         stack = np.empty(STACK, dtype=np.int64)
-        for i in range(c * 1024, min(n, (c + 1) * 1024)):
+        for i in range(chunk * 1024, min(n, (chunk + 1) * 1024)):
             k, t, u, v = closest(bvh, origins[i, 0], origins[i, 1], origins[i, 2],
                                  directions[i, 0], directions[i, 1], directions[i, 2],
                                  t_min[i], t_max[i], stack)
@@ -385,9 +401,10 @@ def occluded_many(bvh, origins, directions, t_min, t_max, hit):
     """:func:`occluded` for every ray (in parallel): true where something is in the way."""
     n = origins.shape[0]
     chunks = (n + 1023) // 1024
-    for c in prange(chunks):
+    for j in prange(chunks):
+        chunk = spread(j, chunks)
         stack = np.empty(STACK, dtype=np.int64)
-        for i in range(c * 1024, min(n, (c + 1) * 1024)):
+        for i in range(chunk * 1024, min(n, (chunk + 1) * 1024)):
             hit[i] = occluded(bvh, origins[i, 0], origins[i, 1], origins[i, 2],
                               directions[i, 0], directions[i, 1], directions[i, 2],
                               t_min[i], t_max[i], stack) >= 0

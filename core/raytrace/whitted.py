@@ -297,7 +297,7 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
     return r_sum, g_sum, b_sum
 
 
-CHUNK = 4096    # rays per parallel work item: 60 items at 500 x 500, enough to balance two cores
+CHUNK = 512     # rays per parallel work item (dealt to the threads by bvh.spread)
 
 
 @njit(cache=True, parallel=True)
@@ -306,13 +306,14 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
     """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``."""
     n = origins.shape[0]
     chunks = (n + CHUNK - 1) // CHUNK
-    for c in prange(chunks):
+    for j in prange(chunks):
+        chunk = bvh.spread(j, chunks)
         rays = np.empty((2 * max_depth + 2, 11))
         scaled = np.empty(lights.shape)
         surface_row = np.empty((1, packed.surfaces.shape[1]))
         eye = np.empty(4)
         stack = np.empty(bvh.STACK, dtype=np.int64)
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+        for i in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
             if not t_min[i] < t_max[i]:          # outside the viewport or the F..B slab
                 raw[i, 0], raw[i, 1], raw[i, 2] = background[0], background[1], background[2]
                 continue
@@ -320,7 +321,7 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
                             directions[i, 0], directions[i, 1], directions[i, 2], t_min[i],
                             t_max[i], primary_eye, lights, ambient, halfway, background, shadows,
                             max_depth, epsilon, fresnel, medium, offset, rays, scaled,
-                            surface_row, eye, stack, counts[c])
+                            surface_row, eye, stack, counts[chunk])
             raw[i, 0], raw[i, 1], raw[i, 2] = r, g, b
 
 
@@ -331,9 +332,10 @@ def visible_many(packed, origins, directions, t_min, t_max, kind, index, t_hit):
     SPHERE / PLANE (``index`` the row)."""
     n = origins.shape[0]
     chunks = (n + CHUNK - 1) // CHUNK
-    for c in prange(chunks):
+    for m in prange(chunks):
+        chunk = bvh.spread(m, chunks)
         stack = np.empty(bvh.STACK, dtype=np.int64)
-        for i in range(c * CHUNK, min(n, (c + 1) * CHUNK)):
+        for i in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
             k, j, t, _, _ = nearest(packed, origins[i, 0], origins[i, 1], origins[i, 2],
                                     directions[i, 0], directions[i, 1], directions[i, 2],
                                     t_min[i], t_max[i], stack)
