@@ -69,11 +69,14 @@ def apply(m: np.ndarray, points: np.ndarray) -> np.ndarray:
 
 
 def unit_rows(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Row-wise unit vectors (as ``core.shading.illumination.unit3``): ``(unit vectors (N, 3), lengths (N,))``; zero rows stay zero."""
+    """Row-wise unit vectors (as ``core.vectors.unit3``): ``(unit vectors (N, 3), lengths
+    (N,))``; zero rows stay zero. Each row is divided by its largest component first, so
+    that neither huge nor subnormal components overflow or underflow in the squares (a
+    division, not a product with 1/m: 1/m of a subnormal m overflows)."""
     m = np.max(np.abs(v), axis=1)
     nonzero = m > 0.0
-    inv_m = np.divide(1.0, m, out=np.zeros_like(m), where=nonzero)
-    scaled = v * inv_m[:, None]
+    scaled = np.divide(v, m[:, None], out=np.zeros_like(v, dtype=np.float64),
+                       where=nonzero[:, None])
     x, y, z = scaled[:, 0], scaled[:, 1], scaled[:, 2]
     s = np.sqrt(x * x + y * y + z * z)
     inv_s = np.divide(1.0, s, out=np.zeros_like(s), where=nonzero)

@@ -252,3 +252,17 @@ def test_eye_from_a_rotated_view():
 def test_packing_rejects_a_light_without_position_or_direction():
     with pytest.raises(ValueError, match="light 2"):
         il.pack_lights([Light(position=(0, 0, 1)), Light(direction=(0, 0, 0))])
+
+
+def test_unit_vectors_of_subnormal_and_huge_components():
+    """1/m of a subnormal m overflows: both unit-vector forms divide instead, so a light
+    1e-310 away, or a direction of 1e-310, still has a direction (and no NaN)."""
+    from core.transforms import unit_rows
+    from core.vectors import unit3
+    for v in ([0.0, 3e-310, 4e-310], [3e300, 4e300, 0.0], [0.0, 0.0, 5e-324]):
+        expected = np.array(v) / np.max(np.abs(v))
+        expected /= np.linalg.norm(expected)
+        x, y, z, length = unit3(*v)
+        assert np.allclose([x, y, z], expected) and length > 0.0
+        rows, lengths = unit_rows(np.array([v]))
+        assert np.allclose(rows[0], expected) and lengths[0] > 0.0

@@ -281,8 +281,9 @@ _FIRST_FRAME = re.compile(r"first frame.*?([0-9]+(?:\.[0-9]+)?)\s*(ms|s)\b(?:.*?
                           re.IGNORECASE)
 
 
-def first_frame_time(timeout: float = 60.0, cold: bool = False) -> dict:
-    """Seconds from spawning ``python -m app view`` to the first frame the viewer logs as shown.
+def first_frame_time(timeout: float = 60.0, cold: bool = False, scene: str | None = None) -> dict:
+    """Seconds from spawning ``python -m app view [scene]`` (default: the default scene) to the
+    first frame the viewer logs as shown.
 
     Runs the viewer under a private Xvfb with ``FVD_LOG`` pointing at a temporary file and reads
     the viewer's own "first frame" line; also gives the wall time until that line appeared.
@@ -310,7 +311,8 @@ def first_frame_time(timeout: float = 60.0, cold: bool = False) -> dict:
         start = time.perf_counter()
         # stderr to a file: a pipe nobody reads while the viewer runs could fill and stall it
         errors = (tmp / "viewer.stderr").open("w")
-        viewer = subprocess.Popen([sys.executable, "-m", "app", "view"], cwd=ROOT, env=env,
+        viewer = subprocess.Popen([sys.executable, "-m", "app", "view", *([scene] if scene else [])],
+                                  cwd=ROOT, env=env,
                                   stdout=subprocess.DEVNULL, stderr=errors)
         errors.close()
         deadline = time.monotonic() + timeout
@@ -409,11 +411,12 @@ def format_startup(startup: dict) -> str:
         firsts = ", ".join(f"{s} {ms:.0f} ms" for s, ms in probe["first_frame_ms"].items())
         lines.append(f"JIT {key} start: import {probe['import_ms']:.0f} ms, first frames {firsts}; "
                      f"process wall {probe['process_wall_ms']:.0f} ms")
-    for key in ("first_frame_warm", "first_frame_cold"):
+    for key in ("first_frame_warm", "first_frame_warm_torus", "first_frame_cold"):
         ff = startup.get(key)
         if ff is None:
             continue
-        label = "python -m app to first frame shown" + (" (empty JIT cache)" if key.endswith("cold") else "")
+        label = ("python -m app" + (" scenes/torus.toml" if key.endswith("torus") else "")
+                 + " to first frame shown" + (" (empty JIT cache)" if key.endswith("cold") else ""))
         if ff.get("measured"):
             cpu = f", {ff['cpu_s']:.2f} s CPU" if ff.get("cpu_s") is not None else ""
             lines.append(f"{label}: {ff['logged_s']:.2f} s after process start as logged{cpu}; "
@@ -533,6 +536,7 @@ def main(args) -> int:
         startup["jit"] = jit_start_times()
         _progress("python -m app view under Xvfb, to the first frame ...")
         startup["first_frame_warm"] = first_frame_time()
+        startup["first_frame_warm_torus"] = first_frame_time(scene="scenes/torus.toml")
         _progress("python -m app view with an empty JIT cache ...")
         startup["first_frame_cold"] = first_frame_time(cold=True)
 

@@ -177,10 +177,12 @@ def main(args) -> int:
     except OSError as error:
         print(f"error: cannot write the report into {out}: {error}", file=sys.stderr)
         return 2
-    if config != accuracy.QUICK:     # -- issue 11: the texture rows (the quick sweep has none)
+    if config != accuracy.QUICK:     # the texture and ray-traced rows (the quick sweep has none)
+        from app.tools.raytrace_report import write as raytrace_rows
         from app.tools.texture_report import write as texture_rows
-        paths += tuple(texture_rows(out, progress=lambda line: print(line, file=sys.stderr,
-                                                                        flush=True)))
+        say = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
+        paths += tuple(texture_rows(out, progress=say))
+        paths += tuple(raytrace_rows(out, config.size, cache=config.cache, progress=say))
     for line in accuracy.reading(points):
         print(line)
     print(f"wrote {', '.join(str(p) for p in paths)} ({wall:.0f} s sweep)")

@@ -12,7 +12,6 @@ against time, one colour per filter, one marker per sample count).
 
 from __future__ import annotations
 
-import csv
 import statistics
 import time
 from pathlib import Path
@@ -58,41 +57,12 @@ def rows(size: int = 256, repeats: int = 3, progress=print) -> list[dict]:
 
 
 def write(out_dir: Path, size: int = 256, progress=print) -> list[Path]:
-    data = rows(size, progress=progress)
-    paths = [out_dir / "texture_filters.csv", out_dir / "texture_filters.md",
-             out_dir / "texture_filters.png"]
-    with open(paths[0], "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(data[0]))
-        w.writeheader()
-        w.writerows(data)
-    lines = [f"Texture filters on `scenes/texture_floor.toml` at {size} x {size}, against "
-             f"{REFERENCE_SAMPLES} samples a pixel (bilinear); RMSE in 8-bit units.", "",
-             "| filter | samples/pixel | time ms (median) | RMSE |", "|---|---|---|---|"]
-    lines += [f"| {r['filter']} | {r['samples']} | {r['time_ms']:.1f} | {r['rmse']:.2f} |"
-              for r in data]
-    paths[1].write_text("\n".join(lines) + "\n")
-    _plot(data, paths[2])
-    return paths
-
-
-def _plot(data, path: Path) -> None:
-    import matplotlib
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    markers = {1: "o", 4: "s", 16: "^"}
-    for k, name in enumerate(FILTERS):
-        pts = [r for r in data if r["filter"] == name]
-        ax.plot([r["time_ms"] for r in pts], [r["rmse"] for r in pts], "-", color=f"C{k}",
-                label=name)
-        for r in pts:
-            ax.plot(r["time_ms"], r["rmse"], markers[r["samples"]], color=f"C{k}")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("frame time, ms (median)")
-    ax.set_ylabel("RMSE against 256 spp")
-    ax.set_title("Grazing checkered floor: filter x samples (o 1, ■ 4, ▲ 16 spp)")
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    from app.tools.series_report import write as write_series
+    data = [{"series": r["filter"], **r} for r in rows(size, progress=progress)]
+    intro = (f"Texture filters on `scenes/texture_floor.toml` at {size} x {size}, against "
+             f"{REFERENCE_SAMPLES} samples a pixel (bilinear); RMSE in 8-bit units.")
+    return write_series(out_dir, "texture_filters", data, intro,
+                        [("filter", "filter"), ("samples", "samples/pixel"),
+                         ("time_ms", "time ms (median)"), ("rmse", "RMSE")],
+                        "Grazing checkered floor: filter x samples (o 1, ■ 4, ▲ 16 spp)",
+                        "RMSE against 256 spp")

@@ -30,6 +30,8 @@ def sample_offsets(samples: int, pattern: str = "regular", seed: int = 0) -> np.
     """``(samples, 2)`` offsets (x right, y down) in ``[0, 1)²``, row by row over the strata."""
     if samples < 1:
         raise ValueError(f"samples per pixel must be at least 1, not {samples}")
+    if samples == 1:
+        return np.array([[0.5, 0.5]])        # one sample is the centre, whatever the pattern
     side = grid_side(samples)
     if pattern == "regular" and side * side != samples:
         raise ValueError(f"a regular grid needs a square number of samples (1, 4, 9, 16, …), "

@@ -83,14 +83,14 @@ def in_depth_range(cam, px, py, pz):
 
 
 @njit(cache=True, parallel=True)
-def _rays(cam, width, height, offsets, origins, directions, inside):
-    per_pixel = offsets.shape[0]
-    for row in prange(height):
-        j = height - 1 - row                     # device row, counted from the bottom
-        for col in range(width):
-            for s in range(per_pixel):
-                k = (s * height + row) * width + col
-                ok, ox, oy, oz, dx, dy, dz = camera_ray(cam, col + offsets[s, 0],
+def _rays(cam, height, row0, row1, col0, col1, offsets, origins, directions, inside):
+    rows, cols = row1 - row0, col1 - col0
+    for r in prange(rows):
+        j = height - 1 - (row0 + r)              # device row, counted from the bottom
+        for c in range(cols):
+            for s in range(offsets.shape[0]):
+                k = (s * rows + r) * cols + c
+                ok, ox, oy, oz, dx, dy, dz = camera_ray(cam, col0 + c + offsets[s, 0],
                                                         j + 1.0 - offsets[s, 1])
                 inside[k] = ok
                 origins[k, 0], origins[k, 1], origins[k, 2] = ox, oy, oz
@@ -98,15 +98,19 @@ def _rays(cam, width, height, offsets, origins, directions, inside):
 
 
 def primary_rays(view: View, projection: str, width: int, height: int,
-                 offsets=((0.5, 0.5),), keep_aspect: bool = False
+                 offsets=((0.5, 0.5),), keep_aspect: bool = False, rows=None, cols=None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(origins (N, 3), directions (N, 3), inside (N,))`` for every pixel sample, N = S·H·W,
-    ordered sample, then image row (top first), then column. ``offsets`` ``(S, 2)`` are the
-    film's (x right, y down, in the pixel); directions are unit vectors."""
+    """``(origins (N, 3), directions (N, 3), inside (N,))`` for every pixel sample of the
+    image rows ``rows = (first, stop)`` and columns ``cols`` (default: the whole frame; a
+    tile lets a renderer trace the picture piece by piece), ordered sample, then image row
+    (top first), then column. ``offsets`` ``(S, 2)`` are the film's (x right, y down, in the
+    pixel); directions are unit vectors; ``inside`` is false outside the viewport."""
     offsets = np.ascontiguousarray(offsets, dtype=np.float64).reshape(-1, 2)
-    count = len(offsets) * height * width
+    row0, row1 = rows or (0, height)
+    col0, col1 = cols or (0, width)
+    count = len(offsets) * (row1 - row0) * (col1 - col0)
     origins, directions = np.empty((count, 3)), np.empty((count, 3))
     inside = np.empty(count, dtype=np.bool_)
-    _rays(pack_camera(view, projection, width, height, keep_aspect), int(width), int(height),
-          offsets, origins, directions, inside)
+    _rays(pack_camera(view, projection, width, height, keep_aspect), int(height), int(row0),
+          int(row1), int(col0), int(col1), offsets, origins, directions, inside)
     return origins, directions, inside

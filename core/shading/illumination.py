@@ -64,7 +64,7 @@ from numba import njit
 from core.camera.film import to_rgb8 as to_uint8  # noqa: F401  (one rounding rule)
 from core.camera.view import Eye, eye_from_view  # noqa: F401  (re-exported)
 from core.vectors import unit3  # noqa: F401  (re-exported)
-from core.transforms import unit_rows  # noqa: F401  (re-exported: the model's row form)
+from core.transforms import unit_rows
 
 # Columns of a packed surface row (pack_surfaces).
 KA, KD, KS, EXPONENT, OD, OS, TWO_SIDED = 0, 1, 2, 3, 4, 7, 10
@@ -82,11 +82,10 @@ def pack_eye(eye: Eye) -> np.ndarray:
     """``(4,)``: ``[EYE_POINT, x, y, z]`` or ``[EYE_DIRECTION, unit direction]``."""
     if eye.point is not None:
         return np.array([EYE_POINT, *np.asarray(eye.point, dtype=np.float64)])
-    direction = np.asarray(eye.direction, dtype=np.float64)
-    length = np.linalg.norm(direction)
-    if not length > 0.0:
+    unit, length = unit_rows(np.asarray(eye.direction, dtype=np.float64).reshape(1, 3))
+    if not length[0] > 0.0:
         raise ValueError("the direction towards the viewer is zero")
-    return np.array([EYE_DIRECTION, *(direction / length)])
+    return np.array([EYE_DIRECTION, *unit[0]])
 
 
 def pack_surfaces(materials, two_sided) -> np.ndarray:
@@ -115,12 +114,12 @@ def pack_lights(lights) -> np.ndarray:
             rows[i, LIGHT_XYZ:LIGHT_XYZ + 3] = light.position
         else:
             direction = np.asarray(light.direction if light.direction is not None else (0, 0, 0),
-                                   dtype=np.float64)
-            length = np.linalg.norm(direction)
-            if not length > 0.0:
+                                   dtype=np.float64).reshape(1, 3)
+            unit, length = unit_rows(direction)          # scaled first: 1e-300 or 1e300 is fine
+            if not length[0] > 0.0:
                 raise ValueError(f"light {i + 1}: it has no position and no direction")
             rows[i, LIGHT_KIND] = DIRECTIONAL_LIGHT
-            rows[i, LIGHT_XYZ:LIGHT_XYZ + 3] = direction / length
+            rows[i, LIGHT_XYZ:LIGHT_XYZ + 3] = unit[0]
         rows[i, LIGHT_INTENSITY:LIGHT_INTENSITY + 3] = light.intensity
         rows[i, LIGHT_ATTENUATION:LIGHT_ATTENUATION + 3] = light.attenuation
     return rows

@@ -387,12 +387,12 @@ class _Reader:
 
     def whitted_terms(self, t: dict, path: Path_) -> dict:
         """``kr``, ``kt`` in [0, 1] and ``ior``: a positive number or a medium's name."""
-        from core.raytrace.optics import index_of_refraction
         fields = {}
         for key in ("kr", "kt"):
             if key in t:
                 fields[key] = self.number(t[key], path + (key,), 0.0, 1.0)
         if "ior" in t:
+            from core.raytrace.optics import index_of_refraction    # (loads numba: only here)
             try:
                 fields["ior"] = index_of_refraction(t["ior"], "ior")
             except ValueError as error:
