@@ -340,3 +340,13 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
 def test_the_status_speaks_of_textures_only_where_there_are_some(whitted):
     assert not whitted.has_textures
     assert ViewerState.open(SCENES_DIR / "texture_floor.toml", size=(40, 30)).has_textures
+
+
+def test_a_letterboxed_progressive_frame_is_the_renderers_too(whitted):
+    whitted.set_renderer("raytrace")
+    whitted.set_keep_aspect(True)                       # 60 x 44: letterboxed, not stretched
+    settings = whitted.settings()
+    final = trace_progressively(whitted.scene, whitted.view, settings, whitted.context)
+    assert np.array_equal(final.color, render(whitted.scene, whitted.view, settings).color)
+    stretched = render(whitted.scene, whitted.view, settings.replace(keep_aspect=False))
+    assert not np.array_equal(final.color, stretched.color)

@@ -19,7 +19,6 @@ superseded it (the view or a setting changed) and stops there (:class:`Cancelled
 
 from __future__ import annotations
 
-import inspect
 import math
 import time
 
@@ -52,16 +51,14 @@ def upscale(color: np.ndarray, factor: int, width: int, height: int) -> np.ndarr
 
 
 def _prepare(scene, view, settings):
-    """The tracer's per-frame setup for ``settings`` (its film's samples, letterboxing when the
-    tracer knows it)."""
+    """The tracer's per-frame setup for ``settings`` (its film's samples, its letterboxing), as
+    its ``draw`` makes it."""
     from core.camera.film import sample_offsets
     from core.raytrace.renderer import TraceOptions, prepare
     offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
                if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
-    extra = ({"keep_aspect": bool(settings.keep_aspect)}
-             if "keep_aspect" in inspect.signature(prepare).parameters else {})
     return prepare(scene, view, settings.projection, settings.size,
-                   TraceOptions.from_settings(settings), offsets, **extra)
+                   TraceOptions.from_settings(settings), offsets, bool(settings.keep_aspect))
 
 
 def trace_progressively(scene, view, settings, context=None, render=None, control=None):
