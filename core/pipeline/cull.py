@@ -71,8 +71,9 @@ def front_faces(meshes, triangles: np.ndarray, eye,
     """
     if not any(m.closed and len(m.triangles) for m in meshes):
         return None
-    kept = np.empty(len(triangles), dtype=np.int64)
-    kept_triangles = np.empty((len(triangles), 3), dtype=np.int64)
+    # written every frame: held by the context, so no fresh (page-faulting) memory each time
+    kept = context.scratch("kept faces", (len(triangles),), np.int64)
+    kept_triangles = context.scratch("kept triangles", (len(triangles), 3), np.int64)
     eye_is_point = eye.point is not None
     e = np.asarray(eye.point if eye_is_point else eye.direction, dtype=np.float64)
     count, first = 0, 0

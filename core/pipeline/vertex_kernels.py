@@ -61,19 +61,22 @@ def _projective_serial(m, points, out, inv_w):
         _projective_point(m, points, out, inv_w, i)
 
 
-def transform_affine(m: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """``(N, 3)`` points through an affine 4 x 4 matrix (last row 0 0 0 1) → ``(N, 3)``."""
-    out = np.empty((len(points), 3))
+def transform_affine(m: np.ndarray, points: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """``(N, 3)`` points through an affine 4 x 4 matrix (last row 0 0 0 1) → ``(N, 3)``
+    (into ``out`` when given)."""
+    out = np.empty((len(points), 3)) if out is None else out
     kernel = _affine_parallel if len(points) >= PARALLEL_POINTS else _affine_serial
     kernel(np.ascontiguousarray(m, dtype=np.float64), np.ascontiguousarray(points, dtype=np.float64),
            out)
     return out
 
 
-def transform_projective(m: np.ndarray, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(N, 3)`` points through a 4 x 4 matrix and the divide by W → ``(xyz (N, 3), 1/W (N,))``."""
-    out = np.empty((len(points), 3))
-    inv_w = np.empty(len(points))
+def transform_projective(m: np.ndarray, points: np.ndarray, out: np.ndarray | None = None,
+                         inv_w: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``(N, 3)`` points through a 4 x 4 matrix and the divide by W → ``(xyz (N, 3), 1/W (N,))``
+    (into ``out`` and ``inv_w`` when given)."""
+    out = np.empty((len(points), 3)) if out is None else out
+    inv_w = np.empty(len(points)) if inv_w is None else inv_w
     kernel = _projective_parallel if len(points) >= PARALLEL_POINTS else _projective_serial
     kernel(np.ascontiguousarray(m, dtype=np.float64),
            np.ascontiguousarray(points, dtype=np.float64), out, inv_w)

@@ -120,7 +120,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
 
-    points = stages.transform_affine(n, positions)
+    points = stages.transform_affine(n, positions,
+                                     out=context.scratch("canonical points", (len(positions), 3)))
     timer.lap("normalize", canonical_points=points)
 
     clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min,
@@ -131,8 +132,10 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("clip triangles", clipped_points=clipped.points, clipped_attrs=clipped.attrs,
               clipped_triangles=clipped.triangles)
 
-    device, inv_w = stages.transform_projective(project.triangle_matrix(projection, z_min, vp),
-                                         clipped.points)
+    count = len(clipped.points)
+    device, inv_w = stages.transform_projective(
+        project.triangle_matrix(projection, z_min, vp), clipped.points,
+        out=context.scratch("device points", (count, 3)), inv_w=context.scratch("1/W", (count,)))
     timer.lap("project", device_points=device, inv_w=inv_w)
 
     rasterize = stages.rasterize

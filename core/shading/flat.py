@@ -46,7 +46,7 @@ def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
 
     Lazy (the z-buffer's way): no face is lit here; the pixel step lights the visible ones."""
     s.normals = all_face_normals(s, scene, meshes)
-    s.face_rgb = np.zeros((len(s.triangles), 3))          # faces not in s.faces stay unlit
+    s.face_rgb = s.context.scratch("flat rgb", (len(s.triangles), 3), zero=True)  # unlit: black
     s.computed += ["face normals", "illuminate faces"]
     if s.lazy:
         s.lit = np.zeros(len(s.triangles), np.uint8)

@@ -18,7 +18,8 @@ def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
     Lazy (the z-buffer's way): no vertex is lit here; the clipper lights the vertices of the
     triangles it cuts (``before_clip``) and the pixel step those of the visible triangles."""
     normals = all_vertex_normals(s, scene, meshes, weighting)
-    s.vertex_attrs = np.zeros((len(s.positions), 3))      # vertices no face uses stay unlit
+    # vertices no face uses stay unlit (black); kept in the context: no fresh 12 MB a frame
+    s.vertex_attrs = s.context.scratch("gouraud rgb", (len(s.positions), 3), zero=True)
     s.computed.append("illuminate vertices")
     if s.lazy:
         s.normals = normals
