@@ -1,4 +1,7 @@
-"""Shading: flat, Gouraud and Phong (FvDFH 16.2.3–16.2.5; Assignment #3) on a visibility buffer.
+"""What every shading mode shares (FvDFH 16.2.3–16.2.5; Assignment #3), on a visibility buffer.
+
+The modes themselves are :mod:`core.shading.flat`, :mod:`~core.shading.gouraud` and
+:mod:`~core.shading.phong`, found through :mod:`core.shading.registry`.
 
 The z-buffer pass (``core.pipeline.raster``) leaves, per pixel, the index of the visible (post-clip)
 triangle and the perspective-correct barycentric weights of its vertices. Shading is then two
