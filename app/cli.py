@@ -281,6 +281,14 @@ def _draw_still(scene, view, settings, time):
     return render_at(animation, time, settings)
 
 
+def _drawn_by(settings) -> str:
+    """What drew the frame, in the render log's words."""
+    if settings.renderer == "zbuffer":
+        return f"z-buffer, {settings.rasterizer} rasterizer"
+    return {"raytrace": "ray traced", "raycast": "ray cast (exact)"}.get(settings.renderer,
+                                                                      settings.renderer)
+
+
 def _render(args) -> int:
     from app.viewer.state import announce_compiles
     refusal = out_problem(Path(args.out), args.scene, args.force)
@@ -321,7 +329,7 @@ def _render(args) -> int:
         return 2
     from core.scene.view_numbers import label
     print(f"wrote {out} ({frame.color.shape[1]}x{frame.color.shape[0]}, {label(scene, index)}, "
-          f"{settings.projection}, {settings.shading}, {settings.rasterizer} rasterizer, "
+          f"{settings.projection}, {settings.shading}, {_drawn_by(settings)}, "
           f"aspect {'kept' if settings.keep_aspect else 'stretched'})")
     return 0
 
