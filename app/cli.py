@@ -224,6 +224,8 @@ def _load(source: str, size=None):
         return None
     for message in scene.view_messages:
         print(f"invalid view: {message}", file=sys.stderr)
+    for message in scene.messages:
+        print(f"warning: {message}", file=sys.stderr)
     return scene
 
 

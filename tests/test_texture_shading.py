@@ -68,7 +68,8 @@ def test_every_filter_draws(tmp_path, filter_name):
 def test_bad_texture_file_draws_untextured_with_a_message(tmp_path):
     (tmp_path / "broken.png").write_bytes(b"\x89PNG\r\n\x1a\n" + b"\x00" * 20)
     scene = _scene(tmp_path, ', texture = "broken.png", bump = "nowhere.png"')
-    messages = " ".join(scene.view_messages)
+    assert scene.view_messages == []                 # a texture is not a view: no view is invalid
+    messages = " ".join(scene.messages)
     assert "broken.png" in messages and "geometry[1].material.texture" in messages
     assert "nowhere.png" in messages and "geometry[1].material.bump" in messages
     assert np.abs(_draw(scene) - _draw(_scene(tmp_path, "", "p.toml"))).max() <= 1

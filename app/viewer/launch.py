@@ -100,6 +100,8 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
         return 2
     for message in state.scene.view_messages:
         print(f"invalid view: {message}", file=sys.stderr)
+    for message in state.scene.messages:
+        print(f"warning: {message}", file=sys.stderr)
     log.info("scene %s: %d valid views, %d invalid (%.3f s after process start)",
              scene_source, state.view_count, len(state.scene.view_messages),
              time.perf_counter() - started)

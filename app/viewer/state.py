@@ -290,7 +290,7 @@ class ViewerState:
     @property
     def notices(self) -> list[str]:
         """Everything else to read: failed opens, this frame's message, a failed render."""
-        found = list(self.open_messages)
+        found = list(self.open_messages) + [f"warning: {m}" for m in self.scene.messages]
         message = getattr(self.frame, "message", None)
         if message:
             found.append(message)

@@ -34,6 +34,9 @@ class Material:
     kr: float = 0.0
     kt: float = 0.0
     ior: float = 1.52                      # glass (the notes); only used where kt > 0
+    # What a system keeps on a material beyond the Phong terms (issue 11: "maps", the
+    # colour/bump/normal/environment maps of core.texture.material).
+    extra: dict = field(default_factory=dict)
 
 
 @dataclass
@@ -115,6 +118,8 @@ class Scene:
     meshes: list[Mesh]
     views: list[View]
     view_messages: list[str] = field(default_factory=list)
+    # The reader's other notes: what it could not use but drew without (a texture file).
+    messages: list[str] = field(default_factory=list)
     # Every view in file order, the View when valid and its message when not, so that "view K"
     # means the K-th view of the file (the course's numbering). Empty: valid views, then invalid.
     view_order: list = field(default_factory=list)

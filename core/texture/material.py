@@ -54,7 +54,7 @@ class SurfaceMaps:
 
 
 def maps_of(material) -> SurfaceMaps | None:
-    extra = getattr(material, "extra", None) or {}
+    extra = material.extra
     return extra.get(MAPS_KEY)
 
 

@@ -271,7 +271,7 @@ class _Reader:
         if size is not None:
             scene.size = tuple(size)
         # -- issue 11: texture files that could not be used; the bump demo's panel view
-        scene.view_messages += getattr(self, "texture_messages", [])
+        scene.messages += getattr(self, "texture_messages", [])
         from core.texture.demo_scene import panel_views
         panel = panel_views(scene)
         scene.views = panel + scene.views
@@ -378,7 +378,7 @@ class _Reader:
         # leaves the mesh untextured, and its message (naming file and key) is shown.
         maps = read_maps(self, t, path)
         if maps is not None:
-            material.extra = {**(getattr(material, "extra", None) or {}), "maps": maps}
+            material.extra = {**material.extra, "maps": maps}
             self.texture_messages = getattr(self, "texture_messages", []) + maps.messages
         # --
         return material
