@@ -139,9 +139,12 @@ def test_the_zbuffer_picture_stays_until_the_coarse_traced_one_arrives(whitted):
         time.sleep(0.2)
         assert worker.collect() is None and state.frame is zbuffer    # still the z-buffer's
         gate.set()
-        partial = _wait(worker, final=False)
-        state.accept(partial)
-        assert state.frame is not zbuffer and state.frame_partial
+        first = _wait(worker, final=False)
+        state.accept(first)
+        # The first traced picture replaces it: the coarse one, or the finished one when the
+        # small frame was traced before the worker was polled (the newest result is kept).
+        assert state.frame is not zbuffer and state.frame.stats["renderer"] == "raytrace"
+        assert state.frame_partial == (not first.final)
     finally:
         worker.stop()
 
