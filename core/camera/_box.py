@@ -3,7 +3,7 @@
 from numba import njit, prange
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _box_filter(image, k, out):
     height, width = out.shape[0], out.shape[1]
     scale = 1.0 / (k * k)

@@ -82,7 +82,7 @@ def in_depth_range(cam, px, py, pz):
     return cam[CAMERA_BACK] <= n <= cam[CAMERA_FRONT]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _rays(cam, height, row0, row1, col0, col1, offsets, origins, directions, inside):
     rows, cols = row1 - row0, col1 - col0
     for r in prange(rows):

@@ -309,7 +309,7 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk
     return bad
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _setup_parallel(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tri, s_bands,
                     s_xy, s_zw, chunk_end):
     # Snapping is one cheap pass (about 1 ms for 500k vertices); a parallel region of its
@@ -323,7 +323,7 @@ def _setup_parallel(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_
     return bad
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tri, s_bands,
                   s_xy, s_zw, chunk_end):
     _snap_vertices(xy_z, inv_w, fixed)
@@ -437,7 +437,7 @@ def _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chu
         span[height - 1 - j, 1] = hi
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _rast_parallel(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
                    depth, tri, b1, b2, span, count_fragments, fragments):
     for band in prange(n_bands):
@@ -445,7 +445,7 @@ def _rast_parallel(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_
                    depth, tri, b1, b2, span, count_fragments, fragments)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _rast_serial(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
                  depth, tri, b1, b2, span, count_fragments, fragments):
     for band in range(n_bands):

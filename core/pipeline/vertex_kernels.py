@@ -37,25 +37,25 @@ def _projective_point(m, points, out, inv_w, i):
         out[i, r] = (m[r, 0] * x + m[r, 1] * y + m[r, 2] * z + m[r, 3]) * iw
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _affine_parallel(m, points, out):
     for i in prange(points.shape[0]):
         _affine_point(m, points, out, i)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _affine_serial(m, points, out):
     for i in range(points.shape[0]):
         _affine_point(m, points, out, i)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _projective_parallel(m, points, out, inv_w):
     for i in prange(points.shape[0]):
         _projective_point(m, points, out, inv_w, i)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _projective_serial(m, points, out, inv_w):
     for i in range(points.shape[0]):
         _projective_point(m, points, out, inv_w, i)

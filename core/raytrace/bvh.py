@@ -220,7 +220,7 @@ def _build(lo, hi, cent):
     return box[:used].copy(), first[:used].copy(), count[:used].copy(), index, depth_max
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _triangle_arrays(positions, triangles, order, v0, e1, e2):
     for k in prange(order.shape[0]):
         t = order[k]
@@ -380,7 +380,7 @@ def spread(j, chunks):
     return (j * SPREAD) % chunks
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def closest_many(bvh, origins, directions, t_min, t_max, prim, t_hit, u_hit, v_hit):
     """:func:`closest` for every ray (in parallel): the scene triangle (-1: none), t, u, v."""
     n = origins.shape[0]
@@ -396,7 +396,7 @@ def closest_many(bvh, origins, directions, t_min, t_max, prim, t_hit, u_hit, v_h
             t_hit[i], u_hit[i], v_hit[i] = t, u, v
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def occluded_many(bvh, origins, directions, t_min, t_max, hit):
     """:func:`occluded` for every ray (in parallel): true where something is in the way."""
     n = origins.shape[0]

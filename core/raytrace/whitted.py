@@ -300,7 +300,7 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
 CHUNK = 512     # rays per parallel work item (dealt to the threads by bvh.spread)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, ambient, halfway,
                background, shadows, max_depth, epsilon, fresnel, medium, offset, raw, counts):
     """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``."""
@@ -325,7 +325,7 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
             raw[i, 0], raw[i, 1], raw[i, 2] = r, g, b
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def visible_many(packed, origins, directions, t_min, t_max, kind, index, t_hit):
     """Primary visibility only (no shading): what each ray sees first — :func:`nearest` for
     every ray, in parallel. ``kind`` NOTHING / TRIANGLE (``index`` the scene's triangle) /

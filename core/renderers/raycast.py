@@ -283,7 +283,7 @@ def _nearest_hit(shapes, ox, oy, oz, dx, dy, dz, vrp, nvx, nvy, nvz, front, back
     return best_shape, best_t
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _trace(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, background, rgb,
            surface_rgb, coverage, seen):
     height, width = coverage.shape

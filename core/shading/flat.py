@@ -25,7 +25,7 @@ def _phong_face(positions, triangles, f, normals, face_surface, surfaces, lights
     out[f, 0], out[f, 1], out[f, 2] = r, g, b
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _phong_faces_parallel(positions, triangles, faces, normals, face_surface, surfaces, lights,
                           ambient, eye, halfway, out):
     for k in prange(faces.shape[0]):
@@ -33,7 +33,7 @@ def _phong_faces_parallel(positions, triangles, faces, normals, face_surface, su
                     ambient, eye, halfway, out)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _phong_faces_serial(positions, triangles, faces, normals, face_surface, surfaces, lights,
                         ambient, eye, halfway, out):
     for k in range(faces.shape[0]):
@@ -60,7 +60,7 @@ def _light(s: ShadeInput, faces) -> None:
            s.ambient, s.eye, s.halfway, s.face_rgb)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _resolve_flat(tri, span, source, face_rgb, out):
     """Each covered pixel of each row's span gets its face's colour (the rest is background)."""
     for row in prange(tri.shape[0]):

@@ -57,7 +57,7 @@ def _phong_vertex(positions, normals, i, vertex_surface, surfaces, lights, ambie
     out[i, 0], out[i, 1], out[i, 2] = r, g, b
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _phong_vertices_parallel(positions, normals, vertices, vertex_surface, surfaces, lights,
                              ambient, eye, halfway, out):
     for k in prange(vertices.shape[0]):
@@ -65,7 +65,7 @@ def _phong_vertices_parallel(positions, normals, vertices, vertex_surface, surfa
                       eye, halfway, out)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surfaces, lights,
                            ambient, eye, halfway, out):
     for k in range(vertices.shape[0]):
@@ -73,7 +73,7 @@ def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surface
                       eye, halfway, out)
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
     """Interpolate the vertex colours over each row's covered span (the rest is background)."""
     for row in prange(tri.shape[0]):

@@ -24,7 +24,7 @@ def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
     s.computed.append("illuminate pixels")
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _resolve_phong(tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces, lights,
                    ambient, eye, halfway, out):
     """The model at every covered pixel of each row's span (the rest is background)."""

@@ -277,7 +277,7 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
     return out
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _mark_visible(tri, span, items, corners, limit, lit):
     """``lit[i] = 2`` for each item ``i < limit`` that a covered pixel uses and that is not
     lit yet: its vertices (``corners`` 3, ``items`` the triangles) or its source face

@@ -100,7 +100,7 @@ def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
     s.computed += ["illuminate pixels", "texture lookups"]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _resolve(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surfaces, maps,
              texels, levels, textures, demo, demo_light, filter_, bump, lights, ambient, eye,
              halfway, background8, out):

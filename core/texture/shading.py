@@ -17,7 +17,7 @@ from core.texture.sample import sample
 from core.texture.tutorial import uv_at
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def unlit_texture(tri, constants, texels, levels, wrap, filter_, background, out):
     """``out (H, W, 4)`` float: the filtered texel at each covered pixel, ``background``
     elsewhere (the texture alone, no light: the oracle's picture)."""

@@ -230,7 +230,7 @@ def textured_pixel(attrs, i0, i1, i2, w0, w1, w2, t, col, row, constants, s, map
     return r, g, b
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def resolve_textured(tri, b1, b2, triangles, attrs, constants, source, face_surface, surfaces,
                      maps, texels, levels, textures, filter_, bump, lights, ambient, eye,
                      halfway, background8, out):

@@ -69,7 +69,7 @@ def _tutorial_point(device_h, k, height):
     return device_h[k, 0] - 0.5 * w, w, (height - 0.5) * w - device_h[k, 1]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def _constants(device_h, triangles, uv, height, out):
     for t in prange(triangles.shape[0]):
         plane_constants(device_h, triangles[t, 0], triangles[t, 1], triangles[t, 2],
@@ -130,7 +130,7 @@ def uv_at(constants, t, i, j):
     return u, v, dudi, dvdi, -dudj, -dvdj
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def scan_uv(tri, constants, size, uv_out):
     """(u, v) at every covered pixel, stepped along each scan line as the tutorial does.
 
@@ -160,7 +160,7 @@ def scan_uv(tri, constants, size, uv_out):
             c += constants[t, 1, 2]
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True, parallel=True, nogil=True)
 def tutorial_map(tri, constants, texels, levels, background, out):
     """``screen[i] = texture_map[v][u]``: the nearest texel of level 0 (repeat) per pixel.
 
