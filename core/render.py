@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core.context import DEFAULT_CONTEXT, RenderContext
-from core.camera.film import Film, box_filter, fill, grid_side, to_rgb8  # noqa: F401
+from core.camera.film import Film, box_filter, fill, grid_side
 from core.camera.view import View, ViewError, problems
 from core.plan import Stage, plan
 from core.renderers import get_renderer

@@ -102,7 +102,7 @@ class RenderSettings:
         override of ``None`` keeps the scene's value."""
         values = {"projection": scene.projection, "shading": scene.shading, "size": scene.size,
                   "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect,
-                  "renderer": getattr(scene, "renderer", "zbuffer")}
+                  "renderer": scene.renderer}
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)
 

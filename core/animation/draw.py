@@ -196,10 +196,10 @@ def draw_particles(frame, sprites: Sprites, view, settings) -> int:
     height, width = color.shape[:2]
     if len(sprites) == 0 or width == 0 or height == 0:
         return 0
-    projection = getattr(settings, "projection", None) or "perspective"
+    projection = settings.projection
     p = project_sprites(sprites, view, projection, width, height,
-                        getattr(settings, "keep_aspect", False))     # the z-buffer's viewport
-    depth = getattr(frame, "depth", None)
+                        settings.keep_aspect)     # the z-buffer's viewport
+    depth = frame.depth
     if depth is None:
         # a renderer that keeps no depth (wireframe lines, the ray casters): nothing hides a
         # particle, and the frame says so

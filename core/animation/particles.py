@@ -494,7 +494,7 @@ def read_spec(reader, value, path, scene, depth: int) -> Spec:
             rt = reader.table(raw, p, ("min", "max"))
             for corner in ("min", "max"):
                 if corner not in rt:
-                    raise reader.fail(p, f"a region needs both 'min' and 'max' corners")
+                    raise reader.fail(p, "a region needs both 'min' and 'max' corners")
             lo, hi = (np.array(reader.vector(rt[c], p + (c,))) for c in ("min", "max"))
             if np.any(lo >= hi):
                 raise reader.fail(p, "the region's min corner is not below its max corner")

@@ -44,10 +44,10 @@ def paths_of(animation, samples_per_second: float = SAMPLES_PER_SECOND) -> dict[
 
 def draw_paths(frame, paths: dict[str, np.ndarray], view, settings, color=(1.0, 0.85, 0.2)) -> int:
     """Draw every path as a polyline over ``frame.color``; returns the segments drawn."""
-    projection = getattr(settings, "projection", "perspective")
+    projection = settings.projection
     height, width = frame.color.shape[:2]
     n, z_min = normalizing_transform(view, projection)
-    vp = project.viewport(view.window, width, height, getattr(settings, "keep_aspect", False))
+    vp = project.viewport(view.window, width, height, settings.keep_aspect)
     rgb = np.floor(np.clip(np.asarray(color, dtype=np.float64), 0, 1) * 255 + 0.5).astype(np.uint8)
     drawn = 0
     for points in paths.values():

@@ -68,15 +68,15 @@ _cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
 def _traced_meshes(scene) -> list:
-    return [m for m in scene.meshes if getattr(m, "tessellates", None) is None
+    return [m for m in scene.meshes if m.tessellates is None
             and len(m.triangles)]
 
 
 def _primitives(scene) -> tuple[list, list]:
-    spheres = [p for p in getattr(scene, "primitives", []) if isinstance(p, Sphere)]
-    planes = [p for p in getattr(scene, "primitives", []) if isinstance(p, Plane)]
+    spheres = [p for p in scene.primitives if isinstance(p, Sphere)]
+    planes = [p for p in scene.primitives if isinstance(p, Plane)]
     for mesh in scene.meshes:
-        prim = getattr(mesh, "tessellates", None)
+        prim = mesh.tessellates
         if isinstance(prim, Sphere) and not any(prim is s for s in spheres):
             spheres.append(prim)
         if isinstance(prim, Plane) and not any(prim is p for p in planes):
@@ -111,7 +111,7 @@ def _pack(meshes, spheres, planes) -> Packing:
         check_material(material, name)
     two_sided = [not m.closed for m in meshes] + [s.two_sided for s in spheres] + [True] * len(planes)
     surfaces = pack_surfaces(materials, two_sided)
-    optics = np.array([[getattr(m, "kr", 0.0), getattr(m, "kt", 0.0), getattr(m, "ior", 1.52)]
+    optics = np.array([[m.kr, m.kt, m.ior]
                        for m in materials], dtype=np.float64).reshape(-1, 3)
     checker = np.zeros((len(materials), 4))
     for i, plane in enumerate(planes):

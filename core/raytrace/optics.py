@@ -53,10 +53,10 @@ def index_of_refraction(value, where: str = "ior") -> float:
 def check_material(material, where: str) -> None:
     """Refuse a material whose global terms cannot be traced (ValueError naming ``where``)."""
     for name in ("kr", "kt"):
-        k = getattr(material, name, 0.0)
+        k = getattr(material, name)
         if not (isinstance(k, (int, float)) and math.isfinite(k) and 0.0 <= k <= 1.0):
             raise ValueError(f"{where}: {name} must be a number in [0, 1], not {k!r}")
-    index_of_refraction(getattr(material, "ior", GLASS), f"{where}: ior")
+    index_of_refraction(material.ior, f"{where}: ior")
 
 
 @njit(cache=True)

@@ -181,7 +181,7 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
         offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
                    if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
         setup = prepare(scene, view, settings.projection, settings.size, options, offsets,
-                        getattr(settings, "keep_aspect", False))
+                        settings.keep_aspect)
     except ValueError as error:              # a setting or a material the tracer cannot use
         frame.color[...] = to_uint8(scene.background)
         frame.message = f"{scene.name}: cannot ray trace: {error}"

@@ -18,7 +18,7 @@ class ViewNumberError(ValueError):
 
 def entries(scene) -> list:
     """Every view in file order: the View when valid, the reader's message when not."""
-    order = getattr(scene, "view_order", None)
+    order = scene.view_order
     return list(order) if order else [*scene.views, *scene.view_messages]
 
 

@@ -51,7 +51,7 @@ Decisions that keep every output finite (the stability suite of issue 6 checks t
   clamp maps to 0 and 1.
 
 :func:`to_uint8` turns [0, 1] into bytes: ``floor(255 c + 0.5)``, i.e. rounded half up
-(0.5/255 → 1), the same rule as ``core.render.to_rgb8`` and the numba kernels' ``quantize``.
+(0.5/255 → 1), the same rule as ``core.camera.film.to_rgb8`` and the numba kernels' ``quantize``.
 """
 
 from __future__ import annotations

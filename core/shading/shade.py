@@ -99,6 +99,10 @@ class ShadeInput:
     lit: np.ndarray | None = None
     normals: np.ndarray | None = None
     before_clip: Callable | None = None
+    # Set by the renderer before the pixel step, for shaders that read them (issue 11's
+    # textured one): the frame's RenderSettings, and (device points, 1/W) of the clipped vertices.
+    settings: object = None
+    device: tuple | None = None
 
 
 # --------------------------------------------------------------------------------------------
@@ -339,7 +343,7 @@ def unlit(candidates: np.ndarray, lit: np.ndarray) -> np.ndarray:
 def covered_spans(vis) -> np.ndarray:
     """``(H, 2)`` int32: per row, the first and last column a pixel step must look at (the
     rasterizer's spans when it kept them, else whole rows); the rest is background."""
-    if getattr(vis, "spans_known", False) and vis.span is not None:
+    if getattr(vis, "spans_known", False) and vis.span is not None:   # any object with tri, b1, b2 will do
         return vis.span
     height, width = vis.tri.shape
     spans = np.empty((height, 2), np.int32)

@@ -157,11 +157,10 @@ def _demo(attrs, i0, i1, i2, w0, w1, w2, demo, s, light):
 
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
-    settings = getattr(s, "settings", None)
-    filter_ = FILTERS.get(getattr(settings, "texture_filter", "trilinear"), TRILINEAR)
-    bump = bool(getattr(settings, "bump", True))
+    filter_ = FILTERS.get(s.settings.texture_filter if s.settings else "trilinear", TRILINEAR)
+    bump = s.settings.bump if s.settings else True
     tri = np.ascontiguousarray(vis.tri, dtype=np.int32)
-    device = getattr(s, "device", None)
+    device = s.device
     if device is not None:
         points, inv_w = device
         w = np.divide(1.0, inv_w, out=np.zeros_like(inv_w), where=inv_w > 0)

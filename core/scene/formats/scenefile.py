@@ -108,6 +108,7 @@ class _Reader:
         self.text = text
         self.file = file
         self.folder = folder
+        self.texture_messages: list[str] = []       # files a material could not use (issue 11)
         self.lines = text.split("\n")
         # Indexed once, so that locating a key costs the lines of its own table, not the
         # file's: every [[view]] asks for its line, and a rescan per view was quadratic.
@@ -271,7 +272,7 @@ class _Reader:
         if size is not None:
             scene.size = tuple(size)
         # -- issue 11: texture files that could not be used; the bump demo's panel view
-        scene.messages += getattr(self, "texture_messages", [])
+        scene.messages += self.texture_messages
         from core.texture.demo_scene import panel_views
         panel = panel_views(scene)
         scene.views = panel + scene.views
@@ -379,7 +380,7 @@ class _Reader:
         maps = read_maps(self, t, path)
         if maps is not None:
             material.extra = {**material.extra, "maps": maps}
-            self.texture_messages = getattr(self, "texture_messages", []) + maps.messages
+            self.texture_messages += maps.messages
         # --
         return material
 
