@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tools import need_module
+
 from core.raytrace import bvh, camera, intersect
 from core.scene.normals import face_normals
 
@@ -36,7 +38,7 @@ BUNNY = _bunny_path()
 
 
 def _embree():
-    return pytest.importorskip("embreex.rtcore_scene", reason="Embree oracle: pip install embreex")
+    return need_module("embreex.rtcore_scene", "the Embree oracle: pip install embreex")
 
 
 # --------------------------------------------------------------------------- hand values
