@@ -120,11 +120,9 @@ def test_switch_to_ray_traced_changes_the_picture(display, tmp_path):
                                "--size", "160x120", "--renderer", "raytrace", "--out",
                                str(rendered)], cwd=ROOT, capture_output=True, text=True,
                               timeout=300)
-        if done.returncode == 0:
-            from PIL import Image
-            assert np.array_equal(traced, np.asarray(Image.open(rendered).convert("RGB")))
-        else:                             # render --renderer lands with issue 12's CLI
-            assert "--renderer" in done.stderr, done.stderr
+        assert done.returncode == 0, done.stderr
+        from PIL import Image
+        assert np.array_equal(traced, np.asarray(Image.open(rendered).convert("RGB")))
         assert whole.shape[1] > 160
     finally:
         app.stop()
