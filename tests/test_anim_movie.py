@@ -121,7 +121,9 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
     clean = tmp_path / "clean"
     assert main(["animate", str(scene_file), "--out", str(clean), "--size", "96x96",
                  "--duration", "5"]) == 0
-    assert all(np.array_equal(x, y) for x, y in zip(frames(folder), frames(clean)))
+    resumed_frames, clean_frames = frames(folder), frames(clean)
+    assert len(resumed_frames) == len(clean_frames) == 60
+    assert all(np.array_equal(x, y) for x, y in zip(resumed_frames, clean_frames))
 
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):
