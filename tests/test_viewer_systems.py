@@ -52,7 +52,8 @@ class Recorder:
 @pytest.fixture
 def whitted():
     # 60 x 44: not a multiple of the coarse step, so the upscaled picture is cut to size
-    return ViewerState.open(SCENES_DIR / "whitted.toml", size=(60, 44))
+    # opened in the z-buffer (the file asks for the ray tracer), so the tests can switch
+    return ViewerState.open(SCENES_DIR / "whitted.toml", size=(60, 44), renderer_name="zbuffer")
 
 
 def test_ray_traced_is_a_setting_of_the_next_frame(whitted):
@@ -322,7 +323,7 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
     from core.scene.formats import ReaderError, load_scene
     from core.settings import RenderSettings
 
-    text = (SCENES_DIR / "whitted.toml").read_text()
+    text = (SCENES_DIR / "torus.toml").read_text()
     traced = tmp_path / "traced.toml"
     traced.write_text('renderer = "raytrace"\n' + text)
     scene = load_scene(traced)
@@ -333,7 +334,7 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
     # the command line's `view --renderer zbuffer` wins over the file
     assert ViewerState.open(traced, size=(40, 30), renderer_name="zbuffer").renderer_name == \
         "zbuffer"
-    assert load_scene(SCENES_DIR / "whitted.toml").renderer == "zbuffer"
+    assert load_scene(SCENES_DIR / "torus.toml").renderer == "zbuffer"      # the default
     bad = tmp_path / "bad.toml"
     bad.write_text('renderer = "radiosity"\n' + text)
     with pytest.raises(ReaderError, match=r"bad.toml:1: renderer: .*raytrace"):

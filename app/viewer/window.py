@@ -48,6 +48,7 @@ import glfw
 import imgui
 import moderngl
 
+from app.naming import picture_name, unused
 from app.viewer.blit import Blit
 from app.viewer.imgui_backend import GlfwInput, ImGuiRenderer
 from app.viewer.state import ViewerState, compile_count
@@ -375,13 +376,8 @@ class ViewerWindow:
         from PIL import Image
 
         s = self.state
-        stem = f"{Path(s.scene.name).stem or 'scene'}"[:24].replace(" ", "_")
-        stem = f"{stem}-v{s.view_number:02d}-{s.shading}"
-        path = self.out_dir / f"{stem}.png"
-        n = 1
-        while path.exists():
-            n += 1
-            path = self.out_dir / f"{stem}-{n}.png"
+        path = unused(self.out_dir / picture_name(s.scene.name, s.view_number, s.projection,
+                                                  s.shading, s.renderer_name))
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
             Image.fromarray(frame.color).save(path)
