@@ -193,7 +193,11 @@ def test_playback_runs_on_the_wall_clock_and_steps_whole_frames():
     assert p.playing and p.tick(10.5) and p.time == pytest.approx(0.5)
     p.set_speed(2.0)
     assert p.tick(10.75) and p.time == pytest.approx(1.0)
-    assert p.tick(12.0) and p.time == 2.0 and not p.playing  # no loop: stops at the end
+    assert p.tick(12.0) and p.time == pytest.approx(1.9) and not p.playing
+    # no loop: it stops on its last frame, the last picture `animate` writes: "20 of 20"
+    assert p.frame_index == 19 and "frame 20 of 20" in p.label()
+    p.seek(5.0)
+    assert p.time == pytest.approx(1.9) and "frame 20 of 20" in p.label()
     p.toggle(now=20.0)
     assert p.playing and p.time == 0.0                       # play at the end starts again
     p.step(+1)
@@ -210,6 +214,18 @@ def test_playback_runs_on_the_wall_clock_and_steps_whole_frames():
     assert looping.time == pytest.approx(1.9)
     with pytest.raises(ValueError, match="speed"):
         p.set_speed(0)
+
+
+def test_the_timeline_never_counts_past_its_last_frame():
+    # 2.04 s at 10 fps rounds to 20 frames; neither end reads "frame 21 of 20"
+    for loop in (False, True):
+        p = Playback(Clip(duration=2.04, fps=10.0, loop=loop))
+        p.toggle(now=0.0)
+        p.tick(2.035)
+        assert p.frame_index <= 19 and "of 20" in p.label() and "frame 21" not in p.label()
+    ends = Playback(Clip(duration=2.0, fps=10.0))
+    ends.step(+1000)
+    assert ends.time == pytest.approx(1.9) and ends.label().startswith("t = 1.90 s of 2.00 s, frame 20 of 20")
 
 
 @pytest.fixture
