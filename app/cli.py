@@ -88,14 +88,17 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
     r.add_argument("--view", type=int, default=1,
-                   help="which view: its position in the file, counting from 1 (an invalid "
-                        "one prints its message and exits 1)")
+                   help="which view: its position in the file, counting from 1 (a view that "
+                        "cannot be drawn, invalid in the file or in this projection, prints "
+                        "its message and exits with status 2)")
     r.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
     r.add_argument("--shading", choices=SHADING_CHOICES, default=None)
     r.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's, 500x500)")
-    r.add_argument("--out", required=True,
+    r.add_argument("--out", default=None,
                    help="the PNG file to write (.png only; its folder must exist; an existing "
-                        "file that is not a PNG is kept unless --force)")
+                        "file that is not a PNG is kept unless --force; default: named for "
+                        "the scene, view, projection, shading and renderer in the current "
+                        "folder, e.g. torus-view01-perspective-phong-zbuffer.png)")
     r.add_argument("--force", action="store_true",
                    help="overwrite --out even if it is an existing file that is not a PNG")
     _texture_arguments(r)                     # issue 11
@@ -293,9 +296,7 @@ def _drawn_by(settings) -> str:
 
 def _render(args) -> int:
     from app.viewer.state import announce_compiles
-    refusal = out_problem(Path(args.out), args.scene, args.force)
-    if refusal:
-        print(f"error: --out {args.out}: {refusal}", file=sys.stderr)
+    if args.out is not None and _refused(args.out, args):
         return 2
     scene = _load(args.scene, size=args.size)
     if scene is None:
@@ -315,14 +316,21 @@ def _render(args) -> int:
     except ValueError as error:            # e.g. --samples 0 (issue 12's options)
         print(f"error: {error}", file=sys.stderr)
         return 2
+    if args.out is None:                 # named by the rule every output follows
+        from app.naming import picture_name
+        from core.scene.view_numbers import file_number
+        args.out = picture_name(scene.name, file_number(scene, index), settings.projection,
+                                settings.shading, settings.renderer)
+        if _refused(args.out, args):
+            return 2
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
     with announce_compiles():            # the first run compiles the kernels: say so
         frame = _draw_still(scene, view, settings, args.time)
-    if frame.message:
+    if frame.message:                    # a view only the other projection can draw
         print(f"error: {frame.message}", file=sys.stderr)
-        return 1
+        return 2
     out = Path(args.out)
     try:
         write_png(frame.color, out)
@@ -334,6 +342,14 @@ def _render(args) -> int:
           f"{settings.projection}, {settings.shading}, {_drawn_by(settings)}, "
           f"aspect {'kept' if settings.keep_aspect else 'stretched'})")
     return 0
+
+
+def _refused(out: str, args) -> bool:
+    """Print why ``render`` must not write ``out`` and say so, or say nothing and return False."""
+    refusal = out_problem(Path(out), args.scene, args.force)
+    if refusal:
+        print(f"error: --out {out}: {refusal}", file=sys.stderr)
+    return bool(refusal)
 
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -424,9 +440,9 @@ def _matrices(args) -> int:
     view = scene.views[index]
     try:
         factors = (n_per_factors if args.projection == "perspective" else n_par_factors)(view)
-    except ViewError as error:
+    except ViewError as error:           # a view only the other projection can draw
         print(f"error: {error}", file=sys.stderr)
-        return 1
+        return 2
     out = {"view": view.label, "projection": args.projection}
     for name, m in factors.items():
         out[name] = float(m) if m.ndim == 0 else m.tolist()

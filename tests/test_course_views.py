@@ -89,7 +89,7 @@ def test_bare_app_reads_views_from_stdin_without_a_display(tmp_path):
                               capture_output=True, text=True, timeout=180)
     assert done.returncode == 0, done.stderr
     names = sorted(p.name for p in (tmp_path / "out").glob("*.png"))
-    assert names == [f"house-view{k:02d}-perspective-wireframe.png" for k in (1, 3, 5)]
+    assert names == [f"house-view{k:02d}-perspective-wireframe-zbuffer.png" for k in (1, 3, 5)]
     assert "<stdin>: view 2 (line 7): VUP is parallel to VPN" in done.stderr
 
 

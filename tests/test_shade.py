@@ -62,14 +62,58 @@ def test_prepare_concatenates_meshes_and_computes_only_what_the_mode_needs():
     assert phong.computed == ["vertex normals", "illuminate pixels"]
 
 
-def test_flat_colour_is_the_model_at_the_centroid():
-    scene = quad_scene()
+def test_flat_colour_is_the_model_once_at_the_polygons_centroid():
+    # each unit square is one planar polygon of two triangles: lit once, at the square's
+    # centre (the area-weighted centroid of its triangles), so both halves get one colour
+    scene = quad_scene(light=(0.9, 0.1, 1.0))      # near one half: per-triangle lighting differs
     s = shade.prepare("flat", scene, EYE)
-    centroid = np.array([[2, 1, 0], [1, 2, 0]]) / 3.0
-    expected = il.illuminate(centroid, [[0, 0, 1]] * 2, [0, 0], s.surfaces, s.lights, s.ambient,
+    centre = np.array([[0.5, 0.5, 0.0], [-0.5, -0.5, 0.5]])
+    expected = il.illuminate(centre, [[0, 0, 1]] * 2, [0, 1], s.surfaces, s.lights, s.ambient,
                              s.eye, False)
-    np.testing.assert_array_equal(s.face_rgb[:2], expected)
+    np.testing.assert_allclose(s.face_rgb[[0, 2]], expected, rtol=1e-12)
+    np.testing.assert_array_equal(s.face_rgb[0], s.face_rgb[1])          # no seam
+    np.testing.assert_array_equal(s.face_rgb[2], s.face_rgb[3])
+    halves = il.illuminate(np.array([[2, 1, 0], [1, 2, 0]]) / 3.0, [[0, 0, 1]] * 2, [0, 0],
+                           s.surfaces, s.lights, s.ambient, s.eye, False)
+    assert np.abs(halves[0] - halves[1]).max() > 0.02   # what lighting each triangle gave
     assert s.face_rgb[0, 0] > s.face_rgb[0, 2] and s.face_rgb[2, 2] > s.face_rgb[2, 0]  # mixed materials
+
+
+def test_planar_polygons_join_coplanar_neighbours_only():
+    from core.scene.generators import cube, icosphere, torus
+    from core.scene.normals import face_normals, planar_polygons
+
+    def polygons(positions, triangles):
+        positions, triangles = np.asarray(positions, float), np.asarray(triangles)
+        return planar_polygons(positions, triangles, face_normals(positions, triangles)[0])
+
+    square = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    assert polygons(square, [[0, 1, 2], [0, 2, 3]]).tolist() == [0, 0]
+    bent = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 1e-3]]
+    assert polygons(bent, [[0, 1, 2], [0, 2, 3]]).tolist() == [0, 1]
+    folded = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 0, 0], [1, 1, 0], [0, 1, 0]]   # split vertices
+    assert polygons(folded, [[0, 1, 2], [3, 4, 5]]).tolist() == [0, 0]
+    flipped = polygons(square, [[0, 1, 2], [0, 3, 2]])                  # facing the other way
+    assert flipped.tolist() == [0, 1]
+    apart = square + [[3, 0, 0], [4, 0, 0], [4, 1, 0]]                  # coplanar, no shared edge
+    assert polygons(apart, [[0, 1, 2], [4, 5, 6]]).tolist() == [0, 1]
+    for mesh, expected in ((cube(), 6), (torus(segments=24, sides=12), 24 * 12),
+                           (icosphere(subdivisions=2), 320)):
+        found = polygons(mesh.positions, mesh.triangles)
+        assert len(np.unique(found)) == expected, mesh.name     # a torus's quads are planar
+
+
+def test_a_flat_square_has_no_seam_on_the_screen():
+    from core import render
+    from core.settings import RenderSettings
+
+    scene = quad_scene(light=(0.9, 0.1, 1.0))
+    frame = render(scene, VIEW, RenderSettings(projection="perspective", shading="flat",
+                                               size=(80, 80)))
+    red = frame.color[:, 40:][:40]                        # the red square: x, y in [0, 1]
+    colours = np.unique(red.reshape(-1, 3), axis=0)
+    colours = colours[np.any(colours != frame.color[0, 0], axis=1)]      # not the background
+    assert len(colours) == 1, colours
 
 
 def test_gouraud_vertex_colours_are_the_model_at_the_vertices():

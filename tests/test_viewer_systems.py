@@ -52,7 +52,8 @@ class Recorder:
 @pytest.fixture
 def whitted():
     # 60 x 44: not a multiple of the coarse step, so the upscaled picture is cut to size
-    return ViewerState.open(SCENES_DIR / "whitted.toml", size=(60, 44))
+    # opened in the z-buffer (the file asks for the ray tracer), so the tests can switch
+    return ViewerState.open(SCENES_DIR / "whitted.toml", size=(60, 44), renderer_name="zbuffer")
 
 
 def test_ray_traced_is_a_setting_of_the_next_frame(whitted):
@@ -192,7 +193,11 @@ def test_playback_runs_on_the_wall_clock_and_steps_whole_frames():
     assert p.playing and p.tick(10.5) and p.time == pytest.approx(0.5)
     p.set_speed(2.0)
     assert p.tick(10.75) and p.time == pytest.approx(1.0)
-    assert p.tick(12.0) and p.time == 2.0 and not p.playing  # no loop: stops at the end
+    assert p.tick(12.0) and p.time == pytest.approx(1.9) and not p.playing
+    # no loop: it stops on its last frame, the last picture `animate` writes: "20 of 20"
+    assert p.frame_index == 19 and "frame 20 of 20" in p.label()
+    p.seek(5.0)
+    assert p.time == pytest.approx(1.9) and "frame 20 of 20" in p.label()
     p.toggle(now=20.0)
     assert p.playing and p.time == 0.0                       # play at the end starts again
     p.step(+1)
@@ -209,6 +214,18 @@ def test_playback_runs_on_the_wall_clock_and_steps_whole_frames():
     assert looping.time == pytest.approx(1.9)
     with pytest.raises(ValueError, match="speed"):
         p.set_speed(0)
+
+
+def test_the_timeline_never_counts_past_its_last_frame():
+    # 2.04 s at 10 fps rounds to 20 frames; neither end reads "frame 21 of 20"
+    for loop in (False, True):
+        p = Playback(Clip(duration=2.04, fps=10.0, loop=loop))
+        p.toggle(now=0.0)
+        p.tick(2.035)
+        assert p.frame_index <= 19 and "of 20" in p.label() and "frame 21" not in p.label()
+    ends = Playback(Clip(duration=2.0, fps=10.0))
+    ends.step(+1000)
+    assert ends.time == pytest.approx(1.9) and ends.label().startswith("t = 1.90 s of 2.00 s, frame 20 of 20")
 
 
 @pytest.fixture
@@ -322,7 +339,7 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
     from core.scene.formats import ReaderError, load_scene
     from core.settings import RenderSettings
 
-    text = (SCENES_DIR / "whitted.toml").read_text()
+    text = (SCENES_DIR / "torus.toml").read_text()
     traced = tmp_path / "traced.toml"
     traced.write_text('renderer = "raytrace"\n' + text)
     scene = load_scene(traced)
@@ -333,7 +350,7 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
     # the command line's `view --renderer zbuffer` wins over the file
     assert ViewerState.open(traced, size=(40, 30), renderer_name="zbuffer").renderer_name == \
         "zbuffer"
-    assert load_scene(SCENES_DIR / "whitted.toml").renderer == "zbuffer"
+    assert load_scene(SCENES_DIR / "torus.toml").renderer == "zbuffer"      # the default
     bad = tmp_path / "bad.toml"
     bad.write_text('renderer = "radiosity"\n' + text)
     with pytest.raises(ReaderError, match=r"bad.toml:1: renderer: .*raytrace"):

@@ -330,7 +330,7 @@ def test_no_display_renders_every_view_to_png(state, tmp_path, capsys):
             f"views to PNG in {out}") in captured.err
     files = sorted(out.glob("*.png"))
     # named by their place in the file: 1-13, then 19 (14-18 and 20 are invalid)
-    assert [f.name for f in files] == [f"house-view{k:02d}-perspective-wireframe.png"
+    assert [f.name for f in files] == [f"house-view{k:02d}-perspective-wireframe-zbuffer.png"
                                        for k in [*range(1, 14), 19]]
     for k, path in enumerate(files):
         assert f"wrote {path}" in captured.out

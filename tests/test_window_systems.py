@@ -96,7 +96,8 @@ def test_animated_scene_plays_pauses_and_steps(display, tmp_path):
 @pytest.mark.xvfb
 @pytest.mark.slow
 def test_switch_to_ray_traced_changes_the_picture(display, tmp_path):
-    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "whitted.toml"), "--size", "160x120")
+    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "whitted.toml"), "--size", "160x120",
+                "--renderer", "zbuffer")          # the file asks for the ray tracer
     try:
         app.wait_for(r"first frame shown", timeout=120)
         app.find_window()

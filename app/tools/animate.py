@@ -9,7 +9,7 @@ depend on who rendered the one before it), so they are rendered anywhere and in 
   and the scene file at the same path).
 
 Each frame comes back as PNG bytes and is written here, as soon as it completes, into the
-frames folder (``movie.frames/frame_00042.png``; for a PNG-sequence ``--out`` the folder is the
+frames folder (``movie.frames/frame-00042.png``; for a PNG-sequence ``--out`` the folder is the
 output). A frame is written to a temporary name and renamed, so a frame on disk is a whole
 frame: a run that is killed and started again skips the frames already there (**resumable**),
 as long as the settings are the same (``job.json`` in the folder records them). A frame that
@@ -37,8 +37,9 @@ from pathlib import Path
 
 import numpy as np
 
+from app.naming import frame_name
+
 MOVIE_SUFFIXES = (".mp4", ".gif")
-FRAME_NAME = "frame_{:05d}.png"
 MAX_FRAMES = 100_000
 
 
@@ -188,12 +189,12 @@ def prepare_folder(folder: Path, job: dict) -> list[int]:
         record.write_text(text)
     for stale in folder.glob("*.tmp"):                 # a frame half written when killed
         stale.unlink()
-    return [k for k in range(job["frames"]) if not (folder / FRAME_NAME.format(k)).exists()]
+    return [k for k in range(job["frames"]) if not (folder / frame_name(k)).exists()]
 
 
 def write_frame(folder: Path, k: int, data: bytes) -> None:
     """Write-then-rename: a frame on disk is always a whole frame."""
-    target = folder / FRAME_NAME.format(k)
+    target = folder / frame_name(k)
     tmp = target.with_name(target.name + ".tmp")
     tmp.write_bytes(data)
     os.replace(tmp, target)
@@ -339,7 +340,7 @@ def format_animation(row: dict) -> str:
 def encode(folder: Path, count: int, out: Path, fps: float, crf: int = 18) -> None:
     """The frames of ``folder`` into ``out``: H.264 MP4 (PyAV) or GIF (Pillow)."""
     from PIL import Image
-    paths = [folder / FRAME_NAME.format(k) for k in range(count)]
+    paths = [folder / frame_name(k) for k in range(count)]
     if out.suffix.lower() == ".gif":
         images = [Image.open(p).convert("RGB") for p in paths]
         images[0].save(out, save_all=True, append_images=images[1:], loop=0,

@@ -94,7 +94,7 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
     parser.add_argument("--no-animation", action="store_true",
                         help="skip the animation row (the fountain on 1 process and 2 workers)")
     parser.add_argument("--renderer", choices=("zbuffer", "raytrace"), default="zbuffer",
-                        help="raytrace: the ray tracer's rows beside Embree (issue 12)")
+                        help="raytrace: the ray tracer's rows beside Embree")
 
 
 def _progress(text: str) -> None:

@@ -26,8 +26,9 @@ per RGB channel, ``f_att = min(1, 1 / (c1 + c2 d + c3 d^2))`` (1 for directional
 the scene says ``specular = "halfway"``; meshes that are not closed are lit from both sides
 (the normal is flipped to face the viewer); closed meshes have their back faces culled.
 
-- flat:    one evaluation per triangle at its centroid with the face normal; every triangle gets
-           its own three vertices carrying the face normal and centroid (``flat`` varyings);
+- flat:    one evaluation per polygon at its centroid with its normal (a planar polygon's
+           triangles share them, as in :mod:`core.shading.flat`); every triangle gets its own
+           three vertices carrying that normal and point (``flat`` varyings);
 - gouraud: the model evaluated per vertex (vertex shader) with the same vertex normals as the
            CPU (:func:`core.scene.normals.vertex_normals`), clamped, then interpolated
            perspective-correctly;
@@ -50,7 +51,7 @@ import moderngl
 import numpy as np
 
 from core.shading.illumination import eye_from_view
-from core.scene.normals import face_normals, vertex_normals
+from core.scene.normals import vertex_normals
 from core.pipeline.project import perspective_to_parallel, viewport
 from core.scene.model import Scene
 from core.camera.view import View, normalizing_transform
@@ -375,11 +376,12 @@ class GLRenderer:
                             [(pos_buf, "3f", "in_position"), (nrm_buf, "3f", "in_normal")],
                             idx_buf)
             if "flat" in modes:
-                # Each triangle gets its own three corners carrying its face normal and
-                # centroid, so the flat varying is the same whichever vertex provokes.
+                # Each triangle gets its own three corners carrying the point and normal its
+                # polygon is lit with (core.shading.flat: a planar quad's two triangles share
+                # them), so the flat varying is the same whichever vertex provokes.
+                from core.shading.flat import lighting_points
                 corners = mesh.positions[mesh.triangles]                    # (T, 3, 3)
-                normal = face_normals(mesh.positions, mesh.triangles)[0]
-                centroid = corners.mean(axis=1)
+                centroid, normal = lighting_points(mesh)
                 flat = np.empty((len(corners), 3, 9), dtype="f4")
                 flat[:, :, 0:3] = corners
                 flat[:, :, 3:6] = normal[:, None, :]

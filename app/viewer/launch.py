@@ -20,6 +20,8 @@ import sys
 import time
 from pathlib import Path
 
+from app.naming import picture_name
+
 log = logging.getLogger("fvd")
 
 DEFAULT_OUT_DIR = "fvd-views"
@@ -135,7 +137,6 @@ def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:
     except OSError as error:
         print(f"error: cannot create {out}: {error}", file=sys.stderr)
         return 1
-    stem = Path(scene.name).stem or "scene"
     failed = 0
     for index in range(len(scene.views)):
         state.set_view(index)
@@ -148,7 +149,8 @@ def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:
         frame = state.frame
         if frame.message:
             print(f"view {number}: {frame.message}", file=sys.stderr)
-        path = out / f"{stem}-view{number:02d}-{state.projection}-{state.shading}.png"
+        path = out / picture_name(scene.name, number, state.projection, state.shading,
+                                  state.renderer_name)
         try:
             Image.fromarray(frame.color).save(path)
         except OSError as error:

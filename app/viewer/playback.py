@@ -44,8 +44,18 @@ class Playback:
 
     @property
     def frame_index(self) -> int:
-        """The animation frame at or just before ``time`` (frame k is at k / fps)."""
-        return int(math.floor(self.time * self.fps + 1e-9))
+        """The animation frame at or just before ``time`` (frame k is at k / fps), from 0 to
+        ``frame_count - 1``."""
+        return min(int(math.floor(self.time * self.fps + 1e-9)), self.frame_count - 1)
+
+    @property
+    def end(self) -> float:
+        """The last moment of the timeline: a movie that does not loop ends on its last frame,
+        ``(frame_count - 1) / fps``, the last picture ``animate`` writes; one that loops runs
+        on to ``duration``, where it starts again."""
+        if self.animation.loop:
+            return self.duration
+        return min(self.duration, (self.frame_count - 1) / self.fps)
 
     @property
     def frame_count(self) -> int:
@@ -59,7 +69,7 @@ class Playback:
     def toggle(self, now: float) -> None:
         """Play or pause. Playing from the end of a movie that does not loop starts it again."""
         self.playing = not self.playing
-        if self.playing and not self.animation.loop and self.time >= self.duration:
+        if self.playing and not self.animation.loop and self.time >= self.end:
             self.time = 0.0
         self._clock = now if self.playing else None
 
@@ -93,8 +103,8 @@ class Playback:
         t = self.time + elapsed * self.speed
         if self.animation.loop and self.duration > 0.0:
             t = math.fmod(t, self.duration)
-        elif t >= self.duration:
-            t, self.playing, self._clock = self.duration, False, None
+        elif t >= self.end:
+            t, self.playing, self._clock = self.end, False, None
         self.time = t
         return True
 
@@ -104,7 +114,7 @@ class Playback:
             return 0.0
         if self.animation.loop:
             return t % self.duration
-        return min(max(t, 0.0), self.duration)
+        return min(max(t, 0.0), self.end)
 
 
 def render_animated(animation, t: float, settings, context, view_index: int, control=None):

@@ -48,6 +48,7 @@ import glfw
 import imgui
 import moderngl
 
+from app.naming import picture_name, unused
 from app.viewer.blit import Blit
 from app.viewer.imgui_backend import GlfwInput, ImGuiRenderer
 from app.viewer.state import ViewerState, compile_count
@@ -254,6 +255,10 @@ class ViewerWindow:
             self._close_popups = True     # Esc closes the open menu or pop-up, nothing more
             log.info("action: key Esc -> close the open menu")
             return
+        if key == glfw.KEY_ESCAPE and self.state.open_messages:
+            self.state.clear_messages()   # an error is a message to dismiss, not a reason to quit
+            log.info("action: key Esc -> dismiss the message")
+            return
         if imgui.get_io().want_capture_keyboard:
             return                        # typing in a text field
         if key == glfw.KEY_ESCAPE:
@@ -301,8 +306,17 @@ class ViewerWindow:
         self._wake()
 
     def _on_framebuffer_size(self, window, width, height) -> None:
-        self.state.resize(*self.picture_size())
+        self._fit_picture()
         self._wake()
+
+    def _fit_picture(self) -> None:
+        """Give the picture what the panel leaves; say when that is nothing."""
+        shown = self.state.renderable
+        fb_w, fb_h = glfw.get_framebuffer_size(self.window)
+        self.state.resize(*self.picture_size())
+        if shown != self.state.renderable and fb_w > 0 and fb_h > 0:
+            log.info("picture %s", "shown" if self.state.renderable
+                     else "hidden: the panel takes the whole window")
 
     # -- actions -----------------------------------------------------------------------------
     def step_view(self, step: int, how: str) -> None:
@@ -356,14 +370,16 @@ class ViewerWindow:
         source = source.strip()
         if not source:
             return
+        earlier = len(self.state.open_messages)
         if self.state.open_scene(source):
             log.info("action: %s -> opened %s (%s)", how, source, self.state.view_label)
             for message in self.state.scene.view_messages:
                 print(f"invalid view: {message}", file=sys.stderr)
             glfw.set_window_title(self.window, self._title())
-        else:
-            log.info("action: %s -> %s", how, self.state.open_messages[-1])
-            print("\n".join(self.state.open_messages), file=sys.stderr)
+        else:                             # this failure's messages only, not the earlier ones
+            new = self.state.open_messages[earlier:]
+            log.info("action: %s -> %s", how, new[0] if new else "not opened")
+            print("\n".join(new), file=sys.stderr)
         self._wake()
 
     def save_screenshot(self, how: str) -> Path | None:
@@ -375,13 +391,8 @@ class ViewerWindow:
         from PIL import Image
 
         s = self.state
-        stem = f"{Path(s.scene.name).stem or 'scene'}"[:24].replace(" ", "_")
-        stem = f"{stem}-v{s.view_number:02d}-{s.shading}"
-        path = self.out_dir / f"{stem}.png"
-        n = 1
-        while path.exists():
-            n += 1
-            path = self.out_dir / f"{stem}-{n}.png"
+        path = unused(self.out_dir / picture_name(s.scene.name, s.view_number, s.projection,
+                                                  s.shading, s.renderer_name))
         try:
             self.out_dir.mkdir(parents=True, exist_ok=True)
             Image.fromarray(frame.color).save(path)
@@ -426,7 +437,7 @@ class ViewerWindow:
     def draw_frame(self) -> bool:
         """Input, clicks, ask for / collect a frame, GUI, blit, swap; False when minimised."""
         fb_w, fb_h = glfw.get_framebuffer_size(self.window)
-        self.state.resize(*self.picture_size())
+        self._fit_picture()
         if fb_w <= 0 or fb_h <= 0 or glfw.get_window_attrib(self.window, glfw.ICONIFIED):
             self._clicks.clear()
             self._busy = 0
@@ -454,11 +465,15 @@ class ViewerWindow:
 
         self.ctx.viewport = (0, 0, fb_w, fb_h)
         self.ctx.clear(0.11, 0.11, 0.13, 1.0)
-        if self.state.frame is not None:  # after a scene change, never the old scene's picture
+        if self.state.frame is not None and self.state.renderable:
+            # after a scene change, never the old scene's picture; and only inside the picture's
+            # area, so a frame of the old, larger size never shows under the panel
             width, height = self.state.frame.color.shape[1::-1]
             origin = (0, fb_h - height)   # the picture's bottom-left, GL counts rows up
             self.ctx.viewport = (*origin, width, height)
+            self.ctx.scissor = (0, fb_h - self.state.size[1], *self.state.size)
             self.blit.draw(origin)
+            self.ctx.scissor = None
             self.ctx.viewport = (0, 0, fb_w, fb_h)
         self.gui.render(imgui.get_draw_data())
         glfw.swap_buffers(self.window)
@@ -681,8 +696,11 @@ class ViewerWindow:
         if s.bump_label:
             imgui.text_colored(displayable(s.bump_label), 0.6, 0.7, 1.0)
             imgui.text_disabled("left click: bump / Phong; other buttons: next map")
-        if s.frame is None:
-            imgui.text("no frame to show" if not s.renderable else "")
+        if not s.renderable:
+            imgui.text_colored("the panel takes the whole window: widen it to see the picture",
+                               1.0, 0.75, 0.4)
+        elif s.frame is None:
+            imgui.text("")
         else:
             imgui.text(f"{s.size[0]} x {s.size[1]}, frame {s.frame_seconds * 1e3:.1f} ms")
         imgui.text_colored(displayable(self._progress_text()), 0.55, 0.8, 1.0)
@@ -725,7 +743,7 @@ class ViewerWindow:
         imgui.text(f"frame {playback.frame_index + 1} of {playback.frame_count}")
         imgui.push_item_width(-1)
         changed, t = imgui.slider_float("##time", playback.time, 0.0,
-                                        max(playback.duration, 1e-6), "%.2f s")
+                                        max(playback.end, 1e-6), "%.2f s")
         if changed:
             self.state.seek(t, time.perf_counter())
             self._wake()

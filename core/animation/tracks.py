@@ -3,8 +3,9 @@
 A :class:`Track` holds keys ``(t_i, V_i)`` (``V`` a vector of any length) and a method:
 
 - ``linear``: the notes' ``V_t = V_i (1 - u) + u V_f`` on each interval, ``u`` in [0, 1].
-- ``ease``: the notes' trigonometric method: the same lerp with ``u`` replaced by
-  ``(1 - cos(pi u)) / 2`` (ease-in/ease-out: zero speed at every key).
+- ``ease``: the same lerp with ``u`` replaced by ``(1 - cos(pi u)) / 2`` (ease-in/ease-out:
+  zero speed at every key). The notes name a "trigonometric method" but give no formula;
+  this cosine is ours.
 - ``catmull-rom``: the cubic Hermite spline through the keys with tangents
   ``(V_{i+1} - V_{i-1}) / (t_{i+1} - t_{i-1})``: C1 in time at every key.
 - ``kochanek-bartels``: Hermite with Kochanek and Bartels' (1984) incoming and outgoing

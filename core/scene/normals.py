@@ -190,3 +190,69 @@ def vertex_normals(mesh, weighting: str = "mean") -> np.ndarray:
             given[missing] = vertex_normals_from_faces(mesh.positions, triangles, weighting)[missing]
         return given
     return vertex_normals_from_faces(mesh.positions, triangles, weighting)
+
+
+# Two faces sharing an edge lie in one plane when their unit normals agree this closely
+# (an angle under ~1.4e-6 rad): round-off in a planar quad's two normals is ~1e-13, while
+# neighbouring faces of the finest curved mesh we allow differ by ~1e-3 rad.
+COPLANAR_TOLERANCE = 1e-12
+
+
+@njit(cache=True)
+def _root(parent, f):
+    while parent[f] != f:
+        parent[f] = parent[parent[f]]               # path halving
+        f = parent[f]
+    return f
+
+
+@njit(cache=True)
+def _join_faces(face_count, first, second):
+    """Union–find over the pairs ``(first[j], second[j])``: each face's polygon, the lowest
+    face of its piece."""
+    parent = np.arange(face_count)
+    for j in range(first.shape[0]):
+        a, b = _root(parent, first[j]), _root(parent, second[j])
+        if a < b:
+            parent[b] = a
+        elif b < a:
+            parent[a] = b
+    for f in range(face_count):
+        parent[f] = _root(parent, f)
+    return parent
+
+
+def _same_points(p: np.ndarray) -> tuple[np.ndarray, int]:
+    """``(index (V,), count)``: equal rows of ``p`` get one index (-0.0 equals 0.0)."""
+    if len(p) == 0:
+        return np.zeros(0, dtype=np.int64), 0
+    order = np.lexsort((p[:, 2], p[:, 1], p[:, 0]))
+    q = p[order]
+    new = np.ones(len(p), dtype=bool)
+    new[1:] = np.any(q[1:] != q[:-1], axis=1)
+    index = np.empty(len(p), dtype=np.int64)
+    index[order] = np.cumsum(new) - 1
+    return index, int(new.sum())
+
+
+def planar_polygons(positions: np.ndarray, triangles: np.ndarray,
+                    normals: np.ndarray) -> np.ndarray:
+    """``(T,)``: the polygon of each face — faces that share an edge (by position, so split
+    vertices still join) and lie in one plane facing the same way are one polygon, named by
+    its lowest face. The two triangles of a planar quad are one polygon; a curved mesh's faces
+    stay one each. ``normals`` are the faces' unit normals; zero-area faces stay alone."""
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    count = len(t)
+    if count == 0:
+        return np.zeros(0, dtype=np.int64)
+    where, distinct = _same_points(np.asarray(positions, dtype=np.float64))
+    t = where[t]
+    a, b = t.reshape(-1), t[:, [1, 2, 0]].reshape(-1)
+    edge = np.minimum(a, b) * distinct + np.maximum(a, b)     # one integer per undirected edge
+    order = np.argsort(edge, kind="stable")
+    edge, face = edge[order], order // 3
+    shared = np.flatnonzero(edge[:-1] == edge[1:])
+    first, second = face[shared], face[shared + 1]          # neighbours along a run of faces
+    n = np.asarray(normals, dtype=np.float64)
+    same_plane = np.einsum("ij,ij->i", n[first], n[second]) > 1.0 - COPLANAR_TOLERANCE
+    return _join_faces(count, first[same_plane], second[same_plane])

@@ -1,5 +1,10 @@
-"""Flat shading (FvDFH 16.2.3): the illumination model once per face, at its centroid with its
-face normal; every pixel of the face gets that colour. Varyings: none."""
+"""Flat shading (FvDFH 16.2.3): the illumination model once per polygon, at its centroid with
+its normal; every pixel of the polygon gets that colour. Varyings: none.
+
+The course's polygons arrive here as triangles: a planar quad is two. Faces that share an edge
+and lie in one plane (:func:`core.scene.normals.planar_polygons`) are lit as one polygon, at
+the area-weighted centroid of the whole polygon, so a flat quad has no diagonal seam. A face
+alone in its plane is lit at its own centroid, exactly as before."""
 
 from __future__ import annotations
 
@@ -8,44 +13,94 @@ from numba import njit, prange
 
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
-from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_face_normals, covered_spans,
-                                 visible_items)
+from core.scene.normals import face_normals, planar_polygons
+from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_face_normals, cached,
+                                 covered_spans, scene_arrays, visible_items)
 
 
 @njit(cache=True)
-def _phong_face(positions, triangles, f, normals, face_surface, surfaces, lights, ambient, eye,
-                halfway, out):
-    """The model once for face ``f``, at its centroid with its face normal."""
-    i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
-    cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
-    cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
-    cz = (positions[i0, 2] + positions[i1, 2] + positions[i2, 2]) / 3.0
-    r, g, b = phong_point(cx, cy, cz, normals[f, 0], normals[f, 1], normals[f, 2],
+def _phong_face(positions, triangles, f, normals, polygon, polygon_point, face_surface,
+                surfaces, lights, ambient, eye, halfway, out):
+    """The model once for face ``f``: at its polygon's centroid with the polygon's normal (the
+    same numbers for every face of the polygon), or at its own centroid when it is alone."""
+    p = polygon[f]
+    if p < 0:
+        i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
+        cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
+        cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
+        cz = (positions[i0, 2] + positions[i1, 2] + positions[i2, 2]) / 3.0
+        p = f
+    else:
+        cx, cy, cz = polygon_point[p, 0], polygon_point[p, 1], polygon_point[p, 2]
+    r, g, b = phong_point(cx, cy, cz, normals[p, 0], normals[p, 1], normals[p, 2],
                           face_surface[f], surfaces, lights, ambient, eye, halfway)
     out[f, 0], out[f, 1], out[f, 2] = r, g, b
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _phong_faces_parallel(positions, triangles, faces, normals, face_surface, surfaces, lights,
-                          ambient, eye, halfway, out):
+def _phong_faces_parallel(positions, triangles, faces, normals, polygon, polygon_point,
+                          face_surface, surfaces, lights, ambient, eye, halfway, out):
     for k in prange(faces.shape[0]):
-        _phong_face(positions, triangles, faces[k], normals, face_surface, surfaces, lights,
-                    ambient, eye, halfway, out)
+        _phong_face(positions, triangles, faces[k], normals, polygon, polygon_point,
+                    face_surface, surfaces, lights, ambient, eye, halfway, out)
 
 
 @njit(cache=True, nogil=True)
-def _phong_faces_serial(positions, triangles, faces, normals, face_surface, surfaces, lights,
-                        ambient, eye, halfway, out):
+def _phong_faces_serial(positions, triangles, faces, normals, polygon, polygon_point,
+                        face_surface, surfaces, lights, ambient, eye, halfway, out):
     for k in range(faces.shape[0]):
-        _phong_face(positions, triangles, faces[k], normals, face_surface, surfaces, lights,
-                    ambient, eye, halfway, out)
+        _phong_face(positions, triangles, faces[k], normals, polygon, polygon_point,
+                    face_surface, surfaces, lights, ambient, eye, halfway, out)
+
+
+def _mesh_polygons(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """``(polygon (T,), point (T, 3))`` of one mesh: each face's polygon (its lowest face; -1
+    for a face alone in its plane) and, at that lowest face's row, the polygon's area-weighted
+    centroid."""
+    normals, double_area = face_normals(mesh.positions, mesh.triangles)
+    polygon = planar_polygons(mesh.positions, mesh.triangles, normals)
+    count = len(polygon)
+    size = np.bincount(polygon, minlength=count)
+    centroid = mesh.positions[mesh.triangles].sum(axis=1) / 3.0
+    area = np.bincount(polygon, weights=double_area, minlength=count)
+    point = np.zeros((count, 3))
+    for c in range(3):
+        point[:, c] = np.bincount(polygon, weights=double_area * centroid[:, c], minlength=count)
+    ok = area > 0.0
+    point[ok] /= area[ok, None]
+    return np.where(size[polygon] > 1, polygon, -1), point
+
+
+def lighting_points(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """``(point (T, 3), normal (T, 3))``: where and with which normal flat shading evaluates
+    the model for each face of ``mesh`` (the GL oracle draws flat with the same numbers)."""
+    polygon, point = _mesh_polygons(mesh)
+    normals = face_normals(mesh.positions, mesh.triangles)[0]
+    alone = polygon < 0
+    own = np.where(alone, np.arange(len(polygon)), polygon)
+    where = np.where(alone[:, None], mesh.positions[mesh.triangles].sum(axis=1) / 3.0,
+                     point[own])
+    return where, normals[own]
+
+
+def polygons(s: ShadeInput, scene, meshes) -> tuple[np.ndarray, np.ndarray]:
+    """Every mesh's :func:`_mesh_polygons`, scene order, faces numbered across the scene."""
+    def build():
+        parts = [cached(s.context, m, (m.positions, m.triangles, m.normals), "flat polygons",
+                        lambda m=m: _mesh_polygons(m)) for m in meshes]
+        offsets = np.cumsum([0] + [len(p[0]) for p in parts])
+        polygon = [np.where(p[0] >= 0, p[0] + offsets[i], -1) for i, p in enumerate(parts)]
+        return ((np.concatenate(polygon) if parts else np.zeros(0, np.int64)),
+                (np.concatenate([p[1] for p in parts]) if parts else np.zeros((0, 3))))
+    return cached(s.context, scene, scene_arrays(meshes), "flat polygons", build)
 
 
 def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
-    """One evaluation per face, at its centroid with its face normal (FvDFH 16.2.3).
+    """One evaluation per polygon, at its centroid with its normal (FvDFH 16.2.3).
 
     Lazy (the z-buffer's way): no face is lit here; the pixel step lights the visible ones."""
     s.normals = all_face_normals(s, scene, meshes)
+    s.polygon, s.polygon_point = polygons(s, scene, meshes)
     s.face_rgb = s.context.scratch("flat rgb", (len(s.triangles), 3), zero=True)  # unlit: black
     s.computed += ["face normals", "illuminate faces"]
     if s.lazy:
@@ -56,8 +111,8 @@ def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
 
 def _light(s: ShadeInput, faces) -> None:
     kernel = _phong_faces_parallel if len(faces) >= PARALLEL_ITEMS else _phong_faces_serial
-    kernel(s.positions, s.triangles, faces, s.normals, s.face_surface, s.surfaces, s.lights,
-           s.ambient, s.eye, s.halfway, s.face_rgb)
+    kernel(s.positions, s.triangles, faces, s.normals, s.polygon, s.polygon_point,
+           s.face_surface, s.surfaces, s.lights, s.ambient, s.eye, s.halfway, s.face_rgb)
 
 
 @njit(cache=True, parallel=True, nogil=True)

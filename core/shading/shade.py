@@ -103,6 +103,9 @@ class ShadeInput:
     # textured one): the frame's RenderSettings, and (device points, 1/W) of the clipped vertices.
     settings: object = None
     device: tuple | None = None
+    # Flat shading: each face's planar polygon (-1 alone) and the polygons' centroids.
+    polygon: np.ndarray | None = None
+    polygon_point: np.ndarray | None = None
 
 
 # --------------------------------------------------------------------------------------------
