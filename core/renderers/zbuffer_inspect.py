@@ -27,7 +27,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from core.camera.film import grid_side, to_rgb8
-from core.camera.view import eye_from_view, n_par_factors, n_per_factors
+from core.camera.view import eye_from_view, n_par_factors, n_per_factors, vrc_basis
 from core.context import DEFAULT_CONTEXT, RenderContext
 from core.pipeline import project
 from core.shading.illumination import quantize
@@ -67,6 +67,9 @@ class Capture:
     arrays: dict = field(default_factory=dict)
     shade: object = None            # a ShadeInput: surfaces, lights, eye, normals, maps
     device_h: np.ndarray | None = None
+    matrices: dict = field(default_factory=dict)
+    n_inverse: np.ndarray | None = None
+    vrc: tuple = ()                 # u, v, n of the view, and the eye point (or None)
 
 
 def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
@@ -83,7 +86,7 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
                   "color": [int(c) for c in np.floor(mean + 0.5)]}
     return {"renderer": "zbuffer", "pixel": [int(x), int(y)], **record,
             "shading": cap.mode, "rasterizer": settings.rasterizer,
-            "projection": settings.projection, "matrices": _matrices(cap)}
+            "projection": settings.projection, "matrices": cap.matrices}
 
 
 def capture(scene, view, settings, context=None) -> Capture:
@@ -125,6 +128,9 @@ def _capture(scene, view, settings) -> Capture:
                   lines=None, line_rgb=to_rgb8(scene.line_color).tolist(),
                   background=to_rgb8(scene.background).tolist(),
                   mesh_names=[getattr(m, "name", None) for m in scene.meshes])
+    cap.matrices = _matrices(cap)
+    cap.n_inverse = np.linalg.inv(cap.n)
+    cap.vrc = (*vrc_basis(view), eye_from_view(view, settings.projection).point)
     if "tri" in recorder.arrays:
         vis = context.buffer("visibility", (width, height), lambda: None)
         covered = np.zeros((height, width), bool)
@@ -181,7 +187,7 @@ def _triangle_pixel(cap: Capture, x: int, y: int, t: int) -> dict:
     first_face = int(np.searchsorted(s.face_surface, mesh))
     canonical = w0 * a["clipped_points"][i0] + w1 * a["clipped_points"][i1] \
         + w2 * a["clipped_points"][i2]
-    world = (np.linalg.inv(cap.n) @ np.append(canonical, 1.0))[:3]
+    world = (cap.n_inverse @ np.append(canonical, 1.0))[:3]
     corners = (i0, i1, i2)
     vertex_count = len(s.positions)
     record = {
@@ -225,17 +231,14 @@ def _both_weights(cap: Capture, x, y, corners) -> dict:
 
 
 def _depth(cap: Capture, y, x, world, canonical) -> dict:
-    view = cap.view
-    from core.camera.view import vrc_basis
-    u, v, n = vrc_basis(view)
-    rel = world - np.asarray(view.vrp, dtype=np.float64)
+    u, v, n, eye = cap.vrc
+    rel = world - np.asarray(cap.view.vrp, dtype=np.float64)
     out = {"npc": float(cap.arrays["depth"][y, x]),
            "canonical point": [float(c) for c in canonical],
            "world point": [float(c) for c in world],
            "vrc": [float(rel @ u), float(rel @ v), float(rel @ n)]}
-    eye = eye_from_view(view, cap.settings.projection)
-    if eye.point is not None:
-        out["distance from the eye"] = float(np.linalg.norm(world - eye.point))
+    if eye is not None:
+        out["distance from the eye"] = float(np.linalg.norm(world - eye))
     return out
 
 
