@@ -48,8 +48,9 @@ def draw(scene, view, settings, frame, context, timer) -> None:
 def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
     """The record of image pixel (x, y): what the stages above made of it (issue 22;
     :mod:`core.renderers.zbuffer_inspect`)."""
-    from core.renderers.zbuffer_inspect import inspect_pixel as record
-    return record(scene, view, settings, x, y, context)
+    from core.renderers.zbuffer_inspect import Stages, inspect_pixel as record
+    return record(scene, view, settings, x, y, context,
+                  Stages(draw, draw_lines, _sample_viewport))
 
 
 def _sample_viewport(vp, pixel_offset):

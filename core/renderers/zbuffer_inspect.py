@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from types import SimpleNamespace
+from typing import Callable, NamedTuple
 
 import numpy as np
 
@@ -34,6 +35,15 @@ from core.shading.illumination import quantize
 from core.shading.terms import phong_terms
 
 KEY = "pixel inspector: z-buffer"
+
+
+class Stages(NamedTuple):
+    """The z-buffer's own functions, handed over by :mod:`core.renderers.zbuffer` (which
+    imports this module: it is not imported back)."""
+
+    draw: Callable
+    draw_lines: Callable
+    sample_viewport: Callable
 
 
 class _Recorder:
@@ -72,9 +82,9 @@ class Capture:
     vrc: tuple = ()                 # u, v, n of the view, and the eye point (or None)
 
 
-def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
+def inspect_pixel(scene, view, settings, x: int, y: int, context, stages: Stages) -> dict:
     """The record of image pixel ``(x, y)`` (x right, y down, row 0 at the top)."""
-    cap = capture(scene, view, settings, context)
+    cap = capture(scene, view, settings, context, stages)
     side = cap.side
     if side == 1:
         record = _sample(cap, x, y)
@@ -89,7 +99,7 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
             "projection": settings.projection, "matrices": cap.matrices}
 
 
-def capture(scene, view, settings, context=None) -> Capture:
+def capture(scene, view, settings, context, stages: Stages) -> Capture:
     """The frame of ``view`` drawn once with every stage's arrays kept (cached per scene)."""
     cache = (context or DEFAULT_CONTEXT).cache(scene)
     held = cache.get(KEY)
@@ -98,13 +108,12 @@ def capture(scene, view, settings, context=None) -> Capture:
             return held[1]
     except (TypeError, ValueError):       # a view of arrays: compare nothing, draw again
         pass
-    cap = _capture(scene, view, settings)
+    cap = _capture(scene, view, settings, stages)
     cache[KEY] = ((view, settings), cap)
     return cap
 
 
-def _capture(scene, view, settings) -> Capture:
-    from core.renderers import zbuffer
+def _capture(scene, view, settings, zbuffer: Stages) -> Capture:
     from core.texture.shaders import shading_for
     side = grid_side(settings.samples)
     if settings.samples > 1 and (settings.sample_pattern != "regular"
@@ -120,7 +129,7 @@ def _capture(scene, view, settings) -> Capture:
     recorder = _Recorder()
     zbuffer.draw(scene, view, drawn, frame, context, recorder)
     n, z_min = context.normalizing_transform(view, settings.projection)
-    vp = zbuffer._sample_viewport(project.viewport(view.window, width, height,
+    vp = zbuffer.sample_viewport(project.viewport(view.window, width, height,
                                                    settings.keep_aspect), drawn.pixel_offset)
     mode = shading_for(scene, settings.shading)
     cap = Capture(settings=settings, view=view, side=side, width=width, height=height,
