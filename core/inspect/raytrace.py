@@ -195,3 +195,45 @@ def _local(setup, packed, kind, index, s, p, n, g, eye, shadows, offset, surface
                                              setup.background, offset, stack, counts)
     return phong_terms(p, n, 0, surface_row, lights, setup.ambient, eye, setup.halfway,
                        shadow=factors)
+
+
+def buffers(scene, view, settings, context, names) -> dict:
+    """The ray tracer's buffer views (stand-in): ``depth`` (−t of the primary hit, so larger
+    is nearer, as the z-buffer's), ``triangle`` (the scene triangle a primary ray hits first;
+    -1 for spheres, planes and nothing) and ``ray-depth`` (per pixel, the smallest depth
+    limit from which the traced colour no longer changes: the depth of the tree that
+    matters). One sample per pixel, at the pixel centre."""
+    from core.raytrace import whitted
+    from core.raytrace.renderer import render_raw
+    options_settings = settings.replace(samples=1)
+    setup, (origins, directions, t_min, t_max) = _setup(
+        scene, view, options_settings, _options(options_settings),
+        np.array([options_settings.pixel_offset]), context)
+    width, height = settings.size
+    out = {}
+    if "depth" in names or "triangle" in names:
+        n = len(origins)
+        kind, index, t_hit = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
+        whitted.visible_many(setup.packing.packed, origins, directions, t_min, t_max, kind,
+                             index, t_hit)
+        hit = kind != whitted.NOTHING
+        out["depth"] = np.where(hit, -t_hit, np.nan).reshape(height, width)
+        out["triangle"] = np.where(kind == whitted.TRIANGLE, index, -1).reshape(height, width)
+    if "ray-depth" in names:
+        import dataclasses
+        limit = setup.options.max_depth
+        final = render_raw(setup)
+        depth = np.full((height, width), limit, np.int64)
+        still = np.ones((height, width), bool)      # the same colour at every limit so far
+        for d in range(limit - 1, 0, -1):
+            trial = dataclasses.replace(setup, options=dataclasses.replace(setup.options,
+                                                                          max_depth=d))
+            still &= (render_raw(trial) == final).all(axis=2)
+            depth[still] = d
+        out["ray-depth"] = depth
+    return out
+
+
+def _options(settings):
+    from core.raytrace import renderer
+    return renderer.TraceOptions.from_settings(settings)

@@ -53,6 +53,14 @@ def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
                   Stages(draw, draw_lines, _sample_viewport))
 
 
+def buffers(scene, view, settings, context=None, names=()) -> dict:
+    """The buffer views of this frame (issue 22): depth, normal, triangle id, barycentrics,
+    (u, v), MIP level, overdraw, as named in ``names``."""
+    from core.renderers.zbuffer_inspect import Stages, buffers as views
+    return views(scene, view, settings, context, Stages(draw, draw_lines, _sample_viewport),
+                 names)
+
+
 def _sample_viewport(vp, pixel_offset):
     """The viewport moved so that the sample at ``pixel_offset`` (x right, y down, in its
     pixel) lands where the scan conversion samples, the pixel centre."""

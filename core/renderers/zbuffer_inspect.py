@@ -324,3 +324,118 @@ def _phong(cap, x, y, corners, weights, face, mesh) -> dict:
 def _textured(cap, x, y, corners, weights, face, mesh) -> dict:
     from core.renderers.zbuffer_texture import textured_record
     return textured_record(cap, x, y, corners, weights, face, mesh)
+
+
+# --------------------------------------------------------------------------------------------
+# Buffer views: the same capture, every pixel at once
+
+
+def buffers(scene, view, settings, context, stages: Stages, names) -> dict:
+    """``{name: array}`` for the buffer views in ``names`` this frame has (see
+    :data:`core.inspect.buffers.BUFFERS`), at the drawn size (``side`` x the frame's when
+    supersampled). Empty pixels are NaN (-1 for the triangle id, 0 for overdraw)."""
+    cap = capture(scene, view, settings, context, stages)
+    a = cap.arrays
+    if "tri" not in a:
+        return {}                           # wireframe: no triangle was filled
+    h, w = cap.height, cap.width
+    tri = a["tri"]
+    covered = tri >= 0
+    t = tri[covered]
+    w1, w2 = a["b1"][covered], a["b2"][covered]
+    weights = np.stack([1.0 - w1 - w2, w1, w2], axis=1)
+    corners = a["clipped_triangles"][t]
+    source = a["source"][t]
+    out = {}
+
+    def image(values, fill, k=None):
+        shape = (h, w) if k is None else (h, w, k)
+        full = np.full(shape, fill, dtype=np.float64 if fill != -1 else np.int64)
+        full[covered] = values
+        return full
+
+    if "depth" in names:
+        out["depth"] = image(a["depth"][covered], np.nan)
+    if "triangle" in names:
+        out["triangle"] = image(source, -1)
+    if "barycentrics" in names:
+        out["barycentrics"] = image(weights, np.nan, 3)
+    if "normal" in names:
+        out["normal"] = image(_normals(cap, corners, weights, source), np.nan, 3)
+    if "uv" in names and cap.mode == "textured":
+        attrs = a["clipped_attrs"]
+        uv = sum(weights[:, k, None] * attrs[corners[:, k], 6:8] for k in range(3))
+        out["uv"] = image(uv, np.nan, 2)
+    if "mip" in names and cap.mode == "textured":
+        out["mip"] = image(_mip_levels(cap, t, corners, covered), np.nan)
+    if "overdraw" in names:
+        from core.pipeline.raster import count_fragments
+        out["overdraw"] = count_fragments(a["device_points"], a["inv_w"],
+                                          a["clipped_triangles"], w, h).astype(np.int64)
+    return out
+
+
+def _normals(cap, corners, weights, source) -> np.ndarray:
+    """The normal shading used: interpolated (Phong, textured), the face's (flat), or the
+    vertex normals interpolated at the world point (Gouraud, which keeps colours instead)."""
+    a, s = cap.arrays, cap.shade
+    if cap.mode in ("phong", "textured"):
+        attrs = a["clipped_attrs"]
+        n = sum(weights[:, k, None] * attrs[corners[:, k], 0:3] for k in range(3))
+    elif cap.mode == "flat":
+        n = s.normals[source]
+    else:
+        points = a["clipped_points"]
+        canonical = sum(weights[:, k, None] * points[corners[:, k]] for k in range(3))
+        world = canonical @ cap.n_inverse[:3, :3].T + cap.n_inverse[:3, 3]
+        tri = s.triangles[source]
+        lam = _barycentric(world, s.positions[tri[:, 0]], s.positions[tri[:, 1]],
+                           s.positions[tri[:, 2]])
+        n = sum(lam[:, k, None] * s.normals[tri[:, k]] for k in range(3))
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def _barycentric(p, a, b, c) -> np.ndarray:
+    v0, v1, v2 = b - a, c - a, p - a
+    d00, d01, d11 = (v0 * v0).sum(1), (v0 * v1).sum(1), (v1 * v1).sum(1)
+    d20, d21 = (v2 * v0).sum(1), (v2 * v1).sum(1)
+    den = d00 * d11 - d01 * d01
+    den = np.where(den == 0.0, 1.0, den)
+    l1 = (d11 * d20 - d01 * d21) / den
+    l2 = (d00 * d21 - d01 * d20) / den
+    return np.stack([1.0 - l1 - l2, l1, l2], axis=1)
+
+
+def _mip_levels(cap, t, corners, covered) -> np.ndarray:
+    """The MIP level the colour texture is read at (λ clamped to its levels, as trilinear
+    does; NaN where the material has no colour map)."""
+    from core.texture.surface import COLOR, UV
+    from core.texture.tutorial import plane_constants
+    s, attrs = cap.shade, cap.arrays["clipped_attrs"]
+    texels, levels, textures, maps = s.texture_maps
+    unique, slot = np.unique(t, return_inverse=True)
+    constants = np.zeros((len(unique), 3, 3))
+    first = cap.arrays["clipped_triangles"][unique]
+    for k, (i0, i1, i2) in enumerate(first):
+        plane_constants(cap.device_h, i0, i1, i2, attrs[i0, UV], attrs[i0, UV + 1],
+                        attrs[i1, UV], attrs[i1, UV + 1], attrs[i2, UV], attrs[i2, UV + 1],
+                        float(cap.height), constants, k)
+    rows, cols = np.nonzero(covered)
+    c = constants[slot]
+    a_ = c[:, 0, 0] + c[:, 1, 0] * cols + c[:, 2, 0] * rows
+    b_ = c[:, 0, 1] + c[:, 1, 1] * cols + c[:, 2, 1] * rows
+    cc = c[:, 0, 2] + c[:, 1, 2] * cols + c[:, 2, 2] * rows
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u, v = a_ / cc, b_ / cc
+        dudx, dvdx = (c[:, 1, 0] - u * c[:, 1, 2]) / cc, (c[:, 1, 1] - v * c[:, 1, 2]) / cc
+        dudy, dvdy = (c[:, 2, 0] - u * c[:, 2, 2]) / cc, (c[:, 2, 1] - v * c[:, 2, 2]) / cc
+        mesh = s.face_surface[cap.arrays["source"][t]]
+        k = maps[mesh, COLOR].astype(np.int64)
+        base = textures[np.maximum(k, 0), 0]
+        count = textures[np.maximum(k, 0), 1]
+        tw, th = levels[base, 1], levels[base, 2]
+        rho = np.maximum(np.hypot(dudx * tw, dvdx * th), np.hypot(dudy * tw, dvdy * th))
+        lam = np.log2(rho)
+    lam = np.clip(np.nan_to_num(lam, nan=0.0, posinf=1e9, neginf=0.0), 0.0, count - 1)
+    return np.where(k >= 0, lam, np.nan)
