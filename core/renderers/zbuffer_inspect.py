@@ -362,12 +362,12 @@ def buffers(scene, view, settings, context, stages: Stages, names) -> dict:
         out["barycentrics"] = image(weights, np.nan, 3)
     if "normal" in names:
         out["normal"] = image(_normals(cap, corners, weights, source), np.nan, 3)
-    if "uv" in names and cap.mode == "textured":
+    if ("uv" in names or "mip" in names) and cap.mode == "textured":
         attrs = a["clipped_attrs"]
-        uv = sum(weights[:, k, None] * attrs[corners[:, k], 6:8] for k in range(3))
+        lerped = sum(weights[:, k, None] * attrs[corners[:, k], 6:8] for k in range(3))
+        uv, lam = _texture_reads(cap, t, covered, lerped)
         out["uv"] = image(uv, np.nan, 2)
-    if "mip" in names and cap.mode == "textured":
-        out["mip"] = image(_mip_levels(cap, t, corners, covered), np.nan)
+        out["mip"] = image(lam, np.nan)
     if "overdraw" in names:
         from core.pipeline.raster import count_fragments
         out["overdraw"] = count_fragments(a["device_points"], a["inv_w"],
@@ -407,9 +407,11 @@ def _barycentric(p, a, b, c) -> np.ndarray:
     return np.stack([1.0 - l1 - l2, l1, l2], axis=1)
 
 
-def _mip_levels(cap, t, corners, covered) -> np.ndarray:
-    """The MIP level the colour texture is read at (λ clamped to its levels, as trilinear
-    does; NaN where the material has no colour map)."""
+def _texture_reads(cap, t, covered, lerped) -> tuple[np.ndarray, np.ndarray]:
+    """Where the textures are read: ``(u, v)`` from the triangle's plane constants at the
+    pixel centre (the interpolated ``lerped`` where they are degenerate, as the kernel does),
+    and the colour map's MIP level (λ clamped to its levels, as trilinear does; NaN where the
+    material has no colour map)."""
     from core.texture.surface import COLOR, UV
     from core.texture.tutorial import plane_constants
     s, attrs = cap.shade, cap.arrays["clipped_attrs"]
@@ -437,5 +439,8 @@ def _mip_levels(cap, t, corners, covered) -> np.ndarray:
         tw, th = levels[base, 1], levels[base, 2]
         rho = np.maximum(np.hypot(dudx * tw, dvdx * th), np.hypot(dudy * tw, dvdy * th))
         lam = np.log2(rho)
+    finite = np.isfinite(u) & np.isfinite(v)
+    uv = np.where(finite[:, None], np.stack([u, v], axis=1), lerped)
+    lam = np.where(finite, lam, -np.inf)          # no derivatives: level 0
     lam = np.clip(np.nan_to_num(lam, nan=0.0, posinf=1e9, neginf=0.0), 0.0, count - 1)
-    return np.where(k >= 0, lam, np.nan)
+    return uv, np.where(k >= 0, lam, np.nan)
