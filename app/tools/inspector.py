@@ -158,6 +158,13 @@ def opengl_reference(scene, view, settings):
     if settings.shading not in GL_SHADINGS:
         return None, (f"the OpenGL oracle draws {', '.join(GL_SHADINGS)} shading, not "
                       f"{settings.shading}")
+    from core.texture.shaders import shading_for
+    if shading_for(scene, settings.shading) != settings.shading:
+        return None, ("the OpenGL oracle (app/tools/reference_gl.py) draws no textures, and "
+                      f"{scene.name} has textured materials")
+    if settings.renderer != "zbuffer":
+        return None, (f"the OpenGL oracle draws what the z-buffer draws; this frame is "
+                      f"{settings.renderer}")
     mode = settings.shading
     if mode == "gouraud" and settings.rasterizer == "scanline":
         mode = "gouraud_linear"
