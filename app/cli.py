@@ -324,7 +324,7 @@ def _render(args) -> int:
         scene = course_tri_scene(scene, view)
     if args.buffer:                      # issue 22: a buffer view instead of the picture
         from app.tools.inspector import render_buffer
-        return render_buffer(scene, view, settings, args.buffer, Path(args.out))
+        return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
     with announce_compiles():            # the first run compiles the kernels: say so
         frame = _draw_still(scene, view, settings, args.time)
     if frame.message:
@@ -525,5 +525,5 @@ def _inspector_command(args) -> int:
     from app.tools import inspector
     if args.command == "inspect":
         return inspector.inspect_main(scene, view, settings, args.pixel, args.json)
-    return inspector.compare_main(scene, view, settings, args)
+    return inspector.compare_main(scene, view, settings, args, write_png)
 # --

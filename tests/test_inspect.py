@@ -53,8 +53,10 @@ def _check_sum(record) -> None:
 
 # (scene, settings overrides, share of the renderer's pixels)
 ZBUFFER_CASES = [
-    ("cube.toml", {"shading": "flat"}, 0.15),
-    ("cube.toml", {"shading": "gouraud"}, 0.15),
+    ("cube.toml", {"shading": "flat"}, 0.1),
+    ("cube.toml", {"shading": "gouraud"}, 0.1),
+    ("crossing_front_plane.tri", {"shading": "gouraud"}, 0.05),      # the clipper's vertices
+    ("interpenetrating.tri", {"shading": "phong", "projection": "parallel"}, 0.05),
     ("torus.toml", {"shading": "phong"}, 0.15),
     ("torus.toml", {"shading": "gouraud", "rasterizer": "scanline"}, 0.1),
     ("texture_floor.toml", {"shading": "phong"}, 0.15),

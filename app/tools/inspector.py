@@ -47,9 +47,9 @@ def _jsonable(value):
     raise TypeError(f"{type(value).__name__} is not JSON")
 
 
-def render_buffer(scene, view, settings, name: str, out: Path) -> int:
-    """``render --buffer NAME --out X.png``: the colour-mapped picture, and X.npy beside it."""
-    from app.cli import write_png
+def render_buffer(scene, view, settings, name: str, out: Path, write_png) -> int:
+    """``render --buffer NAME --out X.png``: the colour-mapped picture, and X.npy beside it
+    (``write_png(color, path)``: the command line's atomic writer)."""
     from app.viewer.state import announce_compiles
     from core.inspect import NotInspectable
     from core.inspect.buffers import buffer
@@ -73,10 +73,9 @@ def render_buffer(scene, view, settings, name: str, out: Path) -> int:
     return 0
 
 
-def compare_main(scene, view, settings, args) -> int:
+def compare_main(scene, view, settings, args, write_png) -> int:
     """``compare``: 0 when no pixel is beyond the tolerance, 1 when some are, 2 for bad
     input."""
-    from app.cli import write_png
     from app.viewer.state import announce_compiles
     from core.inspect.compare import compare, heat_map
     picture = _read_picture(args.image)
