@@ -1,5 +1,6 @@
 """The window's inspector tools (issue 22): inspect mode, buffer views, the OpenGL comparison
-and the plots. Nothing here runs while it is off: a frame costs what it cost before.
+and the plots. Nothing here runs while it is off: a frame costs what it cost before, and start-up
+imports nothing more (the inspector's modules load on first use).
 
 - ``i`` (View menu): inspect mode; a left click on the picture then shows that pixel's record
   in the panel (:func:`core.inspect.inspect_pixel`, the same record ``python -m app inspect``
@@ -14,9 +15,7 @@ and the plots. Nothing here runs while it is off: a frame costs what it cost bef
 
 from __future__ import annotations
 
-import json
 import logging
-from array import array
 from collections import deque
 
 import numpy as np
@@ -66,6 +65,7 @@ class InspectorTools:
         log.info("action: %s -> inspect mode %s", how, "on" if self.inspecting else "off")
 
     def inspect(self, x: int, y: int, where: str) -> None:
+        import json
         from core.inspect import NotInspectable, inspect_pixel
         from core.inspect.text import describe
         s = self.state
@@ -164,6 +164,7 @@ class InspectorTools:
             self.progress.append(float(fraction))
 
     def panel(self, imgui, displayable) -> None:
+        from array import array
         header = "Inspector" + (" (click a pixel)" if self.inspecting else "")
         expanded, _ = imgui.collapsing_header(f"{header}###inspector",
                                               flags=imgui.TREE_NODE_DEFAULT_OPEN)
