@@ -1,5 +1,5 @@
 """The command line: ``python -m app COMMAND ...``, COMMAND one of view, render, matrices, plan,
-bench, report, stability, animate, warmup (``view`` when none is given).
+bench, report, stability, animate, warmup, inspect, compare (``view`` when none is given).
 
 Only parsing and dispatch live here; each command's body is in its own module and is imported
 when that command runs, so that ``python -m app --help`` and the window start fast.

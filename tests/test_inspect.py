@@ -152,3 +152,23 @@ def test_a_renderer_without_an_inspector_is_refused_in_words():
     bad = dataclasses.replace(scene.views[0], vup=scene.views[0].vpn, label="tilted")
     with pytest.raises(NotInspectable, match="tilted: invalid"):
         inspect_pixel(scene, bad, settings, 3, 3)
+
+
+def test_a_frame_drawn_without_the_inspector_loads_none_of_it():
+    """Off costs nothing: rendering (and the window's module) import no inspector code."""
+    import subprocess
+    import sys
+    code = ("import sys\n"
+            "from core import render, RenderSettings\n"
+            "from core.scene.formats import load_scene\n"
+            "from core.paths import SCENES_DIR\n"
+            "import app.viewer.inspector_tools\n"
+            "scene = load_scene(SCENES_DIR / 'cube.toml')\n"
+            "render(scene, scene.views[0], RenderSettings.for_scene(scene, shading='phong',"
+            " size=(32, 24)))\n"
+            "print(sorted(m for m in sys.modules if 'inspect' in m and m.startswith(('core',"
+            " 'app'))))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, cwd=str(SCENES_DIR.parent))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "['app.viewer.inspector_tools']"
