@@ -1,5 +1,5 @@
 """The command line: ``python -m app COMMAND ...``, COMMAND one of view, render, matrices, plan,
-bench, report, stability, animate, warmup (``view`` when none is given).
+bench, report, stability, animate, warmup, inspect, compare (``view`` when none is given).
 
 Only parsing and dispatch live here; each command's body is in its own module and is imported
 when that command runs, so that ``python -m app --help`` and the window start fast.
@@ -18,7 +18,7 @@ from pathlib import Path
 
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate",
-            "warmup")
+            "warmup", "inspect", "compare")
 RASTERIZER_CHOICES = ("edge", "scanline")
 
 
@@ -107,6 +107,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
     _renderer_arguments(r)                    # issue 12
+    _buffer_argument(r)                       # issue 22
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -142,6 +143,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     st.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
     sub.add_parser("warmup", help="compile every kernel once (make does it), with progress")
+    _inspector_parsers(sub, scene_help)       # issue 22
     return p
 
 
@@ -268,6 +270,8 @@ def _dispatch(args) -> int:
     if args.command == "warmup":
         from app.tools.warmup import main as warmup_main
         return warmup_main(args)
+    if args.command in ("inspect", "compare"):      # issue 22
+        return _inspector_command(args)
     if args.command == "stability":
         from app.tools.stability import main as stability_main
         return stability_main(args)
@@ -326,6 +330,9 @@ def _render(args) -> int:
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
+    if args.buffer:                      # issue 22: a buffer view instead of the picture
+        from app.tools.inspector import render_buffer
+        return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
     with announce_compiles():            # the first run compiles the kernels: say so
         frame = _draw_still(scene, view, settings, args.time)
     if frame.message:                    # a view only the other projection can draw
@@ -471,3 +478,68 @@ def _plan(args) -> int:
            **plan_as_dict(plan(scene, projection, shading, keep, rasterizer))}
     print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0
+
+
+# -- issue 22: the pixel inspector, buffer views and compare
+def _buffer_argument(parser) -> None:
+    from core.inspect.buffers import BUFFERS
+    parser.add_argument("--buffer", choices=BUFFERS, default=None,
+                        help="write a buffer view instead of the picture: a colour-mapped PNG "
+                             "(--out) and the raw values beside it (.npy, same name)")
+
+
+def _inspector_parsers(sub, scene_help: str) -> None:
+    i = sub.add_parser("inspect", help="why one pixel has its colour: the renderer's record")
+    c = sub.add_parser("compare", help="hold a picture (PNG) against our render of the same "
+                                       "view: a diff heat map and a verdict (exit 1: differs)")
+    for p in (i, c):
+        p.add_argument("scene", help=scene_help)
+        p.add_argument("--view", type=int, default=1,
+                       help="which view: its position in the file, counting from 1")
+        p.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
+        p.add_argument("--shading", choices=SHADING_CHOICES, default=None)
+        p.add_argument("--size", type=parse_size, default=None,
+                       help="WxH (default: the scene's; compare: the picture's)")
+        _texture_arguments(p)
+        _course_options(p)
+        _renderer_arguments(p)
+    i.add_argument("--pixel", required=True, metavar="X,Y",
+                   help="the pixel: x right, y down, from 0 (row 0 is the top)")
+    i.add_argument("--json", action="store_true", help="print the whole record as JSON")
+    c.add_argument("--image", required=True, help="the picture to check (PNG)")
+    c.add_argument("--tolerance", type=float, default=1 / 255,
+                   help="largest channel difference that counts as equal, on 0-1 "
+                        "(default 1/255)")
+    c.add_argument("--out", default=None, help="write the diff heat map here (.png)")
+    c.add_argument("--opengl", action="store_true",
+                   help="the reference is real OpenGL (the GLSL oracle, Mesa llvmpipe) "
+                        "instead of our CPU render")
+
+
+def _inspector_command(args) -> int:
+    scene = _load(args.scene, size=args.size)
+    if scene is None:
+        return 2
+    index = _pick_view(scene, args.view)
+    if index is None:
+        return 2
+    from core.settings import RenderSettings
+    texture_options = _texture_options(scene, args)
+    view = scene.views[index]
+    try:
+        settings = RenderSettings.for_scene(scene, projection=args.projection,
+                                            shading=args.shading, size=args.size,
+                                            rasterizer=args.rasterizer,
+                                            keep_aspect=args.keep_aspect, **texture_options,
+                                            **_renderer_overrides(args))
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    if args.course_tri:
+        from core.scene.course_tri import course_tri_scene
+        scene = course_tri_scene(scene, view)
+    from app.tools import inspector
+    if args.command == "inspect":
+        return inspector.inspect_main(scene, view, settings, args.pixel, args.json)
+    return inspector.compare_main(scene, view, settings, args, write_png)
+# --

@@ -30,6 +30,10 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
   advances the view when paused and pauses when playing;
 - the bump demo's scene (J3DPanel): a left click toggles bump / Phong, any other button
   cycles the four height maps, as in the demo.
+- issue 22 (View menu too; :mod:`app.viewer.inspector_tools`): ``i`` inspect mode, where a
+  left click shows the pixel's record in the panel; ``v`` the next buffer view (depth, normal,
+  triangle id, ...) in place of the picture; ``h`` compares with OpenGL and flips between the
+  picture and the heat map.
 
 Every user action and every new frame is logged (logger ``fvd``; ``app.viewer`` sends it to
 stderr and to ``$FVD_LOG``). On HiDPI screens sizes in points are scaled so that the picture
@@ -51,6 +55,7 @@ import moderngl
 from app.naming import picture_name, unused
 from app.viewer.blit import Blit
 from app.viewer.imgui_backend import GlfwInput, ImGuiRenderer
+from app.viewer.inspector_tools import InspectorTools
 from app.viewer.state import ViewerState, compile_count
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
@@ -191,6 +196,7 @@ class ViewerWindow:
         self._popup_open = False          # a menu or the pop-up was open in the last frame
         self._close_popups = False        # Esc: close them in the next frame
         self._compiles_at_request = 0
+        self.tools = InspectorTools(state)    # issue 22: inspect mode, buffer views, compare
         self._install_callbacks()
 
     # -- geometry: the picture at the top-left, the panel to its right -----------------------
@@ -300,6 +306,12 @@ class ViewerWindow:
             self.change_speed(0.5 if char == "[" else 2.0, f"key {char}")
         elif char == "q":
             self.quit("key q")
+        elif char == "i":                 # issue 22: inspect mode, buffer views, compare
+            self.tools.toggle_inspect("key i")
+        elif char == "v":
+            self.tools.next_buffer("key v")
+        elif char == "h":
+            self.tools.flip("key h")
 
     def _on_scroll(self, window, x_offset, y_offset) -> None:
         self.input.on_scroll(x_offset, y_offset)
@@ -455,11 +467,18 @@ class ViewerWindow:
             if getattr(result, "final", True):
                 self._log_frame()
                 self._start_warm_up()
+                self.tools.frame_changed(self.state.frame, self.state.frame_seconds)
             else:
                 log.info("partial frame: %s (%s)", result.what,
                          self.state.frame.stats.get("pass", "on its way"))
-            self.blit.upload(self.state.frame.rgbx)
+            self.blit.upload(self.tools.picture(self.state.frame))
+            self.tools.changed = False
             self._wake()                  # the GUI shows the new frame's plan and timing next
+        if self.tools.changed and self.state.frame is not None:
+            self.blit.upload(self.tools.picture(self.state.frame))
+            self.tools.changed = False
+        if self.worker.waiting:
+            self.tools.note_progress(self.worker.progress().fraction)
         self._build_gui()
         imgui.render()
 
@@ -516,6 +535,9 @@ class ViewerWindow:
                 log.info("action: %s -> the bump demo: %s", where, demo)   # issue 11
             elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
                 self.toggle_play(where)
+            elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:    # issue 22
+                scale = self._scale()
+                self.tools.inspect(int(x * scale), int(y * scale), where)
             elif self.state.course_tri:
                 self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
             elif button == glfw.MOUSE_BUTTON_LEFT:
@@ -575,6 +597,7 @@ class ViewerWindow:
         self._menu_bar()
         self._status()
         self._timeline()
+        self.tools.panel(imgui, displayable)
         self._plan_strip()
         self._invalid_views_strip()
         self._messages_strip()
@@ -624,6 +647,8 @@ class ViewerWindow:
             if imgui.menu_item("Previous view", "Left")[0]:
                 self.step_view(-1, "menu View > Previous")
             imgui.separator()
+            self._inspector_items()
+            imgui.separator()
             from core.scene.view_numbers import file_number
             for i, view in enumerate(self.state.scene.views):
                 number = file_number(self.state.scene, i)
@@ -632,6 +657,19 @@ class ViewerWindow:
                     self.go_to_view(i, "menu View")
             imgui.end_menu()
         imgui.end_menu_bar()
+
+    def _inspector_items(self) -> None:
+        """Issue 22: inspect mode, the buffer views, the comparison with OpenGL."""
+        if imgui.menu_item("Inspect mode (click a pixel)", "I", self.tools.inspecting)[0]:
+            self.tools.toggle_inspect("menu View > Inspect mode")
+        if imgui.begin_menu("Buffer view").opened:
+            from core.inspect.buffers import BUFFERS
+            for name in ("picture", *BUFFERS):
+                if imgui.menu_item(name, None, self.tools.buffer == name)[0]:
+                    self.tools.choose_buffer(name, "menu View > Buffer view")
+            imgui.end_menu()
+        if imgui.menu_item("Compare with OpenGL", "H", self.tools.showing_heat)[0]:
+            self.tools.flip("menu View > Compare with OpenGL")
 
     def _render_items(self) -> None:
         from core.renderers import renderer_names

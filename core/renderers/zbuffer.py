@@ -45,6 +45,22 @@ def draw(scene, view, settings, frame, context, timer) -> None:
                    timer, frame.stats)
 
 
+def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
+    """The record of image pixel (x, y): what the stages above made of it (issue 22;
+    :mod:`core.renderers.zbuffer_inspect`)."""
+    from core.renderers.zbuffer_inspect import Stages, inspect_pixel as record
+    return record(scene, view, settings, x, y, context,
+                  Stages(draw, draw_lines, _sample_viewport))
+
+
+def buffers(scene, view, settings, context=None, names=()) -> dict:
+    """The buffer views of this frame (issue 22): depth, normal, triangle id, barycentrics,
+    (u, v), MIP level, overdraw, as named in ``names``."""
+    from core.renderers.zbuffer_inspect import Stages, buffers as views
+    return views(scene, view, settings, context, Stages(draw, draw_lines, _sample_viewport),
+                 names)
+
+
 def _sample_viewport(vp, pixel_offset):
     """The viewport moved so that the sample at ``pixel_offset`` (x right, y down, in its
     pixel) lands where the scan conversion samples, the pixel centre."""
@@ -130,7 +146,7 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))
     timer.lap("clip triangles", clipped_points=clipped.points, clipped_attrs=clipped.attrs,
-              clipped_triangles=clipped.triangles)
+              clipped_triangles=clipped.triangles, source=source)
 
     count = len(clipped.points)
     device, inv_w = stages.transform_projective(

@@ -1,0 +1,200 @@
+"""The window's inspector tools (issue 22): inspect mode, buffer views, the OpenGL comparison
+and the plots. Nothing here runs while it is off: a frame costs what it cost before, and start-up
+imports nothing more (the inspector's modules load on first use).
+
+- ``i`` (View menu): inspect mode; a left click on the picture then shows that pixel's record
+  in the panel (:func:`core.inspect.inspect_pixel`, the same record ``python -m app inspect``
+  prints) instead of advancing the view; the record is logged as one JSON line.
+- ``v`` (View > Buffer view): the picture, then each buffer view the frame has (depth,
+  normal, triangle id, barycentrics, (u, v), MIP level, overdraw, ray-tree depth), in place
+  of the picture; the panel says which.
+- View > Compare with OpenGL: the same view drawn by real OpenGL (the GLSL oracle), held
+  against the frame; the heat map takes the picture's place and ``h`` flips between the two.
+- Plots: the last frames' times, and a progressive frame's progress, in the panel.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections import deque
+
+import numpy as np
+
+log = logging.getLogger("fvd")
+
+PICTURE = "picture"
+
+
+class InspectorTools:
+    def __init__(self, state):
+        self.state = state
+        self.inspecting = False
+        self.record: dict | None = None
+        self.lines: list[str] = []
+        self.buffer = PICTURE
+        self.overlay: np.ndarray | None = None     # (H, W, 4) shown instead of the frame
+        self.heat: np.ndarray | None = None        # the comparison's heat map, (H, W, 4)
+        self.verdict = ""
+        self.showing_heat = False
+        self.frame_ms: deque = deque(maxlen=120)
+        self.progress: deque = deque(maxlen=240)
+        self._context = None
+        self.changed = False                       # the picture to show changed: upload it
+
+    # -- what the picture area shows ---------------------------------------------------------
+    def picture(self, frame) -> np.ndarray:
+        if self.showing_heat and self.heat is not None:
+            return self.heat
+        if self.overlay is not None:
+            return self.overlay
+        return frame.rgbx
+
+    def frame_changed(self, frame, seconds: float) -> None:
+        """A new final frame: the plots take its time; a buffer view follows it; a
+        comparison made for the old frame is dropped."""
+        self.frame_ms.append(seconds * 1e3)
+        if self.heat is not None:
+            self.heat, self.showing_heat, self.verdict = None, False, ""
+        if self.buffer != PICTURE:
+            self._show_buffer(self.buffer, "the new frame")
+        self.changed = True
+
+    # -- inspect mode ------------------------------------------------------------------------
+    def toggle_inspect(self, how: str) -> None:
+        self.inspecting = not self.inspecting
+        log.info("action: %s -> inspect mode %s", how, "on" if self.inspecting else "off")
+
+    def inspect(self, x: int, y: int, where: str) -> None:
+        import json
+        from core.inspect import NotInspectable, inspect_pixel
+        from core.inspect.text import describe
+        s = self.state
+        try:
+            record = inspect_pixel(s.scene, s.view, s.settings(), x, y, self.context())
+        except NotInspectable as error:
+            self.record, self.lines = None, [str(error)]
+            log.info("action: %s -> inspect pixel (%d, %d): %s", where, x, y, error)
+            return
+        self.record, self.lines = record, describe(record)
+        log.info("action: %s -> inspect pixel (%d, %d)", where, x, y)
+        log.info("inspect record: %s", json.dumps(record, default=_jsonable))
+
+    def context(self):
+        if self._context is None:
+            from core.context import RenderContext
+            self._context = RenderContext()
+        return self._context
+
+    # -- buffer views ------------------------------------------------------------------------
+    def next_buffer(self, how: str) -> None:
+        from core.inspect.buffers import BUFFERS
+        cycle = (PICTURE, *BUFFERS)
+        start = cycle.index(self.buffer)
+        for step in range(1, len(cycle) + 1):
+            name = cycle[(start + step) % len(cycle)]
+            if name == PICTURE:                  # the ones this frame lacks are skipped
+                self.choose_buffer(PICTURE, how)
+                return
+            if self._show_buffer(name, how):
+                break
+        self.changed = True
+
+    def choose_buffer(self, name: str, how: str) -> None:
+        if name == PICTURE:
+            self.buffer, self.overlay = PICTURE, None
+            log.info("action: %s -> buffer view: picture", how)
+        elif not self._show_buffer(name, how):
+            log.info("action: %s -> buffer view %s: not kept by this frame", how, name)
+        self.changed = True
+
+    def _show_buffer(self, name: str, how: str) -> bool:
+        from core.inspect import NotInspectable
+        from core.inspect.buffers import buffer
+        s = self.state
+        if s.view is None or s.frame is None:
+            return False
+        try:
+            _, picture = buffer(s.scene, s.view, s.settings(), name, self.context())
+        except NotInspectable:
+            return False
+        height, width = s.frame.color.shape[:2]
+        side = max(1, picture.shape[0] // height)
+        picture = picture[::side, ::side][:height, :width]
+        rgbx = np.zeros((height, width, 4), np.uint8)
+        rgbx[:picture.shape[0], :picture.shape[1], :3] = picture
+        self.buffer, self.overlay = name, rgbx
+        log.info("action: %s -> buffer view: %s", how, name)
+        return True
+
+    # -- the OpenGL comparison ---------------------------------------------------------------
+    def compare_opengl(self, how: str) -> None:
+        from app.tools.inspector import opengl_reference
+        from core.inspect.compare import compare, heat_map
+        s = self.state
+        if s.frame is None or s.view is None:
+            return
+        ours = s.frame.color
+        reference, why = opengl_reference(s.scene, s.view, s.settings().replace(
+            size=(ours.shape[1], ours.shape[0])))
+        if reference is None:
+            self.verdict = f"no comparison: {why}"
+            log.info("action: %s -> %s", how, self.verdict)
+            return
+        result = compare(ours, reference)
+        heat = heat_map(result, reference)
+        self.heat = np.zeros(ours.shape[:2] + (4,), np.uint8)
+        self.heat[..., :3] = heat
+        self.verdict = "against OpenGL: " + result.verdict()
+        self.showing_heat = True
+        self.changed = True
+        log.info("action: %s -> compare with OpenGL: %s", how, result.verdict())
+
+    def flip(self, how: str) -> None:
+        if self.heat is None:
+            self.compare_opengl(how)
+            return
+        self.showing_heat = not self.showing_heat
+        self.changed = True
+        log.info("action: %s -> showing %s", how,
+                 "the heat map" if self.showing_heat else "the picture")
+
+    # -- the panel ---------------------------------------------------------------------------
+    def note_progress(self, fraction) -> None:
+        if fraction is not None:
+            self.progress.append(float(fraction))
+
+    def panel(self, imgui, displayable) -> None:
+        from array import array
+        header = "Inspector" + (" (click a pixel)" if self.inspecting else "")
+        expanded, _ = imgui.collapsing_header(f"{header}###inspector",
+                                              flags=imgui.TREE_NODE_DEFAULT_OPEN)
+        if not expanded:
+            return
+        imgui.push_text_wrap_pos(0.0)
+        if self.buffer != PICTURE:
+            imgui.text_colored(f"showing the {self.buffer} buffer (v: next)", 0.55, 0.8, 1.0)
+        if self.verdict:
+            imgui.text_colored(displayable(self.verdict), 1.0, 0.75, 0.4)
+            if self.heat is not None:
+                imgui.text_disabled("h: " + ("picture" if self.showing_heat else "heat map"))
+        if not self.lines and not self.inspecting:
+            imgui.text_disabled("i: inspect mode, v: buffer views, h: compare with OpenGL")
+        for line in self.lines:
+            imgui.text(displayable(line))
+        imgui.pop_text_wrap_pos()
+        if self.frame_ms:
+            values = array("f", self.frame_ms)
+            imgui.plot_lines("##frame ms", values, overlay_text=f"frame {values[-1]:.1f} ms",
+                             graph_size=(0, 40))
+        if len(self.progress) > 1:
+            imgui.plot_lines("##progress", array("f", self.progress), scale_min=0.0,
+                             scale_max=1.0, overlay_text="progressive frame",
+                             graph_size=(0, 40))
+
+
+def _jsonable(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(type(value).__name__)

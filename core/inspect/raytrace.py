@@ -1,0 +1,239 @@
+"""The ray tracer's pixel record (issue 22): the ray tree, node by node — a stand-in until
+:mod:`core.raytrace.renderer` defines its own ``inspect_pixel`` (the dispatch prefers it).
+
+:func:`ray_tree` walks :func:`core.raytrace.whitted.trace`'s loop in Python, in its order
+(an explicit stack, depth first), calling the tracer's own compiled pieces for each step
+(``nearest``, ``surface_at``, ``checker_colour``, ``shadow_term``, ``refract``, ``reflect``,
+``schlick``) and :func:`core.shading.terms.phong_terms` for the local colour with each
+light's shadow factor. Every node keeps its kind, origin, direction, hit, material, local
+colour, weight and contribution (weight x local colour); their sum is the sample's colour,
+and the samples' mean the pixel's, to the last bit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core.shading.illumination import EYE_DIRECTION, EYE_POINT, POINT_LIGHT, TWO_SIDED, to_uint8
+from core.shading.terms import phong_terms
+
+KINDS = ("primary", "shadow", "reflected", "refracted")
+HITS = {0: "triangle", 1: "sphere", 2: "plane"}
+
+
+def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
+    from core.camera.film import sample_offsets
+    from core.raytrace import renderer
+    options = renderer.TraceOptions.from_settings(settings)
+    offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
+               if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
+    setup, (origins, directions, t_min, t_max) = _setup(scene, view, settings, options, offsets,
+                                                         context)
+    width, height = settings.size
+    samples, colours = [], []
+    for k in ((s * height + y) * width + x for s in range(len(offsets))):
+        if not t_min[k] < t_max[k]:
+            colour = [float(c) for c in setup.background]
+            samples.append({"nodes": [], "note": "outside the viewport or the F..B slab",
+                            "sum": colour})
+        else:
+            nodes, colour = ray_tree(setup, origins[k], directions[k], t_min[k], t_max[k])
+            samples.append({"nodes": nodes, "sum": colour})
+        colours.append(colour)
+    raw = np.mean(np.array(colours), axis=0)
+    record = {"renderer": "raytrace", "pixel": [int(x), int(y)],
+              "color": to_uint8(raw).tolist(), "raw": raw.tolist(),
+              "shadows": options.shadows, "max depth": options.max_depth}
+    if len(samples) == 1:
+        record.update({"ray tree": samples[0]["nodes"], "ray-tree depth": _depth(samples[0])})
+    else:
+        record["samples"] = samples
+        record["ray-tree depth"] = max(_depth(s) for s in samples)
+    return record
+
+
+def _setup(scene, view, settings, options, offsets, context):
+    """The tracer's prepared frame and its primary rays (all of them at once: one pixel's
+    alone costs as much), kept per scene for the last view and settings asked."""
+    from core.context import DEFAULT_CONTEXT
+    from core.raytrace import renderer
+    cache = (context or DEFAULT_CONTEXT).cache(scene)
+    held = cache.get("pixel inspector: raytrace")
+    try:
+        if held is not None and held[0] == (view, settings):
+            return held[1]
+    except (TypeError, ValueError):
+        pass
+    setup = renderer.prepare(scene, view, settings.projection, settings.size, options, offsets,
+                             settings.keep_aspect)
+    held = (setup, renderer.primary(setup, 0, setup.height, 0, setup.width))
+    cache["pixel inspector: raytrace"] = ((view, settings), held)
+    return held
+
+
+def _depth(sample) -> int:
+    return max((n["depth"] for n in sample["nodes"]), default=0)
+
+
+def ray_tree(setup, origin, direction, t_min, t_max) -> tuple[list, list]:
+    """The nodes of one primary ray's tree and their summed colour (unclamped RGB)."""
+    from core.raytrace import bvh, optics, whitted
+    packed, o = setup.packing.packed, setup.options
+    shadows = whitted.SHADOW_MODES.index(o.shadows)
+    offset = 1e-9 * setup.packing.scale
+    stack = np.empty(bvh.STACK, dtype=np.int64)
+    counts = np.zeros(len(whitted.COUNTERS), dtype=np.int64)
+    surface_row = np.empty((1, packed.surfaces.shape[1]))
+    eye = np.empty(4)
+    total = [0.0, 0.0, 0.0]
+    nodes = []
+    pending = [(*origin, *direction, float(t_min), float(t_max), 1.0, 1, whitted.PRIMARY, -1)]
+    while pending:
+        ox, oy, oz, dx, dy, dz, t0, t1, weight, depth, ray_kind, parent = pending.pop()
+        node = {"id": len(nodes), "parent": parent, "kind": KINDS[ray_kind], "depth": depth,
+                "origin": [ox, oy, oz], "direction": [dx, dy, dz], "weight": weight}
+        nodes.append(node)
+        kind, index, t, u, v = whitted.nearest(packed, ox, oy, oz, dx, dy, dz, t0, t1, stack)
+        if kind == whitted.NOTHING:
+            node.update({"hit": None, "local colour": [float(c) for c in setup.background]})
+            contribution = [weight * float(setup.background[c]) for c in range(3)]
+            node["contribution"] = contribution
+            total = [total[c] + contribution[c] for c in range(3)]
+            continue
+        px, py, pz, nx, ny, nz, gx, gy, gz, s = whitted.surface_at(packed, kind, index, u, v,
+                                                                   ox, oy, oz, dx, dy, dz, t)
+        if ray_kind == whitted.PRIMARY:
+            eye[:] = setup.eye
+        else:
+            eye[0], eye[1], eye[2], eye[3] = EYE_DIRECTION, -dx, -dy, -dz
+        entering = gx * dx + gy * dy + gz * dz < 0.0
+        lnx, lny, lnz = nx, ny, nz
+        if not entering and packed.surfaces[s, TWO_SIDED] == 0.0:
+            lnx, lny, lnz = -nx, -ny, -nz
+        terms = _local(setup, packed, kind, index, s, (px, py, pz), (lnx, lny, lnz),
+                       (gx, gy, gz), eye, shadows, offset, surface_row, stack, counts)
+        local = terms["clamped"]
+        contribution = [weight * local[c] for c in range(3)]
+        total = [total[c] + contribution[c] for c in range(3)]
+        k_r, k_t, ior = (float(c) for c in packed.optics[s])
+        node.update({"hit": {"kind": HITS.get(int(kind), str(kind)), "index": int(index),
+                             "t": float(t), "point": [px, py, pz], "normal": [nx, ny, nz],
+                             "entering": bool(entering)},
+                     "material": {"surface": int(s), "k_r": k_r, "k_t": k_t, "ior": ior},
+                     "phong": terms, "local colour": local, "contribution": contribution})
+        if k_r == 0.0 and k_t == 0.0:
+            continue
+        if depth >= o.max_depth:
+            node["children"] = "cut: the depth limit"
+            continue
+        if not entering:
+            gx, gy, gz = -gx, -gy, -gz
+        fx, fy, fz = nx, ny, nz
+        if fx * dx + fy * dy + fz * dz > 0.0:
+            fx, fy, fz = -fx, -fy, -fz
+        if fx * gx + fy * gy + fz * gz <= 0.0:
+            fx, fy, fz = gx, gy, gz
+        me = node["id"]
+        if k_t > 0.0:
+            n_i, n_t = (o.medium, ior) if entering else (ior, o.medium)
+            ok, tx, ty, tz = optics.refract(dx, dy, dz, fx, fy, fz, n_i, n_t)
+            if not ok:
+                node["total internal reflection"] = True
+                k_r, k_t = k_r + k_t, 0.0
+            elif o.fresnel:
+                cos_i = -(fx * dx + fy * dy + fz * dz)
+                cos_t = -(fx * tx + fy * ty + fz * tz)
+                share = optics.schlick(cos_i, cos_t, n_i, n_t)
+                k_r, k_t = k_r + share * k_t, (1.0 - share) * k_t
+            if k_t > 0.0:
+                if weight * k_t >= o.adaptive_epsilon:
+                    pending.append((px - offset * gx, py - offset * gy, pz - offset * gz,
+                                    tx, ty, tz, 0.0, np.inf, weight * k_t, depth + 1,
+                                    whitted.REFRACTED, me))
+                else:
+                    node["refracted"] = "cut by adaptive control"
+        if k_r > 0.0:
+            if weight * k_r >= o.adaptive_epsilon:
+                rx, ry, rz = optics.reflect(dx, dy, dz, fx, fy, fz)
+                pending.append((px + offset * gx, py + offset * gy, pz + offset * gz,
+                                rx, ry, rz, 0.0, np.inf, weight * k_r, depth + 1,
+                                whitted.REFLECTED, me))
+            else:
+                node["reflected"] = "cut by adaptive control"
+    return nodes, total
+
+
+def _local(setup, packed, kind, index, s, p, n, g, eye, shadows, offset, surface_row, stack,
+           counts) -> dict:
+    """local_colour's terms: the checker's O_d, each light's shadow factor, Phong."""
+    from core.raytrace import whitted
+    from core.shading.illumination import unit3
+    px, py, pz = p
+    nx, ny, nz = n
+    gx, gy, gz = g
+    whitted.checker_colour(packed, kind, index, s, px, py, pz, surface_row)
+    lights = setup.lights
+    factors = [(1.0, 1.0, 1.0)] * len(lights)
+    if shadows != whitted.SHADOW_OFF and len(lights):
+        if eye[0] == EYE_POINT:
+            vx, vy, vz, _ = unit3(eye[1] - px, eye[2] - py, eye[3] - pz)
+        else:
+            vx, vy, vz = eye[1], eye[2], eye[3]
+        lit = (nx, ny, nz)
+        if surface_row[0, TWO_SIDED] != 0.0 and nx * vx + ny * vy + nz * vz < 0.0:
+            lit = (-nx, -ny, -nz)
+        side = 1.0 if gx * vx + gy * vy + gz * vz >= 0.0 else -1.0
+        sx, sy, sz = px + side * offset * gx, py + side * offset * gy, pz + side * offset * gz
+        for k in range(len(lights)):
+            if lights[k, 0] == POINT_LIGHT:
+                lx, ly, lz, _ = unit3(lights[k, 1] - px, lights[k, 2] - py, lights[k, 3] - pz)
+            else:
+                lx, ly, lz = lights[k, 1], lights[k, 2], lights[k, 3]
+            if lit[0] * lx + lit[1] * ly + lit[2] * lz <= 0.0:
+                continue
+            factors[k] = whitted.shadow_term(packed, shadows, lights[k], sx, sy, sz,
+                                             setup.background, offset, stack, counts)
+    return phong_terms(p, n, 0, surface_row, lights, setup.ambient, eye, setup.halfway,
+                       shadow=factors)
+
+
+def buffers(scene, view, settings, context, names) -> dict:
+    """The ray tracer's buffer views (stand-in): ``depth`` (−t of the primary hit, so larger
+    is nearer, as the z-buffer's), ``triangle`` (the scene triangle a primary ray hits first;
+    -1 for spheres, planes and nothing) and ``ray-depth`` (per pixel, the smallest depth
+    limit from which the traced colour no longer changes: the depth of the tree that
+    matters). One sample per pixel, at the pixel centre."""
+    from core.raytrace import whitted
+    from core.raytrace.renderer import render_raw
+    options_settings = settings.replace(samples=1)
+    setup, (origins, directions, t_min, t_max) = _setup(
+        scene, view, options_settings, _options(options_settings),
+        np.array([options_settings.pixel_offset]), context)
+    width, height = settings.size
+    out = {}
+    if "depth" in names or "triangle" in names:
+        n = len(origins)
+        kind, index, t_hit = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n)
+        whitted.visible_many(setup.packing.packed, origins, directions, t_min, t_max, kind,
+                             index, t_hit)
+        hit = kind != whitted.NOTHING
+        out["depth"] = np.where(hit, -t_hit, np.nan).reshape(height, width)
+        out["triangle"] = np.where(kind == whitted.TRIANGLE, index, -1).reshape(height, width)
+    if "ray-depth" in names:
+        import dataclasses
+        limit = setup.options.max_depth
+        final = render_raw(setup)
+        depth = np.full((height, width), limit, np.int64)
+        still = np.ones((height, width), bool)      # the same colour at every limit so far
+        for d in range(limit - 1, 0, -1):
+            trial = dataclasses.replace(setup, options=dataclasses.replace(setup.options,
+                                                                          max_depth=d))
+            still &= (render_raw(trial) == final).all(axis=2)
+            depth[still] = d
+        out["ray-depth"] = depth
+    return out
+
+
+def _options(settings):
+    from core.raytrace import renderer
+    return renderer.TraceOptions.from_settings(settings)

@@ -1,0 +1,109 @@
+"""A pixel record as short lines of text: what ``inspect`` prints and the window's panel shows.
+
+The lines are plain ASCII-friendly text (the window's font has few glyphs), the most telling
+first: the pixel and its colour, what covers it, the weights and depth, then the sum
+(Phong's terms per light, the texture, the ray tree). Other keys are left to ``--json``.
+"""
+
+from __future__ import annotations
+
+
+def _v(values, digits: int = 4) -> str:
+    return "(" + ", ".join(f"{float(v):.{digits}g}" for v in values) + ")"
+
+
+def _rgb(values) -> str:
+    return "(" + ", ".join(f"{float(v):.4f}" for v in values) + ")"
+
+
+def describe(record: dict) -> list[str]:
+    """The record's lines (the first names the pixel, the renderer and the colour)."""
+    x, y = record["pixel"]
+    r, g, b = record["color"]
+    lines = [f"pixel ({x}, {y})  {record['renderer']}  colour ({r}, {g}, {b})"]
+    if "samples" in record and record.get("samples per pixel"):
+        lines.append(f"{record['samples per pixel']} samples, averaged; the first:")
+        return lines + _sample(record["samples"][0])
+    if "ray tree" in record or "samples" in record:
+        return lines + _ray_tree(record)
+    if "history" in record or "polygons" in record:
+        return lines + [f"{k}: {record[k]}" for k in ("history", "polygons") if k in record]
+    return lines + _sample(record)
+
+
+def _sample(record: dict) -> list[str]:
+    layer = record.get("layer")
+    if layer == "background":
+        return ["background: no triangle covers the pixel centre"]
+    if layer == "line":
+        return ["line: drawn by the line pass over the triangles"]
+    if layer != "triangle":
+        return [f"{k}: {v}" for k, v in record.items() if k not in ("renderer", "pixel", "color")][:12]
+    w, d = record["weights"], record["depth"]
+    lines = [f"mesh {record['mesh']} ({record.get('mesh name')}), triangle {record['triangle']}"
+             + (" (clipped)" if record.get("made by the clipper") else ""),
+             f"weights {w['kind']} {_v(w['used'])}"]
+    if "screen-linear" in w:
+        lines.append(f"  screen-linear {_v(w['screen-linear'])}")
+        lines.append(f"  perspective-correct {_v(w['perspective-correct'])}")
+    lines.append(f"depth NPC {d['npc']:.6f}, world {_v(d['world point'], 6)}")
+    if "distance from the eye" in d:
+        lines.append(f"  {d['distance from the eye']:.6g} from the eye")
+    if "normal" in record:
+        lines.append(f"normal {_v(record['normal'])}")
+    if "texture" in record:
+        t = record["texture"]
+        lines.append(f"uv {_v(record['uv'])}, {record.get('texture filter')}, MIP level "
+                     f"{float(t['mip level']):.3f}, {len(t['texels'])} texels read")
+        for texel in t["texels"][:8]:
+            lines.append(f"  level {texel['level']} texel ({texel['i']}, {texel['j']}) "
+                         f"x {texel['weight']:.4f} = {_rgb(texel['rgba'][:3])}")
+        lines.append(f"  O_d {_rgb(t['O_d'])}")
+    if "phong" in record:
+        lines += _phong(record["phong"], record.get("evaluated at"))
+    if "vertices" in record:
+        for k, vertex in enumerate(record["vertices"]):
+            lines.append(f"vertex {k}: colour {_rgb(vertex['colour'])}")
+            if "phong" in vertex:
+                lines += ["  " + line for line in _phong(vertex["phong"], None)[1:]]
+        lines.append(f"interpolated {_rgb(record['interpolated colour'])}")
+    if "environment" in record:
+        e = record["environment"]
+        lines.append(f"environment x {e['reflectivity']:.3f}: {_rgb(e['colour'])}")
+    if "sum" in record:
+        lines.append(f"sum {_rgb(record['sum'])}")
+    return lines
+
+
+def _phong(terms: dict, where) -> list[str]:
+    lines = [f"Phong at {where or 'the pixel'}: N {_v(terms['N'])}"
+             + (" (turned to the viewer)" if terms.get("two-sided flip") else "")]
+    lines.append(f"ambient {_rgb(terms['ambient'])}")
+    for light in terms["lights"]:
+        if "diffuse" in light:
+            shadow = light.get("shadow", [1, 1, 1])
+            lines.append(f"light {light['light']}: N.L {light['N.L']:.4f}, att "
+                         f"{light['attenuation']:.4f}, shadow {_v(shadow, 3)}")
+            lines.append(f"  diffuse {_rgb(light['diffuse'])} specular {_rgb(light['specular'])}")
+        else:
+            lines.append(f"light {light['light']}: {light.get('note', 'no contribution')}")
+    lines.append(f"sum {_rgb(terms['sum'])} -> {_rgb(terms['clamped'])}")
+    return lines
+
+
+def _ray_tree(record: dict) -> list[str]:
+    nodes = record.get("ray tree")
+    if nodes is None:
+        nodes = record["samples"][0]["nodes"]
+        lines = [f"{len(record['samples'])} samples, averaged; the first's ray tree:"]
+    else:
+        lines = [f"ray tree ({len(nodes)} rays, depth {record.get('ray-tree depth')}):"]
+    for node in nodes[:24]:
+        hit = node.get("hit")
+        where = "background" if hit is None else f"{hit['kind']} {hit['index']} t {hit['t']:.4g}"
+        lines.append(f"{'  ' * (node['depth'] - 1)}{node['kind']} x {node['weight']:.3f}: "
+                     f"{where}, local {_rgb(node['local colour'])}, adds "
+                     f"{_rgb(node['contribution'])}")
+    if "raw" in record:
+        lines.append(f"sum {_rgb(record['raw'])}")
+    return lines

@@ -1,0 +1,174 @@
+"""The pixel inspector (issue 22): each renderer's record sums to the pixel the frame shows,
+on 10,000 random pixels per renderer; the notes' worked example gives its hand values."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from core import RenderContext, RenderSettings, View, render
+from core.inspect import NotInspectable, inspect_pixel
+from core.paths import SCENES_DIR
+from core.scene.formats import load_scene
+from core.shading.illumination import quantize
+
+PIXELS_PER_RENDERER = 10_000
+
+# The notes' worked example: VRP (0, 0, 54), PRP (8, 6, 30), window -1..17, F = 10, B = -50.
+WORKED = View(vrp=(0.0, 0.0, 54.0), vpn=(0.0, 0.0, 1.0), vup=(0.0, 1.0, 0.0),
+              window=(-1.0, 17.0, -1.0, 17.0), prp=(8.0, 6.0, 30.0), front=10.0, back=-50.0,
+              label="worked example")
+
+
+def _bytes(rgb) -> list[int]:
+    return [int(quantize(c)) for c in rgb]
+
+
+def _check_sum(record) -> None:
+    """The record's own terms add up to its colour (to 1/255)."""
+    if "samples" in record:
+        for sample in record["samples"]:
+            _check_sum(sample)
+        return
+    if "phong" in record and "sum" not in record:            # flat, Phong: the model's terms
+        terms = record["phong"]
+        total = [terms["ambient"][c] + sum(light.get("sum", [0, 0, 0])[c]
+                                           for light in terms["lights"]) for c in range(3)]
+        assert np.abs(np.subtract(_bytes(total), record["color"])).max() <= 1
+    if "sum" in record:                                       # textured: the maps, then Phong
+        assert np.abs(np.subtract(_bytes(record["sum"]), record["color"])).max() <= 1
+    if "vertices" in record:                                  # Gouraud: each vertex lit
+        for vertex in record["vertices"]:
+            if "phong" in vertex:
+                assert _bytes(vertex["phong"]["clamped"]) == _bytes(vertex["colour"])
+        w = record["weights"]["used"]
+        mixed = sum(w[k] * np.array(v["colour"]) for k, v in enumerate(record["vertices"]))
+        assert _bytes(mixed) == record["color"]
+    if "ray tree" in record:                                  # the tree's contributions
+        total = np.sum([node["contribution"] for node in record["ray tree"]], axis=0)
+        assert np.abs(total - record["raw"]).max() <= 1e-12
+
+
+# (scene, settings overrides, share of the renderer's pixels)
+ZBUFFER_CASES = [
+    ("cube.toml", {"shading": "flat"}, 0.1),
+    ("cube.toml", {"shading": "gouraud"}, 0.1),
+    ("crossing_front_plane.tri", {"shading": "gouraud"}, 0.05),      # the clipper's vertices
+    ("interpenetrating.tri", {"shading": "phong", "projection": "parallel"}, 0.05),
+    ("torus.toml", {"shading": "phong"}, 0.15),
+    ("torus.toml", {"shading": "gouraud", "rasterizer": "scanline"}, 0.1),
+    ("texture_floor.toml", {"shading": "phong"}, 0.15),
+    ("texture_sphere_torus.toml", {"shading": "phong", "texture_filter": "anisotropic"}, 0.1),
+    ("texture_bump_sphere.toml", {"shading": "phong"}, 0.1),
+    ("cube.toml", {"shading": "phong", "samples": 4}, 0.05),
+    ("house.toml", {"shading": "wireframe"}, 0.05),
+]
+RAYTRACE_CASES = [
+    ("whitted.toml", {}, 0.5),
+    ("refraction.toml", {"fresnel": True}, 0.3),
+    ("house_mirror.toml", {"shadows": "object"}, 0.2),
+]
+
+
+def _run(cases, renderer, size=(96, 72)) -> tuple[int, dict]:
+    rng = np.random.default_rng(22)
+    checked, layers = 0, {}
+    for name, overrides, share in cases:
+        scene = load_scene(SCENES_DIR / name)
+        settings = RenderSettings.for_scene(scene, renderer=renderer, size=size, **overrides)
+        view = scene.views[0]
+        shown = render(scene, view, settings, RenderContext()).color
+        context = RenderContext()
+        for _ in range(int(round(share * PIXELS_PER_RENDERER))):
+            x, y = int(rng.integers(size[0])), int(rng.integers(size[1]))
+            record = inspect_pixel(scene, view, settings, x, y, context)
+            assert record["renderer"] == renderer and record["pixel"] == [x, y]
+            assert np.abs(np.subtract(record["color"], shown[y, x], dtype=int)).max() <= 1, \
+                (name, overrides, x, y)
+            _check_sum(record)
+            layer = record.get("layer", "ray tree" if record.get("ray tree") else "other")
+            layers[layer] = layers.get(layer, 0) + 1
+            checked += 1
+    return checked, layers
+
+
+@pytest.mark.slow
+def test_zbuffer_records_sum_to_the_shown_pixel_on_10000_random_pixels():
+    checked, layers = _run(ZBUFFER_CASES, "zbuffer")
+    assert checked >= PIXELS_PER_RENDERER
+    assert layers["triangle"] > 3000 and layers["line"] > 5 and layers["background"] > 100
+
+
+@pytest.mark.slow
+def test_raytrace_records_sum_to_the_shown_pixel_on_10000_random_pixels():
+    checked, layers = _run(RAYTRACE_CASES, "raytrace", size=(64, 48))
+    assert checked >= PIXELS_PER_RENDERER
+
+
+def test_the_worked_example_depth_and_matrices_are_the_hand_values():
+    scene = load_scene(SCENES_DIR / "house_solid.obj")
+    scene = dataclasses.replace(scene, views=[WORKED])
+    settings = RenderSettings.for_scene(scene, shading="flat", size=(500, 500))
+    x, y = 250, 250
+    record = inspect_pixel(scene, WORKED, settings, x, y, RenderContext())
+    # The pixel centre on the view plane (the front wall, z = 54): u from the window.
+    u = -1 + 18 * (x + 0.5) / 500
+    v = 17 - 18 * (y + 0.5) / 500
+    assert record["layer"] == "triangle" and record["mesh name"] is not None
+    # The rasterizer snaps vertices to 1/256 pixel (its weights are those of the snapped
+    # triangle): x and y within 1/256 pixel = 18/500/256 world units; z is exact on the wall.
+    snap = 18 / 500 / 256
+    assert record["depth"]["world point"][:2] == pytest.approx([u, v], abs=snap)
+    assert record["depth"]["world point"][2] == pytest.approx(54.0, abs=1e-12)
+    assert record["depth"]["vrc"] == pytest.approx([u, v, 0.0], abs=snap)
+    # n = -30 after T(-PRP): canonical z = -30/80; z_min = -(-30 + 10)/(-30 - 50) = -1/4;
+    # after M and the divide by W = 3/8: (-3/8 + 1/4)/(3/4) / (3/8) = -4/9.
+    assert record["depth"]["npc"] == pytest.approx(-4 / 9, abs=1e-12)
+    assert record["depth"]["distance from the eye"] == pytest.approx(
+        np.linalg.norm([u - 8, v - 6, 54 - 84]), abs=snap)
+    m = record["matrices"]
+    assert np.allclose(m["S_per"], np.diag([1 / 24, 1 / 24, 1 / 80, 1]))
+    assert np.allclose(m["SH_par"], [[1, 0, 0, 0], [0, 1, 1 / 15, 0], [0, 0, 1, 0], [0, 0, 0, 1]])
+    assert np.allclose(m["T_prp"], [[1, 0, 0, -8], [0, 1, 0, -6], [0, 0, 1, -30], [0, 0, 0, 1]])
+    assert np.allclose(m["T_vrp"], [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, -54], [0, 0, 0, 1]])
+    assert np.allclose(m["R"], np.eye(4))
+    assert m["z_min"] == pytest.approx(-0.25)
+    assert np.allclose(m["M"], [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 4 / 3, 1 / 3], [0, 0, -1, 0]])
+    # the front wall faces +z: its normal, and the pixel's colour from its terms
+    assert record["normal"] == pytest.approx([0, 0, 1])
+    _check_sum(record)
+
+
+def test_a_renderer_without_an_inspector_is_refused_in_words():
+    scene = load_scene(SCENES_DIR / "sphere.toml")
+    settings = RenderSettings.for_scene(scene, renderer="raycast", size=(20, 20))
+    with pytest.raises(NotInspectable, match="the raycast renderer has no pixel inspector"):
+        inspect_pixel(scene, scene.views[0], settings, 3, 3)
+    settings = settings.replace(renderer="zbuffer")
+    with pytest.raises(NotInspectable, match=r"pixel \(20, 3\) is outside the 20 x 20 frame"):
+        inspect_pixel(scene, scene.views[0], settings, 20, 3)
+    bad = dataclasses.replace(scene.views[0], vup=scene.views[0].vpn, label="tilted")
+    with pytest.raises(NotInspectable, match="tilted: invalid"):
+        inspect_pixel(scene, bad, settings, 3, 3)
+
+
+def test_a_frame_drawn_without_the_inspector_loads_none_of_it():
+    """Off costs nothing: rendering (and the window's module) import no inspector code."""
+    import subprocess
+    import sys
+    code = ("import sys\n"
+            "from core import render, RenderSettings\n"
+            "from core.scene.formats import load_scene\n"
+            "from core.paths import SCENES_DIR\n"
+            "import app.viewer.inspector_tools\n"
+            "scene = load_scene(SCENES_DIR / 'cube.toml')\n"
+            "render(scene, scene.views[0], RenderSettings.for_scene(scene, shading='phong',"
+            " size=(32, 24)))\n"
+            "print(sorted(m for m in sys.modules if 'inspect' in m and m.startswith(('core',"
+            " 'app'))))\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          timeout=300, cwd=str(SCENES_DIR.parent))
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "['app.viewer.inspector_tools']"
