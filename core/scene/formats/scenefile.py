@@ -69,6 +69,7 @@ TOP_KEYS += animation_keys.TOP_KEYS
 TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
 
 # -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
+from core.texture.image import TexelBudget  # noqa: E402
 from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
 MATERIAL_KEYS = MATERIAL_KEYS + TEXTURE_KEYS
 # --
@@ -109,6 +110,7 @@ class _Reader:
         self.file = file
         self.folder = folder
         self.texture_messages: list[str] = []       # files a material could not use (issue 11)
+        self.texel_budget = TexelBudget()           # what the scene's textures may hold
         self.lines = text.split("\n")
         # Indexed once, so that locating a key costs the lines of its own table, not the
         # file's: every [[view]] asks for its line, and a rescan per view was quadratic.
