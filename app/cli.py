@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import re
 import sys
@@ -293,6 +294,9 @@ def _drawn_by(settings) -> str:
 
 def _render(args) -> int:
     from app.viewer.state import announce_compiles
+    if args.time is not None and not math.isfinite(args.time):
+        print(f"error: --time {args.time}: expected a finite number of seconds", file=sys.stderr)
+        return 2
     refusal = out_problem(Path(args.out), args.scene, args.force)
     if refusal:
         print(f"error: --out {args.out}: {refusal}", file=sys.stderr)
@@ -304,7 +308,11 @@ def _render(args) -> int:
     if index is None:
         return 2
     from core.settings import RenderSettings
-    texture_options = _texture_options(scene, args)       # issue 11
+    try:
+        texture_options = _texture_options(scene, args)   # issue 11
+    except ValueError as error:                           # --bump-map 99 (issue 23)
+        print(f"error: --bump-map: {error}", file=sys.stderr)
+        return 2
     view = scene.views[index]
     try:
         settings = RenderSettings.for_scene(scene, projection=args.projection,

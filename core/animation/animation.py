@@ -114,6 +114,8 @@ class Animation:
 
     def local_time(self, t: float) -> float:
         """``t`` wrapped into [0, duration) when the animation loops, else clamped to it."""
+        if not math.isfinite(t):
+            raise ValueError(f"the time must be a finite number of seconds, not {t}")
         if self.duration <= 0.0:
             return 0.0
         if self.loop:

@@ -208,6 +208,8 @@ def _install(reader, anim: Animation, channel: str, keys: list, options: dict) -
         track = Track(times, values, options.get("method", "catmull-rom"),
                       options.get("tension", 0.0), options.get("continuity", 0.0),
                       options.get("bias", 0.0), position and options.get("constant_speed", False))
+    if channel.endswith(".scale"):
+        _check_scale(reader, channel, track, keys)
     kind, _, rest = channel.partition(".")
     scene = anim.scene
     if kind == "view":
@@ -223,6 +225,19 @@ def _install(reader, anim: Animation, channel: str, keys: list, options: dict) -
     else:
         index = [m.name for m in scene.meshes].index(rest.split(".")[0])
         anim.colors[index] = track
+
+
+def _check_scale(reader, channel: str, track: Track, keys: list) -> None:
+    """A scale factor keeps its sign and its size between the keys too: in-betweened through 0
+    the mesh would flatten (and its normals have no inverse transpose)."""
+    low, high = track.interval_ranges()
+    small = (low < 1e-6) & (high > -1e-6)
+    if small.any():
+        i = int(np.flatnonzero(small.any(axis=1))[0])
+        raise reader.fail(keys[i + 1][2], f"the scale passes through zero between the keys at "
+                                          f"t = {keys[i][0]:g} and t = {keys[i + 1][0]:g} (a "
+                                          "factor must keep its sign and stay at least 1e-6 in "
+                                          "size all along; key a mirror as its own object)")
 
 
 def _base_view(reader, scene, path):
