@@ -281,7 +281,24 @@ def _draw_still(scene, view, settings, time):
     if animation is None:
         return render(scene, view, settings)
     from core.animation.frames import render_at
+    if animation.particle_system is not None:       # simulated from 0: say how far it is
+        animation.particle_system.progress = _simulation_progress()
     return render_at(animation, time, settings)
+
+
+def _simulation_progress():
+    """A ParticleSystem.progress that prints a line every few seconds of simulating."""
+    import time as clock
+    start = last = clock.monotonic()
+
+    def progress(step: int, of: int) -> None:
+        nonlocal last
+        now = clock.monotonic()
+        if now - last >= 5.0:
+            last = now
+            print(f"simulating the particles: step {step:,} of {of:,} "
+                  f"({now - start:.0f} s)", file=sys.stderr, flush=True)
+    return progress
 
 
 def _drawn_by(settings) -> str:
@@ -326,8 +343,16 @@ def _render(args) -> int:
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
-    with announce_compiles():            # the first run compiles the kernels: say so
-        frame = _draw_still(scene, view, settings, args.time)
+    from core.animation.particles import ParticleBudgetError
+    try:
+        with announce_compiles():        # the first run compiles the kernels: say so
+            frame = _draw_still(scene, view, settings, args.time)
+    except ParticleBudgetError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    if frame.stats.get("particles not born"):
+        print(f"warning: {frame.stats['particles not born']:,} particles were not born: at most "
+              f"{frame.stats['particle cap']:,} live at once", file=sys.stderr)
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1

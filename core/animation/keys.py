@@ -37,7 +37,8 @@ import weakref
 import numpy as np
 
 from core.animation import quaternion as qt
-from core.animation.animation import Animation, ObjectTracks, ViewTracks, frame_quaternion
+from core.animation.animation import (Animation, ObjectTracks, ViewTracks, frame_quaternion,
+                                      meshes_named)
 from core.animation.tracks import METHODS, ORIENTATION_METHODS, OrientationTrack, Track
 
 TOP_KEYS = ("animation", "key", "emitter")          # the scene file's top-level tables we read
@@ -104,7 +105,20 @@ def read_animation(reader, doc: dict, scene) -> None:
     if "emitter" in doc:
         from core.animation.particles import read_emitters
         anim.emitters = read_emitters(reader, doc["emitter"], scene)
+        _check_simulation_length(reader, anim)
     attach(scene, anim)
+
+
+def _check_simulation_length(reader, anim: Animation) -> None:
+    """Particles are simulated step by step from 0 to any time asked for (at most the
+    duration): the steps that takes are bounded before any is taken."""
+    from core.animation.particles import MAX_SIMULATION_STEPS, SUBSTEPS
+    steps = anim.duration * anim.fps * SUBSTEPS
+    if steps > MAX_SIMULATION_STEPS:
+        raise reader.fail(("animation", "duration"),
+                          f"with particles, duration · fps · {SUBSTEPS} steps a frame = "
+                          f"{steps:,.0f} simulation steps; at most {MAX_SIMULATION_STEPS:,} "
+                          "(shorten the animation or lower the fps)")
 
 
 def _track_settings(reader, table, path) -> dict:
@@ -126,7 +140,7 @@ def _track_settings(reader, table, path) -> dict:
 
 def _samples(reader, doc: dict, scene) -> dict[str, list]:
     """channel → [(time, value, path)] from every ``[[key]]``, in file order."""
-    names = {m.name: i for i, m in enumerate(scene.meshes)}
+    names = {m.name for m in scene.meshes}
     out: dict[str, list] = {}
     add = lambda channel, time, value, path: out.setdefault(channel, []).append((time, value, path))
     for i, key in enumerate(reader.tables(doc.get("key", []), ("key",))):
@@ -218,13 +232,14 @@ def _install(reader, anim: Animation, channel: str, keys: list, options: dict) -
         setattr(anim.view, rest, track)
     elif kind == "object":
         name, what = rest.rsplit(".", 1)
-        index = [m.name for m in scene.meshes].index(name)
-        setattr(anim.objects.setdefault(index, ObjectTracks()), what, track)
+        for index in meshes_named(scene, name):
+            setattr(anim.objects.setdefault(index, ObjectTracks()), what, track)
     elif kind == "light":
         anim.lights[int(rest.split(".")[0]) - 1] = track
     else:
-        index = [m.name for m in scene.meshes].index(rest.split(".")[0])
-        anim.colors[index] = track
+        for index in meshes_named(scene, rest.split(".")[0], own_material=True):
+            anim.colors[index] = track
+
 
 
 def _check_scale(reader, channel: str, track: Track, keys: list) -> None:

@@ -174,14 +174,35 @@ class Track:
     # ------------------------------------------------------------------ arc length
 
     SAMPLES_PER_INTERVAL = 256
+    MAX_ARC_SAMPLES = 1 << 20         # the whole table's; many keys get fewer per interval
 
     def _arc_table(self) -> tuple[np.ndarray, np.ndarray]:
-        """Cumulative chord length of the curve sampled finely: (times, lengths)."""
-        n = self.SAMPLES_PER_INTERVAL * (len(self.times) - 1) + 1
-        ts = np.linspace(self.times[0], self.times[-1], n)
-        points = np.array([self._curve(t) for t in ts])
+        """Cumulative chord length of the curve sampled finely: (times, lengths). The samples
+        are evaluated together (:meth:`_curve_many`) and bounded in number, so that a track
+        of 20,000 keys costs time and memory linear in its keys."""
+        intervals = len(self.times) - 1
+        per = max(8, min(self.SAMPLES_PER_INTERVAL, self.MAX_ARC_SAMPLES // intervals))
+        ts = np.linspace(self.times[0], self.times[-1], per * intervals + 1)
+        points = self._curve_many(ts)
         lengths = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
         return ts, lengths
+
+    def _curve_many(self, ts: np.ndarray) -> np.ndarray:
+        """:meth:`_curve` at every time of ``ts`` (inside the keys), ``(len(ts), D)``."""
+        ts = np.clip(ts, self.times[0], self.times[-1])
+        i = np.clip(np.searchsorted(self.times, ts, side="right") - 1, 0, len(self.times) - 2)
+        h = self.times[i + 1] - self.times[i]
+        u = ((ts - self.times[i]) / h)[:, None]
+        v0, v1 = self.values[i], self.values[i + 1]
+        if self.method == "linear":
+            return lerp(v0, v1, u)
+        if self.method == "ease":
+            return lerp(v0, v1, (1.0 - np.cos(np.pi * u)) / 2.0)
+        if self.method == "double":
+            k = hermite(i.astype(np.float64), i + 1.0, self._timing_slopes[i],
+                        self._timing_slopes[i + 1], u[:, 0], h)
+            return self._shape._curve_many(k)
+        return hermite(v0, v1, self._outgoing[i], self._incoming[i + 1], u, h[:, None])
 
     def _arc_time(self, t: float) -> float:
         """The curve time at which the arc length is the fraction of the whole that t is of
