@@ -102,11 +102,55 @@ def read_animation(reader, doc: dict, scene) -> None:
         if anim.view is None or anim.view.frame is None:
             raise reader.fail(("animation", "level"), "no key gives the view's vpn and vup")
         anim.view.level = level
+    if anim.view is not None:
+        _check_in_betweens(reader, anim, samples)
     if "emitter" in doc:
         from core.animation.particles import read_emitters
         anim.emitters = read_emitters(reader, doc["emitter"], scene)
         _check_simulation_length(reader, anim)
     attach(scene, anim)
+
+
+# The in-between views checked at load: this many between two keys, fewer (at least one) when
+# the keys are so many that the whole would pass MAX_VIEW_SAMPLES.
+VIEW_SAMPLES_PER_INTERVAL = 32
+MAX_VIEW_SAMPLES = 4096
+
+
+def _check_in_betweens(reader, anim: Animation, samples: dict) -> None:
+    """Every key may be a valid view and the views between them not: a window whose sides
+    cross, F and B swapping, a PRP crossing the view plane. The keyed view is checked at load,
+    at samples between every two keys, with the still views' rules (a view no projection can
+    draw), and for the signs of ``PRP_n``, ``u_max − u_min``, ``v_max − v_min`` and ``F − B``
+    changing between two samples (the crossing itself falls between them)."""
+    from core.camera.view import load_problems
+    channels = [c for c in samples if c.startswith("view.")]
+    times = np.unique([t for c in channels for t, _, _ in samples[c]])
+    if len(times) < 2:
+        return
+    per = max(1, min(VIEW_SAMPLES_PER_INTERVAL, MAX_VIEW_SAMPLES // (len(times) - 1)))
+    u = np.arange(per + 1) / (per + 1)
+    ts = np.append((times[:-1, None] + np.diff(times)[:, None] * u).reshape(-1), times[-1])
+    before = None
+    for t in ts:
+        view = anim.view.at(float(t), "")
+        found = load_problems(view)
+        w = view.window
+        signs = np.sign([view.prp[2], w[1] - w[0], w[3] - w[2], view.front - view.back])
+        if not found and before is not None and np.any(signs != before[1]):
+            found = [["PRP crosses the view plane (PRP_n changes sign)",
+                      "u_min and u_max cross", "v_min and v_max cross",
+                      "F and B cross"][int(np.flatnonzero(signs != before[1])[0])]]
+            t = before[0], t
+        if found:
+            k = int(np.searchsorted(times, t if np.isscalar(t) else t[1], side="right"))
+            k = min(max(k, 1), len(times) - 1)
+            when = (f"at t = {t:.6g} s" if np.isscalar(t)
+                    else f"between t = {t[0]:.6g} s and t = {t[1]:.6g} s")
+            raise reader.fail(("key",), f"the keyed view is invalid {when}, between the keys "
+                                        f"at t = {times[k - 1]:g} and t = {times[k]:g}: "
+                                        + "; ".join(found))
+        before = (t, signs)
 
 
 def _check_simulation_length(reader, anim: Animation) -> None:
