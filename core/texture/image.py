@@ -205,15 +205,16 @@ MAX_SCENE_TEXELS = 2 * 4096 * 4096
 class TexelBudget:
     """What is left of a scene's :data:`MAX_SCENE_TEXELS` as its textures are made."""
 
-    def __init__(self, texels: int = MAX_SCENE_TEXELS) -> None:
-        self.left = texels
+    def __init__(self, texels: int | None = None) -> None:
+        self.total = MAX_SCENE_TEXELS if texels is None else texels
+        self.left = self.total
 
     def take(self, count: int, what: str) -> str | None:
         """Take ``count`` texels for ``what``; the reason it cannot (nothing taken), or None."""
         if count > self.left:
-            used = MAX_SCENE_TEXELS - self.left
+            used = self.total - self.left
             return (f"{what} needs {count:,} texels and the scene's textures may hold "
-                    f"{MAX_SCENE_TEXELS:,} together ({used:,} already used)")
+                    f"{self.total:,} together ({used:,} already used)")
         self.left -= count
         return None
 

@@ -8,6 +8,7 @@ names the file, the line (where the problem has one) and the reason, in the form
 from __future__ import annotations
 
 import functools
+import os
 import re
 from pathlib import Path
 
@@ -122,6 +123,12 @@ def read_file(path: Path, shown: str, kind: str = "views") -> bytes:
     """The bytes of a regular file (never a device, a FIFO or a folder) of at most
     ``MAX_INPUT_BYTES[kind]`` bytes, or a ReaderError."""
     limit = MAX_INPUT_BYTES[kind]
+    try:
+        os.stat(path)                 # the reason it cannot be reached (a symlink loop …)
+    except FileNotFoundError:
+        pass                          # said below, as "no such file"
+    except (OSError, ValueError) as error:
+        raise ReaderError(shown, f"cannot read it: {getattr(error, 'strerror', None) or error}") from None
     try:
         if path.is_file():
             size = path.stat().st_size
