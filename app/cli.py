@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import re
 import sys
@@ -287,7 +288,24 @@ def _draw_still(scene, view, settings, time):
     if animation is None:
         return render(scene, view, settings)
     from core.animation.frames import render_at
+    if animation.particle_system is not None:       # simulated from 0: say how far it is
+        animation.particle_system.progress = _simulation_progress()
     return render_at(animation, time, settings)
+
+
+def _simulation_progress():
+    """A ParticleSystem.progress that prints a line every few seconds of simulating."""
+    import time as clock
+    start = last = clock.monotonic()
+
+    def progress(step: int, of: int) -> None:
+        nonlocal last
+        now = clock.monotonic()
+        if now - last >= 5.0:
+            last = now
+            print(f"simulating the particles: step {step:,} of {of:,} "
+                  f"({now - start:.0f} s)", file=sys.stderr, flush=True)
+    return progress
 
 
 def _drawn_by(settings) -> str:
@@ -300,6 +318,9 @@ def _drawn_by(settings) -> str:
 
 def _render(args) -> int:
     from app.viewer.state import announce_compiles
+    if args.time is not None and not math.isfinite(args.time):
+        print(f"error: --time {args.time}: expected a finite number of seconds", file=sys.stderr)
+        return 2
     if args.out is not None and _refused(args.out, args):
         return 2
     scene = _load(args.scene, size=args.size)
@@ -309,7 +330,11 @@ def _render(args) -> int:
     if index is None:
         return 2
     from core.settings import RenderSettings
-    texture_options = _texture_options(scene, args)       # issue 11
+    try:
+        texture_options = _texture_options(scene, args)   # issue 11
+    except ValueError as error:                           # --bump-map 99 (issue 23)
+        print(f"error: --bump-map: {error}", file=sys.stderr)
+        return 2
     view = scene.views[index]
     try:
         settings = RenderSettings.for_scene(scene, projection=args.projection,
@@ -330,11 +355,19 @@ def _render(args) -> int:
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
-    if args.buffer:                      # issue 22: a buffer view instead of the picture
+    if args.buffer:                      # a buffer view instead of the picture
         from app.tools.inspector import render_buffer
         return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
-    with announce_compiles():            # the first run compiles the kernels: say so
-        frame = _draw_still(scene, view, settings, args.time)
+    from core.animation.particles import ParticleBudgetError
+    try:
+        with announce_compiles():        # the first run compiles the kernels: say so
+            frame = _draw_still(scene, view, settings, args.time)
+    except ParticleBudgetError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    if frame.stats.get("particles not born"):
+        print(f"warning: {frame.stats['particles not born']:,} particles were not born: at most "
+              f"{frame.stats['particle cap']:,} live at once", file=sys.stderr)
     if frame.message:                    # a view only the other projection can draw
         print(f"error: {frame.message}", file=sys.stderr)
         return 2

@@ -12,6 +12,7 @@ existing picture unchanged.
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from enum import Enum
 
@@ -90,6 +91,12 @@ class RenderSettings:
         if self.sample_pattern not in SAMPLE_PATTERNS:
             raise ValueError(f"sample pattern must be one of {', '.join(SAMPLE_PATTERNS)}, "
                              f"not {self.sample_pattern!r}")
+        side = math.isqrt(self.samples)
+        if self.sample_pattern == "regular" and side * side != self.samples:
+            # the film's regular grid is s x s; refused here, not as a traceback in the film
+            raise ValueError(f"samples per pixel: {self.samples} is not a square; the regular "
+                             f"grid takes 1, 4, 9, 16, … (the nearest are {side * side} and "
+                             f"{(side + 1) ** 2})")
         object.__setattr__(self, "projection", str(self.projection))
         object.__setattr__(self, "shading", str(self.shading))
         object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))

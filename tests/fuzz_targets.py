@@ -99,6 +99,159 @@ direction = [0, 1, 1]
 """
 VIEWS = (SCENES_DIR / "house.views").read_bytes()
 
+# Issue 23: the systems' keys. Each seed is a small valid scene that uses most of its system's
+# keys; its files (a 4 x 4 PNG) lie in FOLDER, made once per process.
+TEXTURES = b"""[[geometry]]
+generator = "uv_sphere"
+params = { radius = 1.0, segments = 8, rings = 5 }
+material = { kd = 0.7, texture = { file = "tex.png", wrap = "mirror", srgb = true }, uv_scale = [2, 3] }
+[[geometry]]
+generator = "cube"
+material = { texture = { procedural = "checker", scale = 4, resolution = 16, a = [1, 0, 0], b = [0, 0, 1] }, bump = { procedural = "bricks_height", rows = 4, columns = 2, mortar = 0.1, resolution = 16 }, bump_scale = 0.05 }
+[[geometry]]
+generator = "torus"
+params = { segments = 8, sides = 6 }
+material = { normal_map = { procedural = "bricks_normal", resolution = 8, strength = 2.0 }, environment = { procedural = "sky", resolution = 8, sun = [0.3, 0.7], squares = 4 }, reflectivity = 0.5, texture = { procedural = "perlin", scale = 2, octaves = 2, seed = 3, resolution = 16 } }
+[[geometry]]
+generator = "plane"
+material = { bump_demo = { map = 2, bump = true, viewpoint = [50, -50, 50] }, texture = "missing.png" }
+"""
+KEYS = b"""[[geometry]]
+generator = "cube"
+name = "box"
+[[geometry]]
+primitive = "plane"
+name = "floor"
+checker = 1.0
+extent = 3.0
+[[light]]
+position = [3, 4, 5]
+[[view]]
+vrp = [0, 0, 0]
+vpn = [0, 0, 1]
+vup = [0, 1, 0]
+window = [-3, 3, -3, 3]
+prp = [0, 0, 10]
+front = 5
+back = -5
+[animation]
+duration = 2.0
+fps = 4
+interpolation = "kochanek-bartels"
+orientation = "squad"
+tension = 0.2
+continuity = 0.1
+bias = -0.1
+constant_speed = true
+[animation.track."view.vrp"]
+interpolation = "double"
+[[key]]
+time = 0.0
+view = { vrp = [0, 0, 0], vpn = [0, 0, 1], vup = [0, 1, 0], window = [-3, 3, -3, 3], prp = [0, 0, 10], front = 5, back = -5 }
+object.box = { translate = [0, 0, 0], rotate = [0, 0, 0], scale = 1.0 }
+light.1 = { position = [3, 4, 5] }
+material.floor = { od = [1, 0, 0] }
+[[key]]
+time = 1.0
+view = { vrp = [1, 0, 0], vpn = [0.2, 0, 1], vup = [0, 1, 0], prp = [0, 0, 12] }
+object.box = { translate = [1, 1, 0], rotate = [0, 90, 0], scale = [1, 2, 1] }
+object.floor = { translate = [0, -1, 0] }
+[[key]]
+time = 2.0
+view = { vrp = [0, 1, 0], front = 4, back = -6 }
+object.box = { translate = [0, 0, 1], rotate = [45, 0, 0], scale = 0.5 }
+light.1 = { position = [-3, 4, 5] }
+material.floor = { od = [0, 1, 0] }
+"""
+EMITTERS = b"""[[geometry]]
+generator = "cube"
+name = "box"
+[[view]]
+vrp = [0, 0, 0]
+vpn = [0, 0, 1]
+vup = [0, 1, 0]
+window = [-3, 3, -3, 3]
+prp = [0, 0, 10]
+front = 5
+back = -5
+[animation]
+duration = 1.0
+fps = 8
+seed = 7
+[[emitter]]
+name = "fountain"
+shape = "disc"
+radius = 0.5
+normal = [0, 1, 0]
+rate = 20
+rate_var = 5
+speed = 3
+speed_var = 1
+velocity = [0, 1, 0]
+velocity_var = [0.2, 0.2, 0.2]
+size = 0.1
+size_var = 0.02
+size_end = 0.5
+color = [0.3, 0.5, 1]
+color_var = [0.1, 0.1, 0.1]
+color_end = [1, 1, 1]
+alpha = 0.9
+alpha_end = 0.1
+lifetime = 0.5
+lifetime_var = 0.2
+gravity = [0, -9.8, 0]
+wind = [0.5, 0, 0]
+drag = 0.1
+plane = { point = [0, -1, 0], normal = [0, 1, 0], restitution = 0.5, friction = 0.2 }
+region = { min = [-5, -5, -5], max = [5, 5, 5] }
+alpha_min = 0.01
+size_min = 0.001
+draw = "streak"
+streak = 0.05
+children = 2
+children_var = 1
+child = { lifetime = 0.2, size = 0.05, draw = "point", inherit = 0.5 }
+[[emitter]]
+shape = "mesh"
+mesh = "box"
+rate = 5
+speed = 1
+draw = "sprite"
+start = 0.1
+stop = 0.8
+"""
+PRIMITIVES = b"""[[geometry]]
+primitive = "sphere"
+center = [0, 1, 0]
+radius = 0.8
+segments = 16
+material = { kr = 0.3, kt = 0.2, ior = 1.5, od = [0.9, 0.2, 0.2] }
+[[geometry]]
+primitive = "plane"
+point = [0, -1, 0]
+normal = [0, 1, 0]
+checker = 1.0
+checker_color = [0.2, 0.2, 0.2]
+extent = 4.0
+name = "floor"
+"""
+
+
+def _texture_folder():
+    """A folder with the textures' seed file ``tex.png`` (4 x 4, made once)."""
+    import tempfile
+    from pathlib import Path
+
+    import numpy as np
+    from PIL import Image
+    folder = Path(tempfile.mkdtemp(prefix="fuzz-textures-"))
+    image = (np.arange(48, dtype=np.uint8).reshape(4, 4, 3) * 5)
+    Image.fromarray(image).save(folder / "tex.png")
+    return folder
+
+
+FOLDER = _texture_folder()
+
 
 def _views_scene(data: bytes) -> Scene:
     """A bare view file, read as ``load_scene`` reads one (decoded, then its views)."""
@@ -119,7 +272,24 @@ TARGETS = {
     "stl-binary": (lambda d: read_mesh(d, "fuzz.stl", ".stl"), STL_BINARY),
     "toml": (lambda d: read_scene_file(d, "fuzz.toml", SCENES_DIR), TOML),
     "views": (_views_scene, VIEWS),
+    # issue 23
+    "textures": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), TEXTURES),
+    "keys": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), KEYS),
+    "emitters": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), EMITTERS),
+    "primitives": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), PRIMITIVES),
 }
+SYSTEMS = ("textures", "keys", "emitters", "primitives")
+
+# While fuzzing, the budgets are small, so that a mutation that asks for a day of particles or
+# a 4096² texture is refused (or stopped) in milliseconds: the budgets are what is tested, not
+# the machine's patience. Restored after every case (other tests share the process).
+SMALL_BUDGETS = {("core.animation.particles", "MAX_SIMULATION_STEPS"): 2_000,
+                 ("core.animation.particles", "MAX_PARTICLE_WORK"): 2_000_000,
+                 ("core.animation.particles", "MAX_PARTICLES"): 20_000,
+                 ("core.animation.particles", "MAX_PER_FRAME"): 5_000,
+                 ("core.animation.draw", "MAX_SPLAT_PIXELS"): 2_000_000,
+                 ("core.texture.image", "MAX_SCENE_TEXELS"): 4 * 256 * 256}
+TIMES = 3                    # moments of an animated scene drawn: 0, the middle, the end
 
 
 def as_scene(result) -> Scene:
@@ -135,13 +305,32 @@ def check(name: str, data: bytes) -> str:
     ``"refused"`` (a ReaderError), ``"rendered"`` (a scene whose views all drew), or
     ``"no views"`` (a scene without a valid view: its frame says so). Anything else raises."""
     read, _ = TARGETS[name]
-    try:
-        result = read(data)
-    except ReaderError as error:
-        assert str(error).strip() and error.reason.strip(), "an empty message"
-        assert "\n" not in str(error) and "\x1b" not in str(error), "an unescaped message"
-        return "refused"
-    return renders(result)
+    with small_budgets():
+        try:
+            result = read(data)
+        except ReaderError as error:
+            assert str(error).strip() and error.reason.strip(), "an empty message"
+            assert "\n" not in str(error) and "\x1b" not in str(error), "an unescaped message"
+            return "refused"
+        for message in getattr(result, "messages", []):      # textures drawn without
+            assert "\n" not in message and "\x1b" not in message, "an unescaped message"
+        return renders(result)
+
+
+class small_budgets:
+    """The SMALL_BUDGETS while inside, the real ones again after."""
+
+    def __enter__(self):
+        import importlib
+        self.saved = []
+        for (module, name), value in SMALL_BUDGETS.items():
+            target = importlib.import_module(module)
+            self.saved.append((target, name, getattr(target, name)))
+            setattr(target, name, value)
+
+    def __exit__(self, *exc):
+        for target, name, value in self.saved:
+            setattr(target, name, value)
 
 
 def renders(result) -> str:
@@ -158,7 +347,139 @@ def renders(result) -> str:
             frame = render(scene, view, settings)
             if frame.message:      # only a view the rules refuse for this projection
                 assert problems(view, projection), frame.message
-    return "rendered"
+    return animates(scene)
+
+
+def animates(scene) -> str:
+    """An animated scene (issue 23) is also drawn at TIMES moments, particles included: a
+    frame may come back with a message only for a view the rules refuse or for the particle
+    budget, and the simulation may stop only with its budget's message."""
+    from core.animation.frames import render_at
+    from core.animation.keys import animation_of
+    from core.animation.particles import ParticleBudgetError
+    animation = animation_of(scene)
+    if animation is None:
+        return "rendered"
+    settings = RenderSettings.for_scene(scene, size=FRAME)
+    for k in range(TIMES):
+        t = animation.duration * k / max(TIMES - 1, 1)
+        try:
+            frame = render_at(animation, t, settings)
+        except ParticleBudgetError as error:
+            assert "particle-steps" in str(error) and "\n" not in str(error)
+            return "budget"
+        if frame.message:
+            view = animation.scene_at(t).views[0]
+            assert problems(view, settings.projection) or "particles would cover" in frame.message, \
+                frame.message
+    return "animated"
+
+
+# ---------------------------------------------------------------------------- value mutation
+
+# Byte edits of a TOML file mostly break its syntax (the reader refuses it at once); the
+# systems' keys are reached by editing the parsed values instead and writing the file back.
+NASTY_VALUES = [float("nan"), float("inf"), float("-inf"), 1e308, -1e308, 1e-320, -1e-320, 0,
+                -1, 1, 2, 0.5, 8.5, 99, 10**6, 4096, 1024, 200_000, 86_400, 2**63, -(2**63),
+                10**30, True, False, "", "x", "\n\x1b[2J\u202e", "a" * 5000, "/dev/zero",
+                "..", [], [1], [0, 0, 0], [0, 1e-320, 0], [1e308, 1e308, 1e308],
+                [float("nan")] * 3, [0.5] * 1000, ["x", "y", "z"], {}, {"x": 1}, [[1, 2], [3]]]
+
+
+def mutate_values(rng: random.Random, base: bytes) -> bytes:
+    """``base`` (TOML) parsed, 1 to 4 values replaced by NASTY_VALUES, keys dropped or added,
+    tables repeated, and written back as TOML."""
+    import copy
+    import tomllib
+    doc = tomllib.loads(base.decode())
+    for _ in range(rng.randint(1, 4)):
+        parent, key = _pick(rng, doc)
+        kind = rng.random()
+        if kind < 0.35:                   # a plausible value: a number scaled or flipped
+            parent[key] = _perturbed(rng, parent[key] if isinstance(parent, list) or key in parent
+                                     else 1.0)
+        elif kind < 0.6 or not isinstance(parent, dict):
+            parent[key] = copy.deepcopy(rng.choice(NASTY_VALUES))
+        elif kind < 0.75:
+            parent.pop(key, None)
+        elif kind < 0.85:
+            parent[rng.choice(["zz", "time", "file", "procedural", "child", "view", "key"])] = \
+                copy.deepcopy(rng.choice(NASTY_VALUES))
+        elif isinstance(parent, list) or key in parent:
+            value = parent[key]
+            if isinstance(value, list) and value:        # a table array: one more of them
+                value.append(copy.deepcopy(rng.choice(value)))
+            else:
+                parent[key] = copy.deepcopy(value)
+    return toml_text(doc).encode("utf-8", "surrogatepass")
+
+
+def _perturbed(rng: random.Random, value):
+    if isinstance(value, bool) or not isinstance(value, (int, float, list)):
+        return value
+    if isinstance(value, list):
+        return [_perturbed(rng, v) if rng.random() < 0.5 else v for v in value]
+    factor = rng.choice([-1, 0.5, 2, 10, 0.1, 1e3, 1e-3, 0])
+    result = value * factor + rng.choice([0, 0, 1, -1, 0.25])
+    return int(result) if isinstance(value, int) and rng.random() < 0.5 else result
+
+
+def _pick(rng: random.Random, doc: dict):
+    """A random (container, key) pair of ``doc``, any depth."""
+    parent, key = doc, rng.choice(list(doc)) if doc else "zz"
+    while True:
+        value = parent.get(key) if isinstance(parent, dict) else parent[key]
+        inner = (list(value) if isinstance(value, dict) else
+                 list(range(len(value))) if isinstance(value, list) else [])
+        if not inner or rng.random() < 0.35:
+            return parent, key
+        parent, key = value, rng.choice(inner)
+
+
+def toml_text(doc: dict) -> str:
+    """``doc`` as TOML: plain keys first, then ``[table]`` and ``[[array]]`` blocks."""
+    lines, blocks = [], []
+    for key, value in doc.items():
+        if isinstance(value, dict) and value:
+            blocks.append(f"[{_key(key)}]\n" + "".join(f"{_key(k)} = {_value(v)}\n"
+                                                         for k, v in value.items()))
+        elif isinstance(value, list) and value and all(isinstance(v, dict) for v in value):
+            for table in value:
+                blocks.append(f"[[{_key(key)}]]\n" + "".join(f"{_key(k)} = {_value(v)}\n"
+                                                             for k, v in table.items()))
+        else:
+            lines.append(f"{_key(key)} = {_value(value)}\n")
+    return "".join(lines) + "\n".join(blocks)
+
+
+def _key(key) -> str:
+    import json
+    return json.dumps(str(key))
+
+
+def _value(value) -> str:
+    import json
+    import math
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if value != value else ("inf" if value > 0 else "-inf")
+    if isinstance(value, (int, float)):
+        return repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{_key(k)} = {_value(v)}" for k, v in value.items()) + "}"
+    raise TypeError(type(value))
+
+
+def mutate_any(rng: random.Random, name: str, base: bytes) -> bytes:
+    """A case for target ``name``: the systems' targets get value edits two times in three."""
+    if name in SYSTEMS and rng.random() < 2 / 3:
+        return mutate_values(rng, base)
+    return mutate(rng, base)
 
 
 # Token edits keep a file's structure, so they reach past the header more often: weighted up.

@@ -30,6 +30,10 @@ from core.camera.view import normalizing_transform, vrc_basis
 from core.pipeline import project
 
 POINT, SPRITE, STREAK = 0, 1, 2
+# The stage's cost is the pixels its sprites cover (each blended once per sprite): 2M sprites
+# that fill a 500 x 500 frame are 5·10^11 blends, over half an hour. Above this many (a few
+# seconds) the frame is not drawn and says why.
+MAX_SPLAT_PIXELS = 2_000_000_000
 DRAW_CODES = {"point": POINT, "sprite": SPRITE, "streak": STREAK}
 
 
@@ -106,6 +110,23 @@ def project_sprites(sprites: Sprites, view, projection: str, width: int, height:
     order = keep[np.argsort(head[keep, 2], kind="stable")]  # far (small z) first
     return {"head": head, "tail": tail, "r": np.minimum(pixels, float(max(width, height))),
             "mode": mode, "order": order}
+
+
+def covered_pixels(p: dict, width: int, height: int) -> int:
+    """The pixels :func:`_splat` will visit for the projected sprites ``p``: each sprite's
+    bounding box (its streak's, for a streak) inside the frame, one pixel for a point."""
+    k = p["order"]
+    if len(k) == 0:
+        return 0
+    head, tail, mode = p["head"][k], p["tail"][k], p["mode"][k]
+    radius = np.maximum(p["r"][k], 0.75)
+    far = np.where((mode == STREAK)[:, None], tail[:, :2], head[:, :2])
+    lo = np.minimum(head[:, :2], far) - radius[:, None]
+    hi = np.maximum(head[:, :2], far) + radius[:, None]
+    w = np.clip(np.ceil(hi[:, 0]), -1, width - 1) - np.clip(np.floor(lo[:, 0]), 0, width) + 1
+    h = np.clip(np.ceil(hi[:, 1]), -1, height - 1) - np.clip(np.floor(lo[:, 1]), 0, height) + 1
+    area = np.where(mode == POINT, 1.0, np.maximum(w, 0) * np.maximum(h, 0))
+    return int(area.sum())
 
 
 @njit(cache=True)
@@ -199,6 +220,12 @@ def draw_particles(frame, sprites: Sprites, view, settings) -> int:
     projection = settings.projection
     p = project_sprites(sprites, view, projection, width, height,
                         settings.keep_aspect)     # the z-buffer's viewport
+    covered = covered_pixels(p, width, height)
+    if covered > MAX_SPLAT_PIXELS:
+        frame.message = (f"the particles would cover {covered:,} pixels ({len(p['order']):,} "
+                         f"in view); a frame may blend at most {MAX_SPLAT_PIXELS:,}: make them "
+                         "smaller or fewer, or the frame smaller")
+        return 0
     depth = frame.depth
     if depth is None:
         # a renderer that keeps no depth (wireframe lines, the ray casters): nothing hides a

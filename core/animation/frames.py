@@ -53,6 +53,7 @@ def _with_particles(animation, t, scene, view, settings, context):
         frame = render(scene, view, settings, context)
         if sprites is not None and frame.message is None:
             draw_particles(frame, sprites, view, settings)
+            _count_unborn(frame, animation)
         return frame
     side = max(1, math.isqrt(settings.samples - 1) + 1)       # the smallest grid that holds them
     width, height = settings.size
@@ -65,4 +66,15 @@ def _with_particles(animation, t, scene, view, settings, context):
                     message=big.message, stats={**big.stats, "samples per pixel": side * side})
     out.color[:] = small
     out.sample_color = big.color
+    _count_unborn(out, animation)
     return out
+
+
+def _count_unborn(frame, animation) -> None:
+    """Particles the MAX_PARTICLES cap kept from being born go in the frame's stats (the
+    command line warns of them): the cap is never silent."""
+    unborn = animation.particle_system.unborn
+    if unborn:
+        from core.animation.particles import MAX_PARTICLES
+        frame.stats["particles not born"] = unborn
+        frame.stats["particle cap"] = MAX_PARTICLES

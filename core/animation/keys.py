@@ -37,7 +37,8 @@ import weakref
 import numpy as np
 
 from core.animation import quaternion as qt
-from core.animation.animation import Animation, ObjectTracks, ViewTracks, frame_quaternion
+from core.animation.animation import (Animation, ObjectTracks, ViewTracks, frame_quaternion,
+                                      meshes_named)
 from core.animation.tracks import METHODS, ORIENTATION_METHODS, OrientationTrack, Track
 
 TOP_KEYS = ("animation", "key", "emitter")          # the scene file's top-level tables we read
@@ -101,10 +102,67 @@ def read_animation(reader, doc: dict, scene) -> None:
         if anim.view is None or anim.view.frame is None:
             raise reader.fail(("animation", "level"), "no key gives the view's vpn and vup")
         anim.view.level = level
+    if anim.view is not None:
+        _check_in_betweens(reader, anim, samples)
     if "emitter" in doc:
         from core.animation.particles import read_emitters
         anim.emitters = read_emitters(reader, doc["emitter"], scene)
+        _check_simulation_length(reader, anim)
     attach(scene, anim)
+
+
+# The in-between views checked at load: this many between two keys, fewer (at least one) when
+# the keys are so many that the whole would pass MAX_VIEW_SAMPLES.
+VIEW_SAMPLES_PER_INTERVAL = 32
+MAX_VIEW_SAMPLES = 4096
+
+
+def _check_in_betweens(reader, anim: Animation, samples: dict) -> None:
+    """Every key may be a valid view and the views between them not: a window whose sides
+    cross, F and B swapping, a PRP crossing the view plane. The keyed view is checked at load,
+    at samples between every two keys, with the still views' rules (a view no projection can
+    draw), and for the signs of ``PRP_n``, ``u_max − u_min``, ``v_max − v_min`` and ``F − B``
+    changing between two samples (the crossing itself falls between them)."""
+    from core.camera.view import load_problems
+    channels = [c for c in samples if c.startswith("view.")]
+    times = np.unique([t for c in channels for t, _, _ in samples[c]])
+    if len(times) < 2:
+        return
+    per = max(1, min(VIEW_SAMPLES_PER_INTERVAL, MAX_VIEW_SAMPLES // (len(times) - 1)))
+    u = np.arange(per + 1) / (per + 1)
+    ts = np.append((times[:-1, None] + np.diff(times)[:, None] * u).reshape(-1), times[-1])
+    before = None
+    for t in ts:
+        view = anim.view.at(float(t), "")
+        found = load_problems(view)
+        w = view.window
+        signs = np.sign([view.prp[2], w[1] - w[0], w[3] - w[2], view.front - view.back])
+        if not found and before is not None and np.any(signs != before[1]):
+            found = [["PRP crosses the view plane (PRP_n changes sign)",
+                      "u_min and u_max cross", "v_min and v_max cross",
+                      "F and B cross"][int(np.flatnonzero(signs != before[1])[0])]]
+            t = before[0], t
+        if found:
+            k = int(np.searchsorted(times, t if np.isscalar(t) else t[1], side="right"))
+            k = min(max(k, 1), len(times) - 1)
+            when = (f"at t = {t:.6g} s" if np.isscalar(t)
+                    else f"between t = {t[0]:.6g} s and t = {t[1]:.6g} s")
+            raise reader.fail(("key",), f"the keyed view is invalid {when}, between the keys "
+                                        f"at t = {times[k - 1]:g} and t = {times[k]:g}: "
+                                        + "; ".join(found))
+        before = (t, signs)
+
+
+def _check_simulation_length(reader, anim: Animation) -> None:
+    """Particles are simulated step by step from 0 to any time asked for (at most the
+    duration): the steps that takes are bounded before any is taken."""
+    from core.animation.particles import MAX_SIMULATION_STEPS, SUBSTEPS
+    steps = anim.duration * anim.fps * SUBSTEPS
+    if steps > MAX_SIMULATION_STEPS:
+        raise reader.fail(("animation", "duration"),
+                          f"with particles, duration · fps · {SUBSTEPS} steps a frame = "
+                          f"{steps:,.0f} simulation steps; at most {MAX_SIMULATION_STEPS:,} "
+                          "(shorten the animation or lower the fps)")
 
 
 def _track_settings(reader, table, path) -> dict:
@@ -126,7 +184,7 @@ def _track_settings(reader, table, path) -> dict:
 
 def _samples(reader, doc: dict, scene) -> dict[str, list]:
     """channel → [(time, value, path)] from every ``[[key]]``, in file order."""
-    names = {m.name: i for i, m in enumerate(scene.meshes)}
+    names = {m.name for m in scene.meshes}
     out: dict[str, list] = {}
     add = lambda channel, time, value, path: out.setdefault(channel, []).append((time, value, path))
     for i, key in enumerate(reader.tables(doc.get("key", []), ("key",))):
@@ -208,6 +266,8 @@ def _install(reader, anim: Animation, channel: str, keys: list, options: dict) -
         track = Track(times, values, options.get("method", "catmull-rom"),
                       options.get("tension", 0.0), options.get("continuity", 0.0),
                       options.get("bias", 0.0), position and options.get("constant_speed", False))
+    if channel.endswith(".scale"):
+        _check_scale(reader, channel, track, keys)
     kind, _, rest = channel.partition(".")
     scene = anim.scene
     if kind == "view":
@@ -216,13 +276,27 @@ def _install(reader, anim: Animation, channel: str, keys: list, options: dict) -
         setattr(anim.view, rest, track)
     elif kind == "object":
         name, what = rest.rsplit(".", 1)
-        index = [m.name for m in scene.meshes].index(name)
-        setattr(anim.objects.setdefault(index, ObjectTracks()), what, track)
+        for index in meshes_named(scene, name):
+            setattr(anim.objects.setdefault(index, ObjectTracks()), what, track)
     elif kind == "light":
         anim.lights[int(rest.split(".")[0]) - 1] = track
     else:
-        index = [m.name for m in scene.meshes].index(rest.split(".")[0])
-        anim.colors[index] = track
+        for index in meshes_named(scene, rest.split(".")[0], own_material=True):
+            anim.colors[index] = track
+
+
+
+def _check_scale(reader, channel: str, track: Track, keys: list) -> None:
+    """A scale factor keeps its sign and its size between the keys too: in-betweened through 0
+    the mesh would flatten (and its normals have no inverse transpose)."""
+    low, high = track.interval_ranges()
+    small = (low < 1e-6) & (high > -1e-6)
+    if small.any():
+        i = int(np.flatnonzero(small.any(axis=1))[0])
+        raise reader.fail(keys[i + 1][2], f"the scale passes through zero between the keys at "
+                                          f"t = {keys[i][0]:g} and t = {keys[i + 1][0]:g} (a "
+                                          "factor must keep its sign and stay at least 1e-6 in "
+                                          "size all along; key a mirror as its own object)")
 
 
 def _base_view(reader, scene, path):

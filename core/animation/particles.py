@@ -34,6 +34,17 @@ DRAW_MODES = ("point", "sprite", "streak")
 SUBSTEPS = 4                      # fixed simulation steps per animation frame
 MAX_PARTICLES = 2_000_000         # live particles, all systems together (memory guard)
 MAX_PER_FRAME = 200_000
+# Time guards. The state at t is simulated from 0, so the animation's length bounds the steps
+# (checked when the scene is read), and the particle-steps done since 0 bound the work (checked
+# as it is done: how many particles live is known only by simulating). At about 10 ns a
+# particle-step, the work budget is a minute or two of one core.
+MAX_SIMULATION_STEPS = 400_000    # duration · fps · SUBSTEPS (an hour of 30 fps is 432,000)
+MAX_PARTICLE_WORK = 4_000_000_000
+PROGRESS_EVERY = 2048             # steps between two calls of ParticleSystem.progress
+
+
+class ParticleBudgetError(ValueError):
+    """The simulation would take longer than its budget; the message says what to change."""
 
 
 @dataclass
@@ -367,6 +378,10 @@ class ParticleSystem:
         self.particles = ParticlePool()
         self.step_index = 0                 # steps done; time = step_index · dt
         self.emitted: list[list[int]] = []  # per frame, per root emitter: N(t) drawn
+        self.work = 0                       # particle-steps since 0 (MAX_PARTICLE_WORK)
+        self.unborn = 0                     # particles and children the MAX_PARTICLES cap refused
+
+    progress = None                         # progress(step, of): called while state_at works
 
     def state_at(self, t: float) -> "ParticlePool":
         """The particles at time t (after the last whole step at or before t)."""
@@ -374,16 +389,24 @@ class ParticleSystem:
         if target < self.step_index:
             self.reset()
         while self.step_index < target:
+            if self.progress is not None and self.step_index % PROGRESS_EVERY == 0:
+                self.progress(self.step_index, target)
             self.step()
         return self.particles
 
     def step(self) -> None:
         """One fixed step; at each frame boundary, first the emission of that frame."""
         k = self.step_index
+        p = self.particles
+        self.work += len(p)
+        if self.work > MAX_PARTICLE_WORK:
+            raise ParticleBudgetError(
+                f"the particles need more than {MAX_PARTICLE_WORK:,} particle-steps to reach "
+                f"t = {k * self.dt:.3f} s ({len(p):,} alive, {self.substeps} steps a frame): "
+                "emit fewer, shorter-lived particles, or a shorter animation")
         rng = np.random.default_rng([self.seed, k])
         if k % self.substeps == 0:
             self._emit(rng, k * self.dt)
-        p = self.particles
         fate = np.zeros(len(p), np.int64)
         if len(p):
             _step(p.position, p.velocity, p.age, p.life, p.size, p.size_end, p.alpha,
@@ -403,8 +426,9 @@ class ParticleSystem:
         counts, new = [], []
         for index in self.roots:
             spec = self.specs[index]
-            n = count(rng, *spec.rate) if spec.start <= t < spec.stop else 0
-            n = min(n, MAX_PER_FRAME, max(0, MAX_PARTICLES - len(self.particles)))
+            wanted = count(rng, *spec.rate) if spec.start <= t < spec.stop else 0
+            n = min(wanted, MAX_PER_FRAME, max(0, MAX_PARTICLES - len(self.particles)))
+            self.unborn += wanted - n
             counts.append(n)
             if n:
                 new.append(_new_particles(spec, index, rng, n, frame_dt))
@@ -424,7 +448,8 @@ class ParticleSystem:
             spec = self.specs[int(s)]
             n_each = np.array([count(rng, *spec.children) for _ in parents], np.int64)
             room = max(0, MAX_PARTICLES - len(p) - len(out))
-            if n_each.sum() > room:
+            if n_each.sum() > room:             # the cap: none of this batch, and it is counted
+                self.unborn += int(n_each.sum())
                 n_each[:] = 0
             if n_each.sum() == 0:
                 continue
@@ -555,10 +580,11 @@ def _mesh_triangles(reader, got, path, scene) -> np.ndarray:
     if got["mesh"] not in names:
         raise reader.fail(path + ("mesh",), f"no geometry is named {got['mesh']!r} "
                                             f"(names: {', '.join(names)})")
-    mesh = scene.meshes[names.index(got["mesh"])]
-    if len(mesh.triangles) == 0:
+    from core.animation.animation import meshes_named
+    meshes = [scene.meshes[i] for i in meshes_named(scene, got["mesh"])]   # all of a checker
+    tris = np.concatenate([m.positions[m.triangles] for m in meshes])
+    if len(tris) == 0:
         raise reader.fail(path + ("mesh",), f"{got['mesh']!r} has no triangles to emit from")
-    tris = mesh.positions[mesh.triangles]
     area = np.linalg.norm(np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]), axis=1)
     if not area.sum() > 0:
         raise reader.fail(path + ("mesh",), f"{got['mesh']!r} has no area")

@@ -141,17 +141,69 @@ class Track:
             return self._shape._curve(k)
         return hermite(v0, v1, self._outgoing[i], self._incoming[i + 1], u, h)
 
+    # ------------------------------------------------------------------ ranges
+
+    def interval_ranges(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(low, high)``, each ``(K - 1, D)``: the exact least and greatest value of each
+        component over each key interval (from the cubic's ends and turning points), so that
+        a check at load time sees what the in-betweens will be (a scale keyed 1 → −1 passes
+        through 0). ``linear`` and ``ease`` stay between their keys; ``double`` runs along its
+        shape spline (its timing is monotone), as does a constant-speed track."""
+        if len(self.times) == 1:
+            return self.values[:1].copy(), self.values[:1].copy()
+        if self.method in ("linear", "ease"):
+            v0, v1 = self.values[:-1], self.values[1:]
+            return np.minimum(v0, v1), np.maximum(v0, v1)
+        if self.method == "double":
+            return self._shape.interval_ranges()
+        h = np.diff(self.times)[:, None]
+        p0, p1 = self.values[:-1], self.values[1:]
+        m0, m1 = self._outgoing[:-1] * h, self._incoming[1:] * h
+        a = 2 * p0 + m0 - 2 * p1 + m1                     # p(u) = a u³ + b u² + c u + d
+        b = -3 * p0 - 2 * m0 + 3 * p1 - m1
+        low, high = np.minimum(p0, p1), np.maximum(p0, p1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            disc = np.sqrt(np.maximum(b * b - 3 * a * m0, 0.0))   # p'(u) = 3a u² + 2b u + c
+            roots = [(-b + disc) / (3 * a), (-b - disc) / (3 * a), -m0 / (2 * b)]
+        for u in roots:
+            inside = np.isfinite(u) & (u > 0.0) & (u < 1.0)
+            u = np.where(inside, u, 0.0)
+            value = np.where(inside, ((a * u + b) * u + m0) * u + p0, p0)
+            low, high = np.minimum(low, value), np.maximum(high, value)
+        return low, high
+
     # ------------------------------------------------------------------ arc length
 
     SAMPLES_PER_INTERVAL = 256
+    MAX_ARC_SAMPLES = 1 << 20         # the whole table's; many keys get fewer per interval
 
     def _arc_table(self) -> tuple[np.ndarray, np.ndarray]:
-        """Cumulative chord length of the curve sampled finely: (times, lengths)."""
-        n = self.SAMPLES_PER_INTERVAL * (len(self.times) - 1) + 1
-        ts = np.linspace(self.times[0], self.times[-1], n)
-        points = np.array([self._curve(t) for t in ts])
+        """Cumulative chord length of the curve sampled finely: (times, lengths). The samples
+        are evaluated together (:meth:`_curve_many`) and bounded in number, so that a track
+        of 20,000 keys costs time and memory linear in its keys."""
+        intervals = len(self.times) - 1
+        per = max(8, min(self.SAMPLES_PER_INTERVAL, self.MAX_ARC_SAMPLES // intervals))
+        ts = np.linspace(self.times[0], self.times[-1], per * intervals + 1)
+        points = self._curve_many(ts)
         lengths = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
         return ts, lengths
+
+    def _curve_many(self, ts: np.ndarray) -> np.ndarray:
+        """:meth:`_curve` at every time of ``ts`` (inside the keys), ``(len(ts), D)``."""
+        ts = np.clip(ts, self.times[0], self.times[-1])
+        i = np.clip(np.searchsorted(self.times, ts, side="right") - 1, 0, len(self.times) - 2)
+        h = self.times[i + 1] - self.times[i]
+        u = ((ts - self.times[i]) / h)[:, None]
+        v0, v1 = self.values[i], self.values[i + 1]
+        if self.method == "linear":
+            return lerp(v0, v1, u)
+        if self.method == "ease":
+            return lerp(v0, v1, (1.0 - np.cos(np.pi * u)) / 2.0)
+        if self.method == "double":
+            k = hermite(i.astype(np.float64), i + 1.0, self._timing_slopes[i],
+                        self._timing_slopes[i + 1], u[:, 0], h)
+            return self._shape._curve_many(k)
+        return hermite(v0, v1, self._outgoing[i], self._incoming[i + 1], u, h[:, None])
 
     def _arc_time(self, t: float) -> float:
         """The curve time at which the arc length is the fraction of the whole that t is of

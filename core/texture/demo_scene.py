@@ -62,7 +62,9 @@ def demo_materials(scene) -> list:
 def apply_demo_options(scene, bump_map: int | None, bump: bool) -> str | None:
     """Set every bump-demo material of ``scene`` to ``bump_map`` (when given) and ``bump``;
     returns the demo's label text (``"Bump: B(x,y) = …"`` or ``"Phong"``), or None when the
-    scene has no demo material."""
+    scene has no demo material. Raises ValueError for a map the demo does not have."""
+    if bump_map is not None and not 0 <= bump_map < MAPS:
+        raise ValueError(f"the bump demo's height map must be 0 to {MAPS - 1}, not {bump_map}")
     demos = demo_materials(scene)
     for demo in demos:
         if bump_map is not None:

@@ -58,20 +58,53 @@ def _box_weights(n_fine: int, n_coarse: int) -> np.ndarray:
     return weights / scale
 
 
-def mip_chain(image: np.ndarray) -> list[np.ndarray]:
-    """Levels 0 … down to 1 x 1 of ``image (h, w, C)`` by box filtering (glGenerateMipmap)."""
-    levels = [np.ascontiguousarray(image, dtype=np.float32)]
-    while levels[-1].shape[0] > 1 or levels[-1].shape[1] > 1:
-        fine = levels[-1].astype(np.float64)
-        h, w = fine.shape[:2]
-        h2, w2 = max(1, h // 2), max(1, w // 2)
-        if h == 2 * h2 and w == 2 * w2:                   # even sizes: the 2 x 2 box
-            coarse = fine.reshape(h2, 2, w2, 2, -1).mean(axis=(1, 3))
-        else:                                             # one axis at a time, by area
-            coarse = np.tensordot(_box_weights(h, h2), fine, axes=(1, 0))
-            coarse = np.tensordot(_box_weights(w, w2), coarse, axes=(1, 1)).transpose(1, 0, 2)
-        levels.append(np.ascontiguousarray(coarse, dtype=np.float32))
+def mip_chain(image: np.ndarray, convert=None) -> list[np.ndarray]:
+    """Levels 0 … down to 1 x 1 of ``image (h, w, C)`` by box filtering (glGenerateMipmap).
+
+    The levels are views of one float32 buffer, in order (what :meth:`Texture.packed` hands to
+    the samplers, so the texels are held once), each computed from the one before a band of
+    rows at a time in float64: the transient memory is a band's, not a whole level's.
+    ``convert`` (optional) turns a band of ``image``'s rows into level 0's texels.
+    """
+    image = np.asarray(image)
+    convert = convert or (lambda band: band)
+    sizes = [image.shape[:2]]
+    while sizes[-1] != (1, 1):
+        h, w = sizes[-1]
+        sizes.append((max(1, h // 2), max(1, w // 2)))
+    channels = convert(image[:1]).shape[2]
+    buffer = np.empty((sum(h * w for h, w in sizes), channels), dtype=np.float32)
+    levels, offset = [], 0
+    for h, w in sizes:
+        levels.append(buffer[offset:offset + h * w].reshape(h, w, channels))
+        offset += h * w
+    for r0 in range(0, sizes[0][0], _BAND):
+        levels[0][r0:r0 + _BAND] = convert(image[r0:r0 + _BAND])
+    for fine, coarse in zip(levels, levels[1:]):
+        _downsample(fine, coarse)
     return levels
+
+
+_BAND = 256                       # rows converted or filtered at a time
+_SMALL = 1 << 22                  # texels: an odd-sized level this small is filtered whole
+
+
+def _downsample(fine: np.ndarray, coarse: np.ndarray) -> None:
+    """``coarse`` = the box-filtered ``fine`` (the 2 x 2 box, or by area for odd sizes)."""
+    h, w = fine.shape[:2]
+    h2, w2 = coarse.shape[:2]
+    if h == 2 * h2 and w == 2 * w2:                       # even sizes: the 2 x 2 box
+        for r0 in range(0, h2, _BAND):
+            band = fine[2 * r0:2 * (r0 + _BAND)].astype(np.float64)
+            coarse[r0:r0 + _BAND] = band.reshape(-1, 2, w2, 2, fine.shape[2]).mean(axis=(1, 3))
+        return
+    weights_h, weights_w = _box_weights(h, h2), _box_weights(w, w2)
+    bands = [(0, h2)] if h * w <= _SMALL else [(r, min(r + _BAND, h2)) for r in range(0, h2, _BAND)]
+    for r0, r1 in bands:                                  # one axis at a time, by area
+        rows = np.flatnonzero(weights_h[r0:r1].any(axis=0))
+        lo, hi = (rows[0], rows[-1] + 1) if h * w > _SMALL else (0, h)
+        part = np.tensordot(weights_h[r0:r1, lo:hi], fine[lo:hi].astype(np.float64), axes=(1, 0))
+        coarse[r0:r1] = np.tensordot(weights_w, part, axes=(1, 1)).transpose(1, 0, 2)
 
 
 @dataclass(eq=False)
@@ -86,18 +119,32 @@ class Texture:
 
     @classmethod
     def from_array(cls, image: np.ndarray, wrap: str = "repeat", srgb: bool = False,
-                   source: str = "", mipmaps: bool = True) -> "Texture":
+                   source: str = "", mipmaps: bool = True, divisor: float = 1.0) -> "Texture":
         """A texture from ``image (h, w)`` or ``(h, w, 1 … 4)`` in [0, 1], row 0 at v = 0.
 
         Grey is spread to RGB, missing alpha is 1. With ``srgb`` the colour channels are
-        decoded to linear (alpha never is).
+        decoded to linear (alpha never is). ``image / divisor`` is used (integer pixels of a
+        file are divided a band of rows at a time, never copied whole to float64); values
+        outside [0, 1] are clamped to it (a signed 32-bit TIFF holds negative ones).
         """
         if wrap not in WRAPS:
             raise ValueError(f"wrap must be one of {', '.join(WRAPS)}, not {wrap!r}")
-        rgba = _to_rgba(np.asarray(image, dtype=np.float64))
-        if srgb:
-            rgba[..., :3] = srgb_to_linear(rgba[..., :3])
-        levels = mip_chain(rgba) if mipmaps else [rgba.astype(np.float32)]
+        image = np.asarray(image)
+        if image.ndim == 2:
+            image = image[:, :, None]
+        if image.ndim != 3 or image.shape[2] not in (1, 2, 3, 4) or 0 in image.shape[:2]:
+            raise ValueError(f"a texture image must be (h, w) or (h, w, 1..4), not {image.shape}")
+
+        def convert(band):
+            rgba = _to_rgba(np.clip(np.asarray(band, dtype=np.float64) / divisor, 0.0, 1.0))
+            if srgb:
+                rgba[..., :3] = srgb_to_linear(rgba[..., :3])
+            return rgba
+        if mipmaps:
+            levels = mip_chain(image, convert)
+        else:
+            levels = [np.concatenate([convert(image[r:r + _BAND]).astype(np.float32)
+                                      for r in range(0, image.shape[0], _BAND)])]
         return cls(levels=levels, wrap=wrap, srgb=srgb, source=source)
 
     @property
@@ -114,9 +161,20 @@ class Texture:
                 h, w = level.shape[:2]
                 table[k] = offset, w, h
                 offset += w * h
-            texels = np.concatenate([lv.reshape(-1, 4) for lv in self.levels]).astype(np.float32)
+            texels = self._shared_buffer()
+            if texels is None:            # levels made elsewhere: one copy, once
+                texels = np.concatenate([lv.reshape(-1, 4) for lv in self.levels]).astype(np.float32)
             self._packed = (np.ascontiguousarray(texels), table)
         return self._packed
+
+    def _shared_buffer(self) -> np.ndarray | None:
+        """The one buffer :func:`mip_chain` made the levels in, when they are its views."""
+        base = self.levels[0].base
+        total = sum(lv.shape[0] * lv.shape[1] for lv in self.levels)
+        if (base is None or base.dtype != np.float32 or base.ndim != 2 or base.shape != (total, 4)
+                or not all(lv.base is base for lv in self.levels)):
+            return None
+        return base
 
     @property
     def wrap_code(self) -> int:
@@ -124,10 +182,6 @@ class Texture:
 
 
 def _to_rgba(image: np.ndarray) -> np.ndarray:
-    if image.ndim == 2:
-        image = image[:, :, None]
-    if image.ndim != 3 or image.shape[2] not in (1, 2, 3, 4) or 0 in image.shape[:2]:
-        raise ValueError(f"a texture image must be (h, w) or (h, w, 1..4), not {image.shape}")
     h, w, c = image.shape
     rgba = np.ones((h, w, 4))
     if c in (1, 2):                           # grey (and grey + alpha)
@@ -139,57 +193,91 @@ def _to_rgba(image: np.ndarray) -> np.ndarray:
     return rgba
 
 
+# The most bytes a texture file may have (it is read whole before decoding): a PNG of the
+# largest image the texel budget admits is far smaller, and a bigger file is not a texture.
+MAX_TEXTURE_BYTES = 256 << 20
+# Texels (level 0) all the textures of one scene may hold together: two 4096 x 4096 images.
+# Each costs 16 bytes and a third more for its MIP levels while the scene lives, and about
+# 50 bytes while it is decoded; the budget is checked before any pixel is decoded.
+MAX_SCENE_TEXELS = 2 * 4096 * 4096
+
+
+class TexelBudget:
+    """What is left of a scene's :data:`MAX_SCENE_TEXELS` as its textures are made."""
+
+    def __init__(self, texels: int | None = None) -> None:
+        self.total = MAX_SCENE_TEXELS if texels is None else texels
+        self.left = self.total
+
+    def take(self, count: int, what: str) -> str | None:
+        """Take ``count`` texels for ``what``; the reason it cannot (nothing taken), or None."""
+        if count > self.left:
+            used = self.total - self.left
+            return (f"{what} needs {count:,} texels and the scene's textures may hold "
+                    f"{self.total:,} together ({used:,} already used)")
+        self.left -= count
+        return None
+
+
 def load_image(path: str | Path, key: str, wrap: str = "repeat", srgb: bool = True,
-               shown: str | None = None) -> Texture:
+               shown: str | None = None, budget: TexelBudget | None = None) -> Texture:
     """The texture in the image file ``path``; ``key`` is the scene key that named it.
 
     Raises :class:`TextureError` (a ValueError) naming ``shown`` (default: the path) and
-    ``key`` for a missing or unreadable file, a file that is not an image, a corrupt image
-    and an image over ``MAX_TEXTURE_SIDE`` texels on a side (checked from the header,
-    before any pixel is decoded).
+    ``key`` for a missing or unreadable file, one that is not a regular file (a FIFO, a
+    device, a folder) or is over ``MAX_TEXTURE_BYTES``, a file that is not an image, a corrupt
+    image, an image over ``MAX_TEXTURE_SIDE`` texels on a side, and one over what is left of
+    ``budget`` (both checked from the header, before any pixel is decoded). The name is
+    printed escaped and cut short, like every name from the input.
     """
+    import io
+
     from PIL import Image, UnidentifiedImageError
 
-    name = shown or str(path)
+    from core.scene.formats.errors import ReaderError, printable, read_file
+
+    name, key = printable(shown or str(path), 200), printable(key, 100)
 
     def fail(reason: str) -> TextureError:
         return TextureError(f"{name}: {reason} (the texture of {key}); drawn untextured")
 
     try:
+        data = read_file(Path(path), name, "texture")
+    except ReaderError as error:
+        raise fail(error.reason) from None
+    try:
         with warnings.catch_warnings():
             warnings.simplefilter("error", Image.DecompressionBombWarning)
-            with Image.open(path) as img:
+            with Image.open(io.BytesIO(data)) as img:
                 w, h = img.size
                 if w > MAX_TEXTURE_SIDE or h > MAX_TEXTURE_SIDE:
                     raise fail(f"the image is {w} x {h}; textures may be at most "
                                f"{MAX_TEXTURE_SIDE} x {MAX_TEXTURE_SIDE}")
                 if w < 1 or h < 1:
                     raise fail(f"the image is {w} x {h}")
+                over = budget.take(w * h, f"the image ({w} x {h})") if budget else None
+                if over:
+                    raise fail(over)
                 img.load()
-                pixels = _pixels(img)
+                pixels, divisor = _pixels(img)
     except TextureError:
         raise
-    except FileNotFoundError:
-        raise fail("no such file") from None
-    except IsADirectoryError:
-        raise fail("is a folder, not an image") from None
-    except PermissionError:
-        raise fail("permission denied") from None
     except UnidentifiedImageError:
         raise fail("not an image Pillow can read (PNG, JPEG, …)") from None
     except (Image.DecompressionBombError, Image.DecompressionBombWarning) as error:
         raise fail(f"too large: {error}") from None
     except (OSError, ValueError, SyntaxError, EOFError) as error:
-        raise fail(f"corrupt image ({error})") from None
+        raise fail(f"corrupt image ({printable(error, 120)})") from None
     except MemoryError:
         raise fail("not enough memory to decode it") from None
-    return Texture.from_array(pixels[::-1], wrap=wrap, srgb=srgb, source=name)
+    return Texture.from_array(pixels[::-1], wrap=wrap, srgb=srgb, source=name, divisor=divisor)
 
 
-def _pixels(img) -> np.ndarray:
-    """Pillow image → float (h, w, C) in [0, 1], row 0 the top of the picture."""
+def _pixels(img) -> tuple[np.ndarray, float]:
+    """Pillow image → ``(pixels (h, w, C), divisor)``: ``pixels / divisor`` in [0, 1], row 0
+    the top of the picture (the integers as stored: 1 byte a channel for 8-bit images)."""
     if img.mode in ("I;16", "I;16B", "I;16L", "I"):
-        return np.asarray(img, dtype=np.float64) / (65535.0 if "16" in img.mode else 2**31 - 1)
+        return np.asarray(img), (65535.0 if "16" in img.mode else 2**31 - 1)
     if img.mode not in ("L", "LA", "RGB", "RGBA"):
         img = img.convert("RGBA" if "A" in img.getbands() or img.mode == "P" else "RGB")
-    return np.asarray(img, dtype=np.float64) / 255.0
+    return np.asarray(img), 255.0

@@ -20,6 +20,7 @@ import numpy as np
 from core.texture.image import Texture
 
 MAX_RESOLUTION = 4096
+DEFAULT_RESOLUTION = 256
 
 
 def _grid(resolution: int) -> tuple[np.ndarray, np.ndarray]:
@@ -176,24 +177,86 @@ def parameters(name: str) -> tuple[str, ...]:
     return tuple(inspect.signature(PROCEDURALS[name]).parameters)
 
 
+# What each parameter may be: a whole number in a range, a number in a range, a colour (three
+# numbers in [0, 1]) or a point of the (u, v) square. The scene file passes TOML values
+# straight through, so every one is checked here: a string, a NaN, a list of a thousand numbers
+# (which numpy would broadcast over the whole image) or a colour of 1e308 is refused by name.
+_WHOLE = {"resolution": (1, MAX_RESOLUTION), "scale": (1, 1024), "rows": (1, 1024),
+          "columns": (1, 1024), "octaves": (1, 16), "squares": (1, 1024),
+          "seed": (0, 2**63 - 1), "map": (0, 3)}
+_REAL = {"mortar": (0.0, 1.0), "strength": (0.0, 1e3)}
+_COLOURS = ("a", "b", "brick", "joint", "zenith", "horizon", "ground")
+_POINTS = ("sun",)
+# The finest noise lattice has scale · 2^(octaves − 1) cells a side (one table of that many
+# squared numbers); finer than the texels it is aliasing only, and its table the largest array.
+MAX_LATTICE = MAX_RESOLUTION
+
+
+class ParameterError(ValueError):
+    """A procedural texture's parameter that cannot be used; ``key`` names it."""
+
+    def __init__(self, key: str, reason: str) -> None:
+        self.key = key
+        super().__init__(reason)
+
+
+def check_parameters(name: str, params: dict) -> dict:
+    """``params`` of procedural ``name`` checked one by one (ValueError naming the first bad
+    one); whole numbers come back as int, colours and points as tuples of floats."""
+    allowed = parameters(name)
+    out = {}
+    for key, value in params.items():
+        if key not in allowed:
+            raise ParameterError(key, f"{name} has no parameter {key!r} (it takes "
+                                      f"{', '.join(allowed)})")
+        if key in _WHOLE:
+            low, high = _WHOLE[key]
+            if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+                raise ParameterError(key, f"{key} must be a whole number from {low} to {high}, "
+                                          f"not {_shown(value)}")
+            out[key] = int(value)
+        elif key in _REAL:
+            out[key] = _real(key, value, *_REAL[key])
+        else:
+            length = 3 if key in _COLOURS else 2
+            what = "a colour: 3 numbers from 0 to 1" if length == 3 else "a point: 2 numbers (u, v) from 0 to 1"
+            if not isinstance(value, (list, tuple)) or len(value) != length:
+                raise ParameterError(key, f"{key} must be {what}, not {_shown(value)}")
+            out[key] = tuple(_real(key, v, 0.0, 1.0, f"{key}[{i + 1}]") for i, v in enumerate(value))
+    if name in ("value_noise", "perlin", "perlin_height"):
+        scale, octaves = out.get("scale", 8), out.get("octaves", 4)
+        finest = scale * 2 ** (octaves - 1)
+        if finest > MAX_LATTICE:
+            raise ParameterError("octaves" if "octaves" in params else "scale",
+                                 f"scale · 2^(octaves − 1) = {finest} lattice cells a side; at "
+                                 f"most {MAX_LATTICE} (a finer lattice only aliases, and its "
+                                 f"table would take {finest * finest * 8 / 2**30:.1f} GiB)")
+    if name == "checker" and out.get("scale", 8) % 2:
+        raise ParameterError("scale", "checker: scale must be even (an odd count puts two "
+                                      "squares of one colour side by side where it repeats)")
+    return out
+
+
+def _real(key: str, value, low: float, high: float, shown: str | None = None) -> float:
+    shown = shown or key
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ParameterError(key, f"{shown} must be a number, not {_shown(value)}")
+    if not low <= value <= high:                      # also refuses NaN
+        raise ParameterError(key, f"{shown} must lie in [{low:g}, {high:g}], not {_shown(value)}")
+    return float(value)
+
+
+def _shown(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:40] + "..."
+
+
 def make(name: str, wrap: str = "repeat", **params) -> Texture:
     """The procedural texture ``name`` with ``params``, as a MIP-mapped :class:`Texture`.
 
-    Raises ValueError for an unknown name, parameter or a resolution out of range.
+    Raises ValueError for an unknown name, an unknown parameter or one out of its range.
     """
     if name not in PROCEDURALS:
         raise ValueError(f"unknown procedural texture {name!r} (known: {', '.join(PROCEDURALS)})")
-    resolution = params.get("resolution", 256)
-    if not (isinstance(resolution, int) and 1 <= resolution <= MAX_RESOLUTION):
-        raise ValueError(f"resolution must be a whole number from 1 to {MAX_RESOLUTION}")
-    for key in ("scale", "rows", "columns", "octaves", "squares"):
-        if key in params and not (isinstance(params[key], int) and 1 <= params[key] <= 1024):
-            raise ValueError(f"{key} must be a whole number from 1 to 1024 (so the pattern tiles)")
-    if name == "checker" and params.get("scale", 8) % 2:
-        raise ValueError("checker: scale must be even (an odd count puts two squares of one "
-                         "colour side by side where the texture repeats)")
-    try:
-        image, srgb = PROCEDURALS[name](**params)
-    except TypeError as error:
-        raise ValueError(f"{name}: {error}") from None
+    image, srgb = PROCEDURALS[name](**check_parameters(name, params))
     return Texture.from_array(image, wrap=wrap, srgb=srgb, source=f"procedural {name}")

@@ -24,6 +24,7 @@ from __future__ import annotations
 from core.texture import procedural
 from core.texture.image import TextureError, load_image
 from core.texture.material import DemoMaterial, SurfaceMaps
+from core.texture.demo_scene import MAPS
 from core.texture.modes import WRAPS
 
 TEXTURE_KEYS = ("texture", "bump", "bump_scale", "normal_map", "environment", "reflectivity",
@@ -38,7 +39,8 @@ def read_maps(reader, table: dict, path: tuple) -> SurfaceMaps | None:
     """The :class:`SurfaceMaps` of a material table (None when it names no texture key).
 
     ``reader`` is the scene reader (its ``fail``, ``number``, ``vector``, ``string``,
-    ``choice``, ``table``, ``boolean`` checks and ``folder``/``file``).
+    ``choice``, ``table``, ``boolean`` checks, ``folder``/``file`` and ``texel_budget``, the
+    :class:`core.texture.image.TexelBudget` every texture of the scene draws from).
     """
     if not any(key in table for key in TEXTURE_KEYS):
         return None
@@ -74,7 +76,8 @@ def _texture(reader, value, path: tuple, srgb: bool, maps: SurfaceMaps):
         srgb = reader.boolean(value.get("srgb", srgb), path + ("srgb",))
         shown = f"{reader.file}: {name}" if not name.startswith("/") else name
         try:
-            return load_image(reader.folder / name, key, wrap=wrap, srgb=srgb, shown=shown)
+            return load_image(reader.folder / name, key, wrap=wrap, srgb=srgb, shown=shown,
+                              budget=reader.texel_budget)
         except TextureError as error:
             maps.messages.append(str(error))
             return None
@@ -83,16 +86,23 @@ def _texture(reader, value, path: tuple, srgb: bool, maps: SurfaceMaps):
     params = {k: v for k, v in reader.table(value, path, allowed).items()
               if k not in ("procedural", "wrap")}
     try:
-        return procedural.make(name, wrap=wrap, **params)
-    except ValueError as error:
-        raise reader.fail(path, str(error)) from None
+        params = procedural.check_parameters(name, params)
+    except procedural.ParameterError as error:
+        raise reader.fail(path + (error.key,), str(error)) from None
+    resolution = params.get("resolution", procedural.DEFAULT_RESOLUTION)
+    over = reader.texel_budget.take(resolution * resolution,
+                                f"{name} at resolution {resolution}")
+    if over:
+        raise reader.fail(path + ("resolution",), over)
+    return procedural.make(name, wrap=wrap, **params)
+
 
 
 def _demo(reader, value, path: tuple) -> DemoMaterial:
     t = reader.table(value, path, _DEMO_KEYS)
     demo = DemoMaterial()
     if "map" in t:
-        number = reader.number(t["map"], path + ("map",), 0, 1e6)
+        number = reader.number(t["map"], path + ("map",), 0, MAPS - 1)
         if number != int(number):
             raise reader.fail(path + ("map",), "expected a whole number")
         demo.bump_map = int(number)

@@ -8,6 +8,7 @@ names the file, the line (where the problem has one) and the reason, in the form
 from __future__ import annotations
 
 import functools
+import os
 import re
 from pathlib import Path
 
@@ -108,7 +109,8 @@ def short(token: str, limit: int = 40) -> str:
 # limits sit well above the largest input each kind can usefully hold: a mesh or .tri is held
 # to the 4M-triangle budget anyway (a binary STL of 4M triangles is 200 MB).
 MiB = 1 << 20
-MAX_INPUT_BYTES = {"scene": 16 * MiB, "views": 16 * MiB, "tri": 256 * MiB, "mesh": 512 * MiB}
+MAX_INPUT_BYTES = {"scene": 16 * MiB, "views": 16 * MiB, "tri": 256 * MiB, "mesh": 512 * MiB,
+                   "texture": 256 * MiB}
 
 
 def _too_big(shown: str, size: int | str, kind: str) -> ReaderError:
@@ -121,6 +123,12 @@ def read_file(path: Path, shown: str, kind: str = "views") -> bytes:
     """The bytes of a regular file (never a device, a FIFO or a folder) of at most
     ``MAX_INPUT_BYTES[kind]`` bytes, or a ReaderError."""
     limit = MAX_INPUT_BYTES[kind]
+    try:
+        os.stat(path)                 # the reason it cannot be reached (a symlink loop …)
+    except FileNotFoundError:
+        pass                          # said below, as "no such file"
+    except (OSError, ValueError) as error:
+        raise ReaderError(shown, f"cannot read it: {getattr(error, 'strerror', None) or error}") from None
     try:
         if path.is_file():
             size = path.stat().st_size

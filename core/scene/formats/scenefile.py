@@ -69,6 +69,7 @@ TOP_KEYS += animation_keys.TOP_KEYS
 TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
 
 # -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
+from core.texture.image import TexelBudget  # noqa: E402
 from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
 MATERIAL_KEYS = MATERIAL_KEYS + TEXTURE_KEYS
 # --
@@ -109,6 +110,7 @@ class _Reader:
         self.file = file
         self.folder = folder
         self.texture_messages: list[str] = []       # files a material could not use (issue 11)
+        self.texel_budget = TexelBudget()           # what the scene's textures may hold
         self.lines = text.split("\n")
         # Indexed once, so that locating a key costs the lines of its own table, not the
         # file's: every [[view]] asks for its line, and a rescan per view was quadratic.
@@ -411,25 +413,33 @@ class _Reader:
         kind = self.choice(g["primitive"], path + ("primitive",), ("sphere", "plane"))
         material = (self.material(g["material"], path + ("material",), Material())
                     if "material" in g else Material())
-        segments = int(self.number(g.get("segments", 96), path + ("segments",), 8, 1024))
+        segments = self.number(g.get("segments", 96), path + ("segments",), 8, 1024)
+        if segments != int(segments):
+            raise self.fail(path + ("segments",), f"expected a whole number, got {segments!r}")
         if kind == "sphere":
+            # the tessellation's (and every generator's) range of lengths
             shape = Sphere(self.vector(g.get("center", [0, 0, 0]), path + ("center",)),
-                           self.number(g.get("radius", 1.0), path + ("radius",), 1e-6, MAX_NUMBER),
-                           material)
+                           self.number(g.get("radius", 1.0), path + ("radius",),
+                                       *generators.LENGTH_RANGE), material)
         else:
-            normal = self.vector(g.get("normal", [0, 1, 0]), path + ("normal",))
-            if not any(normal):
+            # kept as a unit vector, scaled first: [0, 1e-320, 0] is a direction, and a plain
+            # norm of it underflows to zero (the plane then drew nothing)
+            normal, length = unit3(self.vector(g.get("normal", [0, 1, 0]), path + ("normal",)))
+            if length == 0.0:
                 raise self.fail(path + ("normal",), "the plane's normal is the zero vector")
-            shape = Plane(self.vector(g.get("point", [0, 0, 0]), path + ("point",)), normal,
-                          material,
+            shape = Plane(self.vector(g.get("point", [0, 0, 0]), path + ("point",)),
+                          tuple(float(c) for c in normal), material,
                           self.number(g.get("checker", 0.0), path + ("checker",), 0.0, MAX_NUMBER),
                           self.vector(g.get("checker_color", [0.1, 0.1, 0.1]),
                                       path + ("checker_color",), 3, 0.0, 1.0),
                           self.number(g.get("extent", 20.0), path + ("extent",), 1e-6, 1e6))
-            if shape.checker > 0.0 and (2 * shape.extent / shape.checker) ** 2 > 1e6:
+            # (2 extent / checker)² squares, compared without dividing (1e-300 would overflow)
+            if shape.checker > 0.0 and 2 * shape.extent > 1000.0 * shape.checker:
                 raise self.fail(path + ("checker",), "over a million checker squares: make the "
                                 "squares bigger or the extent smaller")
-        meshes = tessellate(shape, segments)
+        meshes = tessellate(shape, int(segments))
+        if not all(np.all(np.abs(m.positions) <= MAX_NUMBER) for m in meshes):
+            raise self.fail(path, f"the primitive reaches coordinates beyond {MAX_NUMBER:g}")
         for mesh in meshes:
             if "name" in g:
                 mesh.name = self.string(g["name"], path + ("name",))
