@@ -12,7 +12,6 @@ import json
 import os
 import re
 import sys
-import tempfile
 from pathlib import Path
 
 
@@ -336,60 +335,23 @@ def _render(args) -> int:
     return 0
 
 
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+from app.output_files import PNG_SIGNATURE  # noqa: E402  (tests read it here)
 
 
 def out_problem(out: Path, source: str, force: bool) -> str | None:
-    """Why ``render`` must not write ``out``, or None. Only PNG is written (``.png``); the
-    folder must exist (none is created); the output is never the input (also through links or
-    another name); an existing file is replaced only if it is a PNG, or with ``--force``."""
-    if out.suffix.lower() != ".png":
-        return f"only PNG is written: the name must end in .png (got {out.suffix or 'no extension'!r})"
-    parent = out.parent
-    if not parent.is_dir():
-        return f"the folder {str(parent)!r} does not exist (it is not created)"
-    if source != "-" and _same_file(out, Path(source)):
-        return f"it is the input {source!r}: writing would destroy it"
-    if os.path.lexists(out):
-        if out.is_dir():
-            return "it is a folder"
-        if not out.is_file():
-            return "it exists and is not a regular file"
-        if not force and not _is_png(out):
-            return "it exists and is not a PNG: it is kept (--force replaces it)"
-    return None
-
-
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        return a.exists() and b.exists() and os.path.samefile(a, b)
-    except OSError:
-        return False
-
-
-def _is_png(path: Path) -> bool:
-    try:
-        with open(path, "rb") as f:
-            return f.read(8) == PNG_SIGNATURE
-    except OSError:
-        return False
+    """Why ``render`` must not write ``out``, or None: only PNG is written (``.png``), by the
+    one output rule of every command (:mod:`app.output_files`)."""
+    from app.output_files import out_problem as problem
+    return problem(out, source, force, (".png",))
 
 
 def write_png(color, out: Path) -> None:
     """Write a temporary PNG beside ``out`` and rename it over ``out``: a failed write (a full
     disk) leaves whatever was there untouched, and no half-written file behind."""
     from PIL import Image
-    fd, temp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    try:
-        with os.fdopen(fd, "wb") as stream:
-            Image.fromarray(color).save(stream, format="PNG")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(temp, 0o666 & ~umask)         # mkstemp made it private; a PNG is not
-        os.replace(temp, out)
-    except BaseException:
-        os.unlink(temp)
-        raise
+
+    from app.output_files import write_beside
+    write_beside(out, lambda temp: Image.fromarray(color).save(temp, format="PNG"))
 
 
 # -- issue 11: texture filter, and the bump demo's map and mode (J3DPanel's clicks)
