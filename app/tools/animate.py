@@ -392,13 +392,28 @@ def _frames_text(frames: list[int]) -> str:
     return f"{len(frames)} frames ({shown})"
 
 
+def _load(path: str, size=None):
+    """The scene, or None after printing the reader's message; its invalid views and the
+    files it drew without (a texture) are printed as ``render`` prints them."""
+    from core.scene.formats import ReaderError, load_scene
+    try:
+        scene = load_scene(path, size=size)
+    except ReaderError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return None
+    for message in scene.view_messages:
+        print(f"invalid view: {message}", file=sys.stderr)
+    for message in scene.messages:
+        print(f"warning: {message}", file=sys.stderr)
+    return scene
+
+
 def _error(message: str, code: int) -> int:
     print(f"error: {message}", file=sys.stderr)
     return code
 
 
 def main(args) -> int:
-    from app.cli import _load
     from app.tools import cluster
     from app.tools.bundle import load_recorded
     from core.animation.animation import Animation

@@ -69,11 +69,11 @@ def main(argv=None) -> int:
     import argparse
     import json
 
-    from app.cli import parse_size
     p = argparse.ArgumentParser(prog="python -m app.tools.scaleout")
     p.add_argument("scenes", nargs="*", default=["scenes/fountain.toml", "scenes/house_flyaround.toml"])
     p.add_argument("--frames", type=int, default=240)
-    p.add_argument("--size", type=parse_size, default=(500, 500))
+    p.add_argument("--size", type=lambda t: tuple(int(x) for x in t.lower().split("x")),
+                   default=(500, 500), help="WxH")
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--json", default=None, help="also write the rows here")
     args = p.parse_args(argv)
