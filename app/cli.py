@@ -13,6 +13,7 @@ import os
 import re
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
@@ -103,6 +104,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
     _renderer_arguments(r)                    # issue 12
+    _cluster_arguments(r)                     # issue 21: scale-out
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -156,6 +158,37 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
                         help="raytrace: the ray tree's depth limit (default 7)")
     parser.add_argument("--fresnel", action="store_true", default=None,
                         help="raytrace: Schlick's Fresnel weighting of k_r and k_t")
+
+
+def _cluster_arguments(parser: argparse.ArgumentParser) -> None:
+    """--workers and --scheduler: a ray-traced frame traced by bands on a Dask cluster."""
+    parser.add_argument("--workers", type=int, default=1,
+                        help="local worker processes for a ray-traced frame (a local cluster "
+                             "is started only when it can beat this process; it says so)")
+    parser.add_argument("--scheduler", default=None,
+                        help="trace a ray-traced frame by bands on the Dask scheduler at this "
+                             "address (tcp://host:8786); the picture is the one-process one")
+
+
+def _split(args, settings):
+    """``(frame colour or None, what to say)``: the frame traced across a cluster when asked
+    and possible; None when this process draws it (or an error was printed: then say is None)."""
+    if args.workers < 1:
+        print(f"error: --workers must be at least 1, got {args.workers}", file=sys.stderr)
+        return None, None
+    if args.workers == 1 and not args.scheduler:
+        return None, ""
+    from app.tools.cluster import ClusterError
+    from app.tools.split_render import split_frame
+    try:
+        return split_frame(args, settings)
+    except ClusterError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return None, None
+    except Exception as error:                # noqa: BLE001 - a failed task, in one line
+        print(f"error: the cluster could not trace the frame: {type(error).__name__}: "
+              f"{' '.join(str(error).split())}", file=sys.stderr)
+        return None, None
 
 
 def _renderer_overrides(args) -> dict:
@@ -317,8 +350,16 @@ def _render(args) -> int:
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
-    with announce_compiles():            # the first run compiles the kernels: say so
-        frame = _draw_still(scene, view, settings, args.time)
+    split, said = _split(args, settings)
+    if said is None:
+        return 1
+    if said:
+        print(said, file=sys.stderr if split is None else sys.stdout)
+    if split is not None:
+        frame = SimpleNamespace(color=split, message=None)
+    else:
+        with announce_compiles():            # the first run compiles the kernels: say so
+            frame = _draw_still(scene, view, settings, args.time)
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1
