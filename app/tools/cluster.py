@@ -132,8 +132,12 @@ def worker_cap(asked: int) -> tuple[int, str | None]:
 
 def quiet_dask() -> None:
     """Workers log errors only (their processes inherit this environment): a failed task is
-    reported once by the caller, not as a traceback from every worker."""
+    reported once by the caller, not as a traceback from every worker. Their statistical
+    profiler (a stack sample every 10 ms, for a dashboard nobody opens) is off."""
     os.environ.setdefault("DASK_LOGGING__DISTRIBUTED", "critical")   # its children inherit it
+    os.environ.setdefault("DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED", "False")
+    import dask
+    dask.config.set({"distributed.worker.profile.enabled": False})
     import logging
     for name in ("distributed", "distributed.worker", "distributed.scheduler",
                  "distributed.nanny", "distributed.client", "distributed.core"):
