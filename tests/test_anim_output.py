@@ -335,3 +335,27 @@ view = { front = -4, back = 4 }
     assert not (tmp_path / "m.mp4").exists()
     if done.returncode == 1:
         assert "failed after 2 tries" in errors[0]
+
+
+def test_the_mp4_bytes_do_not_depend_on_the_cores(tmp_path):
+    """x264's default thread count follows the cores the process may use, and its output
+    follows the thread count (measured: 24 busy 320 x 240 frames give other bytes on one core
+    than on two). The encoder runs one thread with fixed options: the same frames give the
+    same bytes on one core and on all of them, run after run."""
+    from app.tools.movie_files import frame_png, write_frame
+    if len(os.sched_getaffinity(0)) < 2:
+        pytest.skip("needs two cores to compare with one")
+    rng = np.random.default_rng(7)
+    base = rng.integers(0, 256, (240, 320, 3), dtype=np.uint8)
+    for k in range(24):
+        write_frame(tmp_path, k, frame_png(np.roll(base, 7 * k, axis=1), "h", k))
+    code = ("import sys; from pathlib import Path; from app.tools.movie_files import encode; "
+            "encode(Path(sys.argv[1]), 24, Path(sys.argv[2]), 24.0)")
+    for name, cores in (("one.mp4", {min(os.sched_getaffinity(0))}),
+                        ("all.mp4", os.sched_getaffinity(0)), ("again.mp4", None)):
+        subprocess.run([sys.executable, "-c", code, str(tmp_path), str(tmp_path / name)],
+                       cwd=ROOT, check=True, timeout=300,
+                       preexec_fn=(lambda c=cores: os.sched_setaffinity(0, c)) if cores else None)
+    data = (tmp_path / "one.mp4").read_bytes()
+    assert len(data) > 100_000
+    assert data == (tmp_path / "all.mp4").read_bytes() == (tmp_path / "again.mp4").read_bytes()
