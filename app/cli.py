@@ -13,8 +13,8 @@ import math
 import os
 import re
 import sys
-import tempfile
 from pathlib import Path
+from types import SimpleNamespace
 
 
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
@@ -108,7 +108,8 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
     _renderer_arguments(r)                    # issue 12
-    _buffer_argument(r)                       # issue 22
+    _buffer_argument(r)
+    _cluster_arguments(r)                     # scale-out
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -163,6 +164,37 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
                         help="raytrace: the ray tree's depth limit (default 7)")
     parser.add_argument("--fresnel", action="store_true", default=None,
                         help="raytrace: Schlick's Fresnel weighting of k_r and k_t")
+
+
+def _cluster_arguments(parser: argparse.ArgumentParser) -> None:
+    """--workers and --scheduler: a ray-traced frame traced by bands on a Dask cluster."""
+    parser.add_argument("--workers", type=int, default=1,
+                        help="local worker processes for a ray-traced frame (a local cluster "
+                             "is started only when it can beat this process; it says so)")
+    parser.add_argument("--scheduler", default=None,
+                        help="trace a ray-traced frame by bands on the Dask scheduler at this "
+                             "address (tcp://host:8786); the picture is the one-process one")
+
+
+def _split(args, settings):
+    """``(frame colour or None, what to say)``: the frame traced across a cluster when asked
+    and possible; None when this process draws it (or an error was printed: then say is None)."""
+    if args.workers < 1:
+        print(f"error: --workers must be at least 1, got {args.workers}", file=sys.stderr)
+        return None, None
+    if args.workers == 1 and not args.scheduler:
+        return None, ""
+    from app.tools.cluster import ClusterError
+    from app.tools.split_render import split_frame
+    try:
+        return split_frame(args, settings)
+    except ClusterError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return None, None
+    except Exception as error:                # noqa: BLE001 - a failed task, in one line
+        print(f"error: the cluster could not trace the frame: {type(error).__name__}: "
+              f"{' '.join(str(error).split())}", file=sys.stderr)
+        return None, None
 
 
 def _renderer_overrides(args) -> dict:
@@ -358,10 +390,18 @@ def _render(args) -> int:
     if args.buffer:                      # a buffer view instead of the picture
         from app.tools.inspector import render_buffer
         return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
+    split, said = _split(args, settings)
+    if said is None:
+        return 1
+    if said:
+        print(said, file=sys.stderr if split is None else sys.stdout)
     from core.animation.particles import ParticleBudgetError
     try:
-        with announce_compiles():        # the first run compiles the kernels: say so
-            frame = _draw_still(scene, view, settings, args.time)
+        if split is not None:
+            frame = SimpleNamespace(color=split, message=None, stats={})
+        else:
+            with announce_compiles():    # the first run compiles the kernels: say so
+                frame = _draw_still(scene, view, settings, args.time)
     except ParticleBudgetError as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
@@ -392,60 +432,23 @@ def _refused(out: str, args) -> bool:
     return bool(refusal)
 
 
-PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+from app.output_files import PNG_SIGNATURE  # noqa: E402  (tests read it here)
 
 
 def out_problem(out: Path, source: str, force: bool) -> str | None:
-    """Why ``render`` must not write ``out``, or None. Only PNG is written (``.png``); the
-    folder must exist (none is created); the output is never the input (also through links or
-    another name); an existing file is replaced only if it is a PNG, or with ``--force``."""
-    if out.suffix.lower() != ".png":
-        return f"only PNG is written: the name must end in .png (got {out.suffix or 'no extension'!r})"
-    parent = out.parent
-    if not parent.is_dir():
-        return f"the folder {str(parent)!r} does not exist (it is not created)"
-    if source != "-" and _same_file(out, Path(source)):
-        return f"it is the input {source!r}: writing would destroy it"
-    if os.path.lexists(out):
-        if out.is_dir():
-            return "it is a folder"
-        if not out.is_file():
-            return "it exists and is not a regular file"
-        if not force and not _is_png(out):
-            return "it exists and is not a PNG: it is kept (--force replaces it)"
-    return None
-
-
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        return a.exists() and b.exists() and os.path.samefile(a, b)
-    except OSError:
-        return False
-
-
-def _is_png(path: Path) -> bool:
-    try:
-        with open(path, "rb") as f:
-            return f.read(8) == PNG_SIGNATURE
-    except OSError:
-        return False
+    """Why ``render`` must not write ``out``, or None: only PNG is written (``.png``), by the
+    one output rule of every command (:mod:`app.output_files`)."""
+    from app.output_files import out_problem as problem
+    return problem(out, source, force, (".png",))
 
 
 def write_png(color, out: Path) -> None:
     """Write a temporary PNG beside ``out`` and rename it over ``out``: a failed write (a full
     disk) leaves whatever was there untouched, and no half-written file behind."""
     from PIL import Image
-    fd, temp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    try:
-        with os.fdopen(fd, "wb") as stream:
-            Image.fromarray(color).save(stream, format="PNG")
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(temp, 0o666 & ~umask)         # mkstemp made it private; a PNG is not
-        os.replace(temp, out)
-    except BaseException:
-        os.unlink(temp)
-        raise
+
+    from app.output_files import write_beside
+    write_beside(out, lambda temp: Image.fromarray(color).save(temp, format="PNG"))
 
 
 # -- issue 11: texture filter, and the bump demo's map and mode (J3DPanel's clicks)

@@ -82,11 +82,23 @@ def decoded(movie: Path) -> list[np.ndarray]:
         return [f.to_ndarray(format="rgb24") for f in container.decode(video=0)]
 
 
-def test_two_local_workers_give_the_single_process_movie(scene_file, tmp_path):
+@pytest.fixture
+def on_the_cluster(monkeypatch):
+    """A short job on --workers 2 would be kept in this process (it cannot win); these tests
+    want the frames rendered by the local cluster's workers."""
+    import app.tools.animate as animate
+    monkeypatch.setattr(animate, "CLUSTER_START_GUESS", 0.0)
+    monkeypatch.setattr(animate, "RENDER_WHILE_STARTING", False)
+
+
+def test_two_local_workers_give_the_single_process_movie(scene_file, tmp_path, on_the_cluster,
+                                                         capsys):
     one, two = tmp_path / "one.mp4", tmp_path / "two.mp4"
-    assert main(["animate", str(scene_file), "--out", str(one), "--size", "48x40"]) == 0
+    assert main(["animate", str(scene_file), "--out", str(one), "--size", "48x40",
+                 "--keep-frames"]) == 0
     assert main(["animate", str(scene_file), "--out", str(two), "--size", "48x40",
-                 "--workers", "2"]) == 0
+                 "--workers", "2", "--keep-frames"]) == 0
+    assert "2 local workers, started once in" in capsys.readouterr().out
     a, b = frames(tmp_path / "one.frames"), frames(tmp_path / "two.frames")
     assert len(a) == len(b) == 12
     assert all(np.array_equal(x, y) for x, y in zip(a, b))
@@ -117,24 +129,28 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
     assert resumed.returncode == 0, resumed.stderr
     assert f"{done_before} of 60 frames already in" in resumed.stderr
     assert len(decoded(out)) == 60
+    assert not folder.exists()                  # the frames folder is removed after the movie
     # the resumed movie's frames are those of a clean run
     clean = tmp_path / "clean"
     assert main(["animate", str(scene_file), "--out", str(clean), "--size", "96x96",
                  "--duration", "5"]) == 0
-    resumed_frames, clean_frames = frames(folder), frames(clean)
-    assert len(resumed_frames) == len(clean_frames) == 60
-    assert all(np.array_equal(x, y) for x, y in zip(resumed_frames, clean_frames))
+    assert main(["animate", str(scene_file), "--out", str(tmp_path / "again.mp4"), "--size",
+                 "96x96", "--duration", "5"]) == 0
+    resumed, again = decoded(out), decoded(tmp_path / "again.mp4")
+    assert len(resumed) == len(again) == 60
+    assert all(np.array_equal(x, y) for x, y in zip(resumed, again))
+    assert len(frames(clean)) == 60
 
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):
     import app.tools.animate as animate
     real, calls = animate.render_png, []
 
-    def flaky(job, k):
+    def flaky(job, k, *rest):
         calls.append(k)
         if k == 4 and calls.count(4) == 1:
             raise MemoryError("the machine was busy")
-        return real(job, k)
+        return real(job, k, *rest)
 
     monkeypatch.setattr(animate, "render_png", flaky)
     out = tmp_path / "seq"
@@ -146,7 +162,8 @@ def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypat
 def test_gif_and_frames_and_refusals(scene_file, tmp_path, capsys):
     from PIL import Image
     gif = tmp_path / "loop.gif"
-    assert main(["animate", str(scene_file), "--out", str(gif), "--size", "40x30", "--frames", "6"]) == 0
+    assert main(["animate", str(scene_file), "--out", str(gif), "--size", "40x30", "--frames", "6",
+                 "--keep-frames"]) == 0
     with Image.open(gif) as image:
         assert image.n_frames == 6 and image.size == (40, 30)
     # the same folder with other settings is refused rather than mixed

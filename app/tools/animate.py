@@ -1,46 +1,45 @@
 """``python -m app animate SCENE --out movie.mp4``: an animation rendered to a movie.
 
-Frames are independent (particles are recomputed from time 0 for a seed, so a frame does not
-depend on who rendered the one before it), so they are rendered anywhere and in any order:
+Frames are rendered
 
-- in this process (the default),
-- on ``--workers N`` local processes (a Dask ``LocalCluster``),
-- on an existing Dask cluster (``--scheduler tcp://host:8786``; the workers need this package
-  and the scene file at the same path).
+- in this process (the default; the particles step on from frame to frame),
+- on ``--workers N`` local processes (a Dask ``LocalCluster``, started once per job while
+  this process renders the first frames, and not started at all when the job is too short
+  for it to win: the output says so), or
+- on a running Dask cluster (``--scheduler tcp://host:8786``; the workers need only this
+  package: the scene file and every file it names travel with the job, content-addressed,
+  :mod:`app.tools.bundle`).
 
-Each frame comes back as PNG bytes and is written here, as soon as it completes, into the
-frames folder (``movie.frames/frame-00042.png``; for a PNG-sequence ``--out`` the folder is the
-output). A frame is written to a temporary name and renamed, so a frame on disk is a whole
-frame: a run that is killed and started again skips the frames already there (**resumable**),
-as long as the settings are the same (``job.json`` in the folder records them). A frame that
-fails is retried (``--retries``, default 2) without stopping the others. When every frame is
-there, the movie is encoded: ``.mp4`` as H.264 (PyAV: FFmpeg's libraries and libx264 come in
-its wheel, so no system ffmpeg is needed), ``.gif`` with Pillow. Progress and an ETA go to
-stderr.
-
-Why Dask rather than Ray: Dask's wheels are pure Python (Ray's are a ~70 MB C++ core per
-platform and Python version, which lag new Pythons), a ``LocalCluster`` starts in a few
-seconds for the tests, and ``submit(..., retries=)`` and ``as_completed`` are exactly the
-retry-a-frame and write-as-they-complete this needs.
+On a cluster the frames go out in contiguous runs, each with the particle state at its first
+frame (:mod:`core.animation.checkpoint`, from a simulation-only pass here), so no worker
+simulates from t = 0; a run that fails is retried by Dask (``--retries``). Frames come back as
+PNG bytes and are written, as they complete, into the frames folder, which makes a killed run
+resumable (:mod:`app.tools.movie_files`). When every frame is there the movie is encoded
+(``.mp4`` H.264 with PyAV, ``.gif`` with Pillow) and the folder removed (``--keep-frames``
+keeps it). Progress and an ETA go to stderr.
 """
 
 from __future__ import annotations
 
 import argparse
 import hashlib
-import io
 import json
-import os
+import math
 import sys
 import time
 from pathlib import Path
 
-import numpy as np
+from app.tools.movie_files import (FRAME_NAME, MOVIE_SUFFIXES, FolderError, clean_folder,  # noqa: F401
+                                   encode, frame_png, frames_folder, movie_rate, out_problem,
+                                   prepare_folder, write_frame)
 
-from app.naming import frame_name
-
-MOVIE_SUFFIXES = (".mp4", ".gif")
 MAX_FRAMES = 100_000
+MIN_FPS, MAX_FPS = 1e-3, 1000.0
+MAX_RETRIES = 100
+CLUSTER_START_GUESS = 3.0      # seconds a local cluster of 2 takes to take its first run here
+RUNS_PER_WORKER = 4            # runs dealt per worker (the last ones balance the load)
+MAX_RUN = 30                   # frames in one run at most
+RENDER_WHILE_STARTING = True   # this process renders while a local cluster starts
 
 
 def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
@@ -48,38 +47,56 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     from core.settings import PROJECTIONS
     p.add_argument("scene", help="a scene file with [animation], [[key]] or [[emitter]] tables")
     p.add_argument("--out", required=True,
-                   help="movie.mp4 (H.264), movie.gif, or a folder for a PNG sequence")
-    p.add_argument("--fps", type=_positive(float), default=None,
-                   help="frames per second of the movie (default: the scene's [animation] fps)")
+                   help="movie.mp4 (H.264), movie.gif, or a folder for a PNG sequence; the "
+                        "movie's folder must exist, and an existing file that is not an MP4 or "
+                        "GIF is kept unless --force")
+    p.add_argument("--force", action="store_true",
+                   help="replace an existing --out that is not a movie; render over frames "
+                        "that are not this job's")
+    p.add_argument("--keep-frames", action="store_true",
+                   help="keep the frames folder (NAME.frames/) after the movie is written")
+    p.add_argument("--fps", type=_number(float, MIN_FPS, MAX_FPS), default=None,
+                   help=f"frames per second, {MIN_FPS:g} to {MAX_FPS:g} (default: the scene's)")
     length = p.add_mutually_exclusive_group()
-    length.add_argument("--frames", type=_positive(int), default=None, help="how many frames")
-    length.add_argument("--duration", type=_positive(float), default=None, help="seconds")
+    length.add_argument("--frames", type=_number(int, 1, MAX_FRAMES), default=None,
+                        help=f"how many frames (at most {MAX_FRAMES})")
+    length.add_argument("--duration", type=_number(float, 0.0, math.inf, low_open=True),
+                        default=None, help="seconds")
     p.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's)")
     p.add_argument("--renderer", default=None, help="a registered renderer (default: zbuffer)")
-    p.add_argument("--samples", type=_positive(int), default=None, help="samples per pixel")
+    p.add_argument("--samples", type=_number(int, 1, 1024), default=None, help="samples per pixel")
     p.add_argument("--projection", choices=PROJECTIONS, default=None)
     p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
-    p.add_argument("--view", type=_positive(int), default=1,
-                   help="which view, counting from 1: the keyed view first (when the scene keys "
-                        "one), then the file's views (default 1)")
+    p.add_argument("--view", type=_number(int, 1, 10 ** 6), default=None,
+                   help="the file's view K (its position in the file, counting from 1, as "
+                        "everywhere); default: the keyed view, or the first valid view")
     p.add_argument("--paths", action="store_true",
                    help="draw the keyed paths (the eye, objects, lights) over every frame")
-    p.add_argument("--workers", type=_positive(int), default=1,
-                   help="local worker processes (a Dask LocalCluster when more than 1)")
+    p.add_argument("--workers", type=_number(int, 1, 10 ** 4), default=1,
+                   help="local worker processes (a Dask LocalCluster when more than 1; at most "
+                        "one a core, and as many as the memory holds)")
     p.add_argument("--scheduler", default=None,
                    help="address of a running Dask scheduler (tcp://host:8786)")
-    p.add_argument("--retries", type=int, default=2, help="tries again per failed frame")
-    p.add_argument("--crf", type=int, default=18, help="H.264 quality, 0 (lossless) to 51")
+    p.add_argument("--retries", type=_number(int, 0, MAX_RETRIES), default=2,
+                   help="tries again per failed frame (or run of frames on a cluster)")
+    p.add_argument("--crf", type=_number(int, 0, 51), default=18,
+                   help="H.264 quality, 0 (lossless) to 51")
 
 
-def _positive(kind):
+def _number(kind, low, high, low_open=False):
+    """An argparse type: a finite ``kind`` in [low, high] ((low, high] with ``low_open``)."""
     def parse(text):
         try:
             value = kind(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-        if not value > 0:
-            raise argparse.ArgumentTypeError(f"must be greater than 0, got {text!r}")
+            raise argparse.ArgumentTypeError(f"expected a {'whole ' if kind is int else ''}"
+                                             f"number, got {text!r}") from None
+        inside = (value > low if low_open else value >= low) and value <= high
+        if not (math.isfinite(value) and inside):
+            bounds = f"greater than {low:g}" if low_open else f"at least {low:g}"
+            if math.isfinite(high):
+                bounds = f"{'above' if low_open else 'from'} {low:g} {'up ' if low_open else ''}to {high:g}"
+            raise argparse.ArgumentTypeError(f"must be {bounds} (a finite number), got {text!r}")
         return value
     return parse
 
@@ -87,32 +104,43 @@ def _positive(kind):
 # ---------------------------------------------------------------------- the job
 
 
-def job_of(args, animation) -> dict:
+class JobError(ValueError):
+    """The options cannot make a movie of this scene; the message says which and why."""
+
+
+def job_of(args, animation, bundle, view_index: int) -> dict:
     """Everything a worker needs to render any frame, as plain data (sent to every worker)."""
     scene = animation.scene
     fps = args.fps or animation.fps
-    if args.frames:
-        count = args.frames
-    elif args.duration:
-        count = max(1, int(round(args.duration * fps)))
-    else:
-        count = max(1, int(round(animation.duration * fps)))
+    if not MIN_FPS <= fps <= MAX_FPS:
+        raise JobError(f"the scene's fps {fps:g} is outside {MIN_FPS:g} to {MAX_FPS:g}")
+    seconds = args.duration if args.duration else animation.duration
+    count = args.frames or max(1, round(min(seconds * fps, 2.0 * MAX_FRAMES)))
+    if count > MAX_FRAMES:
+        raise JobError(f"{'--duration ' + format(args.duration, 'g') if args.duration else 'the scene'}"
+                       f" at {fps:g} fps is {seconds * fps:.3g} frames; at most {MAX_FRAMES} "
+                       "are rendered")
     settings = {"size": list(args.size or scene.size), "samples": args.samples or 1,
                 "projection": args.projection or scene.projection,
                 "shading": args.shading or scene.shading,
-                "renderer": args.renderer or "zbuffer", "view": args.view, "paths": args.paths}
-    path = Path(args.scene).resolve()
-    # the file's digest: frames left by a run on an edited scene are not taken as this one's
-    digest = hashlib.sha256(path.read_bytes()).hexdigest()
-    return {"scene": str(path), "scene_sha256": digest, "fps": fps,
-            "frames": min(count, MAX_FRAMES), "settings": settings}
+                "renderer": args.renderer or "zbuffer", "view": view_index, "paths": args.paths}
+    return {"scene": Path(args.scene).name, "bundle": bundle.digest, "fps": fps,
+            "frames": int(count), "settings": settings,
+            "load_size": list(args.size) if args.size else None}
+
+
+def job_hash(job: dict) -> str:
+    """What every frame of the job carries: the hash of what its pixels depend on."""
+    same = {k: v for k, v in job.items() if k not in ("frames", "scene", "path")}
+    return hashlib.sha256(json.dumps(same, sort_keys=True).encode()).hexdigest()[:32]
 
 
 def _settings_problem(job: dict, animation) -> str | None:
     """What is wrong with the job's settings (a renderer, shading or sample count that does not
     exist), found once here rather than as the same failure of every frame."""
     from core.renderers import get_renderer
-    from core.settings import RenderSettings
+    from core.settings import SHADINGS, RenderSettings
+    from core.shading.registry import shader_names
     s = job["settings"]
     try:
         RenderSettings.for_scene(animation.scene, size=tuple(s["size"]), samples=s["samples"],
@@ -121,92 +149,79 @@ def _settings_problem(job: dict, animation) -> str | None:
         get_renderer(s["renderer"])
     except ValueError as error:
         return str(error)
-    views = (animation.view is not None) + len(animation.scene.views)
-    if not 1 <= s["view"] <= views:
-        return f"--view {s['view']}: the animation has {views} views (1 to {views})"
-    from core.settings import SHADINGS
-    from core.shading.registry import shader_names
     if s["shading"] not in SHADINGS[:1] + tuple(shader_names()):
         return f"shading must be one of {', '.join(SHADINGS[:1] + tuple(shader_names()))}, not {s['shading']!r}"
     return None
 
 
+def view_index_of(scene, animation, number: int | None) -> int:
+    """The index in ``scene_at(t).views`` of ``--view number`` (the file's view, by position;
+    the keyed view, or else the first valid one, when None); ViewNumberError when invalid."""
+    from core.scene.view_numbers import index_of
+    keyed = animation.view is not None
+    if number is None:
+        return 0
+    return int(keyed) + index_of(scene, number)
+
+
+# ---------------------------------------------------------------------- rendering a frame
+
 _loaded: dict = {}
 
 
-def _animation(path: str):
+def _animation(path: str, size=None):
     """The animation of a scene file, loaded once per process (and again if the file changed)."""
+    import os
+
     from core.animation.animation import Animation
     from core.animation.keys import animation_of
     from core.scene.formats import load_scene
-    stamp = os.stat(path).st_mtime_ns
-    if _loaded.get("key") != (path, stamp):
-        scene = load_scene(path)
+    key = (path, os.stat(path).st_mtime_ns, tuple(size) if size else None)
+    if _loaded.get("key") != key:
+        scene = load_scene(path, size=tuple(size) if size else None)
         _loaded["animation"] = animation_of(scene) or Animation(scene=scene)
-        _loaded["key"] = (path, stamp)
+        _loaded["key"] = key
     return _loaded["animation"]
 
 
-def render_png(job: dict, k: int) -> tuple[int, bytes]:
-    """Frame k of the job, encoded as PNG bytes (what a worker sends back)."""
-    from PIL import Image
-
+def render_png(job: dict, k: int, animation=None) -> tuple[int, bytes]:
+    """Frame k of the job, encoded as PNG bytes signed with the job's hash."""
     from core.animation.frames import render_at
     from core.settings import RenderSettings
-    animation = _animation(job["scene"])
+    animation = animation or _animation(job["path"], job.get("load_size"))
     s = job["settings"]
     settings = RenderSettings.for_scene(animation.scene, size=tuple(s["size"]),
                                         samples=s["samples"], projection=s["projection"],
                                         shading=s["shading"], renderer=s["renderer"])
-    frame = render_at(animation, k / job["fps"], settings, view_index=s["view"] - 1,
+    frame = render_at(animation, k / job["fps"], settings, view_index=s["view"],
                       paths=s["paths"])
     if frame.message:
         raise RuntimeError(f"frame {k}: {frame.message}")
-    out = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(frame.color)).save(out, format="PNG")
-    return k, out.getvalue()
+    return k, frame_png(frame.color, job_hash(job), k)
 
 
-# ---------------------------------------------------------------------- frames on disk
+def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tuple[int, bytes]]:
+    """A worker's task: the contiguous ``frames`` of the job, the scene read from the bundle
+    (unpacked once per worker), the particles restored from ``checkpoint`` (their state at
+    the first frame), so that nothing is simulated from t = 0."""
+    from app.tools.bundle import unpack
+    animation = _animation(str(unpack(bundle)), job.get("load_size"))
+    if checkpoint is not None and animation.particle_system is not None:
+        from core.animation.checkpoint import restore
+        restore(animation.particle_system, checkpoint)
+    return [render_png(job, k, animation) for k in frames]
 
 
-def frames_folder(out: Path) -> Path:
-    """Where the frames go: the output itself for a PNG sequence, else ``NAME.frames/``."""
-    return out.with_suffix(".frames") if out.suffix.lower() in MOVIE_SUFFIXES else out
-
-
-def prepare_folder(folder: Path, job: dict) -> list[int]:
-    """Make the folder, check it holds frames of this same job, and return the frames to do."""
-    folder.mkdir(parents=True, exist_ok=True)
-    record = folder / "job.json"
-    text = json.dumps(job, indent=1, sort_keys=True)
-    if record.exists():
-        if json.loads(record.read_text()) != json.loads(text):
-            raise ValueError(f"{folder} holds frames rendered with other settings or another "
-                             f"version of the scene (see {record}); remove it or choose "
-                             "another --out")
-    else:
-        record.write_text(text)
-    for stale in folder.glob("*.tmp"):                 # a frame half written when killed
-        stale.unlink()
-    return [k for k in range(job["frames"]) if not (folder / frame_name(k)).exists()]
-
-
-def write_frame(folder: Path, k: int, data: bytes) -> None:
-    """Write-then-rename: a frame on disk is always a whole frame."""
-    target = folder / frame_name(k)
-    tmp = target.with_name(target.name + ".tmp")
-    tmp.write_bytes(data)
-    os.replace(tmp, target)
+# ---------------------------------------------------------------------- progress
 
 
 class Progress:
     """``frame 12/90 (13%), 2.1 frames/s, ETA 37 s`` on stderr, one line updated in place."""
 
-    def __init__(self, total: int, done: int, stream=sys.stderr):
+    def __init__(self, total: int, done: int, stream=None):
         self.total, self.done, self.start_done = total, done, done
         self.t0 = time.perf_counter()
-        self.stream = stream
+        self.stream = stream = stream or sys.stderr
         self.tty = hasattr(stream, "isatty") and stream.isatty()
 
     def tick(self) -> None:
@@ -216,8 +231,13 @@ class Progress:
         eta = (self.total - self.done) / rate if rate > 0 else float("inf")
         line = (f"frame {self.done}/{self.total} ({100 * self.done // self.total}%), "
                 f"{rate:.2f} frames/s, ETA {eta:.0f} s")
-        print(("\r" + line) if self.tty else line, end="" if self.tty else "\n",
-              file=self.stream, flush=True)
+        self.say(line, final=False)
+
+    def say(self, line: str, final: bool = True) -> None:
+        if self.tty:
+            print("\r\033[K" + line, end="\n" if final else "", file=self.stream, flush=True)
+        else:
+            print(line, file=self.stream, flush=True)
 
     def finish(self) -> None:
         if self.tty:
@@ -227,173 +247,214 @@ class Progress:
 # ---------------------------------------------------------------------- running the frames
 
 
-def run_local(job, todo, on_frame, retries: int) -> dict[int, str]:
-    """Render ``todo`` in this process in order (the particles step on from frame to frame);
-    returns {frame: error} for frames that failed every try."""
-    failed = {}
-    for k in todo:
+def _one_line(error: BaseException) -> str:
+    text = " ".join(str(error).split()) or type(error).__name__
+    return f"{type(error).__name__}: {text}" if not isinstance(error, RuntimeError) else text
+
+
+def render_here(job, frames, on_frame, retries: int, animation, failed: list,
+                stop=lambda: False) -> int:
+    """Render ``frames`` in this process, in order, until ``stop()``; returns how many were
+    taken (rendered or failed)."""
+    taken = 0
+    for k in frames:
+        if stop():
+            break
         for attempt in range(retries + 1):
             try:
-                on_frame(*render_png(job, k))
-                failed.pop(k, None)
+                on_frame(*render_png(job, k, animation))
                 break
             except Exception as error:                      # noqa: BLE001 - reported per frame
-                failed[k] = f"{type(error).__name__}: {error}"
-    return failed
+                if attempt == retries:
+                    failed.append(([k], _one_line(error)))
+        taken += 1
+    return taken
 
 
-def run_dask(job, todo, on_frame, retries: int, workers: int = 1,
-             scheduler: str | None = None) -> dict[int, str]:
-    """Render ``todo`` on a Dask cluster: a new local one of ``workers`` processes, or the one
-    at ``scheduler``. Frames are handed out in order and written as they complete."""
-    with dask_client(workers, scheduler) as client:
-        return run_on(client, job, todo, on_frame, retries)
+def runs_of(frames: list[int], workers: int) -> list[list[int]]:
+    """``frames`` cut into contiguous runs (a gap starts a new one), about RUNS_PER_WORKER a
+    worker, so that the last runs even out the load."""
+    length = max(1, min(MAX_RUN, math.ceil(len(frames) / (workers * RUNS_PER_WORKER))))
+    runs, run = [], []
+    for k in frames:
+        if run and (k != run[-1] + 1 or len(run) == length):
+            runs.append(run)
+            run = []
+        run.append(k)
+    return runs + ([run] if run else [])
 
 
-class dask_client:
-    """A Dask client on a new ``LocalCluster`` of ``workers`` single-threaded processes, or on
-    the scheduler at ``address``; closed (with its cluster) on leaving the block."""
-
-    def __init__(self, workers: int = 1, address: str | None = None):
-        try:
-            from dask.distributed import Client, LocalCluster
-        except ImportError:
-            raise RuntimeError("--workers and --scheduler need Dask: "
-                               "pip install 'fvd-viewer[anim]'") from None
-        self.cluster = None
-        if address is None:
-            self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                        dashboard_address=None)
-        try:
-            self.client = Client(address or self.cluster)
-        except OSError as error:
-            if self.cluster is not None:
-                self.cluster.close()
-            raise RuntimeError(f"cannot reach the Dask scheduler at {address}: {error}") from None
-
-    def __enter__(self):
-        return self.client
-
-    def __exit__(self, *exc) -> None:
-        self.client.close()
-        if self.cluster is not None:
-            self.cluster.close()
-
-
-def run_on(client, job, todo, on_frame, retries: int) -> dict[int, str]:
-    """Submit every frame of ``todo`` (retried ``retries`` times by Dask), hand each result to
-    ``on_frame`` as it completes; returns {frame: error} for frames that failed for good."""
+def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, animation,
+                      failed: list, workers: int) -> None:
+    """Deal ``frames`` to the cluster in runs, each with the particles' checkpoint at its
+    first frame (made here by stepping the simulation on, no picture drawn), two runs in
+    flight a worker; write each run's frames as it completes."""
     from dask.distributed import as_completed
-    failed = {}
-    futures = {client.submit(render_png, job, k, retries=retries, pure=False): k for k in todo}
-    for future in as_completed(futures):
-        k = futures[future]
+
+    from core.animation.checkpoint import snapshot
+    system = animation.particle_system
+    shipped = client.scatter(bundle, broadcast=True, hash=False)
+    runs = runs_of(frames, workers)
+    in_flight = {}
+    done = as_completed()
+
+    def submit(run):
+        checkpoint = None
+        if system is not None:
+            system.state_at(animation.local_time(run[0] / job["fps"]))
+            checkpoint = snapshot(system)
+        future = client.submit(render_run, job, shipped, run, checkpoint, retries=retries,
+                               pure=False)
+        in_flight[future] = run
+        done.add(future)
+
+    for run in runs[:2 * workers]:
+        submit(run)
+    waiting = runs[2 * workers:]
+    for future in done:
+        run = in_flight.pop(future)
         try:
-            on_frame(*future.result())
-        except Exception as error:                          # noqa: BLE001 - reported per frame
-            failed[k] = f"{type(error).__name__}: {error}"
-    return failed
+            for k, data in future.result():
+                on_frame(k, data)
+        except Exception as error:                          # noqa: BLE001 - reported per run
+            failed.append((run, _one_line(error)))
+        if waiting:
+            submit(waiting.pop(0))
 
 
-# ---------------------------------------------------------------------- the bench row
-
-
-def bench_animation(scene: str | Path | None = None, size=(500, 500), first: int = 60,
-                    frames: int = 30) -> dict:
-    """Frames per second rendering ``scenes/fountain.toml`` (frames ``first`` … ``first +
-    frames - 1``, PNG encoding included), in this process and on a local cluster of 2 workers
-    (timed after each worker has rendered a frame, so start-up and JIT are left out)."""
-    from core.paths import ROOT
-    scene = Path(scene or ROOT / "scenes" / "fountain.toml")
-    job = {"scene": str(scene.resolve()), "fps": _animation(str(scene.resolve())).fps,
-           "frames": first + frames,
-           "settings": {"size": list(size), "samples": 1, "projection": "perspective",
-                        "shading": _animation(str(scene.resolve())).scene.shading,
-                        "renderer": "zbuffer", "view": 1, "paths": False}}
-    todo = list(range(first, first + frames))
-    render_png(job, first - 1)                                # warm: JIT, particles to first
+def render_frames(args, job, bundle, animation, todo, on_frame, progress) -> tuple[list, str | None]:
+    """Render ``todo`` where the options say; returns ``(failures, what ran where)``, each
+    failure ``(frames, why)``."""
+    from app.tools import cluster
+    failed: list = []
+    if args.scheduler:
+        client = cluster.connect(args.scheduler)
+        try:
+            workers = max(1, len(client.scheduler_info().get("workers", {})))
+            render_on_cluster(client, job, bundle, todo, on_frame, args.retries, animation,
+                              failed, workers)
+        finally:
+            client.close()
+        return failed, f"on the cluster at {args.scheduler} ({workers} workers)"
+    workers = args.workers
+    if workers > 1 and todo:
+        workers, why = cluster.worker_cap(workers)
+        if why:
+            progress.say(f"note: {why}")
+    if workers == 1 or not todo:
+        render_here(job, todo, on_frame, args.retries, animation, failed)
+        return failed, None
+    # Two frames here first: the second times a frame (the first may load kernels), to
+    # decide whether a cluster can win at all.
+    head = render_here(job, todo[:1], on_frame, args.retries, animation, failed)
     t0 = time.perf_counter()
-    for k in todo:
-        render_png(job, k)
-    one = time.perf_counter() - t0
-    with dask_client(2) as client:
-        client.gather([client.submit(render_png, job, first - 2 + i, pure=False) for i in range(2)])
-        t0 = time.perf_counter()
-        run_on(client, job, todo, lambda k, data: None, 0)
-        two = time.perf_counter() - t0
-    particles = len(_animation(str(scene.resolve())).particle_system.particles)
-    return {"scene": str(scene.name), "size": list(size), "frames": frames,
-            "particles": particles, "fps_1": frames / one, "fps_2": frames / two,
-            "scaling": one / two}
-
-
-def format_animation(row: dict) -> str:
-    return (f"animation: {row['scene']} at {row['size'][0]} x {row['size'][1]}, "
-            f"{row['frames']} frames, ~{row['particles']:,} live particles: "
-            f"{row['fps_1']:.1f} frames/s on 1 process, {row['fps_2']:.1f} on 2 Dask workers "
-            f"(x{row['scaling']:.2f})")
-
-
-# ---------------------------------------------------------------------- the movie
-
-
-def encode(folder: Path, count: int, out: Path, fps: float, crf: int = 18) -> None:
-    """The frames of ``folder`` into ``out``: H.264 MP4 (PyAV) or GIF (Pillow)."""
-    from PIL import Image
-    paths = [folder / frame_name(k) for k in range(count)]
-    if out.suffix.lower() == ".gif":
-        images = [Image.open(p).convert("RGB") for p in paths]
-        images[0].save(out, save_all=True, append_images=images[1:], loop=0,
-                       duration=max(20, int(round(1000 / fps))))
-        return
+    head += render_here(job, todo[1:2], on_frame, args.retries, animation, failed)
+    seconds = time.perf_counter() - t0
+    todo = todo[head:]
+    if len(todo) * seconds < 2 * CLUSTER_START_GUESS or not todo:
+        progress.say(f"note: --workers {workers}: not starting a local cluster: the remaining "
+                     f"{len(todo)} frames take ~{len(todo) * seconds:.1f} s here, less than "
+                     f"twice the ~{CLUSTER_START_GUESS:g} s its start costs")
+        render_here(job, todo, on_frame, args.retries, animation, failed)
+        return failed, "in this process (a cluster could not win)"
+    start = cluster.LocalStart(workers)
     try:
-        import av
-    except ImportError:
-        raise OSError("MP4 needs PyAV: pip install 'fvd-viewer[anim]' (or write .gif or PNGs)") from None
-    from fractions import Fraction
-    tmp = out.with_name(out.name + ".tmp.mp4")
-    with av.open(str(tmp), "w") as container:
-        stream = container.add_stream("libx264", rate=Fraction(fps).limit_denominator(1001))
-        first = np.asarray(Image.open(paths[0]).convert("RGB"))
-        # yuv420p halves the chroma resolution, so both sides must be even: pad by one pixel
-        height, width = first.shape[0] + first.shape[0] % 2, first.shape[1] + first.shape[1] % 2
-        stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
-        stream.options = {"crf": str(crf), "preset": "medium"}
-        for p in paths:
-            rgb = np.asarray(Image.open(p).convert("RGB"))
-            rgb = np.pad(rgb, ((0, height - rgb.shape[0]), (0, width - rgb.shape[1]), (0, 0)), mode="edge")
-            for packet in stream.encode(av.VideoFrame.from_ndarray(rgb, format="rgb24")):
-                container.mux(packet)
-        for packet in stream.encode():
-            container.mux(packet)
-    os.replace(tmp, out)
+        if not RENDER_WHILE_STARTING:
+            start.ready.wait()
+        here = render_here(job, todo, on_frame, args.retries, animation, failed,
+                           stop=start.ready.is_set)
+        if here == len(todo):
+            return failed, (f"in this process: it finished before the local cluster started "
+                            f"(this process rendered {head + here} frames)")
+        if start.error is not None:
+            progress.say(f"note: the local cluster did not start ({_one_line(start.error)}): "
+                         "rendering here")
+            render_here(job, todo[here:], on_frame, args.retries, animation, failed)
+            return failed, None
+        render_on_cluster(start.client, job, bundle, todo[here:], on_frame, args.retries,
+                          animation, failed, workers)
+        return failed, (f"{workers} local workers, started once in {start.seconds:.1f} s while "
+                        f"this process rendered {head + here} frames")
+    finally:
+        start.close()
+
+
+# ---------------------------------------------------------------------- the command
+
+
+def _frames_text(frames: list[int]) -> str:
+    """``frame 4``, ``frames 3-9``, ``5 frames (2, 4, 7, ...)``."""
+    if len(frames) == 1:
+        return f"frame {frames[0]}"
+    if frames[-1] - frames[0] == len(frames) - 1:
+        return f"frames {frames[0]}-{frames[-1]}"
+    shown = ", ".join(map(str, frames[:4])) + (", ..." if len(frames) > 4 else "")
+    return f"{len(frames)} frames ({shown})"
+
+
+def _load(path: str, size=None):
+    """The scene, or None after printing the reader's message; its invalid views and the
+    files it drew without (a texture) are printed as ``render`` prints them."""
+    from core.scene.formats import ReaderError, load_scene
+    try:
+        scene = load_scene(path, size=size)
+    except ReaderError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return None
+    for message in scene.view_messages:
+        print(f"invalid view: {message}", file=sys.stderr)
+    for message in scene.messages:
+        print(f"warning: {message}", file=sys.stderr)
+    return scene
+
+
+def _error(message: str, code: int) -> int:
+    print(f"error: {message}", file=sys.stderr)
+    return code
 
 
 def main(args) -> int:
+    from app.tools import cluster
+    from app.tools.bundle import load_recorded
     from core.animation.animation import Animation
     from core.animation.keys import animation_of
-    from core.scene.formats import ReaderError, load_scene
-    try:
-        scene = load_scene(args.scene, size=args.size)
-    except ReaderError as error:
-        print(f"error: {error}", file=sys.stderr)
+    from core.scene.view_numbers import ViewNumberError
+    out = Path(args.out)
+    refusal = out_problem(out, args.scene, args.force)
+    if refusal:
+        return _error(f"--out {args.out}: {refusal}", 2)
+    if args.scheduler:
+        try:
+            cluster.scheduler_address(args.scheduler)
+        except cluster.ClusterError as error:
+            return _error(str(error), 2)
+    scene, bundle = load_recorded(args.scene, lambda path: _load(path, size=args.size))
+    if scene is None:
         return 2
     animation = animation_of(scene) or Animation(scene=scene)
     if not scene.views and animation.view is None:
-        print(f"error: {scene.name}: no view to render", file=sys.stderr)
-        return 2
-    job = job_of(args, animation)
-    problem = _settings_problem(job, animation)
-    if problem:
-        print(f"error: {problem}", file=sys.stderr)
-        return 2
-    out = Path(args.out)
+        return _error(f"{scene.name}: no view to render", 2)
+    try:
+        view_index = view_index_of(scene, animation, args.view)
+        job = job_of(args, animation, bundle, view_index)
+        problem = _settings_problem(job, animation)
+        if problem:
+            raise JobError(problem)
+        note = movie_rate(out, job["fps"])[1] if out.suffix.lower() in MOVIE_SUFFIXES else None
+    except (ViewNumberError, JobError, ValueError) as error:
+        return _error(str(error), 2)
+    if note:
+        print(note, file=sys.stderr)
+    job["path"] = str(Path(args.scene).resolve())        # where this process reads it
     folder = frames_folder(out)
     try:
-        todo = prepare_folder(folder, job)
+        todo, notes = prepare_folder(folder, {k: v for k, v in job.items() if k != "path"},
+                                     job_hash(job), args.force)
     except (OSError, ValueError) as error:
-        print(f"error: {error}", file=sys.stderr)
-        return 2
+        return _error(str(error) if isinstance(error, FolderError)
+                      else f"{folder}: {getattr(error, 'strerror', None) or error}", 2)
+    for line in notes[:5] + ([f"... and {len(notes) - 5} more"] if len(notes) > 5 else []):
+        print(line, file=sys.stderr)
     total = job["frames"]
     if len(todo) < total:
         print(f"{total - len(todo)} of {total} frames already in {folder}: skipped", file=sys.stderr)
@@ -405,29 +466,56 @@ def main(args) -> int:
 
     t0 = time.perf_counter()
     try:
-        if args.scheduler or args.workers > 1:
-            failed = run_dask(job, todo, on_frame, args.retries, args.workers, args.scheduler)
-        else:
-            failed = run_local(job, todo, on_frame, args.retries)
-    except (RuntimeError, OSError) as error:
+        failed, where = render_frames(args, job, bundle, animation, todo, on_frame, progress)
+    except (cluster.ClusterError, OSError) as error:
         progress.finish()
-        print(f"error: {error}", file=sys.stderr)
-        return 1
+        return _error(_one_line(error) if not isinstance(error, cluster.ClusterError)
+                      else str(error), 1)
     progress.finish()
     if failed:
-        for k, why in sorted(failed.items()):
-            print(f"error: frame {k} failed after {args.retries + 1} tries: {why}", file=sys.stderr)
-        print(f"{len(failed)} frames missing; run the same command again to render only them",
-              file=sys.stderr)
+        frames = sorted(k for run, _ in failed for k in run)
+        first = min(failed, key=lambda f: f[0][0])[1]
+        others = len({why for _, why in failed}) - 1
+        print(f"error: {_frames_text(frames)} of {total} failed after {args.retries + 1} tries"
+              f"{'' if len(frames) == 1 else ', the first'}: {first}"
+              f"{f' (and {others} other reasons)' if others else ''}; the same command renders "
+              "only the missing frames", file=sys.stderr)
         return 1
     seconds = time.perf_counter() - t0
-    if out.suffix.lower() in MOVIE_SUFFIXES:
-        try:
-            encode(folder, total, out, job["fps"], args.crf)
-        except (OSError, ValueError) as error:
-            print(f"error: cannot write {out}: {error}", file=sys.stderr)
-            return 1
     w, h = job["settings"]["size"]
-    print(f"wrote {out} ({total} frames, {w}x{h}, {job['fps']:g} fps; {len(todo)} rendered in "
-          f"{seconds:.1f} s)")
+    rendered = (f"{len(todo)} rendered in {seconds:.1f} s" + (f", {where}" if where else ""))
+    if out.suffix.lower() not in MOVIE_SUFFIXES:
+        print(f"wrote {out} ({total} frames, {w}x{h}, {job['fps']:g} fps; {rendered})")
+        return 0
+    try:
+        encode(folder, total, out, job["fps"], args.crf)
+    except (OSError, ValueError) as error:
+        reason = getattr(error, "strerror", None) or error
+        return _error(f"cannot write {out}: {reason} (the frames stay in {folder}; the same "
+                      "command resumes from them)", 1)
+    print(f"wrote {out} ({total} frames, {w}x{h}, {job['fps']:g} fps; {rendered})")
+    if args.keep_frames:
+        print(f"the frames stay in {folder} (--keep-frames)", file=sys.stderr)
+    else:
+        left = clean_folder(folder, total)
+        if left:
+            print(f"removed the frames from {folder}; it is kept for what else it holds: "
+                  f"{', '.join(left[:3])}{' ...' if len(left) > 3 else ''}", file=sys.stderr)
     return 0
+
+
+# ---------------------------------------------------------------------- the bench row
+
+
+def bench_animation(scene: str | Path | None = None, size=(500, 500), frames: int = 240,
+                    workers: int = 2) -> dict:
+    """The whole command, timed as a user meets it: ``animate`` of ``frames`` frames in one
+    process and with ``--workers`` (cluster start included), each in a fresh process."""
+    from app.tools.scaleout import compare
+    from core.paths import ROOT
+    return compare(Path(scene or ROOT / "scenes" / "fountain.toml"), frames, size, workers)
+
+
+def format_animation(row: dict) -> str:
+    from app.tools.scaleout import format_row
+    return format_row(row)

@@ -1,0 +1,110 @@
+"""``render --scheduler ADDR`` (or ``--workers N``): one ray-traced frame split across a cluster.
+
+The frame is cut into bands of rows; each band is a task that traces its rows at every
+sample of the pixel (:func:`core.raytrace.renderer.trace_tile`) on a worker, which reads the
+scene from the job's bundle (:mod:`app.tools.bundle`: the scene file and every file it names,
+so the worker needs only the package) and prepares it once (BVH and all) for every band it
+traces. A pixel's colour depends on its own rays only, so the assembled bands are exactly the
+picture one process traces (the test compares them byte for byte).
+
+Only the ray tracer traces by tiles. A local cluster (``--workers``) on one machine cannot beat
+one process, whose tracer already runs on every core: it is started only when it is given
+more cores than this process uses (it never is here; the option says so and renders here).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+BANDS_PER_WORKER = 4
+_prepared: dict = {}
+
+
+def can_split(settings) -> str | None:
+    """Why this frame cannot be split across a cluster, or None."""
+    if settings.renderer != "raytrace":
+        return f"only ray-traced frames are split across workers (this one is {settings.renderer})"
+    return None
+
+
+def bands(height: int, workers: int) -> list[tuple[int, int]]:
+    """``(row0, row1)`` bands covering the image, about BANDS_PER_WORKER a worker."""
+    step = max(1, math.ceil(height / (workers * BANDS_PER_WORKER)))
+    return [(r, min(r + step, height)) for r in range(0, height, step)]
+
+
+def trace_band(bundle, view_number: int, settings, demo, rows) -> tuple[tuple[int, int], np.ndarray]:
+    """A worker's task: the rows ``[row0, row1)`` of the frame, as uint8 colours."""
+    from core.raytrace.renderer import trace_tile
+    from core.shading.illumination import to_uint8
+    setup = _setup(bundle, view_number, settings, demo)
+    return rows, to_uint8(trace_tile(setup, rows[0], rows[1], 0, setup.width))
+
+
+def _setup(bundle, view_number, settings, demo):
+    """The traced frame's Setup, made once per worker for the same job."""
+    key = (bundle.digest, view_number, settings, demo)
+    if _prepared.get("key") != key:
+        from app.tools.bundle import unpack
+        from core.camera.film import sample_offsets
+        from core.raytrace.renderer import TraceOptions, prepare
+        from core.scene.formats import load_scene
+        from core.scene.view_numbers import index_of
+        from core.texture.demo_scene import apply_demo_options
+        scene = load_scene(unpack(bundle), size=settings.size)
+        apply_demo_options(scene, *demo)
+        view = scene.views[index_of(scene, view_number)]
+        offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
+                   if settings.samples > 1 else np.array([settings.pixel_offset], np.float64))
+        _prepared["setup"] = prepare(scene, view, settings.projection, settings.size,
+                                     TraceOptions.from_settings(settings), offsets,
+                                     settings.keep_aspect)
+        _prepared["key"] = key
+    return _prepared["setup"]
+
+
+def render_split(client, bundle, view_number: int, settings, demo, retries: int = 2,
+                 workers: int = 1) -> np.ndarray:
+    """The frame, traced band by band on the cluster of ``client`` and assembled here."""
+    from dask.distributed import as_completed
+    width, height = settings.size
+    color = np.empty((height, width, 3), np.uint8)
+    shipped = client.scatter(bundle, broadcast=True, hash=False)
+    futures = [client.submit(trace_band, shipped, view_number, settings, demo, rows,
+                             retries=retries, pure=False) for rows in bands(height, workers)]
+    for future in as_completed(futures):
+        (row0, row1), band = future.result()
+        color[row0:row1] = band
+    return color
+
+
+def split_frame(args, settings):
+    """``render``'s scale-out: ``(color, where)`` traced on the cluster, or ``(None, note)``
+    when this process renders the frame itself (the note says why); ClusterError when the
+    cluster cannot be used."""
+    from app.tools import cluster
+    from app.tools.bundle import load_recorded
+    from core.scene.formats import load_scene
+    why = can_split(settings)
+    if why is None and args.time is not None:
+        why = "--time frames are not split across workers"
+    if why is None and args.course_tri:
+        why = "--course-tri frames are not split across workers"
+    if why is None and not args.scheduler:
+        workers, capped = cluster.worker_cap(args.workers)
+        why = ((capped + "; " if capped else "") +
+               f"a local cluster of {workers} cannot beat this process, whose ray tracer already "
+               f"runs on every core of this machine")
+    if why is not None:
+        return None, f"note: {why}: rendering in this process"
+    _, bundle = load_recorded(args.scene, lambda path: load_scene(path, size=args.size))
+    client = cluster.connect(args.scheduler)
+    try:
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        demo = (args.bump_map, not args.no_bump)
+        color = render_split(client, bundle, args.view, settings, demo, workers=workers)
+    finally:
+        client.close()
+    return color, f"traced on the cluster at {args.scheduler} ({workers} workers)"
