@@ -104,6 +104,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
     _renderer_arguments(r)                    # issue 12
+    _crease_argument(r)                       # issue 20
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -164,6 +165,13 @@ def _renderer_overrides(args) -> dict:
             "max_depth": args.max_depth, "fresnel": args.fresnel}
 
 
+def _crease_argument(parser: argparse.ArgumentParser) -> None:
+    """--crease-angle (issue 20): where meshes without normals of their own keep sharp edges."""
+    parser.add_argument("--crease-angle", type=float, default=None, metavar="DEGREES",
+                        help="faces meeting at more than this keep their own normals along "
+                             "the edge (default: the scene's crease_angle, else 45)")
+
+
 def _course_options(p: argparse.ArgumentParser) -> None:
     """The course's options shared by ``view`` and ``render`` (None: the scene's own)."""
     p.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None,
@@ -214,11 +222,11 @@ def views_on_stdin() -> bool:
     return stat.S_ISREG(mode) or stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
 
 
-def _load(source: str, size=None):
+def _load(source: str, size=None, crease_angle=None):
     """The scene, or None after printing the reader's message."""
     from core.scene.formats import ReaderError, load_scene
     try:
-        scene = load_scene(source, size=size)
+        scene = load_scene(source, size=size, crease_angle=crease_angle)
     except ReaderError as error:
         print(f"error: {error}", file=sys.stderr)
         return None
@@ -297,7 +305,7 @@ def _render(args) -> int:
     if refusal:
         print(f"error: --out {args.out}: {refusal}", file=sys.stderr)
         return 2
-    scene = _load(args.scene, size=args.size)
+    scene = _load(args.scene, size=args.size, crease_angle=args.crease_angle)
     if scene is None:
         return 2
     index = _pick_view(scene, args.view)
