@@ -331,6 +331,8 @@ def _render(args) -> int:
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1
+    for note in frame.stats.get("not drawn", []):           # issue 20: said, never dropped
+        print(f"warning: not drawn: {note}", file=sys.stderr)
     out = Path(args.out)
     try:
         write_png(frame.color, out)

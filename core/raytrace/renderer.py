@@ -76,6 +76,7 @@ class Setup:
     options: TraceOptions
     counts: np.ndarray           # (7,) rays of each kind so far (whitted.COUNTERS)
     keep_aspect: bool = False    # letterbox the window (else stretch it: the course's mapping)
+    not_drawn: tuple = ()        # what the scene has that the tracer leaves out, in words
 
 
 def prepare(scene, view: View, projection: str, size: tuple[int, int],
@@ -95,7 +96,17 @@ def prepare(scene, view: View, projection: str, size: tuple[int, int],
                  halfway=scene.specular == "halfway",
                  background=np.asarray(scene.background, dtype=np.float64).reshape(3),
                  options=options, counts=np.zeros(len(whitted.COUNTERS), dtype=np.int64),
-                 keep_aspect=bool(keep_aspect))
+                 keep_aspect=bool(keep_aspect), not_drawn=not_drawn(scene))
+
+
+def not_drawn(scene) -> tuple:
+    """What of ``scene`` the tracer cannot draw, one sentence each (shown with the frame's
+    stats and in the window's panel, never silently dropped)."""
+    notes = []
+    lines = [m.name for m in scene.meshes if len(m.edges) and not len(m.triangles)]
+    if lines:
+        notes.append(f"line edges ({', '.join(lines)}): drawn by the z-buffer only")
+    return tuple(notes)
 
 
 def trace_rays(setup: Setup, origins, directions, t_min, t_max) -> np.ndarray:
@@ -158,7 +169,8 @@ def stats_of(setup: Setup, seconds: float) -> dict:
     rays = {name: int(c) for name, c in zip(whitted.COUNTERS, setup.counts)}
     return {"rays": rays, "bvh": {"triangles": b.triangles, "nodes": b.nodes, "depth": b.depth,
                                   "build ms": b.seconds * 1e3, "bytes": b.bytes},
-            "trace ms": seconds * 1e3, "renderer": "raytrace"}
+            "trace ms": seconds * 1e3, "renderer": "raytrace",
+            "not drawn": list(setup.not_drawn)}
 
 
 def render_image(scene, view: View, projection: str, size: tuple[int, int],

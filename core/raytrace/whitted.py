@@ -64,12 +64,11 @@ def nearest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     k, t, u, v = bvh.closest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
     if k >= 0:
         kind, index, t_max = TRIANGLE, k, t
-    spheres = packed.spheres
-    for i in range(spheres.shape[0]):
-        t_s = intersect.sphere(ox, oy, oz, dx, dy, dz, spheres[i, 0], spheres[i, 1],
-                               spheres[i, 2], spheres[i, 3], t_min, t_max)
-        if t_s < t_max:
-            kind, index, t_max = SPHERE, i, t_s
+    i, t_s = bvh.closest_sphere(packed.sphere_box, packed.sphere_first, packed.sphere_count,
+                                packed.sphere_item, packed.spheres, ox, oy, oz, dx, dy, dz,
+                                t_min, t_max, stack)
+    if i >= 0:
+        kind, index, t_max = SPHERE, i, t_s
     planes = packed.planes
     for i in range(planes.shape[0]):
         t_p = intersect.plane(ox, oy, oz, dx, dy, dz, planes[i, 0], planes[i, 1], planes[i, 2],
