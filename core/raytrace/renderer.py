@@ -38,6 +38,8 @@ class TraceOptions:
     shadows: str = "transmit"
     fresnel: bool = False
     medium: float = AIR
+    texture_filter: str = "trilinear"      # the z-buffer's filters (core.texture.sample)
+    bump: bool = True
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_depth, int) and 1 <= self.max_depth <= MAX_DEPTH_LIMIT):
@@ -54,7 +56,7 @@ class TraceOptions:
 
     @classmethod
     def from_settings(cls, settings) -> "TraceOptions":
-        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel")
+        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel", "texture_filter", "bump")
         return cls(**{n: getattr(settings, n) for n in names if hasattr(settings, n)})
 
 
@@ -106,13 +108,30 @@ def not_drawn(scene) -> tuple:
     lines = [m.name for m in scene.meshes if len(m.edges) and not len(m.triangles)]
     if lines:
         notes.append(f"line edges ({', '.join(lines)}): drawn by the z-buffer only")
+    from core.texture.material import maps_of
+    demo = [m.name for m in scene.meshes if getattr(maps_of(m.material), "demo", None)]
+    if demo:
+        notes.append(f"the bump demo's material ({', '.join(demo)}): drawn by the z-buffer only")
+    mapped = sorted({m.name for m in scene.meshes if m.tessellates is not None
+                     and maps_of(m.material) is not None})
+    if mapped:
+        notes.append(f"texture maps on analytic primitives ({', '.join(mapped)}): the traced "
+                     f"sphere or plane has no (u, v)")
     return tuple(notes)
 
 
-def trace_rays(setup: Setup, origins, directions, t_min, t_max) -> np.ndarray:
-    """Colours ``(N, 3)`` (unclamped) of primary rays; adds their ray counts to ``setup``."""
+def trace_rays(setup: Setup, origins, directions, t_min, t_max,
+               differentials=None) -> np.ndarray:
+    """Colours ``(N, 3)`` (unclamped) of primary rays; adds their ray counts to ``setup``.
+
+    ``differentials`` ``(N, 12)``: ∂O/∂x, ∂D/∂x, ∂O/∂y, ∂D/∂y per pixel of each ray, for the
+    texture footprint (None: a point sample, the finest level)."""
+    from core.texture.sample import FILTERS
     o = setup.options
     n = len(origins)
+    textured = setup.packing.textured
+    if differentials is None:
+        differentials = np.zeros((n if textured else 0, 12))
     raw = np.empty((n, 3))
     counts = np.zeros(((n + whitted.CHUNK - 1) // whitted.CHUNK, len(whitted.COUNTERS)),
                       dtype=np.int64)
@@ -122,7 +141,9 @@ def trace_rays(setup: Setup, origins, directions, t_min, t_max) -> np.ndarray:
                        np.ascontiguousarray(t_max), setup.eye, setup.lights, setup.ambient,
                        setup.halfway, setup.background, whitted.SHADOW_MODES.index(o.shadows),
                        o.max_depth, float(o.adaptive_epsilon), bool(o.fresnel), o.medium,
-                       offset, raw, counts)
+                       offset, raw, counts, setup.packing.texturing, textured,
+                       FILTERS[o.texture_filter], bool(o.bump),
+                       np.ascontiguousarray(differentials, dtype=np.float64))
     setup.counts += counts.sum(axis=0)
     return raw
 
@@ -143,10 +164,25 @@ def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int):
     return origins, directions, t_min, t_max
 
 
+def differentials(setup: Setup, row0: int, row1: int, col0: int, col1: int) -> np.ndarray:
+    """``(N, 12)`` the primary rays' differentials per pixel, by the rays one pixel right
+    and one pixel down (in the order of :func:`primary`)."""
+    def rays(shift):
+        o, d, _ = camera.tile_rays(setup.view, setup.projection, setup.width, setup.height,
+                                   setup.offsets + shift, rows=(row0, row1), cols=(col0, col1),
+                                   keep_aspect=setup.keep_aspect)
+        return o, d
+    o, d = rays(np.zeros(2))
+    ox, dx = rays(np.array([1.0, 0.0]))
+    oy, dy = rays(np.array([0.0, 1.0]))
+    return np.concatenate([ox - o, dx - d, oy - o, dy - d], axis=1)
+
+
 def trace_tile(setup: Setup, row0: int, row1: int, col0: int, col1: int) -> np.ndarray:
     """The box-filtered, unclamped colour ``(row1 − row0, col1 − col0, 3)`` of a tile."""
     origins, directions, t_min, t_max = primary(setup, row0, row1, col0, col1)
-    raw = trace_rays(setup, origins, directions, t_min, t_max)
+    diffs = (differentials(setup, row0, row1, col0, col1) if setup.packing.textured else None)
+    raw = trace_rays(setup, origins, directions, t_min, t_max, diffs)
     return raw.reshape(len(setup.offsets), row1 - row0, col1 - col0, 3).mean(axis=0)
 
 

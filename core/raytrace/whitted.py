@@ -43,6 +43,7 @@ import numpy as np
 from numba import njit, prange
 
 from core.raytrace import bvh, intersect, optics
+from core.texture.surface import UV, textured_at
 from core.shading.illumination import (EYE_DIRECTION, EYE_POINT, LIGHT_INTENSITY, OD, POINT_LIGHT,
                                        TWO_SIDED, phong_point, unit3)
 
@@ -172,12 +173,28 @@ def shadow_term(packed, mode, light, px, py, pz, background, offset, stack, coun
 
 
 @njit(cache=True)
+def has_maps(tex, kind, s):
+    """Does the hit surface carry a colour, bump, normal or environment map?"""
+    if kind != TRIANGLE:
+        return False
+    for c in range(4):
+        if tex.maps[s, c] >= 0.0:
+            return True
+    return False
+
+
+@njit(cache=True)
 def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights, ambient,
-                 eye, halfway, shadows, background, offset, scaled, surface_row, stack, counts):
-    """``I_local`` at P with each light's ``I_p`` scaled by its shadow term (Phong's model)."""
+                 eye, halfway, shadows, background, offset, scaled, surface_row, stack, counts,
+                 tex, filter_, bump, u, v, duv, surf):
+    """``I_local`` at P with each light's ``I_p`` scaled by its shadow term (Phong's model);
+    a textured triangle is shaded by the z-buffer's textured pixel step
+    (:func:`core.texture.surface.textured_at`) at barycentrics ``(u, v)`` with the (u, v)
+    derivatives ``duv`` of the ray's differentials."""
     checker_colour(packed, kind, index, s, px, py, pz, surface_row)
     if shadows == SHADOW_OFF or lights.shape[0] == 0:
-        return phong_point(px, py, pz, nx, ny, nz, 0, surface_row, lights, ambient, eye, halfway)
+        return _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, lights, ambient, eye,
+                      halfway, surface_row, tex, filter_, bump, u, v, duv, surf)
     # The side the viewer sees, as phong_point decides it: V towards the eye.
     if eye[0] == EYE_POINT:
         vx, vy, vz, _ = unit3(eye[1] - px, eye[2] - py, eye[3] - pz)
@@ -203,7 +220,70 @@ def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lig
         scaled[k, LIGHT_INTENSITY] *= s_r
         scaled[k, LIGHT_INTENSITY + 1] *= s_g
         scaled[k, LIGHT_INTENSITY + 2] *= s_b
-    return phong_point(px, py, pz, nx, ny, nz, 0, surface_row, scaled, ambient, eye, halfway)
+    return _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, scaled, ambient, eye, halfway,
+                  surface_row, tex, filter_, bump, u, v, duv, surf)
+
+
+@njit(cache=True)
+def _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, lights, ambient, eye, halfway,
+           surface_row, tex, filter_, bump, u, v, duv, surf):
+    if not has_maps(tex, kind, s):
+        return phong_point(px, py, pz, nx, ny, nz, 0, surface_row, lights, ambient, eye, halfway)
+    f = packed.prim[index]
+    i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
+    w0 = 1.0 - u - v
+    a = tex.attrs
+    tu = w0 * a[i0, UV] + u * a[i1, UV] + v * a[i2, UV]
+    tv = w0 * a[i0, UV + 1] + u * a[i1, UV + 1] + v * a[i2, UV + 1]
+    r, g, b = textured_at(a, i0, i1, i2, w0, u, v, tu, tv, duv[0], duv[1], duv[2], duv[3], s,
+                          tex.maps, tex.texels, tex.levels, tex.textures, filter_, bump, surf,
+                          lights, ambient, eye, halfway)
+    for c in range(3):                                  # textured_at wrote its texel's O_d
+        surf[s, OD + c] = packed.surfaces[s, OD + c]
+    return r, g, b
+
+
+@njit(cache=True)
+def transfer(dif, t, dx, dy, dz, gx, gy, gz, dp):
+    """Igehy's (1999) transfer of a ray's differentials to its hit at ``t`` on the plane of
+    normal G: ``dP = dO + t dD`` moved along D back onto the plane (rows of ``dp``: ∂P/∂x,
+    ∂P/∂y; rows of ``dif``: ∂O/∂x, ∂D/∂x, ∂O/∂y, ∂D/∂y, per pixel)."""
+    d_dot_g = dx * gx + dy * gy + dz * gz
+    for k in range(2):
+        ax = dif[2 * k, 0] + t * dif[2 * k + 1, 0]
+        ay = dif[2 * k, 1] + t * dif[2 * k + 1, 1]
+        az = dif[2 * k, 2] + t * dif[2 * k + 1, 2]
+        dt = -(ax * gx + ay * gy + az * gz) / d_dot_g if d_dot_g != 0.0 else 0.0
+        dp[k, 0], dp[k, 1], dp[k, 2] = ax + dt * dx, ay + dt * dy, az + dt * dz
+
+
+@njit(cache=True)
+def uv_derivatives(packed, tex, index, dp, duv):
+    """``duv`` = (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) of the texture coordinates on triangle
+    ``index`` (BVH order) from the point's derivatives ``dp``: ``dP = dβ₁ E1 + dβ₂ E2``
+    solved by least squares in the triangle's plane, then (u, v) interpolated."""
+    e1, e2 = packed.e1[index], packed.e2[index]
+    a = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]
+    b = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]
+    c = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]
+    det = a * c - b * b
+    f = packed.prim[index]
+    i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
+    at = tex.attrs
+    for k in range(2):
+        if not det > 0.0:
+            duv[2 * k], duv[2 * k + 1] = 0.0, 0.0
+            continue
+        r1 = e1[0] * dp[k, 0] + e1[1] * dp[k, 1] + e1[2] * dp[k, 2]
+        r2 = e2[0] * dp[k, 0] + e2[1] * dp[k, 1] + e2[2] * dp[k, 2]
+        db1, db2 = (c * r1 - b * r2) / det, (a * r2 - b * r1) / det
+        for m in range(2):
+            duv[2 * k + m] = (db1 * (at[i1, UV + m] - at[i0, UV + m])
+                              + db2 * (at[i2, UV + m] - at[i0, UV + m]))
+
+
+RAY_COLUMNS = 11               # origin, direction, t_min, t_max, weight, depth, kind
+DIFF = RAY_COLUMNS             # then the ray differentials ∂O/∂x, ∂D/∂x, ∂O/∂y, ∂D/∂y (12)
 
 
 @njit(cache=True)
@@ -216,12 +296,35 @@ def _push(rays, top, ox, oy, oz, dx, dy, dz, t_min, t_max, weight, depth, kind):
 
 
 @njit(cache=True)
+def _push_differentials(rays, row, dp, dif, nx, ny, nz, alpha, dbeta):
+    """A child ray's differentials: it starts at P (∂O = ∂P) and its direction changes as
+    ``∂D' = α ∂D + (∂β) (∂D·N) N`` — reflection α = 1, ∂β = −2; refraction (Igehy 1999, the
+    normal's own change left out) α = n_i/n_t, ∂β = −(α + α² cos θ_i / (T·N))."""
+    for k in range(2):
+        ex, ey, ez = dif[2 * k + 1, 0], dif[2 * k + 1, 1], dif[2 * k + 1, 2]
+        dn = dbeta * (ex * nx + ey * ny + ez * nz)
+        rays[row, DIFF + 6 * k] = dp[k, 0]
+        rays[row, DIFF + 6 * k + 1] = dp[k, 1]
+        rays[row, DIFF + 6 * k + 2] = dp[k, 2]
+        rays[row, DIFF + 6 * k + 3] = alpha * ex + dn * nx
+        rays[row, DIFF + 6 * k + 4] = alpha * ey + dn * ny
+        rays[row, DIFF + 6 * k + 5] = alpha * ez + dn * nz
+
+
+@njit(cache=True)
 def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, ambient, halfway,
           background, shadows, max_depth, epsilon, fresnel, medium, offset, rays, scaled,
-          surface_row, eye, stack, counts):
-    """The colour (unclamped RGB) of one primary ray: the whole ray tree, depth first."""
+          surface_row, eye, stack, counts, tex, textured, filter_, bump, diff0, work):
+    """The colour (unclamped RGB) of one primary ray: the whole ray tree, depth first.
+
+    With ``textured`` every ray carries its differentials (``diff0``: the primary ray's), so
+    that a texture is filtered over the pixel's footprint where the ray lands."""
     r_sum, g_sum, b_sum = 0.0, 0.0, 0.0
+    dif, dp, duv, surf = work
     top = _push(rays, 0, ox, oy, oz, dx, dy, dz, t_min, t_max, 1.0, 1, PRIMARY)
+    if textured:
+        for c in range(12):
+            rays[0, DIFF + c] = diff0[c]
     while top > 0:
         top -= 1
         ox, oy, oz, dx, dy, dz = rays[top, 0], rays[top, 1], rays[top, 2], rays[top, 3], rays[top, 4], rays[top, 5]
@@ -236,6 +339,12 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
             continue
         px, py, pz, nx, ny, nz, gx, gy, gz, s = surface_at(packed, kind, index, u, v,
                                                            ox, oy, oz, dx, dy, dz, t)
+        if textured:
+            for c in range(12):
+                dif[c // 3, c % 3] = rays[top, DIFF + c]
+            transfer(dif, t, dx, dy, dz, gx, gy, gz, dp)
+            if has_maps(tex, kind, s):
+                uv_derivatives(packed, tex, index, dp, duv)
         # The viewer of this hit: the primary eye (the PRP or the parallel DOP) for primary
         # rays, exactly as the z-buffer's shading sees it; the ray's origin for the others.
         if ray_kind == PRIMARY:
@@ -251,7 +360,8 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
             lnx, lny, lnz = -nx, -ny, -nz
         r, g, b = local_colour(packed, kind, index, s, px, py, pz, lnx, lny, lnz, gx, gy, gz,
                                lights, ambient, eye, halfway, shadows, background, offset,
-                               scaled, surface_row, stack, counts)
+                               scaled, surface_row, stack, counts, tex, filter_, bump, u, v,
+                               duv, surf)
         r_sum += weight * r
         g_sum += weight * g
         b_sum += weight * b
@@ -282,6 +392,12 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
                 k_r, k_t = k_r + share * k_t, (1.0 - share) * k_t
             if k_t > 0.0:
                 if weight * k_t >= epsilon:
+                    if textured:
+                        alpha = n_i / n_t
+                        cos_i = -(fx * dx + fy * dy + fz * dz)
+                        t_dot_n = fx * tx + fy * ty + fz * tz
+                        dbeta = -(alpha + alpha * alpha * cos_i / t_dot_n) if t_dot_n != 0.0 else 0.0
+                        _push_differentials(rays, top, dp, dif, fx, fy, fz, alpha, dbeta)
                     top = _push(rays, top, px - offset * gx, py - offset * gy, pz - offset * gz,
                                 tx, ty, tz, 0.0, np.inf, weight * k_t, depth + 1, REFRACTED)
                 else:
@@ -289,6 +405,8 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
         if k_r > 0.0:
             if weight * k_r >= epsilon:
                 rx, ry, rz = optics.reflect(dx, dy, dz, fx, fy, fz)
+                if textured:
+                    _push_differentials(rays, top, dp, dif, fx, fy, fz, 1.0, -2.0)
                 top = _push(rays, top, px + offset * gx, py + offset * gy, pz + offset * gz,
                             rx, ry, rz, 0.0, np.inf, weight * k_r, depth + 1, REFLECTED)
             else:
@@ -299,20 +417,34 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
 CHUNK = 512     # rays per parallel work item (dealt to the threads by bvh.spread)
 
 
+@njit(cache=True)
+def scratch(packed):
+    """Per-thread work arrays of :func:`trace`: a ray's differentials, its hit point's, the
+    (u, v) derivatives, and a copy of the surfaces for a texel's O_d."""
+    return (np.zeros((4, 3)), np.zeros((2, 3)), np.zeros(4), packed.surfaces.copy())
+
+
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, ambient, halfway,
-               background, shadows, max_depth, epsilon, fresnel, medium, offset, raw, counts):
-    """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``."""
+               background, shadows, max_depth, epsilon, fresnel, medium, offset, raw, counts,
+               tex, textured, filter_, bump, differentials):
+    """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``;
+    ``differentials`` ``(N, 12)`` (used when ``textured``)."""
     n = origins.shape[0]
     chunks = (n + CHUNK - 1) // CHUNK
     for j in prange(chunks):
         chunk = bvh.spread(j, chunks)
-        rays = np.empty((2 * max_depth + 2, 11))
+        rays = np.empty((2 * max_depth + 2, RAY_COLUMNS + 12))
         scaled = np.empty(lights.shape)
         surface_row = np.empty((1, packed.surfaces.shape[1]))
         eye = np.empty(4)
         stack = np.empty(bvh.STACK, dtype=np.int64)
+        work = scratch(packed)
+        none = np.zeros(12)
         for i in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
+            diff0 = none
+            if textured:
+                diff0 = differentials[i]
             if not t_min[i] < t_max[i]:          # outside the viewport or the F..B slab
                 raw[i, 0], raw[i, 1], raw[i, 2] = background[0], background[1], background[2]
                 continue
@@ -320,7 +452,8 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
                             directions[i, 0], directions[i, 1], directions[i, 2], t_min[i],
                             t_max[i], primary_eye, lights, ambient, halfway, background, shadows,
                             max_depth, epsilon, fresnel, medium, offset, rays, scaled,
-                            surface_row, eye, stack, counts[chunk])
+                            surface_row, eye, stack, counts[chunk], tex, textured, filter_,
+                            bump, diff0, work)
             raw[i, 0], raw[i, 1], raw[i, 2] = r, g, b
 
 
