@@ -284,6 +284,16 @@ def uv_derivatives(packed, tex, index, dp, duv):
 
 RAY_COLUMNS = 11               # origin, direction, t_min, t_max, weight, depth, kind
 DIFF = RAY_COLUMNS             # then the ray differentials ∂O/∂x, ∂D/∂x, ∂O/∂y, ∂D/∂y (12)
+PARENT = DIFF + 12             # then the ray tree record of the ray that spawned it
+STACK_COLUMNS = PARENT + 1
+# Columns of a ray tree record (trace's ``tree``, for the pixel inspector): the ray's kind,
+# depth, origin, direction, parent record (-1: none), what it hit (NOTHING / TRIANGLE /
+# SPHERE / PLANE) and where (t), the surface row, I_local (the background for a miss), the
+# weight, the hit point, the normal the children were spawned about, the geometric normal.
+(TREE_KIND, TREE_DEPTH, TREE_ORIGIN, TREE_DIRECTION, TREE_PARENT, TREE_HIT, TREE_T, TREE_SURFACE,
+ TREE_LOCAL, TREE_WEIGHT, TREE_POINT, TREE_NORMAL, TREE_GEOMETRIC) = (
+    0, 1, 2, 5, 8, 9, 10, 11, 12, 15, 16, 19, 22)
+TREE_COLUMNS = 25
 
 
 @njit(cache=True)
@@ -314,14 +324,18 @@ def _push_differentials(rays, row, dp, dif, nx, ny, nz, alpha, dbeta):
 @njit(cache=True)
 def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, ambient, halfway,
           background, shadows, max_depth, epsilon, fresnel, medium, offset, rays, scaled,
-          surface_row, eye, stack, counts, tex, textured, filter_, bump, diff0, work):
+          surface_row, eye, stack, counts, tex, textured, filter_, bump, diff0, work, tree):
     """The colour (unclamped RGB) of one primary ray: the whole ray tree, depth first.
 
     With ``textured`` every ray carries its differentials (``diff0``: the primary ray's), so
-    that a texture is filtered over the pixel's footprint where the ray lands."""
+    that a texture is filtered over the pixel's footprint where the ray lands. ``tree``
+    ``(R, TREE_COLUMNS)``: where to record the first R rays of the tree (the pixel
+    inspector's; zero rows when tracing a frame); returns the count recorded too."""
     r_sum, g_sum, b_sum = 0.0, 0.0, 0.0
     dif, dp, duv, surf = work
+    recorded = 0
     top = _push(rays, 0, ox, oy, oz, dx, dy, dz, t_min, t_max, 1.0, 1, PRIMARY)
+    rays[0, PARENT] = -1.0
     if textured:
         for c in range(12):
             rays[0, DIFF + c] = diff0[c]
@@ -332,6 +346,10 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
         depth, ray_kind = int(rays[top, 9]), int(rays[top, 10])
         counts[ray_kind] += 1
         kind, index, t, u, v = nearest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
+        node = recorded
+        if node < tree.shape[0]:
+            _record(tree, node, rays[top], kind, t, background[0], background[1], background[2])
+            recorded += 1
         if kind == NOTHING:                  # the ray leaves the scene: the background
             r_sum += weight * background[0]
             g_sum += weight * background[1]
@@ -365,6 +383,13 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
         r_sum += weight * r
         g_sum += weight * g
         b_sum += weight * b
+        if node < tree.shape[0]:
+            tree[node, TREE_SURFACE] = s
+            tree[node, TREE_LOCAL], tree[node, TREE_LOCAL + 1], tree[node, TREE_LOCAL + 2] = r, g, b
+            tree[node, TREE_POINT], tree[node, TREE_POINT + 1], tree[node, TREE_POINT + 2] = px, py, pz
+            tree[node, TREE_NORMAL], tree[node, TREE_NORMAL + 1], tree[node, TREE_NORMAL + 2] = nx, ny, nz
+            tree[node, TREE_GEOMETRIC] = gx
+            tree[node, TREE_GEOMETRIC + 1], tree[node, TREE_GEOMETRIC + 2] = gy, gz
         k_r, k_t = packed.optics[s, 0], packed.optics[s, 1]
         if k_r == 0.0 and k_t == 0.0:
             continue
@@ -400,6 +425,7 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
                         _push_differentials(rays, top, dp, dif, fx, fy, fz, alpha, dbeta)
                     top = _push(rays, top, px - offset * gx, py - offset * gy, pz - offset * gz,
                                 tx, ty, tz, 0.0, np.inf, weight * k_t, depth + 1, REFRACTED)
+                    rays[top - 1, PARENT] = node
                 else:
                     counts[CUT_ADAPTIVE] += 1
         if k_r > 0.0:
@@ -409,9 +435,24 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
                     _push_differentials(rays, top, dp, dif, fx, fy, fz, 1.0, -2.0)
                 top = _push(rays, top, px + offset * gx, py + offset * gy, pz + offset * gz,
                             rx, ry, rz, 0.0, np.inf, weight * k_r, depth + 1, REFLECTED)
+                rays[top - 1, PARENT] = node
             else:
                 counts[CUT_ADAPTIVE] += 1
-    return r_sum, g_sum, b_sum
+    return r_sum, g_sum, b_sum, recorded
+
+
+@njit(cache=True)
+def _record(tree, node, ray, kind, t, r, g, b):
+    """A ray's row of the ray tree: what it is, and (for now) that it missed."""
+    tree[node, :] = 0.0
+    tree[node, TREE_KIND], tree[node, TREE_DEPTH] = ray[10], ray[9]
+    for c in range(3):
+        tree[node, TREE_ORIGIN + c] = ray[c]
+        tree[node, TREE_DIRECTION + c] = ray[3 + c]
+    tree[node, TREE_PARENT] = ray[PARENT]
+    tree[node, TREE_HIT], tree[node, TREE_T], tree[node, TREE_SURFACE] = kind, t, -1.0
+    tree[node, TREE_LOCAL], tree[node, TREE_LOCAL + 1], tree[node, TREE_LOCAL + 2] = r, g, b
+    tree[node, TREE_WEIGHT] = ray[8]
 
 
 CHUNK = 512     # rays per parallel work item (dealt to the threads by bvh.spread)
@@ -434,7 +475,8 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
     chunks = (n + CHUNK - 1) // CHUNK
     for j in prange(chunks):
         chunk = bvh.spread(j, chunks)
-        rays = np.empty((2 * max_depth + 2, RAY_COLUMNS + 12))
+        rays = np.empty((2 * max_depth + 2, STACK_COLUMNS))
+        no_tree = np.empty((0, TREE_COLUMNS))
         scaled = np.empty(lights.shape)
         surface_row = np.empty((1, packed.surfaces.shape[1]))
         eye = np.empty(4)
@@ -448,12 +490,12 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
             if not t_min[i] < t_max[i]:          # outside the viewport or the F..B slab
                 raw[i, 0], raw[i, 1], raw[i, 2] = background[0], background[1], background[2]
                 continue
-            r, g, b = trace(packed, origins[i, 0], origins[i, 1], origins[i, 2],
+            r, g, b, _ = trace(packed, origins[i, 0], origins[i, 1], origins[i, 2],
                             directions[i, 0], directions[i, 1], directions[i, 2], t_min[i],
                             t_max[i], primary_eye, lights, ambient, halfway, background, shadows,
                             max_depth, epsilon, fresnel, medium, offset, rays, scaled,
                             surface_row, eye, stack, counts[chunk], tex, textured, filter_,
-                            bump, diff0, work)
+                            bump, diff0, work, no_tree)
             raw[i, 0], raw[i, 1], raw[i, 2] = r, g, b
 
 
