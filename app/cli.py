@@ -150,19 +150,54 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--renderer", choices=renderer_names(), default=None,
                         help="zbuffer (default), raycast, or raytrace (Whitted: shadows, "
                              "mirrors, glass)")
-    parser.add_argument("--samples", type=int, default=None, help="samples per pixel (1, 4, 9, 16 ...)")
+    parser.add_argument("--samples", type=_samples, default=None,
+                        help="samples per pixel (1, 4, 9, 16 ...), or 'adaptive' (raytrace: "
+                             "Whitted's adaptive supersampling, up to 16 a pixel, or up to "
+                             "--samples-max)")
     parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
                         help="raytrace: what an object between a point and a light does "
                              "(default transmit: attenuate by k_t)")
     parser.add_argument("--max-depth", type=int, default=None,
                         help="raytrace: the ray tree's depth limit (default 7)")
-    parser.add_argument("--fresnel", action="store_true", default=None,
-                        help="raytrace: Schlick's Fresnel weighting of k_r and k_t")
+    parser.add_argument("--fresnel", nargs="?", const="schlick", default=None,
+                        choices=("schlick", "exact"),
+                        help="raytrace: Fresnel weighting of k_r and k_t, Schlick's "
+                             "approximation (the default form) or the exact equations")
+    # issue 20
+    parser.add_argument("--samples-max", type=int, default=None, metavar="N",
+                        help="raytrace, --samples adaptive: the most samples a pixel gets "
+                             "(4, 16, 64 or 256; default 16)")
+    parser.add_argument("--adaptive-threshold", type=float, default=None, metavar="T",
+                        help="raytrace, --samples adaptive: split a pixel whose corners differ "
+                             "by more than T (0-1, any channel; default 0.1)")
+    parser.add_argument("--attenuation", type=float, nargs=2, default=None,
+                        metavar=("C1", "C2"),
+                        help="raytrace: attenuate a secondary ray's light by "
+                             "1 / (1 + C1 R + C2 R^2) over its length R (default off)")
+
+
+def _samples(text: str):
+    """``--samples``: a whole number, or ``adaptive``."""
+    if text == "adaptive":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"samples must be a whole number or 'adaptive', "
+                                         f"not {text!r}") from None
 
 
 def _renderer_overrides(args) -> dict:
-    return {"renderer": args.renderer, "samples": args.samples, "shadows": args.shadows,
-            "max_depth": args.max_depth, "fresnel": args.fresnel}
+    adaptive = args.samples == "adaptive"
+    samples = (args.samples_max or 16) if adaptive else args.samples
+    return {"renderer": args.renderer, "samples": samples, "shadows": args.shadows,
+            "max_depth": args.max_depth,
+            "fresnel": None if args.fresnel is None else True,
+            "fresnel_form": args.fresnel,
+            "sample_pattern": "adaptive" if adaptive else None,
+            "adaptive_threshold": args.adaptive_threshold,
+            "secondary_attenuation": (tuple(args.attenuation) if args.attenuation is not None
+                                      else None)}
 
 
 def _crease_argument(parser: argparse.ArgumentParser) -> None:

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.camera.view import View, check
-from core.raytrace import camera, geometry, whitted
+from core.raytrace import adaptive, camera, geometry, whitted
 from core.raytrace.optics import AIR, index_of_refraction
 from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
@@ -40,6 +40,15 @@ class TraceOptions:
     medium: float = AIR
     texture_filter: str = "trilinear"      # the z-buffer's filters (core.texture.sample)
     bump: bool = True
+    fresnel_form: str = "schlick"          # with fresnel: "schlick" | "exact"
+    secondary_attenuation: tuple = (0.0, 0.0)   # C1, C2 of 1 / (1 + C1 R + C2 R²); off
+
+    @property
+    def fresnel_code(self) -> int:
+        if not self.fresnel:
+            return whitted.FRESNEL_OFF
+        return (whitted.FRESNEL_EXACT if self.fresnel_form == "exact"
+                else whitted.FRESNEL_SCHLICK)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_depth, int) and 1 <= self.max_depth <= MAX_DEPTH_LIMIT):
@@ -56,7 +65,8 @@ class TraceOptions:
 
     @classmethod
     def from_settings(cls, settings) -> "TraceOptions":
-        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel", "texture_filter", "bump")
+        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel", "texture_filter", "bump",
+                 "fresnel_form", "secondary_attenuation")
         return cls(**{n: getattr(settings, n) for n in names if hasattr(settings, n)})
 
 
@@ -79,6 +89,7 @@ class Setup:
     counts: np.ndarray           # (7,) rays of each kind so far (whitted.COUNTERS)
     keep_aspect: bool = False    # letterbox the window (else stretch it: the course's mapping)
     not_drawn: tuple = ()        # what the scene has that the tracer leaves out, in words
+    adaptive: tuple | None = None  # (levels, threshold): adaptive supersampling (adaptive.py)
 
 
 def prepare(scene, view: View, projection: str, size: tuple[int, int],
@@ -140,18 +151,21 @@ def trace_rays(setup: Setup, origins, directions, t_min, t_max,
                        np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
                        np.ascontiguousarray(t_max), setup.eye, setup.lights, setup.ambient,
                        setup.halfway, setup.background, whitted.SHADOW_MODES.index(o.shadows),
-                       o.max_depth, float(o.adaptive_epsilon), bool(o.fresnel), o.medium,
+                       o.max_depth, float(o.adaptive_epsilon), o.fresnel_code, o.medium,
                        offset, raw, counts, setup.packing.texturing, textured,
                        FILTERS[o.texture_filter], bool(o.bump),
-                       np.ascontiguousarray(differentials, dtype=np.float64))
+                       np.ascontiguousarray(differentials, dtype=np.float64),
+                       np.array(o.secondary_attenuation, dtype=np.float64))
     setup.counts += counts.sum(axis=0)
     return raw
 
 
-def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int):
-    """Primary rays of a tile, sample-major then row-major, and their [F, B] intervals."""
+def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int, offsets=None):
+    """Primary rays of a tile, sample-major then row-major, and their [F, B] intervals
+    (``offsets``: the samples in each pixel, default the setup's)."""
     origins, directions, inside = camera.tile_rays(
-        setup.view, setup.projection, setup.width, setup.height, setup.offsets,
+        setup.view, setup.projection, setup.width, setup.height,
+        setup.offsets if offsets is None else offsets,
         rows=(row0, row1), cols=(col0, col1), keep_aspect=setup.keep_aspect)
     perspective = setup.projection == "perspective"
     t_min, t_max = camera.clip_interval(setup.view, origins, directions, from_origin=perspective)
@@ -164,12 +178,15 @@ def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int):
     return origins, directions, t_min, t_max
 
 
-def differentials(setup: Setup, row0: int, row1: int, col0: int, col1: int) -> np.ndarray:
+def differentials(setup: Setup, row0: int, row1: int, col0: int, col1: int,
+                  offsets=None) -> np.ndarray:
     """``(N, 12)`` the primary rays' differentials per pixel, by the rays one pixel right
     and one pixel down (in the order of :func:`primary`)."""
+    offsets = setup.offsets if offsets is None else offsets
+
     def rays(shift):
         o, d, _ = camera.tile_rays(setup.view, setup.projection, setup.width, setup.height,
-                                   setup.offsets + shift, rows=(row0, row1), cols=(col0, col1),
+                                   offsets + shift, rows=(row0, row1), cols=(col0, col1),
                                    keep_aspect=setup.keep_aspect)
         return o, d
     o, d = rays(np.zeros(2))
@@ -197,7 +214,19 @@ def tiles(width: int, height: int, tile: int = 32) -> list[tuple[int, int, int, 
 
 def render_raw(setup: Setup) -> np.ndarray:
     """The whole frame, ``(H, W, 3)`` unclamped float colours, row 0 at the top."""
+    if setup.adaptive is not None:
+        levels, threshold = setup.adaptive
+        return adaptive.render_adaptive(lambda points: trace_points(setup, points),
+                                        setup.width, setup.height, levels, threshold)
     return trace_tile(setup, 0, setup.height, 0, setup.width)
+
+
+def trace_points(setup: Setup, points: np.ndarray) -> np.ndarray:
+    """Colours ``(N, 3)`` of the primary rays through ``points`` (pixels from the picture's
+    top-left corner, x right, y down)."""
+    origins, directions, t_min, t_max = primary(setup, 0, 1, 0, 1, points)
+    diffs = differentials(setup, 0, 1, 0, 1, points) if setup.packing.textured else None
+    return trace_rays(setup, origins, directions, t_min, t_max, diffs)
 
 
 def stats_of(setup: Setup, seconds: float) -> dict:
@@ -211,11 +240,15 @@ def stats_of(setup: Setup, seconds: float) -> dict:
 
 def render_image(scene, view: View, projection: str, size: tuple[int, int],
                  options: TraceOptions = TraceOptions(), samples: int = 1,
-                 pattern: str = "regular", seed: int = 0, keep_aspect: bool = False
-                 ) -> tuple[np.ndarray, np.ndarray, dict]:
-    """``(uint8 image (H, W, 3), raw float image, stats)`` of ``view`` of ``scene``."""
+                 pattern: str = "regular", seed: int = 0, keep_aspect: bool = False,
+                 threshold: float = 0.1) -> tuple[np.ndarray, np.ndarray, dict]:
+    """``(uint8 image (H, W, 3), raw float image, stats)`` of ``view`` of ``scene``
+    (``pattern = "adaptive"``: up to ``samples`` a pixel where corners differ by more than
+    ``threshold``)."""
     offsets = sample_offsets(samples, pattern, seed)
     setup = prepare(scene, view, projection, size, options, offsets, keep_aspect)
+    if pattern == "adaptive":
+        setup.adaptive = (adaptive.levels_for(samples), threshold)
     start = time.perf_counter()
     raw = render_raw(setup)
     return to_uint8(raw), raw, stats_of(setup, time.perf_counter() - start)
@@ -230,6 +263,8 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
                    if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
         setup = prepare(scene, view, settings.projection, settings.size, options, offsets,
                         settings.keep_aspect)
+        if settings.sample_pattern == "adaptive":
+            setup.adaptive = (adaptive.levels_for(settings.samples), settings.adaptive_threshold)
     except ValueError as error:              # a setting or a material the tracer cannot use
         frame.color[...] = to_uint8(scene.background)
         frame.message = f"{scene.name}: cannot ray trace: {error}"
@@ -243,7 +278,9 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
     start = time.perf_counter()
     frame.color[...] = to_uint8(render_raw(setup))
     frame.stats.update(stats_of(setup, time.perf_counter() - start))
-    frame.stats["samples per pixel"] = len(offsets)
+    frame.stats["samples per pixel"] = (
+        setup.counts[whitted.PRIMARY] / (setup.width * setup.height) if setup.adaptive
+        else len(offsets))
     frame.stats["computed"].append("ray tracing")
     if timer is not None:
         timer.lap("ray trace")
@@ -306,10 +343,11 @@ def _trace_one(setup: Setup, origin, direction, t_min, t_max, diff, tree):
         packed, *map(float, origin), *map(float, direction), float(t_min), float(t_max),
         setup.eye, setup.lights, setup.ambient, setup.halfway, setup.background,
         whitted.SHADOW_MODES.index(o.shadows), o.max_depth, float(o.adaptive_epsilon),
-        bool(o.fresnel), o.medium, 1e-9 * setup.packing.scale, rays, np.empty(setup.lights.shape),
+        o.fresnel_code, o.medium, 1e-9 * setup.packing.scale, rays, np.empty(setup.lights.shape),
         np.empty((1, packed.surfaces.shape[1])), np.empty(4), np.empty(64, dtype=np.int64),
         counts, setup.packing.texturing, setup.packing.textured, FILTERS[o.texture_filter],
-        bool(o.bump), np.ascontiguousarray(diff), whitted.scratch(packed), tree)
+        bool(o.bump), np.ascontiguousarray(diff), whitted.scratch(packed), tree,
+        np.array(o.secondary_attenuation, dtype=np.float64))
     setup.counts += counts
     return np.array([r, g, b]), recorded
 

@@ -285,7 +285,11 @@ def uv_derivatives(packed, tex, index, dp, duv):
 RAY_COLUMNS = 11               # origin, direction, t_min, t_max, weight, depth, kind
 DIFF = RAY_COLUMNS             # then the ray differentials ∂O/∂x, ∂D/∂x, ∂O/∂y, ∂D/∂y (12)
 PARENT = DIFF + 12             # then the ray tree record of the ray that spawned it
-STACK_COLUMNS = PARENT + 1
+INTERNAL = PARENT + 1          # then the total internal reflections in a row that led to it
+STACK_COLUMNS = INTERNAL + 1
+MAX_INTERNAL = 64              # total internal reflections in a row a ray tree follows
+FRESNEL_OFF, FRESNEL_SCHLICK, FRESNEL_EXACT = 0, 1, 2
+FRESNEL_FORMS = ("schlick", "exact")
 # Columns of a ray tree record (trace's ``tree``, for the pixel inspector): the ray's kind,
 # depth, origin, direction, parent record (-1: none), what it hit (NOTHING / TRIANGLE /
 # SPHERE / PLANE) and where (t), the surface row, I_local (the background for a miss), the
@@ -324,7 +328,8 @@ def _push_differentials(rays, row, dp, dif, nx, ny, nz, alpha, dbeta):
 @njit(cache=True)
 def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, ambient, halfway,
           background, shadows, max_depth, epsilon, fresnel, medium, offset, rays, scaled,
-          surface_row, eye, stack, counts, tex, textured, filter_, bump, diff0, work, tree):
+          surface_row, eye, stack, counts, tex, textured, filter_, bump, diff0, work, tree,
+          attenuation):
     """The colour (unclamped RGB) of one primary ray: the whole ray tree, depth first.
 
     With ``textured`` every ray carries its differentials (``diff0``: the primary ray's), so
@@ -335,7 +340,7 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
     dif, dp, duv, surf = work
     recorded = 0
     top = _push(rays, 0, ox, oy, oz, dx, dy, dz, t_min, t_max, 1.0, 1, PRIMARY)
-    rays[0, PARENT] = -1.0
+    rays[0, PARENT], rays[0, INTERNAL] = -1.0, 0.0
     if textured:
         for c in range(12):
             rays[0, DIFF + c] = diff0[c]
@@ -346,6 +351,13 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
         depth, ray_kind = int(rays[top, 9]), int(rays[top, 10])
         counts[ray_kind] += 1
         kind, index, t, u, v = nearest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
+        if ray_kind != PRIMARY and kind != NOTHING and (attenuation[0] > 0.0
+                                                         or attenuation[1] > 0.0):
+            # the notes' attenuation of a secondary ray's light over the distance R it
+            # travelled, 1 / (1 + C1 R + C2 R²): its children inherit it, so the adaptive
+            # cut-off (weight < epsilon) prunes the tree sooner
+            weight /= 1.0 + attenuation[0] * t + attenuation[1] * t * t
+            rays[top, 8] = weight
         node = recorded
         if node < tree.shape[0]:
             _record(tree, node, rays[top], kind, t, background[0], background[1], background[2])
@@ -393,49 +405,72 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
         k_r, k_t = packed.optics[s, 0], packed.optics[s, 1]
         if k_r == 0.0 and k_t == 0.0:
             continue
-        if depth >= max_depth:
-            counts[CUT_DEPTH] += 1
-            continue
-        # Normals facing the incoming ray: geometric (for the offsets) and shading.
+        # Normals facing the incoming ray: geometric (for the offsets and the sides) and
+        # shading (for the directions). A shading normal turned away from the ray's side of
+        # the face (an interpolated normal near a silhouette) is replaced by the face's.
         if not entering:
             gx, gy, gz = -gx, -gy, -gz
         fx, fy, fz = nx, ny, nz
         if fx * dx + fy * dy + fz * dz > 0.0:
             fx, fy, fz = -fx, -fy, -fz
-        if fx * gx + fy * gy + fz * gz <= 0.0:   # the interpolated normal disagrees: use the face's
+        if fx * gx + fy * gy + fz * gz <= 0.0:
             fx, fy, fz = gx, gy, gz
+        tir = False
         if k_t > 0.0:
             n_i, n_t = (medium, packed.optics[s, 2]) if entering else (packed.optics[s, 2], medium)
             ok, tx, ty, tz = optics.refract(dx, dy, dz, fx, fy, fz, n_i, n_t)
+            if ok and tx * gx + ty * gy + tz * gz >= 0.0:
+                # bent about the shading normal, T would leave on the side it came from: the
+                # geometric normal decides which side is which, so refract about the face's
+                fx, fy, fz = gx, gy, gz
+                ok, tx, ty, tz = optics.refract(dx, dy, dz, fx, fy, fz, n_i, n_t)
             if not ok:                         # total internal reflection
                 counts[TIR] += 1
+                tir = True
                 k_r, k_t = k_r + k_t, 0.0
-            elif fresnel:
+            elif fresnel > 0:
                 cos_i = -(fx * dx + fy * dy + fz * dz)
                 cos_t = -(fx * tx + fy * ty + fz * tz)
-                share = optics.schlick(cos_i, cos_t, n_i, n_t)
+                share = (optics.schlick(cos_i, cos_t, n_i, n_t) if fresnel == FRESNEL_SCHLICK
+                         else optics.fresnel_exact(cos_i, cos_t, n_i, n_t))
                 k_r, k_t = k_r + share * k_t, (1.0 - share) * k_t
-            if k_t > 0.0:
-                if weight * k_t >= epsilon:
-                    if textured:
-                        alpha = n_i / n_t
-                        cos_i = -(fx * dx + fy * dy + fz * dz)
-                        t_dot_n = fx * tx + fy * ty + fz * tz
-                        dbeta = -(alpha + alpha * alpha * cos_i / t_dot_n) if t_dot_n != 0.0 else 0.0
-                        _push_differentials(rays, top, dp, dif, fx, fy, fz, alpha, dbeta)
-                    top = _push(rays, top, px - offset * gx, py - offset * gy, pz - offset * gz,
-                                tx, ty, tz, 0.0, np.inf, weight * k_t, depth + 1, REFRACTED)
-                    rays[top - 1, PARENT] = node
-                else:
-                    counts[CUT_ADAPTIVE] += 1
+        # The ray tree's depth: the notes' limit on splitting. A total internal reflection
+        # does not split the ray (one child, all of the light), so it does not deepen the tree;
+        # MAX_INTERNAL such bounces in a row end it (and the weight's decay, by epsilon).
+        internal = int(rays[top, INTERNAL])
+        if tir and internal < MAX_INTERNAL:
+            child_depth, child_internal = depth, internal + 1
+        elif depth >= max_depth or tir:
+            counts[CUT_DEPTH] += 1
+            continue
+        else:
+            child_depth, child_internal = depth + 1, 0
+        if k_t > 0.0:
+            if weight * k_t >= epsilon:
+                if textured:
+                    alpha = n_i / n_t
+                    cos_i = -(fx * dx + fy * dy + fz * dz)
+                    t_dot_n = fx * tx + fy * ty + fz * tz
+                    dbeta = -(alpha + alpha * alpha * cos_i / t_dot_n) if t_dot_n != 0.0 else 0.0
+                    _push_differentials(rays, top, dp, dif, fx, fy, fz, alpha, dbeta)
+                top = _push(rays, top, px - offset * gx, py - offset * gy, pz - offset * gz,
+                            tx, ty, tz, 0.0, np.inf, weight * k_t, child_depth, REFRACTED)
+                rays[top - 1, PARENT], rays[top - 1, INTERNAL] = node, child_internal
+            else:
+                counts[CUT_ADAPTIVE] += 1
         if k_r > 0.0:
             if weight * k_r >= epsilon:
                 rx, ry, rz = optics.reflect(dx, dy, dz, fx, fy, fz)
+                if rx * gx + ry * gy + rz * gz <= 0.0:
+                    # mirrored about the shading normal, R would enter the surface: mirror it
+                    # about the face's normal, whose side the offset is on
+                    fx, fy, fz = gx, gy, gz
+                    rx, ry, rz = optics.reflect(dx, dy, dz, fx, fy, fz)
                 if textured:
                     _push_differentials(rays, top, dp, dif, fx, fy, fz, 1.0, -2.0)
                 top = _push(rays, top, px + offset * gx, py + offset * gy, pz + offset * gz,
-                            rx, ry, rz, 0.0, np.inf, weight * k_r, depth + 1, REFLECTED)
-                rays[top - 1, PARENT] = node
+                            rx, ry, rz, 0.0, np.inf, weight * k_r, child_depth, REFLECTED)
+                rays[top - 1, PARENT], rays[top - 1, INTERNAL] = node, child_internal
             else:
                 counts[CUT_ADAPTIVE] += 1
     return r_sum, g_sum, b_sum, recorded
@@ -468,7 +503,7 @@ def scratch(packed):
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, ambient, halfway,
                background, shadows, max_depth, epsilon, fresnel, medium, offset, raw, counts,
-               tex, textured, filter_, bump, differentials):
+               tex, textured, filter_, bump, differentials, attenuation):
     """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``;
     ``differentials`` ``(N, 12)`` (used when ``textured``)."""
     n = origins.shape[0]
@@ -495,7 +530,7 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
                             t_max[i], primary_eye, lights, ambient, halfway, background, shadows,
                             max_depth, epsilon, fresnel, medium, offset, rays, scaled,
                             surface_row, eye, stack, counts[chunk], tex, textured, filter_,
-                            bump, diff0, work, no_tree)
+                            bump, diff0, work, no_tree, attenuation)
             raw[i, 0], raw[i, 1], raw[i, 2] = r, g, b
 
 
