@@ -110,6 +110,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     _renderer_arguments(r)                    # issue 12
     _buffer_argument(r)
     _cluster_arguments(r)                     # scale-out
+    _crease_argument(r)                       # issue 20
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -156,14 +157,41 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--renderer", choices=renderer_names(), default=None,
                         help="zbuffer (default), raycast, or raytrace (Whitted: shadows, "
                              "mirrors, glass)")
-    parser.add_argument("--samples", type=int, default=None, help="samples per pixel (1, 4, 9, 16 ...)")
+    parser.add_argument("--samples", type=_samples, default=None,
+                        help="samples per pixel (1, 4, 9, 16 ...), or 'adaptive' (raytrace: "
+                             "Whitted's adaptive supersampling, up to 16 a pixel, or up to "
+                             "--samples-max)")
     parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
                         help="raytrace: what an object between a point and a light does "
                              "(default transmit: attenuate by k_t)")
     parser.add_argument("--max-depth", type=int, default=None,
                         help="raytrace: the ray tree's depth limit (default 7)")
-    parser.add_argument("--fresnel", action="store_true", default=None,
-                        help="raytrace: Schlick's Fresnel weighting of k_r and k_t")
+    parser.add_argument("--fresnel", nargs="?", const="schlick", default=None,
+                        choices=("schlick", "exact"),
+                        help="raytrace: Fresnel weighting of k_r and k_t, Schlick's "
+                             "approximation (the default form) or the exact equations")
+    # issue 20
+    parser.add_argument("--samples-max", type=int, default=None, metavar="N",
+                        help="raytrace, --samples adaptive: the most samples a pixel gets "
+                             "(4, 16, 64 or 256; default 16)")
+    parser.add_argument("--adaptive-threshold", type=float, default=None, metavar="T",
+                        help="raytrace, --samples adaptive: split a pixel whose corners differ "
+                             "by more than T (0-1, any channel; default 0.1)")
+    parser.add_argument("--attenuation", type=float, nargs=2, default=None,
+                        metavar=("C1", "C2"),
+                        help="raytrace: attenuate a secondary ray's light by "
+                             "1 / (1 + C1 R + C2 R^2) over its length R (default off)")
+
+
+def _samples(text: str):
+    """``--samples``: a whole number, or ``adaptive``."""
+    if text == "adaptive":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"samples must be a whole number or 'adaptive', "
+                                         f"not {text!r}") from None
 
 
 def _cluster_arguments(parser: argparse.ArgumentParser) -> None:
@@ -198,8 +226,23 @@ def _split(args, settings):
 
 
 def _renderer_overrides(args) -> dict:
-    return {"renderer": args.renderer, "samples": args.samples, "shadows": args.shadows,
-            "max_depth": args.max_depth, "fresnel": args.fresnel}
+    adaptive = args.samples == "adaptive"
+    samples = (args.samples_max or 16) if adaptive else args.samples
+    return {"renderer": args.renderer, "samples": samples, "shadows": args.shadows,
+            "max_depth": args.max_depth,
+            "fresnel": None if args.fresnel is None else True,
+            "fresnel_form": args.fresnel,
+            "sample_pattern": "adaptive" if adaptive else None,
+            "adaptive_threshold": args.adaptive_threshold,
+            "secondary_attenuation": (tuple(args.attenuation) if args.attenuation is not None
+                                      else None)}
+
+
+def _crease_argument(parser: argparse.ArgumentParser) -> None:
+    """--crease-angle (issue 20): where meshes without normals of their own keep sharp edges."""
+    parser.add_argument("--crease-angle", type=float, default=None, metavar="DEGREES",
+                        help="faces meeting at more than this keep their own normals along "
+                             "the edge (default: the scene's crease_angle, else 45)")
 
 
 def _course_options(p: argparse.ArgumentParser) -> None:
@@ -252,11 +295,11 @@ def views_on_stdin() -> bool:
     return stat.S_ISREG(mode) or stat.S_ISFIFO(mode) or stat.S_ISSOCK(mode)
 
 
-def _load(source: str, size=None):
+def _load(source: str, size=None, crease_angle=None):
     """The scene, or None after printing the reader's message."""
     from core.scene.formats import ReaderError, load_scene
     try:
-        scene = load_scene(source, size=size)
+        scene = load_scene(source, size=size, crease_angle=crease_angle)
     except ReaderError as error:
         print(f"error: {error}", file=sys.stderr)
         return None
@@ -355,7 +398,7 @@ def _render(args) -> int:
         return 2
     if args.out is not None and _refused(args.out, args):
         return 2
-    scene = _load(args.scene, size=args.size)
+    scene = _load(args.scene, size=args.size, crease_angle=args.crease_angle)
     if scene is None:
         return 2
     index = _pick_view(scene, args.view)
@@ -411,6 +454,8 @@ def _render(args) -> int:
     if frame.message:                    # a view only the other projection can draw
         print(f"error: {frame.message}", file=sys.stderr)
         return 2
+    for note in frame.stats.get("not drawn", []):           # issue 20: said, never dropped
+        print(f"warning: not drawn: {note}", file=sys.stderr)
     out = Path(args.out)
     try:
         write_png(frame.color, out)

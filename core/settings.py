@@ -38,7 +38,8 @@ class Shading(str, Enum):
 PROJECTIONS = tuple(p.value for p in Projection)
 SHADINGS = tuple(s.value for s in Shading)
 SOLID_SHADINGS = SHADINGS[1:]          # the modes that fill triangles
-SAMPLE_PATTERNS = ("regular", "jittered")
+SAMPLE_PATTERNS = ("regular", "jittered", "adaptive")   # adaptive: the ray tracer's (issue 20)
+FRESNEL_FORMS = ("schlick", "exact")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace")   # a scene file's `renderer` (core.renderers)
@@ -77,6 +78,14 @@ class RenderSettings:
     adaptive_epsilon: float = 1e-3
     shadows: str = "transmit"
     fresnel: bool = False
+    # Issue 20 (the ray tracer's): which Fresnel weighting ``fresnel`` turns on (Schlick's
+    # approximation or the exact equations); the notes' attenuation 1 / (1 + C1 R + C2 R²) of
+    # a secondary ray's light over its length R, (C1, C2), off at (0, 0); and adaptive
+    # supersampling's colour threshold (Whitted 1980: a pixel whose corner samples differ by
+    # more, in any channel on 0-1, is split, down to ``samples`` samples a pixel).
+    fresnel_form: str = "schlick"
+    secondary_attenuation: tuple[float, float] = (0.0, 0.0)
+    adaptive_threshold: float = 0.1
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
@@ -97,6 +106,20 @@ class RenderSettings:
             raise ValueError(f"samples per pixel: {self.samples} is not a square; the regular "
                              f"grid takes 1, 4, 9, 16, … (the nearest are {side * side} and "
                              f"{(side + 1) ** 2})")
+        if self.sample_pattern == "adaptive" and self.samples not in (1, 4, 16, 64, 256):
+            raise ValueError(f"adaptive supersampling splits a pixel in four at each level: "
+                             f"its most samples must be 4, 16, 64 or 256, not {self.samples}")
+        if self.fresnel_form not in FRESNEL_FORMS:
+            raise ValueError(f"fresnel must be one of {', '.join(FRESNEL_FORMS)}, "
+                             f"not {self.fresnel_form!r}")
+        c1, c2 = (float(c) for c in self.secondary_attenuation)
+        if not (0.0 <= c1 < float("inf") and 0.0 <= c2 < float("inf")):
+            raise ValueError(f"the secondary rays' attenuation C1, C2 must be finite and >= 0, "
+                             f"not {self.secondary_attenuation!r}")
+        if not (0.0 <= float(self.adaptive_threshold) <= 1.0):
+            raise ValueError(f"the adaptive threshold must be from 0 to 1, "
+                             f"not {self.adaptive_threshold!r}")
+        object.__setattr__(self, "secondary_attenuation", (c1, c2))
         object.__setattr__(self, "projection", str(self.projection))
         object.__setattr__(self, "shading", str(self.shading))
         object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))

@@ -731,6 +731,8 @@ class ViewerWindow:
             extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))
         if extras:
             imgui.text(", ".join(extras))
+        for note in (s.frame.stats.get("not drawn", []) if s.frame is not None else []):
+            imgui.text_colored(displayable(f"not drawn: {note}"), 1.0, 0.7, 0.3)   # issue 20
         if s.bump_label:
             imgui.text_colored(displayable(s.bump_label), 0.6, 0.7, 1.0)
             imgui.text_disabled("left click: bump / Phong; other buttons: next map")

@@ -154,7 +154,21 @@ class Animation:
         lights = [self._light_at(i, light, t) for i, light in enumerate(base.lights)]
         view = self.view_at(t)
         views = ([view] if view is not None else []) + list(base.views)
-        return dataclasses.replace(base, meshes=meshes, lights=lights, views=views)
+        # A keyed sphere or plane is moved and recoloured with its tessellation (issue 20:
+        # the ray tracer intersects the primitive, so it must move too).
+        moved = {}
+        for i, (old, new) in enumerate(zip(base.meshes, meshes)):
+            if old.tessellates is None or new is old:
+                continue
+            if id(old.tessellates) not in moved:     # a checkered plane has two meshes
+                tracks = self.objects.get(i)
+                moved[id(old.tessellates)] = moved_primitive(
+                    old, tracks.matrix(t) if tracks is not None else None,
+                    new.material if i in self.colors else None)
+            meshes[i] = dataclasses.replace(new, tessellates=moved[id(old.tessellates)])
+        primitives = [moved.get(id(p), p) for p in base.primitives]
+        return dataclasses.replace(base, meshes=meshes, lights=lights, views=views,
+                                   primitives=primitives)
 
     def _mesh_at(self, i: int, mesh: Mesh, t: float) -> Mesh:
         tracks, color = self.objects.get(i), self.colors.get(i)
@@ -200,3 +214,23 @@ class Animation:
             return None
         from core.animation.particles import sprites_of
         return sprites_of(system, system.state_at(self.local_time(t)))
+
+
+def moved_primitive(mesh: Mesh, m, material):
+    """``mesh.tessellates`` moved by the 4 x 4 matrix ``m`` (None: not moved) and, where the
+    mesh's material is the primitive's own, recoloured to ``material`` (None: kept). A
+    sphere's radius scales by the cube root of the matrix's volume factor (keys scale
+    uniformly); a plane's point moves and its normal turns by the inverse transpose."""
+    from core.scene.primitives import Plane, Sphere
+    primitive = mesh.tessellates
+    changes = {}
+    if material is not None and mesh.material is primitive.material:
+        changes["material"] = material
+    if m is not None and isinstance(primitive, Sphere):
+        changes["center"] = tuple(float(c) for c in apply(m, np.array([primitive.center]))[0, :3])
+        changes["radius"] = primitive.radius * abs(np.linalg.det(m[:3, :3])) ** (1.0 / 3.0)
+    elif m is not None and isinstance(primitive, Plane):
+        normal = np.linalg.solve(m[:3, :3].T, np.asarray(primitive.normal, dtype=np.float64))
+        changes["point"] = tuple(float(c) for c in apply(m, np.array([primitive.point]))[0, :3])
+        changes["normal"] = tuple(float(c) for c in normal / np.linalg.norm(normal))
+    return dataclasses.replace(primitive, **changes) if changes else primitive

@@ -32,6 +32,10 @@ def sample_offsets(samples: int, pattern: str = "regular", seed: int = 0) -> np.
         raise ValueError(f"samples per pixel must be at least 1, not {samples}")
     if samples == 1:
         return np.array([[0.5, 0.5]])        # one sample is the centre, whatever the pattern
+    if pattern == "adaptive":
+        # Adaptive supersampling is the ray tracer's (core.raytrace.adaptive); a renderer
+        # that cannot adapt takes every sample of the finest grid.
+        pattern = "regular"
     side = grid_side(samples)
     if pattern == "regular" and side * side != samples:
         raise ValueError(f"a regular grid needs a square number of samples (1, 4, 9, 16, …), "

@@ -263,6 +263,27 @@ def build(positions: np.ndarray, triangles: np.ndarray) -> tuple[BVH, BuildRepor
     return bvh, BuildReport(len(order), len(box), leaves, int(depth), seconds, size)
 
 
+class BoxTree(NamedTuple):
+    """A BVH over boxes of anything (the analytic spheres): the same nodes as :class:`BVH`,
+    a leaf's items ``item[first[k] .. first[k] + count[k] − 1]`` (rows of the caller's table)."""
+
+    box: np.ndarray
+    first: np.ndarray
+    count: np.ndarray
+    item: np.ndarray
+
+
+def build_boxes(lo: np.ndarray, hi: np.ndarray) -> BoxTree:
+    """The tree over items with boxes ``lo``, ``hi`` ``(N, 3)`` (same binned SAH as :func:`build`)."""
+    lo = np.ascontiguousarray(lo, dtype=np.float64).reshape(-1, 3)
+    hi = np.ascontiguousarray(hi, dtype=np.float64).reshape(-1, 3)
+    if len(lo) == 0:
+        box = np.array([[np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf]])
+        return BoxTree(box, np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64))
+    box, first, count, index, _ = _build(lo, hi, (lo + hi) * 0.5)
+    return BoxTree(box, first, count, index.astype(np.int64))
+
+
 # --------------------------------------------------------------------------------------------
 # Traversal
 
@@ -433,3 +454,36 @@ def occluded_rays(bvh: BVH, origins, directions, t_min=0.0, t_max=np.inf) -> np.
     hit = np.empty(n, np.bool_)
     occluded_many(bvh, origins, directions, lo, hi, hit)
     return hit
+
+
+@njit(cache=True)
+def closest_sphere(box, first, count, item, spheres, ox, oy, oz, dx, dy, dz, t_min, t_max,
+                   stack):
+    """``(row, t)`` of the nearest sphere (rows ``cx, cy, cz, r, …``) a :class:`BoxTree`
+    holds, hit in ``(t_min, t_max)``; ``(-1, inf)`` when none is."""
+    best, best_t = -1, t_max
+    if item.shape[0] == 0:
+        return -1, np.inf
+    ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
+    stack[0] = 0
+    top = 1
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if _box_entry(box, node, ox, oy, oz, ix, iy, iz, best_t) == np.inf:
+            continue
+        n = count[node]
+        if n > 0:
+            for k in range(first[node], first[node] + n):
+                i = item[k]
+                t = intersect.sphere(ox, oy, oz, dx, dy, dz, spheres[i, 0], spheres[i, 1],
+                                     spheres[i, 2], spheres[i, 3], t_min, best_t)
+                if t < best_t:
+                    best, best_t = i, t
+            continue
+        stack[top] = first[node] + 1
+        stack[top + 1] = first[node]
+        top += 2
+    if best < 0:
+        return -1, np.inf
+    return best, best_t

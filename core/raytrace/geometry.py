@@ -7,6 +7,8 @@ analytic spheres and planes as rows, and one material row per surface.
 - Vertex normals are :func:`core.scene.normals.vertex_normals` with the notes' "mean"
   weighting — the ones the z-buffer's Phong shading interpolates — so that a ray-traced pixel
   and a rasterized one evaluate the model with the same normal.
+- Spheres have a BVH of their own over their boxes (``sphere_*``), so 10,000 of them cost a
+  ray a few box tests, not 10,000 quadratics.
 - Surfaces: ``pack_surfaces`` rows (the Phong model's, shared with the z-buffer), meshes first,
   then spheres, then planes; ``optics`` ``(M, 3)``: ``k_r, k_t, ior``; ``checker`` ``(M, 4)``:
   square side (0: plain) and the second colour.
@@ -55,6 +57,24 @@ class Packed(NamedTuple):
     surfaces: np.ndarray       # (M, 11) the Phong model's rows
     optics: np.ndarray         # (M, 3) k_r, k_t, ior
     checker: np.ndarray        # (M, 4) side, colour
+    # The spheres' own BVH (bvh.BoxTree over their boxes): a ray tests O(log S) of them.
+    sphere_box: np.ndarray
+    sphere_first: np.ndarray
+    sphere_count: np.ndarray
+    sphere_item: np.ndarray
+
+
+class Texturing(NamedTuple):
+    """The z-buffer's texture data for the traced meshes (:mod:`core.texture.surface`):
+    ``attrs`` ``(V, 14)`` the varyings (normal, position, (u, v), ∂P/∂u, ∂P/∂v) of every
+    vertex, ``maps`` ``(M, 7)`` each surface's textures (−1: none; spheres and planes have
+    none), and the packed texels, levels and texture table."""
+
+    attrs: np.ndarray
+    maps: np.ndarray
+    texels: np.ndarray
+    levels: np.ndarray
+    textures: np.ndarray
 
 
 class Packing(NamedTuple):
@@ -62,6 +82,8 @@ class Packing(NamedTuple):
     build: bvh_module.BuildReport
     scale: float               # the size of the scene's bounded part (for ray offsets)
     seconds: float
+    texturing: Texturing       # what the textured meshes need (maps all −1 when none is)
+    textured: bool             # any surface has a texture, bump, normal or environment map
 
 
 _cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
@@ -149,9 +171,31 @@ def _pack(meshes, spheres, planes) -> Packing:
         plane_rows[i, 11], plane_rows[i, 12] = e1 @ p.point, e2 @ p.point   # checker origin
 
     scale = _scale(positions, sphere_rows, plane_rows)
+    sphere_tree = bvh_module.build_boxes(sphere_rows[:, :3] - sphere_rows[:, 3:4],
+                                         sphere_rows[:, :3] + sphere_rows[:, 3:4])
     packed = Packed(*tree, corners, np.ascontiguousarray(normals, dtype=np.float64), face_surface,
-                    sphere_rows, plane_rows, surfaces, optics, checker)
-    return Packing(packed, report, scale, time.perf_counter() - start)
+                    sphere_rows, plane_rows, surfaces, optics, checker, *sphere_tree)
+    texturing = _texturing(meshes, len(materials), positions, normals)
+    textured = bool(np.any(texturing.maps[:, :4] >= 0))
+    return Packing(packed, report, scale, time.perf_counter() - start, texturing, textured)
+
+
+def _texturing(meshes, surfaces: int, positions, normals) -> Texturing:
+    """The textured meshes' varyings and maps, packed as the z-buffer's textured shader packs
+    them (the same filters then sample the same texels)."""
+    from core.texture.material import maps_of
+    from core.texture.shaders import _mesh_varyings
+    from core.texture.surface import VARYING_COLUMNS, pack_maps
+    all_maps = [maps_of(m.material) for m in meshes]
+    usable = [m if m is not None and m.demo is None else None for m in all_maps]
+    if not any(m is not None for m in usable):
+        maps = np.full((surfaces, 7), -1.0)
+        return Texturing(np.zeros((0, VARYING_COLUMNS)), maps, np.zeros((1, 4), np.float32),
+                         np.array([[0, 1, 1]], np.int64), np.zeros((0, 3), np.int64))
+    texels, levels, textures, rows = pack_maps(usable + [None] * (surfaces - len(meshes)))
+    varyings = np.concatenate([_mesh_varyings(m) for m in meshes])
+    attrs = np.ascontiguousarray(np.concatenate([normals, positions, varyings], axis=1))
+    return Texturing(attrs, rows, texels, levels, textures)
 
 
 def _scale(positions, spheres, planes) -> float:

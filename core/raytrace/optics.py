@@ -17,6 +17,9 @@ surface) and ``N`` the unit normal on the side the ray comes from (``N·I < 0``)
   leaving the denser medium). The "beyond the notes" option: with it a surface with ``k_t``
   reflects ``k_r + F k_t`` and transmits ``(1 − F) k_t``, so ``k_r + k_t`` is kept.
 
+- Exact (``--fresnel exact``): the Fresnel equations for unpolarised light,
+  ``F = (R_s + R_p) / 2`` (:func:`fresnel_exact`); Schlick's form approximates it.
+
 Named indices of refraction (the notes): :data:`INDICES`.
 """
 
@@ -89,3 +92,20 @@ def schlick(cos_i, cos_t, n_i, n_t):
     f0 = ((n_i - n_t) / (n_i + n_t)) ** 2
     c = cos_i if n_i <= n_t else cos_t                 # the angle in the rarer medium
     return f0 + (1.0 - f0) * (1.0 - c) ** 5
+
+
+@njit(cache=True)
+def fresnel_exact(cos_i, cos_t, n_i, n_t):
+    """The Fresnel equations' reflected fraction for unpolarised light (the mean of the s- and
+    p-polarised reflectances), what outside renderers use::
+
+        R_s = ((n_i cos θ_i − n_t cos θ_t) / (n_i cos θ_i + n_t cos θ_t))²
+        R_p = ((n_i cos θ_t − n_t cos θ_i) / (n_i cos θ_t + n_t cos θ_i))²
+    """
+    s_den = n_i * cos_i + n_t * cos_t
+    p_den = n_i * cos_t + n_t * cos_i
+    if s_den == 0.0 or p_den == 0.0:
+        return 1.0
+    r_s = ((n_i * cos_i - n_t * cos_t) / s_den) ** 2
+    r_p = ((n_i * cos_t - n_t * cos_i) / p_den) ** 2
+    return 0.5 * (r_s + r_p)

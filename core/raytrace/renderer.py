@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.camera.view import View, check
-from core.raytrace import camera, geometry, whitted
+from core.raytrace import adaptive, camera, geometry, whitted
 from core.raytrace.optics import AIR, index_of_refraction
 from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
@@ -38,6 +38,17 @@ class TraceOptions:
     shadows: str = "transmit"
     fresnel: bool = False
     medium: float = AIR
+    texture_filter: str = "trilinear"      # the z-buffer's filters (core.texture.sample)
+    bump: bool = True
+    fresnel_form: str = "schlick"          # with fresnel: "schlick" | "exact"
+    secondary_attenuation: tuple = (0.0, 0.0)   # C1, C2 of 1 / (1 + C1 R + C2 R²); off
+
+    @property
+    def fresnel_code(self) -> int:
+        if not self.fresnel:
+            return whitted.FRESNEL_OFF
+        return (whitted.FRESNEL_EXACT if self.fresnel_form == "exact"
+                else whitted.FRESNEL_SCHLICK)
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_depth, int) and 1 <= self.max_depth <= MAX_DEPTH_LIMIT):
@@ -54,7 +65,8 @@ class TraceOptions:
 
     @classmethod
     def from_settings(cls, settings) -> "TraceOptions":
-        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel")
+        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel", "texture_filter", "bump",
+                 "fresnel_form", "secondary_attenuation")
         return cls(**{n: getattr(settings, n) for n in names if hasattr(settings, n)})
 
 
@@ -76,6 +88,8 @@ class Setup:
     options: TraceOptions
     counts: np.ndarray           # (7,) rays of each kind so far (whitted.COUNTERS)
     keep_aspect: bool = False    # letterbox the window (else stretch it: the course's mapping)
+    not_drawn: tuple = ()        # what the scene has that the tracer leaves out, in words
+    adaptive: tuple | None = None  # (levels, threshold): adaptive supersampling (adaptive.py)
 
 
 def prepare(scene, view: View, projection: str, size: tuple[int, int],
@@ -95,13 +109,40 @@ def prepare(scene, view: View, projection: str, size: tuple[int, int],
                  halfway=scene.specular == "halfway",
                  background=np.asarray(scene.background, dtype=np.float64).reshape(3),
                  options=options, counts=np.zeros(len(whitted.COUNTERS), dtype=np.int64),
-                 keep_aspect=bool(keep_aspect))
+                 keep_aspect=bool(keep_aspect), not_drawn=not_drawn(scene))
 
 
-def trace_rays(setup: Setup, origins, directions, t_min, t_max) -> np.ndarray:
-    """Colours ``(N, 3)`` (unclamped) of primary rays; adds their ray counts to ``setup``."""
+def not_drawn(scene) -> tuple:
+    """What of ``scene`` the tracer cannot draw, one sentence each (shown with the frame's
+    stats and in the window's panel, never silently dropped)."""
+    notes = []
+    lines = [m.name for m in scene.meshes if len(m.edges) and not len(m.triangles)]
+    if lines:
+        notes.append(f"line edges ({', '.join(lines)}): drawn by the z-buffer only")
+    from core.texture.material import maps_of
+    demo = [m.name for m in scene.meshes if getattr(maps_of(m.material), "demo", None)]
+    if demo:
+        notes.append(f"the bump demo's material ({', '.join(demo)}): drawn by the z-buffer only")
+    mapped = sorted({m.name for m in scene.meshes if m.tessellates is not None
+                     and maps_of(m.material) is not None})
+    if mapped:
+        notes.append(f"texture maps on analytic primitives ({', '.join(mapped)}): the traced "
+                     f"sphere or plane has no (u, v)")
+    return tuple(notes)
+
+
+def trace_rays(setup: Setup, origins, directions, t_min, t_max,
+               differentials=None) -> np.ndarray:
+    """Colours ``(N, 3)`` (unclamped) of primary rays; adds their ray counts to ``setup``.
+
+    ``differentials`` ``(N, 12)``: ∂O/∂x, ∂D/∂x, ∂O/∂y, ∂D/∂y per pixel of each ray, for the
+    texture footprint (None: a point sample, the finest level)."""
+    from core.texture.sample import FILTERS
     o = setup.options
     n = len(origins)
+    textured = setup.packing.textured
+    if differentials is None:
+        differentials = np.zeros((n if textured else 0, 12))
     raw = np.empty((n, 3))
     counts = np.zeros(((n + whitted.CHUNK - 1) // whitted.CHUNK, len(whitted.COUNTERS)),
                       dtype=np.int64)
@@ -110,16 +151,21 @@ def trace_rays(setup: Setup, origins, directions, t_min, t_max) -> np.ndarray:
                        np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
                        np.ascontiguousarray(t_max), setup.eye, setup.lights, setup.ambient,
                        setup.halfway, setup.background, whitted.SHADOW_MODES.index(o.shadows),
-                       o.max_depth, float(o.adaptive_epsilon), bool(o.fresnel), o.medium,
-                       offset, raw, counts)
+                       o.max_depth, float(o.adaptive_epsilon), o.fresnel_code, o.medium,
+                       offset, raw, counts, setup.packing.texturing, textured,
+                       FILTERS[o.texture_filter], bool(o.bump),
+                       np.ascontiguousarray(differentials, dtype=np.float64),
+                       np.array(o.secondary_attenuation, dtype=np.float64))
     setup.counts += counts.sum(axis=0)
     return raw
 
 
-def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int):
-    """Primary rays of a tile, sample-major then row-major, and their [F, B] intervals."""
+def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int, offsets=None):
+    """Primary rays of a tile, sample-major then row-major, and their [F, B] intervals
+    (``offsets``: the samples in each pixel, default the setup's)."""
     origins, directions, inside = camera.tile_rays(
-        setup.view, setup.projection, setup.width, setup.height, setup.offsets,
+        setup.view, setup.projection, setup.width, setup.height,
+        setup.offsets if offsets is None else offsets,
         rows=(row0, row1), cols=(col0, col1), keep_aspect=setup.keep_aspect)
     perspective = setup.projection == "perspective"
     t_min, t_max = camera.clip_interval(setup.view, origins, directions, from_origin=perspective)
@@ -132,10 +178,28 @@ def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int):
     return origins, directions, t_min, t_max
 
 
+def differentials(setup: Setup, row0: int, row1: int, col0: int, col1: int,
+                  offsets=None) -> np.ndarray:
+    """``(N, 12)`` the primary rays' differentials per pixel, by the rays one pixel right
+    and one pixel down (in the order of :func:`primary`)."""
+    offsets = setup.offsets if offsets is None else offsets
+
+    def rays(shift):
+        o, d, _ = camera.tile_rays(setup.view, setup.projection, setup.width, setup.height,
+                                   offsets + shift, rows=(row0, row1), cols=(col0, col1),
+                                   keep_aspect=setup.keep_aspect)
+        return o, d
+    o, d = rays(np.zeros(2))
+    ox, dx = rays(np.array([1.0, 0.0]))
+    oy, dy = rays(np.array([0.0, 1.0]))
+    return np.concatenate([ox - o, dx - d, oy - o, dy - d], axis=1)
+
+
 def trace_tile(setup: Setup, row0: int, row1: int, col0: int, col1: int) -> np.ndarray:
     """The box-filtered, unclamped colour ``(row1 − row0, col1 − col0, 3)`` of a tile."""
     origins, directions, t_min, t_max = primary(setup, row0, row1, col0, col1)
-    raw = trace_rays(setup, origins, directions, t_min, t_max)
+    diffs = (differentials(setup, row0, row1, col0, col1) if setup.packing.textured else None)
+    raw = trace_rays(setup, origins, directions, t_min, t_max, diffs)
     return raw.reshape(len(setup.offsets), row1 - row0, col1 - col0, 3).mean(axis=0)
 
 
@@ -150,7 +214,19 @@ def tiles(width: int, height: int, tile: int = 32) -> list[tuple[int, int, int, 
 
 def render_raw(setup: Setup) -> np.ndarray:
     """The whole frame, ``(H, W, 3)`` unclamped float colours, row 0 at the top."""
+    if setup.adaptive is not None:
+        levels, threshold = setup.adaptive
+        return adaptive.render_adaptive(lambda points: trace_points(setup, points),
+                                        setup.width, setup.height, levels, threshold)
     return trace_tile(setup, 0, setup.height, 0, setup.width)
+
+
+def trace_points(setup: Setup, points: np.ndarray) -> np.ndarray:
+    """Colours ``(N, 3)`` of the primary rays through ``points`` (pixels from the picture's
+    top-left corner, x right, y down)."""
+    origins, directions, t_min, t_max = primary(setup, 0, 1, 0, 1, points)
+    diffs = differentials(setup, 0, 1, 0, 1, points) if setup.packing.textured else None
+    return trace_rays(setup, origins, directions, t_min, t_max, diffs)
 
 
 def stats_of(setup: Setup, seconds: float) -> dict:
@@ -158,16 +234,21 @@ def stats_of(setup: Setup, seconds: float) -> dict:
     rays = {name: int(c) for name, c in zip(whitted.COUNTERS, setup.counts)}
     return {"rays": rays, "bvh": {"triangles": b.triangles, "nodes": b.nodes, "depth": b.depth,
                                   "build ms": b.seconds * 1e3, "bytes": b.bytes},
-            "trace ms": seconds * 1e3, "renderer": "raytrace"}
+            "trace ms": seconds * 1e3, "renderer": "raytrace",
+            "not drawn": list(setup.not_drawn)}
 
 
 def render_image(scene, view: View, projection: str, size: tuple[int, int],
                  options: TraceOptions = TraceOptions(), samples: int = 1,
-                 pattern: str = "regular", seed: int = 0, keep_aspect: bool = False
-                 ) -> tuple[np.ndarray, np.ndarray, dict]:
-    """``(uint8 image (H, W, 3), raw float image, stats)`` of ``view`` of ``scene``."""
+                 pattern: str = "regular", seed: int = 0, keep_aspect: bool = False,
+                 threshold: float = 0.1) -> tuple[np.ndarray, np.ndarray, dict]:
+    """``(uint8 image (H, W, 3), raw float image, stats)`` of ``view`` of ``scene``
+    (``pattern = "adaptive"``: up to ``samples`` a pixel where corners differ by more than
+    ``threshold``)."""
     offsets = sample_offsets(samples, pattern, seed)
     setup = prepare(scene, view, projection, size, options, offsets, keep_aspect)
+    if pattern == "adaptive":
+        setup.adaptive = (adaptive.levels_for(samples), threshold)
     start = time.perf_counter()
     raw = render_raw(setup)
     return to_uint8(raw), raw, stats_of(setup, time.perf_counter() - start)
@@ -182,6 +263,8 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
                    if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
         setup = prepare(scene, view, settings.projection, settings.size, options, offsets,
                         settings.keep_aspect)
+        if settings.sample_pattern == "adaptive":
+            setup.adaptive = (adaptive.levels_for(settings.samples), settings.adaptive_threshold)
     except ValueError as error:              # a setting or a material the tracer cannot use
         frame.color[...] = to_uint8(scene.background)
         frame.message = f"{scene.name}: cannot ray trace: {error}"
@@ -195,7 +278,107 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
     start = time.perf_counter()
     frame.color[...] = to_uint8(render_raw(setup))
     frame.stats.update(stats_of(setup, time.perf_counter() - start))
-    frame.stats["samples per pixel"] = len(offsets)
+    frame.stats["samples per pixel"] = (
+        setup.counts[whitted.PRIMARY] / (setup.width * setup.height) if setup.adaptive
+        else len(offsets))
     frame.stats["computed"].append("ray tracing")
     if timer is not None:
         timer.lap("ray trace")
+
+
+# ------------------------------------------------------------------ the pixel inspector
+
+RAY_KINDS = ("primary", "shadow", "reflected", "refracted")
+HIT_KINDS = {whitted.NOTHING: "nothing", whitted.TRIANGLE: "triangle", whitted.SPHERE: "sphere",
+             whitted.PLANE: "plane"}
+MAX_TREE = 4096            # rays recorded per sample at most
+
+
+def frame_offsets(settings) -> np.ndarray:
+    """The sample offsets ``draw`` uses for ``settings``."""
+    if settings.samples > 1:
+        return sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
+    return np.array([settings.pixel_offset], dtype=np.float64)
+
+
+def inspect_pixel(scene, view: View, settings, x: int, y: int, context=None) -> dict:
+    """The ray tree of pixel ``(x, y)`` (x right, y down, row 0 at the top), sample by sample:
+    each ray's kind, origin, direction, what it hit, the material, ``I_local``, its weight and
+    its contribution ``weight · I_local``; the contributions of a sample's tree sum to that
+    sample's colour, and the samples' mean is the pixel (``color``, 0–255, as ``draw`` writes
+    it). Raises ValueError for a pixel outside the picture."""
+    width, height = settings.size
+    if not (0 <= x < width and 0 <= y < height):
+        raise ValueError(f"pixel ({x}, {y}) is outside the {width} x {height} picture")
+    options = TraceOptions.from_settings(settings)
+    setup = prepare(scene, view, settings.projection, settings.size, options,
+                    frame_offsets(settings), settings.keep_aspect)
+    origins, directions, t_min, t_max = primary(setup, y, y + 1, x, x + 1)
+    diffs = differentials(setup, y, y + 1, x, x + 1)
+    samples, total = [], np.zeros(3)
+    for k in range(len(origins)):
+        tree = np.zeros((MAX_TREE, whitted.TREE_COLUMNS))
+        colour, recorded = _trace_one(setup, origins[k], directions[k], t_min[k], t_max[k],
+                                      diffs[k], tree)
+        total += colour
+        samples.append({"offset": [float(c) for c in setup.offsets[k]],
+                        "color": [float(c) for c in colour],
+                        "rays": [_ray_record(scene, setup, row) for row in tree[:recorded]]})
+    mean = total / len(origins)
+    return {"renderer": "raytrace", "pixel": [int(x), int(y)],
+            "color": [int(c) for c in to_uint8(mean)], "raw": [float(c) for c in mean],
+            "samples": samples, "counts": {n: int(c) for n, c in zip(whitted.COUNTERS,
+                                                                      setup.counts)}}
+
+
+def _trace_one(setup: Setup, origin, direction, t_min, t_max, diff, tree):
+    """One primary ray through the kernel's own :func:`whitted.trace`, recording its tree."""
+    from core.texture.sample import FILTERS
+    o, packed = setup.options, setup.packing.packed
+    if not t_min < t_max:
+        return np.array(setup.background), 0
+    rays = np.empty((2 * o.max_depth + 2, whitted.STACK_COLUMNS))
+    counts = np.zeros(len(whitted.COUNTERS), dtype=np.int64)
+    r, g, b, recorded = whitted.trace(
+        packed, *map(float, origin), *map(float, direction), float(t_min), float(t_max),
+        setup.eye, setup.lights, setup.ambient, setup.halfway, setup.background,
+        whitted.SHADOW_MODES.index(o.shadows), o.max_depth, float(o.adaptive_epsilon),
+        o.fresnel_code, o.medium, 1e-9 * setup.packing.scale, rays, np.empty(setup.lights.shape),
+        np.empty((1, packed.surfaces.shape[1])), np.empty(4), np.empty(64, dtype=np.int64),
+        counts, setup.packing.texturing, setup.packing.textured, FILTERS[o.texture_filter],
+        bool(o.bump), np.ascontiguousarray(diff), whitted.scratch(packed), tree,
+        np.array(o.secondary_attenuation, dtype=np.float64))
+    setup.counts += counts
+    return np.array([r, g, b]), recorded
+
+
+def _ray_record(scene, setup: Setup, row) -> dict:
+    w = whitted
+    hit = int(row[w.TREE_HIT])
+    local = row[w.TREE_LOCAL:w.TREE_LOCAL + 3]
+    weight = float(row[w.TREE_WEIGHT])
+    record = {"kind": RAY_KINDS[int(row[w.TREE_KIND])], "depth": int(row[w.TREE_DEPTH]),
+              "parent": int(row[w.TREE_PARENT]),
+              "origin": row[w.TREE_ORIGIN:w.TREE_ORIGIN + 3].tolist(),
+              "direction": row[w.TREE_DIRECTION:w.TREE_DIRECTION + 3].tolist(),
+              "hit": HIT_KINDS[hit], "weight": weight, "local": local.tolist(),
+              "contribution": (weight * local).tolist()}
+    if hit != w.NOTHING:
+        s = int(row[w.TREE_SURFACE])
+        record.update({"t": float(row[w.TREE_T]), "material": _material_name(scene, s),
+                       "point": row[w.TREE_POINT:w.TREE_POINT + 3].tolist(),
+                       "normal": row[w.TREE_NORMAL:w.TREE_NORMAL + 3].tolist(),
+                       "geometric normal": row[w.TREE_GEOMETRIC:w.TREE_GEOMETRIC + 3].tolist(),
+                       "kr kt ior": setup.packing.packed.optics[s].tolist()})
+    return record
+
+
+def _material_name(scene, s: int) -> str:
+    """The name of surface row ``s`` (meshes, then spheres, then planes, as packed)."""
+    meshes = geometry._traced_meshes(scene)
+    if s < len(meshes):
+        return f"mesh {meshes[s].name!r}"
+    spheres, planes = geometry._primitives(scene)
+    if s < len(meshes) + len(spheres):
+        return f"sphere {s - len(meshes) + 1}"
+    return f"plane {s - len(meshes) - len(spheres) + 1}"

@@ -43,6 +43,7 @@ import numpy as np
 from numba import njit, prange
 
 from core.raytrace import bvh, intersect, optics
+from core.texture.surface import UV, textured_at
 from core.shading.illumination import (EYE_DIRECTION, EYE_POINT, LIGHT_INTENSITY, OD, POINT_LIGHT,
                                        TWO_SIDED, phong_point, unit3)
 
@@ -64,12 +65,11 @@ def nearest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     k, t, u, v = bvh.closest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
     if k >= 0:
         kind, index, t_max = TRIANGLE, k, t
-    spheres = packed.spheres
-    for i in range(spheres.shape[0]):
-        t_s = intersect.sphere(ox, oy, oz, dx, dy, dz, spheres[i, 0], spheres[i, 1],
-                               spheres[i, 2], spheres[i, 3], t_min, t_max)
-        if t_s < t_max:
-            kind, index, t_max = SPHERE, i, t_s
+    i, t_s = bvh.closest_sphere(packed.sphere_box, packed.sphere_first, packed.sphere_count,
+                                packed.sphere_item, packed.spheres, ox, oy, oz, dx, dy, dz,
+                                t_min, t_max, stack)
+    if i >= 0:
+        kind, index, t_max = SPHERE, i, t_s
     planes = packed.planes
     for i in range(planes.shape[0]):
         t_p = intersect.plane(ox, oy, oz, dx, dy, dz, planes[i, 0], planes[i, 1], planes[i, 2],
@@ -173,12 +173,28 @@ def shadow_term(packed, mode, light, px, py, pz, background, offset, stack, coun
 
 
 @njit(cache=True)
+def has_maps(tex, kind, s):
+    """Does the hit surface carry a colour, bump, normal or environment map?"""
+    if kind != TRIANGLE:
+        return False
+    for c in range(4):
+        if tex.maps[s, c] >= 0.0:
+            return True
+    return False
+
+
+@njit(cache=True)
 def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights, ambient,
-                 eye, halfway, shadows, background, offset, scaled, surface_row, stack, counts):
-    """``I_local`` at P with each light's ``I_p`` scaled by its shadow term (Phong's model)."""
+                 eye, halfway, shadows, background, offset, scaled, surface_row, stack, counts,
+                 tex, filter_, bump, u, v, duv, surf):
+    """``I_local`` at P with each light's ``I_p`` scaled by its shadow term (Phong's model);
+    a textured triangle is shaded by the z-buffer's textured pixel step
+    (:func:`core.texture.surface.textured_at`) at barycentrics ``(u, v)`` with the (u, v)
+    derivatives ``duv`` of the ray's differentials."""
     checker_colour(packed, kind, index, s, px, py, pz, surface_row)
     if shadows == SHADOW_OFF or lights.shape[0] == 0:
-        return phong_point(px, py, pz, nx, ny, nz, 0, surface_row, lights, ambient, eye, halfway)
+        return _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, lights, ambient, eye,
+                      halfway, surface_row, tex, filter_, bump, u, v, duv, surf)
     # The side the viewer sees, as phong_point decides it: V towards the eye.
     if eye[0] == EYE_POINT:
         vx, vy, vz, _ = unit3(eye[1] - px, eye[2] - py, eye[3] - pz)
@@ -204,7 +220,84 @@ def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lig
         scaled[k, LIGHT_INTENSITY] *= s_r
         scaled[k, LIGHT_INTENSITY + 1] *= s_g
         scaled[k, LIGHT_INTENSITY + 2] *= s_b
-    return phong_point(px, py, pz, nx, ny, nz, 0, surface_row, scaled, ambient, eye, halfway)
+    return _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, scaled, ambient, eye, halfway,
+                  surface_row, tex, filter_, bump, u, v, duv, surf)
+
+
+@njit(cache=True)
+def _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, lights, ambient, eye, halfway,
+           surface_row, tex, filter_, bump, u, v, duv, surf):
+    if not has_maps(tex, kind, s):
+        return phong_point(px, py, pz, nx, ny, nz, 0, surface_row, lights, ambient, eye, halfway)
+    f = packed.prim[index]
+    i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
+    w0 = 1.0 - u - v
+    a = tex.attrs
+    tu = w0 * a[i0, UV] + u * a[i1, UV] + v * a[i2, UV]
+    tv = w0 * a[i0, UV + 1] + u * a[i1, UV + 1] + v * a[i2, UV + 1]
+    r, g, b = textured_at(a, i0, i1, i2, w0, u, v, tu, tv, duv[0], duv[1], duv[2], duv[3], s,
+                          tex.maps, tex.texels, tex.levels, tex.textures, filter_, bump, surf,
+                          lights, ambient, eye, halfway)
+    for c in range(3):                                  # textured_at wrote its texel's O_d
+        surf[s, OD + c] = packed.surfaces[s, OD + c]
+    return r, g, b
+
+
+@njit(cache=True)
+def transfer(dif, t, dx, dy, dz, gx, gy, gz, dp):
+    """Igehy's (1999) transfer of a ray's differentials to its hit at ``t`` on the plane of
+    normal G: ``dP = dO + t dD`` moved along D back onto the plane (rows of ``dp``: ∂P/∂x,
+    ∂P/∂y; rows of ``dif``: ∂O/∂x, ∂D/∂x, ∂O/∂y, ∂D/∂y, per pixel)."""
+    d_dot_g = dx * gx + dy * gy + dz * gz
+    for k in range(2):
+        ax = dif[2 * k, 0] + t * dif[2 * k + 1, 0]
+        ay = dif[2 * k, 1] + t * dif[2 * k + 1, 1]
+        az = dif[2 * k, 2] + t * dif[2 * k + 1, 2]
+        dt = -(ax * gx + ay * gy + az * gz) / d_dot_g if d_dot_g != 0.0 else 0.0
+        dp[k, 0], dp[k, 1], dp[k, 2] = ax + dt * dx, ay + dt * dy, az + dt * dz
+
+
+@njit(cache=True)
+def uv_derivatives(packed, tex, index, dp, duv):
+    """``duv`` = (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) of the texture coordinates on triangle
+    ``index`` (BVH order) from the point's derivatives ``dp``: ``dP = dβ₁ E1 + dβ₂ E2``
+    solved by least squares in the triangle's plane, then (u, v) interpolated."""
+    e1, e2 = packed.e1[index], packed.e2[index]
+    a = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]
+    b = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]
+    c = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]
+    det = a * c - b * b
+    f = packed.prim[index]
+    i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
+    at = tex.attrs
+    for k in range(2):
+        if not det > 0.0:
+            duv[2 * k], duv[2 * k + 1] = 0.0, 0.0
+            continue
+        r1 = e1[0] * dp[k, 0] + e1[1] * dp[k, 1] + e1[2] * dp[k, 2]
+        r2 = e2[0] * dp[k, 0] + e2[1] * dp[k, 1] + e2[2] * dp[k, 2]
+        db1, db2 = (c * r1 - b * r2) / det, (a * r2 - b * r1) / det
+        for m in range(2):
+            duv[2 * k + m] = (db1 * (at[i1, UV + m] - at[i0, UV + m])
+                              + db2 * (at[i2, UV + m] - at[i0, UV + m]))
+
+
+RAY_COLUMNS = 11               # origin, direction, t_min, t_max, weight, depth, kind
+DIFF = RAY_COLUMNS             # then the ray differentials ∂O/∂x, ∂D/∂x, ∂O/∂y, ∂D/∂y (12)
+PARENT = DIFF + 12             # then the ray tree record of the ray that spawned it
+INTERNAL = PARENT + 1          # then the total internal reflections in a row that led to it
+STACK_COLUMNS = INTERNAL + 1
+MAX_INTERNAL = 64              # total internal reflections in a row a ray tree follows
+FRESNEL_OFF, FRESNEL_SCHLICK, FRESNEL_EXACT = 0, 1, 2
+FRESNEL_FORMS = ("schlick", "exact")
+# Columns of a ray tree record (trace's ``tree``, for the pixel inspector): the ray's kind,
+# depth, origin, direction, parent record (-1: none), what it hit (NOTHING / TRIANGLE /
+# SPHERE / PLANE) and where (t), the surface row, I_local (the background for a miss), the
+# weight, the hit point, the normal the children were spawned about, the geometric normal.
+(TREE_KIND, TREE_DEPTH, TREE_ORIGIN, TREE_DIRECTION, TREE_PARENT, TREE_HIT, TREE_T, TREE_SURFACE,
+ TREE_LOCAL, TREE_WEIGHT, TREE_POINT, TREE_NORMAL, TREE_GEOMETRIC) = (
+    0, 1, 2, 5, 8, 9, 10, 11, 12, 15, 16, 19, 22)
+TREE_COLUMNS = 25
 
 
 @njit(cache=True)
@@ -217,12 +310,40 @@ def _push(rays, top, ox, oy, oz, dx, dy, dz, t_min, t_max, weight, depth, kind):
 
 
 @njit(cache=True)
+def _push_differentials(rays, row, dp, dif, nx, ny, nz, alpha, dbeta):
+    """A child ray's differentials: it starts at P (∂O = ∂P) and its direction changes as
+    ``∂D' = α ∂D + (∂β) (∂D·N) N`` — reflection α = 1, ∂β = −2; refraction (Igehy 1999, the
+    normal's own change left out) α = n_i/n_t, ∂β = −(α + α² cos θ_i / (T·N))."""
+    for k in range(2):
+        ex, ey, ez = dif[2 * k + 1, 0], dif[2 * k + 1, 1], dif[2 * k + 1, 2]
+        dn = dbeta * (ex * nx + ey * ny + ez * nz)
+        rays[row, DIFF + 6 * k] = dp[k, 0]
+        rays[row, DIFF + 6 * k + 1] = dp[k, 1]
+        rays[row, DIFF + 6 * k + 2] = dp[k, 2]
+        rays[row, DIFF + 6 * k + 3] = alpha * ex + dn * nx
+        rays[row, DIFF + 6 * k + 4] = alpha * ey + dn * ny
+        rays[row, DIFF + 6 * k + 5] = alpha * ez + dn * nz
+
+
+@njit(cache=True)
 def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, ambient, halfway,
           background, shadows, max_depth, epsilon, fresnel, medium, offset, rays, scaled,
-          surface_row, eye, stack, counts):
-    """The colour (unclamped RGB) of one primary ray: the whole ray tree, depth first."""
+          surface_row, eye, stack, counts, tex, textured, filter_, bump, diff0, work, tree,
+          attenuation):
+    """The colour (unclamped RGB) of one primary ray: the whole ray tree, depth first.
+
+    With ``textured`` every ray carries its differentials (``diff0``: the primary ray's), so
+    that a texture is filtered over the pixel's footprint where the ray lands. ``tree``
+    ``(R, TREE_COLUMNS)``: where to record the first R rays of the tree (the pixel
+    inspector's; zero rows when tracing a frame); returns the count recorded too."""
     r_sum, g_sum, b_sum = 0.0, 0.0, 0.0
+    dif, dp, duv, surf = work
+    recorded = 0
     top = _push(rays, 0, ox, oy, oz, dx, dy, dz, t_min, t_max, 1.0, 1, PRIMARY)
+    rays[0, PARENT], rays[0, INTERNAL] = -1.0, 0.0
+    if textured:
+        for c in range(12):
+            rays[0, DIFF + c] = diff0[c]
     while top > 0:
         top -= 1
         ox, oy, oz, dx, dy, dz = rays[top, 0], rays[top, 1], rays[top, 2], rays[top, 3], rays[top, 4], rays[top, 5]
@@ -230,6 +351,17 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
         depth, ray_kind = int(rays[top, 9]), int(rays[top, 10])
         counts[ray_kind] += 1
         kind, index, t, u, v = nearest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
+        if ray_kind != PRIMARY and kind != NOTHING and (attenuation[0] > 0.0
+                                                         or attenuation[1] > 0.0):
+            # the notes' attenuation of a secondary ray's light over the distance R it
+            # travelled, 1 / (1 + C1 R + C2 R²): its children inherit it, so the adaptive
+            # cut-off (weight < epsilon) prunes the tree sooner
+            weight /= 1.0 + attenuation[0] * t + attenuation[1] * t * t
+            rays[top, 8] = weight
+        node = recorded
+        if node < tree.shape[0]:
+            _record(tree, node, rays[top], kind, t, background[0], background[1], background[2])
+            recorded += 1
         if kind == NOTHING:                  # the ray leaves the scene: the background
             r_sum += weight * background[0]
             g_sum += weight * background[1]
@@ -237,6 +369,12 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
             continue
         px, py, pz, nx, ny, nz, gx, gy, gz, s = surface_at(packed, kind, index, u, v,
                                                            ox, oy, oz, dx, dy, dz, t)
+        if textured:
+            for c in range(12):
+                dif[c // 3, c % 3] = rays[top, DIFF + c]
+            transfer(dif, t, dx, dy, dz, gx, gy, gz, dp)
+            if has_maps(tex, kind, s):
+                uv_derivatives(packed, tex, index, dp, duv)
         # The viewer of this hit: the primary eye (the PRP or the parallel DOP) for primary
         # rays, exactly as the z-buffer's shading sees it; the ray's origin for the others.
         if ray_kind == PRIMARY:
@@ -252,76 +390,147 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
             lnx, lny, lnz = -nx, -ny, -nz
         r, g, b = local_colour(packed, kind, index, s, px, py, pz, lnx, lny, lnz, gx, gy, gz,
                                lights, ambient, eye, halfway, shadows, background, offset,
-                               scaled, surface_row, stack, counts)
+                               scaled, surface_row, stack, counts, tex, filter_, bump, u, v,
+                               duv, surf)
         r_sum += weight * r
         g_sum += weight * g
         b_sum += weight * b
+        if node < tree.shape[0]:
+            tree[node, TREE_SURFACE] = s
+            tree[node, TREE_LOCAL], tree[node, TREE_LOCAL + 1], tree[node, TREE_LOCAL + 2] = r, g, b
+            tree[node, TREE_POINT], tree[node, TREE_POINT + 1], tree[node, TREE_POINT + 2] = px, py, pz
+            tree[node, TREE_NORMAL], tree[node, TREE_NORMAL + 1], tree[node, TREE_NORMAL + 2] = nx, ny, nz
+            tree[node, TREE_GEOMETRIC] = gx
+            tree[node, TREE_GEOMETRIC + 1], tree[node, TREE_GEOMETRIC + 2] = gy, gz
         k_r, k_t = packed.optics[s, 0], packed.optics[s, 1]
         if k_r == 0.0 and k_t == 0.0:
             continue
-        if depth >= max_depth:
-            counts[CUT_DEPTH] += 1
-            continue
-        # Normals facing the incoming ray: geometric (for the offsets) and shading.
+        # Normals facing the incoming ray: geometric (for the offsets and the sides) and
+        # shading (for the directions). A shading normal turned away from the ray's side of
+        # the face (an interpolated normal near a silhouette) is replaced by the face's.
         if not entering:
             gx, gy, gz = -gx, -gy, -gz
         fx, fy, fz = nx, ny, nz
         if fx * dx + fy * dy + fz * dz > 0.0:
             fx, fy, fz = -fx, -fy, -fz
-        if fx * gx + fy * gy + fz * gz <= 0.0:   # the interpolated normal disagrees: use the face's
+        if fx * gx + fy * gy + fz * gz <= 0.0:
             fx, fy, fz = gx, gy, gz
+        tir = False
         if k_t > 0.0:
             n_i, n_t = (medium, packed.optics[s, 2]) if entering else (packed.optics[s, 2], medium)
             ok, tx, ty, tz = optics.refract(dx, dy, dz, fx, fy, fz, n_i, n_t)
+            if ok and tx * gx + ty * gy + tz * gz >= 0.0:
+                # bent about the shading normal, T would leave on the side it came from: the
+                # geometric normal decides which side is which, so refract about the face's
+                fx, fy, fz = gx, gy, gz
+                ok, tx, ty, tz = optics.refract(dx, dy, dz, fx, fy, fz, n_i, n_t)
             if not ok:                         # total internal reflection
                 counts[TIR] += 1
+                tir = True
                 k_r, k_t = k_r + k_t, 0.0
-            elif fresnel:
+            elif fresnel > 0:
                 cos_i = -(fx * dx + fy * dy + fz * dz)
                 cos_t = -(fx * tx + fy * ty + fz * tz)
-                share = optics.schlick(cos_i, cos_t, n_i, n_t)
+                share = (optics.schlick(cos_i, cos_t, n_i, n_t) if fresnel == FRESNEL_SCHLICK
+                         else optics.fresnel_exact(cos_i, cos_t, n_i, n_t))
                 k_r, k_t = k_r + share * k_t, (1.0 - share) * k_t
-            if k_t > 0.0:
-                if weight * k_t >= epsilon:
-                    top = _push(rays, top, px - offset * gx, py - offset * gy, pz - offset * gz,
-                                tx, ty, tz, 0.0, np.inf, weight * k_t, depth + 1, REFRACTED)
-                else:
-                    counts[CUT_ADAPTIVE] += 1
+        # The ray tree's depth: the notes' limit on splitting. A total internal reflection
+        # does not split the ray (one child, all of the light), so it does not deepen the tree;
+        # MAX_INTERNAL such bounces in a row end it (and the weight's decay, by epsilon).
+        internal = int(rays[top, INTERNAL])
+        if tir and internal < MAX_INTERNAL:
+            child_depth, child_internal = depth, internal + 1
+        elif depth >= max_depth or tir:
+            counts[CUT_DEPTH] += 1
+            continue
+        else:
+            child_depth, child_internal = depth + 1, 0
+        if k_t > 0.0:
+            if weight * k_t >= epsilon:
+                if textured:
+                    alpha = n_i / n_t
+                    cos_i = -(fx * dx + fy * dy + fz * dz)
+                    t_dot_n = fx * tx + fy * ty + fz * tz
+                    dbeta = -(alpha + alpha * alpha * cos_i / t_dot_n) if t_dot_n != 0.0 else 0.0
+                    _push_differentials(rays, top, dp, dif, fx, fy, fz, alpha, dbeta)
+                top = _push(rays, top, px - offset * gx, py - offset * gy, pz - offset * gz,
+                            tx, ty, tz, 0.0, np.inf, weight * k_t, child_depth, REFRACTED)
+                rays[top - 1, PARENT], rays[top - 1, INTERNAL] = node, child_internal
+            else:
+                counts[CUT_ADAPTIVE] += 1
         if k_r > 0.0:
             if weight * k_r >= epsilon:
                 rx, ry, rz = optics.reflect(dx, dy, dz, fx, fy, fz)
+                if rx * gx + ry * gy + rz * gz <= 0.0:
+                    # mirrored about the shading normal, R would enter the surface: mirror it
+                    # about the face's normal, whose side the offset is on
+                    fx, fy, fz = gx, gy, gz
+                    rx, ry, rz = optics.reflect(dx, dy, dz, fx, fy, fz)
+                if textured:
+                    _push_differentials(rays, top, dp, dif, fx, fy, fz, 1.0, -2.0)
                 top = _push(rays, top, px + offset * gx, py + offset * gy, pz + offset * gz,
-                            rx, ry, rz, 0.0, np.inf, weight * k_r, depth + 1, REFLECTED)
+                            rx, ry, rz, 0.0, np.inf, weight * k_r, child_depth, REFLECTED)
+                rays[top - 1, PARENT], rays[top - 1, INTERNAL] = node, child_internal
             else:
                 counts[CUT_ADAPTIVE] += 1
-    return r_sum, g_sum, b_sum
+    return r_sum, g_sum, b_sum, recorded
+
+
+@njit(cache=True)
+def _record(tree, node, ray, kind, t, r, g, b):
+    """A ray's row of the ray tree: what it is, and (for now) that it missed."""
+    tree[node, :] = 0.0
+    tree[node, TREE_KIND], tree[node, TREE_DEPTH] = ray[10], ray[9]
+    for c in range(3):
+        tree[node, TREE_ORIGIN + c] = ray[c]
+        tree[node, TREE_DIRECTION + c] = ray[3 + c]
+    tree[node, TREE_PARENT] = ray[PARENT]
+    tree[node, TREE_HIT], tree[node, TREE_T], tree[node, TREE_SURFACE] = kind, t, -1.0
+    tree[node, TREE_LOCAL], tree[node, TREE_LOCAL + 1], tree[node, TREE_LOCAL + 2] = r, g, b
+    tree[node, TREE_WEIGHT] = ray[8]
 
 
 CHUNK = 512     # rays per parallel work item (dealt to the threads by bvh.spread)
 
 
+@njit(cache=True)
+def scratch(packed):
+    """Per-thread work arrays of :func:`trace`: a ray's differentials, its hit point's, the
+    (u, v) derivatives, and a copy of the surfaces for a texel's O_d."""
+    return (np.zeros((4, 3)), np.zeros((2, 3)), np.zeros(4), packed.surfaces.copy())
+
+
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, ambient, halfway,
-               background, shadows, max_depth, epsilon, fresnel, medium, offset, raw, counts):
-    """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``."""
+               background, shadows, max_depth, epsilon, fresnel, medium, offset, raw, counts,
+               tex, textured, filter_, bump, differentials, attenuation):
+    """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``;
+    ``differentials`` ``(N, 12)`` (used when ``textured``)."""
     n = origins.shape[0]
     chunks = (n + CHUNK - 1) // CHUNK
     for j in prange(chunks):
         chunk = bvh.spread(j, chunks)
-        rays = np.empty((2 * max_depth + 2, 11))
+        rays = np.empty((2 * max_depth + 2, STACK_COLUMNS))
+        no_tree = np.empty((0, TREE_COLUMNS))
         scaled = np.empty(lights.shape)
         surface_row = np.empty((1, packed.surfaces.shape[1]))
         eye = np.empty(4)
         stack = np.empty(bvh.STACK, dtype=np.int64)
+        work = scratch(packed)
+        none = np.zeros(12)
         for i in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
+            diff0 = none
+            if textured:
+                diff0 = differentials[i]
             if not t_min[i] < t_max[i]:          # outside the viewport or the F..B slab
                 raw[i, 0], raw[i, 1], raw[i, 2] = background[0], background[1], background[2]
                 continue
-            r, g, b = trace(packed, origins[i, 0], origins[i, 1], origins[i, 2],
+            r, g, b, _ = trace(packed, origins[i, 0], origins[i, 1], origins[i, 2],
                             directions[i, 0], directions[i, 1], directions[i, 2], t_min[i],
                             t_max[i], primary_eye, lights, ambient, halfway, background, shadows,
                             max_depth, epsilon, fresnel, medium, offset, rays, scaled,
-                            surface_row, eye, stack, counts[chunk])
+                            surface_row, eye, stack, counts[chunk], tex, textured, filter_,
+                            bump, diff0, work, no_tree, attenuation)
             raw[i, 0], raw[i, 1], raw[i, 2] = r, g, b
 
 

@@ -16,6 +16,11 @@ from core.camera.view import View
 from core.settings import SHADINGS  # noqa: F401  (re-exported for the readers)
 
 MAX_IMAGE_SIDE = 8192       # pixels, either side of a framebuffer any input may ask for
+# Default crease angle, degrees: edges whose faces meet at more than this are sharp. 45° is
+# below the FvDFH house's wall-to-roof edge (53.1°) and a box's 90°, and at or above the step
+# of every smooth generator's tessellation (a sphere or torus of 8 segments turns 45° an edge),
+# so boxes and houses get flat faces while spheres, tori and the bunny stay smooth.
+CREASE_ANGLE = 45.0
 
 
 @dataclass
@@ -137,6 +142,9 @@ class Scene:
     renderer: str = "zbuffer"             # the scene file's renderer (settings.SCENE_RENDERERS)
     # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
     primitives: list = field(default_factory=list)
+    # The crease angle (degrees) the reader split vertices at (core.scene.normals.with_creases):
+    # faces meeting at more than this keep their own normals along the edge (issue 20).
+    crease_angle: float = CREASE_ANGLE
 
     @property
     def triangle_count(self) -> int:

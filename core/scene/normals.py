@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from core.scene.model import CREASE_ANGLE  # noqa: F401  (the default, and why: there)
 from core.transforms import unit_rows
 
 WEIGHTINGS = ("mean", "area", "angle")
@@ -256,3 +257,109 @@ def planar_polygons(positions: np.ndarray, triangles: np.ndarray,
     n = np.asarray(normals, dtype=np.float64)
     same_plane = np.einsum("ij,ij->i", n[first], n[second]) > 1.0 - COPLANAR_TOLERANCE
     return _join_faces(count, first[same_plane], second[same_plane])
+
+
+# ----------------------------------------------------------------------------- creases
+
+
+
+@njit(cache=True)
+def _find(parent, i):
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]        # path halving
+        i = parent[i]
+    return i
+
+
+@njit(cache=True)
+def _smooth_groups(triangles, vertex_count, corner_a, corner_b, degenerate):
+    """``(T, 3)`` new vertex index of each face corner: corners joined across smooth edges
+    (``corner_a[j]`` with ``corner_b[j]``) share a vertex. Each vertex's first group keeps its
+    index, the others are numbered from ``vertex_count`` up; a zero-area face's corners stay
+    on the original vertex. Returns ``(corner_vertex, origin)``, ``origin[k]`` the original
+    vertex of new vertex k."""
+    n = triangles.shape[0] * 3
+    parent = np.arange(n)
+    for j in range(corner_a.shape[0]):
+        ra, rb = _find(parent, corner_a[j]), _find(parent, corner_b[j])
+        if ra != rb:
+            parent[max(ra, rb)] = min(ra, rb)
+    root_vertex = np.full(n, -1, dtype=np.int64)      # the new vertex of each group's root
+    primary = np.full(vertex_count, -1, dtype=np.int64)  # each vertex's first group root
+    corner_vertex = np.empty(n, dtype=np.int64)
+    origin = np.empty(vertex_count + n, dtype=np.int64)
+    origin[:vertex_count] = np.arange(vertex_count)
+    next_vertex = vertex_count
+    for c in range(n):
+        v = triangles[c // 3, c % 3]
+        if degenerate[c // 3]:
+            corner_vertex[c] = v
+            continue
+        r = _find(parent, c)
+        if root_vertex[r] < 0:
+            if primary[v] < 0:
+                primary[v] = r
+                root_vertex[r] = v
+            else:
+                root_vertex[r] = next_vertex
+                origin[next_vertex] = v
+                next_vertex += 1
+        corner_vertex[c] = root_vertex[r]
+    return corner_vertex.reshape(-1, 3), origin[:next_vertex]
+
+
+def crease_split(positions: np.ndarray, triangles: np.ndarray, angle: float = CREASE_ANGLE,
+                 closed: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Split the vertices along creases: ``(triangles', origin)``.
+
+    Two faces sharing an edge are smooth there when their normals differ by at most
+    ``angle`` degrees; a vertex whose faces fall into several smooth fans becomes one vertex
+    per fan (``origin[k]`` is the vertex that new vertex ``k`` copies; the first ``V`` are the
+    old ones, unchanged). Averaging the faces at each vertex of the result
+    (:func:`vertex_normals_from_faces`) is then the notes' average within a smooth region,
+    and a face meeting its neighbours at a crease keeps its own normal there. An open soup
+    (``closed=False``) is oriented first for the comparison only; its winding is kept.
+    """
+    p = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    t = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    origin = np.arange(len(p))
+    if len(t) == 0:
+        return t.copy(), origin
+    oriented = t if closed else orient_consistently(t)
+    unit, double_area = face_normals(p, oriented)
+    # Every edge k of face f as a sorted vertex pair; faces sharing it follow each other.
+    a, b = t.reshape(-1), t[:, [1, 2, 0]].reshape(-1)
+    corner_a = np.arange(3 * len(t))                          # corner of a in face f
+    corner_b = (corner_a // 3) * 3 + (corner_a % 3 + 1) % 3   # corner of b in face f
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    order = np.lexsort((high, low))
+    same = (low[order][:-1] == low[order][1:]) & (high[order][:-1] == high[order][1:])
+    e, g = order[:-1][same], order[1:][same]                  # edge e of one face, g of another
+    f0, f1 = e // 3, g // 3
+    cos_limit = np.cos(np.radians(angle))
+    smooth = (np.einsum("ij,ij->i", unit[f0], unit[f1]) >= cos_limit - 1e-12) & (f0 != f1)
+    e, g = e[smooth], g[smooth]
+    # Join the corners at each shared vertex (a with a, b with b, whichever way they run).
+    va_e, va_g = a[e], a[g]
+    join_a = np.concatenate([corner_a[e], corner_b[e]])
+    join_b = np.concatenate([np.where(va_g == va_e, corner_a[g], corner_b[g]),
+                             np.where(va_g == va_e, corner_b[g], corner_a[g])])
+    split, origin = _smooth_groups(t, len(p), join_a, join_b, ~(double_area > 0.0))
+    return split, origin
+
+
+def with_creases(mesh, angle: float = CREASE_ANGLE):
+    """``mesh`` with its vertices split along creases (:func:`crease_split`), every
+    per-vertex array copied to the new vertices. A mesh with normals of its own, or with no
+    crease, is returned as it is."""
+    if mesh.normals is not None or len(mesh.triangles) == 0:
+        return mesh
+    triangles, origin = crease_split(mesh.positions, mesh.triangles, angle, mesh.closed)
+    if len(origin) == len(mesh.positions):
+        return mesh
+    mesh.positions = mesh.positions[origin]
+    mesh.triangles = np.ascontiguousarray(triangles)
+    if mesh.uv is not None:
+        mesh.uv = mesh.uv[origin]
+    mesh.extra = {name: values[origin] for name, values in mesh.extra.items()}
+    return mesh

@@ -182,17 +182,28 @@ def textured_pixel(attrs, i0, i1, i2, w0, w1, w2, t, col, row, constants, s, map
                    texels, levels, textures, filter_, bump, surf, lights, ambient, eye,
                    halfway):
     """The colour ``(r, g, b)`` of one pixel; ``surf`` is a scratch copy of the surfaces."""
+    u, v, dudx, dvdx, dudy, dvdy = uv_at(constants, t, col, row)
+    if not (math.isfinite(u) and math.isfinite(v)):      # (u, v) degenerate on this triangle
+        u = _lerp(attrs, UV, i0, i1, i2, w0, w1, w2)
+        v = _lerp(attrs, UV + 1, i0, i1, i2, w0, w1, w2)
+        dudx = dvdx = dudy = dvdy = 0.0
+    return textured_at(attrs, i0, i1, i2, w0, w1, w2, u, v, dudx, dvdx, dudy, dvdy, s, maps,
+                       texels, levels, textures, filter_, bump, surf, lights, ambient, eye,
+                       halfway)
+
+
+@njit(cache=True)
+def textured_at(attrs, i0, i1, i2, w0, w1, w2, u, v, dudx, dvdx, dudy, dvdy, s, maps,
+                texels, levels, textures, filter_, bump, surf, lights, ambient, eye, halfway):
+    """The textured colour at barycentrics ``(w0, w1, w2)`` of corners ``i0, i1, i2`` with
+    texture coordinates ``(u, v)`` and their derivatives per pixel — from the z-buffer's
+    plane constants or from a ray's differentials (:mod:`core.raytrace.whitted`)."""
     nx, ny, nz, _ = unit3(_lerp(attrs, NORMAL, i0, i1, i2, w0, w1, w2),
                           _lerp(attrs, NORMAL + 1, i0, i1, i2, w0, w1, w2),
                           _lerp(attrs, NORMAL + 2, i0, i1, i2, w0, w1, w2))
     px = _lerp(attrs, POSITION, i0, i1, i2, w0, w1, w2)
     py = _lerp(attrs, POSITION + 1, i0, i1, i2, w0, w1, w2)
     pz = _lerp(attrs, POSITION + 2, i0, i1, i2, w0, w1, w2)
-    u, v, dudx, dvdx, dudy, dvdy = uv_at(constants, t, col, row)
-    if not (math.isfinite(u) and math.isfinite(v)):      # (u, v) degenerate on this triangle
-        u = _lerp(attrs, UV, i0, i1, i2, w0, w1, w2)
-        v = _lerp(attrs, UV + 1, i0, i1, i2, w0, w1, w2)
-        dudx = dvdx = dudy = dvdy = 0.0
     if bump and (maps[s, HEIGHT] >= 0 or maps[s, NORMAL_MAP] >= 0):
         pux = _lerp(attrs, DPDU, i0, i1, i2, w0, w1, w2)
         puy = _lerp(attrs, DPDU + 1, i0, i1, i2, w0, w1, w2)

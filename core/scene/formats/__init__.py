@@ -25,7 +25,7 @@ from core.scene.formats.errors import (MAX_INPUT_BYTES, ReaderError, decode_text
 from core.scene.formats.meshfile import MESH_EXTENSIONS, read_mesh
 from core.scene.formats.scenefile import read_scene_file
 from core.scene.formats.tri import read_tri
-from core.scene.model import MAX_IMAGE_SIDE, Scene
+from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, Scene
 
 __all__ = ["MAX_INPUT_BYTES", "ReaderError", "load_scene", "read_mesh", "read_scene_file", "read_tri",
            "MESH_EXTENSIONS"]
@@ -33,8 +33,13 @@ __all__ = ["MAX_INPUT_BYTES", "ReaderError", "load_scene", "read_mesh", "read_sc
 STDIN = "-"
 
 
-def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene:
+def load_scene(source: str | Path, size: tuple[int, int] | None = None,
+               crease_angle: float | None = None) -> Scene:
     """The scene in ``source``; ``size`` (width, height) overrides the scene's image size.
+
+    Meshes without normals of their own have their vertices split where faces meet at more
+    than ``crease_angle`` degrees (:func:`core.scene.normals.with_creases`; default: the scene
+    file's ``crease_angle`` key, else ``CREASE_ANGLE``, 45).
 
     For a ``.tri`` file ``size`` is the image its camera's pixel grid spans (500 x 500 unless
     given), so it changes the window of the view as well.
@@ -49,13 +54,22 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene
     path = Path(source)
     ext = path.suffix.lower()
     data = read_file(path, name, input_kind(ext))
+    if crease_angle is not None and not (0.0 <= crease_angle <= 180.0):
+        raise ReaderError(name, f"the crease angle must be from 0 to 180 degrees, "
+                                f"not {crease_angle!r}")
     if ext == ".toml":
-        return read_scene_file(data, name, path.parent, size)
+        return read_scene_file(data, name, path.parent, size, crease_angle)
+    angle = CREASE_ANGLE if crease_angle is None else float(crease_angle)
     if ext == ".tri":
-        return read_tri(data, name, size)
-    if ext in MESH_EXTENSIONS:
-        return _mesh_scene(read_mesh(data, name, ext), name, size)
-    return _views_scene(decode_text(data, name), name, size)
+        scene = read_tri(data, name, size)
+    elif ext in MESH_EXTENSIONS:
+        scene = _mesh_scene(read_mesh(data, name, ext), name, size)
+    else:
+        return _views_scene(decode_text(data, name), name, size)
+    from core.scene.normals import with_creases
+    scene.meshes = [with_creases(m, angle) for m in scene.meshes]
+    scene.crease_angle = angle
+    return scene
 
 
 def input_kind(ext: str) -> str:

@@ -41,7 +41,7 @@ from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, d
                                  tolerant_of_underflow)
 from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
                                    signed_volume)
-from core.scene.model import MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
+from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
 from core.settings import RASTERIZERS, SCENE_RENDERERS, SPECULAR_FORMS
@@ -50,7 +50,7 @@ MAX_NUMBER = MAX_COORDINATE
 
 TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
             "line_color", "views", "view", "geometry", "light", "keep_aspect", "rasterizer",
-            "renderer")
+            "renderer", "crease_angle")
 GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
 # Analytic primitives (issue 12: the ray tracer intersects them, the z-buffer draws them
 # tessellated): [[geometry]] primitive = "sphere" | "plane" with these keys.
@@ -105,8 +105,10 @@ def _spellings(name: str) -> str:
 class _Reader:
     """One scene file being read: its name, its text (to find lines), and its folder."""
 
-    def __init__(self, text: str, file: str, folder: Path) -> None:
+    def __init__(self, text: str, file: str, folder: Path,
+                 crease_angle: float | None = None) -> None:
         self.text = text
+        self.crease_angle = crease_angle          # None: the file's, else CREASE_ANGLE
         self.file = file
         self.folder = folder
         self.texture_messages: list[str] = []       # files a material could not use (issue 11)
@@ -224,6 +226,9 @@ class _Reader:
         self.table(doc, (), TOP_KEYS)
         if "geometry" not in doc:
             raise self.fail((), "a scene needs at least one [[geometry]] table")
+        if self.crease_angle is None:
+            self.crease_angle = (self.number(doc["crease_angle"], ("crease_angle",), 0.0, 180.0)
+                                 if "crease_angle" in doc else CREASE_ANGLE)
         meshes, total = [], 0
         for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
             self.budget = generators.MAX_TRIANGLES - total     # what a mesh file may still add
@@ -248,7 +253,7 @@ class _Reader:
                   if "light" in doc else default_lights(points))
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
                       meshes=meshes, views=views, view_messages=messages, view_order=order,
-                      lights=lights, source=self.file)
+                      lights=lights, source=self.file, crease_angle=self.crease_angle)
         # Spheres join scene.primitives (every ray caster traces them); planes stay with their
         # tessellation only (the exact ray caster knows spheres and tori; the ray tracer finds
         # planes through Mesh.tessellates).
@@ -312,7 +317,8 @@ class _Reader:
             mesh.material = self.material(g["material"], path + ("material",), mesh.material)
         if "name" in g:
             mesh.name = self.string(g["name"], path + ("name",))
-        return mesh
+        from core.scene.normals import with_creases      # (numba: only when a mesh is read)
+        return with_creases(mesh, self.crease_angle)     # after the transform: its angles
 
     def mesh_file(self, value, path: Path_) -> Mesh:
         name = self.string(value, path)
@@ -514,11 +520,13 @@ class _Reader:
 
 @tolerant_of_underflow
 def read_scene_file(data: bytes | str, file: str, folder: Path | None = None,
-                    size: tuple[int, int] | None = None) -> Scene:
-    """The scene in the TOML text ``data``; relative paths start at ``folder``."""
+                    size: tuple[int, int] | None = None,
+                    crease_angle: float | None = None) -> Scene:
+    """The scene in the TOML text ``data``; relative paths start at ``folder``;
+    ``crease_angle`` (degrees) overrides the file's ``crease_angle`` key."""
     text = decode_text(data, file) if isinstance(data, bytes) else data
     folder = Path(folder) if folder is not None else Path(file).parent
-    return _Reader(text, file, folder).scene(size)
+    return _Reader(text, file, folder, crease_angle).scene(size)
 
 
 # Bounds checked before tomllib sees the text. A scene needs keys four deep
