@@ -134,11 +134,13 @@ def pass_offsets(samples: int, seed: int) -> np.ndarray:
 
 
 def render_passes(scene, view, settings, context, first: int = 0, count: int | None = None,
-                  packed: Packed | None = None) -> tuple[np.ndarray, dict]:
-    """Mean radiance ``(H, W, 3)`` of passes ``first .. first + count`` of ``settings.samples``."""
+                  packed: Packed | None = None, samples: int | None = None
+                  ) -> tuple[np.ndarray, dict]:
+    """Mean radiance ``(H, W, 3)`` of passes ``first .. first + count`` of ``samples`` (default
+    ``settings.samples``; more than its limit of 256 may be asked for here)."""
     packed = packed or packed_for(scene, context)
     width, height = settings.size
-    offsets = pass_offsets(settings.samples, settings.seed)
+    offsets = pass_offsets(samples or settings.samples, settings.seed)
     count = len(offsets) - first if count is None else count
     total = np.zeros((height * width, 3))
     bounces, began = 0, time.perf_counter()

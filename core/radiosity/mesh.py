@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+EMITTER_PIECES = 4        # an emitting triangle is at least 4 x 4 patches
 MIN_AREA = 1e-12          # relative to the scene's squared size: below it a triangle is dropped
 
 
@@ -173,6 +174,8 @@ def mesh_scene(scene, max_elements: int = 2000, elements_per_patch: int = 4) -> 
     mesh_of, sided = np.concatenate(mesh_of)[keep], np.concatenate(sided)[keep]
     m = 2 if elements_per_patch >= 4 else 1
     k = _pieces_per_side(area, max(1, max_elements // (m * m)))
+    # An emitter shoots from each patch's centre as a point would: cut small lights finer.
+    k[emission.max(axis=1) > 0] = np.maximum(k[emission.max(axis=1) > 0], EMITTER_PIECES)
     patch_corners, parent = subdivide(corners, k)
     element_corners, patch = subdivide(patch_corners, np.full(len(patch_corners), m))
     return _elements(element_corners, patch, patch_corners, parent[patch], rho, emission,

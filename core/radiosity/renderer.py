@@ -168,6 +168,28 @@ def inspect_pixel(scene, view, settings, x, y, context) -> dict:
     return record
 
 
+def radiosity_image(solution: Solution, view, projection: str, width: int, height: int
+                    ) -> np.ndarray:
+    """(H, W, 3) float: the displayed radiosity (vertex values interpolated, no ambient
+    term, no tone) at each pixel centre, found by casting a ray per pixel into the elements
+    (the oracle tests compare it with the path tracer's radiance)."""
+    from core.pathtrace.renderer import camera_rays
+    from core.raytrace.bvh import build, intersect_rays
+    e = solution.elements
+    positions, triangles, at_vertex = vertex_values(e, solution.radiosity)
+    origins, directions, t_min, t_max = camera_rays(view, projection, width, height,
+                                                    (0.5, 0.5), False)
+    # one-sided elements only: of a coplanar two-sided pair the ray could take either copy
+    keep = np.flatnonzero(~e.two_sided)
+    bvh, _ = build(positions, triangles[keep])
+    prim, _, u, v = intersect_rays(bvh, origins, directions, t_min, t_max)
+    tri = triangles[keep][np.maximum(prim, 0)]
+    image = ((1 - u - v)[:, None] * at_vertex[tri[:, 0]] + u[:, None] * at_vertex[tri[:, 1]]
+             + v[:, None] * at_vertex[tri[:, 2]])
+    image[prim < 0] = 0.0
+    return image.reshape(height, width, 3)
+
+
 def _element_at(scene, shown, view, settings, context, x, y):
     """The element drawn at (x, y): a ray through the pixel centre to the nearest display
     triangle (the z-buffer and the ray see the same surface)."""
