@@ -18,7 +18,7 @@ from pathlib import Path
 
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate",
-            "warmup")
+            "warmup", "radiosity")
 RASTERIZER_CHOICES = ("edge", "scanline")
 
 
@@ -104,6 +104,14 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
     _renderer_arguments(r)                    # issue 12
+    # -- issue 19: global illumination (radiosity, path tracing)
+    from app.tools.radiosity import add_options as gi_options
+    gi_options(r)
+    rad = sub.add_parser("radiosity", help="solve a scene's radiosity once and save it (.npz)")
+    if command in (None, "radiosity"):
+        from app.tools.radiosity import add_arguments as radiosity_arguments
+        radiosity_arguments(rad)
+    # --
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -162,6 +170,11 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
 def _renderer_overrides(args) -> dict:
     return {"renderer": args.renderer, "samples": args.samples, "shadows": args.shadows,
             "max_depth": args.max_depth, "fresnel": args.fresnel}
+
+
+def _gi_overrides(args) -> dict:
+    from app.tools.radiosity import overrides          # issue 19
+    return overrides(args)
 
 
 def _course_options(p: argparse.ArgumentParser) -> None:
@@ -265,6 +278,9 @@ def _dispatch(args) -> int:
     if args.command == "warmup":
         from app.tools.warmup import main as warmup_main
         return warmup_main(args)
+    if args.command == "radiosity":           # issue 19
+        from app.tools.radiosity import main as radiosity_main
+        return radiosity_main(args)
     if args.command == "stability":
         from app.tools.stability import main as stability_main
         return stability_main(args)
@@ -287,7 +303,9 @@ def _drawn_by(settings) -> str:
     """What drew the frame, in the render log's words."""
     if settings.renderer == "zbuffer":
         return f"z-buffer, {settings.rasterizer} rasterizer"
-    return {"raytrace": "ray traced", "raycast": "ray cast (exact)"}.get(settings.renderer,
+    return {"raytrace": "ray traced", "raycast": "ray cast (exact)",
+            "radiosity": f"radiosity ({settings.form_factors} form factors, {settings.solver})",
+            "pathtrace": f"path traced, {settings.samples} paths per pixel"}.get(settings.renderer,
                                                                       settings.renderer)
 
 
@@ -311,15 +329,25 @@ def _render(args) -> int:
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
                                             keep_aspect=args.keep_aspect, **texture_options,
-                                            **_renderer_overrides(args))
+                                            **_renderer_overrides(args),
+                                            **_gi_overrides(args))       # issue 19
     except ValueError as error:            # e.g. --samples 0 (issue 12's options)
         print(f"error: {error}", file=sys.stderr)
         return 2
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
+    if args.solution:                     # issue 19: a saved radiosity solution
+        from app.tools.radiosity import load_solution
+        from core.context import DEFAULT_CONTEXT
+        refusal = load_solution(scene, args.solution, DEFAULT_CONTEXT)
+        if refusal:
+            print(f"error: --solution: {refusal}", file=sys.stderr)
+            return 2
     with announce_compiles():            # the first run compiles the kernels: say so
         frame = _draw_still(scene, view, settings, args.time)
+    for warning in frame.stats.get("warnings", ()):       # issue 19: e.g. nothing emits light
+        print(f"warning: {warning}", file=sys.stderr)
     if frame.message:
         print(f"error: {frame.message}", file=sys.stderr)
         return 1

@@ -158,9 +158,10 @@ def _sample_lobe(m, nx, ny, nz, wox, woy, woz, pd, ps, u0, u1, u2):
 
 @njit(cache=True)
 def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
-               tri_area, tri_emit_pdf, lights, ox, oy, oz, dx, dy, dz, t_min, t_max, offset,
-               state, stack):
-    """The radiance along one camera ray: ``(r, g, b, state, bounces)``."""
+               tri_area, tri_emit_pdf, lights, background, ox, oy, oz, dx, dy, dz, t_min, t_max,
+               offset, state, stack):
+    """The radiance along one camera ray: ``(r, g, b, state, bounces)``; a camera ray that
+    hits nothing sees the background colour (a path that leaves the scene later, nothing)."""
     lr, lg, lb = 0.0, 0.0, 0.0
     tr, tg, tb = 1.0, 1.0, 1.0
     last_pdf = 0.0            # solid-angle pdf of the BSDF sample that made this ray
@@ -168,6 +169,8 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
     for bounce in range(MAX_BOUNCES):
         k, t, _, _ = closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
         if k < 0:
+            if bounce == 0:
+                return background[0], background[1], background[2], state, 0
             return lr, lg, lb, state, bounce
         tri = bvh.prim[k]
         m = materials[tri_material[tri]]
@@ -293,8 +296,8 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
 
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
-               tri_emit_pdf, lights, origins, directions, t_min, t_max, offset, seed, out,
-               bounces):
+               tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
+               out, bounces):
     """Radiance of every ray into ``out`` (N, 3); ``bounces`` (chunks,) the path lengths."""
     n = origins.shape[0]
     chunks = (n + 255) // 256
@@ -305,12 +308,12 @@ def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
         for i in range(chunk * 256, min(n, (chunk + 1) * 256)):
             state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(i)
             state, _ = _next(state)
-            if not t_min[i] < t_max[i]:
-                out[i, 0], out[i, 1], out[i, 2] = 0.0, 0.0, 0.0
+            if not t_min[i] < t_max[i]:          # outside the viewport (letterbox)
+                out[i, 0], out[i, 1], out[i, 2] = background[0], background[1], background[2]
                 continue
             r, g, b, state, depth = trace_path(
                 bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
-                tri_area, tri_emit_pdf, lights, origins[i, 0], origins[i, 1], origins[i, 2],
+                tri_area, tri_emit_pdf, lights, background, origins[i, 0], origins[i, 1], origins[i, 2],
                 directions[i, 0], directions[i, 1], directions[i, 2], t_min[i], t_max[i],
                 offset, state, stack)
             out[i, 0], out[i, 1], out[i, 2] = r, g, b

@@ -38,6 +38,7 @@ class Packed:
     emit_pdf: np.ndarray
     lights: np.ndarray
     scale: float
+    background: np.ndarray
 
 
 def _material_row(material) -> np.ndarray:
@@ -90,7 +91,8 @@ def pack(scene) -> Packed:
     lo, hi = positions.min(axis=0), positions.max(axis=0)
     return Packed(bvh, np.ascontiguousarray(corners), normal, material.astype(np.int64),
                   materials, emit_tri.astype(np.int64), emit_cdf, area, emit_pdf,
-                  pack_lights(scene.lights), float(np.linalg.norm(hi - lo)) or 1.0)
+                  pack_lights(scene.lights), float(np.linalg.norm(hi - lo)) or 1.0,
+                  np.asarray(scene.background, dtype=np.float64).reshape(3))
 
 
 def packed_for(scene, context) -> Packed:
@@ -107,7 +109,8 @@ def trace(packed: Packed, origins, directions, t_min, t_max, seed: int) -> tuple
     bounces = np.zeros((n + 255) // 256, np.int64)
     kernel.trace_many(packed.bvh, packed.corners, packed.normal, packed.material,
                       packed.materials, packed.emit_tri, packed.emit_cdf, packed.area,
-                      packed.emit_pdf, packed.lights, np.ascontiguousarray(origins),
+                      packed.emit_pdf, packed.lights, packed.background,
+                      np.ascontiguousarray(origins),
                       np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
                       np.ascontiguousarray(t_max), kernel.EPS * packed.scale, int(seed), out,
                       bounces)

@@ -68,8 +68,9 @@ def perpendicular_pair(l=1.0, w=1.0, h=1.0):
     return floor, wall, perpendicular_rectangles(l, w, h)
 
 
-def disc_pair(r1=1.0, r2=1.0, h=1.0):
-    return _disc(r1, 0.0, True), _disc(r2, h, False), coaxial_discs(r1, r2, h)
+def disc_pair(r1=1.0, r2=1.0, h=1.0, segments=96):
+    return (_disc(r1, 0.0, True, segments), _disc(r2, h, False, segments),
+            coaxial_discs(r1, r2, h))
 
 
 def measured(source: np.ndarray, target: np.ndarray, method: str, resolution: int = 256,

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.camera.film import fill
-from core.radiosity.mesh import Elements, RadiosityError, vertex_values
+from core.radiosity.mesh import Elements, has_light, vertex_values
 from core.radiosity.solution import Options, Solution, solve
 from core.radiosity.tone import tone_map
 from core.scene.model import Material, Mesh, Scene
@@ -111,15 +111,18 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     """Fill ``frame`` with the radiosity solution of ``scene`` seen through ``view``."""
     from core.pipeline import project
     from core.renderers.zbuffer import _sample_viewport, draw_triangles
+    if not has_light(scene):
+        fill(frame.color, (0.0, 0.0, 0.0))
+        frame.stats.setdefault("warnings", []).append(
+            f"{scene.name}: nothing emits light (no material with emission and no [[light]]): "
+            "the picture is black")
+        return
     try:
         held = context.cache(scene).get("radiosity solution")
         solution = held if held is not None and held.stats.get("loaded") else \
             solution_for(scene, settings, context)
-    except (RadiosityError, ValueError) as error:
+    except ValueError as error:          # RadiosityError: a material, a zero-area scene
         fill(frame.color, (0.0, 0.0, 0.0))
-        if isinstance(error, RadiosityError) and "nothing emits light" in str(error):
-            frame.stats.setdefault("warnings", []).append(str(error))   # a black picture
-            return
         frame.message = f"{scene.name}: cannot solve for radiosity: {error}"
         return
     timer.lap("radiosity solution")
