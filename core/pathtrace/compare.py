@@ -13,8 +13,10 @@ from __future__ import annotations
 import numpy as np
 
 
-def surface_ids(scene, view, projection: str, width: int, height: int) -> np.ndarray:
-    """(H, W) int64: the planar surface seen at each pixel centre (-1: nothing)."""
+def surface_ids(scene, view, projection: str, width: int, height: int,
+                with_meshes: bool = False):
+    """(H, W) int64: the planar surface seen at each pixel centre (-1: nothing); with
+    ``with_meshes`` also (H, W) the index of its mesh among those with triangles."""
     from core.pathtrace.renderer import camera_rays, pack
     from core.raytrace.bvh import intersect_rays
     packed = pack(scene)
@@ -26,6 +28,9 @@ def surface_ids(scene, view, projection: str, width: int, height: int) -> np.nda
     key = np.concatenate([packed.material[:, None], normal, plane[:, None]], axis=1)
     _, surface = np.unique(key, axis=0, return_inverse=True)
     ids = np.where(prim >= 0, surface.reshape(-1)[np.maximum(prim, 0)], -1)
+    if with_meshes:
+        mesh = np.where(prim >= 0, packed.material[np.maximum(prim, 0)], -1)
+        return ids.reshape(height, width), mesh.reshape(height, width)
     return ids.reshape(height, width)
 
 
