@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import tempfile
+import time
 from pathlib import Path
 
 import numpy as np
@@ -53,8 +54,10 @@ def _write_obj(path: Path, positions, triangles) -> None:
             f.write(f"f {t[0]} {t[1]} {t[2]}\n")
 
 
-def render(scene, view, width: int, height: int, spp: int, seed: int = 0) -> np.ndarray:
-    """Mitsuba's linear radiance ``(H, W, 3)`` of ``scene`` seen through ``view``."""
+def render(scene, view, width: int, height: int, spp: int, seed: int = 0,
+           timed: bool = False):
+    """Mitsuba's linear radiance ``(H, W, 3)`` of ``scene`` seen through ``view`` (with
+    ``timed``: and the seconds ``mi.render`` took, the scene's loading left out)."""
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
     from core.radiosity.mesh import reflectance
@@ -75,5 +78,8 @@ def render(scene, view, width: int, height: int, spp: int, seed: int = 0) -> np.
                 shape["emitter"] = {"type": "area", "radiance": {
                     "type": "rgb", "value": list(mesh.material.emission)}}
             doc[f"mesh{i}"] = shape
-        image = mi.render(mi.load_dict(doc), spp=spp, seed=seed)
-        return np.array(image, dtype=np.float64)[:, :, :3]
+        loaded = mi.load_dict(doc)
+        began = time.perf_counter()
+        image = np.array(mi.render(loaded, spp=spp, seed=seed), dtype=np.float64)[:, :, :3]
+        seconds = time.perf_counter() - began
+        return (image, seconds) if timed else image
