@@ -55,15 +55,17 @@ def add_arguments(parser) -> None:
 
 
 def main(args) -> int:
-    from app.cli import _load
     from core.radiosity.mesh import RadiosityError
     from core.radiosity.solution import Options, save, solve
     from core.settings import RenderSettings
     if not args.out.endswith(".npz"):
         print(f"error: --out {args.out}: a solution file ends in .npz", file=sys.stderr)
         return 2
-    scene = _load(args.scene)
-    if scene is None:
+    from core.scene.formats import ReaderError, load_scene
+    try:
+        scene = load_scene(args.scene)
+    except ReaderError as error:
+        print(f"error: {error}", file=sys.stderr)
         return 2
     try:
         settings = RenderSettings.for_scene(scene, **overrides(args))
