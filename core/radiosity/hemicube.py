@@ -26,7 +26,7 @@ import numpy as np
 from core.camera.view import View
 from core.pipeline import project
 from core.pipeline.clip_polygon import clip_triangles
-from core.pipeline.raster import rasterize
+from core.pipeline.raster import VisibilityBuffer, rasterize
 from core.pipeline.vertex_kernels import transform_affine, transform_projective
 
 NEAR = 1e-6             # the front plane, a fraction of the scene's size from the point
@@ -50,12 +50,18 @@ def delta_factors(res: int) -> tuple[np.ndarray, np.ndarray]:
     return top, side
 
 
+def _cross(a, b) -> np.ndarray:
+    """a x b of two 3-vectors (np.cross costs 1 ms of set-up per call here)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
+
+
 def _basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two unit vectors ``u, v`` with ``(u, v, normal)`` right-handed."""
     helper = np.array([1.0, 0.0, 0.0]) if abs(normal[0]) < 0.6 else np.array([0.0, 1.0, 0.0])
-    u = np.cross(helper, normal)
+    u = _cross(helper, normal)
     u /= np.linalg.norm(u)
-    return u, np.cross(normal, u)
+    return u, _cross(normal, u)
 
 
 def faces(point, normal) -> list[tuple[np.ndarray, np.ndarray, bool]]:
@@ -75,9 +81,9 @@ def face_transform(point, look, up, top: bool, scale: float) -> tuple[np.ndarray
     :func:`view_of_face` is the same view as a :class:`View` (the tests compare the two)."""
     point, look, up = (np.asarray(a, dtype=np.float64) for a in (point, look, up))
     n_axis = -look
-    u = np.cross(up, n_axis)
+    u = _cross(up, n_axis)
     u /= np.linalg.norm(u)
-    v = np.cross(n_axis, u)
+    v = _cross(n_axis, u)
     m = np.eye(4)
     m[:3, :3] = np.stack([u, v, n_axis])             # R, after T(−point): T(−PRP)·R·T(−VRP)
     m[:3, 3] = -m[:3, :3] @ point
@@ -98,6 +104,16 @@ def view_of_face(point, look, up, top: bool, scale: float) -> View:
                 front=1.0 - NEAR * scale, back=-4.0 * scale - 1.0)
 
 
+_BUFFERS: dict = {}
+
+
+def _buffer(width: int, height: int):
+    """A visibility buffer per face size, reused from row to row (one solve at a time)."""
+    if (width, height) not in _BUFFERS:
+        _BUFFERS[(width, height)] = VisibilityBuffer.allocate(width, height)
+    return _BUFFERS[(width, height)]
+
+
 def item_buffer(positions, triangles, point, look, up, top: bool, res: int, scale: float):
     """The element index ``(H, res)`` int64 seen in each pixel of one hemicube face (-1: none),
     drawn by our z-buffer. ``positions`` (V, 3), ``triangles`` (T, 3): the elements."""
@@ -108,7 +124,8 @@ def item_buffer(positions, triangles, point, look, up, top: bool, res: int, scal
     device, inv_w = transform_projective(
         project.triangle_matrix("perspective", z_min, (0.0, float(res), 0.0, float(height))),
         clipped.points)
-    vis = rasterize(device, inv_w, clipped.triangles, res, height, parallel=False)
+    vis = rasterize(device, inv_w, clipped.triangles, res, height, parallel=False,
+                    out=_buffer(res, height))
     source = np.asarray(clipped.source, dtype=np.int64)
     items = np.full(vis.tri.shape, -1, np.int64)
     seen = vis.tri >= 0
@@ -123,9 +140,15 @@ def form_factors(positions, triangles, point, normal, res: int, scale: float,
     top_df, side_df = delta_factors(res)
     count = len(triangles) if count is None else count
     out = np.zeros(count)
+    # Triangles wholly below the point's tangent plane are behind every face: left out once.
+    height = (positions - np.asarray(point, dtype=np.float64)) @ np.asarray(normal, float)
+    above = np.flatnonzero(height[triangles].max(axis=1) > 0.0)
+    if not len(above):
+        return out
+    kept = np.ascontiguousarray(triangles[above])
     for look, up, top in faces(point, normal):
-        items = item_buffer(positions, triangles, point, look, up, top, res, scale)
+        items = item_buffer(positions, kept, point, look, up, top, res, scale)
         seen = items >= 0
-        out += np.bincount(items[seen], weights=(top_df if top else side_df)[seen],
+        out += np.bincount(above[items[seen]], weights=(top_df if top else side_df)[seen],
                            minlength=count)[:count]
     return out

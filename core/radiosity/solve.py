@@ -160,7 +160,9 @@ class Progressive:
         k = self.shooter.row(p) * (e.patch_area[p] / e.area)      # K_ep, reciprocity
         gained = e.rho * shot[None] * k[:, None]                   # (E, 3)
         self.radiosity += gained
-        np.add.at(self.unshot, e.patch, gained * e.area[:, None] / e.patch_area[e.patch, None])
+        share = e.area / e.patch_area[e.patch]                     # element's part of its patch
+        for c in range(3):
+            self.unshot[:, c] += np.bincount(e.patch, gained[:, c] * share, e.patches)
         self.steps += 1
         return True
 
