@@ -19,7 +19,7 @@ from types import SimpleNamespace
 
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate",
-            "warmup", "inspect", "compare")
+            "warmup", "inspect", "compare", "radiosity")
 RASTERIZER_CHOICES = ("edge", "scanline")
 
 
@@ -83,8 +83,10 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="where screenshots go, and the PNGs when there is no display "
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
-    v.add_argument("--renderer", choices=("zbuffer", "raytrace"), default=None,   # issue 12
-                   help="draw with the z-buffer (default) or the ray tracer (progressive)")
+    v.add_argument("--renderer", choices=("zbuffer", "raytrace", "radiosity", "pathtrace"),
+                   default=None,   # issues 12, 19
+                   help="draw with the z-buffer (default), the ray tracer, radiosity or the path "
+                        "tracer (the last three progressive)")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
@@ -111,6 +113,14 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     _buffer_argument(r)
     _cluster_arguments(r)                     # scale-out
     _crease_argument(r)                       # issue 20
+    # -- issue 19: global illumination (radiosity, path tracing)
+    from app.tools.radiosity import add_options as gi_options
+    gi_options(r)
+    rad = sub.add_parser("radiosity", help="solve a scene's radiosity once and save it (.npz)")
+    if command in (None, "radiosity"):
+        from app.tools.radiosity import add_arguments as radiosity_arguments
+        radiosity_arguments(rad)
+    # --
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -245,6 +255,11 @@ def _crease_argument(parser: argparse.ArgumentParser) -> None:
                              "the edge (default: the scene's crease_angle, else 45)")
 
 
+def _gi_overrides(args) -> dict:
+    from app.tools.radiosity import overrides          # issue 19
+    return overrides(args)
+
+
 def _course_options(p: argparse.ArgumentParser) -> None:
     """The course's options shared by ``view`` and ``render`` (None: the scene's own)."""
     p.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None,
@@ -348,6 +363,9 @@ def _dispatch(args) -> int:
         return warmup_main(args)
     if args.command in ("inspect", "compare"):      # issue 22
         return _inspector_command(args)
+    if args.command == "radiosity":           # issue 19
+        from app.tools.radiosity import main as radiosity_main
+        return radiosity_main(args)
     if args.command == "stability":
         from app.tools.stability import main as stability_main
         return stability_main(args)
@@ -387,7 +405,9 @@ def _drawn_by(settings) -> str:
     """What drew the frame, in the render log's words."""
     if settings.renderer == "zbuffer":
         return f"z-buffer, {settings.rasterizer} rasterizer"
-    return {"raytrace": "ray traced", "raycast": "ray cast (exact)"}.get(settings.renderer,
+    return {"raytrace": "ray traced", "raycast": "ray cast (exact)",
+            "radiosity": f"radiosity ({settings.form_factors} form factors, {settings.solver})",
+            "pathtrace": f"path traced, {settings.samples} paths per pixel"}.get(settings.renderer,
                                                                       settings.renderer)
 
 
@@ -416,7 +436,8 @@ def _render(args) -> int:
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
                                             keep_aspect=args.keep_aspect, **texture_options,
-                                            **_renderer_overrides(args))
+                                            **_renderer_overrides(args),
+                                            **_gi_overrides(args))       # issue 19
     except ValueError as error:            # e.g. --samples 0 (issue 12's options)
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -430,6 +451,13 @@ def _render(args) -> int:
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
+    if args.solution:                     # issue 19: a saved radiosity solution
+        from app.tools.radiosity import load_solution
+        from core.context import DEFAULT_CONTEXT
+        refusal = load_solution(scene, args.solution, DEFAULT_CONTEXT)
+        if refusal:
+            print(f"error: --solution: {refusal}", file=sys.stderr)
+            return 2
     if args.buffer:                      # a buffer view instead of the picture
         from app.tools.inspector import render_buffer
         return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
@@ -448,6 +476,8 @@ def _render(args) -> int:
     except ParticleBudgetError as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
+    for warning in frame.stats.get("warnings", ()):       # e.g. nothing emits light
+        print(f"warning: {warning}", file=sys.stderr)
     if frame.stats.get("particles not born"):
         print(f"warning: {frame.stats['particles not born']:,} particles were not born: at most "
               f"{frame.stats['particle cap']:,} live at once", file=sys.stderr)

@@ -42,7 +42,7 @@ SAMPLE_PATTERNS = ("regular", "jittered", "adaptive")   # adaptive: the ray trac
 FRESNEL_FORMS = ("schlick", "exact")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
-SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace")   # a scene file's `renderer` (core.renderers)
+SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace", "radiosity", "pathtrace")   # a scene file's `renderer` (core.renderers)
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
@@ -86,6 +86,15 @@ class RenderSettings:
     fresnel_form: str = "schlick"
     secondary_attenuation: tuple[float, float] = (0.0, 0.0)
     adaptive_threshold: float = 0.1
+    # Global illumination (issue 19; core.radiosity, core.pathtrace): how form factors are
+    # found ("hemicube" | "raycast") and the hemicube's resolution, the solver ("progressive" |
+    # "gauss-seidel"), its stopping point (fraction of the energy still unshot) and the element
+    # budget of adaptive subdivision.
+    form_factors: str = "hemicube"
+    hemicube_resolution: int = 128
+    solver: str = "progressive"
+    converge: float = 0.01
+    max_elements: int = 2000
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:

@@ -93,8 +93,10 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
                         help="skip the thread-scaling table (every case again on one thread)")
     parser.add_argument("--no-animation", action="store_true",
                         help="skip the animation row (the fountain on 1 process and 2 workers)")
-    parser.add_argument("--renderer", choices=("zbuffer", "raytrace"), default="zbuffer",
-                        help="raytrace: the ray tracer's rows beside Embree")
+    parser.add_argument("--renderer", default="zbuffer",
+                        help="zbuffer (default); raytrace: the ray tracer's rows beside Embree "
+                             "(issue 12); radiosity,pathtrace (either or both): the global "
+                             "illumination rows on the Cornell box, beside Mitsuba (issue 19)")
 
 
 def _progress(text: str) -> None:
@@ -521,6 +523,9 @@ def main(args) -> int:
         return 2
     if args.renderer == "raytrace":
         return raytrace_bench(args)
+    if args.renderer != "zbuffer":            # issue 19: radiosity, pathtrace
+        from app.tools.gi_bench import main as gi_main
+        return gi_main(args)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()

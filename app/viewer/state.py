@@ -536,6 +536,14 @@ class ViewerState:
                 frame = render_animated(playback.animation, t, settings, context, index, control)
                 frame.stats["time"] = t           # the moment drawn (the clock moves on)
                 return frame
+        elif settings.renderer in ("radiosity", "pathtrace") and view is not None:   # issue 19
+            from app.viewer import progressive_gi
+            progressively = getattr(progressive_gi, f"{settings.renderer}_progressively")
+            what = f"{what}, {settings.renderer}"
+
+            def run(control=None):
+                prepare()
+                return progressively(scene, view, settings, context, renderer, control)
         elif settings.renderer == "raytrace" and view is not None:
             from app.viewer.progressive import trace_progressively
             what = f"{what}, ray traced"

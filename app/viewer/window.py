@@ -65,7 +65,8 @@ log = logging.getLogger("fvd")
 PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel", "O"))
 SHADING_LABELS = (("wireframe", "Wireframe", "W"), ("flat", "Flat", "1"),
                   ("gouraud", "Gouraud", "2"), ("phong", "Phong", "3"))
-RENDERER_LABELS = (("zbuffer", "Z-buffer", "R"), ("raytrace", "Ray traced", "R"))
+RENDERER_LABELS = (("zbuffer", "Z-buffer", "R"), ("raytrace", "Ray traced", "R"),
+                   ("radiosity", "Radiosity", ""), ("pathtrace", "Path traced", ""))
 FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),
                  ("trilinear", "Trilinear (MIP map)"), ("anisotropic", "Anisotropic"))
 RASTERIZER_LABELS = (("edge", "Edge functions (perspective-correct)"),
@@ -554,7 +555,8 @@ class ViewerWindow:
 
     def _title(self) -> str:
         s = self.state
-        renderer = " - ray traced" if s.renderer_name == "raytrace" else ""
+        renderer = {"raytrace": " - ray traced", "radiosity": " - radiosity",
+                    "pathtrace": " - path traced"}.get(s.renderer_name, "")
         return (f"FvD viewer - {s.scene.name} - {s.view_label} - {s.projection} - "
                 f"{s.shading}{renderer}")
 
@@ -726,7 +728,9 @@ class ViewerWindow:
         if s.course_tri:
             imgui.text_disabled("course .tri rules: left Phong, middle Gouraud, right flat")
         extras = [] if s.renderer_name == "zbuffer" else [
-            "ray traced" + (" (refining)" if s.frame_partial else "")]
+            {"raytrace": "ray traced", "radiosity": "radiosity",
+             "pathtrace": "path traced"}.get(s.renderer_name, s.renderer_name)
+            + (" (refining)" if s.frame_partial else "")]
         if s.has_textures:
             extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))
         if extras:

@@ -59,3 +59,9 @@ register_renderer("raycast", "core.renderers.raycast:draw", samples_itself=True,
                   description="the analytic surfaces ray-cast exactly (the reference)")
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)")
+register_renderer("radiosity", "core.radiosity.renderer:draw",
+                  description="radiosity (hemicube or ray-cast form factors, progressive "
+                              "refinement), drawn Gouraud by the z-buffer (core.radiosity)")
+register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
+                  description="Kajiya's rendering equation by path tracing on the BVH "
+                              "(core.pathtrace)")

@@ -42,6 +42,12 @@ class Material:
     # What a system keeps on a material beyond the Phong terms (issue 11: "maps", the
     # colour/bump/normal/environment maps of core.texture.material).
     extra: dict = field(default_factory=dict)
+    # Global illumination (issue 19; radiosity and the path tracer read them): the radiosity
+    # an area light emits, and on which sides it glows and reflects. ``two_sided`` None: both
+    # sides for an open mesh that emits nothing (as the Phong model lights an open soup), else
+    # the side its normal (counter-clockwise winding) faces.
+    emission: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    two_sided: bool | None = None
 
 
 @dataclass
@@ -145,6 +151,10 @@ class Scene:
     # The crease angle (degrees) the reader split vertices at (core.scene.normals.with_creases):
     # faces meeting at more than this keep their own normals along the edge (issue 20).
     crease_angle: float = CREASE_ANGLE
+    # How the global-illumination renderers (issue 19: radiosity, pathtrace) turn radiosity
+    # into pixels: "linear" (clamped, as the Phong model's intensities) or "srgb" (the sRGB
+    # transfer curve, for scenes in physical units such as the Cornell box).
+    tone: str = "linear"
 
     @property
     def triangle_count(self) -> int:

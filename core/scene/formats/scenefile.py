@@ -60,8 +60,10 @@ GEOMETRY_KEYS += PRIMITIVE_KEYS
 TRANSFORM_KEYS = ("scale", "rotate", "translate")
 MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
 MATERIAL_KEYS += ("kr", "kt", "ior")      # Whitted's global terms (issue 12)
+MATERIAL_KEYS += ("emission", "two_sided")  # area lights (issue 19)
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
+TOP_KEYS += ("tone",)                       # issue 19: linear | srgb (radiosity, pathtrace)
 TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
 # Animation (issue 13): [animation], [[key]] and [[emitter]] are read by core/animation/keys.py.
 from core.animation import keys as animation_keys     # noqa: E402  (after the constants it extends)
@@ -248,9 +250,10 @@ class _Reader:
         order = self.views(doc, points)
         views = [v for v in order if isinstance(v, View)]
         messages = [v for v in order if not isinstance(v, View)]
+        emitters = any(any(m.material.emission) for m in meshes)     # issue 19: area lights
         lights = ([self.light(t, ("light", i + 1))
                    for i, t in enumerate(self.tables(doc["light"], ("light",)))]
-                  if "light" in doc else default_lights(points))
+                  if "light" in doc else [] if emitters else default_lights(points))
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
                       meshes=meshes, views=views, view_messages=messages, view_order=order,
                       lights=lights, source=self.file, crease_angle=self.crease_angle)
@@ -268,7 +271,8 @@ class _Reader:
                           ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS)),
                           ("keep_aspect", self.boolean),
                           ("rasterizer", lambda v, p: self.choice(v, p, RASTERIZERS)),
-                          ("renderer", lambda v, p: self.choice(v, p, SCENE_RENDERERS))):
+                          ("renderer", lambda v, p: self.choice(v, p, SCENE_RENDERERS)),
+                          ("tone", lambda v, p: self.choice(v, p, ("linear", "srgb")))):
             if key in doc:
                 setattr(scene, key, read(doc[key], (key,)))
         if "size" in doc:
@@ -382,6 +386,10 @@ class _Reader:
             if key in t:
                 fields[key] = self.vector(t[key], path + (key,), 3, 0.0, 1.0)
         fields.update(self.whitted_terms(t, path))
+        if "emission" in t:       # issue 19: finite and >= 0 (NaN fails the range check)
+            fields["emission"] = self.vector(t["emission"], path + ("emission",), 3, 0.0, 1e6)
+        if "two_sided" in t:
+            fields["two_sided"] = self.boolean(t["two_sided"], path + ("two_sided",))
         material = Material(**{**base.__dict__, **fields})
         # -- issue 11: textures ride on Material.extra["maps"]; a file that cannot be used
         # leaves the mesh untextured, and its message (naming file and key) is shown.

@@ -1,0 +1,130 @@
+"""``python -m app bench --renderer radiosity,pathtrace``: the global-illumination rows (issue 19)
+on the Cornell box (``scenes/cornell_box.toml``):
+
+- radiosity: seconds from the scene to 1 % unshot energy (meshing, BVH, form factors, progressive
+  refinement; no adaptive round) at about 1,000 and 10,000 elements, hemicube (resolution
+  ``--hemicube-resolution``, default 128) and ray-cast form factors (ray casting at 1,000 only
+  unless ``--gi-large-raycast``), and form-factor rows per second;
+- pathtrace: samples (camera paths) per second of our path tracer and of Mitsuba 3
+  ``scalar_rgb`` in the same run, same picture (``--size``, default 128 x 128 here, 16 spp).
+
+The first solve and the first picture run once untimed (compiling). Writes
+``DIR/bench_gi.json`` and prints a table.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+from core.paths import ROOT
+
+RENDERERS = ("radiosity", "pathtrace")
+
+
+def _progress(text: str) -> None:
+    print(f"[bench] {text}", file=sys.stderr, flush=True)
+
+
+def radiosity_rows(scene, resolution: int, sizes=(1000, 10000), raycast_sizes=(1000,)) -> list:
+    from core.radiosity.solution import Options, solve
+    solve(scene, Options(max_elements=200, resolution=resolution, adaptive=False))   # compile
+    solve(scene, Options(max_elements=200, form_factors="raycast", adaptive=False))
+    rows = []
+    for method, counts in (("hemicube", sizes), ("raycast", raycast_sizes)):
+        for count in counts:
+            _progress(f"radiosity: {method}, about {count} elements ...")
+            options = Options(form_factors=method, resolution=resolution, max_elements=count,
+                              converge=0.01, adaptive=False)
+            began = time.perf_counter()
+            solution = solve(scene, options)
+            seconds = time.perf_counter() - began
+            s, r = solution.stats, solution.stats["rounds"][0]
+            rows.append({"form_factors": method, "resolution": resolution if method == "hemicube"
+                         else None, "elements": s["elements"], "patches": s["patches"],
+                         "seconds_to_1pct": seconds, "steps": r["steps"], "unshot": r["unshot"],
+                         "rows": s["form factor rows"],
+                         "rows_per_second": s["form factor rows"] / max(s["form factor seconds"],
+                                                                        1e-9)})
+    return rows
+
+
+def pathtrace_rows(scene, size, spp: int) -> list:
+    from core.context import RenderContext
+    from core.pathtrace.renderer import render_passes
+    from core.settings import RenderSettings
+    view = scene.views[0]
+    width, height = size
+    settings = RenderSettings.for_scene(scene, renderer="pathtrace", size=(width, height))
+    render_passes(scene, view, settings.replace(size=(16, 16)), RenderContext(), samples=1)
+    _progress(f"pathtrace: ours, {width} x {height} at {spp} spp ...")
+    context = RenderContext()
+    render_passes(scene, view, settings, context, samples=1)                 # pack, BVH
+    began = time.perf_counter()
+    _, stats = render_passes(scene, view, settings, context, samples=spp)
+    ours = time.perf_counter() - began
+    rows = [{"renderer": "ours (core.pathtrace)", "samples": width * height * spp,
+             "seconds": ours, "samples_per_second": width * height * spp / ours,
+             "bounces_per_path": stats["bounces"] / stats["paths"]}]
+    from app.tools import mitsuba_oracle
+    if mitsuba_oracle.available():
+        _progress(f"pathtrace: Mitsuba 3 scalar_rgb, {width} x {height} at {spp} spp ...")
+        mitsuba_oracle.render(scene, view, 16, 16, 1)                        # load, JIT
+        _, seconds = mitsuba_oracle.render(scene, view, width, height, spp, timed=True)
+        rows.append({"renderer": "Mitsuba 3 scalar_rgb", "samples": width * height * spp,
+                     "seconds": seconds, "samples_per_second": width * height * spp / seconds})
+    else:
+        rows.append({"renderer": "Mitsuba 3 scalar_rgb", "missing": "pip install mitsuba"})
+    return rows
+
+
+def main(args) -> int:
+    from core.scene.formats import load_scene
+    wanted = [r.strip() for r in args.renderer.split(",") if r.strip()]
+    bad = [r for r in wanted if r not in RENDERERS]
+    if bad or not wanted:
+        print(f"error: --renderer: {', '.join(bad) or 'nothing'}: choose zbuffer, raytrace, or "
+              f"any of {', '.join(RENDERERS)}", file=sys.stderr)
+        return 2
+    scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    report = {"scene": "scenes/cornell_box.toml", "cpus": os.cpu_count(),
+              "loadavg_before": list(os.getloadavg())}
+    resolution = getattr(args, "hemicube_resolution", None) or 128
+    if "radiosity" in wanted:
+        report["radiosity"] = radiosity_rows(scene, resolution)
+    if "pathtrace" in wanted:
+        size = tuple(args.size) if tuple(args.size) != (500, 500) else (128, 128)
+        report["pathtrace"] = pathtrace_rows(scene, size, 16)
+    report["loadavg_after"] = list(os.getloadavg())
+    (out / "bench_gi.json").write_text(json.dumps(report, indent=2))
+    print(table(report))
+    print(f"wrote {out / 'bench_gi.json'}")
+    return 0
+
+
+def table(report) -> str:
+    lines = []
+    if "radiosity" in report:
+        lines += ["| form factors | elements | patches | s to 1 % unshot | shots | rows/s |",
+                  "|---|---:|---:|---:|---:|---:|"]
+        for r in report["radiosity"]:
+            method = (f"hemicube {r['resolution']}" if r["form_factors"] == "hemicube"
+                      else "ray cast")
+            lines.append(f"| {method} | {r['elements']} | {r['patches']} | "
+                         f"{r['seconds_to_1pct']:.2f} | {r['steps']} | {r['rows_per_second']:.0f} |")
+    if "pathtrace" in report:
+        lines += ["", "| path tracer | samples | s | samples/s |", "|---|---:|---:|---:|"]
+        for r in report["pathtrace"]:
+            if "missing" in r:
+                lines.append(f"| {r['renderer']} | - | - | ({r['missing']}) |")
+            else:
+                lines.append(f"| {r['renderer']} | {r['samples']} | {r['seconds']:.2f} | "
+                             f"{r['samples_per_second']:.0f} |")
+    lines.append(f"\nload average {report['loadavg_before'][0]:.1f} -> "
+                 f"{report['loadavg_after'][0]:.1f} on {report['cpus']} CPUs")
+    return "\n".join(lines)

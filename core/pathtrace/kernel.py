@@ -1,0 +1,321 @@
+"""Kajiya's rendering equation (1986) by path tracing, one numba loop per camera ray.
+
+    L(x, ω_o) = L_e(x, ω_o) + ∫ f(x, ω_i, ω_o) L(x', −ω_i) cos θ_i dω_i
+
+Units match :mod:`core.radiosity`: an emitter's ``emission`` is its radiance, a diffuse surface
+reflects with the BRDF ρ/π (ρ = k_d O_d), so a lit wall's pixel is its radiosity B. The
+Phong lobe is the normalised modified Phong BRDF k_s O_s (n + 2)/(2π) cos^n α (α between the
+mirror direction and ω_o); mirrors (k_r) and glass (k_t, index ``ior``) are delta lobes.
+
+At each hit along a path (``throughput`` the product of f cos / pdf so far):
+
+1. emission seen directly (first hit, after a delta bounce) counts whole; seen after a
+   diffuse or glossy bounce, it is weighted by multiple importance sampling (Veach's power
+   heuristic) against the light sampling of step 2;
+2. next-event estimation: a point chosen on the emitting triangles (by area x emitted power)
+   and a shadow ray, MIS-weighted against BSDF sampling; every point and directional light
+   of the scene, with its shadow ray (a delta light: no MIS, the Phong model's units
+   π I f_att cos θ as irradiance);
+3. the next direction sampled from the BSDF: a lobe chosen in proportion to its weight
+   (diffuse: cosine-weighted; Phong: the cos^n lobe about the mirror direction; mirror;
+   glass: Snell's refraction, total internal reflection reflects);
+4. Russian roulette from the fourth bounce on (survive with the throughput's largest channel,
+   at most 0.95), and a hard limit of ``MAX_BOUNCES``.
+
+Random numbers: splitmix64 per (ray, pass, seed), so a picture is reproducible.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from core.raytrace.bvh import STACK, closest, occluded, spread
+
+MAX_BOUNCES = 64
+# materials columns
+RHO, KS, SHINE, KR, KT, IOR, EMIT, TWO_SIDED, OS = 0, 3, 4, 5, 6, 7, 8, 11, 12
+MATERIAL_WIDTH = 15
+EPS = 1e-7          # ray offset, times the scene's size
+
+
+@njit(cache=True, inline="always")
+def _next(state):
+    """splitmix64: (new state, uniform in [0, 1))."""
+    state = (state + np.uint64(0x9E3779B97F4A7C15)) & np.uint64(0xFFFFFFFFFFFFFFFF)
+    z = state
+    z = ((z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)) & np.uint64(0xFFFFFFFFFFFFFFFF)
+    z = ((z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)) & np.uint64(0xFFFFFFFFFFFFFFFF)
+    z = z ^ (z >> np.uint64(31))
+    return state, (z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
+
+
+@njit(cache=True)
+def _frame(nx, ny, nz):
+    """Two unit vectors perpendicular to the unit n (Duff et al. 2017)."""
+    sign = 1.0 if nz >= 0.0 else -1.0
+    a = -1.0 / (sign + nz)
+    b = nx * ny * a
+    return (1.0 + sign * nx * nx * a, sign * b, -sign * nx), (b, sign + ny * ny * a, -ny)
+
+
+@njit(cache=True)
+def _around(nx, ny, nz, x, y, z):
+    t, b = _frame(nx, ny, nz)
+    return (x * t[0] + y * b[0] + z * nx, x * t[1] + y * b[1] + z * ny,
+            x * t[2] + y * b[2] + z * nz)
+
+
+@njit(cache=True)
+def _lum(r, g, b):
+    return 0.2126 * r + 0.7152 * g + 0.0722 * b
+
+
+@njit(cache=True)
+def _lobe_weights(m):
+    """Probabilities of choosing diffuse, Phong, mirror, glass at a hit of material ``m``."""
+    wd = _lum(m[RHO], m[RHO + 1], m[RHO + 2])
+    ws = m[KS] * _lum(m[OS], m[OS + 1], m[OS + 2])
+    wr, wt = m[KR], m[KT]
+    total = wd + ws + wr + wt
+    if total <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    return wd / total, ws / total, wr / total, wt / total
+
+
+@njit(cache=True)
+def _reflect(dx, dy, dz, nx, ny, nz):
+    c = dx * nx + dy * ny + dz * nz
+    return dx - 2 * c * nx, dy - 2 * c * ny, dz - 2 * c * nz
+
+
+@njit(cache=True)
+def _bsdf(m, nx, ny, nz, wox, woy, woz, wix, wiy, wiz, pd, ps):
+    """f (r, g, b) of the diffuse and Phong lobes and the pdf of sampling ω_i (solid angle);
+    ω_o points away from the surface, n on its side."""
+    cos_i = nx * wix + ny * wiy + nz * wiz
+    if cos_i <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    fr = m[RHO] / math.pi
+    fg = m[RHO + 1] / math.pi
+    fb = m[RHO + 2] / math.pi
+    pdf = pd * cos_i / math.pi
+    if ps > 0.0:
+        rx, ry, rz = _reflect(-wox, -woy, -woz, nx, ny, nz)
+        cos_a = rx * wix + ry * wiy + rz * wiz
+        if cos_a > 0.0:
+            n = m[SHINE]
+            lobe = math.pow(cos_a, n)
+            s = m[KS] * (n + 2.0) / (2.0 * math.pi) * lobe
+            fr += s * m[OS]
+            fg += s * m[OS + 1]
+            fb += s * m[OS + 2]
+            pdf += ps * (n + 1.0) / (2.0 * math.pi) * lobe
+    return fr, fg, fb, pdf
+
+
+@njit(cache=True)
+def _emitted(m, front):
+    if front or m[TWO_SIDED] > 0.0:
+        return m[EMIT], m[EMIT + 1], m[EMIT + 2]
+    return 0.0, 0.0, 0.0
+
+
+@njit(cache=True)
+def _light_pdf(emit_pdf, area, cos_l, dist2):
+    """Solid-angle pdf of having chosen this point by light sampling."""
+    if cos_l <= 0.0:
+        return 0.0
+    return emit_pdf / area * dist2 / cos_l
+
+
+@njit(cache=True)
+def _point_on(corners, e, u1, u2):
+    """A uniform point on triangle ``e`` (Shirley's square-root warp)."""
+    su = math.sqrt(u1)
+    b0, b1 = 1.0 - su, u2 * su
+    b2 = 1.0 - b0 - b1
+    c = corners[e]
+    return (b0 * c[0, 0] + b1 * c[1, 0] + b2 * c[2, 0], b0 * c[0, 1] + b1 * c[1, 1] + b2 * c[2, 1],
+            b0 * c[0, 2] + b1 * c[1, 2] + b2 * c[2, 2])
+
+
+@njit(cache=True)
+def _sample_lobe(m, nx, ny, nz, wox, woy, woz, pd, ps, u0, u1, u2):
+    """A direction from the diffuse or Phong lobe (chosen with pd : ps by ``u0``)."""
+    if u0 * (pd + ps) < pd:               # cosine-weighted hemisphere
+        r = math.sqrt(u1)
+        phi = 2.0 * math.pi * u2
+        return _around(nx, ny, nz, r * math.cos(phi), r * math.sin(phi), math.sqrt(1.0 - u1))
+    rx, ry, rz = _reflect(-wox, -woy, -woz, nx, ny, nz)
+    cos_a = math.pow(u1, 1.0 / (m[SHINE] + 1.0))
+    sin_a = math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
+    phi = 2.0 * math.pi * u2
+    return _around(rx, ry, rz, sin_a * math.cos(phi), sin_a * math.sin(phi), cos_a)
+
+
+@njit(cache=True)
+def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
+               tri_area, tri_emit_pdf, lights, background, ox, oy, oz, dx, dy, dz, t_min, t_max,
+               offset, state, stack):
+    """The radiance along one camera ray: ``(r, g, b, state, bounces)``; a camera ray that
+    hits nothing sees the background colour (a path that leaves the scene later, nothing)."""
+    lr, lg, lb = 0.0, 0.0, 0.0
+    tr, tg, tb = 1.0, 1.0, 1.0
+    last_pdf = 0.0            # solid-angle pdf of the BSDF sample that made this ray
+    delta = True              # a camera ray, or one after a mirror or glass bounce: no MIS
+    for bounce in range(MAX_BOUNCES):
+        k, t, _, _ = closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
+        if k < 0:
+            if bounce == 0:
+                return background[0], background[1], background[2], state, 0
+            return lr, lg, lb, state, bounce
+        tri = bvh.prim[k]
+        m = materials[tri_material[tri]]
+        px, py, pz = ox + t * dx, oy + t * dy, oz + t * dz
+        gx, gy, gz = tri_normal[tri, 0], tri_normal[tri, 1], tri_normal[tri, 2]
+        cos_o = -(dx * gx + dy * gy + dz * gz)
+        front = cos_o > 0.0
+        nx, ny, nz = (gx, gy, gz) if front else (-gx, -gy, -gz)
+        # 1. emission seen along the ray
+        er, eg, eb = _emitted(m, front)
+        if er + eg + eb > 0.0:
+            w = 1.0
+            if not delta:
+                lp = _light_pdf(tri_emit_pdf[tri], tri_area[tri], abs(cos_o), t * t)
+                w = last_pdf * last_pdf / (last_pdf * last_pdf + lp * lp)
+            lr += tr * er * w
+            lg += tg * eg * w
+            lb += tb * eb * w
+        pd, ps, pr, pt = _lobe_weights(m)
+        if pd + ps + pr + pt <= 0.0:
+            return lr, lg, lb, state, bounce
+        wox, woy, woz = -dx, -dy, -dz
+        sx, sy, sz = px + offset * nx, py + offset * ny, pz + offset * nz
+        # 2. next-event estimation, for the diffuse and Phong lobes
+        if pd + ps > 0.0:
+            if emit_tri.shape[0] > 0:
+                state, u0 = _next(state)
+                state, u1 = _next(state)
+                state, u2 = _next(state)
+                j = min(np.searchsorted(emit_cdf, u0 * emit_cdf[-1], side="right"),
+                        emit_tri.shape[0] - 1)
+                e = emit_tri[j]
+                qx, qy, qz = _point_on(corners, e, u1, u2)
+                lx, ly, lz = qx - sx, qy - sy, qz - sz
+                dist2 = lx * lx + ly * ly + lz * lz
+                dist = math.sqrt(dist2)
+                if dist > 0.0:
+                    lx, ly, lz = lx / dist, ly / dist, lz / dist
+                    en = tri_normal[e]
+                    cos_l = -(lx * en[0] + ly * en[1] + lz * en[2])
+                    me = materials[tri_material[e]]
+                    er, eg, eb = _emitted(me, cos_l > 0.0)
+                    fr, fg, fb, bp = _bsdf(m, nx, ny, nz, wox, woy, woz, lx, ly, lz, pd, ps)
+                    if er + eg + eb > 0.0 and fr + fg + fb > 0.0 and \
+                            occluded(bvh, sx, sy, sz, lx, ly, lz, 0.0, dist * (1.0 - 1e-6),
+                                     stack) < 0:
+                        lp = _light_pdf(tri_emit_pdf[e], tri_area[e], abs(cos_l), dist2)
+                        cos_s = nx * lx + ny * ly + nz * lz
+                        w = lp * lp / (lp * lp + bp * bp)
+                        g = w * cos_s / lp
+                        lr += tr * fr * er * g
+                        lg += tg * fg * eg * g
+                        lb += tb * fb * eb * g
+            for li in range(lights.shape[0]):
+                light = lights[li]
+                if light[9] > 0.0:                       # a point light
+                    lx, ly, lz = light[0] - sx, light[1] - sy, light[2] - sz
+                    dist = math.sqrt(lx * lx + ly * ly + lz * lz)
+                    if dist == 0.0:
+                        continue
+                    lx, ly, lz = lx / dist, ly / dist, lz / dist
+                    f_att = min(1.0, 1.0 / max(light[6] + light[7] * dist
+                                               + light[8] * dist * dist, 1e-300))
+                    reach = dist * (1.0 - 1e-9)
+                else:                                    # directional: towards the light
+                    lx, ly, lz = light[0], light[1], light[2]
+                    f_att, reach = 1.0, np.inf
+                cos_s = nx * lx + ny * ly + nz * lz
+                if cos_s <= 0.0:
+                    continue
+                fr, fg, fb, _ = _bsdf(m, nx, ny, nz, wox, woy, woz, lx, ly, lz, pd, ps)
+                if occluded(bvh, sx, sy, sz, lx, ly, lz, 0.0, reach, stack) >= 0:
+                    continue
+                g = math.pi * f_att * cos_s
+                lr += tr * fr * light[3] * g
+                lg += tg * fg * light[4] * g
+                lb += tb * fb * light[5] * g
+        # 3. the next direction, from a lobe chosen by its weight
+        state, u0 = _next(state)
+        state, u1 = _next(state)
+        state, u2 = _next(state)
+        if u0 < pd + ps:
+            wx, wy, wz = _sample_lobe(m, nx, ny, nz, wox, woy, woz, pd, ps, u0 / (pd + ps),
+                                      u1, u2)
+            fr, fg, fb, bp = _bsdf(m, nx, ny, nz, wox, woy, woz, wx, wy, wz, pd, ps)
+            if bp <= 0.0:
+                return lr, lg, lb, state, bounce
+            cos_i = nx * wx + ny * wy + nz * wz
+            tr, tg, tb = tr * fr * cos_i / bp, tg * fg * cos_i / bp, tb * fb * cos_i / bp
+            last_pdf, delta = bp, False
+            ox, oy, oz = sx, sy, sz
+        elif u0 < pd + ps + pr:                       # mirror: k_r, chosen with pr
+            wx, wy, wz = _reflect(dx, dy, dz, nx, ny, nz)
+            scale = m[KR] / pr
+            tr, tg, tb = tr * scale, tg * scale, tb * scale
+            delta = True
+            ox, oy, oz = sx, sy, sz
+        else:                                         # glass: k_t, Snell's law
+            eta = 1.0 / m[IOR] if front else m[IOR]
+            c = -(dx * nx + dy * ny + dz * nz)
+            k2 = 1.0 - eta * eta * (1.0 - c * c)
+            if k2 < 0.0:                              # total internal reflection
+                wx, wy, wz = _reflect(dx, dy, dz, nx, ny, nz)
+                ox, oy, oz = sx, sy, sz
+            else:
+                a = eta * c - math.sqrt(k2)
+                wx, wy, wz = eta * dx + a * nx, eta * dy + a * ny, eta * dz + a * nz
+                ox, oy, oz = px - offset * nx, py - offset * ny, pz - offset * nz
+            scale = m[KT] / pt
+            tr, tg, tb = tr * scale, tg * scale, tb * scale
+            delta = True
+        dx, dy, dz = wx, wy, wz
+        t_min, t_max = 0.0, np.inf
+        # 4. Russian roulette
+        if bounce >= 3:
+            q = min(0.95, max(tr, tg, tb))
+            state, u = _next(state)
+            if u >= q:
+                return lr, lg, lb, state, bounce + 1
+            tr, tg, tb = tr / q, tg / q, tb / q
+    return lr, lg, lb, state, MAX_BOUNCES
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
+               tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
+               out, bounces):
+    """Radiance of every ray into ``out`` (N, 3); ``bounces`` (chunks,) the path lengths."""
+    n = origins.shape[0]
+    chunks = (n + 255) // 256
+    for j in prange(chunks):
+        chunk = spread(j, chunks)
+        stack = np.empty(STACK, np.int64)
+        total = 0
+        for i in range(chunk * 256, min(n, (chunk + 1) * 256)):
+            state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(i)
+            state, _ = _next(state)
+            if not t_min[i] < t_max[i]:          # outside the viewport (letterbox)
+                out[i, 0], out[i, 1], out[i, 2] = background[0], background[1], background[2]
+                continue
+            r, g, b, state, depth = trace_path(
+                bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
+                tri_area, tri_emit_pdf, lights, background, origins[i, 0], origins[i, 1], origins[i, 2],
+                directions[i, 0], directions[i, 1], directions[i, 2], t_min[i], t_max[i],
+                offset, state, stack)
+            out[i, 0], out[i, 1], out[i, 2] = r, g, b
+            total += depth
+        bounces[chunk] = total

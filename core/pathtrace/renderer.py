@@ -1,0 +1,184 @@
+"""The ``"pathtrace"`` renderer: the scene packed for :mod:`core.pathtrace.kernel`, the film's
+samples one pass each, averaged.
+
+:func:`pack` turns a scene into the kernel's arrays (kept in the render context while the
+scene lives): the ray tracer's BVH (:func:`core.raytrace.bvh.build`) over every triangle,
+each triangle's corners, unit normal, area and material row, the emitting triangles with the
+cumulative distribution that light sampling draws from (area x emitted luminance), and the
+point and directional lights. :func:`render_passes` traces ``samples`` passes, each one ray
+through every pixel at one of the film's sample offsets (jittered strata), and returns the
+mean radiance ``(H, W, 3)``; :func:`draw` is the registered renderer. ``inspect_pixel`` is
+not provided yet.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.camera.film import sample_offsets
+from core.pathtrace import kernel
+from core.radiosity.mesh import check_scene, has_light, reflectance
+from core.radiosity.tone import tone_map
+from core.shading.illumination import to_uint8
+
+
+@dataclass
+class Packed:
+    bvh: object
+    corners: np.ndarray
+    normal: np.ndarray
+    material: np.ndarray
+    materials: np.ndarray
+    emit_tri: np.ndarray
+    emit_cdf: np.ndarray
+    area: np.ndarray
+    emit_pdf: np.ndarray
+    lights: np.ndarray
+    scale: float
+    background: np.ndarray
+
+
+def _material_row(material) -> np.ndarray:
+    row = np.zeros(kernel.MATERIAL_WIDTH)
+    row[kernel.RHO:kernel.RHO + 3] = reflectance(material)
+    row[kernel.KS] = material.ks
+    row[kernel.SHINE] = material.n
+    row[kernel.KR] = material.kr
+    row[kernel.KT] = material.kt
+    row[kernel.IOR] = material.ior
+    row[kernel.EMIT:kernel.EMIT + 3] = material.emission
+    row[kernel.TWO_SIDED] = 1.0 if material.two_sided else 0.0
+    row[kernel.OS:kernel.OS + 3] = material.os
+    return row
+
+
+def pack_lights(lights) -> np.ndarray:
+    """(L, 10): position or direction, intensity, c1 c2 c3, 1 for a point light."""
+    rows = []
+    for light in lights:
+        point = light.position is not None
+        where = light.position if point else light.direction
+        rows.append([*where, *light.intensity, *light.attenuation, 1.0 if point else 0.0])
+    return np.array(rows, dtype=np.float64).reshape(-1, 10)
+
+
+def pack(scene) -> Packed:
+    """The kernel's arrays for ``scene``; raises RadiosityError for a material it cannot use."""
+    from core.raytrace.bvh import build
+    check_scene(scene)
+    meshes = [m for m in scene.meshes if len(m.triangles)]
+    positions = np.concatenate([m.positions for m in meshes])
+    offsets = np.cumsum([0] + [len(m.positions) for m in meshes])
+    triangles = np.concatenate([m.triangles + offsets[i] for i, m in enumerate(meshes)])
+    material = np.repeat(np.arange(len(meshes)), [len(m.triangles) for m in meshes])
+    materials = np.array([_material_row(m.material) for m in meshes])
+    corners = positions[triangles]
+    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    length = np.linalg.norm(cross, axis=1)
+    normal = cross / np.where(length > 0, length, 1.0)[:, None]
+    area = 0.5 * length
+    emission = materials[material, kernel.EMIT:kernel.EMIT + 3]
+    power = area * (0.2126 * emission[:, 0] + 0.7152 * emission[:, 1] + 0.0722 * emission[:, 2])
+    emit_tri = np.flatnonzero(power > 0.0)
+    emit_cdf = np.cumsum(power[emit_tri])
+    emit_pdf = np.zeros(len(area))
+    if len(emit_tri):
+        emit_pdf[emit_tri] = power[emit_tri] / emit_cdf[-1]
+    bvh, _ = build(positions, triangles)
+    lo, hi = positions.min(axis=0), positions.max(axis=0)
+    return Packed(bvh, np.ascontiguousarray(corners), normal, material.astype(np.int64),
+                  materials, emit_tri.astype(np.int64), emit_cdf, area, emit_pdf,
+                  pack_lights(scene.lights), float(np.linalg.norm(hi - lo)) or 1.0,
+                  np.asarray(scene.background, dtype=np.float64).reshape(3))
+
+
+def packed_for(scene, context) -> Packed:
+    cache = context.cache(scene)
+    if "pathtrace packing" not in cache:
+        cache["pathtrace packing"] = pack(scene)
+    return cache["pathtrace packing"]
+
+
+def trace(packed: Packed, origins, directions, t_min, t_max, seed: int) -> tuple[np.ndarray, int]:
+    """Radiance ``(N, 3)`` of the rays and the bounces their paths made."""
+    n = len(origins)
+    out = np.empty((n, 3))
+    bounces = np.zeros((n + 255) // 256, np.int64)
+    kernel.trace_many(packed.bvh, packed.corners, packed.normal, packed.material,
+                      packed.materials, packed.emit_tri, packed.emit_cdf, packed.area,
+                      packed.emit_pdf, packed.lights, packed.background,
+                      np.ascontiguousarray(origins),
+                      np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
+                      np.ascontiguousarray(t_max), kernel.EPS * packed.scale, int(seed), out,
+                      bounces)
+    return out, int(bounces.sum())
+
+
+def camera_rays(view, projection, width, height, offset, keep_aspect, rows=None):
+    from core.raytrace.camera import clip_interval, tile_rays
+    origins, directions, inside = tile_rays(view, projection, width, height, [offset],
+                                            rows=rows, keep_aspect=keep_aspect)
+    perspective = projection == "perspective"
+    t_min, t_max = clip_interval(view, origins, directions, from_origin=perspective)
+    if not perspective:
+        start = np.where(inside & np.isfinite(t_min), t_min, 0.0)
+        origins = origins + start[:, None] * directions
+        t_min, t_max = t_min - start, t_max - start
+    t_min[~inside] = np.inf
+    return origins, directions, t_min, t_max
+
+
+def pass_offsets(samples: int, seed: int) -> np.ndarray:
+    """One film offset per pass: jittered strata (a single pass: the pixel centre)."""
+    return sample_offsets(samples, "jittered" if samples > 1 else "regular", seed)
+
+
+def render_passes(scene, view, settings, context, first: int = 0, count: int | None = None,
+                  packed: Packed | None = None, samples: int | None = None
+                  ) -> tuple[np.ndarray, dict]:
+    """Mean radiance ``(H, W, 3)`` of passes ``first .. first + count`` of ``samples`` (default
+    ``settings.samples``; more than its limit of 256 may be asked for here)."""
+    packed = packed or packed_for(scene, context)
+    width, height = settings.size
+    offsets = pass_offsets(samples or settings.samples, settings.seed)
+    count = len(offsets) - first if count is None else count
+    total = np.zeros((height * width, 3))
+    bounces, began = 0, time.perf_counter()
+    for k in range(first, first + count):
+        rays = camera_rays(view, settings.projection, width, height, offsets[k],
+                           settings.keep_aspect)
+        radiance, b = trace(packed, *rays, seed=settings.seed * 1_000_003 + k)
+        total += radiance
+        bounces += b
+    seconds = time.perf_counter() - began
+    stats = {"paths": count * width * height, "bounces": bounces, "trace seconds": seconds}
+    return (total / max(count, 1)).reshape(height, width, 3), stats
+
+
+def draw(scene, view, settings, frame, context, timer=None) -> None:
+    """The ``"pathtrace"`` renderer: ``settings.samples`` paths per pixel."""
+    from core.radiosity.mesh import RadiosityError
+    try:
+        packed = packed_for(scene, context)
+    except RadiosityError as error:
+        frame.color[...] = 0
+        frame.message = f"{scene.name}: cannot path trace: {error}"
+        return
+    if not has_light(scene):
+        frame.color[...] = 0
+        frame.stats.setdefault("warnings", []).append(
+            f"{scene.name}: nothing emits light (no material with emission and no "
+            "[[light]]): the picture is black")
+        return
+    if timer is not None:
+        timer.lap("pack scene, build BVH")
+    radiance, stats = render_passes(scene, view, settings, context, packed=packed)
+    frame.color[...] = to_uint8(tone_map(radiance, scene.tone))
+    frame.stats["pathtrace"] = stats
+    frame.stats["samples per pixel"] = settings.samples
+    frame.stats["computed"].append("path tracing")
+    if timer is not None:
+        timer.lap("path trace")

@@ -1,0 +1,216 @@
+"""The ``"radiosity"`` renderer: solve once per scene, then every view is a z-buffer frame.
+
+The solution (:func:`core.radiosity.solution.solve`) does not depend on the view; it is kept
+in the :class:`core.context.RenderContext` with the scene, keyed by the settings it depends
+on, so moving the camera costs one Gouraud frame. Element radiosities go to the vertices
+(area-weighted within each surface, :func:`core.radiosity.mesh.vertex_values`) and are drawn by
+the z-buffer (:func:`core.renderers.zbuffer.draw_triangles`) with the ``"radiosity"`` shader
+of the registry: the vertex values are the colours, interpolated as Gouraud's are. Pixel values
+are radiosities clamped to [0, 1] (``scene.tone`` "srgb": through the sRGB curve first).
+
+Display meshes: the two-sided pairs are one mesh marked closed, so back-face culling shows
+each side's own copy; the one-sided elements another, drawn from both sides.
+
+``inspect_pixel`` tells what one pixel shows: its element, emission, reflectance, radiosity
+and the vertex values interpolated there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core.camera.film import fill
+from core.radiosity.mesh import Elements, has_light, vertex_values
+from core.radiosity.solution import Options, Solution, solve
+from core.radiosity.tone import tone_map
+from core.scene.model import Material, Mesh, Scene
+
+SHADER = "radiosity"
+
+
+def _register_shader() -> None:
+    from core.shading.gouraud import _resolve_gouraud
+    from core.shading.registry import Shader, register_shader
+    from core.shading.shade import concatenated, covered_spans
+
+    def vertex(s, scene, meshes, weighting) -> None:
+        s.vertex_attrs = np.ascontiguousarray(concatenated(
+            s.context, scene, meshes, "radiosity", lambda m: m.extra["radiosity"], 3))
+        s.computed.append("radiosity at vertices")
+
+    def pixel(s, vis, triangles, attrs, source, background8, out) -> None:
+        _resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
+                         np.ascontiguousarray(vis.b1, dtype=np.float64),
+                         np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
+                         triangles, attrs, out)
+
+    register_shader(Shader(SHADER, vertex, pixel, varyings=("rgb",), width=3,
+                           description="radiosity at the vertices, interpolated (Gouraud)"))
+
+
+_register_shader()
+
+
+def display_scene(scene, solution: Solution) -> Scene:
+    """The elements as meshes whose vertices carry the shown radiosity (``extra["radiosity"]``)."""
+    e = solution.elements
+    values = tone_map(solution.shown(), scene.tone)
+    meshes = []
+    for two_sided in (False, True):
+        rows = np.flatnonzero(e.two_sided == two_sided)
+        if not len(rows):
+            continue
+        part = Elements(**{k: (getattr(e, k)[rows] if k in _ELEMENT_FIELDS else getattr(e, k))
+                           for k in Elements.__dataclass_fields__})
+        positions, triangles, at_vertex = vertex_values(part, values[rows])
+        meshes.append(Mesh(positions, triangles, closed=two_sided, material=Material(),
+                           name=f"elements ({'two' if two_sided else 'one'}-sided)",
+                           extra={"radiosity": at_vertex}))
+        meshes[-1].element_rows = rows          # display triangle k is element rows[k]
+    return Scene(name=scene.name, meshes=meshes, views=[], lights=[], ambient=(0, 0, 0),
+                 background=scene.background, shading="gouraud")
+
+
+_ELEMENT_FIELDS = ("corners", "patch", "area", "normal", "centre", "rho", "emission", "surface",
+                   "mesh", "two_sided")
+
+
+def _key(settings):
+    return Options.from_settings(settings)
+
+
+def solution_for(scene, settings, context) -> Solution:
+    """The scene's solution for these settings, solved on first use and kept in ``context``."""
+    cache = context.cache(scene)
+    options = _key(settings)
+    held = cache.get("radiosity solution")
+    if held is None or held.options != options:
+        held = solve(scene, options)
+        cache["radiosity solution"] = held
+        cache.pop("radiosity display", None)
+    return held
+
+
+def use_solution(scene, solution: Solution, context) -> None:
+    """Show ``solution`` (a loaded or a progressive one) for ``scene`` in ``context``."""
+    cache = context.cache(scene)
+    cache["radiosity solution"] = solution
+    cache.pop("radiosity display", None)
+
+
+def _display(scene, solution, context) -> Scene:
+    cache = context.cache(scene)
+    held = cache.get("radiosity display")
+    if held is None or held[0] is not solution:
+        held = (solution, display_scene(scene, solution))
+        cache["radiosity display"] = held
+    return held[1]
+
+
+def draw(scene, view, settings, frame, context, timer) -> None:
+    """Fill ``frame`` with the radiosity solution of ``scene`` seen through ``view``."""
+    from core.pipeline import project
+    from core.renderers.zbuffer import _sample_viewport, draw_triangles
+    if not has_light(scene):
+        fill(frame.color, (0.0, 0.0, 0.0))
+        frame.stats.setdefault("warnings", []).append(
+            f"{scene.name}: nothing emits light (no material with emission and no [[light]]): "
+            "the picture is black")
+        return
+    try:
+        held = context.cache(scene).get("radiosity solution")
+        solution = held if held is not None and held.stats.get("loaded") else \
+            solution_for(scene, settings, context)
+    except ValueError as error:          # RadiosityError: a material, a zero-area scene
+        fill(frame.color, (0.0, 0.0, 0.0))
+        frame.message = f"{scene.name}: cannot solve for radiosity: {error}"
+        return
+    timer.lap("radiosity solution")
+    shown = _display(scene, solution, context)
+    n, z_min = context.normalizing_transform(view, settings.projection)
+    height, width = frame.color.shape[:2]
+    vp = _sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
+                          settings.pixel_offset)
+    draw_triangles(frame, shown, view, settings.projection, SHADER, n, z_min, vp, context,
+                   timer, settings)
+    frame.stats["radiosity"] = {k: v for k, v in solution.stats.items() if k != "rounds"}
+    frame.stats["computed"].append("radiosity")
+
+
+def inspect_pixel(scene, view, settings, x, y, context) -> dict:
+    """The element seen at image pixel (x, y): its emission, reflectance, radiosity, and the
+    vertex values interpolated there (the pixel's colour)."""
+    from core.render import render
+    frame = render(scene, view, settings, context)
+    record = {"renderer": "radiosity", "pixel": [int(x), int(y)],
+              "color": [int(c) for c in frame.color[y, x]]}
+    if frame.message:
+        record["message"] = frame.message
+        return record
+    vis = context.buffer("visibility", (settings.size[0], settings.size[1]), lambda: None)
+    solution = context.cache(scene)["radiosity solution"]
+    shown = _display(scene, solution, context)
+    record["solution"] = {k: v for k, v in solution.stats.items() if k != "rounds"}
+    t = int(vis.tri[y, x]) if vis is not None else -1
+    if t < 0:
+        record["hit"] = None
+        return record
+    element = _element_at(scene, shown, view, settings, context, x, y)
+    if element is None:
+        record["hit"] = None
+        return record
+    e = solution.elements
+    record.update({"element": int(element), "patch": int(e.patch[element]),
+                   "mesh": scene.meshes[int(e.mesh[element])].name,
+                   "area": float(e.area[element]),
+                   "emission": e.emission[element].tolist(), "reflectance": e.rho[element].tolist(),
+                   "radiosity": solution.radiosity[element].tolist(),
+                   "ambient": solution.ambient[element].tolist()})
+    w1, w2 = float(vis.b1[y, x]), float(vis.b2[y, x])
+    record["barycentric"] = [1.0 - w1 - w2, w1, w2]
+    return record
+
+
+def radiosity_image(solution: Solution, view, projection: str, width: int, height: int
+                    ) -> np.ndarray:
+    """(H, W, 3) float: the displayed radiosity (vertex values interpolated, no ambient
+    term, no tone) at each pixel centre, found by casting a ray per pixel into the elements
+    (the oracle tests compare it with the path tracer's radiance)."""
+    from core.pathtrace.renderer import camera_rays
+    from core.raytrace.bvh import build, intersect_rays
+    e = solution.elements
+    positions, triangles, at_vertex = vertex_values(e, solution.radiosity)
+    origins, directions, t_min, t_max = camera_rays(view, projection, width, height,
+                                                    (0.5, 0.5), False)
+    # one-sided elements only: of a coplanar two-sided pair the ray could take either copy
+    keep = np.flatnonzero(~e.two_sided)
+    bvh, _ = build(positions, triangles[keep])
+    prim, _, u, v = intersect_rays(bvh, origins, directions, t_min, t_max)
+    tri = triangles[keep][np.maximum(prim, 0)]
+    image = ((1 - u - v)[:, None] * at_vertex[tri[:, 0]] + u[:, None] * at_vertex[tri[:, 1]]
+             + v[:, None] * at_vertex[tri[:, 2]])
+    image[prim < 0] = 0.0
+    return image.reshape(height, width, 3)
+
+
+def _element_at(scene, shown, view, settings, context, x, y):
+    """The element drawn at (x, y): a ray through the pixel centre to the nearest display
+    triangle (the z-buffer and the ray see the same surface)."""
+    from core.camera.rays import primary_rays
+    from core.raytrace.bvh import build, intersect_rays
+    origins, directions, inside = primary_rays(view, settings.projection, settings.size[0],
+                                               settings.size[1], np.array([[0.5, 0.5]]),
+                                               settings.keep_aspect, (y, y + 1), (x, x + 1))
+    positions = np.concatenate([m.positions for m in shown.meshes])
+    offsets = np.cumsum([0] + [len(m.positions) for m in shown.meshes])
+    triangles = np.concatenate([m.triangles + offsets[i] for i, m in enumerate(shown.meshes)])
+    rows = np.concatenate([m.element_rows for m in shown.meshes])
+    # Of a two-sided pair (coplanar) only the copy facing the ray can be the one drawn.
+    corners = positions[triangles]
+    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    two = np.concatenate([np.full(len(m.triangles), m.closed) for m in shown.meshes])
+    keep = np.flatnonzero(~two | (normal @ directions[0] < 0.0))
+    triangles, rows = triangles[keep], rows[keep]
+    bvh, _ = build(positions, triangles)
+    prim, _, _, _ = intersect_rays(bvh, origins, directions)
+    return None if prim[0] < 0 else rows[prim[0]]
