@@ -41,6 +41,7 @@ SAMPLE_PATTERNS = ("regular", "jittered")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace")   # a scene file's `renderer` (core.renderers)
+BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
@@ -76,6 +77,11 @@ class RenderSettings:
     adaptive_epsilon: float = 1e-3
     shadows: str = "transmit"
     fresnel: bool = False
+    # The painter's renderers (issue 18; core.renderers.painters): the BSP tree's root rule
+    # (core.visibility.bsp.ROOT_RULES) and, for the draw-order slider, how many triangles of
+    # the painting order to paint (None: all).
+    bsp_root: str = "fewest-splits"
+    paint_first: int | None = None
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
@@ -90,6 +96,9 @@ class RenderSettings:
         if self.sample_pattern not in SAMPLE_PATTERNS:
             raise ValueError(f"sample pattern must be one of {', '.join(SAMPLE_PATTERNS)}, "
                              f"not {self.sample_pattern!r}")
+        if self.bsp_root not in BSP_ROOTS:
+            raise ValueError(f"BSP root rule must be one of {', '.join(BSP_ROOTS)}, "
+                             f"not {self.bsp_root!r}")
         object.__setattr__(self, "projection", str(self.projection))
         object.__setattr__(self, "shading", str(self.shading))
         object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))
