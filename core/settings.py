@@ -40,7 +40,7 @@ SOLID_SHADINGS = SHADINGS[1:]          # the modes that fill triangles
 SAMPLE_PATTERNS = ("regular", "jittered")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
-SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace")   # a scene file's `renderer` (core.renderers)
+SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace", "bsp", "depth-sort")   # a scene file's `renderer` (core.renderers)
 BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 

@@ -70,7 +70,7 @@ class BSPTree:
 
     def stats(self) -> dict:
         return {"rule": self.rule, "nodes": self.nodes, "splits": self.splits,
-                "depth": self.depth, "fragments": int(len(self.fragments)),
+                "depth": self.depth, "fragments": int(len(self.node_fragments)),
                 "build ms": round(self.build_ms, 3)}
 
 
