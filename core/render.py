@@ -107,6 +107,9 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         fill(frame.color, scene.background)
         return frame
     draw = renderer.function()
+    if settings.depth_cue:                    # issue 18: any renderer's picture, cued by depth
+        from core.shading.depth_cue import depth_cued
+        draw = depth_cued(draw)
     if settings.samples == 1 or renderer.samples_itself:
         draw(scene, view, settings, frame, context, Timer(frame.stats, inspect))
     else:

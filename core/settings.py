@@ -82,6 +82,9 @@ class RenderSettings:
     # the painting order to paint (None: all).
     bsp_root: str = "fewest-splits"
     paint_first: int | None = None
+    # Depth cueing (issue 18; core.shading.depth_cue) on any renderer, with the scene's
+    # [depth_cue] parameters (on by default for a scene that has the table).
+    depth_cue: bool = False
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
@@ -111,7 +114,8 @@ class RenderSettings:
         override of ``None`` keeps the scene's value."""
         values = {"projection": scene.projection, "shading": scene.shading, "size": scene.size,
                   "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect,
-                  "renderer": scene.renderer}
+                  "renderer": scene.renderer,
+                  "depth_cue": getattr(scene, "depth_cue", None) is not None}
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)
 

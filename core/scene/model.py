@@ -137,6 +137,8 @@ class Scene:
     renderer: str = "zbuffer"             # the scene file's renderer (settings.SCENE_RENDERERS)
     # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
     primitives: list = field(default_factory=list)
+    # The [depth_cue] table (core.shading.depth_cue.DepthCue), None when the file has none.
+    depth_cue: object | None = None
 
     @property
     def triangle_count(self) -> int:

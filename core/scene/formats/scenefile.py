@@ -68,6 +68,10 @@ from core.animation import keys as animation_keys     # noqa: E402  (after the c
 TOP_KEYS += animation_keys.TOP_KEYS
 TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
 
+# -- issue 18: the [depth_cue] table (core.shading.depth_cue)
+TOP_KEYS += ("depth_cue",)
+# --
+
 # -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
 from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
 MATERIAL_KEYS = MATERIAL_KEYS + TEXTURE_KEYS
@@ -271,6 +275,9 @@ class _Reader:
             scene.size = (int(w), int(h))
         if size is not None:
             scene.size = tuple(size)
+        if "depth_cue" in doc:                                  # issue 18
+            from core.shading.depth_cue import read_table
+            scene.depth_cue = read_table(self, doc["depth_cue"], ("depth_cue",))
         # -- issue 11: texture files that could not be used; the bump demo's panel view
         scene.messages += self.texture_messages
         from core.texture.demo_scene import panel_views
