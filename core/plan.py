@@ -89,7 +89,22 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
     ]
     if renderer in PAINTERS:
         _painter_stages(stages, renderer, triangle_stage)
+    if shading == "depth":
+        _depth_shading_stages(stages, solid)
     return stages
+
+
+def _depth_shading_stages(stages: list, solid: bool) -> None:
+    """Depth shading (issue 18) needs no normals and no light: a colour map per pixel."""
+    unlit = ("face normals", "vertex normals", "illuminate faces", "illuminate vertices",
+             "illuminate pixels")
+    for i, s in enumerate(stages):
+        if s.name in unlit:
+            stages[i] = Stage(s.name, False, "depth shading uses no normals and no light")
+    at = next(i for i, s in enumerate(stages) if s.name == "z-buffer scan conversion") + 1
+    stages.insert(at, Stage("depth shading", solid,
+                            "each pixel's height (or eye distance) through a colour map"
+                            if solid else "no triangles are drawn"))
 
 
 # issue 18: the painter's renderers find an order instead of testing depth per pixel

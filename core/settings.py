@@ -29,6 +29,7 @@ class Shading(str, Enum):
     FLAT = "flat"
     GOURAUD = "gouraud"
     PHONG = "phong"
+    DEPTH = "depth"          # issue 18: colour from height or view depth alone (core.shading.depth)
 
     def __str__(self) -> str:
         return self.value
@@ -85,6 +86,8 @@ class RenderSettings:
     # Depth cueing (issue 18; core.shading.depth_cue) on any renderer, with the scene's
     # [depth_cue] parameters (on by default for a scene that has the table).
     depth_cue: bool = False
+    # Depth shading's scalar (core.shading.depth.MODES): "height" (world y) | "view" (eye distance).
+    depth_shading: str = "height"
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
