@@ -182,6 +182,9 @@ def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> N
                              "head; random: seeded)")
     parser.add_argument("--paint-first", type=int, default=None, metavar="K",
                         help="bsp, depth-sort: paint only the first K triangles of the order")
+    parser.add_argument("--transparency", choices=("off", "interpolated", "screen-door"),
+                        default=None, help="z-buffer, bsp, depth-sort: materials with k_t > 0 "
+                        "laid over the opaque picture (default: the scene's, else off)")
     parser.add_argument("--depth-cue", action=argparse.BooleanOptionalAction, default=None,
                         help="fade with depth towards the cue colour (FvDFH 16.1.3; the scene's "
                              "[depth_cue] table, default on when it has one)")
@@ -192,7 +195,8 @@ def _painter_overrides(args) -> dict:
         raise ValueError(f"--paint-first must be 0 or more, not {args.paint_first}")
     return {"bsp_root": getattr(args, "bsp_root", None),
             "paint_first": getattr(args, "paint_first", None),
-            "depth_cue": getattr(args, "depth_cue", None)}
+            "depth_cue": getattr(args, "depth_cue", None),
+            "transparency": getattr(args, "transparency", None)}
 
 
 def _painter_plan(args, scene) -> dict | None:

@@ -107,6 +107,10 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         fill(frame.color, scene.background)
         return frame
     draw = renderer.function()
+    if (settings.transparency != "off" and settings.renderer in ("zbuffer", "bsp", "depth-sort")
+            and any(m.material.kt > 0 for m in scene.meshes)):   # issue 18: k_t > 0 laid over
+        from core.shading.transparency import with_transparency
+        draw = with_transparency(draw)
     if settings.depth_cue:                    # issue 18: any renderer's picture, cued by depth
         from core.shading.depth_cue import depth_cued
         draw = depth_cued(draw)

@@ -42,7 +42,8 @@ SAMPLE_PATTERNS = ("regular", "jittered")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace", "bsp", "depth-sort")   # a scene file's `renderer` (core.renderers)
-BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
+BSP_ROOTS = ("first", "random", "fewest-splits")
+TRANSPARENCIES = ("off", "interpolated", "screen-door")   # core.shading.transparency.MODES   # core.visibility.bsp.ROOT_RULES
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
@@ -88,6 +89,9 @@ class RenderSettings:
     depth_cue: bool = False
     # Depth shading's scalar (core.shading.depth.MODES): "height" (world y) | "view" (eye distance).
     depth_shading: str = "height"
+    # Transparency of materials with k_t > 0 in the z-buffer family (core.shading.transparency):
+    # "off" (drawn opaque, as before) | "interpolated" | "screen-door".
+    transparency: str = "off"
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
@@ -102,6 +106,9 @@ class RenderSettings:
         if self.sample_pattern not in SAMPLE_PATTERNS:
             raise ValueError(f"sample pattern must be one of {', '.join(SAMPLE_PATTERNS)}, "
                              f"not {self.sample_pattern!r}")
+        if self.transparency not in TRANSPARENCIES:
+            raise ValueError(f"transparency must be one of {', '.join(TRANSPARENCIES)}, "
+                             f"not {self.transparency!r}")
         if self.bsp_root not in BSP_ROOTS:
             raise ValueError(f"BSP root rule must be one of {', '.join(BSP_ROOTS)}, "
                              f"not {self.bsp_root!r}")
@@ -118,7 +125,8 @@ class RenderSettings:
         values = {"projection": scene.projection, "shading": scene.shading, "size": scene.size,
                   "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect,
                   "renderer": scene.renderer,
-                  "depth_cue": getattr(scene, "depth_cue", None) is not None}
+                  "depth_cue": getattr(scene, "depth_cue", None) is not None,
+                  "transparency": getattr(scene, "transparency", "off")}
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)
 

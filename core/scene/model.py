@@ -139,6 +139,8 @@ class Scene:
     primitives: list = field(default_factory=list)
     # The [depth_cue] table (core.shading.depth_cue.DepthCue), None when the file has none.
     depth_cue: object | None = None
+    # How the z-buffer family draws materials with k_t > 0 (settings.TRANSPARENCIES).
+    transparency: str = "off"
 
     @property
     def triangle_count(self) -> int:
