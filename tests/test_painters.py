@@ -205,3 +205,56 @@ def test_no_order_of_whole_polygons_exists(name, monkeypatch):
     _plain_sort(monkeypatch)
     same, kinds = _compare(scene, "depth-sort", "perspective", "flat")
     assert kinds["other"] > 500, (same, kinds)       # a whole region, not a seam
+
+
+# ------------------------------------------------------------- looking at the painting
+
+def test_paint_first_overdraw_and_pixel_history():
+    from core.renderers.painters import inspect_pixel, overdraw
+    scene = _scene("interpenetrating.tri")
+    view = scene.views[0]
+    context = RenderContext()
+    settings = RenderSettings.for_scene(scene, renderer="depth-sort")
+    full = render(scene, view, settings, context)
+    painted = full.stats["painted"]
+    assert painted > len(scene.meshes[0].triangles)              # the cycle and the pierce split
+    none = render(scene, view, settings.replace(paint_first=0), context)
+    assert (none.color == none.color[0, 0]).all()                # nothing painted: background
+    part = render(scene, view, settings.replace(paint_first=painted // 2), context)
+    assert part.stats["painted"] == painted // 2
+    assert 0 < (part.color != none.color).any(axis=2).sum() < (full.color != none.color).any(axis=2).sum()
+    counts = overdraw(scene, view, settings, context)
+    assert counts.shape == (500, 500) and counts.dtype == np.int32
+    covered = (full.color != none.color).any(axis=2)
+    assert (counts[covered] >= 1).all() and counts.max() >= 2
+    zcounts = overdraw(scene, view, settings.replace(renderer="zbuffer"), context)
+    zbuffer = render(scene, view, settings.replace(renderer="zbuffer"), context)
+    assert (zcounts[(zbuffer.color != none.color).any(axis=2)] >= 1).all()
+    y, x = np.argwhere(counts == counts.max())[0]
+    for renderer in ("depth-sort", "bsp"):
+        s = settings.replace(renderer=renderer)
+        record = inspect_pixel(scene, view, s, int(x), int(y), context)
+        frame = render(scene, view, s, context)
+        assert record["renderer"] == renderer and record["pixel"] == [int(x), int(y)]
+        assert record["color"] == [int(c) for c in frame.color[y, x]]
+        writes = record["writes"]
+        assert len(writes) == overdraw(scene, view, s, context)[y, x] >= 2
+        assert [w["rank"] for w in writes] == sorted(w["rank"] for w in writes)
+        assert writes[-1]["color"] == record["color"]           # the last write is what shows
+        assert writes[-1]["depth"] >= max(w["depth"] for w in writes) - 1e-12   # and nearest
+
+
+def test_cli_painter_options(tmp_path, capsys):
+    from app.cli import main
+    out = tmp_path / "bars.png"
+    assert main(["render", str(SCENES / "three_bars.toml"), "--renderer", "bsp", "--bsp-root",
+                 "first", "--paint-first", "10", "--out", str(out)]) == 0
+    assert out.exists()
+    assert main(["render", str(SCENES / "three_bars.toml"), "--renderer", "bsp",
+                 "--paint-first", "-2", "--out", str(out), "--force"]) == 2
+    assert "error: --paint-first must be 0 or more, not -2" in capsys.readouterr().err
+    assert main(["plan", str(SCENES / "three_bars.toml"), "--renderer", "depth-sort"]) == 0
+    import json
+    report = json.loads(capsys.readouterr().out)
+    assert report["depth-sort"]["depth sort"]["splits"] > 0
+    assert any(s["stage"] == "depth sort" and "splits" in s["why"] for s in report["runs"])

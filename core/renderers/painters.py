@@ -28,6 +28,7 @@ import numpy as np
 
 from core.camera.film import fill
 from core.pipeline import project
+from core.pipeline.raster import count_fragments
 from core.renderers.zbuffer import _sample_viewport, draw_lines
 from core.visibility import bsp as bsp_tree
 
@@ -282,7 +283,7 @@ def overdraw(scene, view, settings, context=None) -> np.ndarray:
         if p is None:
             return np.zeros((height, width), np.int32)
         xy_z, inv_w, triangles = paint_ranks(p)
-        return stages.count_fragments(xy_z, inv_w, triangles, width, height)
+        return count_fragments(xy_z, inv_w, triangles, width, height)
     kept = {}
 
     def grab(stage, arrays):
@@ -296,7 +297,7 @@ def overdraw(scene, view, settings, context=None) -> np.ndarray:
     render(scene, view, settings.replace(renderer="zbuffer", samples=1), context, inspect=grab)
     if "triangles" not in kept:
         return np.zeros((height, width), np.int32)
-    return stages.count_fragments(kept["device"], kept["inv_w"], kept["triangles"], width,
+    return count_fragments(kept["device"], kept["inv_w"], kept["triangles"], width,
                                   height)
 
 
@@ -319,7 +320,7 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
     record.update({k: v for k, v in frame.stats.items() if k in ("BSP tree", "depth sort")})
     xy_z, inv_w, triangles = paint_ranks(p)
     from core.renderers import triangles as stages
-    covered = stages.count_fragments(xy_z, inv_w, triangles, width, height)
+    covered = count_fragments(xy_z, inv_w, triangles, width, height)
     if covered[y, x] == 0:
         return record
     # which painted triangles cover the pixel: rasterize only the candidates whose box holds it
