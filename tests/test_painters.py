@@ -258,3 +258,20 @@ def test_cli_painter_options(tmp_path, capsys):
     report = json.loads(capsys.readouterr().out)
     assert report["depth-sort"]["depth sort"]["splits"] > 0
     assert any(s["stage"] == "depth sort" and "splits" in s["why"] for s in report["runs"])
+
+
+def test_viewer_state_draw_order_and_toggles():
+    from app.viewer.state import ViewerState
+    state = ViewerState.open(SCENES / "three_bars.toml")
+    state.set_renderer("depth-sort")
+    state.set_paint_first(7)
+    assert state.settings().paint_first == 7
+    state.set_renderer("zbuffer")
+    assert state.settings().paint_first is None          # only the painters paint in order
+    assert not state.settings().depth_cue
+    state.set_depth_cue(True)
+    assert state.settings().depth_cue and state.dirty
+    state.set_transparency("screen-door")
+    assert state.settings().transparency == "screen-door"
+    with pytest.raises(ValueError, match="transparency must be one of"):
+        state.set_transparency("glass")

@@ -92,7 +92,7 @@ def box_layers(device, triangles, width, height):
 
 def composite(clear, view, settings, frame, context) -> None:
     """Lay the transparent meshes of ``clear`` over ``frame`` (its colour and depth)."""
-    from core.renderers.painters import Painting, SimpleFrame, _paint, _resolve, painting, true_depth
+    from core.visibility.paint import Painting, SimpleFrame, paint, painting, resolve, true_depth
     if not clear.meshes:
         return
     height, width = frame.color.shape[:2]
@@ -113,8 +113,8 @@ def composite(clear, view, settings, frame, context) -> None:
         chosen = np.flatnonzero(layers == layer)
         one = Painting(p.device, p.inv_w, p.triangles[chosen], p.attrs, p.source[chosen],
                        p.inputs, {})
-        vis = _paint(one, width, height, context)
-        _resolve(one, vis, clear, settings, SimpleFrame(colour))
+        vis = paint(one, width, height, context)
+        resolve(one, vis, clear, settings, SimpleFrame(colour))
         z = true_depth(vis, one)
         covered = vis.tri >= 0
         kt = np.zeros((height, width))
