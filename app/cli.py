@@ -121,6 +121,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
         from app.tools.radiosity import add_arguments as radiosity_arguments
         radiosity_arguments(rad)
     # --
+    _painter_arguments(r)                     # painter's renderers
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -137,6 +138,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
     pl.add_argument("--shading", choices=SHADING_CHOICES, default=None)
     pl.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None)
     pl.add_argument("--keep-aspect", action="store_true", default=None)
+    _painter_arguments(pl, plan=True)         # issue 18
 
     b = sub.add_parser("bench", help="time the CPU pipeline against llvmpipe (OpenGL in software)")
     if command == "bench":                    # its options live with its body (app/tools/bench.py)
@@ -245,7 +247,8 @@ def _renderer_overrides(args) -> dict:
             "sample_pattern": "adaptive" if adaptive else None,
             "adaptive_threshold": args.adaptive_threshold,
             "secondary_attenuation": (tuple(args.attenuation) if args.attenuation is not None
-                                      else None)}
+                                      else None),
+            **_painter_overrides(args)}
 
 
 def _crease_argument(parser: argparse.ArgumentParser) -> None:
@@ -258,6 +261,57 @@ def _crease_argument(parser: argparse.ArgumentParser) -> None:
 def _gi_overrides(args) -> dict:
     from app.tools.radiosity import overrides          # issue 19
     return overrides(args)
+
+
+# -- issue 18: the painter's renderers (bsp, depth-sort) ----------------------------------------
+def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> None:
+    """--bsp-root and --paint-first (and for ``plan``, --renderer)."""
+    from core.settings import BSP_ROOTS
+    if plan:
+        from core.renderers import renderer_names
+        parser.add_argument("--renderer", choices=renderer_names(), default=None,
+                            help="bsp and depth-sort also report their tree or sort "
+                                 "(nodes, splits, depth, build time; tests run)")
+        parser.add_argument("--view", type=int, default=1, help="the view whose order to report")
+    parser.add_argument("--bsp-root", choices=BSP_ROOTS, default=None,
+                        help="bsp: how each node's root triangle is chosen (default "
+                             "fewest-splits: the notes' 'fewest branches'; first: the list's "
+                             "head; random: seeded)")
+    parser.add_argument("--paint-first", type=int, default=None, metavar="K",
+                        help="bsp, depth-sort: paint only the first K triangles of the order")
+    parser.add_argument("--transparency", choices=("off", "interpolated", "screen-door"),
+                        default=None, help="z-buffer, bsp, depth-sort: materials with k_t > 0 "
+                        "laid over the opaque picture (default: the scene's, else off)")
+    parser.add_argument("--depth-cue", action=argparse.BooleanOptionalAction, default=None,
+                        help="fade with depth towards the cue colour (FvDFH 16.1.3; the scene's "
+                             "[depth_cue] table, default on when it has one)")
+
+
+def _painter_overrides(args) -> dict:
+    if getattr(args, "paint_first", None) is not None and args.paint_first < 0:
+        raise ValueError(f"--paint-first must be 0 or more, not {args.paint_first}")
+    return {"bsp_root": getattr(args, "bsp_root", None),
+            "paint_first": getattr(args, "paint_first", None),
+            "depth_cue": getattr(args, "depth_cue", None),
+            "transparency": getattr(args, "transparency", None)}
+
+
+def _painter_plan(args, scene) -> dict | None:
+    """What the painter's renderer did for the view: the tree's or the sort's numbers."""
+    if getattr(args, "renderer", None) not in ("bsp", "depth-sort"):
+        return {}
+    from core.render import render
+    from core.settings import RenderSettings
+    index = _pick_view(scene, args.view)
+    if index is None:
+        return None                                  # _pick_view said why
+    settings = RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading,
+                                        renderer=args.renderer, **_painter_overrides(args))
+    frame = render(scene, scene.views[index], settings)
+    return {args.renderer: {k: v for k, v in frame.stats.items()
+                            if k in ("BSP tree", "depth sort", "painted", "culled")},
+            "runs": [{"stage": s.name, "why": s.reason} for s in frame.plan if s.runs]}
+# -- end of issue 18 ------------------------------------------------------------------------------
 
 
 def _course_options(p: argparse.ArgumentParser) -> None:
@@ -584,9 +638,18 @@ def _plan(args) -> int:
     shading = args.shading or scene.shading
     keep = scene.keep_aspect if args.keep_aspect is None else args.keep_aspect
     rasterizer = args.rasterizer or scene.rasterizer
+    renderer = args.renderer or scene.renderer
+    try:
+        painter = _painter_plan(args, scene)               # issue 18
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 2
+    if painter is None:
+        return 2
     out = {"scene": scene.name, "projection": projection, "shading": shading,
-           "rasterizer": rasterizer, "keep_aspect": keep,
-           **plan_as_dict(plan(scene, projection, shading, keep, rasterizer))}
+           "rasterizer": rasterizer, "keep_aspect": keep, "renderer": renderer,
+           **plan_as_dict(plan(scene, projection, shading, keep, rasterizer,
+                               renderer=renderer)), **painter}
     print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0
 

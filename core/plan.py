@@ -22,7 +22,8 @@ class Stage:
 
 
 def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
-         rasterizer: str = "edge", texture_filter: str = "trilinear") -> list[Stage]:
+         rasterizer: str = "edge", texture_filter: str = "trilinear",
+         renderer: str = "zbuffer") -> list[Stage]:
     """The stages for ``scene`` drawn with ``projection`` and ``shading``, in the order the
     renderer runs them (``core/render.py``, ``core/renderers/zbuffer.py``); ``keep_aspect``
     and ``rasterizer`` as in :class:`core.settings.RenderSettings`."""
@@ -43,7 +44,7 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
     def triangle_stage(name: str, runs: bool, why: str, why_not: str = "") -> Stage:
         return stage(name, runs, why, why_not if solid else no_triangles)
 
-    return [
+    stages = [
         triangle_stage("cull back faces", solid and closed,
                        "closed, consistently wound meshes: faces turned away are never visible",
                        "no mesh is declared closed, so every face may be seen"),
@@ -86,6 +87,47 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
                        "pixel", "not Phong shading"),
         triangle_stage("texture lookups", *_texture_stage(scene, shading, texture_filter)),
     ]
+    if renderer in PAINTERS:
+        _painter_stages(stages, renderer, triangle_stage)
+    if shading == "depth":
+        _depth_shading_stages(stages, solid)
+    return stages
+
+
+def _depth_shading_stages(stages: list, solid: bool) -> None:
+    """Depth shading (issue 18) needs no normals and no light: a colour map per pixel."""
+    unlit = ("face normals", "vertex normals", "illuminate faces", "illuminate vertices",
+             "illuminate pixels")
+    for i, s in enumerate(stages):
+        if s.name in unlit:
+            stages[i] = Stage(s.name, False, "depth shading uses no normals and no light")
+    at = next(i for i, s in enumerate(stages) if s.name == "z-buffer scan conversion") + 1
+    stages.insert(at, Stage("depth shading", solid,
+                            "each pixel's height (or eye distance) through a colour map"
+                            if solid else "no triangles are drawn"))
+
+
+# issue 18: the painter's renderers find an order instead of testing depth per pixel
+PAINTERS = {
+    "bsp": ("BSP tree", "clip triangles",
+            "built once per scene in world space (spanning triangles split), walked back to "
+            "front from the eye"),
+    "depth-sort": ("depth sort", "project",
+                   "Newell, Newell and Sancha: sorted by farthest z, overlap tests in order, "
+                   "moves and splits until no polygon hides one painted before it"),
+}
+
+
+def _painter_stages(stages: list, renderer: str, triangle_stage) -> None:
+    """Put the painter's ordering stage in place and say how it paints."""
+    name, after, why = PAINTERS[renderer]
+    at = next(i for i, s in enumerate(stages) if s.name == after)
+    at += 1 if renderer == "depth-sort" else 0         # the BSP order is known before clipping
+    stages.insert(at, triangle_stage(name, True, why))
+    for i, s in enumerate(stages):
+        if s.name == "depth buffer" and s.runs:
+            stages[i] = Stage(s.name, True, "the rasterizer's depth holds each triangle's paint "
+                                            "rank: the later painted covers the earlier")
 
 
 def _texture_stage(scene, shading, texture_filter):        # issue 11

@@ -98,7 +98,7 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     width, height = settings.size
     frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8),
                   plan=plan(scene, settings.projection, settings.shading, settings.keep_aspect,
-                            settings.rasterizer, settings.texture_filter),
+                            settings.rasterizer, settings.texture_filter, settings.renderer),
                   stats={"allocated": ["color"], "computed": [], "renderer": renderer.name,
                          "projection": settings.projection, "shading": settings.shading})
     message = _why_not(scene, view, settings, context)
@@ -107,6 +107,13 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         fill(frame.color, scene.background)
         return frame
     draw = renderer.function()
+    if (settings.transparency != "off" and settings.renderer in ("zbuffer", "bsp", "depth-sort")
+            and any(m.material.kt > 0 for m in scene.meshes)):   # issue 18: k_t > 0 laid over
+        from core.shading.transparency import with_transparency
+        draw = with_transparency(draw)
+    if settings.depth_cue:                    # issue 18: any renderer's picture, cued by depth
+        from core.shading.depth_cue import depth_cued
+        draw = depth_cued(draw)
     if settings.samples == 1 or renderer.samples_itself:
         draw(scene, view, settings, frame, context, Timer(frame.stats, inspect))
     else:

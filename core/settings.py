@@ -30,6 +30,7 @@ class Shading(str, Enum):
     FLAT = "flat"
     GOURAUD = "gouraud"
     PHONG = "phong"
+    DEPTH = "depth"          # issue 18: colour from height or view depth alone (core.shading.depth)
 
     def __str__(self) -> str:
         return self.value
@@ -42,7 +43,10 @@ SAMPLE_PATTERNS = ("regular", "jittered", "adaptive")   # adaptive: the ray trac
 FRESNEL_FORMS = ("schlick", "exact")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
-SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace", "radiosity", "pathtrace")   # a scene file's `renderer` (core.renderers)
+SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace", "radiosity", "pathtrace", "bsp",
+                   "depth-sort")   # a scene file's `renderer` (core.renderers)
+BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
+TRANSPARENCIES = ("off", "interpolated", "screen-door")   # core.shading.transparency.MODES
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
@@ -95,6 +99,19 @@ class RenderSettings:
     solver: str = "progressive"
     converge: float = 0.01
     max_elements: int = 2000
+    # The painter's renderers (issue 18; core.renderers.painters): the BSP tree's root rule
+    # (core.visibility.bsp.ROOT_RULES) and, for the draw-order slider, how many triangles of
+    # the painting order to paint (None: all).
+    bsp_root: str = "fewest-splits"
+    paint_first: int | None = None
+    # Depth cueing (issue 18; core.shading.depth_cue) on any renderer, with the scene's
+    # [depth_cue] parameters (on by default for a scene that has the table).
+    depth_cue: bool = False
+    # Depth shading's scalar (core.shading.depth.MODES): "height" (world y) | "view" (eye distance).
+    depth_shading: str = "height"
+    # Transparency of materials with k_t > 0 in the z-buffer family (core.shading.transparency):
+    # "off" (drawn opaque, as before) | "interpolated" | "screen-door".
+    transparency: str = "off"
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
@@ -129,6 +146,12 @@ class RenderSettings:
             raise ValueError(f"the adaptive threshold must be from 0 to 1, "
                              f"not {self.adaptive_threshold!r}")
         object.__setattr__(self, "secondary_attenuation", (c1, c2))
+        if self.transparency not in TRANSPARENCIES:
+            raise ValueError(f"transparency must be one of {', '.join(TRANSPARENCIES)}, "
+                             f"not {self.transparency!r}")
+        if self.bsp_root not in BSP_ROOTS:
+            raise ValueError(f"BSP root rule must be one of {', '.join(BSP_ROOTS)}, "
+                             f"not {self.bsp_root!r}")
         object.__setattr__(self, "projection", str(self.projection))
         object.__setattr__(self, "shading", str(self.shading))
         object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))
@@ -141,7 +164,9 @@ class RenderSettings:
         override of ``None`` keeps the scene's value."""
         values = {"projection": scene.projection, "shading": scene.shading, "size": scene.size,
                   "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect,
-                  "renderer": scene.renderer}
+                  "renderer": scene.renderer,
+                  "depth_cue": getattr(scene, "depth_cue", None) is not None,
+                  "transparency": getattr(scene, "transparency", "off")}
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)
 

@@ -171,6 +171,11 @@ class ViewerState:
     playback: object = None         # app.viewer.playback.Playback of an animated scene, or None
     keyed_view: bool = False        # an animated scene: show the keyed camera (not a file view)
     frame_partial: bool = False     # the frame shown is a ray-traced one still being refined
+    # issue 18: depth cueing (None: the scene's), transparency ("": the scene's), and the
+    # draw-order slider of the painter's renderers (None: paint everything)
+    depth_cue: bool | None = None
+    transparency: str = ""
+    paint_first: int | None = None
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -280,7 +285,11 @@ class ViewerState:
                                         rasterizer=self.rasterizer,
                                         keep_aspect=bool(self.keep_aspect),
                                         renderer=self.renderer_name,
-                                        texture_filter=self.texture_filter, bump=self.bump)
+                                        texture_filter=self.texture_filter, bump=self.bump,
+                                        depth_cue=self.depth_cue,
+                                        transparency=self.transparency or None,
+                                        paint_first=(self.paint_first if self.renderer_name in
+                                                     ("bsp", "depth-sort") else None))
 
     @property
     def invalid_messages(self) -> list[str]:
@@ -375,6 +384,27 @@ class ViewerState:
         from core.texture.demo_scene import MAPS
         self.bump_map, self.dirty = (self.bump_map + 1) % MAPS, True
         return self.bump_map
+
+    # -- issue 18: depth cueing, transparency, the painter's draw order ---------------------
+    def set_depth_cue(self, on: bool) -> None:
+        if bool(on) != bool(self.settings().depth_cue):
+            self.depth_cue, self.dirty = bool(on), True
+
+    def set_transparency(self, mode: str) -> None:
+        from core.settings import TRANSPARENCIES
+        self._set("transparency", mode, TRANSPARENCIES)
+
+    def set_paint_first(self, count: int | None) -> None:
+        """Paint only the first ``count`` triangles of the order (None: all of them)."""
+        count = None if count is None else max(int(count), 0)
+        if count != self.paint_first:
+            self.paint_first, self.dirty = count, True
+
+    @property
+    def painted_total(self) -> int | None:
+        """How many triangles the last painter's frame painted in all (the slider's end)."""
+        stats = getattr(self.frame, "stats", None) or {}
+        return stats.get("painted total", stats.get("painted"))
 
     # -- issue 13: playing an animated scene -------------------------------------------------
     def toggle_play(self, now: float) -> None:

@@ -66,7 +66,11 @@ PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel
 SHADING_LABELS = (("wireframe", "Wireframe", "W"), ("flat", "Flat", "1"),
                   ("gouraud", "Gouraud", "2"), ("phong", "Phong", "3"))
 RENDERER_LABELS = (("zbuffer", "Z-buffer", "R"), ("raytrace", "Ray traced", "R"),
-                   ("radiosity", "Radiosity", ""), ("pathtrace", "Path traced", ""))
+                   ("radiosity", "Radiosity", ""), ("pathtrace", "Path traced", ""),
+                   ("bsp", "BSP tree (painter's)", ""),
+                   ("depth-sort", "Depth sort (Newell, painter's)", ""))
+TRANSPARENCY_LABELS = (("off", "Opaque (k_t ignored)"), ("interpolated", "Interpolated"),
+                       ("screen-door", "Screen door"))
 FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),
                  ("trilinear", "Trilinear (MIP map)"), ("anisotropic", "Anisotropic"))
 RASTERIZER_LABELS = (("edge", "Edge functions (perspective-correct)"),
@@ -351,7 +355,10 @@ class ViewerWindow:
                   "course_tri": self.state.set_course_tri,
                   "renderer": self.state.set_renderer,
                   "texture_filter": self.state.set_texture_filter,
-                  "bump": self.state.set_bump}[what]
+                  "bump": self.state.set_bump,
+                  "depth_cue": self.state.set_depth_cue,                    # issue 18
+                  "transparency": self.state.set_transparency,
+                  "paint_first": self.state.set_paint_first}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
         self._wake()
@@ -600,6 +607,7 @@ class ViewerWindow:
         self._status()
         self._timeline()
         self.tools.panel(imgui, displayable)
+        self._draw_order()                    # issue 18
         self._plan_strip()
         self._invalid_views_strip()
         self._messages_strip()
@@ -700,6 +708,34 @@ class ViewerWindow:
         if imgui.menu_item("Course .tri rules (back faces, mouse)", None,
                            self.state.course_tri)[0]:
             self.choose("course_tri", not self.state.course_tri, "menu Render")
+        self._issue18_items()
+
+    # -- issue 18: depth cueing, transparency, the painter's draw-order slider -------------------
+    def _issue18_items(self) -> None:
+        imgui.separator()
+        cued = bool(self.state.settings().depth_cue)
+        if imgui.menu_item("Depth cueing", None, cued)[0]:
+            self.choose("depth_cue", not cued, "menu Render")
+        imgui.text_disabled("Transparency (k_t > 0)")
+        current = self.state.settings().transparency
+        for value, label in TRANSPARENCY_LABELS:
+            if imgui.menu_item(label, None, current == value)[0]:
+                self.choose("transparency", value, "menu Render")
+
+    def _draw_order(self) -> None:
+        """The painter's renderers: a slider that paints only the first K triangles."""
+        s = self.state
+        total = s.painted_total
+        if s.renderer_name not in ("bsp", "depth-sort") or not total:
+            return
+        imgui.text("draw order (triangles painted)")
+        imgui.push_item_width(-1)
+        shown = total if s.paint_first is None else min(s.paint_first, total)
+        changed, k = imgui.slider_int("##paint_first", shown, 0, total)
+        imgui.pop_item_width()
+        if changed:
+            self.choose("paint_first", None if k >= total else k, "slider draw order")
+        imgui.separator()
 
     def _popup(self) -> None:
         # The course's GLUT pop-up menu: projection and shading at the click.

@@ -10,6 +10,7 @@ Registered here by module path, so that choosing a renderer imports it (and its 
 kernels) only when it is first used.
 
 - ``zbuffer``: the FvDFH pipeline, lines and triangles (:mod:`core.renderers.zbuffer`);
+- ``bsp``, ``depth-sort``: the painter's algorithms (:mod:`core.renderers.painters`);
 - ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`).
 """
 
@@ -65,3 +66,7 @@ register_renderer("radiosity", "core.radiosity.renderer:draw",
 register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
                   description="Kajiya's rendering equation by path tracing on the BVH "
                               "(core.pathtrace)")
+register_renderer("bsp", "core.renderers.painters:draw_bsp",
+                  description="a BSP tree built once in world space, painted back to front")
+register_renderer("depth-sort", "core.renderers.painters:draw_depth_sort",
+                  description="Newell, Newell and Sancha's depth sort, painted back to front")

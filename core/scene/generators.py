@@ -408,6 +408,40 @@ def plane(size: float = 2.0, subdivisions: int = 1) -> Mesh:
 # --
 
 
+def terrain(size: float = 10.0, resolution: int = 96, height: float = 2.0, octaves: int = 5,
+            seed: int = 1) -> Mesh:
+    """A generated height field (issue 18: depth shading's terrain): ``resolution`` x
+    ``resolution`` cells over the square of side ``size`` in the xz-plane, heights y in
+    [0, ``height``] from ``octaves`` of smooth value noise (each octave twice the frequency
+    and half the amplitude of the last; seeded). Open, facing +y."""
+    size = _length("size", size)
+    n = _whole("resolution", resolution, 1, 2048)
+    height = _length("height", height, 0.0)
+    octaves = _whole("octaves", octaves, 1, 12)
+    seed = _whole("seed", seed, 0, 2**31 - 1)
+    _budget("terrain", 2 * n * n)
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, 1.0, n + 1)
+    y = np.zeros((n + 1, n + 1))
+    for k in range(octaves):
+        cells = 2 ** (k + 1)
+        lattice = rng.uniform(-1.0, 1.0, (cells + 1, cells + 1))
+        g = t * cells
+        i = np.minimum(g.astype(int), cells - 1)
+        f = g - i
+        f = f * f * (3.0 - 2.0 * f)                         # smoothstep between lattice values
+        a = lattice[i][:, i] * (1 - f)[None, :] + lattice[i][:, i + 1] * f[None, :]
+        b = lattice[i + 1][:, i] * (1 - f)[None, :] + lattice[i + 1][:, i + 1] * f[None, :]
+        y += 0.5 ** k * (a * (1 - f)[:, None] + b * f[:, None])
+    y = (y - y.min()) / max(np.ptp(y), 1e-12) * height
+    u, v = np.meshgrid(t, t, indexing="ij")
+    positions = np.stack([(u - 0.5) * size, y, (0.5 - v) * size], axis=-1)
+    return Mesh(positions=positions.reshape(-1, 3),
+                triangles=_grid_triangles(n + 1, n + 1, wrap_rows=False, wrap_cols=False),
+                uv=_grid_uv(n + 1, n + 1), closed=False, material=Material(od=(0.6, 0.6, 0.5)),
+                name="terrain")
+
+
 # The names a scene file may give as ``generator = "..."``.
 GENERATORS = {
     "house": house,
@@ -418,4 +452,5 @@ GENERATORS = {
     "bezier_surface": bezier_surface,
     "torus_knot": torus_knot,
     "plane": plane,             # issue 11
+    "terrain": terrain,         # issue 18
 }

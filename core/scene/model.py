@@ -155,6 +155,10 @@ class Scene:
     # into pixels: "linear" (clamped, as the Phong model's intensities) or "srgb" (the sRGB
     # transfer curve, for scenes in physical units such as the Cornell box).
     tone: str = "linear"
+    # The [depth_cue] table (core.shading.depth_cue.DepthCue), None when the file has none.
+    depth_cue: object | None = None
+    # How the z-buffer family draws materials with k_t > 0 (settings.TRANSPARENCIES).
+    transparency: str = "off"
 
     @property
     def triangle_count(self) -> int:

@@ -39,7 +39,8 @@ def register_shader(shader: Shader) -> None:
     _SHADERS[shader.name] = shader
 
 
-BUILT_IN = ("core.shading.flat", "core.shading.gouraud", "core.shading.phong")
+BUILT_IN = ("core.shading.flat", "core.shading.gouraud", "core.shading.phong",
+            "core.shading.depth")                 # issue 18: depth shading
 
 
 def _load_built_in() -> None:

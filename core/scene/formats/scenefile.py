@@ -70,6 +70,10 @@ from core.animation import keys as animation_keys     # noqa: E402  (after the c
 TOP_KEYS += animation_keys.TOP_KEYS
 TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
 
+# -- issue 18: the [depth_cue] table (core.shading.depth_cue)
+TOP_KEYS += ("depth_cue", "transparency")
+# --
+
 # -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
 from core.texture.image import TexelBudget  # noqa: E402
 from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
@@ -282,6 +286,13 @@ class _Reader:
             scene.size = (int(w), int(h))
         if size is not None:
             scene.size = tuple(size)
+        if "depth_cue" in doc:                                  # issue 18
+            from core.shading.depth_cue import read_table
+            scene.depth_cue = read_table(self, doc["depth_cue"], ("depth_cue",))
+        if "transparency" in doc:
+            from core.settings import TRANSPARENCIES
+            scene.transparency = self.choice(doc["transparency"], ("transparency",),
+                                             TRANSPARENCIES)
         # -- issue 11: texture files that could not be used; the bump demo's panel view
         scene.messages += self.texture_messages
         from core.texture.demo_scene import panel_views

@@ -1,0 +1,132 @@
+"""Transparency in the z-buffer family (FvDFH 16.5.1; the notes' "interpolated" and "screen
+door" transparency), for the z-buffer and the painter's renderers.
+
+A mesh whose material has ``k_t > 0`` (the transmission coefficient; the same
+``Material.kt`` the ray tracer refracts with) is transparent. The opaque meshes are drawn
+first, as usual, leaving colours and depths. The transparent triangles are then put in back
+to front order (Newell's depth sort, or for the BSP renderer their own BSP tree) and laid over
+the frame where they lie in front of the opaque surface:
+
+- ``interpolated``: ``I = (1 - k_t) I_1 + k_t I_2``, ``I_1`` the transparent surface's own
+  colour, ``I_2`` what was there (the opaque surface, or transparent ones painted before);
+- ``screen-door``: the surface is drawn, with the depth test, only on the pixels of an
+  ordered-dither mask (4 x 4 Bayer) whose share is its opacity ``1 - k_t``; the eye averages
+  the mesh of pixels. Order-independent in principle; drawn in the same order here.
+
+Painting order matters only where transparent triangles overlap: they are grouped into layers
+whose pixel boxes do not meet (a triangle's layer is one above the highest layer under its
+box), and each layer is rasterized and shaded at once, in order.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+from numba import njit
+
+from core.shading.illumination import to_uint8
+
+MODES = ("off", "interpolated", "screen-door")
+# The 4 x 4 ordered-dither (Bayer) matrix: a pixel shows the surface where
+# (B + 0.5) / 16 < opacity, so any 16 pixels of a tile show round(16 opacity) of them.
+BAYER = np.array([[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]])
+
+
+def has_transparency(scene) -> bool:
+    return any(m.material.kt > 0 and len(m.triangles) for m in scene.meshes)
+
+
+def split_scene(scene, context):
+    """``(opaque scene, transparent scene)``, kept in the context while ``scene`` lives; the
+    transparent meshes are open (both faces drawn: one sees the back of a glass through it)."""
+    cache = context.cache(scene)
+    held = cache.get("transparency split")
+    meshes = tuple(scene.meshes)
+    if held is None or held[0] != meshes:
+        clear = [m for m in meshes if m.material.kt > 0 and len(m.triangles)]
+        opaque = [m for m in meshes if not (m.material.kt > 0 and len(m.triangles))]
+        held = (meshes, dataclasses.replace(scene, meshes=opaque),
+                dataclasses.replace(scene, meshes=[dataclasses.replace(m, closed=False)
+                                                   for m in clear]))
+        cache["transparency split"] = held
+    return held[1], held[2]
+
+
+def with_transparency(draw):
+    """``draw`` (a z-buffer family renderer) on the opaque meshes, then the transparent ones
+    laid over (``settings.transparency``)."""
+    def draw_transparent(scene, view, settings, frame, context, timer):
+        opaque, clear = split_scene(scene, context)
+        draw(opaque, view, settings, frame, context, timer)
+        if frame.message is None and settings.shading not in ("wireframe",):
+            composite(clear, view, settings, frame, context)
+            timer.lap("transparency")
+    return draw_transparent
+
+
+@njit(cache=True, nogil=True)
+def box_layers(device, triangles, width, height):
+    """Each triangle's layer, in order: one above the highest layer under its pixel box."""
+    top = np.zeros((height, width), np.int32)
+    layer = np.empty(triangles.shape[0], np.int32)
+    for t in range(triangles.shape[0]):
+        x0, x1, y0, y1 = np.inf, -np.inf, np.inf, -np.inf
+        for c in range(3):
+            p = device[triangles[t, c]]
+            x0, x1 = min(x0, p[0]), max(x1, p[0])
+            y0, y1 = min(y0, p[1]), max(y1, p[1])
+        c0, c1 = max(int(np.floor(x0)) - 1, 0), min(int(np.ceil(x1)) + 1, width - 1)
+        r0 = max(height - 1 - int(np.ceil(y1)) - 1, 0)
+        r1 = min(height - 1 - int(np.floor(y0)) + 1, height - 1)
+        m = 0
+        for r in range(r0, r1 + 1):
+            for c in range(c0, c1 + 1):
+                m = max(m, top[r, c])
+        layer[t] = m
+        for r in range(r0, r1 + 1):
+            for c in range(c0, c1 + 1):
+                top[r, c] = m + 1
+    return layer
+
+
+def composite(clear, view, settings, frame, context) -> None:
+    """Lay the transparent meshes of ``clear`` over ``frame`` (its colour and depth)."""
+    from core.visibility.paint import Painting, SimpleFrame, paint, painting, resolve, true_depth
+    if not clear.meshes:
+        return
+    height, width = frame.color.shape[:2]
+    order = "bsp" if settings.renderer == "bsp" else "depth-sort"
+    p = painting(clear, view, settings.replace(renderer=order, paint_first=None,
+                                               samples=1), context)
+    frame.stats["transparent triangles"] = 0 if p is None else int(len(p.triangles))
+    if p is None or len(p.triangles) == 0:
+        return
+    kt_of_face = np.array([m.material.kt for m in clear.meshes])[p.inputs.face_surface]
+    depth = frame.depth if frame.depth is not None else np.full((height, width), -np.inf)
+    depth = depth.copy()
+    layers = box_layers(p.device, np.ascontiguousarray(p.triangles), width, height)
+    frame.stats["transparency layers"] = int(layers.max()) + 1
+    opacity_mask = (BAYER[np.arange(height)[:, None] % 4, np.arange(width)[None, :] % 4] + 0.5) / 16
+    colour = np.empty((height, width, 3), np.uint8)
+    for layer in range(int(layers.max()) + 1):
+        chosen = np.flatnonzero(layers == layer)
+        one = Painting(p.device, p.inv_w, p.triangles[chosen], p.attrs, p.source[chosen],
+                       p.inputs, {})
+        vis = paint(one, width, height, context)
+        resolve(one, vis, clear, settings, SimpleFrame(colour))
+        z = true_depth(vis, one)
+        covered = vis.tri >= 0
+        kt = np.zeros((height, width))
+        kt[covered] = kt_of_face[one.source[vis.tri[covered]]]
+        front = covered & (z >= depth)
+        if settings.transparency == "screen-door":
+            front &= opacity_mask < 1.0 - kt
+            frame.color[front] = colour[front]
+            depth[front] = z[front]
+        else:
+            k = kt[front][:, None]
+            blend = (1.0 - k) * colour[front] / 255.0 + k * frame.color[front] / 255.0
+            frame.color[front] = to_uint8(blend)
+    if settings.transparency == "screen-door":
+        frame.depth = depth

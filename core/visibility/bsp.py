@@ -1,0 +1,311 @@
+"""The binary space-partitioning tree (Fuchs, Kedem and Naylor 1980; FvDFH 15.5.2; the notes'
+lecture of February 26, "Binary Spanning Partition").
+
+The work is done once, before display, in world space: well suited to a viewpoint that moves
+over static objects. :func:`build` picks a triangle as the root, takes its plane, and sorts
+every other triangle into the half-space in front of it (along its normal), the one behind
+it, or the node itself (coplanar); a triangle spanning the plane is split, its pieces going
+to both sides. Each half-space is partitioned again the same way until every node holds one
+plane's triangles. :func:`back_to_front` walks the tree from the eye: at each node, the
+subtree on the far side of the plane first, then the node's triangles, then the near side
+("draw the back half-space first": a triangle is scan-converted correctly if everything on
+the other side of it from the eye was drawn before it and everything on its own side after).
+
+The root choice is the ``rule``: ``first`` (the first triangle of the node's list, the
+notes' example), ``random`` (seeded), or ``fewest-splits`` (the notes: "select the one with
+the fewest branches"): a few candidates spread over the list, each scored by how many of a
+sample of the node's triangles it would split (Fuchs et al. tried five; scoring against all
+would make the build quadratic per node).
+
+A split vertex is ``P_a + t (P_b - P_a)`` with ``(a, b, t)`` in :attr:`BSPTree.recipe`:
+every per-vertex attribute interpolates with the same ``t`` (linear in world space, so a
+split triangle shades exactly like the original).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from core.settings import BSP_ROOTS as ROOT_RULES      # first, random, fewest-splits
+from core.visibility.split import cut_triangle, side
+
+CANDIDATES = 8          # fewest-splits: triangles tried as the root of a node
+SAMPLE = 128            # fewest-splits: triangles of the node each candidate is scored on
+EPSILON = 1e-9          # on-the-plane tolerance, relative to the scene's size
+
+
+@dataclass
+class BSPTree:
+    """A BSP tree over triangles in world space.
+
+    ``points`` (V', 3): the input vertices, then one per split (``recipe`` (V' - V, 3): its
+    ``a, b, t``). ``fragments`` (F, 3) vertex ids, ``source`` (F,) the input triangle each
+    came from. Node ``i`` has the plane ``plane[i]`` (unit normal, constant: ``n·P = d``),
+    children ``front[i]``, ``back[i]`` (-1: none) and the fragments
+    ``node_fragments[first[i]:first[i] + count[i]]`` lying in its plane.
+    """
+
+    points: np.ndarray
+    recipe: np.ndarray
+    fragments: np.ndarray
+    source: np.ndarray
+    plane: np.ndarray
+    front: np.ndarray
+    back: np.ndarray
+    first: np.ndarray
+    count: np.ndarray
+    node_fragments: np.ndarray
+    rule: str = "first"
+    splits: int = 0
+    depth: int = 0
+    build_ms: float = 0.0
+
+    @property
+    def nodes(self) -> int:
+        return len(self.plane)
+
+    def stats(self) -> dict:
+        return {"rule": self.rule, "nodes": self.nodes, "splits": self.splits,
+                "depth": self.depth, "fragments": int(len(self.node_fragments)),
+                "build ms": round(self.build_ms, 3)}
+
+
+def build(positions: np.ndarray, triangles: np.ndarray, rule: str = "first",
+          seed: int = 0) -> BSPTree:
+    """The BSP tree of ``triangles`` (T, 3) over ``positions`` (V, 3), roots chosen by ``rule``."""
+    if rule not in ROOT_RULES:
+        raise ValueError(f"BSP root rule must be one of {', '.join(ROOT_RULES)}, not {rule!r}")
+    start = time.perf_counter()
+    positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3)
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    span = float(np.ptp(positions, axis=0).max()) if len(positions) else 1.0
+    eps = EPSILON * max(span, 1e-300)
+    out = _build(positions, triangles, ROOT_RULES.index(rule), seed, eps)
+    (points, recipe, fragments, source, plane, front, back, first, count, node_fragments,
+     splits, depth) = out
+    return BSPTree(points, recipe, fragments, source, plane, front, back, first, count,
+                   node_fragments, rule, int(splits), int(depth),
+                   (time.perf_counter() - start) * 1e3)
+
+
+# ------------------------------------------------------------------------------------ build
+
+@njit(cache=True, nogil=True)
+def _plane_of(points, tri):
+    """Unit normal and constant of a triangle's plane (right-hand rule on its winding)."""
+    p0, p1, p2 = points[tri[0]], points[tri[1]], points[tri[2]]
+    n = np.cross(p1 - p0, p2 - p0)
+    length = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+    if length > 0.0:
+        n = n / length
+    return n, n[0] * p0[0] + n[1] * p0[1] + n[2] * p0[2]
+
+
+@njit(cache=True, nogil=True)
+def _distances(points, tri, n, c):
+    d = np.empty(3)
+    for k in range(3):
+        p = points[tri[k]]
+        d[k] = n[0] * p[0] + n[1] * p[1] + n[2] * p[2] - c
+    return d
+
+
+@njit(cache=True, nogil=True)
+def _classify(d, eps):
+    """0 coplanar, 1 in front, -1 behind, 2 spanning."""
+    s0, s1, s2 = side(d[0], eps), side(d[1], eps), side(d[2], eps)
+    if s0 == 0 and s1 == 0 and s2 == 0:
+        return 0
+    if s0 >= 0 and s1 >= 0 and s2 >= 0:
+        return 1
+    if s0 <= 0 and s1 <= 0 and s2 <= 0:
+        return -1
+    return 2
+
+
+@njit(cache=True, nogil=True)
+def _grow(a, need):
+    if need <= a.shape[0]:
+        return a
+    bigger = np.empty((max(need, 2 * a.shape[0]),) + a.shape[1:], a.dtype)
+    bigger[:a.shape[0]] = a
+    return bigger
+
+
+@njit(cache=True, nogil=True)
+def _choose_root(ids, fragments, points, rule, eps):
+    """Index into ``ids`` of the node's root triangle."""
+    n = ids.shape[0]
+    if rule == 0 or n == 1:
+        return 0
+    if rule == 1:
+        return np.random.randint(0, n)
+    best, best_score = 0, 1 << 62
+    candidates = min(CANDIDATES, n)
+    sample = min(SAMPLE, n)
+    for c in range(candidates):
+        i = c * n // candidates
+        normal, const = _plane_of(points, fragments[ids[i]])
+        splits, balance = 0, 0
+        for s in range(sample):
+            kind = _classify(_distances(points, fragments[ids[s * n // sample]], normal, const),
+                             eps)
+            if kind == 2:
+                splits += 1
+            elif kind != 0:
+                balance += kind
+        score = splits * n + abs(balance)        # fewest splits, then the better balanced
+        if score < best_score:
+            best, best_score = i, score
+    return best
+
+
+@njit(cache=True, nogil=True)
+def _build(positions, triangles, rule, seed, eps):
+    np.random.seed(seed)
+    points = positions.copy()
+    n_points = points.shape[0]
+    recipe = np.empty((16, 3))
+    fragments = triangles.copy()
+    source = np.arange(triangles.shape[0])
+    n_frags = triangles.shape[0]
+    plane = np.empty((16, 4))
+    front = np.empty(16, np.int64)
+    back = np.empty(16, np.int64)
+    first = np.empty(16, np.int64)
+    count = np.empty(16, np.int64)
+    node_fragments = np.empty(max(n_frags, 1), np.int64)
+    n_node_frags = 0
+    splits, depth = 0, 0
+    if n_frags == 0:
+        return (points, recipe[:0], fragments, source, plane[:0], front[:0], back[:0],
+                first[:0], count[:0], node_fragments[:0], 0, 0)
+    # the work list: (node, its depth, its fragment ids)
+    stack_node = [0]
+    stack_depth = [1]
+    stack_ids = [np.arange(n_frags)]
+    n_nodes = 1
+    while len(stack_ids):
+        node, level, ids = stack_node.pop(), stack_depth.pop(), stack_ids.pop()
+        depth = max(depth, level)
+        r = _choose_root(ids, fragments, points, rule, eps)
+        normal, const = _plane_of(points, fragments[ids[r]])
+        plane = _grow(plane, node + 1)
+        front = _grow(front, node + 1)
+        back = _grow(back, node + 1)
+        first = _grow(first, node + 1)
+        count = _grow(count, node + 1)
+        plane[node, 0], plane[node, 1], plane[node, 2], plane[node, 3] = (
+            normal[0], normal[1], normal[2], const)
+        in_front = np.empty(ids.shape[0] * 3, np.int64)   # a split adds at most 2 pieces
+        behind = np.empty(ids.shape[0] * 3, np.int64)
+        nf, nb = 0, 0
+        first[node] = n_node_frags
+        node_fragments = _grow(node_fragments, n_node_frags + ids.shape[0])
+        node_fragments[n_node_frags] = ids[r]
+        n_node_frags += 1
+        for k in range(ids.shape[0]):
+            if k == r:
+                continue
+            f = ids[k]
+            d = _distances(points, fragments[f], normal, const)
+            kind = _classify(d, eps)
+            if kind == 0:
+                node_fragments[n_node_frags] = f
+                n_node_frags += 1
+            elif kind == 1:
+                in_front[nf] = f
+                nf += 1
+            elif kind == -1:
+                behind[nb] = f
+                nb += 1
+            else:                                      # spanning: split it by the plane
+                splits += 1
+                pieces, sides, n_pieces, new, n_new = cut_triangle(fragments[f], d, eps)
+                points = _grow(points, n_points + n_new)
+                recipe = _grow(recipe, n_points + n_new - positions.shape[0])
+                for j in range(n_new):
+                    a, b, t = int(new[j, 0]), int(new[j, 1]), new[j, 2]
+                    points[n_points] = points[a] + t * (points[b] - points[a])
+                    row = n_points - positions.shape[0]
+                    recipe[row, 0], recipe[row, 1], recipe[row, 2] = a, b, t
+                    n_points += 1
+                fragments = _grow(fragments, n_frags + n_pieces)
+                source = _grow(source, n_frags + n_pieces)
+                for j in range(n_pieces):
+                    for c in range(3):
+                        v = pieces[j, c]
+                        fragments[n_frags, c] = v if v >= 0 else n_points - n_new + (-1 - v)
+                    source[n_frags] = source[f]
+                    if sides[j] > 0:
+                        in_front[nf] = n_frags
+                        nf += 1
+                    else:
+                        behind[nb] = n_frags
+                        nb += 1
+                    n_frags += 1
+        count[node] = n_node_frags - first[node]
+        front[node], back[node] = -1, -1
+        # pushed back first so that the front list is built next (order only, not the result)
+        if nb:
+            back[node] = n_nodes
+            stack_node.append(n_nodes)
+            stack_depth.append(level + 1)
+            stack_ids.append(behind[:nb].copy())
+            n_nodes += 1
+        if nf:
+            front[node] = n_nodes
+            stack_node.append(n_nodes)
+            stack_depth.append(level + 1)
+            stack_ids.append(in_front[:nf].copy())
+            n_nodes += 1
+    n_recipe = n_points - positions.shape[0]
+    return (points[:n_points], recipe[:n_recipe], fragments[:n_frags], source[:n_frags],
+            plane[:n_nodes], front[:n_nodes], back[:n_nodes], first[:n_nodes],
+            count[:n_nodes], node_fragments[:n_node_frags], splits, depth)
+
+
+# -------------------------------------------------------------------------------- traversal
+
+def back_to_front(tree: BSPTree, eye) -> np.ndarray:
+    """Fragment ids in painting order for ``eye`` (``core.shading.illumination.Eye``: the
+    centre of projection, or for a parallel view the direction towards the viewer, the eye
+    at infinity)."""
+    is_point = eye.point is not None
+    e = np.asarray(eye.point if is_point else eye.direction, dtype=np.float64)
+    return _traverse(tree.plane, tree.front, tree.back, tree.first, tree.count,
+                     tree.node_fragments, e, is_point)
+
+
+@njit(cache=True, nogil=True)
+def _traverse(plane, front, back, first, count, node_fragments, eye, eye_is_point):
+    """In-order walk, far side first. The stack holds ``node`` (expand it) or ``-1 - node``
+    (paint its own fragments)."""
+    order = np.empty(node_fragments.shape[0], np.int64)
+    n = 0
+    if plane.shape[0] == 0:
+        return order
+    stack = [0]
+    while len(stack):
+        item = stack.pop()
+        if item < 0:
+            node = -1 - item
+            for k in range(first[node], first[node] + count[node]):
+                order[n] = node_fragments[k]
+                n += 1
+            continue
+        node = item
+        s = plane[node, 0] * eye[0] + plane[node, 1] * eye[1] + plane[node, 2] * eye[2]
+        if eye_is_point:
+            s -= plane[node, 3]
+        far, near = (back[node], front[node]) if s > 0.0 else (front[node], back[node])
+        if near >= 0:                  # pushed first: painted last
+            stack.append(near)
+        stack.append(-1 - node)
+        if far >= 0:
+            stack.append(far)
+    return order[:n]
