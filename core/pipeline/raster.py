@@ -11,28 +11,42 @@ perspective-correct barycentric weights of vertex 1 and vertex 2 of that triangl
 centre (vertex 0's weight is 1 - b1 - b2; undefined where empty). All arrays are in image
 order: row 0 is the top, so device row j is array row H - 1 - j.
 
-Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene, ``lp_rast_tri.c`` consumes it):
+Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene and bins it into tiles,
+``lp_rast_tri.c`` rasterizes one tile at a time):
 
 * **setup** snaps each vertex to fixed point with ``SUBPIXEL_BITS`` = 8 sub-pixel bits, finds
   each triangle's box of pixel centres (clamped to the framebuffer) and keeps only triangles
   that can draw something: box not empty, and for boxes of at most 2 x 2 pixels at least one
-  centre actually covered (in a dense mesh most triangles cover none). Each kept
-  triangle goes into the *scene*: its id, the horizontal bands it meets, its fixed-point
-  corners, depths and 1/W, packed so that the scan reads it in order.
-* **rast** orients each triangle counter-clockwise (either winding is drawn) and writes each
-  edge as an edge function E(x, y) = A x + B y + C whose constant already holds the top-left
-  fill rule, so a pixel centre is inside exactly when all three E are >= 0: one sign test
-  (``e0 | e1 | e2 >= 0``). The integers are exact: two triangles sharing an edge see the same
-  numbers, so the edge is neither drawn twice nor left open. The box is walked row by row,
-  the edge functions stepped by A per pixel (FvDFH's incremental scan line, in integers).
-  Depth is interpolated linearly in screen space (after the perspective-to-parallel divide it
-  is an affine function of x and y, FvDFH 6.5.4) and tested as the notes write it,
-  ``z >= zbuffer``: on a tie the later triangle wins. Barycentrics are perspective-corrected with 1/W.
+  centre actually covered (in a dense mesh most triangles cover none). Each kept triangle
+  goes into the *scene* (its id, fixed-point corners, depths and 1/W) and into the *bin* of
+  every 64 x 64 tile its box meets (a big triangle skips the tiles one of its edges misses),
+  with its nearest depth beside it. Setup counts the entries per tile, chunk by chunk of the
+  triangle array, then writes them, so that each bin lists its triangles in triangle order.
+* **rast** takes the tiles one at a time, each with its own slice of the z-buffer (a tile's
+  depth and ids stay in the core's cache). It orients each triangle counter-clockwise
+  (either winding is drawn) and writes each edge as an edge function E(x, y) = A x + B y + C
+  whose constant already holds the top-left fill rule, so a pixel centre is inside exactly
+  when all three E are >= 0: one sign test (``e0 | e1 | e2 >= 0``). The integers are exact:
+  two triangles sharing an edge see the same numbers, so the edge is neither drawn twice nor
+  left open. The box is walked in 8 x 8 blocks, row by row, the edge functions stepped by A
+  per pixel (FvDFH's incremental scan line, in integers). Depth is interpolated linearly in
+  screen space (after the perspective-to-parallel divide it is an affine function of x and y,
+  FvDFH 6.5.4) and tested as the notes write it, ``z >= zbuffer``: on a tie the later
+  triangle wins. Barycentrics are perspective-corrected with 1/W.
+* **hierarchical z**: once every pixel of an 8 x 8 block has been written, the block keeps its
+  farthest depth (its *coarse z*), and once every block of a tile is full, the tile keeps the
+  farthest of those. Depths only grow during a frame, so these stay lower bounds: a triangle
+  whose nearest vertex is behind the tile's coarse z is dropped reading its bin entry alone,
+  and one behind a block's is not visited in that block. A tile whose later triangles look
+  nearer (a back-to-front stream) is drawn last to first with the test ``z > zbuffer``, which
+  picks the same winner at every pixel, ties included, and lets the near surface land first.
+  So depth complexity costs close to the visible pixels plus a few nanoseconds per hidden
+  triangle.
 
-Both cores: setup works on chunks of the triangle array, rast on horizontal bands of the
-framebuffer, handed out one at a time. Each band draws the scene's triangles that meet it in
-triangle order, so every pixel sees the same triangles in the same order as the single-threaded
-path (``parallel=False``) and the result is bit-identical.
+Both cores: setup works on chunks of the triangle array, rast on tiles, handed out one at a
+time. A pixel's winner depends only on the triangles of its tile's bin, which is the same list
+whatever the number of threads, so the result of the single-threaded path
+(``parallel=False``) is bit-identical.
 
 Vertices far outside the framebuffer are safe: coordinates are clamped to ``COORD_LIMIT``
 pixels before the fixed-point conversion (so no product overflows int64) and boxes are clamped
@@ -56,36 +70,57 @@ PIXEL_CENTRE = SUBPIXEL_ONE // 2  # a pixel centre sits half a pixel in
 COORD_LIMIT = float(1 << 20)
 INVALID = np.int32(np.iinfo(np.int32).min)  # fixed x of a vertex no triangle may use
 MAX_SIZE = 1 << 15  # framebuffer width and height limit
-MAX_BANDS = 16  # a triangle's bands are a uint16 bit mask
+MAX_BANDS = 16  # what default_bands() promises its callers (the banded rasterizer's limit)
+TILE_BITS = 6
+TILE = 1 << TILE_BITS  # 64 x 64 pixel tiles: the unit of parallel work, and its z-buffer fits in L2
+BLOCK_BITS = 3
+BLOCK = 1 << BLOCK_BITS  # 8 x 8 pixel blocks inside a tile, each with a coarse z
 SETUP_CHUNKS = 64  # pieces of the triangle array that setup hands to the cores
 PARALLEL_SETUP = 10_000  # fewer triangles than this are set up on one core
+HIERARCHICAL_Z = True  # skip hidden triangles by tile and by block (the bench compares both)
+COUNT_CELLS = 1 << 20  # at most this many (chunk, tile) counters: huge frames get fewer chunks
 
 
 @dataclass
 class _Scene:
-    """Setup's output, rast's input: the triangles that can draw, chunk by chunk.
+    """Setup's output, rast's input: the triangles that can draw, and each tile's bin.
 
     Chunk c covers triangles [c T / n, (c + 1) T / n) and writes its kept triangles from slot
-    c T / n on, in triangle order, up to ``chunk_end[c]``. Capacity grows on demand and is
-    kept from frame to frame.
+    c T / n on, in triangle order, up to ``chunk_end[c]``. Tile k's bin is
+    ``bins[tile_start[k]:tile_start[k + 1]]``: the slots of the triangles that may draw into
+    it, in triangle order. Capacity grows on demand and is kept from frame to frame.
     """
 
     fixed: np.ndarray = field(default_factory=lambda: np.empty((0, 2), np.int32))  # (V, 2)
     tri: np.ndarray = field(default_factory=lambda: np.empty(0, np.int32))  # triangle id
-    bands: np.ndarray = field(default_factory=lambda: np.empty(0, np.uint16))  # band mask
     xy: np.ndarray = field(default_factory=lambda: np.empty((0, 6), np.int32))  # fixed x0..y2
     zw: np.ndarray = field(default_factory=lambda: np.empty((0, 6)))  # z0, z1, z2, 1/W0..2
     chunk_end: np.ndarray = field(default_factory=lambda: np.empty(SETUP_CHUNKS, np.int64))
+    counts: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))  # (chunk, tile)
+    tile_start: np.ndarray = field(default_factory=lambda: np.empty(1, np.int64))
+    tile_rows: np.ndarray = field(default_factory=lambda: np.empty((0, TILE, 2), np.int32))
+    bins: np.ndarray = field(default_factory=lambda: np.empty(0, np.int32))
+    bin_z: np.ndarray = field(default_factory=lambda: np.empty(0))  # each entry's nearest z
 
-    def reserve(self, n_vertices: int, n_triangles: int) -> None:
+    def reserve(self, n_vertices: int, n_triangles: int, n_chunks: int = 1,
+                n_tiles: int = 0) -> None:
         if self.fixed.shape[0] < n_vertices:
             self.fixed = np.empty((max(n_vertices, 2 * self.fixed.shape[0]), 2), np.int32)
         if self.tri.shape[0] < n_triangles:
             n = max(n_triangles, 2 * self.tri.shape[0])
             self.tri = np.empty(n, np.int32)
-            self.bands = np.empty(n, np.uint16)
             self.xy = np.empty((n, 6), np.int32)
             self.zw = np.empty((n, 6))
+        if self.counts.shape[0] < n_chunks * n_tiles:
+            self.counts = np.empty(n_chunks * n_tiles, np.int64)
+        if self.tile_start.shape[0] < n_tiles + 1:
+            self.tile_start = np.empty(n_tiles + 1, np.int64)
+            self.tile_rows = np.empty((n_tiles, TILE, 2), np.int32)
+
+    def reserve_bins(self, n_entries: int) -> None:
+        if self.bins.shape[0] < n_entries:
+            self.bins = np.empty(max(n_entries, 2 * self.bins.shape[0]), np.int32)
+            self.bin_z = np.empty(self.bins.shape[0])
 
 
 @dataclass
@@ -105,7 +140,8 @@ class VisibilityBuffer:
     # the renderer when a shader needs screen derivatives; None otherwise.
     planes: np.ndarray | None = None
     # (H, 2) int32: per image row, the first and last column the last rasterize() may have
-    # written (first > last: none; the columns of the boxes drawn in the row's band). Outside its span a row is empty. The next frame clears only the
+    # written (first > last: none; the columns of the boxes drawn in the row). Outside its
+    # span a row is empty. The next frame clears only the
     # spans and the resolve shades only them: at 1k triangles most of the 500 x 500 pixels
     # are never touched. ``spans_known`` False (a buffer written by anyone else) makes the
     # next rasterize() clear every row.
@@ -205,7 +241,7 @@ def _triangle_edges(x0, y0, x1, y1, x2, y2):
 
 
 # --------------------------------------------------------------------------------------------
-# Setup (lp_setup_tri.c): fixed point, boxes, culling, binning into bands
+# Setup (lp_setup_tri.c): fixed point, boxes, culling, binning into tiles
 
 
 @njit(cache=True)
@@ -254,50 +290,103 @@ def _quad_covers(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max):
 
 
 @njit(cache=True)
-def _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk, n_chunks,
-                 s_tri, s_bands, s_xy, s_zw, chunk_end):
-    """Put the triangles of one chunk that can draw something into the scene, in order.
+def _edge_misses_box(a, b, c, i0, i1, j0, j1):
+    """Is the (biased) edge function negative at every pixel centre of columns i0..i1, device
+    rows j0..j1? It is affine, so its largest value over the box is at a corner."""
+    x = (i1 if a > 0 else i0) * SUBPIXEL_ONE + PIXEL_CENTRE
+    y = (j1 if b > 0 else j0) * SUBPIXEL_ONE + PIXEL_CENTRE
+    return a * x + b * y + c < 0
+
+
+@njit(cache=True)
+def _misses_box(x0, y0, x1, y1, x2, y2, i0, i1, j0, j1):
+    """Does the triangle cover no pixel centre of the box (one of its edges misses it all)?
+
+    Conservative: False may still mean no centre is covered."""
+    area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
+    return (area2 == 0 or _edge_misses_box(edge0[0], edge0[1], edge0[2], i0, i1, j0, j1)
+            or _edge_misses_box(edge1[0], edge1[1], edge1[2], i0, i1, j0, j1)
+            or _edge_misses_box(edge2[0], edge2[1], edge2[2], i0, i1, j0, j1))
+
+
+@njit(cache=True)
+def _kept_box(triangles, fixed, t, width, height):
+    """Triangle t's fixed corners and pixel box, or an empty box if it can draw nothing.
+
+    Returns (bad, x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max); bad is 1 when it names
+    a vertex that does not exist."""
+    n_vertices = fixed.shape[0]
+    v0 = triangles[t, 0]
+    v1 = triangles[t, 1]
+    v2 = triangles[t, 2]
+    zero = np.int64(0)
+    if min(v0, v1, v2) < 0 or max(v0, v1, v2) >= n_vertices:
+        return 1, zero, zero, zero, zero, zero, zero, 0, -1, 0, -1
+    x0 = np.int64(fixed[v0, 0])
+    y0 = np.int64(fixed[v0, 1])
+    x1 = np.int64(fixed[v1, 0])
+    y1 = np.int64(fixed[v1, 1])
+    x2 = np.int64(fixed[v2, 0])
+    y2 = np.int64(fixed[v2, 1])
+    if x0 == INVALID or x1 == INVALID or x2 == INVALID:
+        return 0, zero, zero, zero, zero, zero, zero, 0, -1, 0, -1
+    i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
+    if i_min <= i_max and j_min <= j_max and i_max - i_min <= 1 and j_max - j_min <= 1:
+        if not _quad_covers(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max):
+            i_max = i_min - 1  # a small triangle between pixel centres: most of a dense mesh
+    return 0, x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max
+
+
+@njit(cache=True)
+def _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty, several):
+    """Does a triangle whose box spans ``several`` tiles both ways possibly cover tile (tx, ty)?
+    (A long thin diagonal triangle's box holds many tiles it never touches.)"""
+    if not several:
+        return True
+    i0 = max(i_min, tx << TILE_BITS)
+    i1 = min(i_max, ((tx + 1) << TILE_BITS) - 1)
+    j0 = max(j_min, ty << TILE_BITS)
+    j1 = min(j_max, ((ty + 1) << TILE_BITS) - 1)
+    return not _misses_box(x0, y0, x1, y1, x2, y2, i0, i1, j0, j1)
+
+
+@njit(cache=True)
+def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk, n_chunks,
+                 s_tri, s_xy, s_zw, chunk_end, counts):
+    """Put the triangles of one chunk that can draw something into the scene, in order, and
+    count how many of them each tile will draw (``counts[chunk, tile]``).
 
     Returns how many triangles name a vertex that does not exist (they are never drawn).
     """
-    n_vertices = fixed.shape[0]
     n = triangles.shape[0]
     first = chunk * n // n_chunks
     slot = first
     bad = 0
+    counts[chunk, :] = 0
     for t in range(first, (chunk + 1) * n // n_chunks):
-        v0 = triangles[t, 0]
-        v1 = triangles[t, 1]
-        v2 = triangles[t, 2]
-        if min(v0, v1, v2) < 0 or max(v0, v1, v2) >= n_vertices:
-            bad += 1
-            continue
-        x0 = np.int64(fixed[v0, 0])
-        y0 = np.int64(fixed[v0, 1])
-        x1 = np.int64(fixed[v1, 0])
-        y1 = np.int64(fixed[v1, 1])
-        x2 = np.int64(fixed[v2, 0])
-        y2 = np.int64(fixed[v2, 1])
-        if x0 == INVALID or x1 == INVALID or x2 == INVALID:
-            continue
-        i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
+        miss, x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max = _kept_box(
+            triangles, fixed, t, width, height)
+        bad += miss
         if i_min > i_max or j_min > j_max:
-            continue  # no pixel centre of the framebuffer in its box
-        if i_max - i_min <= 1 and j_max - j_min <= 1:
-            if not _quad_covers(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max):
-                continue  # a small triangle between pixel centres: most of a dense mesh
-        # bands first..last: j // rows_per_band, as a multiply by band_scale = 2^32 //
-        # rows_per_band + 1 (exact while j * rows_per_band < 2^32; rows are < 2^15)
-        band_first = (j_min * band_scale) >> 32
-        band_last = (j_max * band_scale) >> 32
+            continue
+        tx0, tx1 = i_min >> TILE_BITS, i_max >> TILE_BITS
+        ty0, ty1 = j_min >> TILE_BITS, j_max >> TILE_BITS
+        several = tx1 > tx0 and ty1 > ty0
+        for ty in range(ty0, ty1 + 1):
+            for tx in range(tx0, tx1 + 1):
+                if _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty,
+                                several):
+                    counts[chunk, ty * n_tiles_x + tx] += 1
         s_tri[slot] = t
-        s_bands[slot] = ((1 << (band_last + 1)) - 1) ^ ((1 << band_first) - 1)
         s_xy[slot, 0] = x0
         s_xy[slot, 1] = y0
         s_xy[slot, 2] = x1
         s_xy[slot, 3] = y1
         s_xy[slot, 4] = x2
         s_xy[slot, 5] = y2
+        v0 = triangles[t, 0]
+        v1 = triangles[t, 1]
+        v2 = triangles[t, 2]
         s_zw[slot, 0] = xy_z[v0, 2]
         s_zw[slot, 1] = xy_z[v1, 2]
         s_zw[slot, 2] = xy_z[v2, 2]
@@ -309,159 +398,348 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk
     return bad
 
 
+@njit(cache=True)
+def _nearest(z0, z1, z2):
+    """A bound on the depth the rast interpolates inside a triangle: its nearest vertex's,
+    plus more than the rounding of the interpolation."""
+    return max(z0, z1, z2) + 1e-9 * (abs(z0) + abs(z1) + abs(z2))
+
+
+@njit(cache=True)
+def _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_zw, chunk_end,
+               cursor, bins, bin_z):
+    """Append the chunk's scene slots to the bins of the tiles they draw into: the same tiles
+    :func:`_setup_chunk` counted, written from the chunk's cursor in each bin. Each entry
+    carries the triangle's nearest depth, so that the rast rejects a hidden triangle reading
+    the bin alone, in order (its scene slot may be far away in memory)."""
+    for slot in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
+        z_near = _nearest(s_zw[slot, 0], s_zw[slot, 1], s_zw[slot, 2])
+        x0 = np.int64(s_xy[slot, 0])
+        y0 = np.int64(s_xy[slot, 1])
+        x1 = np.int64(s_xy[slot, 2])
+        y1 = np.int64(s_xy[slot, 3])
+        x2 = np.int64(s_xy[slot, 4])
+        y2 = np.int64(s_xy[slot, 5])
+        i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
+        tx0, tx1 = i_min >> TILE_BITS, i_max >> TILE_BITS
+        ty0, ty1 = j_min >> TILE_BITS, j_max >> TILE_BITS
+        several = tx1 > tx0 and ty1 > ty0
+        for ty in range(ty0, ty1 + 1):
+            for tx in range(tx0, tx1 + 1):
+                if _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty,
+                                several):
+                    k = ty * n_tiles_x + tx
+                    bins[cursor[chunk, k]] = slot
+                    bin_z[cursor[chunk, k]] = z_near
+                    cursor[chunk, k] += 1
+
+
+@njit(cache=True, nogil=True)
+def _bin_offsets(counts, tile_start):
+    """Turn the per-chunk counts into write cursors, bin by bin and chunk by chunk within a
+    bin, so that each tile's bin lists its triangles in triangle order. Returns the total."""
+    n_chunks, n_tiles = counts.shape
+    total = 0
+    for k in range(n_tiles):
+        tile_start[k] = total
+        for c in range(n_chunks):
+            here = counts[c, k]
+            counts[c, k] = total
+            total += here
+    tile_start[n_tiles] = total
+    return total
+
+
 @njit(cache=True, parallel=True, nogil=True)
-def _setup_parallel(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tri, s_bands,
-                    s_xy, s_zw, chunk_end):
+def _setup_parallel(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri, s_xy,
+                    s_zw, chunk_end, counts):
     # Snapping is one cheap pass (about 1 ms for 500k vertices); a parallel region of its
     # own would cost a core's wake-up, and on a loaded machine a scheduler tick, each frame.
     _snap_vertices(xy_z, inv_w, fixed)
     n_chunks = chunk_end.shape[0]
     bad = 0
     for chunk in prange(n_chunks):
-        bad += _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk,
-                            n_chunks, s_tri, s_bands, s_xy, s_zw, chunk_end)
+        bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
+                            n_chunks, s_tri, s_xy, s_zw, chunk_end, counts)
     return bad
 
 
 @njit(cache=True, nogil=True)
-def _setup_serial(xy_z, inv_w, triangles, width, height, band_scale, fixed, s_tri, s_bands,
-                  s_xy, s_zw, chunk_end):
+def _setup_serial(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri, s_xy,
+                  s_zw, chunk_end, counts):
     _snap_vertices(xy_z, inv_w, fixed)
     bad = 0
     for chunk in range(chunk_end.shape[0]):
-        bad += _setup_chunk(xy_z, inv_w, triangles, width, height, band_scale, fixed, chunk,
-                            chunk_end.shape[0], s_tri, s_bands, s_xy, s_zw, chunk_end)
+        bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
+                            chunk_end.shape[0], s_tri, s_xy, s_zw, chunk_end, counts)
     return bad
 
 
+@njit(cache=True, parallel=True, nogil=True)
+def _bin_parallel(width, height, n_triangles, n_tiles_x, s_xy, s_zw, chunk_end, cursor, bins,
+                  bin_z):
+    n_chunks = chunk_end.shape[0]
+    for chunk in prange(n_chunks):
+        _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_zw,
+                   chunk_end, cursor, bins, bin_z)
+
+
+@njit(cache=True, nogil=True)
+def _bin_serial(width, height, n_triangles, n_tiles_x, s_xy, s_zw, chunk_end, cursor, bins,
+                bin_z):
+    n_chunks = chunk_end.shape[0]
+    for chunk in range(n_chunks):
+        _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_zw,
+                   chunk_end, cursor, bins, bin_z)
+
+
 # --------------------------------------------------------------------------------------------
-# Rasterization (lp_rast_tri.c): walk the box, sign test, z-buffer test, barycentrics
+# Rasterization (lp_rast_tri.c): one tile at a time, 8 x 8 blocks with a coarse z each
+
+
+N_BLOCKS = (TILE // BLOCK) ** 2  # blocks per tile; coarse-z entry N_BLOCKS is the tile's
 
 
 @njit(cache=True)
-def _scan_triangle(s_xy, s_zw, slot, t, band_first, band_last, depth, tri, b1, b2,
-                   count_fragments, fragments):
-    """Scan-convert triangle t (scene slot ``slot``) into the device rows of one band.
-
-    Returns the columns of its box (first > last when it drew nothing)."""
-    height, width = depth.shape
-    x0 = np.int64(s_xy[slot, 0])
-    y0 = np.int64(s_xy[slot, 1])
-    x1 = np.int64(s_xy[slot, 2])
-    y1 = np.int64(s_xy[slot, 3])
-    x2 = np.int64(s_xy[slot, 4])
-    y2 = np.int64(s_xy[slot, 5])
-    i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
-    j_min = max(j_min, band_first)
-    j_max = min(j_max, band_last)
-    area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
-    if area2 == 0 or j_min > j_max:
-        return width, -1
-    a0, b0, c0, bias0 = edge0
-    a1, b1_, c1, bias1 = edge1
-    a2, b2_, c2, bias2 = edge2
-    inv_area = 1.0 / area2
-    z0 = s_zw[slot, 0]
-    dz1 = s_zw[slot, 1] - z0
-    dz2 = s_zw[slot, 2] - z0
-    w0 = s_zw[slot, 3]
-    w1 = s_zw[slot, 4]
-    w2 = s_zw[slot, 5]
-    px = i_min * SUBPIXEL_ONE + PIXEL_CENTRE
-    for j in range(j_min, j_max + 1):
-        py = j * SUBPIXEL_ONE + PIXEL_CENTRE
-        e0 = a0 * px + b0 * py + c0
-        e1 = a1 * px + b1_ * py + c1
-        e2 = a2 * px + b2_ * py + c2
-        row = height - 1 - j  # image order: row 0 is the top
-        entered = False
-        for i in range(i_min, i_max + 1):
-            if (e0 | e1 | e2) >= 0:  # inside all three edges, fill rule included
-                entered = True
-                if count_fragments:
-                    fragments[row, i] += 1
-                # unbiased edge values: exact integers, the screen-space barycentrics * area2
-                l1 = float(e1 + bias1)
-                l2 = float(e2 + bias2)
-                z = z0 + (l1 * dz1 + l2 * dz2) * inv_area  # depth is affine in screen space
-                if z >= depth[row, i]:  # the notes' test: a tie goes to the later triangle
-                    depth[row, i] = z
-                    tri[row, i] = t
-                    # perspective correction: weights ~ lambda_k / W_k, renormalised
-                    p0 = float(e0 + bias0) * w0
-                    p1 = l1 * w1
-                    p2 = l2 * w2
-                    s = 1.0 / (p0 + p1 + p2)
-                    b1[row, i] = p1 * s
-                    b2[row, i] = p2 * s
-            elif entered:
-                break  # a triangle is convex: once the scan line has left it, it is done
-            e0 += a0 * SUBPIXEL_ONE  # one pixel to the right
-            e1 += a1 * SUBPIXEL_ONE
-            e2 += a2 * SUBPIXEL_ONE
-    return i_min, i_max
+def _block_zmin(depth, row_top, row_bottom, i0, i1):
+    """The farthest depth in a block (rows row_top..row_bottom, columns i0..i1)."""
+    zmin = np.inf
+    for row in range(row_top, row_bottom + 1):
+        for i in range(i0, i1 + 1):
+            zmin = min(zmin, depth[row, i])
+    return zmin
 
 
 @njit(cache=True)
-def _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end, depth,
-               tri, b1, b2, span, count_fragments, fragments):
-    """Clear one band of rows, then draw into it every scene triangle that meets it, in order.
+def _block_filled(b, bi, bj, ti1, tj1, depth, zmin, unfilled):
+    """Block b has just had its last empty pixel written: its coarse z becomes its farthest
+    depth, and once every block of the tile is full, the tile's coarse z ``zmin[N_BLOCKS]``
+    the farthest of the blocks'. Later writes only bring pixels nearer, so these values stay
+    true lower bounds for the rest of the frame without being recomputed."""
+    height = depth.shape[0]
+    i0 = bi << BLOCK_BITS
+    j0 = bj << BLOCK_BITS
+    zmin[b] = _block_zmin(depth, height - 1 - min(j0 + BLOCK - 1, tj1), height - 1 - j0, i0,
+                          min(i0 + BLOCK - 1, ti1))
+    unfilled[N_BLOCKS] -= 1
+    if unfilled[N_BLOCKS] == 0:
+        zmin[N_BLOCKS] = zmin[:N_BLOCKS].min()
+
+
+@njit(cache=True)
+def _hidden(z_near, coarse, later_first):
+    """Is a triangle whose depth is at most z_near hidden behind a coarse z? (In triangle
+    order a tie draws, ``z >= zbuffer``; last to first it does not.)"""
+    return z_near < coarse or (later_first and z_near == coarse)
+
+
+@njit(cache=True)
+def _later_first(bin_z, start, end):
+    """Should the tile draw its triangles last to first? Yes when the later ones look nearer
+    (a back-to-front stream): then the near surfaces land first and hierarchical z rejects the
+    rest. Either order gives the same picture; this only picks the faster one, from a sample
+    of 16 triangles of each half of the bin."""
+    n = end - start
+    if n < 8:
+        return False
+    half = n // 2
+    step = max(1, half // 16)
+    early = 0.0
+    late = 0.0
+    for k in range(0, half, step):
+        early += bin_z[start + k]
+        late += bin_z[start + half + k]
+    return late > early
+
+
+@njit(cache=True)
+def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
+               span, tile_rows, hiz, count_fragments, fragments):
+    """Clear one tile, then draw into it every triangle of its bin, 8 x 8 block by block.
+
+    Hierarchical z: a triangle whose nearest vertex lies behind the tile's coarse z, or a
+    block's, is not visited there at all. With ``later_first`` the tile's triangles come last
+    to first, so a tie keeps what is there (``z > zbuffer``): the same pixel wins as in
+    triangle order with ``z >= zbuffer``.
 
     Only what the last frame wrote is cleared (each row's span; the rest of the row is still
     empty), and only depth and tri: b1 and b2 mean nothing where tri is -1 and nobody reads
-    them there. The band's new span is the columns of the boxes drawn in it: two registers
-    per band, nothing per pixel."""
+    them there. ``tile_rows[k]`` gets, per row of the tile, the columns of the boxes drawn."""
     height, width = depth.shape
-    first = band * rows_per_band
-    last = min(height, first + rows_per_band) - 1
-    for j in range(first, last + 1):
+    ti0 = (k % n_tiles_x) << TILE_BITS
+    tj0 = (k // n_tiles_x) << TILE_BITS
+    ti1 = min(ti0 + TILE, width) - 1
+    tj1 = min(tj0 + TILE, height) - 1
+    for j in range(tj0, tj1 + 1):
         row = height - 1 - j
-        for i in range(max(span[row, 0], 0), min(span[row, 1], width - 1) + 1):
+        for i in range(max(span[row, 0], ti0), min(span[row, 1], ti1) + 1):
             depth[row, i] = -np.inf
             tri[row, i] = -1
-        span[row, 0] = width
-        span[row, 1] = -1
-    bit = np.uint16(1 << band)
-    n_chunks = chunk_end.shape[0]
-    lo = width
-    hi = -1
-    for chunk in range(n_chunks):
-        for slot in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
-            if s_bands[slot] & bit:
-                i_min, i_max = _scan_triangle(s_xy, s_zw, slot, s_tri[slot], first, last,
-                                              depth, tri, b1, b2, count_fragments, fragments)
-                lo = min(lo, i_min)
-                hi = max(hi, i_max)
-    for j in range(first, last + 1):
+    tile_rows[k, :, 0] = width
+    tile_rows[k, :, 1] = -1
+    # per 8 x 8 block (and, at index N_BLOCKS, the tile): pixels (blocks) not yet written,
+    # and the coarse z, -inf until every pixel has been written
+    side = TILE // BLOCK
+    unfilled = np.empty(N_BLOCKS + 1, np.int32)
+    zmin = np.full(N_BLOCKS + 1, -np.inf)
+    unfilled[N_BLOCKS] = 0
+    for bj in range(side):
+        for bi in range(side):
+            w = min(BLOCK, max(0, ti1 + 1 - ti0 - bi * BLOCK))
+            h = min(BLOCK, max(0, tj1 + 1 - tj0 - bj * BLOCK))
+            unfilled[bj * side + bi] = w * h
+            unfilled[N_BLOCKS] += w * h > 0
+            if w * h == 0:
+                zmin[bj * side + bi] = np.inf  # outside the frame: never in the way
+    start = tile_start[k]
+    end = tile_start[k + 1]
+    later_first = hiz and _later_first(bin_z, start, end)
+    for n in range(end - start):
+        entry = end - 1 - n if later_first else start + n
+        if hiz and _hidden(bin_z[entry], zmin[N_BLOCKS], later_first):
+            continue  # behind everything in the tile: the common case deep in a stack of layers
+        # Scan-convert the triangle into the tile, 8 x 8 block by block. (Written out here,
+        # not called: a call passing the arrays costs two atomic reference counts per array
+        # per triangle, more than the pixels of a small triangle.)
+        slot = bins[entry]
+        t = s_tri[slot]
+        z_near = bin_z[entry]
+        z0 = s_zw[slot, 0]
+        z1 = s_zw[slot, 1]
+        z2 = s_zw[slot, 2]
+        x0 = np.int64(s_xy[slot, 0])
+        y0 = np.int64(s_xy[slot, 1])
+        x1 = np.int64(s_xy[slot, 2])
+        y1 = np.int64(s_xy[slot, 3])
+        x2 = np.int64(s_xy[slot, 4])
+        y2 = np.int64(s_xy[slot, 5])
+        i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
+        i_min = max(i_min, ti0)
+        i_max = min(i_max, ti1)
+        j_min = max(j_min, tj0)
+        j_max = min(j_max, tj1)
+        if j_min > j_max or i_min > i_max:
+            continue
+        for j in range(j_min, j_max + 1):
+            tile_rows[k, j - tj0, 0] = min(tile_rows[k, j - tj0, 0], i_min)
+            tile_rows[k, j - tj0, 1] = max(tile_rows[k, j - tj0, 1], i_max)
+        area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
+        if area2 == 0:
+            continue
+        a0, b0, c0, bias0 = edge0
+        a1, b1_, c1, bias1 = edge1
+        a2, b2_, c2, bias2 = edge2
+        inv_area = 1.0 / area2
+        dz1 = z1 - z0
+        dz2 = z2 - z0
+        w0 = s_zw[slot, 3]
+        w1 = s_zw[slot, 4]
+        w2 = s_zw[slot, 5]
+        big = (i_max - i_min > BLOCK) or (j_max - j_min > BLOCK)
+        tbi = ti0 >> BLOCK_BITS
+        tbj = tj0 >> BLOCK_BITS
+        for bj in range(j_min >> BLOCK_BITS, (j_max >> BLOCK_BITS) + 1):
+            cj0 = max(j_min, bj << BLOCK_BITS)
+            cj1 = min(j_max, ((bj + 1) << BLOCK_BITS) - 1)
+            for bi in range(i_min >> BLOCK_BITS, (i_max >> BLOCK_BITS) + 1):
+                ci0 = max(i_min, bi << BLOCK_BITS)
+                ci1 = min(i_max, ((bi + 1) << BLOCK_BITS) - 1)
+                b = ((bj - tbj) << (TILE_BITS - BLOCK_BITS)) + bi - tbi
+                if hiz and _hidden(z_near, zmin[b], later_first):
+                    continue  # hidden behind everything already in the block
+                if big and (_edge_misses_box(a0, b0, c0, ci0, ci1, cj0, cj1)
+                            or _edge_misses_box(a1, b1_, c1, ci0, ci1, cj0, cj1)
+                            or _edge_misses_box(a2, b2_, c2, ci0, ci1, cj0, cj1)):
+                    continue  # the block lies outside one edge
+                filled = 0
+                px = ci0 * SUBPIXEL_ONE + PIXEL_CENTRE
+                for j in range(cj0, cj1 + 1):
+                    py = j * SUBPIXEL_ONE + PIXEL_CENTRE
+                    e0 = a0 * px + b0 * py + c0
+                    e1 = a1 * px + b1_ * py + c1
+                    e2 = a2 * px + b2_ * py + c2
+                    row = height - 1 - j  # image order: row 0 is the top
+                    entered = False
+                    for i in range(ci0, ci1 + 1):
+                        if (e0 | e1 | e2) >= 0:  # inside all three edges, fill rule included
+                            entered = True
+                            if count_fragments:
+                                fragments[row, i] += 1
+                            # unbiased edge values: exact integers, the screen-space
+                            # barycentrics * area2
+                            l1 = float(e1 + bias1)
+                            l2 = float(e2 + bias2)
+                            # depth is affine in screen space
+                            z = z0 + (l1 * dz1 + l2 * dz2) * inv_area
+                            old = depth[row, i]
+                            # the notes' test z >= zbuffer: a tie goes to the later triangle
+                            if z > old or (z == old and not later_first):
+                                filled += old == -np.inf
+                                depth[row, i] = z
+                                tri[row, i] = t
+                                # perspective correction: weights ~ lambda_k / W_k, renormalised
+                                p0 = float(e0 + bias0) * w0
+                                p1 = l1 * w1
+                                p2 = l2 * w2
+                                s = 1.0 / (p0 + p1 + p2)
+                                b1[row, i] = p1 * s
+                                b2[row, i] = p2 * s
+                        elif entered:
+                            break  # a triangle is convex: once the row has left it, it is done
+                        e0 += a0 * SUBPIXEL_ONE  # one pixel to the right
+                        e1 += a1 * SUBPIXEL_ONE
+                        e2 += a2 * SUBPIXEL_ONE
+                if filled:
+                    unfilled[b] -= filled
+                    if unfilled[b] == 0:
+                        _block_filled(b, bi, bj, ti1, tj1, depth, zmin, unfilled)
+
+
+@njit(cache=True)
+def _merge_spans(n_tiles_x, tile_rows, span):
+    """Each image row's span: the columns the tiles of its tile row drew in it."""
+    height = span.shape[0]
+    for j in range(height):
+        ty = j >> TILE_BITS
+        lo = np.int32(1 << 30)
+        hi = np.int32(-1)
+        for tx in range(n_tiles_x):
+            k = ty * n_tiles_x + tx
+            lo = min(lo, tile_rows[k, j - (ty << TILE_BITS), 0])
+            hi = max(hi, tile_rows[k, j - (ty << TILE_BITS), 1])
         span[height - 1 - j, 0] = lo
         span[height - 1 - j, 1] = hi
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _rast_parallel(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
-                   depth, tri, b1, b2, span, count_fragments, fragments):
-    for band in prange(n_bands):
-        _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
-                   depth, tri, b1, b2, span, count_fragments, fragments)
+def _rast_parallel(n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
+                   span, tile_rows, hiz, count_fragments, fragments):
+    for k in prange(tile_rows.shape[0]):
+        _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1,
+                   b2, span, tile_rows, hiz, count_fragments, fragments)
+    _merge_spans(n_tiles_x, tile_rows, span)
 
 
 @njit(cache=True, nogil=True)
-def _rast_serial(n_bands, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
-                 depth, tri, b1, b2, span, count_fragments, fragments):
-    for band in range(n_bands):
-        _scan_band(band, rows_per_band, n_triangles, s_tri, s_bands, s_xy, s_zw, chunk_end,
-                   depth, tri, b1, b2, span, count_fragments, fragments)
+def _rast_serial(n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
+                 span, tile_rows, hiz, count_fragments, fragments):
+    for k in range(tile_rows.shape[0]):
+        _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1,
+                   b2, span, tile_rows, hiz, count_fragments, fragments)
+    _merge_spans(n_tiles_x, tile_rows, span)
 
 
 # --------------------------------------------------------------------------------------------
 # Public entry points
 
 _NO_FRAGMENTS = np.zeros((1, 1), np.int32)
+_NO_PARALLEL_CHUNKS = 1
 
 
 def default_bands(height: int) -> int:
-    """Bands for the parallel path: a few per core, so that no core waits on a busy band."""
-    return max(1, min(MAX_BANDS, 4 * numba.get_num_threads(), height))
+    """Kept for callers of the banded rasterizer: the tile rows of a frame this high (the
+    tiles, not bands, are now what the cores share), at most ``MAX_BANDS``."""
+    return max(1, min(MAX_BANDS, -(-int(height) // TILE)))
 
 
 def _checked(xy_z, inv_w, triangles, width, height):
@@ -480,38 +758,46 @@ def _checked(xy_z, inv_w, triangles, width, height):
     return xy_z, inv_w, triangles, width, height
 
 
-def _run(xy_z, inv_w, triangles, width, height, out, parallel, n_bands, fragments):
+def _run(xy_z, inv_w, triangles, width, height, out, parallel, fragments):
     xy_z, inv_w, triangles, width, height = _checked(xy_z, inv_w, triangles, width, height)
     if out is None or out.depth.shape != (height, width):
         out = VisibilityBuffer.allocate(width, height)
-    if n_bands is None:
-        n_bands = default_bands(height) if parallel else 1
-    n_bands = max(1, min(int(n_bands), MAX_BANDS, height))
-    rows_per_band = -(-height // n_bands)
-    n_bands = -(-height // rows_per_band)  # no empty band at the end
-    band_scale = (1 << 32) // rows_per_band + 1
+    n_tiles_x = -(-width // TILE)
+    n_tiles = n_tiles_x * -(-height // TILE)
     n_triangles = triangles.shape[0]
+    # Below PARALLEL_SETUP triangles setup takes well under a millisecond: waking a second
+    # core would cost more than it saves. The bins are the same either way (triangle order).
+    parallel_setup = parallel and n_triangles >= PARALLEL_SETUP
+    n_chunks = max(1, min(SETUP_CHUNKS, COUNT_CELLS // n_tiles)) if parallel_setup else 1
     scene = out._scene
-    scene.reserve(xy_z.shape[0], n_triangles)
+    scene.reserve(xy_z.shape[0], n_triangles, n_chunks, n_tiles)
     fixed = scene.fixed[:xy_z.shape[0]]
+    chunk_end = scene.chunk_end[:n_chunks]
+    counts = scene.counts[:n_chunks * n_tiles].reshape(n_chunks, n_tiles)
+    tile_start = scene.tile_start[:n_tiles + 1]
+    tile_rows = scene.tile_rows[:n_tiles]
     count = fragments is not None
     frag = fragments if count else _NO_FRAGMENTS
-    # Below PARALLEL_SETUP triangles setup takes well under a millisecond: waking a second
-    # core would cost more than it saves. (Either way the scene is the same.)
-    setup = _setup_parallel if parallel and n_triangles >= PARALLEL_SETUP else _setup_serial
+    setup = _setup_parallel if parallel_setup else _setup_serial
+    bin_ = _bin_parallel if parallel_setup else _bin_serial
     rast = _rast_parallel if parallel else _rast_serial
-    # chunk size 1: chunks and bands are handed out one at a time, so the cores share the
-    # load even when a few bands hold most of the triangles
+    # chunk size 1: chunks and tiles are handed out one at a time, so the cores share the
+    # load even when a few tiles hold most of the triangles
     with numba.parallel_chunksize(1):
-        bad = setup(xy_z, inv_w, triangles, width, height, band_scale, fixed, scene.tri,
-                    scene.bands, scene.xy, scene.zw, scene.chunk_end)
+        bad = setup(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, scene.tri,
+                    scene.xy, scene.zw, chunk_end, counts)
         if bad:
             raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
+        scene.reserve_bins(_bin_offsets(counts, tile_start))
+        bin_(width, height, n_triangles, n_tiles_x, scene.xy, scene.zw, chunk_end, counts,
+             scene.bins, scene.bin_z)
         if not out.spans_known or out.span is None or out.span.shape != (height, 2):
             out.forget_spans()
         out.spans_known = False             # until the rast has run to its end
-        rast(n_bands, rows_per_band, n_triangles, scene.tri, scene.bands, scene.xy, scene.zw,
-             scene.chunk_end, out.depth, out.tri, out.b1, out.b2, out.span, count, frag)
+        # counting visits every covered pixel, hidden or not: no hierarchical z
+        hiz = HIERARCHICAL_Z and not count
+        rast(n_tiles_x, scene.bins, scene.bin_z, tile_start, scene.tri, scene.xy, scene.zw,
+             out.depth, out.tri, out.b1, out.b2, out.span, tile_rows, hiz, count, frag)
         out.spans_known = True
     return out
 
@@ -527,11 +813,12 @@ def rasterize(xy_z, inv_w, triangles, width, height, out: VisibilityBuffer | Non
     triangles : (T, 3) int64 vertex indices; either winding is drawn.
     out : a buffer to reuse (cleared here); a new one is allocated if it is None or its size
         differs, so always use the returned buffer.
-    parallel : use all cores; ``False`` runs the single-threaded path (one band), whose
-        result is bit-identical.
-    n_bands : number of horizontal bands (default: a few per core; at most 16).
+    parallel : use all cores; ``False`` runs the single-threaded path, whose result is
+        bit-identical.
+    n_bands : accepted for the banded rasterizer's callers and ignored: the frame is cut into
+        64 x 64 tiles, which the cores take one at a time.
     """
-    return _run(xy_z, inv_w, triangles, width, height, out, parallel, n_bands, None)
+    return _run(xy_z, inv_w, triangles, width, height, out, parallel, None)
 
 
 def count_fragments(xy_z, inv_w, triangles, width, height, parallel: bool = True,
@@ -539,8 +826,9 @@ def count_fragments(xy_z, inv_w, triangles, width, height, parallel: bool = True
     """How many triangles cover each pixel centre, ignoring depth: (H, W) int32, image order.
 
     Runs exactly the code of :func:`rasterize` (same setup, same edge tests) with a counter
-    beside the depth test; the tests use it to show the fill rule is watertight.
+    beside the depth test and the hierarchical z test off (it would skip hidden pixels); the
+    tests use it to show the fill rule is watertight.
     """
     fragments = np.zeros((int(height), int(width)), np.int32)
-    _run(xy_z, inv_w, triangles, width, height, None, parallel, n_bands, fragments)
+    _run(xy_z, inv_w, triangles, width, height, None, parallel, fragments)
     return fragments
