@@ -161,10 +161,11 @@ class InspectorTools:
     # -- the panel ---------------------------------------------------------------------------
     def note_progress(self, fraction) -> None:
         if fraction is not None:
+            if self.progress and fraction < self.progress[-1]:
+                self.progress.clear()            # a new frame started: plot its progress
             self.progress.append(float(fraction))
 
     def panel(self, imgui, displayable) -> None:
-        from array import array
         header = "Inspector" + (" (click a pixel)" if self.inspecting else "")
         expanded, _ = imgui.collapsing_header(f"{header}###inspector",
                                               flags=imgui.TREE_NODE_DEFAULT_OPEN)
@@ -179,9 +180,16 @@ class InspectorTools:
                 imgui.text_disabled("h: " + ("picture" if self.showing_heat else "heat map"))
         if not self.lines and not self.inspecting:
             imgui.text_disabled("i: inspect mode, v: buffer views, h: compare with OpenGL")
+        imgui.pop_text_wrap_pos()
+        self._plots(imgui)
+        imgui.push_text_wrap_pos(0.0)
         for line in self.lines:
             imgui.text(displayable(line))
         imgui.pop_text_wrap_pos()
+
+    def _plots(self, imgui) -> None:
+        """The last frames' times, and the progress of a frame still refining."""
+        from array import array
         if self.frame_ms:
             values = array("f", self.frame_ms)
             imgui.plot_lines("##frame ms", values, overlay_text=f"frame {values[-1]:.1f} ms",
