@@ -46,8 +46,9 @@ def _check_sum(record) -> None:
         w = record["weights"]["used"]
         mixed = sum(w[k] * np.array(v["colour"]) for k, v in enumerate(record["vertices"]))
         assert _bytes(mixed) == record["color"]
-    if "ray tree" in record:                                  # the tree's contributions
-        total = np.sum([node["contribution"] for node in record["ray tree"]], axis=0)
+    nodes = record.get("ray tree") or []
+    if "raw" in record and nodes and all("contribution" in n for n in nodes):   # the tree
+        total = np.sum([node["contribution"] for node in nodes], axis=0)
         assert np.abs(total - record["raw"]).max() <= 1e-12
 
 
@@ -172,3 +173,12 @@ def test_a_frame_drawn_without_the_inspector_loads_none_of_it():
                           timeout=300, cwd=str(SCENES_DIR.parent))
     assert done.returncode == 0, done.stderr
     assert done.stdout.strip() == "['app.viewer.inspector_tools']"
+
+
+def test_a_record_of_another_shape_is_listed_key_by_key():
+    from core.inspect.text import describe
+    record = {"renderer": "bsp", "pixel": [4, 2], "color": [9, 8, 7],
+              "history": [{"polygon": 3, "color": [1, 2, 3]}], "ray tree": [{"odd": 1}]}
+    assert describe(record) == ["pixel (4, 2)  bsp  colour (9, 8, 7)",
+                                "history: [{'polygon': 3, 'color': [1, 2, 3]}]",
+                                "ray tree: [{'odd': 1}]"]
