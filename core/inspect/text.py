@@ -43,6 +43,8 @@ def _body(record: dict) -> list[str]:
     if "samples" in record and record.get("samples per pixel"):
         lines.append(f"{record['samples per pixel']} samples, averaged; the first:")
         return lines + _sample(record["samples"][0])
+    if "ray samples" in record:
+        return lines + _ray_samples(record)
     if "ray tree" in record or "samples" in record:
         return lines + _ray_tree(record)
     if record.get("layer") is None and "weights" not in record:
@@ -125,4 +127,18 @@ def _ray_tree(record: dict) -> list[str]:
                      f"{_rgb(node['contribution'])}")
     if "raw" in record:
         lines.append(f"sum {_rgb(record['raw'])}")
+    return lines
+
+
+def _ray_samples(record: dict) -> list[str]:
+    """The ray caster: each sample's hit and Phong sum (the first eight)."""
+    lines = [f"{record['samples per pixel']} samples, coverage {record['coverage']:.3f}"]
+    for sample in record["ray samples"][:8]:
+        hit = sample["hit"]
+        if hit is None:
+            lines.append("  background")
+        else:
+            lines.append(f"  primitive {hit['primitive']} t {hit['t']:.5g}: "
+                         f"{_rgb(sample['phong']['clamped'])}")
+    lines.append(f"mean {_rgb(record['raw'])}")
     return lines
