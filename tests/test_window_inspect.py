@@ -43,6 +43,8 @@ def _cli_record(x, y) -> dict:
     return json.loads(done.stdout)
 
 
+@pytest.mark.xvfb
+@pytest.mark.slow
 def test_inspect_mode_buffer_views_and_opengl_compare_under_xvfb(tmp_path):
     missing = [tool for tool in ("Xvfb", "xdotool", "import") if shutil.which(tool) is None]
     if missing and not os.environ.get("CI"):
@@ -112,3 +114,28 @@ def test_inspect_mode_buffer_views_and_opengl_compare_under_xvfb(tmp_path):
         app.stop()
         xvfb.kill()
         xvfb.wait(timeout=10)
+
+
+def test_the_tools_follow_the_frame_without_a_window():
+    """InspectorTools on a ViewerState: a click's record is the CLI's; a buffer view follows
+    a new frame, and falls back to the picture when the new frame has no such buffer."""
+    from app.viewer.inspector_tools import PICTURE, InspectorTools
+    from app.viewer.state import ViewerState
+    from core.paths import SCENES_DIR
+
+    state = ViewerState.open(SCENES_DIR / "cube.toml", size=SIZE)
+    state.set_shading("phong")
+    state.update()
+    tools = InspectorTools(state)
+    tools.toggle_inspect("test")
+    tools.inspect(120, 100, "test")
+    assert tools.record["color"] == state.frame.color[100, 120].tolist()
+    assert tools.lines[0].startswith("pixel (120, 100)  zbuffer  colour")
+    tools.next_buffer("test")
+    assert tools.buffer == "depth" and tools.overlay.shape == (SIZE[1], SIZE[0], 4)
+    assert tools.picture(state.frame) is tools.overlay
+    state.set_shading("wireframe")                  # no triangles filled: no depth buffer
+    state.update()
+    tools.frame_changed(state.frame, state.frame_seconds)
+    assert tools.buffer == PICTURE and tools.picture(state.frame) is state.frame.rgbx
+    assert list(tools.frame_ms) == [pytest.approx(state.frame_seconds * 1e3)]

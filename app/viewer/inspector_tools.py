@@ -38,6 +38,7 @@ class InspectorTools:
         self.showing_heat = False
         self.frame_ms: deque = deque(maxlen=120)
         self.progress: deque = deque(maxlen=240)
+        self.convergence: deque = deque(maxlen=240)
         self._context = None
         self.changed = False                       # the picture to show changed: upload it
 
@@ -53,10 +54,12 @@ class InspectorTools:
         """A new final frame: the plots take its time; a buffer view follows it; a
         comparison made for the old frame is dropped."""
         self.frame_ms.append(seconds * 1e3)
+        self.note_convergence(getattr(frame, "stats", None))
         if self.heat is not None:
             self.heat, self.showing_heat, self.verdict = None, False, ""
-        if self.buffer != PICTURE:
-            self._show_buffer(self.buffer, "the new frame")
+        if self.buffer != PICTURE and not self._show_buffer(self.buffer, "the new frame"):
+            self.buffer, self.overlay = PICTURE, None        # this frame has no such buffer
+            log.info("buffer view: the new frame keeps none; showing the picture")
         self.changed = True
 
     # -- inspect mode ------------------------------------------------------------------------
@@ -68,9 +71,8 @@ class InspectorTools:
         import json
         from core.inspect import NotInspectable, inspect_pixel
         from core.inspect.text import describe
-        s = self.state
         try:
-            record = inspect_pixel(s.scene, s.view, s.settings(), x, y, self.context())
+            record = inspect_pixel(*self._drawn(), x, y, self.context())
         except NotInspectable as error:
             self.record, self.lines = None, [str(error)]
             log.info("action: %s -> inspect pixel (%d, %d): %s", where, x, y, error)
@@ -78,6 +80,20 @@ class InspectorTools:
         self.record, self.lines = record, describe(record)
         log.info("action: %s -> inspect pixel (%d, %d)", where, x, y)
         log.info("inspect record: %s", json.dumps(record, default=_jsonable))
+
+    def _drawn(self):
+        """``(scene, view, settings)`` as the frame was drawn (the course's .tri rules
+        applied); animated scenes are refused (the moment's objects are not kept)."""
+        from core.inspect import NotInspectable
+        s = self.state
+        if s.playback is not None:
+            raise NotInspectable("animated scenes are not inspected: the objects of the "
+                                 "moment shown are not kept (use a still scene)")
+        scene = s.scene
+        if s.course_tri and s.view is not None:
+            from core.scene.course_tri import course_tri_scene
+            scene = course_tri_scene(scene, s.view)
+        return scene, s.view, s.settings()
 
     def context(self):
         if self._context is None:
@@ -114,7 +130,7 @@ class InspectorTools:
         if s.view is None or s.frame is None:
             return False
         try:
-            _, picture = buffer(s.scene, s.view, s.settings(), name, self.context())
+            _, picture = buffer(*self._drawn(), name, self.context())
         except NotInspectable:
             return False
         height, width = s.frame.color.shape[:2]
@@ -129,12 +145,19 @@ class InspectorTools:
     # -- the OpenGL comparison ---------------------------------------------------------------
     def compare_opengl(self, how: str) -> None:
         from app.tools.inspector import opengl_reference
+        from core.inspect import NotInspectable
         from core.inspect.compare import compare, heat_map
         s = self.state
         if s.frame is None or s.view is None:
             return
         ours = s.frame.color
-        reference, why = opengl_reference(s.scene, s.view, s.settings().replace(
+        try:
+            scene, view, settings = self._drawn()
+        except NotInspectable as error:
+            self.verdict = f"no comparison: {error}"
+            log.info("action: %s -> %s", how, self.verdict)
+            return
+        reference, why = opengl_reference(scene, view, settings.replace(
             size=(ours.shape[1], ours.shape[0])))
         if reference is None:
             self.verdict = f"no comparison: {why}"
@@ -159,12 +182,20 @@ class InspectorTools:
                  "the heat map" if self.showing_heat else "the picture")
 
     # -- the panel ---------------------------------------------------------------------------
+    def note_convergence(self, stats) -> None:
+        """A picture on its way: a renderer that reports ``stats["convergence"]`` (a number:
+        the path tracer's variance, radiosity's unshot energy) gets it plotted."""
+        value = stats.get("convergence") if isinstance(stats, dict) else None
+        if isinstance(value, (int, float)):
+            self.convergence.append(float(value))
+
     def note_progress(self, fraction) -> None:
         if fraction is not None:
+            if self.progress and fraction < self.progress[-1]:
+                self.progress.clear()            # a new frame started: plot its progress
             self.progress.append(float(fraction))
 
     def panel(self, imgui, displayable) -> None:
-        from array import array
         header = "Inspector" + (" (click a pixel)" if self.inspecting else "")
         expanded, _ = imgui.collapsing_header(f"{header}###inspector",
                                               flags=imgui.TREE_NODE_DEFAULT_OPEN)
@@ -179,12 +210,23 @@ class InspectorTools:
                 imgui.text_disabled("h: " + ("picture" if self.showing_heat else "heat map"))
         if not self.lines and not self.inspecting:
             imgui.text_disabled("i: inspect mode, v: buffer views, h: compare with OpenGL")
+        imgui.pop_text_wrap_pos()
+        self._plots(imgui)
+        imgui.push_text_wrap_pos(0.0)
         for line in self.lines:
             imgui.text(displayable(line))
         imgui.pop_text_wrap_pos()
+
+    def _plots(self, imgui) -> None:
+        """The last frames' times, and the progress of a frame still refining."""
+        from array import array
         if self.frame_ms:
             values = array("f", self.frame_ms)
             imgui.plot_lines("##frame ms", values, overlay_text=f"frame {values[-1]:.1f} ms",
+                             graph_size=(0, 40))
+        if len(self.convergence) > 1:
+            imgui.plot_lines("##convergence", array("f", self.convergence),
+                             overlay_text=f"convergence {self.convergence[-1]:.4g}",
                              graph_size=(0, 40))
         if len(self.progress) > 1:
             imgui.plot_lines("##progress", array("f", self.progress), scale_min=0.0,

@@ -479,6 +479,7 @@ class ViewerWindow:
             else:
                 log.info("partial frame: %s (%s)", result.what,
                          self.state.frame.stats.get("pass", "on its way"))
+                self.tools.note_convergence(self.state.frame.stats)
             self.blit.upload(self.tools.picture(self.state.frame))
             self.tools.changed = False
             self._wake()                  # the GUI shows the new frame's plan and timing next

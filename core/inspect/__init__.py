@@ -22,7 +22,8 @@ from core.context import DEFAULT_CONTEXT
 from core.renderers import get_renderer
 
 # Stand-ins for renderers whose module defines no inspect_pixel (yet): theirs wins.
-FALLBACKS = {"raytrace": "core.inspect.raytrace:inspect_pixel"}
+FALLBACKS = {"raytrace": "core.inspect.raytrace:inspect_pixel",
+             "raycast": "core.inspect.raycast:inspect_pixel"}
 
 
 class NotInspectable(ValueError):
@@ -41,6 +42,8 @@ def renderer_module(name: str):
 def inspector_of(name: str):
     """The ``inspect_pixel`` of renderer ``name``: its module's, else a fallback, else None."""
     found = getattr(renderer_module(name), "inspect_pixel", None)
+    if found is inspect_pixel:               # a module that imported this front door's
+        found = None
     if found is None and name in FALLBACKS:
         module, _, function = FALLBACKS[name].partition(":")
         found = getattr(importlib.import_module(module), function)

@@ -17,17 +17,38 @@ def _rgb(values) -> str:
 
 
 def describe(record: dict) -> list[str]:
-    """The record's lines (the first names the pixel, the renderer and the colour)."""
+    """The record's lines (the first names the pixel, the renderer and the colour). A record
+    of a shape this module does not know (another renderer's) is listed key by key."""
     x, y = record["pixel"]
     r, g, b = record["color"]
     lines = [f"pixel ({x}, {y})  {record['renderer']}  colour ({r}, {g}, {b})"]
+    try:
+        return lines + _body(record)
+    except (KeyError, TypeError, IndexError, ValueError):
+        return lines + _generic(record)
+
+
+def _generic(record: dict, limit: int = 40) -> list[str]:
+    out = []
+    for key, value in record.items():
+        if key in ("renderer", "pixel", "color"):
+            continue
+        text = repr(value)
+        out.append(f"{key}: {text if len(text) <= 160 else text[:157] + '...'}")
+    return out[:limit]
+
+
+def _body(record: dict) -> list[str]:
+    lines = []
     if "samples" in record and record.get("samples per pixel"):
         lines.append(f"{record['samples per pixel']} samples, averaged; the first:")
         return lines + _sample(record["samples"][0])
+    if "ray samples" in record:
+        return lines + _ray_samples(record)
     if "ray tree" in record or "samples" in record:
         return lines + _ray_tree(record)
-    if "history" in record or "polygons" in record:
-        return lines + [f"{k}: {record[k]}" for k in ("history", "polygons") if k in record]
+    if record.get("layer") is None and "weights" not in record:
+        return _generic(record)
     return lines + _sample(record)
 
 
@@ -106,4 +127,18 @@ def _ray_tree(record: dict) -> list[str]:
                      f"{_rgb(node['contribution'])}")
     if "raw" in record:
         lines.append(f"sum {_rgb(record['raw'])}")
+    return lines
+
+
+def _ray_samples(record: dict) -> list[str]:
+    """The ray caster: each sample's hit and Phong sum (the first eight)."""
+    lines = [f"{record['samples per pixel']} samples, coverage {record['coverage']:.3f}"]
+    for sample in record["ray samples"][:8]:
+        hit = sample["hit"]
+        if hit is None:
+            lines.append("  background")
+        else:
+            lines.append(f"  primitive {hit['primitive']} t {hit['t']:.5g}: "
+                         f"{_rgb(sample['phong']['clamped'])}")
+    lines.append(f"mean {_rgb(record['raw'])}")
     return lines

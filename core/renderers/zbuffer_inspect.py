@@ -296,11 +296,12 @@ def _gouraud(cap, x, y, corners, weights, face, mesh) -> dict:
             entry["note"] = "made by the clipper: its colour interpolated along the cut edge"
         vertices.append(entry)
     colour = [w0 * rgb[i0, c] + w1 * rgb[i1, c] + w2 * rgb[i2, c] for c in range(3)]
-    normal = [w0 * s.normals[i0, c] + w1 * s.normals[i1, c] + w2 * s.normals[i2, c]
-              if max(corners) < len(s.normals) else None for c in range(3)]
-    return {"vertices": vertices, "interpolated colour": [float(c) for c in colour],
-            "interpolated normal (not used: Gouraud lights the vertices)": normal,
-            "color": _bytes(colour)}
+    record = {"vertices": vertices, "interpolated colour": [float(c) for c in colour],
+              "color": _bytes(colour)}
+    if max(corners) < len(s.normals):       # shown only: Gouraud lights the vertices
+        record["interpolated normal"] = [float(w0 * s.normals[i0, c] + w1 * s.normals[i1, c]
+                                               + w2 * s.normals[i2, c]) for c in range(3)]
+    return record
 
 
 def _lerp(attrs, c, corners, weights):
