@@ -332,13 +332,13 @@ def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, anima
 
 
 class _Checkpoints:
-    """The particle state at the first frame of each run, in order: a second particle system
-    steps on from where this process's is (simulation only), and a snapshot is taken at each
-    run's start. Without emitters there is nothing to carry (None)."""
+    """The particle state at the first frame of each run, asked for in order: a second
+    particle system steps on from where this process's is (simulation only) and is
+    snapshotted at each run's start. Without emitters there is nothing to carry (None)."""
 
     def __init__(self, animation, fps: float):
         from core.animation.checkpoint import restore, snapshot
-        self.animation, self.fps, self.taken = animation, fps, {}
+        self.animation, self.fps = animation, fps
         system = animation.particle_system
         self.sim = None
         if system is not None:
@@ -352,15 +352,13 @@ class _Checkpoints:
         if self.sim is None:
             return None
         self.sim.state_at(self.animation.local_time(k / self.fps))
-        self.taken[k] = snapshot(self.sim)
-        return self.taken[k]
+        return snapshot(self.sim)
 
     def restore(self, k: int) -> None:
         """Put this process's particles at frame ``k`` (the start of a run it renders)."""
         from core.animation.checkpoint import restore
         if self.sim is not None:
-            restore(self.animation.particle_system, self.taken.pop(k, None) or self.at(k))
-            self.taken.pop(k, None)
+            restore(self.animation.particle_system, self.at(k))
 
 
 def _one_numba_thread() -> int:
