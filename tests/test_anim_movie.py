@@ -82,10 +82,11 @@ def decoded(movie: Path) -> list[np.ndarray]:
 
 @pytest.fixture
 def on_the_cluster(monkeypatch):
-    """A short job on --workers 2 would be kept in this process (it cannot win); these tests
-    want the frames rendered by the local cluster's workers."""
+    """A short job on --workers 2 (or any on a busy machine) would be kept in this process
+    (a cluster cannot win); these tests want frames rendered by the local cluster's worker."""
     import app.tools.animate as animate
     monkeypatch.setattr(animate, "CLUSTER_START_GUESS", 0.0)
+    monkeypatch.setattr(animate, "BUSY_LOAD_PER_CORE", float("inf"))
     monkeypatch.setattr(animate, "RENDER_WHILE_STARTING", False)
 
 

@@ -25,6 +25,7 @@ import argparse
 import hashlib
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -40,6 +41,7 @@ CLUSTER_START_GUESS = 3.0      # seconds a local cluster of 2 takes to take its 
 RUNS_PER_WORKER = 4            # runs dealt per worker (the last ones balance the load)
 MAX_RUN = 30                   # frames in one run at most
 RENDER_WHILE_STARTING = True   # this process renders while a local cluster starts
+BUSY_LOAD_PER_CORE = 1.0       # a load average above this many a core leaves no idle core
 
 
 def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
@@ -172,8 +174,6 @@ _loaded: dict = {}
 
 def _animation(path: str, size=None):
     """The animation of a scene file, loaded once per process (and again if the file changed)."""
-    import os
-
     from core.animation.animation import Animation
     from core.animation.keys import animation_of
     from core.scene.formats import load_scene
@@ -361,6 +361,21 @@ class _Checkpoints:
             restore(self.animation.particle_system, self.at(k))
 
 
+def _cannot_win(frames: int, seconds: float, workers: int) -> str | None:
+    """Why a local cluster would not finish these frames sooner than this process, or None:
+    the job is shorter than its start, or no core is idle (more processes would only share
+    the busy ones; the load average counts the runnable processes)."""
+    if frames * seconds < 2 * CLUSTER_START_GUESS:
+        return (f"the remaining {frames} frames take ~{frames * seconds:.1f} s here, less than "
+                f"twice the ~{CLUSTER_START_GUESS:g} s its start costs")
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else 0.0
+    if load > BUSY_LOAD_PER_CORE * cores:
+        return (f"the machine is busy (load average {load:.1f} on {cores} cores): more processes "
+                "would only share the same cores")
+    return None
+
+
 def _one_numba_thread() -> int:
     """This process renders beside the workers: one kernel thread, as each of them has.
     Returns the count before, to restore."""
@@ -399,10 +414,9 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress) -> tup
     head += render_here(job, todo[1:2], on_frame, args.retries, animation, failed)
     seconds = time.perf_counter() - t0
     todo = todo[head:]
-    if len(todo) * seconds < 2 * CLUSTER_START_GUESS or not todo:
-        progress.say(f"note: --workers {workers}: not starting a local cluster: the remaining "
-                     f"{len(todo)} frames take ~{len(todo) * seconds:.1f} s here, less than "
-                     f"twice the ~{CLUSTER_START_GUESS:g} s its start costs")
+    why = _cannot_win(len(todo), seconds, workers)
+    if why:
+        progress.say(f"note: --workers {workers}: not starting a local cluster: {why}")
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, "in this process (a cluster could not win)"
     start = cluster.LocalStart(workers - 1)          # this process is the N-th renderer
