@@ -208,7 +208,7 @@ def _samples(text: str):
 
 def _cluster_arguments(parser: argparse.ArgumentParser) -> None:
     """--workers and --scheduler: a ray-traced frame traced by bands on a Dask cluster."""
-    parser.add_argument("--workers", type=int, default=1,
+    parser.add_argument("--workers", type=_count, default=1,
                         help="local worker processes for a ray-traced frame (a local cluster "
                              "is started only when it can beat this process; it says so)")
     parser.add_argument("--scheduler", default=None,
@@ -216,12 +216,16 @@ def _cluster_arguments(parser: argparse.ArgumentParser) -> None:
                              "address (tcp://host:8786); the picture is the one-process one")
 
 
+def _count(text: str) -> int:
+    """A whole number of at least 1, for argparse."""
+    if not re.fullmatch(r"[0-9]{1,6}", text) or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number from 1 to 999999, got {text!r}")
+    return int(text)
+
+
 def _split(args, settings):
     """``(frame colour or None, what to say)``: the frame traced across a cluster when asked
     and possible; None when this process draws it (or an error was printed: then say is None)."""
-    if args.workers < 1:
-        print(f"error: --workers must be at least 1, got {args.workers}", file=sys.stderr)
-        return None, None
     if args.workers == 1 and not args.scheduler:
         return None, ""
     from app.tools.cluster import ClusterError

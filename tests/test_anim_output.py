@@ -323,6 +323,7 @@ time = 0.5
 view = { front = -4, back = 4 }
 """)
     code = ("import app.tools.animate as a; a.CLUSTER_START_GUESS = 0; "
+            "a.BUSY_LOAD_PER_CORE = float('inf'); "
             "a.RENDER_WHILE_STARTING = False; from app.cli import main; import sys; "
             f"sys.exit(main(['animate', {str(scene)!r}, '--out', {str(tmp_path / 'm.mp4')!r}, "
             "'--size', '24x24', '--workers', '2', '--retries', '1']))")
@@ -359,3 +360,15 @@ def test_the_mp4_bytes_do_not_depend_on_the_cores(tmp_path):
     data = (tmp_path / "one.mp4").read_bytes()
     assert len(data) > 100_000
     assert data == (tmp_path / "all.mp4").read_bytes() == (tmp_path / "again.mp4").read_bytes()
+
+
+def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, capsys, monkeypatch):
+    import app.tools.animate as animate
+    assert run(scene_file, "--out", tmp_path / "short", "--size", "24x24", "--workers", "2") == 0
+    assert "the remaining 2 frames take" in capsys.readouterr().err        # shorter than a start
+    monkeypatch.setattr(animate, "CLUSTER_START_GUESS", 0.0)
+    monkeypatch.setattr(animate.os, "getloadavg", lambda: (99.0, 99.0, 99.0))
+    assert run(scene_file, "--out", tmp_path / "busy", "--size", "24x24", "--workers", "2") == 0
+    captured = capsys.readouterr()
+    assert "the machine is busy (load average 99.0 on" in captured.err
+    assert "in this process (a cluster could not win)" in captured.out

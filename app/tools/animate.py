@@ -25,6 +25,7 @@ import argparse
 import hashlib
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
@@ -40,6 +41,7 @@ CLUSTER_START_GUESS = 3.0      # seconds a local cluster of 2 takes to take its 
 RUNS_PER_WORKER = 4            # runs dealt per worker (the last ones balance the load)
 MAX_RUN = 30                   # frames in one run at most
 RENDER_WHILE_STARTING = True   # this process renders while a local cluster starts
+BUSY_LOAD_PER_CORE = 1.0       # a load average above this many a core leaves no idle core
 
 
 def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
@@ -73,8 +75,9 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     p.add_argument("--paths", action="store_true",
                    help="draw the keyed paths (the eye, objects, lights) over every frame")
     p.add_argument("--workers", type=_number(int, 1, 10 ** 4), default=1,
-                   help="local worker processes (a Dask LocalCluster when more than 1; at most "
-                        "one a core, and as many as the memory holds)")
+                   help="renderers on this machine: this process and N - 1 worker processes "
+                        "(a Dask LocalCluster; at most one a core, and as many as the memory "
+                        "holds; none when the job is too short for them to win)")
     p.add_argument("--scheduler", default=None,
                    help="address of a running Dask scheduler (tcp://host:8786)")
     p.add_argument("--retries", type=_number(int, 0, MAX_RETRIES), default=2,
@@ -171,8 +174,6 @@ _loaded: dict = {}
 
 def _animation(path: str, size=None):
     """The animation of a scene file, loaded once per process (and again if the file changed)."""
-    import os
-
     from core.animation.animation import Animation
     from core.animation.keys import animation_of
     from core.scene.formats import load_scene
@@ -285,41 +286,103 @@ def runs_of(frames: list[int], workers: int) -> list[list[int]]:
 
 
 def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, animation,
-                      failed: list, workers: int) -> None:
+                      failed: list, workers: int, here: bool = False) -> None:
     """Deal ``frames`` to the cluster in runs, each with the particles' checkpoint at its
-    first frame (made here by stepping the simulation on, no picture drawn), two runs in
-    flight a worker; write each run's frames as it completes."""
-    from dask.distributed import as_completed
+    first frame (made here by stepping a copy of the simulation on, no picture drawn), two
+    runs in flight a worker; write each run's frames as it completes. With ``here`` this
+    process takes runs from the same queue too, between looking at what came back."""
+    from collections import deque
 
-    from core.animation.checkpoint import snapshot
-    system = animation.particle_system
+    from dask.distributed import as_completed
     shipped = client.scatter(bundle, broadcast=True, hash=False)
-    runs = runs_of(frames, workers)
+    queue = deque(runs_of(frames, workers + here))
+    checkpoints = _Checkpoints(animation, job["fps"])
     in_flight = {}
     done = as_completed()
 
     def submit(run):
-        checkpoint = None
-        if system is not None:
-            system.state_at(animation.local_time(run[0] / job["fps"]))
-            checkpoint = snapshot(system)
-        future = client.submit(render_run, job, shipped, run, checkpoint, retries=retries,
-                               pure=False)
+        future = client.submit(render_run, job, shipped, run, checkpoints.at(run[0]),
+                               retries=retries, pure=False)
         in_flight[future] = run
         done.add(future)
 
-    for run in runs[:2 * workers]:
-        submit(run)
-    waiting = runs[2 * workers:]
-    for future in done:
-        run = in_flight.pop(future)
-        try:
-            for k, data in future.result():
-                on_frame(k, data)
-        except Exception as error:                          # noqa: BLE001 - reported per run
-            failed.append((run, _one_line(error)))
-        if waiting:
-            submit(waiting.pop(0))
+    def collect(futures):
+        for future in futures:
+            run = in_flight.pop(future)
+            try:
+                for k, data in future.result():
+                    on_frame(k, data)
+            except Exception as error:                      # noqa: BLE001 - reported per run
+                failed.append((run, _one_line(error)))
+            if queue:
+                submit(queue.popleft())
+
+    for _ in range(min(2 * workers, len(queue))):
+        submit(queue.popleft())
+    while queue or in_flight:
+        if here and queue:
+            run = queue.popleft()
+            checkpoints.restore(run[0])
+            for k in run:
+                render_here(job, [k], on_frame, retries, animation, failed)
+                if done.has_ready():
+                    collect(done.next_batch(block=False))
+        else:
+            collect(done.next_batch(block=True))
+
+
+class _Checkpoints:
+    """The particle state at the first frame of each run, asked for in order: a second
+    particle system steps on from where this process's is (simulation only) and is
+    snapshotted at each run's start. Without emitters there is nothing to carry (None)."""
+
+    def __init__(self, animation, fps: float):
+        from core.animation.checkpoint import restore, snapshot
+        self.animation, self.fps = animation, fps
+        system = animation.particle_system
+        self.sim = None
+        if system is not None:
+            from core.animation.particles import ParticleSystem
+            self.sim = ParticleSystem([system.specs[i] for i in system.roots], system.fps,
+                                      system.seed, system.substeps)
+            restore(self.sim, snapshot(system))
+
+    def at(self, k: int):
+        from core.animation.checkpoint import snapshot
+        if self.sim is None:
+            return None
+        self.sim.state_at(self.animation.local_time(k / self.fps))
+        return snapshot(self.sim)
+
+    def restore(self, k: int) -> None:
+        """Put this process's particles at frame ``k`` (the start of a run it renders)."""
+        from core.animation.checkpoint import restore
+        if self.sim is not None:
+            restore(self.animation.particle_system, self.at(k))
+
+
+def _cannot_win(frames: int, seconds: float, workers: int) -> str | None:
+    """Why a local cluster would not finish these frames sooner than this process, or None:
+    the job is shorter than its start, or no core is idle (more processes would only share
+    the busy ones; the load average counts the runnable processes)."""
+    if frames * seconds < 2 * CLUSTER_START_GUESS:
+        return (f"the remaining {frames} frames take ~{frames * seconds:.1f} s here, less than "
+                f"twice the ~{CLUSTER_START_GUESS:g} s its start costs")
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else 0.0
+    if load > BUSY_LOAD_PER_CORE * cores:
+        return (f"the machine is busy (load average {load:.1f} on {cores} cores): more processes "
+                "would only share the same cores")
+    return None
+
+
+def _one_numba_thread() -> int:
+    """This process renders beside the workers: one kernel thread, as each of them has.
+    Returns the count before, to restore."""
+    import numba
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    return before
 
 
 def render_frames(args, job, bundle, animation, todo, on_frame, progress) -> tuple[list, str | None]:
@@ -351,13 +414,12 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress) -> tup
     head += render_here(job, todo[1:2], on_frame, args.retries, animation, failed)
     seconds = time.perf_counter() - t0
     todo = todo[head:]
-    if len(todo) * seconds < 2 * CLUSTER_START_GUESS or not todo:
-        progress.say(f"note: --workers {workers}: not starting a local cluster: the remaining "
-                     f"{len(todo)} frames take ~{len(todo) * seconds:.1f} s here, less than "
-                     f"twice the ~{CLUSTER_START_GUESS:g} s its start costs")
+    why = _cannot_win(len(todo), seconds, workers)
+    if why:
+        progress.say(f"note: --workers {workers}: not starting a local cluster: {why}")
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, "in this process (a cluster could not win)"
-    start = cluster.LocalStart(workers)
+    start = cluster.LocalStart(workers - 1)          # this process is the N-th renderer
     try:
         if not RENDER_WHILE_STARTING:
             start.ready.wait()
@@ -371,10 +433,16 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress) -> tup
                          "rendering here")
             render_here(job, todo[here:], on_frame, args.retries, animation, failed)
             return failed, None
-        render_on_cluster(start.client, job, bundle, todo[here:], on_frame, args.retries,
-                          animation, failed, workers)
-        return failed, (f"{workers} local workers, started once in {start.seconds:.1f} s while "
-                        f"this process rendered {head + here} frames")
+        threads = _one_numba_thread()
+        try:
+            render_on_cluster(start.client, job, bundle, todo[here:], on_frame, args.retries,
+                              animation, failed, workers - 1, here=True)
+        finally:
+            import numba
+            numba.set_num_threads(threads)
+        return failed, (f"this process and {workers - 1} local worker"
+                        f"{'s' if workers > 2 else ''}, started once in {start.seconds:.1f} s "
+                        f"while this process rendered {head + here} frames")
     finally:
         start.close()
 
