@@ -53,7 +53,7 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
                        f"{shading} shading uses vertex normals"),
         triangle_stage("vertex normals", smooth and not given_normals,
                        f"{shading} shading needs a normal at each vertex (average of the adjacent "
-                       "faces)",
+                       "faces; vertices are split where faces meet beyond the crease angle)",
                        "given with the mesh (by its file or its generator)" if smooth
                        else "flat shading needs no vertex normals"),
         triangle_stage("illuminate faces", solid and shading == "flat",

@@ -183,6 +183,8 @@ def main(args) -> int:
         say = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
         paths += tuple(texture_rows(out, progress=say))
         paths += tuple(raytrace_rows(out, config.size, cache=config.cache, progress=say))
+        from app.tools.raytrace_report import write_adaptive          # issue 20
+        paths += tuple(write_adaptive(out, progress=say))
     for line in accuracy.reading(points):
         print(line)
     print(f"wrote {', '.join(str(p) for p in paths)} ({wall:.0f} s sweep)")

@@ -3,7 +3,8 @@
 Rays go through the corners of the pixels, not their centres. Where the four corners of a
 square differ by more than ``threshold`` (in any channel, colours on 0–1) the square is split
 into four and rays go through the new corners — its centre and the middles of its sides —
-down to squares ``1 / 2^levels`` of a pixel across; corners are shared between neighbours, so
+down to squares ``1 / 2^levels`` of a pixel across (every square is split down to
+``1 / 2^min_levels`` first: a pixel whose corners agree may still hide a detail inside); corners are shared between neighbours, so
 each is traced once. A square that is not split contributes the mean of its corners, weighted
 by its area: a flat region costs about one ray a pixel, an edge up to ``(2^levels + 1)²``.
 
@@ -15,6 +16,12 @@ from __future__ import annotations
 
 import numpy as np
 
+# Every pixel is split once before its corners are compared: corners alone miss what lies
+# inside a pixel (a checkerboard finer than the pixels, towards the horizon). Measured on the
+# Whitted scene at 96 x 96 (docs/report/raytrace_adaptive.md): up to 16 samples, 8.2 rays a
+# pixel and RMSE 2.00 against the regular grid's 16 rays and 2.44; corners only, 6.3 and 3.32.
+MIN_LEVELS = 1
+
 
 def levels_for(samples: int) -> int:
     """``samples`` = 4^levels (1 → 0: the corners only)."""
@@ -25,7 +32,7 @@ def levels_for(samples: int) -> int:
 
 
 def render_adaptive(trace_points, width: int, height: int, levels: int,
-                    threshold: float) -> np.ndarray:
+                    threshold: float, min_levels: int = MIN_LEVELS) -> np.ndarray:
     """``(H, W, 3)`` unclamped colours. ``trace_points(points (N, 2)) -> (N, 3)`` traces the
     rays through points given in pixels from the top-left corner (x right, y down)."""
     side = 2 ** levels
@@ -49,7 +56,7 @@ def render_adaptive(trace_points, width: int, height: int, levels: int,
             known = np.concatenate([known, colours])[order]
         c = known[np.searchsorted(known_keys, keys)]                          # (Q, 4, 3)
         spread = (c.max(axis=1) - c.min(axis=1)).max(axis=1)
-        split = (spread > threshold) & (size > 1)
+        split = ((spread > threshold) | (size > side >> min_levels)) & (size > 1)
         leaf = ~split
         area = (size[leaf] / side) ** 2
         np.add.at(image.reshape(-1, 3), pixel[leaf], area[:, None] * c[leaf].mean(axis=1))

@@ -89,7 +89,7 @@ class Setup:
     counts: np.ndarray           # (7,) rays of each kind so far (whitted.COUNTERS)
     keep_aspect: bool = False    # letterbox the window (else stretch it: the course's mapping)
     not_drawn: tuple = ()        # what the scene has that the tracer leaves out, in words
-    adaptive: tuple | None = None  # (levels, threshold): adaptive supersampling (adaptive.py)
+    adaptive: tuple | None = None  # (levels, threshold, min_levels): adaptive.py
 
 
 def prepare(scene, view: View, projection: str, size: tuple[int, int],
@@ -215,9 +215,10 @@ def tiles(width: int, height: int, tile: int = 32) -> list[tuple[int, int, int, 
 def render_raw(setup: Setup) -> np.ndarray:
     """The whole frame, ``(H, W, 3)`` unclamped float colours, row 0 at the top."""
     if setup.adaptive is not None:
-        levels, threshold = setup.adaptive
+        levels, threshold, min_levels = setup.adaptive
         return adaptive.render_adaptive(lambda points: trace_points(setup, points),
-                                        setup.width, setup.height, levels, threshold)
+                                        setup.width, setup.height, levels, threshold,
+                                        min(levels, min_levels))
     return trace_tile(setup, 0, setup.height, 0, setup.width)
 
 
@@ -241,14 +242,15 @@ def stats_of(setup: Setup, seconds: float) -> dict:
 def render_image(scene, view: View, projection: str, size: tuple[int, int],
                  options: TraceOptions = TraceOptions(), samples: int = 1,
                  pattern: str = "regular", seed: int = 0, keep_aspect: bool = False,
-                 threshold: float = 0.1) -> tuple[np.ndarray, np.ndarray, dict]:
+                 threshold: float = 0.1, min_levels: int = adaptive.MIN_LEVELS
+                 ) -> tuple[np.ndarray, np.ndarray, dict]:
     """``(uint8 image (H, W, 3), raw float image, stats)`` of ``view`` of ``scene``
     (``pattern = "adaptive"``: up to ``samples`` a pixel where corners differ by more than
     ``threshold``)."""
     offsets = sample_offsets(samples, pattern, seed)
     setup = prepare(scene, view, projection, size, options, offsets, keep_aspect)
     if pattern == "adaptive":
-        setup.adaptive = (adaptive.levels_for(samples), threshold)
+        setup.adaptive = (adaptive.levels_for(samples), threshold, min_levels)
     start = time.perf_counter()
     raw = render_raw(setup)
     return to_uint8(raw), raw, stats_of(setup, time.perf_counter() - start)
@@ -264,7 +266,8 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
         setup = prepare(scene, view, settings.projection, settings.size, options, offsets,
                         settings.keep_aspect)
         if settings.sample_pattern == "adaptive":
-            setup.adaptive = (adaptive.levels_for(settings.samples), settings.adaptive_threshold)
+            setup.adaptive = (adaptive.levels_for(settings.samples), settings.adaptive_threshold,
+                              adaptive.MIN_LEVELS)
     except ValueError as error:              # a setting or a material the tracer cannot use
         frame.color[...] = to_uint8(scene.background)
         frame.message = f"{scene.name}: cannot ray trace: {error}"
