@@ -61,3 +61,19 @@ def test_radiosity_walls_match_the_path_tracer(cornell):
         assert error.max() < 0.05, (surface, radiosity_mean, ours_mean)
         checked += 1
     assert checked >= 5
+
+
+def test_inspect_pixel_retraces_the_pixel():
+    from core.pathtrace.renderer import inspect_pixel
+    from core.render import render
+    scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
+    settings = RenderSettings.for_scene(scene, renderer="pathtrace", size=(24, 24), samples=4)
+    context = RenderContext()
+    frame = render(scene, scene.views[0], settings, context)
+    record = inspect_pixel(scene, scene.views[0], settings, 12, 20, context)
+    assert record["color"] == frame.color[20, 12].tolist()
+    path = record["path (first sample)"]
+    assert path[0]["kind"] == "camera" and path[0]["hit"] is not None
+    assert all(p["kind"] == "diffuse or glossy (BSDF sample)" for p in path[1:])
+    # the contributions add up to the first sample's radiance
+    assert sum(np.array(p["contribution"]) for p in path).min() >= 0

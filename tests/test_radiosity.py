@@ -263,3 +263,36 @@ def test_inspect_pixel_matches_the_picture():
     assert record["color"] == frame.color[40, 10].tolist()
     assert record["mesh"].startswith("white") and record["reflectance"][0] == 0.725
     assert record["emission"] == [0, 0, 0] and record["radiosity"][0] > 0
+
+
+def test_window_progress_brightens_step_by_step_then_equals_the_renderer(monkeypatch):
+    from app.viewer import progressive_gi
+    from core.context import RenderContext
+    monkeypatch.setattr(progressive_gi, "PARTIAL_EVERY", 0.0)     # a picture after every shot
+
+    class Control:
+        cancelled = False
+        partials, reports = [], []
+
+        def check(self):
+            pass
+
+        def report(self, fraction, detail):
+            self.reports.append(detail)
+
+        def partial(self, frame):
+            self.partials.append(frame.color.copy())
+
+    scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
+    settings = RenderSettings.for_scene(scene, renderer="radiosity", size=(32, 32),
+                                        max_elements=60, hemicube_resolution=16)
+    control = Control()
+    frame = progressive_gi.radiosity_progressively(scene, scene.views[0], settings,
+                                                   RenderContext(), render, control)
+    assert len(control.partials) > 5
+    assert control.reports[0].startswith("shooting step 1, unshot energy")
+    assert control.reports[-1].endswith(" elements")
+    again = render(scene, scene.views[0], settings, RenderContext())
+    assert np.array_equal(frame.color, again.color)
+    # the picture changes as the light is shot (the ambient term stands in for the rest)
+    assert not np.array_equal(control.partials[0], control.partials[-1])

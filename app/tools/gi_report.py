@@ -138,13 +138,19 @@ def _write(out: Path, ff, rad, pt) -> None:
              "this 2-core machine, shared with other jobs.", "",
              "## Form factors against closed forms (Howell C-11, C-14, C-41)", "",
              "F from the source to the target, averaged over the source cut into small "
-             "pieces (the same points for both methods).", "",
-             "| case | method | resolution | exact | measured | error % | s |",
-             "|---|---|---:|---:|---:|---:|---:|"]
+             "pieces (the same points for both methods). Error % is against the closed form "
+             "and includes that averaging (the ray-cast row, exact at each point, shows it); "
+             "'hemicube own %' is the hemicube against the ray-cast value at the same points: "
+             "the error of its pixels, which shrinks with the resolution.", "",
+             "| case | method | resolution | exact | measured | error % | hemicube own % | s |",
+             "|---|---|---:|---:|---:|---:|---:|---:|"]
+    raycast = {r["case"]: r["measured"] for r in ff if r["method"] == "raycast"}
     for r in ff:
+        own = (f"{100 * (r['measured'] - raycast[r['case']]) / raycast[r['case']]:+.3f}"
+               if r["method"] == "hemicube" else "-")
         lines.append(f"| {r['case']} | {r['method']} | {r['resolution'] or '-'} | "
                      f"{r['exact']:.5f} | {r['measured']:.5f} | {r['error_pct']:+.3f} | "
-                     f"{r['seconds']:.2f} |")
+                     f"{own} | {r['seconds']:.2f} |")
     lines += ["", f"## Radiosity on the Cornell box against a path-traced reference "
               f"({REFERENCE_SPP} spp, {SIZE} x {SIZE})", "",
               "Error: mean relative error of the wall surfaces' mean radiance (pixels away from "
@@ -155,7 +161,8 @@ def _write(out: Path, ff, rad, pt) -> None:
         lines.append(f"| {r['elements']} | {r['resolution']} | {r['converge']} | {r['steps']} | "
                      f"{r['seconds']:.2f} | {r['error_pct']:.2f} |")
     lines += ["", "## The path tracer against the same reference", "",
-              "Per-pixel mean relative error away from edges; 1/√N: the first error scaled.", "",
+              "Per-pixel mean relative error away from edges; 1/√N: the first error scaled. "
+              f"The reference's own noise ({REFERENCE_SPP} spp) flattens the last points.", "",
               "| spp | s | error % | 1/√N line % |", "|---:|---:|---:|---:|"]
     for r in pt:
         line = pt[0]["error_pct"] * (pt[0]["spp"] / r["spp"]) ** 0.5
@@ -186,6 +193,15 @@ def _plot(out: Path, rad, pt) -> None:
     b.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out / "global_illumination.png", dpi=100)
+
+
+def rewrite(out: Path) -> None:
+    """The Markdown and the plot again from the CSV (no rendering)."""
+    series = {"form factors": [], "radiosity": [], "pathtrace": []}
+    with open(out / "global_illumination.csv") as f:
+        for name, row in list(csv.reader(f))[1:]:
+            series[name].append(json.loads(row))
+    _write(out, series["form factors"], series["radiosity"], series["pathtrace"])
 
 
 if __name__ == "__main__":

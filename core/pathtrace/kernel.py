@@ -156,18 +156,37 @@ def _sample_lobe(m, nx, ny, nz, wox, woy, woz, pd, ps, u0, u1, u2):
     return _around(rx, ry, rz, sin_a * math.cos(phi), sin_a * math.sin(phi), cos_a)
 
 
+# The kinds of ray a path is made of, and a recorded ray's columns.
+CAMERA, DIFFUSE, MIRROR, GLASS = 0, 1, 2, 3
+RAY_KINDS = ("camera", "diffuse or glossy (BSDF sample)", "mirror", "glass")
+RECORD_WIDTH = 15     # origin 3, direction 3, kind, throughput 3, t, triangle, radiance so far 3
+
+
+@njit(cache=True)
+def _record(row, ox, oy, oz, dx, dy, dz, kind, tr, tg, tb, t, tri, lr, lg, lb):
+    row[0], row[1], row[2], row[3], row[4], row[5] = ox, oy, oz, dx, dy, dz
+    row[6], row[7], row[8], row[9] = kind, tr, tg, tb
+    row[10], row[11], row[12], row[13], row[14] = t, tri, lr, lg, lb
+
+
 @njit(cache=True)
 def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
                tri_area, tri_emit_pdf, lights, background, ox, oy, oz, dx, dy, dz, t_min, t_max,
-               offset, state, stack):
+               offset, state, stack, record):
     """The radiance along one camera ray: ``(r, g, b, state, bounces)``; a camera ray that
-    hits nothing sees the background colour (a path that leaves the scene later, nothing)."""
+    hits nothing sees the background colour (a path that leaves the scene later, nothing).
+    ``record`` (R, RECORD_WIDTH): the first R rays of the path, for the pixel inspector
+    (R = 0 when rendering)."""
     lr, lg, lb = 0.0, 0.0, 0.0
     tr, tg, tb = 1.0, 1.0, 1.0
     last_pdf = 0.0            # solid-angle pdf of the BSDF sample that made this ray
     delta = True              # a camera ray, or one after a mirror or glass bounce: no MIS
+    kind = CAMERA
     for bounce in range(MAX_BOUNCES):
         k, t, _, _ = closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
+        if bounce < record.shape[0]:
+            _record(record[bounce], ox, oy, oz, dx, dy, dz, kind, tr, tg, tb,
+                    t if k >= 0 else np.inf, bvh.prim[k] if k >= 0 else -1, lr, lg, lb)
         if k < 0:
             if bounce == 0:
                 return background[0], background[1], background[2], state, 0
@@ -260,13 +279,13 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
                 return lr, lg, lb, state, bounce
             cos_i = nx * wx + ny * wy + nz * wz
             tr, tg, tb = tr * fr * cos_i / bp, tg * fg * cos_i / bp, tb * fb * cos_i / bp
-            last_pdf, delta = bp, False
+            last_pdf, delta, kind = bp, False, DIFFUSE
             ox, oy, oz = sx, sy, sz
         elif u0 < pd + ps + pr:                       # mirror: k_r, chosen with pr
             wx, wy, wz = _reflect(dx, dy, dz, nx, ny, nz)
             scale = m[KR] / pr
             tr, tg, tb = tr * scale, tg * scale, tb * scale
-            delta = True
+            delta, kind = True, MIRROR
             ox, oy, oz = sx, sy, sz
         else:                                         # glass: k_t, Snell's law
             eta = 1.0 / m[IOR] if front else m[IOR]
@@ -281,7 +300,7 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
                 ox, oy, oz = px - offset * nx, py - offset * ny, pz - offset * nz
             scale = m[KT] / pt
             tr, tg, tb = tr * scale, tg * scale, tb * scale
-            delta = True
+            delta, kind = True, GLASS
         dx, dy, dz = wx, wy, wz
         t_min, t_max = 0.0, np.inf
         # 4. Russian roulette
@@ -297,16 +316,19 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
                tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
-               out, bounces):
-    """Radiance of every ray into ``out`` (N, 3); ``bounces`` (chunks,) the path lengths."""
+               out, bounces, first_index=0):
+    """Radiance of every ray into ``out`` (N, 3); ``bounces`` (chunks,) the path lengths.
+    Ray i draws its random numbers from (seed, first_index + i): its pixel's index in the
+    frame, so one pixel can be traced again alone (the inspector)."""
     n = origins.shape[0]
+    no_record = np.empty((0, RECORD_WIDTH))
     chunks = (n + 255) // 256
     for j in prange(chunks):
         chunk = spread(j, chunks)
         stack = np.empty(STACK, np.int64)
         total = 0
         for i in range(chunk * 256, min(n, (chunk + 1) * 256)):
-            state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(i)
+            state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(first_index + i)
             state, _ = _next(state)
             if not t_min[i] < t_max[i]:          # outside the viewport (letterbox)
                 out[i, 0], out[i, 1], out[i, 2] = background[0], background[1], background[2]
@@ -315,7 +337,25 @@ def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
                 bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
                 tri_area, tri_emit_pdf, lights, background, origins[i, 0], origins[i, 1], origins[i, 2],
                 directions[i, 0], directions[i, 1], directions[i, 2], t_min[i], t_max[i],
-                offset, state, stack)
+                offset, state, stack, no_record)
             out[i, 0], out[i, 1], out[i, 2] = r, g, b
             total += depth
         bounces[chunk] = total
+
+
+@njit(cache=True)
+def trace_recorded(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
+                   tri_area, tri_emit_pdf, lights, background, origin, direction, t_min, t_max,
+                   offset, seed, index, record):
+    """One ray, as :func:`trace_many` traces ray ``index`` of its frame, with its path in
+    ``record``: ``(r, g, b, bounces)``."""
+    state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(index)
+    state, _ = _next(state)
+    if not t_min < t_max:
+        return background[0], background[1], background[2], 0
+    stack = np.empty(STACK, np.int64)
+    r, g, b, state, depth = trace_path(
+        bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
+        tri_emit_pdf, lights, background, origin[0], origin[1], origin[2], direction[0],
+        direction[1], direction[2], t_min, t_max, offset, state, stack, record)
+    return r, g, b, depth
