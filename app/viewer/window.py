@@ -568,9 +568,10 @@ class ViewerWindow:
     def _panel(self) -> None:
         scale = self._scale()
         width, height = self.state.size
-        _, fb_h = glfw.get_framebuffer_size(self.window)
+        fb_w, fb_h = glfw.get_framebuffer_size(self.window)
         imgui.set_next_window_position(width / scale, 0, imgui.ALWAYS)
-        imgui.set_next_window_size(PANEL_WIDTH, fb_h / scale, imgui.ALWAYS)
+        # no wider than the window, so that its text wraps where it can be read
+        imgui.set_next_window_size(min(PANEL_WIDTH, fb_w / scale), fb_h / scale, imgui.ALWAYS)
         imgui.begin("panel", False, PANEL_FLAGS)
         self._menu_bar()
         self._status()
@@ -587,17 +588,17 @@ class ViewerWindow:
             self._closing()
             if imgui.begin_menu("Open scene").opened:
                 self._closing()
-                for path in self._scenes:
-                    if imgui.menu_item(path.name, None, str(path) == self.state.scene_source)[0]:
-                        self.open_scene(str(path), "menu File > Open")
-                imgui.separator()
-                imgui.text("Path:")
+                imgui.text("Path:")               # first: on screen however long the list
                 entered, self._path = imgui.input_text(
                     "##path", self._path, flags=imgui.INPUT_TEXT_ENTER_RETURNS_TRUE)
                 imgui.same_line()
                 if (imgui.button("Open") or entered) and self._path.strip():
                     self.open_scene(self._path, "menu File > Open path")
                     imgui.close_current_popup()
+                imgui.separator()
+                for path in self._scenes:
+                    if imgui.menu_item(path.name, None, str(path) == self.state.scene_source)[0]:
+                        self.open_scene(str(path), "menu File > Open")
                 imgui.end_menu()
             if imgui.menu_item("Save screenshot", "S")[0]:
                 self.save_screenshot("menu File > Save screenshot")
