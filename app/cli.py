@@ -82,7 +82,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="where screenshots go, and the PNGs when there is no display "
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
-    v.add_argument("--renderer", choices=("zbuffer", "raytrace"), default=None,   # issue 12
+    v.add_argument("--renderer", choices=("zbuffer", "raytrace"), default=None,
                    help="draw with the z-buffer (default) or the ray tracer (progressive)")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
@@ -101,12 +101,12 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                         "folder, e.g. torus-view01-perspective-phong-zbuffer.png)")
     r.add_argument("--force", action="store_true",
                    help="overwrite --out even if it is an existing file that is not a PNG")
-    _texture_arguments(r)                     # issue 11
+    _texture_arguments(r)
     _course_options(r)
     r.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
-    _renderer_arguments(r)                    # issue 12
+    _renderer_arguments(r)
 
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
@@ -146,7 +146,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
-    """--renderer and the ray tracer's settings (issue 12); None keeps the defaults."""
+    """--renderer and the ray tracer's settings; None keeps the defaults."""
     from core.raytrace.whitted import SHADOW_MODES
     from core.renderers import renderer_names
     parser.add_argument("--renderer", choices=renderer_names(), default=None,
@@ -305,7 +305,7 @@ def _render(args) -> int:
     if index is None:
         return 2
     from core.settings import RenderSettings
-    texture_options = _texture_options(scene, args)       # issue 11
+    texture_options = _texture_options(scene, args)
     view = scene.views[index]
     try:
         settings = RenderSettings.for_scene(scene, projection=args.projection,
@@ -313,7 +313,7 @@ def _render(args) -> int:
                                             rasterizer=args.rasterizer,
                                             keep_aspect=args.keep_aspect, **texture_options,
                                             **_renderer_overrides(args))
-    except ValueError as error:            # e.g. --samples 0 (issue 12's options)
+    except ValueError as error:            # e.g. --samples 0
         print(f"error: {error}", file=sys.stderr)
         return 2
     if args.out is None:                 # named by the rule every output follows
@@ -408,7 +408,7 @@ def write_png(color, out: Path) -> None:
         raise
 
 
-# -- issue 11: texture filter, and the bump demo's map and mode (J3DPanel's clicks)
+# -- texture filter, and the bump demo's map and mode (J3DPanel's clicks)
 def _texture_arguments(parser) -> None:
     from core.texture.modes import FILTERS
     parser.add_argument("--texture-filter", choices=tuple(FILTERS), default=None,

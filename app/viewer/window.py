@@ -282,7 +282,7 @@ class ViewerWindow:
             self.choose(what, value, f"key {char}")
         elif char == "a":
             self.choose("keep_aspect", not self.state.keep_aspect, "key a")
-        elif char == "t":                 # issue 11: the next texture filter
+        elif char == "t":                 # the next texture filter
             from core.texture.modes import FILTERS
             names = tuple(FILTERS)
             after = names[(names.index(self.state.texture_filter) + 1) % len(names)]
@@ -343,7 +343,7 @@ class ViewerWindow:
         log.info("action: %s -> %s %s", how, what, value)
         self._wake()
 
-    # -- issue 13: an animated scene's timeline ------------------------------------------------
+    # -- an animated scene's timeline ---------------------------------------------------------
     def toggle_play(self, how: str) -> None:
         if not self.state.animated:
             log.info("action: %s -> nothing to play (the scene is not animated)", how)
@@ -513,7 +513,7 @@ class ViewerWindow:
             if captured or not self._on_picture(x, y):
                 log.info("action: %s -> taken by the menu/panel, view unchanged", where)
             elif (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
-                log.info("action: %s -> the bump demo: %s", where, demo)   # issue 11
+                log.info("action: %s -> the bump demo: %s", where, demo)
             elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
                 self.toggle_play(where)
             elif self.state.course_tri:
