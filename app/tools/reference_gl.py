@@ -2,7 +2,8 @@
 
 Used ONLY by the tests (coverage and shading oracles) and by the bench; the viewer never
 draws with it. Takes a :class:`core.scene.Scene`, a view index, a projection and a shading
-mode; returns an ``(H, W, 3)`` uint8 image in image order (row 0 is the top), exactly like ``core.render.render(...).color``.
+mode; returns an ``(H, W, 3)`` uint8 image in image order (row 0 is the top),
+exactly like ``core.render.render(...).color``.
 
 The geometry goes through the SAME matrices as the CPU core, composed into one clip matrix:
 
