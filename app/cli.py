@@ -83,10 +83,10 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="where screenshots go, and the PNGs when there is no display "
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
-    v.add_argument("--renderer", choices=("zbuffer", "raytrace", "radiosity", "pathtrace"),
-                   default=None,   # issues 12, 19
-                   help="draw with the z-buffer (default), the ray tracer, radiosity or the path "
-                        "tracer (the last three progressive)")
+    v.add_argument("--renderer", choices=("zbuffer", "raytrace", "radiosity", "pathtrace", "bsp",
+                                          "depth-sort"), default=None,
+                   help="draw with the z-buffer (default), the ray tracer, radiosity, the path "
+                        "tracer (those three progressive), or a painter's algorithm")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
@@ -104,7 +104,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                         "folder, e.g. torus-view01-perspective-phong-zbuffer.png)")
     r.add_argument("--force", action="store_true",
                    help="overwrite --out even if it is an existing file that is not a PNG")
-    _texture_arguments(r)                     # issue 11
+    _texture_arguments(r)
     _course_options(r)
     r.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="for an animated scene: the moment to draw, particles included "
@@ -163,7 +163,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
-    """--renderer and the ray tracer's settings (issue 12); None keeps the defaults."""
+    """--renderer and the ray tracer's settings; None keeps the defaults."""
     from core.raytrace.whitted import SHADOW_MODES
     from core.renderers import renderer_names
     parser.add_argument("--renderer", choices=renderer_names(), default=None,
@@ -584,7 +584,7 @@ def write_png(color, out: Path) -> None:
     write_beside(out, lambda temp: Image.fromarray(color).save(temp, format="PNG"))
 
 
-# -- issue 11: texture filter, and the bump demo's map and mode (J3DPanel's clicks)
+# -- texture filter, and the bump demo's map and mode (J3DPanel's clicks)
 def _texture_arguments(parser) -> None:
     from core.texture.modes import FILTERS
     parser.add_argument("--texture-filter", choices=tuple(FILTERS), default=None,

@@ -21,18 +21,17 @@ from app.naming import SAFE_NAME
 
 
 def _field_of_open_path(picture: np.ndarray, width: int) -> tuple[int, int]:
-    """The File > Open scene > Path field: the lowest band of ImGui's blue frame and button
-    colours left of ``width`` (the submenu opens over the picture when the panel's right has
-    no room). Found from the screen, so that more scenes in the list move it harmlessly."""
+    """The File > Open scene > Path field, left of its blue Open button: the submenu opens
+    over the picture, its right edge at the panel (``width``), the field first in it. Found
+    from the screen, so that a change of font or layout moves it harmlessly."""
     r, g, b = (picture[..., k].astype(int) for k in range(3))
-    blue = (b - r > 30) & (b > 60) & (np.arange(picture.shape[1])[None, :] < width)
-    rows = np.flatnonzero(blue.sum(axis=1) > 40)
-    assert rows.size, "no Path field on the screen"
-    bottom = rows[-1]
-    band = rows[rows > bottom - 30]
+    columns = np.arange(picture.shape[1])[None, :]
+    blue = (b - r > 30) & (b > 60) & (columns >= width - 45) & (columns < width - 3)
+    rows = np.flatnonzero(blue[20:].sum(axis=1) > 20) + 20          # below the menu bar
+    assert rows.size, "no Open button on the screen"
+    band = rows[rows < rows[0] + 30]
     y = int(band.mean())
-    xs = np.flatnonzero(blue[y])
-    return int(xs[0]) + 30, y
+    return int(np.flatnonzero(blue[y])[0]) - 60, y
 
 
 def _open_path(app, tmp_path, path: str, name: str, width: int) -> None:
@@ -62,7 +61,7 @@ def _hold(app, keys: str) -> None:
 @pytest.mark.xvfb
 @pytest.mark.slow
 def test_a_failed_open_says_its_message_once_and_esc_dismisses_it(display, tmp_path):  # noqa: F811
-    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "house.toml"), "--size", "300x600")
+    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "house.toml"), "--size", "300x400")
     try:
         app.wait_for(r"first frame shown", timeout=120)
         app.find_window()

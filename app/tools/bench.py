@@ -1,4 +1,4 @@
-"""``python -m app bench``: our CPU pipeline against real OpenGL in software (issue 5).
+"""``python -m app bench``: our CPU pipeline against real OpenGL in software.
 
 Renders a scene (default: a sphere plus a torus at 1k, 10k, 100k and 1M triangles, 500 x 500,
 flat, Gouraud and Phong) two ways in the same run:
@@ -546,7 +546,7 @@ def main(args) -> int:
         startup["first_frame_cold"] = first_frame_time(cold=True)
 
     animation = None
-    if not args.no_animation:                  # issue 13: the fountain, 1 process and 2 workers
+    if not args.no_animation:                  # the fountain, 1 process and 2 workers
         _progress("animation: the fountain at 500 x 500 on 1 process and 2 Dask workers ...")
         from app.tools.animate import bench_animation
         animation = bench_animation(size=args.size)
@@ -594,7 +594,7 @@ def main(args) -> int:
     return 0
 
 
-# ----------------------------------------------------------------------------- the ray tracer (issue 12)
+# ------------------------------------------------------------------------------------ the ray tracer
 
 def _bunny_file() -> Path | None:
     for folder in ROOT.parents:

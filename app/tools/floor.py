@@ -1,4 +1,4 @@
-"""The bench's floor: the least a numba rasterizer can do for the same picture (issue 14).
+"""The bench's floor: the least a numba rasterizer can do for the same picture.
 
 Same scene, same view, same 500 x 500, but nothing the course pipeline adds: no clipping (the
 bench scene lies inside the view volume), no visibility buffer, no deferred shading, one light

@@ -1,4 +1,4 @@
-"""The bench's lean llvmpipe row: the cheapest honest OpenGL path to the same picture (issue 14).
+"""The bench's lean llvmpipe row: the cheapest honest OpenGL path to the same picture.
 
 The GLSL oracle (:mod:`app.tools.reference_gl`) is written to match our model exactly: every
 light of the scene in a loop, attenuation, two-sided lighting, the letterbox discard, flat

@@ -1,9 +1,9 @@
 """The OpenGL oracle: the same scene drawn by real OpenGL (Mesa llvmpipe through EGL).
 
-Used ONLY by the tests (coverage and shading oracles, issues 3 and 4) and by the bench
-(issue 5); the viewer never draws with it. Takes a :class:`core.scene.Scene`, a view index, a
-projection and a shading mode; returns an ``(H, W, 3)`` uint8 image in image order (row 0 is
-the top), exactly like ``core.render.render(...).color``.
+Used ONLY by the tests (coverage and shading oracles) and by the bench; the viewer never
+draws with it. Takes a :class:`core.scene.Scene`, a view index, a projection and a shading
+mode; returns an ``(H, W, 3)`` uint8 image in image order (row 0 is the top),
+exactly like ``core.render.render(...).color``.
 
 The geometry goes through the SAME matrices as the CPU core, composed into one clip matrix:
 
@@ -20,7 +20,7 @@ The geometry goes through the SAME matrices as the CPU core, composed into one c
   back planes; pixels whose centre falls outside the letterboxed rectangle are discarded, which
   is the x/y clipping of the canonical volume evaluated at pixel centres.
 
-The fragment shaders implement the Phong illumination model of issue 4 in WORLD coordinates
+The fragment shaders implement the Phong illumination model in WORLD coordinates
 (FvDFH 16.1, 16.2): ``I = I_a k_a O_d + sum f_att I_p [k_d O_d max(N.L, 0) + k_s O_s max(R.V, 0)^n]``
 per RGB channel, ``f_att = min(1, 1 / (c1 + c2 d + c3 d^2))`` (1 for directional lights), the halfway form ``(N.H)^n`` when
 the scene says ``specular = "halfway"``; meshes that are not closed are lit from both sides

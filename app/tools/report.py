@@ -1,4 +1,4 @@
-"""``python -m app report --out DIR [--quick]``: error against run time (issue 6).
+"""``python -m app report --out DIR [--quick]``: error against run time.
 
 Runs the sweep of :mod:`core.analysis.accuracy` (``--quick``: the reduced one the tests use) with a
 progress line per setting on stderr, then writes

@@ -1,4 +1,4 @@
-"""``python -m app stability [--json]``: the stiff and extreme cases of issue 6, PASS/FAIL.
+"""``python -m app stability [--json]``: the stiff and extreme cases, PASS/FAIL.
 
 Runs :func:`core.analysis.stability.run_suite` (the same code ``tests/test_stability.py`` asserts) and
 prints one block per case: the result, the relative error against exact rational arithmetic,

@@ -1,4 +1,4 @@
-"""Textured Phong (trilinear) against llvmpipe doing the same, in the same run (issue 11).
+"""Textured Phong (trilinear) against llvmpipe doing the same, in the same run.
 
 The bench's scene (a UV sphere inside a tilted torus, ``core.scene.generators.sphere_torus``)
 at 100k and 1M triangles, each mesh with a procedural checker texture on its generator (u, v),

@@ -1,6 +1,6 @@
 """The texture oracle: a textured mesh drawn by real OpenGL (Mesa llvmpipe through EGL).
 
-Used only by the tests (issue 11): the same triangles, the same (u, v) per vertex, the same
+Used only by the tests: the same triangles, the same (u, v) per vertex, the same
 world-to-clip matrix as the CPU core (:func:`app.tools.reference_gl.clip_from_world`) and the
 same texels — every MIP level of :class:`core.texture.Texture` uploaded as it is (RGBA32F, so
 neither side rounds texels to 8 bits) — with ``GL_NEAREST``, ``GL_LINEAR`` or

@@ -60,7 +60,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
             add(f"{shading}, {projection}, open mesh and lines", opened, shading=shading,
                 projection=projection)
     add("flat, 4 samples a pixel", closed, shading="flat", samples=4)
-    add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")     # issue 12
+    add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")
     return out
 
 

@@ -293,7 +293,7 @@ class ViewerWindow:
             self.choose(what, value, f"key {char}")
         elif char == "a":
             self.choose("keep_aspect", not self.state.keep_aspect, "key a")
-        elif char == "t":                 # issue 11: the next texture filter
+        elif char == "t":                 # the next texture filter
             from core.texture.modes import FILTERS
             names = tuple(FILTERS)
             after = names[(names.index(self.state.texture_filter) + 1) % len(names)]
@@ -363,7 +363,7 @@ class ViewerWindow:
         log.info("action: %s -> %s %s", how, what, value)
         self._wake()
 
-    # -- issue 13: an animated scene's timeline ------------------------------------------------
+    # -- an animated scene's timeline ---------------------------------------------------------
     def toggle_play(self, how: str) -> None:
         if not self.state.animated:
             log.info("action: %s -> nothing to play (the scene is not animated)", how)
@@ -541,7 +541,7 @@ class ViewerWindow:
             if captured or not self._on_picture(x, y):
                 log.info("action: %s -> taken by the menu/panel, view unchanged", where)
             elif (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
-                log.info("action: %s -> the bump demo: %s", where, demo)   # issue 11
+                log.info("action: %s -> the bump demo: %s", where, demo)
             elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
                 self.toggle_play(where)
             elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:    # issue 22
@@ -600,9 +600,10 @@ class ViewerWindow:
     def _panel(self) -> None:
         scale = self._scale()
         width, height = self.state.size
-        _, fb_h = glfw.get_framebuffer_size(self.window)
+        fb_w, fb_h = glfw.get_framebuffer_size(self.window)
         imgui.set_next_window_position(width / scale, 0, imgui.ALWAYS)
-        imgui.set_next_window_size(PANEL_WIDTH, fb_h / scale, imgui.ALWAYS)
+        # no wider than the window, so that its text wraps where it can be read
+        imgui.set_next_window_size(min(PANEL_WIDTH, fb_w / scale), fb_h / scale, imgui.ALWAYS)
         imgui.begin("panel", False, PANEL_FLAGS)
         self._menu_bar()
         self._status()
@@ -621,17 +622,17 @@ class ViewerWindow:
             self._closing()
             if imgui.begin_menu("Open scene").opened:
                 self._closing()
-                for path in self._scenes:
-                    if imgui.menu_item(path.name, None, str(path) == self.state.scene_source)[0]:
-                        self.open_scene(str(path), "menu File > Open")
-                imgui.separator()
-                imgui.text("Path:")
+                imgui.text("Path:")               # first: on screen however long the list
                 entered, self._path = imgui.input_text(
                     "##path", self._path, flags=imgui.INPUT_TEXT_ENTER_RETURNS_TRUE)
                 imgui.same_line()
                 if (imgui.button("Open") or entered) and self._path.strip():
                     self.open_scene(self._path, "menu File > Open path")
                     imgui.close_current_popup()
+                imgui.separator()
+                for path in self._scenes:
+                    if imgui.menu_item(path.name, None, str(path) == self.state.scene_source)[0]:
+                        self.open_scene(str(path), "menu File > Open")
                 imgui.end_menu()
             if imgui.menu_item("Save screenshot", "S")[0]:
                 self.save_screenshot("menu File > Save screenshot")
