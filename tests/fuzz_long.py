@@ -36,6 +36,7 @@ def main() -> int:
     p.add_argument("--budget", type=float, default=3600.0, help="seconds for the whole run")
     p.add_argument("--seed", type=int, default=15)
     p.add_argument("--out", default="fuzz-long.json")
+    p.add_argument("--batch", type=int, default=BATCH, help="cases per reader per turn")
     p.add_argument("--readers", default=",".join(TARGETS),
                    help="which targets, comma-separated (runs may be split across processes)")
     args = p.parse_args()
@@ -55,7 +56,7 @@ def main() -> int:
             break
         for name in pending:
             t0 = time.monotonic()
-            for _ in range(min(BATCH, args.cases - sum(counts[name].values()))):
+            for _ in range(min(args.batch, args.cases - sum(counts[name].values()))):
                 counts[name][_one(name, rngs[name], failures)] += 1
             spent[name] += time.monotonic() - t0
         _write(out, args, counts, spent, time.monotonic() - start)

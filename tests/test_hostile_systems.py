@@ -147,32 +147,43 @@ RESULT = {{"size": texture.size, "levels": len(levels), "top": float(texels[0, 0
     assert result["peak_mb"] < 2 * 1024
 
 
-@pytest.mark.slow
-def test_procedurals_past_the_texel_budget_are_refused_by_key(tmp_path):
-    """Five ``resolution = 4096`` procedurals: two fit the budget, the third is refused naming
-    its key, before it is computed."""
+def test_procedurals_past_the_texel_budget_are_refused_by_key(tmp_path, capsys, monkeypatch):
+    """Textures draw on one texel budget per scene: the procedural that would pass it is
+    refused naming its key, before it is computed (here with the budget cut to 3 · 64²)."""
+    from core.texture import image
+    monkeypatch.setattr(image, "MAX_SCENE_TEXELS", 3 * 64 * 64)
     geometry = "".join(f"""
 [[geometry]]
 generator = "cube"
 name = "c{i}"
-material = {{ texture = {{ procedural = "checker", resolution = 4096 }} }}
+material = {{ texture = {{ procedural = "checker", resolution = 64 }} }}
 """ for i in range(5))
-    scene = scene_file(tmp_path, geometry)
-    result = peak_of(f"""
-from core.scene.formats import ReaderError, load_scene
-try:
-    load_scene({str(scene)!r})
-    RESULT = {{"error": None}}
-except ReaderError as error:
-    RESULT = {{"error": str(error)}}
+    one_error(*render(capsys, scene_file(tmp_path, geometry), tmp_path),
+              "geometry[4].material.texture.resolution", "needs 4,096 texels",
+              "may hold 12,288 together (12,288 already used)")
+
+
+def test_a_procedural_at_4096_is_refused(tmp_path, capsys):
+    """Five ``resolution = 4096`` procedurals exhausted memory (one perlin: 2.3 GB)."""
+    table = '{ procedural = "perlin", resolution = 4096 }'
+    one_error(*render(capsys, scene_file(tmp_path, TEXTURED.format(texture=table)), tmp_path),
+              "texture.resolution", "from 1 to 2048")
+
+
+@pytest.mark.slow
+def test_the_costliest_procedural_stays_under_2_gb():
+    """Perlin at the largest resolution and the finest lattice allowed."""
+    result = peak_of("""
+from core.texture import procedural
+texture = procedural.make("perlin", resolution=2048, scale=8, octaves=9)
+RESULT = {"size": texture.size}
 """)
-    assert "geometry[3].material.texture.resolution" in result["error"]
-    assert "33,554,432" in result["error"]
-    assert result["peak_mb"] < 2 * 1024
+    assert result["size"] == [2048, 2048] and result["peak_mb"] < 2 * 1024
 
 
 @pytest.mark.parametrize("table, key, words", [
     ('{ procedural = "perlin", scale = 1024, octaves = 6 }', "octaves", "32768 lattice cells"),
+    ('{ procedural = "perlin", scale = 1024, octaves = 16 }', "octaves", "33554432 lattice cells"),
     ('{ procedural = "checker", a = [' + ", ".join(["0.5"] * 3000) + "] }", "a",
      "a colour: 3 numbers"),
     ('{ procedural = "checker", a = [nan, 0, 0] }', "a", "a[1] must lie in"),

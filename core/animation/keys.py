@@ -37,8 +37,8 @@ import weakref
 import numpy as np
 
 from core.animation import quaternion as qt
-from core.animation.animation import (Animation, ObjectTracks, ViewTracks, frame_quaternion,
-                                      meshes_named)
+from core.animation.animation import Animation, ObjectTracks, ViewTracks, frame_quaternion
+from core.scene.model import meshes_named
 from core.animation.tracks import METHODS, ORIENTATION_METHODS, OrientationTrack, Track
 
 TOP_KEYS = ("animation", "key", "emitter")          # the scene file's top-level tables we read

@@ -580,7 +580,7 @@ def _mesh_triangles(reader, got, path, scene) -> np.ndarray:
     if got["mesh"] not in names:
         raise reader.fail(path + ("mesh",), f"no geometry is named {got['mesh']!r} "
                                             f"(names: {', '.join(names)})")
-    from core.animation.animation import meshes_named
+    from core.scene.model import meshes_named
     meshes = [scene.meshes[i] for i in meshes_named(scene, got["mesh"])]   # all of a checker
     tris = np.concatenate([m.positions[m.triangles] for m in meshes])
     if len(tris) == 0:

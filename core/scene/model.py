@@ -163,3 +163,20 @@ class Scene:
     @property
     def triangle_count(self) -> int:
         return sum(len(m.triangles) for m in self.meshes)
+
+
+def meshes_named(scene, name: str, own_material: bool = False) -> list[int]:
+    """The indices of every mesh drawn for the geometry ``name``: a checker plane is two
+    meshes (one per colour) with one name, and a key moves the whole of it. With
+    ``own_material``, only those in the geometry's own material (not a checker's second
+    colour, which a keyed ``od`` leaves alone)."""
+    found, seen = [], set()
+    for i, mesh in enumerate(scene.meshes):
+        if mesh.name != name:
+            continue
+        shape = id(mesh.tessellates) if mesh.tessellates is not None else None
+        if own_material and shape is not None and shape in seen:
+            continue
+        seen.add(shape)
+        found.append(i)
+    return found

@@ -19,7 +19,10 @@ import numpy as np
 
 from core.texture.image import Texture
 
-MAX_RESOLUTION = 4096
+# Texels a side. Computing a pattern takes a dozen float64 arrays of the whole image at once
+# (perlin at 4096²: 2.3 GB measured), so procedurals stop at 2048² (a quarter of that); a larger
+# texture is an image file, read a band at a time.
+MAX_RESOLUTION = 2048
 DEFAULT_RESOLUTION = 256
 
 
@@ -187,9 +190,11 @@ _WHOLE = {"resolution": (1, MAX_RESOLUTION), "scale": (1, 1024), "rows": (1, 102
 _REAL = {"mortar": (0.0, 1.0), "strength": (0.0, 1e3)}
 _COLOURS = ("a", "b", "brick", "joint", "zenith", "horizon", "ground")
 _POINTS = ("sun",)
-# The finest noise lattice has scale · 2^(octaves − 1) cells a side (one table of that many
-# squared numbers); finer than the texels it is aliasing only, and its table the largest array.
-MAX_LATTICE = MAX_RESOLUTION
+# The finest noise lattice has scale · 2^(octaves − 1) cells a side (tables of that many
+# squared numbers); finer than the texels it is aliasing only, and its tables the largest
+# arrays (32768²: 8.6 GB each). It may have as many cells a side as the texture has texels,
+# or MIN_LATTICE for a small texture.
+MIN_LATTICE = 256
 
 
 class ParameterError(ValueError):
@@ -226,11 +231,13 @@ def check_parameters(name: str, params: dict) -> dict:
     if name in ("value_noise", "perlin", "perlin_height"):
         scale, octaves = out.get("scale", 8), out.get("octaves", 4)
         finest = scale * 2 ** (octaves - 1)
-        if finest > MAX_LATTICE:
+        limit = max(out.get("resolution", DEFAULT_RESOLUTION), MIN_LATTICE)
+        if finest > limit:
             raise ParameterError("octaves" if "octaves" in params else "scale",
                                  f"scale · 2^(octaves − 1) = {finest} lattice cells a side; at "
-                                 f"most {MAX_LATTICE} (a finer lattice only aliases, and its "
-                                 f"table would take {finest * finest * 8 / 2**30:.1f} GiB)")
+                                 f"most {limit}, the texels a side (a finer lattice only "
+                                 f"aliases, and its tables would take "
+                                 f"{3 * finest * finest * 8 / 2**30:.1f} GiB)")
     if name == "checker" and out.get("scale", 8) % 2:
         raise ParameterError("scale", "checker: scale must be even (an odd count puts two "
                                       "squares of one colour side by side where it repeats)")

@@ -135,7 +135,11 @@ def read_file(path: Path, shown: str, kind: str = "views") -> bytes:
             if size > limit:
                 raise _too_big(shown, size, kind)
             with open(path, "rb") as stream:
-                data = stream.read(limit + 1)       # the file may have grown since stat()
+                # read(n) allocates n bytes up front: ask for the size found, then for the
+                # rest of the limit only if the file has grown since stat()
+                data = stream.read(size + 1)
+                if len(data) > size:
+                    data += stream.read(limit + 1 - len(data))
             if len(data) > limit:
                 raise _too_big(shown, f"more than {limit}", kind)
             return data
