@@ -93,8 +93,23 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
                         help="skip the thread-scaling table (every case again on one thread)")
     parser.add_argument("--no-animation", action="store_true",
                         help="skip the animation row (the fountain on 1 process and 2 workers)")
-    parser.add_argument("--renderer", choices=("zbuffer", "raytrace"), default="zbuffer",
-                        help="raytrace: the ray tracer's rows beside Embree (issue 12)")
+    parser.add_argument("--renderer", type=_renderers, default="zbuffer",
+                        help="raytrace: the ray tracer's rows beside Embree (issue 12); a list "
+                             "with bsp or depth-sort (e.g. bsp,depth-sort,zbuffer): the "
+                             "painter's algorithms against the z-buffer (issue 18)")
+
+
+def _renderers(text: str) -> str:
+    """``zbuffer``, ``raytrace``, or a comma list of bsp, depth-sort and zbuffer (issue 18)."""
+    chosen = [part.strip() for part in text.split(",") if part.strip()]
+    allowed = ("zbuffer", "raytrace") if len(chosen) == 1 else ("bsp", "depth-sort", "zbuffer")
+    if len(chosen) == 1 and chosen[0] in ("bsp", "depth-sort"):
+        return chosen[0]
+    for name in chosen:
+        if name not in allowed:
+            raise argparse.ArgumentTypeError(f"renderer must be zbuffer, raytrace, or a list of "
+                                             f"bsp, depth-sort, zbuffer; not {name!r}")
+    return ",".join(chosen)
 
 
 def _progress(text: str) -> None:
@@ -521,6 +536,9 @@ def main(args) -> int:
         return 2
     if args.renderer == "raytrace":
         return raytrace_bench(args)
+    if any(name in ("bsp", "depth-sort") for name in args.renderer.split(",")):   # issue 18
+        from app.tools.painters_bench import run
+        return run(args, args.renderer.split(","))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     t_start = time.perf_counter()
