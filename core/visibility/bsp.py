@@ -30,13 +30,14 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from core.settings import BSP_ROOTS as ROOT_RULES      # first, random, fewest-splits
 from core.visibility.split import cut_triangle, side
 
 CANDIDATES = 8          # fewest-splits: triangles tried as the root of a node
 SAMPLE = 128            # fewest-splits: triangles of the node each candidate is scored on
+PARALLEL_NODE = 20_000  # nodes with this many fragments are classified on every core
 SPLIT_WEIGHT = 0.8      # fewest-splits: the weight of splits against imbalance in the score
 EPSILON = 1e-9          # on-the-plane tolerance, relative to the scene's size
 
@@ -175,6 +176,38 @@ def _choose_root(ids, fragments, points, rule, eps):
 
 
 @njit(cache=True, nogil=True)
+def _classify_serial(ids, r, fragments, points, normal, const, eps, kinds):
+    """Each fragment of the node but the root (``r``) against its plane into ``kinds``;
+    returns how many lie in front, behind, in the plane and across it."""
+    nf, nb, nc, ns = 0, 0, 0, 0
+    for k in range(ids.shape[0]):
+        if k != r:
+            kind = _kind(points, fragments[ids[k]], normal, const, eps)
+            kinds[k] = kind
+            nf += kind == 1
+            nb += kind == -1
+            nc += kind == 0
+            ns += kind == 2
+    return nf, nb, nc, ns
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _classify_parallel(ids, r, fragments, points, normal, const, eps, kinds):
+    """:func:`_classify_serial` on both cores (the big nodes near the root, and each step
+    down a long chain)."""
+    nf, nb, nc, ns = 0, 0, 0, 0
+    for k in prange(ids.shape[0]):
+        if k != r:
+            kind = _kind(points, fragments[ids[k]], normal, const, eps)
+            kinds[k] = kind
+            nf += kind == 1
+            nb += kind == -1
+            nc += kind == 0
+            ns += kind == 2
+    return nf, nb, nc, ns
+
+
+@njit(cache=True, nogil=True)
 def _build(positions, triangles, rule, seed, eps):
     np.random.seed(seed)
     points = positions.copy()
@@ -215,14 +248,12 @@ def _build(positions, triangles, rule, seed, eps):
         # (every step down a convex mesh) hands its list on without copying it
         m = ids.shape[0]
         kinds = np.empty(m, np.int8)
-        nf, nb, nc, ns = 0, 0, 0, 0
-        for k in range(m):
-            if k != r:
-                kinds[k] = _kind(points, fragments[ids[k]], normal, const, eps)
-                nf += kinds[k] == 1
-                nb += kinds[k] == -1
-                nc += kinds[k] == 0
-                ns += kinds[k] == 2
+        if m >= PARALLEL_NODE:
+            nf, nb, nc, ns = _classify_parallel(ids, r, fragments, points, normal, const, eps,
+                                                kinds)
+        else:
+            nf, nb, nc, ns = _classify_serial(ids, r, fragments, points, normal, const, eps,
+                                              kinds)
         first[node] = n_node_frags
         node_fragments = _grow(node_fragments, n_node_frags + 1 + nc)
         node_fragments[n_node_frags] = ids[r]
