@@ -93,10 +93,29 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
                         help="skip the thread-scaling table (every case again on one thread)")
     parser.add_argument("--no-animation", action="store_true",
                         help="skip the animation row (the fountain on 1 process and 2 workers)")
-    parser.add_argument("--renderer", default="zbuffer",
-                        help="zbuffer (default); raytrace: the ray tracer's rows beside Embree "
-                             "(issue 12); radiosity,pathtrace (either or both): the global "
-                             "illumination rows on the Cornell box, beside Mitsuba (issue 19)")
+    parser.add_argument("--renderer", type=_renderers, default="zbuffer",
+                        help="zbuffer (default); raytrace: the ray tracer's rows beside Embree; "
+                             "radiosity,pathtrace (either or both): the global illumination rows "
+                             "on the Cornell box, beside Mitsuba; a list with bsp or depth-sort "
+                             "(e.g. bsp,depth-sort,zbuffer): the painter's algorithms against the "
+                             "z-buffer")
+
+
+GI_RENDERERS, PAINTERS = ("radiosity", "pathtrace"), ("bsp", "depth-sort")
+
+
+def _renderers(text: str) -> str:
+    """``zbuffer``, ``raytrace``, a list of radiosity and pathtrace, or a list of bsp,
+    depth-sort and zbuffer."""
+    chosen = [part.strip() for part in text.split(",") if part.strip()]
+    if len(chosen) == 1 and chosen[0] in ("zbuffer", "raytrace", *GI_RENDERERS, *PAINTERS):
+        return chosen[0]
+    for allowed in (GI_RENDERERS, (*PAINTERS, "zbuffer")):
+        if chosen and all(name in allowed for name in chosen):
+            return ",".join(chosen)
+    raise argparse.ArgumentTypeError(f"renderer must be zbuffer, raytrace, a list of radiosity "
+                                     f"and pathtrace, or a list of bsp, depth-sort and zbuffer; "
+                                     f"not {text!r}")
 
 
 def _progress(text: str) -> None:
@@ -523,7 +542,11 @@ def main(args) -> int:
         return 2
     if args.renderer == "raytrace":
         return raytrace_bench(args)
-    if args.renderer != "zbuffer":            # issue 19: radiosity, pathtrace
+    chosen = args.renderer.split(",")
+    if any(name in PAINTERS for name in chosen):
+        from app.tools.painters_bench import run
+        return run(args, chosen)
+    if any(name in GI_RENDERERS for name in chosen):
         from app.tools.gi_bench import main as gi_main
         return gi_main(args)
     out = Path(args.out)

@@ -24,7 +24,8 @@ from core.analysis import accuracy
 from core.analysis.accuracy import Point
 
 COLOURS = {"flat": "tab:orange", "gouraud": "tab:green", "phong": "tab:blue",
-           "gouraud scanline": "tab:red"}
+           "gouraud scanline": "tab:red", "gouraud bsp": "tab:purple",       # issue 18
+           "gouraud depth-sort": "tab:brown"}
 MARKERS = {1: "o", 4: "s", 16: "^"}
 LINES = {1: "-", 4: "--", 16: ":"}
 

@@ -55,9 +55,11 @@ from core.scene.model import Light, Material, Mesh, Scene
 from core.camera.view import View
 
 # A series is a shading mode, drawn by the default edge rasterizer (perspective-correct), or
-# "MODE scanline": the course's scan-line rasterizer, whose interpolation is screen-linear.
+# "MODE scanline": the course's scan-line rasterizer, whose interpolation is screen-linear, or
+# "MODE bsp" / "MODE depth-sort": the painter's renderers (issue 18), same shading.
 SCANLINE = " scanline"
-SHADINGS = SOLID_SHADINGS + ("gouraud" + SCANLINE,)
+PAINTERS = (" bsp", " depth-sort")
+SHADINGS = SOLID_SHADINGS + ("gouraud" + SCANLINE,) + tuple("gouraud" + p for p in PAINTERS)
 SCENES = ("sphere", "torus")
 CACHE = Path(tempfile.gettempdir()) / "fvdfh-reference-cache"
 REFERENCE_SAMPLES = 4                  # per axis: 16 samples a pixel
@@ -222,11 +224,14 @@ def render_supersampled(scene: Scene, shading: str, size: int, k: int):
     the renderer's own supersampling (``RenderSettings.samples`` = k², a regular grid).
     ``shading`` is a series name (``"gouraud scanline"``: Gouraud, scan-line rasterizer)."""
     from core.render import render
-    mode = shading.removesuffix(SCANLINE)
+    mode, renderer = shading.removesuffix(SCANLINE), "zbuffer"
+    for painter in PAINTERS:
+        if shading.endswith(painter):
+            mode, renderer = shading.removesuffix(painter), painter.strip()
     rasterizer = "scanline" if shading.endswith(SCANLINE) else "edge"
     frame = render(scene, scene.views[0],
                    RenderSettings(shading=mode, size=(size, size), samples=k * k,
-                                  rasterizer=rasterizer))
+                                  rasterizer=rasterizer, renderer=renderer))
     if frame.message:
         raise ValueError(frame.message)
     if k == 1:

@@ -34,8 +34,9 @@ class Material:
     od: tuple[float, float, float] = (0.8, 0.8, 0.8)
     # Specular colour O_s; FvDFH 16.1.5 uses the light's colour (O_s = 1) for plastics.
     os: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    # Whitted's global terms (issue 12; the ray tracer's, the z-buffer ignores them): the
-    # mirror coefficient k_r, the transmission coefficient k_t and the index of refraction.
+    # Whitted's global terms (issue 12; the ray tracer's): the mirror coefficient k_r, the
+    # transmission coefficient k_t and the index of refraction. The z-buffer family uses k_t
+    # too when settings.transparency is on (issue 18, core.shading.transparency).
     kr: float = 0.0
     kt: float = 0.0
     ior: float = 1.52                      # glass (the notes); only used where kt > 0

@@ -14,8 +14,10 @@ the other side of it from the eye was drawn before it and everything on its own 
 The root choice is the ``rule``: ``first`` (the first triangle of the node's list, the
 notes' example), ``random`` (seeded), or ``fewest-splits`` (the notes: "select the one with
 the fewest branches"): a few candidates spread over the list, each scored by how many of a
-sample of the node's triangles it would split (Fuchs et al. tried five; scoring against all
-would make the build quadratic per node).
+sample of the node's triangles it would split, weighed against how unevenly it divides them
+(0.8 splits + 0.2 imbalance, as Ericson recommends: a root that splits nothing but leaves
+everything on one side makes the tree a chain; Fuchs et al. tried five candidates, and scoring
+against all triangles would make the build quadratic per node).
 
 A split vertex is ``P_a + t (P_b - P_a)`` with ``(a, b, t)`` in :attr:`BSPTree.recipe`:
 every per-vertex attribute interpolates with the same ``t`` (linear in world space, so a
@@ -28,13 +30,15 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from core.settings import BSP_ROOTS as ROOT_RULES      # first, random, fewest-splits
 from core.visibility.split import cut_triangle, side
 
 CANDIDATES = 8          # fewest-splits: triangles tried as the root of a node
 SAMPLE = 128            # fewest-splits: triangles of the node each candidate is scored on
+PARALLEL_NODE = 20_000  # nodes with this many fragments are classified on every core
+SPLIT_WEIGHT = 0.8      # fewest-splits: the weight of splits against imbalance in the score
 EPSILON = 1e-9          # on-the-plane tolerance, relative to the scene's size
 
 
@@ -106,18 +110,16 @@ def _plane_of(points, tri):
 
 
 @njit(cache=True, nogil=True)
-def _distances(points, tri, n, c):
-    d = np.empty(3)
-    for k in range(3):
-        p = points[tri[k]]
-        d[k] = n[0] * p[0] + n[1] * p[1] + n[2] * p[2] - c
-    return d
+def _distance(points, v, normal, const):
+    """Signed distance of vertex ``v`` from the plane (no allocation: the build's hot loop)."""
+    return (normal[0] * points[v, 0] + normal[1] * points[v, 1] + normal[2] * points[v, 2]
+            - const)
 
 
 @njit(cache=True, nogil=True)
-def _classify(d, eps):
+def _classify(d0, d1, d2, eps):
     """0 coplanar, 1 in front, -1 behind, 2 spanning."""
-    s0, s1, s2 = side(d[0], eps), side(d[1], eps), side(d[2], eps)
+    s0, s1, s2 = side(d0, eps), side(d1, eps), side(d2, eps)
     if s0 == 0 and s1 == 0 and s2 == 0:
         return 0
     if s0 >= 0 and s1 >= 0 and s2 >= 0:
@@ -125,6 +127,13 @@ def _classify(d, eps):
     if s0 <= 0 and s1 <= 0 and s2 <= 0:
         return -1
     return 2
+
+
+@njit(cache=True, nogil=True)
+def _kind(points, tri, normal, const, eps):
+    return _classify(_distance(points, tri[0], normal, const),
+                     _distance(points, tri[1], normal, const),
+                     _distance(points, tri[2], normal, const), eps)
 
 
 @njit(cache=True, nogil=True)
@@ -144,7 +153,7 @@ def _choose_root(ids, fragments, points, rule, eps):
         return 0
     if rule == 1:
         return np.random.randint(0, n)
-    best, best_score = 0, 1 << 62
+    best, best_score = 0, np.inf
     candidates = min(CANDIDATES, n)
     sample = min(SAMPLE, n)
     for c in range(candidates):
@@ -152,16 +161,50 @@ def _choose_root(ids, fragments, points, rule, eps):
         normal, const = _plane_of(points, fragments[ids[i]])
         splits, balance = 0, 0
         for s in range(sample):
-            kind = _classify(_distances(points, fragments[ids[s * n // sample]], normal, const),
-                             eps)
+            kind = _kind(points, fragments[ids[s * n // sample]], normal, const, eps)
             if kind == 2:
                 splits += 1
             elif kind != 0:
                 balance += kind
-        score = splits * n + abs(balance)        # fewest splits, then the better balanced
+        # fewest splits, weighed against balance (Ericson's 0.8 / 0.2): a root with no
+        # splits but everything on one side makes a chain, and a chain makes the build
+        # quadratic (a convex mesh is all chain)
+        score = SPLIT_WEIGHT * splits + (1.0 - SPLIT_WEIGHT) * abs(balance)
         if score < best_score:
             best, best_score = i, score
     return best
+
+
+@njit(cache=True, nogil=True)
+def _classify_serial(ids, r, fragments, points, normal, const, eps, kinds):
+    """Each fragment of the node but the root (``r``) against its plane into ``kinds``;
+    returns how many lie in front, behind, in the plane and across it."""
+    nf, nb, nc, ns = 0, 0, 0, 0
+    for k in range(ids.shape[0]):
+        if k != r:
+            kind = _kind(points, fragments[ids[k]], normal, const, eps)
+            kinds[k] = kind
+            nf += kind == 1
+            nb += kind == -1
+            nc += kind == 0
+            ns += kind == 2
+    return nf, nb, nc, ns
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _classify_parallel(ids, r, fragments, points, normal, const, eps, kinds):
+    """:func:`_classify_serial` on both cores (the big nodes near the root, and each step
+    down a long chain)."""
+    nf, nb, nc, ns = 0, 0, 0, 0
+    for k in prange(ids.shape[0]):
+        if k != r:
+            kind = _kind(points, fragments[ids[k]], normal, const, eps)
+            kinds[k] = kind
+            nf += kind == 1
+            nb += kind == -1
+            nc += kind == 0
+            ns += kind == 2
+    return nf, nb, nc, ns
 
 
 @njit(cache=True, nogil=True)
@@ -201,53 +244,72 @@ def _build(positions, triangles, rule, seed, eps):
         count = _grow(count, node + 1)
         plane[node, 0], plane[node, 1], plane[node, 2], plane[node, 3] = (
             normal[0], normal[1], normal[2], const)
-        in_front = np.empty(ids.shape[0] * 3, np.int64)   # a split adds at most 2 pieces
-        behind = np.empty(ids.shape[0] * 3, np.int64)
-        nf, nb = 0, 0
+        # classify every other fragment first: a node whose fragments all lie on one side
+        # (every step down a convex mesh) hands its list on without copying it
+        m = ids.shape[0]
+        kinds = np.empty(m, np.int8)
+        if m >= PARALLEL_NODE:
+            nf, nb, nc, ns = _classify_parallel(ids, r, fragments, points, normal, const, eps,
+                                                kinds)
+        else:
+            nf, nb, nc, ns = _classify_serial(ids, r, fragments, points, normal, const, eps,
+                                              kinds)
         first[node] = n_node_frags
-        node_fragments = _grow(node_fragments, n_node_frags + ids.shape[0])
+        node_fragments = _grow(node_fragments, n_node_frags + 1 + nc)
         node_fragments[n_node_frags] = ids[r]
         n_node_frags += 1
-        for k in range(ids.shape[0]):
-            if k == r:
-                continue
-            f = ids[k]
-            d = _distances(points, fragments[f], normal, const)
-            kind = _classify(d, eps)
-            if kind == 0:
-                node_fragments[n_node_frags] = f
-                n_node_frags += 1
-            elif kind == 1:
-                in_front[nf] = f
-                nf += 1
-            elif kind == -1:
-                behind[nb] = f
-                nb += 1
-            else:                                      # spanning: split it by the plane
-                splits += 1
-                pieces, sides, n_pieces, new, n_new = cut_triangle(fragments[f], d, eps)
-                points = _grow(points, n_points + n_new)
-                recipe = _grow(recipe, n_points + n_new - positions.shape[0])
-                for j in range(n_new):
-                    a, b, t = int(new[j, 0]), int(new[j, 1]), new[j, 2]
-                    points[n_points] = points[a] + t * (points[b] - points[a])
-                    row = n_points - positions.shape[0]
-                    recipe[row, 0], recipe[row, 1], recipe[row, 2] = a, b, t
-                    n_points += 1
-                fragments = _grow(fragments, n_frags + n_pieces)
-                source = _grow(source, n_frags + n_pieces)
-                for j in range(n_pieces):
+        if ns == 0 and nc == 0 and (nf == 0 or nb == 0):
+            ids[r] = ids[0]                         # the root out of the list, in O(1)
+            rest = ids[1:]
+            in_front, behind = (rest, rest[:0]) if nf else (rest[:0], rest)
+            nf, nb = len(in_front), len(behind)
+        else:
+            in_front = np.empty(nf + 2 * ns, np.int64)   # a split adds at most 2 pieces
+            behind = np.empty(nb + 2 * ns, np.int64)
+            nf, nb = 0, 0
+            for k in range(m):
+                if k == r:
+                    continue
+                f = ids[k]
+                kind = kinds[k]
+                if kind == 0:
+                    node_fragments[n_node_frags] = f
+                    n_node_frags += 1
+                elif kind == 1:
+                    in_front[nf] = f
+                    nf += 1
+                elif kind == -1:
+                    behind[nb] = f
+                    nb += 1
+                else:                                  # spanning: split it by the plane
+                    splits += 1
+                    tri = fragments[f]
+                    d = np.empty(3)
                     for c in range(3):
-                        v = pieces[j, c]
-                        fragments[n_frags, c] = v if v >= 0 else n_points - n_new + (-1 - v)
-                    source[n_frags] = source[f]
-                    if sides[j] > 0:
-                        in_front[nf] = n_frags
-                        nf += 1
-                    else:
-                        behind[nb] = n_frags
-                        nb += 1
-                    n_frags += 1
+                        d[c] = _distance(points, tri[c], normal, const)
+                    pieces, sides, n_pieces, new, n_new = cut_triangle(tri, d, eps)
+                    points = _grow(points, n_points + n_new)
+                    recipe = _grow(recipe, n_points + n_new - positions.shape[0])
+                    for j in range(n_new):
+                        a, b, t = int(new[j, 0]), int(new[j, 1]), new[j, 2]
+                        points[n_points] = points[a] + t * (points[b] - points[a])
+                        row = n_points - positions.shape[0]
+                        recipe[row, 0], recipe[row, 1], recipe[row, 2] = a, b, t
+                        n_points += 1
+                    fragments = _grow(fragments, n_frags + n_pieces)
+                    source = _grow(source, n_frags + n_pieces)
+                    for j in range(n_pieces):
+                        for c in range(3):
+                            v = pieces[j, c]
+                            fragments[n_frags, c] = v if v >= 0 else n_points - n_new + (-1 - v)
+                        source[n_frags] = source[f]
+                        if sides[j] > 0:
+                            in_front[nf] = n_frags
+                            nf += 1
+                        else:
+                            behind[nb] = n_frags
+                            nb += 1
+                        n_frags += 1
         count[node] = n_node_frags - first[node]
         front[node], back[node] = -1, -1
         # pushed back first so that the front list is built next (order only, not the result)
@@ -255,13 +317,13 @@ def _build(positions, triangles, rule, seed, eps):
             back[node] = n_nodes
             stack_node.append(n_nodes)
             stack_depth.append(level + 1)
-            stack_ids.append(behind[:nb].copy())
+            stack_ids.append(behind[:nb])
             n_nodes += 1
         if nf:
             front[node] = n_nodes
             stack_node.append(n_nodes)
             stack_depth.append(level + 1)
-            stack_ids.append(in_front[:nf].copy())
+            stack_ids.append(in_front[:nf])
             n_nodes += 1
     n_recipe = n_points - positions.shape[0]
     return (points[:n_points], recipe[:n_recipe], fragments[:n_frags], source[:n_frags],

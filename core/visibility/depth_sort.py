@@ -105,28 +105,40 @@ def _facts(device, tri, box, plane, f):
 
 
 @njit(cache=True, nogil=True)
+def _distance(device, v, plane, q):
+    """Signed distance of vertex ``v`` from ``q``'s plane (positive: the viewer's side)."""
+    return (plane[q, 0] * device[v, 0] + plane[q, 1] * device[v, 1] + plane[q, 2] * device[v, 2]
+            - plane[q, 3])
+
+
+@njit(cache=True, nogil=True)
 def _distances(device, tri, plane, q):
-    """Signed distances of ``tri``'s vertices from ``q``'s plane (positive: viewer's side)."""
     d = np.empty(3)
     for k in range(3):
-        p = device[tri[k]]
-        d[k] = plane[q, 0] * p[0] + plane[q, 1] * p[1] + plane[q, 2] * p[2] - plane[q, 3]
+        d[k] = _distance(device, tri[k], plane, q)
     return d
 
 
 @njit(cache=True, nogil=True)
-def _all_beyond(d, plane, q, eps):
-    """Every distance on the far side of q's plane (a plane seen edge-on settles nothing)."""
+def _beyond(device, tri, plane, q, eps):
+    """Is ``tri`` wholly on the far side of q's plane? (A plane seen edge-on settles nothing.)"""
     if plane[q, 2] <= 0.0:
         return False
-    return d[0] <= eps and d[1] <= eps and d[2] <= eps
+    for k in range(3):
+        if _distance(device, tri[k], plane, q) > eps:
+            return False
+    return True
 
 
 @njit(cache=True, nogil=True)
-def _all_before(d, plane, q, eps):
+def _before(device, tri, plane, q, eps):
+    """Is ``tri`` wholly on the viewer's side of q's plane?"""
     if plane[q, 2] <= 0.0:
         return False
-    return d[0] >= -eps and d[1] >= -eps and d[2] >= -eps
+    for k in range(3):
+        if _distance(device, tri[k], plane, q) < -eps:
+            return False
+    return True
 
 
 @njit(cache=True, nogil=True)
@@ -228,19 +240,18 @@ def _depth_sort(device_in, inv_w_in, triangles, eps, resolve):
             counts[2] += 1
             if box[Q, 2] >= box[P, 3] - eps or box[P, 2] >= box[Q, 3] - eps:
                 continue
-            p_from_q = _distances(device, tris[P], plane, Q)
             counts[3] += 1
-            if _all_beyond(p_from_q, plane, Q, eps):
+            if _beyond(device, tris[P], plane, Q, eps):
                 continue
-            q_from_p = _distances(device, tris[Q], plane, P)
             counts[4] += 1
-            if _all_before(q_from_p, plane, P, eps):
+            if _before(device, tris[Q], plane, P, eps):
                 continue
             counts[5] += 1
             if not _projections_overlap(device, tris[P], tris[Q], eps):
                 continue
-            counts[6] += 1
-            q_first = _all_beyond(q_from_p, plane, P, eps) or _all_before(p_from_q, plane, Q, eps)
+            counts[6] += 1                     # 3'. and 4'.: may Q be painted first?
+            q_first = _beyond(device, tris[Q], plane, P, eps) or _before(device, tris[P], plane,
+                                                                         Q, eps)
             action = 1 if q_first and not marked[Q] else 2
             j -= 1
             break

@@ -187,12 +187,11 @@ def true_depth(vis, p: Painting, context=None) -> np.ndarray:
     """``(H, W)``: the canonical depth of the painted surface at each pixel centre (larger
     nearer, -inf where nothing was painted), from the barycentrics: depth is affine in the
     screen, so its weights are the perspective-correct ones divided by 1/W, renormalised."""
-    depth = np.full(vis.tri.shape, -np.inf)
-    covered = vis.tri >= 0
-    t = p.triangles[vis.tri[covered]]
-    b = np.stack([1.0 - vis.b1[covered] - vis.b2[covered], vis.b1[covered], vis.b2[covered]], 1)
-    screen = b / p.inv_w[t]
-    depth[covered] = (screen * p.device[t, 2]).sum(1) / screen.sum(1)
+    from core.visibility._kernels import depth_from_barycentrics
+    depth = (np.empty(vis.tri.shape) if context is None
+             else context.scratch("painted depth", vis.tri.shape))
+    depth_from_barycentrics(np.ascontiguousarray(vis.tri, dtype=np.int32), vis.b1, vis.b2,
+                            np.ascontiguousarray(p.triangles), p.device, p.inv_w, depth)
     return depth
 
 
