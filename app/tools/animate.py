@@ -9,7 +9,7 @@ depend on who rendered the one before it), so they are rendered anywhere and in 
   and the scene file at the same path).
 
 Each frame comes back as PNG bytes and is written here, as soon as it completes, into the
-frames folder (``movie.frames/frame-00042.png``; for a PNG-sequence ``--out`` the folder is the
+frames folder (``movie.frames/frame_00042.png``; for a PNG-sequence ``--out`` the folder is the
 output). A frame is written to a temporary name and renamed, so a frame on disk is a whole
 frame: a run that is killed and started again skips the frames already there (**resumable**),
 as long as the settings are the same (``job.json`` in the folder records them). A frame that
