@@ -2,13 +2,13 @@
 
 The PNGs of ``make run`` without a display, the window's screenshots, ``render`` without
 ``--out`` and ``animate``'s frames are all named here, so that they read alike and are safe on
-every file system: lowercase ASCII letters, digits and hyphens only (no spaces, colons,
-slashes or accents), the parts joined by hyphens, the scene's name shortened at a word
+every file system: lowercase ASCII letters, digits, hyphens and underscores only (no spaces,
+colons, slashes or accents), the parts joined by hyphens, the scene's name shortened at a word
 boundary, never in the middle of a word::
 
     whitted-glass-and-mirror-spheres-view01-perspective-phong-raytrace.png
     fvdfh-house-view05-perspective-wireframe-zbuffer.png
-    frame-00042.png
+    frame_00042.png
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import unicodedata
 from pathlib import Path
 
 SCENE_PART = 32          # the most characters of the scene's name a file name keeps
-SAFE_NAME = re.compile(r"^[a-z0-9]+(-[a-z0-9]+)*\.[a-z0-9]+$")   # what every name matches
+SAFE_NAME = re.compile(r"^[a-z0-9]+([-_][a-z0-9]+)*\.[a-z0-9]+$")   # every name matches
 
 
 def slug(text: str, limit: int = SCENE_PART, empty: str = "scene") -> str:
@@ -48,7 +48,7 @@ def picture_name(scene_name: str, view_number: int, projection: str, shading: st
 
 def frame_name(k: int) -> str:
     """The file name of an animation's frame ``k`` (from 0) in its frames folder."""
-    return f"frame-{k:05d}.png"
+    return f"frame_{k:05d}.png"
 
 
 def unused(path: Path) -> Path:

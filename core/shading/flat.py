@@ -135,4 +135,4 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
                   np.ascontiguousarray(s.face_rgb, dtype=np.float64), out)
 
 
-register_shader(Shader("flat", _prepare_flat, _pixel, description="one colour per face"))
+register_shader(Shader("flat", _prepare_flat, _pixel, description="one colour per polygon"))

@@ -11,8 +11,8 @@ small steps per mode, a "vertex" step before clipping and a "pixel" step after r
 =========  ==========================================  =======================================
 mode       before clipping (world coordinates)         per pixel (resolve)
 =========  ==========================================  =======================================
-flat       face normals; the model once per face at    the face's colour: ``face_rgb[source]``
-           its centroid → ``face_rgb (T, 3)``
+flat       face normals; the model once per planar     the face's colour: ``face_rgb[source]``
+           polygon at its centroid → ``face_rgb (T, 3)``
 gouraud    vertex normals; the model at every vertex   the three vertex colours interpolated
            → RGB carried as 3 attributes by the clipper   with the barycentrics
 phong      vertex normals and positions → 6 attributes  normal and position interpolated, the
