@@ -352,7 +352,7 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
         "zbuffer"
     assert load_scene(SCENES_DIR / "torus.toml").renderer == "zbuffer"      # the default
     bad = tmp_path / "bad.toml"
-    bad.write_text('renderer = "radiosity"\n' + text)
+    bad.write_text('renderer = "photon-mapping"\n' + text)
     with pytest.raises(ReaderError, match=r"bad.toml:1: renderer: .*raytrace"):
         load_scene(bad)
 
