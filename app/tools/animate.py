@@ -3,9 +3,10 @@
 Frames are rendered
 
 - in this process (the default; the particles step on from frame to frame),
-- on ``--workers N`` local processes (a Dask ``LocalCluster``, started once per job while
-  this process renders the first frames, and not started at all when the job is too short
-  for it to win: the output says so), or
+- with ``--workers N``, in this process and N - 1 local worker processes (a Dask
+  ``LocalCluster``, started once per job while this process renders the first frames, and
+  not started at all when it cannot win: a job shorter than its start, or a machine with no
+  idle core; the output says which), or
 - on a running Dask cluster (``--scheduler tcp://host:8786``; the workers need only this
   package: the scene file and every file it names travel with the job, content-addressed,
   :mod:`app.tools.bundle`).
