@@ -13,11 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tools import need_module
+
 from app.cli import main
 from tests.conftest import ROOT
 
-pytest.importorskip("av", reason="the animate extra (pip install 'fvd-viewer[anim]') writes MP4")
-pytest.importorskip("distributed", reason="the animate extra runs frames on Dask workers")
+need_module("av", "the animate extra (pip install 'fvd-viewer[anim]') writes MP4")
+need_module("distributed", "the animate extra runs frames on Dask workers")
 
 SCENE = """
 name = "movie test"
@@ -133,10 +135,12 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
     clean = tmp_path / "clean"
     assert main(["animate", str(scene_file), "--out", str(clean), "--size", "96x96",
                  "--duration", "5"]) == 0
-    assert main(["animate", str(scene_file), "--out", str(tmp_path / "again.mp4"), "--size",
-                 "96x96", "--duration", "5"]) == 0
-    assert all(np.array_equal(x, y) for x, y in zip(decoded(out), decoded(tmp_path / "again.mp4")))
-    assert len(frames(clean)) == 60
+    again = tmp_path / "again.mp4"
+    assert main(["animate", str(scene_file), "--out", str(again), "--size", "96x96",
+                 "--duration", "5"]) == 0
+    resumed, clean_movie = decoded(out), decoded(again)
+    assert len(resumed) == len(clean_movie) == len(frames(clean)) == 60
+    assert all(np.array_equal(x, y) for x, y in zip(resumed, clean_movie))
 
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):
