@@ -3,9 +3,10 @@
 Frames are rendered
 
 - in this process (the default; the particles step on from frame to frame),
-- on ``--workers N`` local processes (a Dask ``LocalCluster``, started once per job while
-  this process renders the first frames, and not started at all when the job is too short
-  for it to win: the output says so), or
+- with ``--workers N``, in this process and N - 1 local worker processes (a Dask
+  ``LocalCluster``, started once per job while this process renders the first frames, and
+  not started at all when it cannot win: a job shorter than its start, or a machine with no
+  idle core; the output says which), or
 - on a running Dask cluster (``--scheduler tcp://host:8786``; the workers need only this
   package: the scene file and every file it names travel with the job, content-addressed,
   :mod:`app.tools.bundle`).
@@ -69,16 +70,16 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     p.add_argument("--samples", type=_number(int, 1, 1024), default=None, help="samples per pixel")
     p.add_argument("--projection", choices=PROJECTIONS, default=None)
     p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
-    p.add_argument("--view", type=_number(int, 1, 10 ** 6), default=None,
+    p.add_argument("--view", type=_number(int, 1, 10 ** 6), default=None, metavar="K",
                    help="the file's view K (its position in the file, counting from 1, as "
                         "everywhere); default: the keyed view, or the first valid view")
     p.add_argument("--paths", action="store_true",
                    help="draw the keyed paths (the eye, objects, lights) over every frame")
-    p.add_argument("--workers", type=_number(int, 1, 10 ** 4), default=1,
+    p.add_argument("--workers", type=_number(int, 1, 10 ** 4), default=1, metavar="N",
                    help="renderers on this machine: this process and N - 1 worker processes "
                         "(a Dask LocalCluster; at most one a core, and as many as the memory "
-                        "holds; none when the job is too short for them to win)")
-    p.add_argument("--scheduler", default=None,
+                        "holds; none when they cannot win: a short job, a busy machine)")
+    p.add_argument("--scheduler", default=None, metavar="ADDR",
                    help="address of a running Dask scheduler (tcp://host:8786)")
     p.add_argument("--retries", type=_number(int, 0, MAX_RETRIES), default=2,
                    help="tries again per failed frame (or run of frames on a cluster)")
