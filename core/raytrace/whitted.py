@@ -18,11 +18,21 @@ halfway or the reflection form of the specular term as the scene says)::
   (:func:`core.raytrace.optics.refract`), from the medium (``medium``, air by default) into the
   surface's ``ior`` when the ray enters (it meets the front of the geometric normal) and back
   out when it leaves. Total internal reflection: no ``T``; its ``k_t`` goes to the reflected
-  ray (the light is reflected, not lost). ``fresnel``: Schlick's weight moves ``F k_t`` from
-  transmission to reflection (:func:`core.raytrace.optics.schlick`).
+  ray (the light is reflected, not lost). ``fresnel``: Schlick's weight
+  (:func:`core.raytrace.optics.schlick`) or the exact Fresnel equations
+  (:func:`core.raytrace.optics.fresnel_exact`) move ``F k_t`` from transmission to reflection.
+- Sides: both children keep to the side the geometric normal says; a direction made about the
+  shading normal that would cross the face is made about the face's normal instead.
 - The ray tree: a primary ray is depth 1; a ray of depth ``max_depth`` spawns no children
-  (the notes' "N ≤ 7"). Adaptive depth control (the notes' "k_1 · k_2 · … · k_n ≤ ε"): a child
-  whose weight, the product of the k's on its path, is below ``epsilon`` is not cast.
+  (the notes' "N ≤ 7"). A total internal reflection does not split the ray, so it does not
+  deepen the tree (up to :data:`MAX_INTERNAL` in a row): light trapped in glass is followed
+  instead of being cut to black (the glass bunny's speckles, issue 20). Adaptive depth control
+  (the notes' "k_1 · k_2 · … · k_n ≤ ε"): a child whose weight, the product of the k's on its
+  path, is below ``epsilon`` is not cast; with ``attenuation`` (C1, C2) a secondary ray's
+  weight is also divided by ``1 + C1 R + C2 R²`` over its length R.
+- Textures: a textured triangle is shaded by the z-buffer's pixel step
+  (:func:`core.texture.surface.textured_at`), its footprint from the ray's differentials
+  (:func:`transfer`, :func:`uv_derivatives`), which every child ray carries on.
 
 The recursion is written as a loop over an explicit stack of pending rays, each carrying its
 weight: ``I`` is linear in ``I_r`` and ``I_t``, so ``Σ weight · I_local`` over the tree's nodes
@@ -55,6 +65,7 @@ COUNTERS = ("primary", "shadow", "reflected", "refracted", "total internal refle
             "cut by depth", "cut by adaptive control")
 PRIMARY, SHADOW, REFLECTED, REFRACTED, TIR, CUT_DEPTH, CUT_ADAPTIVE = range(7)
 NOTHING, TRIANGLE, SPHERE, PLANE = -1, 0, 1, 2
+FEW_SPHERES = 8        # up to this many spheres are tested one by one; more, through their BVH
 
 
 @njit(cache=True)
@@ -65,11 +76,19 @@ def nearest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     k, t, u, v = bvh.closest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack)
     if k >= 0:
         kind, index, t_max = TRIANGLE, k, t
-    i, t_s = bvh.closest_sphere(packed.sphere_box, packed.sphere_first, packed.sphere_count,
-                                packed.sphere_item, packed.spheres, ox, oy, oz, dx, dy, dz,
-                                t_min, t_max, stack)
-    if i >= 0:
-        kind, index, t_max = SPHERE, i, t_s
+    spheres = packed.spheres
+    if spheres.shape[0] <= FEW_SPHERES:      # a few: testing each beats walking a tree
+        for i in range(spheres.shape[0]):
+            t_s = intersect.sphere(ox, oy, oz, dx, dy, dz, spheres[i, 0], spheres[i, 1],
+                                   spheres[i, 2], spheres[i, 3], t_min, t_max)
+            if t_s < t_max:
+                kind, index, t_max = SPHERE, i, t_s
+    else:
+        i, t_s = bvh.closest_sphere(packed.sphere_box, packed.sphere_first, packed.sphere_count,
+                                    packed.sphere_item, spheres, ox, oy, oz, dx, dy, dz,
+                                    t_min, t_max, stack)
+        if i >= 0:
+            kind, index, t_max = SPHERE, i, t_s
     planes = packed.planes
     for i in range(planes.shape[0]):
         t_p = intersect.plane(ox, oy, oz, dx, dy, dz, planes[i, 0], planes[i, 1], planes[i, 2],
