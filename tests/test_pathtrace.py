@@ -37,7 +37,8 @@ def cornell():
 def test_path_tracer_matches_mitsuba(cornell):
     if not mitsuba_oracle.available():
         if os.environ.get("CI"):
-            pytest.fail("mitsuba is not installed (pip install mitsuba): the oracle is required in CI")
+            pytest.fail("mitsuba is not installed (pip install mitsuba): the oracle is "
+                        "required in CI")
         pytest.skip("mitsuba is not installed")
     scene, view, ours, _, mask, _ = cornell
     reference = mitsuba_oracle.render(scene, view, SIZE, SIZE, SAMPLES, seed=1)

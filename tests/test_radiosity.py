@@ -296,3 +296,21 @@ def test_window_progress_brightens_step_by_step_then_equals_the_renderer(monkeyp
     assert np.array_equal(frame.color, again.color)
     # the picture changes as the light is shot (the ambient term stands in for the rest)
     assert not np.array_equal(control.partials[0], control.partials[-1])
+
+
+def test_cli_messages_for_bad_scenes(tmp_path, capsys):
+    from app.cli import main
+    dark = tmp_path / "dark.toml"
+    dark.write_text(PANEL.format(kd=0.5, emission="[0, 0, 0]").replace('views = "auto"',
+                    'views = "auto"\n[[light]]\nposition = [0, 0, 5]\nintensity = [0, 0, 0]'))
+    png = tmp_path / "dark.png"
+    assert main(["render", str(dark), "--renderer", "radiosity", "--size", "8x8",
+                 "--out", str(png)]) == 0
+    assert png.exists()                                   # the black picture is written
+    assert "warning: panel: nothing emits light" in capsys.readouterr().err
+    hot = tmp_path / "hot.toml"
+    hot.write_text(PANEL.format(kd=2.0, emission="[1, 1, 1]"))
+    assert main(["render", str(hot), "--renderer", "pathtrace", "--size", "8x8",
+                 "--out", str(tmp_path / "hot.png")]) == 1
+    err = capsys.readouterr().err
+    assert "error: panel: cannot path trace: mesh 1" in err and "below 1" in err

@@ -116,7 +116,8 @@ def table(report) -> str:
             method = (f"hemicube {r['resolution']}" if r["form_factors"] == "hemicube"
                       else "ray cast")
             lines.append(f"| {method} | {r['elements']} | {r['patches']} | "
-                         f"{r['seconds_to_1pct']:.2f} | {r['steps']} | {r['rows_per_second']:.0f} |")
+                         f"{r['seconds_to_1pct']:.2f} | {r['steps']} | "
+                         f"{r['rows_per_second']:.0f} |")
     if "pathtrace" in report:
         lines += ["", "| path tracer | samples | s | samples/s |", "|---|---:|---:|---:|"]
         for r in report["pathtrace"]:

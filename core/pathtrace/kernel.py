@@ -335,7 +335,8 @@ def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
                 continue
             r, g, b, state, depth = trace_path(
                 bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
-                tri_area, tri_emit_pdf, lights, background, origins[i, 0], origins[i, 1], origins[i, 2],
+                tri_area, tri_emit_pdf, lights, background,
+                origins[i, 0], origins[i, 1], origins[i, 2],
                 directions[i, 0], directions[i, 1], directions[i, 2], t_min[i], t_max[i],
                 offset, state, stack, no_record)
             out[i, 0], out[i, 1], out[i, 2] = r, g, b

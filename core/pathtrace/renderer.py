@@ -170,8 +170,8 @@ def draw(scene, view, settings, frame, context, timer=None) -> None:
     if not has_light(scene):
         frame.color[...] = 0
         frame.stats.setdefault("warnings", []).append(
-            f"{scene.name}: nothing emits light (no material with emission and no "
-            "[[light]]): the picture is black")
+            f"{scene.name}: nothing emits light (no material with emission, no [[light]] "
+            "of any intensity): the picture is black")
         return
     if timer is not None:
         timer.lap("pack scene, build BVH")

@@ -65,18 +65,6 @@ class Elements:
     def patches(self) -> int:
         return len(self.patch_area)
 
-    def patch_rho(self) -> np.ndarray:
-        return _area_mean(self.rho, self)
-
-    def patch_emission(self) -> np.ndarray:
-        return _area_mean(self.emission, self)
-
-
-def _area_mean(values, e: Elements) -> np.ndarray:
-    out = np.zeros((e.patches, values.shape[1]))
-    np.add.at(out, e.patch, values * e.area[:, None])
-    return out / e.patch_area[:, None]
-
 
 def reflectance(material) -> np.ndarray:
     """ρ = k_d · O_d per channel."""
@@ -109,8 +97,9 @@ def check_scene(scene) -> None:
 
 
 def has_light(scene) -> bool:
-    return bool(scene.lights) or any(any(m.material.emission) for m in scene.meshes
-                                     if len(m.triangles))
+    """Does anything give light: a [[light]] of some intensity, or an emitting mesh?"""
+    return any(max(light.intensity) > 0 for light in scene.lights) or any(
+        any(m.material.emission) for m in scene.meshes if len(m.triangles))
 
 
 def subdivide(corners: np.ndarray, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

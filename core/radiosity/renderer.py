@@ -66,7 +66,7 @@ def display_scene(scene, solution: Solution) -> Scene:
         meshes.append(Mesh(positions, triangles, closed=two_sided, material=Material(),
                            name=f"elements ({'two' if two_sided else 'one'}-sided)",
                            extra={"radiosity": at_vertex}))
-        meshes[-1].element_rows = rows          # display triangle k is element rows[k]
+        meshes[-1].element_rows = rows   # display triangle k is element rows[k] (the inspector)
     return Scene(name=scene.name, meshes=meshes, views=[], lights=[], ambient=(0, 0, 0),
                  background=scene.background, shading="gouraud")
 
@@ -75,14 +75,10 @@ _ELEMENT_FIELDS = ("corners", "patch", "area", "normal", "centre", "rho", "emiss
                    "mesh", "two_sided")
 
 
-def _key(settings):
-    return Options.from_settings(settings)
-
-
 def solution_for(scene, settings, context) -> Solution:
     """The scene's solution for these settings, solved on first use and kept in ``context``."""
     cache = context.cache(scene)
-    options = _key(settings)
+    options = Options.from_settings(settings)
     held = cache.get("radiosity solution")
     if held is None or held.options != options:
         held = solve(scene, options)
@@ -114,8 +110,8 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     if not has_light(scene):
         fill(frame.color, (0.0, 0.0, 0.0))
         frame.stats.setdefault("warnings", []).append(
-            f"{scene.name}: nothing emits light (no material with emission and no [[light]]): "
-            "the picture is black")
+            f"{scene.name}: nothing emits light (no material with emission, no [[light]] "
+            "of any intensity): the picture is black")
         return
     try:
         held = context.cache(scene).get("radiosity solution")
