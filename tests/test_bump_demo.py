@@ -143,8 +143,18 @@ def test_cli_render_with_bump_map(tmp_path):
 
 
 def test_map_past_the_last_is_the_default_case():
-    ours = _render_demo(7, True, (40, 40)).astype(int)
-    assert np.abs(ours - j3dpanel(40, 40, 0, True)).max() == 0
+    """The Java switch's default case is kept in the kernel; a user asking for map 7 (scene
+    key or --bump-map) is told there is none (no silent clamp)."""
+    from core import render
+    from core.scene.formats import load_scene
+    from core.settings import RenderSettings
+    from core.texture.demo_scene import apply_demo_options, demo_materials
+    scene = load_scene("scenes/bump_demo.toml", size=(40, 40))
+    with pytest.raises(ValueError, match="must be 0 to 3, not 7"):
+        apply_demo_options(scene, 7, True)
+    demo_materials(scene)[0].bump_map = 7
+    frame = render(scene, scene.views[0], RenderSettings.for_scene(scene, bump=True))
+    assert np.abs(frame.color.astype(int) - j3dpanel(40, 40, 0, True)).max() == 0
 
 
 def test_window_clicks_toggle_bump_and_cycle_maps():

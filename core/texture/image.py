@@ -14,8 +14,10 @@ level it covers — a 2 x 2 box for even sizes; for an odd size the footprint of
 covers fractions of the fine ones and each counts by the area it covers.
 
 :func:`load_image` reads PNG or JPEG (anything Pillow reads) and never raises for bad input:
-a missing, unreadable, corrupt or too large file (over ``MAX_TEXTURE_SIDE`` on a side) gives a
-:class:`TextureError` whose message names the file and the scene key that asked for it.
+a missing, unreadable, corrupt or too large file (not a regular file, over ``MAX_TEXTURE_SIDE``
+on a side, or past the scene's :class:`TexelBudget`) gives a :class:`TextureError` whose
+message names the file and the scene key that asked for it. The levels of a texture are views
+of one float32 buffer, built a band of rows at a time (a 4096² image peaks near 0.6 GB).
 """
 
 from __future__ import annotations
@@ -193,9 +195,6 @@ def _to_rgba(image: np.ndarray) -> np.ndarray:
     return rgba
 
 
-# The most bytes a texture file may have (it is read whole before decoding): a PNG of the
-# largest image the texel budget admits is far smaller, and a bigger file is not a texture.
-MAX_TEXTURE_BYTES = 256 << 20
 # Texels (level 0) all the textures of one scene may hold together: two 4096 x 4096 images.
 # Each costs 16 bytes and a third more for its MIP levels while the scene lives, and about
 # 50 bytes while it is decoded; the budget is checked before any pixel is decoded.
@@ -225,7 +224,8 @@ def load_image(path: str | Path, key: str, wrap: str = "repeat", srgb: bool = Tr
 
     Raises :class:`TextureError` (a ValueError) naming ``shown`` (default: the path) and
     ``key`` for a missing or unreadable file, one that is not a regular file (a FIFO, a
-    device, a folder) or is over ``MAX_TEXTURE_BYTES``, a file that is not an image, a corrupt
+    device, a folder) or is over ``MAX_INPUT_BYTES["texture"]`` (read whole before it is
+    decoded; core.scene.formats.errors), a file that is not an image, a corrupt
     image, an image over ``MAX_TEXTURE_SIDE`` texels on a side, and one over what is left of
     ``budget`` (both checked from the header, before any pixel is decoded). The name is
     printed escaped and cut short, like every name from the input.

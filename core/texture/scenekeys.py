@@ -15,8 +15,9 @@ A texture value is a file name (relative to the scene file) or a table with ``fi
 ``procedural`` (plus ``wrap``: repeat | clamp | mirror; ``srgb`` for files; the procedural
 texture's own parameters). Keys and types are checked like every other key (a message naming
 the key and its line). A texture *file* that cannot be used — missing, not an image, corrupt,
-over 16384 texels on a side — is not an error of the scene: the message names the file and the
+over 16384 texels on a side, past the scene's texel budget — is not an error of the scene: the message names the file and the
 key, goes into ``SurfaceMaps.messages`` (the reader shows it), and the mesh is drawn without it.
+A procedural past the budget is an error of the scene (its ``resolution`` is the file's own).
 """
 
 from __future__ import annotations

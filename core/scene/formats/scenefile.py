@@ -154,8 +154,15 @@ class _Reader:
             later = self._tables[bisect.bisect_right(self._tables, start):]
             stop = next((i for i in later if not own.match(self.lines[i])), len(self.lines))
             keys = keys[2:]
-        elif keys:                            # a top-level key: before the first table
+        elif keys:                            # a top-level key: before the first table,
             stop = self._tables[0] if self._tables else len(self.lines)
+            if isinstance(keys[0], str):      # or inside its own [table] ([animation])
+                own = re.compile(rf"\s*\[\s*(?:{_spellings(keys[0])})\s*\]")
+                block = next((i for i in self._tables if own.match(self.lines[i])), None)
+                if block is not None:
+                    later = self._tables[bisect.bisect_right(self._tables, block):]
+                    start, stop = block, later[0] if later else len(self.lines)
+                    keys = keys[1:] or keys
         names = [k for k in keys if isinstance(k, str)]
         for name in reversed(names):          # the key itself, else the nearest enclosing one
             key = re.compile(rf"(^|[{{,\s.\[])({_spellings(name)})\s*[=\].]")
