@@ -53,8 +53,8 @@ def _frame_ms(scene, settings, context, frames, warmup) -> tuple[float, dict]:
 
 
 def run(args, renderers: list[str]) -> int:
-    from app.tools.bench import bench_scene
     from core.context import RenderContext
+    from core.scene.generators import sphere_torus as bench_scene      # the bench's scene
     from core.settings import RenderSettings
     from core.shading.shade import geometry
     from core.visibility import bsp
@@ -64,11 +64,11 @@ def run(args, renderers: list[str]) -> int:
     shading = args.shading[0]
     rows, trees = [], []
     if "bsp" in renderers:                       # load the compiled build before timing it
-        warm = bench_scene(1000)
+        warm = bench_scene(triangles=1000)
         for rule in RULES:
             bsp.build(*geometry(warm, RenderContext()), rule)
     for count in args.sizes:
-        scene = bench_scene(count)
+        scene = bench_scene(triangles=count)
         triangles = scene.triangle_count
         context = RenderContext()
         positions, tris = geometry(scene, context)
