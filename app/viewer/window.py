@@ -709,7 +709,8 @@ class ViewerWindow:
         if s.course_tri:
             imgui.text_disabled("course .tri rules: left Phong, middle Gouraud, right flat")
         extras = [] if s.renderer_name == "zbuffer" else [
-            "ray traced" + (" (refining)" if s.frame_partial else "")]
+            "ray traced" + (" (refining)" if s.frame_partial else "")
+            if s.renderer_name == "raytrace" else f"drawn by {s.renderer_name}"]   # issue 18
         if s.has_textures:
             extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))
         if extras:
