@@ -275,3 +275,23 @@ def test_viewer_state_draw_order_and_toggles():
     assert state.settings().transparency == "screen-door"
     with pytest.raises(ValueError, match="transparency must be one of"):
         state.set_transparency("glass")
+
+
+def test_bench_rows_for_the_painters(tmp_path):
+    """``bench --renderer bsp,depth-sort,zbuffer``: a tree row per root rule, a frame row per
+    renderer (tiny sizes: the numbers are the bench's business, the rows are this test's)."""
+    import argparse
+    import json
+    from app.cli import main
+    from app.tools.bench import _renderers
+    with pytest.raises(argparse.ArgumentTypeError, match="not 'raytrace'"):
+        _renderers("bsp,raytrace")
+    assert main(["bench", "--renderer", "bsp,depth-sort,zbuffer", "--sizes", "300",
+                 "--frames", "1", "--warmup", "0", "--size", "64x64", "--shading", "flat",
+                 "--out", str(tmp_path)]) == 0
+    result = json.loads((tmp_path / "painters.json").read_text())
+    assert [t["rule"] for t in result["trees"]] == ["first", "random", "fewest-splits"]
+    assert all(t["nodes"] > 0 and t["build cpu ms"] >= 0 for t in result["trees"])
+    assert [r["renderer"] for r in result["frames"]] == ["bsp", "depth-sort", "zbuffer"]
+    assert result["frames"][2]["memory_bytes"] == 64 * 64 * 28
+    assert "| fewest-splits |" in (tmp_path / "painters.md").read_text()

@@ -766,8 +766,9 @@ class ViewerWindow:
         if s.course_tri:
             imgui.text_disabled("course .tri rules: left Phong, middle Gouraud, right flat")
         extras = [] if s.renderer_name == "zbuffer" else [
-            {"raytrace": "ray traced", "radiosity": "radiosity",
-             "pathtrace": "path traced"}.get(s.renderer_name, s.renderer_name)
+            {"raytrace": "ray traced", "radiosity": "radiosity", "pathtrace": "path traced",
+             "bsp": "drawn by the BSP tree", "depth-sort": "drawn by the depth sort"}.get(
+                s.renderer_name, f"drawn by {s.renderer_name}")
             + (" (refining)" if s.frame_partial else "")]
         if s.has_textures:
             extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))

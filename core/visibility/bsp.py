@@ -30,14 +30,14 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from core.settings import BSP_ROOTS as ROOT_RULES      # first, random, fewest-splits
 from core.visibility.split import cut_triangle, side
 
 CANDIDATES = 8          # fewest-splits: triangles tried as the root of a node
 SAMPLE = 128            # fewest-splits: triangles of the node each candidate is scored on
-PARALLEL_NODE = 20_000  # nodes with this many fragments are classified on every core
+CHUNK = 64              # fragments per bounding sphere when classifying a node's list
 SPLIT_WEIGHT = 0.8      # fewest-splits: the weight of splits against imbalance in the score
 EPSILON = 1e-9          # on-the-plane tolerance, relative to the scene's size
 
@@ -67,6 +67,7 @@ class BSPTree:
     splits: int = 0
     depth: int = 0
     build_ms: float = 0.0
+    build_cpu_ms: float = 0.0      # this process's CPU time: the wall time on a loaded machine lies
 
     @property
     def nodes(self) -> int:
@@ -75,7 +76,7 @@ class BSPTree:
     def stats(self) -> dict:
         return {"rule": self.rule, "nodes": self.nodes, "splits": self.splits,
                 "depth": self.depth, "fragments": int(len(self.node_fragments)),
-                "build ms": round(self.build_ms, 3)}
+                "build ms": round(self.build_ms, 3), "build cpu ms": round(self.build_cpu_ms, 3)}
 
 
 def build(positions: np.ndarray, triangles: np.ndarray, rule: str = "first",
@@ -83,7 +84,7 @@ def build(positions: np.ndarray, triangles: np.ndarray, rule: str = "first",
     """The BSP tree of ``triangles`` (T, 3) over ``positions`` (V, 3), roots chosen by ``rule``."""
     if rule not in ROOT_RULES:
         raise ValueError(f"BSP root rule must be one of {', '.join(ROOT_RULES)}, not {rule!r}")
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     positions = np.ascontiguousarray(positions, dtype=np.float64).reshape(-1, 3)
     triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
     span = float(np.ptp(positions, axis=0).max()) if len(positions) else 1.0
@@ -93,7 +94,7 @@ def build(positions: np.ndarray, triangles: np.ndarray, rule: str = "first",
      splits, depth) = out
     return BSPTree(points, recipe, fragments, source, plane, front, back, first, count,
                    node_fragments, rule, int(splits), int(depth),
-                   (time.perf_counter() - start) * 1e3)
+                   (time.perf_counter() - start) * 1e3, (time.process_time() - cpu) * 1e3)
 
 
 # ------------------------------------------------------------------------------------ build
@@ -176,34 +177,69 @@ def _choose_root(ids, fragments, points, rule, eps):
 
 
 @njit(cache=True, nogil=True)
-def _classify_serial(ids, r, fragments, points, normal, const, eps, kinds):
-    """Each fragment of the node but the root (``r``) against its plane into ``kinds``;
-    returns how many lie in front, behind, in the plane and across it."""
-    nf, nb, nc, ns = 0, 0, 0, 0
-    for k in range(ids.shape[0]):
-        if k != r:
-            kind = _kind(points, fragments[ids[k]], normal, const, eps)
-            kinds[k] = kind
-            nf += kind == 1
-            nb += kind == -1
-            nc += kind == 0
-            ns += kind == 2
-    return nf, nb, nc, ns
+def _chunk_spheres(ids, fragments, points):
+    """A bounding sphere (centre, radius) of each run of ``CHUNK`` fragments of ``ids``."""
+    chunks = (ids.shape[0] + CHUNK - 1) // CHUNK
+    centres = np.empty((chunks, 3))
+    radii = np.empty(chunks)
+    for c in range(chunks):
+        lo, hi = c * CHUNK, min((c + 1) * CHUNK, ids.shape[0])
+        box_lo = np.full(3, np.inf)
+        box_hi = np.full(3, -np.inf)
+        for k in range(lo, hi):
+            for j in range(3):
+                v = fragments[ids[k], j]
+                for a in range(3):
+                    box_lo[a] = min(box_lo[a], points[v, a])
+                    box_hi[a] = max(box_hi[a], points[v, a])
+        centres[c] = 0.5 * (box_lo + box_hi)
+        radii[c] = 0.0
+        for k in range(lo, hi):
+            _enclose(centres, radii, c, fragments[ids[k]], points)
+    return centres, radii
 
 
-@njit(cache=True, nogil=True, parallel=True)
-def _classify_parallel(ids, r, fragments, points, normal, const, eps, kinds):
-    """:func:`_classify_serial` on both cores (the big nodes near the root, and each step
-    down a long chain)."""
+@njit(cache=True, nogil=True)
+def _enclose(centres, radii, c, tri, points):
+    """Grow sphere ``c`` to hold the triangle ``tri``."""
+    for j in range(3):
+        v = tri[j]
+        dx = points[v, 0] - centres[c, 0]
+        dy = points[v, 1] - centres[c, 1]
+        dz = points[v, 2] - centres[c, 2]
+        radii[c] = max(radii[c], np.sqrt(dx * dx + dy * dy + dz * dz))
+
+
+@njit(cache=True, nogil=True)
+def _classify_chunks(ids, offset, r, centres, radii, fragments, points, normal, const, eps,
+                     kinds, chunk_kind):
+    """Every live fragment of ``ids[offset:]`` but the root (position ``r``) against the
+    plane; returns how many lie in front, behind, in the plane and across it. A chunk whose
+    bounding sphere lies wholly on one side is decided at once (``chunk_kind`` +1 or -1; a
+    convex mesh is mostly such chunks); the others fragment by fragment (``kinds``, 0 in
+    ``chunk_kind``)."""
     nf, nb, nc, ns = 0, 0, 0, 0
-    for k in prange(ids.shape[0]):
-        if k != r:
-            kind = _kind(points, fragments[ids[k]], normal, const, eps)
-            kinds[k] = kind
-            nf += kind == 1
-            nb += kind == -1
-            nc += kind == 0
-            ns += kind == 2
+    for c in range(offset // CHUNK, centres.shape[0]):
+        lo, hi = max(c * CHUNK, offset), min((c + 1) * CHUNK, ids.shape[0])
+        centre = (normal[0] * centres[c, 0] + normal[1] * centres[c, 1]
+                  + normal[2] * centres[c, 2] - const)
+        if centre > radii[c] + eps:
+            chunk_kind[c] = 1
+            nf += hi - lo
+            continue
+        if centre < -radii[c] - eps:
+            chunk_kind[c] = -1
+            nb += hi - lo
+            continue
+        chunk_kind[c] = 0
+        for k in range(lo, hi):
+            if k != r:
+                kind = _kind(points, fragments[ids[k]], normal, const, eps)
+                kinds[k] = kind
+                nf += kind == 1
+                nb += kind == -1
+                nc += kind == 0
+                ns += kind == 2
     return nf, nb, nc, ns
 
 
@@ -227,16 +263,20 @@ def _build(positions, triangles, rule, seed, eps):
     if n_frags == 0:
         return (points, recipe[:0], fragments, source, plane[:0], front[:0], back[:0],
                 first[:0], count[:0], node_fragments[:0], 0, 0)
-    # the work list: (node, its depth, its fragment ids)
-    stack_node = [0]
-    stack_depth = [1]
-    stack_ids = [np.arange(n_frags)]
+    # the work list: a node, its depth, and its fragments ids[offset:] (with the chunks'
+    # bounding spheres, kept while a chain of one-sided nodes eats the list from the front)
+    all_ids = np.arange(n_frags)
+    centres, radii = _chunk_spheres(all_ids, fragments, points)
+    stack_node, stack_depth, stack_offset = [0], [1], [0]
+    stack_ids, stack_centres, stack_radii = [all_ids], [centres], [radii]
     n_nodes = 1
     while len(stack_ids):
-        node, level, ids = stack_node.pop(), stack_depth.pop(), stack_ids.pop()
+        node, level, offset = stack_node.pop(), stack_depth.pop(), stack_offset.pop()
+        ids, centres, radii = stack_ids.pop(), stack_centres.pop(), stack_radii.pop()
         depth = max(depth, level)
-        r = _choose_root(ids, fragments, points, rule, eps)
-        normal, const = _plane_of(points, fragments[ids[r]])
+        r = offset + _choose_root(ids[offset:], fragments, points, rule, eps)
+        root = ids[r]
+        normal, const = _plane_of(points, fragments[root])
         plane = _grow(plane, node + 1)
         front = _grow(front, node + 1)
         back = _grow(back, node + 1)
@@ -244,87 +284,107 @@ def _build(positions, triangles, rule, seed, eps):
         count = _grow(count, node + 1)
         plane[node, 0], plane[node, 1], plane[node, 2], plane[node, 3] = (
             normal[0], normal[1], normal[2], const)
-        # classify every other fragment first: a node whose fragments all lie on one side
-        # (every step down a convex mesh) hands its list on without copying it
         m = ids.shape[0]
         kinds = np.empty(m, np.int8)
-        if m >= PARALLEL_NODE:
-            nf, nb, nc, ns = _classify_parallel(ids, r, fragments, points, normal, const, eps,
-                                                kinds)
-        else:
-            nf, nb, nc, ns = _classify_serial(ids, r, fragments, points, normal, const, eps,
-                                              kinds)
+        chunk_kind = np.empty(centres.shape[0], np.int8)
+        nf, nb, nc, ns = _classify_chunks(ids, offset, r, centres, radii, fragments, points,
+                                          normal, const, eps, kinds, chunk_kind)
         first[node] = n_node_frags
         node_fragments = _grow(node_fragments, n_node_frags + 1 + nc)
-        node_fragments[n_node_frags] = ids[r]
+        node_fragments[n_node_frags] = root
         n_node_frags += 1
-        if ns == 0 and nc == 0 and (nf == 0 or nb == 0):
-            ids[r] = ids[0]                         # the root out of the list, in O(1)
-            rest = ids[1:]
-            in_front, behind = (rest, rest[:0]) if nf else (rest[:0], rest)
-            nf, nb = len(in_front), len(behind)
-        else:
-            in_front = np.empty(nf + 2 * ns, np.int64)   # a split adds at most 2 pieces
-            behind = np.empty(nb + 2 * ns, np.int64)
-            nf, nb = 0, 0
-            for k in range(m):
-                if k == r:
-                    continue
-                f = ids[k]
-                kind = kinds[k]
-                if kind == 0:
-                    node_fragments[n_node_frags] = f
-                    n_node_frags += 1
-                elif kind == 1:
-                    in_front[nf] = f
-                    nf += 1
-                elif kind == -1:
-                    behind[nb] = f
-                    nb += 1
-                else:                                  # spanning: split it by the plane
-                    splits += 1
-                    tri = fragments[f]
-                    d = np.empty(3)
-                    for c in range(3):
-                        d[c] = _distance(points, tri[c], normal, const)
-                    pieces, sides, n_pieces, new, n_new = cut_triangle(tri, d, eps)
-                    points = _grow(points, n_points + n_new)
-                    recipe = _grow(recipe, n_points + n_new - positions.shape[0])
-                    for j in range(n_new):
-                        a, b, t = int(new[j, 0]), int(new[j, 1]), new[j, 2]
-                        points[n_points] = points[a] + t * (points[b] - points[a])
-                        row = n_points - positions.shape[0]
-                        recipe[row, 0], recipe[row, 1], recipe[row, 2] = a, b, t
-                        n_points += 1
-                    fragments = _grow(fragments, n_frags + n_pieces)
-                    source = _grow(source, n_frags + n_pieces)
-                    for j in range(n_pieces):
-                        for c in range(3):
-                            v = pieces[j, c]
-                            fragments[n_frags, c] = v if v >= 0 else n_points - n_new + (-1 - v)
-                        source[n_frags] = source[f]
-                        if sides[j] > 0:
-                            in_front[nf] = n_frags
-                            nf += 1
-                        else:
-                            behind[nb] = n_frags
-                            nb += 1
-                        n_frags += 1
-        count[node] = n_node_frags - first[node]
         front[node], back[node] = -1, -1
+        if ns == 0 and nc == 0 and (nf == 0 or nb == 0):
+            if nf + nb == 0:
+                count[node] = 1
+                continue
+            # one-sided: the root leaves the list from the front, the rest goes on as it is
+            if r != offset:
+                ids[r] = ids[offset]
+                _enclose(centres, radii, r // CHUNK, fragments[ids[r]], points)
+            child = n_nodes
+            n_nodes += 1
+            if nf:
+                front[node] = child
+            else:
+                back[node] = child
+            count[node] = 1
+            stack_node.append(child)
+            stack_depth.append(level + 1)
+            stack_offset.append(offset + 1)
+            stack_ids.append(ids)
+            stack_centres.append(centres)
+            stack_radii.append(radii)
+            continue
+        for c in range(offset // CHUNK, centres.shape[0]):
+            if chunk_kind[c] != 0:
+                for k in range(max(c * CHUNK, offset), min((c + 1) * CHUNK, m)):
+                    kinds[k] = chunk_kind[c]
+        in_front = np.empty(nf + 2 * ns, np.int64)      # a split adds at most 2 pieces
+        behind = np.empty(nb + 2 * ns, np.int64)
+        nf, nb = 0, 0
+        for k in range(offset, m):
+            if k == r:
+                continue
+            f = ids[k]
+            kind = kinds[k]
+            if kind == 0:
+                node_fragments[n_node_frags] = f
+                n_node_frags += 1
+            elif kind == 1:
+                in_front[nf] = f
+                nf += 1
+            elif kind == -1:
+                behind[nb] = f
+                nb += 1
+            else:                                      # spanning: split it by the plane
+                splits += 1
+                tri = fragments[f]
+                d = np.empty(3)
+                for c in range(3):
+                    d[c] = _distance(points, tri[c], normal, const)
+                pieces, sides, n_pieces, new, n_new = cut_triangle(tri, d, eps)
+                points = _grow(points, n_points + n_new)
+                recipe = _grow(recipe, n_points + n_new - positions.shape[0])
+                for j in range(n_new):
+                    a, b, t = int(new[j, 0]), int(new[j, 1]), new[j, 2]
+                    points[n_points] = points[a] + t * (points[b] - points[a])
+                    row = n_points - positions.shape[0]
+                    recipe[row, 0], recipe[row, 1], recipe[row, 2] = a, b, t
+                    n_points += 1
+                fragments = _grow(fragments, n_frags + n_pieces)
+                source = _grow(source, n_frags + n_pieces)
+                for j in range(n_pieces):
+                    for c in range(3):
+                        v = pieces[j, c]
+                        fragments[n_frags, c] = v if v >= 0 else n_points - n_new + (-1 - v)
+                    source[n_frags] = source[f]
+                    if sides[j] > 0:
+                        in_front[nf] = n_frags
+                        nf += 1
+                    else:
+                        behind[nb] = n_frags
+                        nb += 1
+                    n_frags += 1
+        count[node] = n_node_frags - first[node]
         # pushed back first so that the front list is built next (order only, not the result)
-        if nb:
-            back[node] = n_nodes
-            stack_node.append(n_nodes)
-            stack_depth.append(level + 1)
-            stack_ids.append(behind[:nb])
+        for side_ids, n_side, is_front in ((behind, nb, False), (in_front, nf, True)):
+            if n_side == 0:
+                continue
+            child = n_nodes
             n_nodes += 1
-        if nf:
-            front[node] = n_nodes
-            stack_node.append(n_nodes)
+            if is_front:
+                front[node] = child
+            else:
+                back[node] = child
+            kept = side_ids[:n_side]
+            c_centres, c_radii = _chunk_spheres(kept, fragments, points)
+            stack_node.append(child)
             stack_depth.append(level + 1)
-            stack_ids.append(in_front[:nf])
-            n_nodes += 1
+            stack_offset.append(0)
+            stack_ids.append(kept)
+            stack_centres.append(c_centres)
+            stack_radii.append(c_radii)
     n_recipe = n_points - positions.shape[0]
     return (points[:n_points], recipe[:n_recipe], fragments[:n_frags], source[:n_frags],
             plane[:n_nodes], front[:n_nodes], back[:n_nodes], first[:n_nodes],
