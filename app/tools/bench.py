@@ -93,6 +93,8 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
                         help="skip the thread-scaling table (every case again on one thread)")
     parser.add_argument("--no-animation", action="store_true",
                         help="skip the animation row (the fountain on 1 process and 2 workers)")
+    parser.add_argument("--no-depth", action="store_true",
+                        help="skip the depth-complexity rows (100 stacked full-screen layers)")
     parser.add_argument("--renderer", type=_renderers, default="zbuffer",
                         help="zbuffer (default); raytrace: the ray tracer's rows beside Embree; "
                              "radiosity,pathtrace (either or both): the global illumination rows "
@@ -365,7 +367,36 @@ def first_frame_time(timeout: float = 60.0, cold: bool = False, scene: str | Non
         shutil.rmtree(tmp, ignore_errors=True)
 
 
+def first_frame_scenes() -> dict:
+    """``first_frame_time`` (warm cache) for every shipped scene file, by file name."""
+    from app.tools.warmup import shipped_scenes
+    return {path.name: first_frame_time(scene=str(path.relative_to(ROOT)))
+            for path in shipped_scenes()}
+
+
+def depth_complexity(size, frames: int, warmup: int) -> dict:
+    """The rasterizer on 1 and 100 full-screen layers of 10k triangles each (issue 21), front
+    to back and back to front: median ms of ``rasterize`` and the ratio to one layer."""
+    from app.tools.depth_bench import time_layers
+    width, height = size
+    one = time_layers(1, 10_000, width, height, True, frames, warmup)
+    rows = {"1 layer": one}
+    for label, front in (("100 layers, front to back", True), ("100 layers, back to front", False)):
+        row = time_layers(100, 10_000, width, height, front, frames, warmup)
+        row["ratio"] = row["median"] / one["median"]
+        rows[label] = row
+    return rows
+
+
 # ----------------------------------------------------------------------------- output
+
+def format_depth(depth: dict) -> str:
+    lines = ["depth complexity (core.pipeline.raster.rasterize alone, median ms):"]
+    for label, row in depth.items():
+        ratio = f", {row['ratio']:.2f}x one layer" if "ratio" in row else ""
+        lines.append(f"  {label:28s} {row['triangles']:>9,} triangles {row['median']:9.2f} ms{ratio}")
+    return "\n".join(lines)
+
 
 def _ms(stat: dict) -> str:
     return f"{stat['median']:9.2f} ({stat['min']:.2f}–{stat['max']:.2f})"
@@ -432,6 +463,12 @@ def format_startup(startup: dict) -> str:
         firsts = ", ".join(f"{s} {ms:.0f} ms" for s, ms in probe["first_frame_ms"].items())
         lines.append(f"JIT {key} start: import {probe['import_ms']:.0f} ms, first frames {firsts}; "
                      f"process wall {probe['process_wall_ms']:.0f} ms")
+    for name, ff in startup.get("first_frame_scenes", {}).items():
+        if ff.get("measured"):
+            lines.append(f"first picture of scenes/{name}: {ff['logged_s']:.2f} s after process "
+                         f"start as logged (warm cache)")
+        else:
+            lines.append(f"first picture of scenes/{name}: not measured: {ff['reason']}")
     for key in ("first_frame_warm", "first_frame_warm_torus", "first_frame_cold"):
         ff = startup.get(key)
         if ff is None:
@@ -567,6 +604,13 @@ def main(args) -> int:
         startup["first_frame_warm_torus"] = first_frame_time(scene="scenes/torus.toml")
         _progress("python -m app view with an empty JIT cache ...")
         startup["first_frame_cold"] = first_frame_time(cold=True)
+        _progress("first picture of every shipped scene (warm cache) ...")
+        startup["first_frame_scenes"] = first_frame_scenes()
+
+    depth = None
+    if not getattr(args, "no_depth", False):
+        _progress("depth complexity: 100 layers of 10k triangles ...")
+        depth = depth_complexity(args.size, min(args.frames, 7), min(args.warmup, 1))
 
     animation = None
     if not args.no_animation:                  # the fountain, 1 process and 2 workers
@@ -589,6 +633,7 @@ def main(args) -> int:
     probe.release()
 
     report = {"frames": args.frames, "warmup": args.warmup, "cases": rows, "startup": startup,
+              "depth_complexity": depth,
               "animation": animation, "machine": info, "bench_seconds": time.perf_counter() - t_start}
     (out / "bench.json").write_text(json.dumps(report, indent=2))
     write_chart(rows, out / "bench.png")
@@ -604,6 +649,9 @@ def main(args) -> int:
         print()
         print("thread scaling (median ms per stage, one thread → all):")
         print(format_threads(rows))
+    if depth:
+        print()
+        print(format_depth(depth))
     if startup:
         print()
         print(format_startup(startup))

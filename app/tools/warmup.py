@@ -9,7 +9,10 @@ after its first frame, so that switching modes later loads cached kernels off th
 :func:`steps` lists one small render per path through the renderers: every shading mode, both
 projections and both rasterizers, a closed mesh large enough for the parallel set-up (back-face
 culling, ≥ 10 000 triangles), an open one (two-sided lighting), lines, and several samples a
-pixel.
+pixel. :func:`scene_steps` then opens every shipped scene (``scenes/``) the way the window
+does (:class:`app.viewer.state.ViewerState`), in every renderer and shading, and in every
+texture filter when it has textures, so that no first picture the user asks for compiles
+(issue 21; ``tests/test_warmup_complete.py`` checks it from an empty kernel cache).
 """
 
 from __future__ import annotations
@@ -64,9 +67,50 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
     return out
 
 
+def shipped_scenes() -> list:
+    """The scene files in ``scenes/`` that the window opens (not the ``.views`` lists)."""
+    from core.paths import ROOT
+    from core.scene.formats import MESH_EXTENSIONS
+    kinds = {".toml", ".tri", *MESH_EXTENSIONS}
+    return sorted(p for p in (ROOT / "scenes").iterdir() if p.suffix.lower() in kinds)
+
+
+def scene_jobs(path, size=SIZE):
+    """(label, run) for the first picture of scene file ``path`` in every renderer, shading
+    and (when it has textures) texture filter, each made as the window makes it."""
+    from app.viewer.state import ViewerState
+    from core.renderers import renderer_names
+    from core.settings import SHADINGS
+    from core.texture.modes import FILTERS
+
+    state = ViewerState.open(path, size=size)
+    filters = tuple(FILTERS) if state.has_textures else (state.texture_filter,)
+    jobs = []
+    for renderer in renderer_names():
+        for shading in SHADINGS:
+            for filter_ in filters:
+                state.set_renderer(renderer)
+                state.set_shading(shading)
+                state.set_texture_filter(filter_)
+                run, _ = state._job()
+                jobs.append((f"{path.name}: {renderer}, {shading}, {filter_}", run))
+    return jobs
+
+
+def scene_steps() -> list[tuple[str, Callable[[], object]]]:
+    """One step per shipped scene: its first pictures in every renderer, shading, filter."""
+    def opener(path):
+        def run():
+            for _, job in scene_jobs(path):
+                job()
+        return run
+    return [(f"{path.name}, every renderer, shading and filter", opener(path))
+            for path in shipped_scenes()]
+
+
 def run(progress: Callable[[int, int, str, float], None] | None = None) -> float:
     """Run every step; ``progress(k, n, label, seconds)`` after each. Returns the total."""
-    todo = steps()
+    todo = steps() + scene_steps()
     start = time.perf_counter()
     for k, (label, job) in enumerate(todo, start=1):
         t = time.perf_counter()

@@ -310,34 +310,6 @@ def _misses_box(x0, y0, x1, y1, x2, y2, i0, i1, j0, j1):
 
 
 @njit(cache=True)
-def _kept_box(triangles, fixed, t, width, height):
-    """Triangle t's fixed corners and pixel box, or an empty box if it can draw nothing.
-
-    Returns (bad, x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max); bad is 1 when it names
-    a vertex that does not exist."""
-    n_vertices = fixed.shape[0]
-    v0 = triangles[t, 0]
-    v1 = triangles[t, 1]
-    v2 = triangles[t, 2]
-    zero = np.int64(0)
-    if min(v0, v1, v2) < 0 or max(v0, v1, v2) >= n_vertices:
-        return 1, zero, zero, zero, zero, zero, zero, 0, -1, 0, -1
-    x0 = np.int64(fixed[v0, 0])
-    y0 = np.int64(fixed[v0, 1])
-    x1 = np.int64(fixed[v1, 0])
-    y1 = np.int64(fixed[v1, 1])
-    x2 = np.int64(fixed[v2, 0])
-    y2 = np.int64(fixed[v2, 1])
-    if x0 == INVALID or x1 == INVALID or x2 == INVALID:
-        return 0, zero, zero, zero, zero, zero, zero, 0, -1, 0, -1
-    i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
-    if i_min <= i_max and j_min <= j_max and i_max - i_min <= 1 and j_max - j_min <= 1:
-        if not _quad_covers(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max):
-            i_max = i_min - 1  # a small triangle between pixel centres: most of a dense mesh
-    return 0, x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max
-
-
-@njit(cache=True)
 def _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty, several):
     """Does a triangle whose box spans ``several`` tiles both ways possibly cover tile (tx, ty)?
     (A long thin diagonal triangle's box holds many tiles it never touches.)"""
@@ -362,13 +334,29 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
     first = chunk * n // n_chunks
     slot = first
     bad = 0
+    n_vertices = fixed.shape[0]
     counts[chunk, :] = 0
     for t in range(first, (chunk + 1) * n // n_chunks):
-        miss, x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max = _kept_box(
-            triangles, fixed, t, width, height)
-        bad += miss
-        if i_min > i_max or j_min > j_max:
+        v0 = triangles[t, 0]
+        v1 = triangles[t, 1]
+        v2 = triangles[t, 2]
+        if min(v0, v1, v2) < 0 or max(v0, v1, v2) >= n_vertices:
+            bad += 1
             continue
+        x0 = np.int64(fixed[v0, 0])
+        y0 = np.int64(fixed[v0, 1])
+        x1 = np.int64(fixed[v1, 0])
+        y1 = np.int64(fixed[v1, 1])
+        x2 = np.int64(fixed[v2, 0])
+        y2 = np.int64(fixed[v2, 1])
+        if x0 == INVALID or x1 == INVALID or x2 == INVALID:
+            continue
+        i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
+        if i_min > i_max or j_min > j_max:
+            continue  # no pixel centre of the framebuffer in its box
+        if i_max - i_min <= 1 and j_max - j_min <= 1:
+            if not _quad_covers(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max):
+                continue  # a small triangle between pixel centres: most of a dense mesh
         tx0, tx1 = i_min >> TILE_BITS, i_max >> TILE_BITS
         ty0, ty1 = j_min >> TILE_BITS, j_max >> TILE_BITS
         several = tx1 > tx0 and ty1 > ty0
@@ -384,9 +372,6 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
         s_xy[slot, 3] = y1
         s_xy[slot, 4] = x2
         s_xy[slot, 5] = y2
-        v0 = triangles[t, 0]
-        v1 = triangles[t, 1]
-        v2 = triangles[t, 2]
         s_zw[slot, 0] = xy_z[v0, 2]
         s_zw[slot, 1] = xy_z[v1, 2]
         s_zw[slot, 2] = xy_z[v2, 2]
