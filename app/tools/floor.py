@@ -9,10 +9,10 @@ buffers. Per frame:
    ``L · M · N`` of the GL oracle (:func:`app.tools.reference_gl.clip_from_world`), the divide
    by W, and the one-light model (diffuse + (R·V)^n by repeated squaring) → an RGB per vertex;
 2. clear colour and depth;
-3. the triangles in order, one band of rows per core (a bare loop: no setup pass, no binning),
-   back faces of closed meshes culled by their screen winding, scan-converted by edge
-   functions stepped pixel by pixel over their bounding boxes (leaving a row once past the
-   triangle) with a depth test, the colour written as one 32-bit word per pixel.
+3. the triangles in order on one core (a bare loop: no setup pass, no binning), back faces
+   of closed meshes culled by their screen winding, scan-converted by edge functions
+   stepped pixel by pixel over their bounding boxes (leaving a row once past the triangle)
+   with a depth test, the colour written as one 32-bit word per pixel.
 
 It is what "close to what the hardware allows" is measured against: our pipeline within 1.5x
 of it at 100k and 1M triangles. Used only by ``python -m app bench``.
@@ -20,7 +20,6 @@ of it at 100k and 1M triangles. Used only by ``python -m app bench``.
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 from numba import njit, prange
 
@@ -114,21 +113,18 @@ def _triangle(xyz, rgb, v0, v1, v2, cull, row_first, row_last, depth, color):
         l1_row += dl1_dy
 
 
-@njit(cache=True, parallel=True)
-def _draw(xyz, rgb, triangles, closed, background, depth, color, n_bands):
-    """Each core takes a band of rows, clears it and draws every triangle into it."""
+@njit(cache=True)
+def _draw(xyz, rgb, triangles, closed, background, depth, color):
+    """Clear, then every triangle in order on one core. (A band of rows per core made each
+    core read and set up every triangle: slower at 100k triangles, where setup dominates.)"""
     height = depth.shape[0]
-    rows = -(-height // n_bands)
-    for band in prange(n_bands):
-        first, last = band * rows, min(height, (band + 1) * rows) - 1
-        for j in range(first, last + 1):
-            row = height - 1 - j
-            for i in range(depth.shape[1]):
-                depth[row, i] = -np.float32(np.inf)
-                color[row, i] = background
-        for t in range(triangles.shape[0]):
-            _triangle(xyz, rgb, triangles[t, 0], triangles[t, 1], triangles[t, 2], closed[t],
-                      first, last, depth, color)
+    for row in range(height):
+        for i in range(depth.shape[1]):
+            depth[row, i] = -np.float32(np.inf)
+            color[row, i] = background
+    for t in range(triangles.shape[0]):
+        _triangle(xyz, rgb, triangles[t, 0], triangles[t, 1], triangles[t, 2], closed[t], 0,
+                  height - 1, depth, color)
 
 
 class Floor:
@@ -173,5 +169,5 @@ class Floor:
         _vertices(self.positions, self.normals, m, self.light, self.light_is_point,
                   self.intensity, self.material, eye, self.xyz, self.rgb)
         _draw(self.xyz, self.rgb, self.triangles, self.closed, self.background, self.depth,
-              self.color, numba.get_num_threads())
+              self.color)
         return self.color
