@@ -61,6 +61,9 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
                 projection=projection)
     add("flat, 4 samples a pixel", closed, shading="flat", samples=4)
     add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")     # issue 12
+    add("BSP tree (painter's)", closed, shading="flat", renderer="bsp")           # issue 18
+    add("depth sort (painter's), depth-cued", closed, shading="gouraud", renderer="depth-sort",
+        depth_cue=True)
     return out
 
 
