@@ -82,8 +82,10 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                    help="where screenshots go, and the PNGs when there is no display "
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
-    v.add_argument("--renderer", choices=("zbuffer", "raytrace"), default=None,   # issue 12
-                   help="draw with the z-buffer (default) or the ray tracer (progressive)")
+    v.add_argument("--renderer", choices=("zbuffer", "raytrace", "bsp", "depth-sort"),
+                   default=None,                                   # issues 12 and 18
+                   help="draw with the z-buffer (default), the ray tracer (progressive), or a "
+                        "painter's algorithm (bsp, depth-sort)")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
