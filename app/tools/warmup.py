@@ -64,6 +64,9 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
                 projection=projection)
     add("flat, 4 samples a pixel", closed, shading="flat", samples=4)
     add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")
+    add("BSP tree (painter's)", closed, shading="flat", renderer="bsp")
+    add("depth sort (painter's), depth-cued", closed, shading="gouraud", renderer="depth-sort",
+        depth_cue=True)
     return out
 
 
