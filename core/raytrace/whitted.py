@@ -204,16 +204,46 @@ def has_maps(tex, kind, s):
 
 @njit(cache=True)
 def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights, ambient,
-                 eye, halfway, shadows, background, offset, scaled, surface_row, stack, counts,
-                 tex, filter_, bump, u, v, duv, surf):
-    """``I_local`` at P with each light's ``I_p`` scaled by its shadow term (Phong's model);
-    a textured triangle is shaded by the z-buffer's textured pixel step
-    (:func:`core.texture.surface.textured_at`) at barycentrics ``(u, v)`` with the (u, v)
-    derivatives ``duv`` of the ray's differentials."""
+                 eye, halfway, shadows, background, offset, scaled, surface_row, stack, counts):
+    """``I_local`` at P with each light's ``I_p`` scaled by its shadow term (Phong's model)."""
     checker_colour(packed, kind, index, s, px, py, pz, surface_row)
+    arriving = shadowed_lights(packed, px, py, pz, nx, ny, nz, gx, gy, gz, lights, eye, shadows,
+                               background, offset, scaled, surface_row, stack, counts)
+    return phong_point(px, py, pz, nx, ny, nz, 0, surface_row, arriving, ambient, eye, halfway)
+
+
+@njit(cache=True)
+def textured_colour(packed, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights, ambient,
+                    eye, halfway, shadows, background, offset, scaled, surface_row, stack,
+                    counts, tex, filter_, bump, u, v, duv, surf):
+    """``I_local`` of a textured triangle (BVH position ``index``, barycentrics ``(u, v)``):
+    the z-buffer's textured pixel step (:func:`core.texture.surface.textured_at`) with the
+    (u, v) derivatives ``duv`` of the ray's differentials, lights scaled by their shadows."""
+    for c in range(surface_row.shape[1]):
+        surface_row[0, c] = packed.surfaces[s, c]
+    arriving = shadowed_lights(packed, px, py, pz, nx, ny, nz, gx, gy, gz, lights, eye, shadows,
+                               background, offset, scaled, surface_row, stack, counts)
+    f = packed.prim[index]
+    i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
+    w0 = 1.0 - u - v
+    a = tex.attrs
+    tu = w0 * a[i0, UV] + u * a[i1, UV] + v * a[i2, UV]
+    tv = w0 * a[i0, UV + 1] + u * a[i1, UV + 1] + v * a[i2, UV + 1]
+    r, g, b = textured_at(a, i0, i1, i2, w0, u, v, tu, tv, duv[0], duv[1], duv[2], duv[3], s,
+                          tex.maps, tex.texels, tex.levels, tex.textures, filter_, bump, surf,
+                          arriving, ambient, eye, halfway)
+    for c in range(3):                                  # textured_at wrote its texel's O_d
+        surf[s, OD + c] = packed.surfaces[s, OD + c]
+    return r, g, b
+
+
+@njit(cache=True)
+def shadowed_lights(packed, px, py, pz, nx, ny, nz, gx, gy, gz, lights, eye, shadows,
+                    background, offset, scaled, surface_row, stack, counts):
+    """The light rows as they arrive at P: ``lights`` itself with shadows off, else
+    ``scaled``, each ``I_p`` times its shadow term (one shadow ray per light facing P)."""
     if shadows == SHADOW_OFF or lights.shape[0] == 0:
-        return _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, lights, ambient, eye,
-                      halfway, surface_row, tex, filter_, bump, u, v, duv, surf)
+        return lights
     # The side the viewer sees, as phong_point decides it: V towards the eye.
     if eye[0] == EYE_POINT:
         vx, vy, vz, _ = unit3(eye[1] - px, eye[2] - py, eye[3] - pz)
@@ -239,27 +269,7 @@ def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lig
         scaled[k, LIGHT_INTENSITY] *= s_r
         scaled[k, LIGHT_INTENSITY + 1] *= s_g
         scaled[k, LIGHT_INTENSITY + 2] *= s_b
-    return _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, scaled, ambient, eye, halfway,
-                  surface_row, tex, filter_, bump, u, v, duv, surf)
-
-
-@njit(cache=True)
-def _shade(packed, kind, index, s, px, py, pz, nx, ny, nz, lights, ambient, eye, halfway,
-           surface_row, tex, filter_, bump, u, v, duv, surf):
-    if not has_maps(tex, kind, s):
-        return phong_point(px, py, pz, nx, ny, nz, 0, surface_row, lights, ambient, eye, halfway)
-    f = packed.prim[index]
-    i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
-    w0 = 1.0 - u - v
-    a = tex.attrs
-    tu = w0 * a[i0, UV] + u * a[i1, UV] + v * a[i2, UV]
-    tv = w0 * a[i0, UV + 1] + u * a[i1, UV + 1] + v * a[i2, UV + 1]
-    r, g, b = textured_at(a, i0, i1, i2, w0, u, v, tu, tv, duv[0], duv[1], duv[2], duv[3], s,
-                          tex.maps, tex.texels, tex.levels, tex.textures, filter_, bump, surf,
-                          lights, ambient, eye, halfway)
-    for c in range(3):                                  # textured_at wrote its texel's O_d
-        surf[s, OD + c] = packed.surfaces[s, OD + c]
-    return r, g, b
+    return scaled
 
 
 @njit(cache=True)
@@ -388,11 +398,13 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
             continue
         px, py, pz, nx, ny, nz, gx, gy, gz, s = surface_at(packed, kind, index, u, v,
                                                            ox, oy, oz, dx, dy, dz, t)
+        mapped = False
         if textured:
             for c in range(12):
                 dif[c // 3, c % 3] = rays[top, DIFF + c]
             transfer(dif, t, dx, dy, dz, gx, gy, gz, dp)
-            if has_maps(tex, kind, s):
+            mapped = has_maps(tex, kind, s)
+            if mapped:
                 uv_derivatives(packed, tex, index, dp, duv)
         # The viewer of this hit: the primary eye (the PRP or the parallel DOP) for primary
         # rays, exactly as the z-buffer's shading sees it; the ray's origin for the others.
@@ -407,10 +419,15 @@ def trace(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, primary_eye, lights, amb
         lnx, lny, lnz = nx, ny, nz
         if not entering and packed.surfaces[s, TWO_SIDED] == 0.0:
             lnx, lny, lnz = -nx, -ny, -nz
-        r, g, b = local_colour(packed, kind, index, s, px, py, pz, lnx, lny, lnz, gx, gy, gz,
-                               lights, ambient, eye, halfway, shadows, background, offset,
-                               scaled, surface_row, stack, counts, tex, filter_, bump, u, v,
-                               duv, surf)
+        if mapped:
+            r, g, b = textured_colour(packed, index, s, px, py, pz, lnx, lny, lnz, gx, gy, gz,
+                                      lights, ambient, eye, halfway, shadows, background,
+                                      offset, scaled, surface_row, stack, counts, tex, filter_,
+                                      bump, u, v, duv, surf)
+        else:
+            r, g, b = local_colour(packed, kind, index, s, px, py, pz, lnx, lny, lnz, gx, gy,
+                                   gz, lights, ambient, eye, halfway, shadows, background,
+                                   offset, scaled, surface_row, stack, counts)
         r_sum += weight * r
         g_sum += weight * g
         b_sum += weight * b
