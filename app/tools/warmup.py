@@ -42,6 +42,7 @@ def _scenes():
 def steps() -> list[tuple[str, Callable[[], object]]]:
     """(label, run) for every path the window can take; each ``run`` renders one small frame."""
     from core.render import render
+    from core.scene.model import Scene
     from core.settings import RASTERIZERS, SHADINGS, RenderSettings
 
     closed, opened = _scenes()
@@ -61,6 +62,13 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
                 projection=projection)
     add("flat, 4 samples a pixel", closed, shading="flat", samples=4)
     add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")     # issue 12
+    # issue 19: hemicube and ray-cast form factors, the solver, the display; the path tracer
+    from core.scene.generators import cube
+    box = Scene(name="warm-up box", meshes=[cube(1.0)], views=closed.views)
+    for method in ("hemicube", "raycast"):
+        add(f"radiosity ({method})", box, renderer="radiosity", form_factors=method,
+            max_elements=64, hemicube_resolution=16)
+    add("path traced", box, renderer="pathtrace")
     return out
 
 
