@@ -151,19 +151,19 @@ def mesh_scene(scene, max_elements: int = 2000, elements_per_patch: int = 4) -> 
             mesh_of.append(np.full(n, i))
             sided.append(np.full(n, len(copies) == 2))
     if not tris:
-        raise RadiosityError(f"{scene.name}: no triangles to mesh into patches")
+        raise RadiosityError("no triangles to mesh into patches")
     corners = np.concatenate(tris)
     lo, hi = corners.reshape(-1, 3).min(axis=0), corners.reshape(-1, 3).max(axis=0)
     scale = float(np.linalg.norm(hi - lo)) or 1.0
     area, _, _ = _frames(corners)
     keep = area > MIN_AREA * scale * scale                       # zero-area triangles drop out
     if not keep.any():
-        raise RadiosityError(f"{scene.name}: every triangle has zero area")
+        raise RadiosityError("every triangle has zero area")
     corners, area = corners[keep], area[keep]
     rho, emission = np.concatenate(rho)[keep], np.concatenate(emission)[keep]
     mesh_of, sided = np.concatenate(mesh_of)[keep], np.concatenate(sided)[keep]
     if len(corners) > MAX_TRIANGLES:
-        raise RadiosityError(f"{scene.name}: {len(corners)} triangles (two-sided ones counted "
+        raise RadiosityError(f"{len(corners)} triangles (two-sided ones counted "
                              f"twice) are too many for radiosity (at most {MAX_TRIANGLES:,}); "
                              "use --renderer pathtrace")
     # A scene with more triangles than the budget: each triangle one patch and one element.
