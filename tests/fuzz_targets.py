@@ -162,7 +162,20 @@ def renders(result) -> str:
 
 
 # Token edits keep a file's structure, so they reach past the header more often: weighted up.
-KINDS = ("byte", "insert", "delete", "truncate", "token", "token", "token", "repeat")
+# A "number" edit swaps one number for another plausible one and keeps the syntax whole, so
+# that a fair share of the inputs gets through the reader to the renderer (a test holds it).
+KINDS = ("byte", "insert", "delete", "truncate", "token", "token", "token", "repeat",
+         "number", "number", "number")
+NUMBER = re.compile(rb"(?<![\w.])-?\d+(\.\d+)?([eE][-+]?\d+)?(?![\w.])")
+PLAUSIBLE = [b"0", b"1", b"-1", b"2", b"0.5", b"-0.5", b"3", b"10", b"-7.25", b"1e-3", b"100",
+             b"0.001", b"1e5", b"-2", b"4"]
+
+
+def _swap_number(rng: random.Random, data: bytearray) -> None:
+    spans = [m.span() for m in NUMBER.finditer(bytes(data))]
+    if spans:
+        a, b = spans[rng.randint(0, len(spans) - 1)]
+        data[a:b] = rng.choice(PLAUSIBLE)
 
 
 def mutate(rng: random.Random, base: bytes) -> bytes:
@@ -181,6 +194,8 @@ def mutate(rng: random.Random, base: bytes) -> bytes:
             del data[at:]
         elif kind == "repeat":
             data[at:at] = data[at:at + rng.randint(1, 60)]
+        elif kind == "number":
+            _swap_number(rng, data)
         else:
             spans = [m.span() for m in re.finditer(rb"[^\s,=\[\]{}/]+", bytes(data))]
             if spans:

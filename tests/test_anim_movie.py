@@ -13,11 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tools import need_module
+
 from app.cli import main
 from tests.conftest import ROOT
 
-pytest.importorskip("av", reason="the animate extra (pip install 'fvd-viewer[anim]') writes MP4")
-pytest.importorskip("distributed", reason="the animate extra runs frames on Dask workers")
+need_module("av", "the animate extra (pip install 'fvd-viewer[anim]') writes MP4")
+need_module("distributed", "the animate extra runs frames on Dask workers")
 
 SCENE = """
 name = "movie test"
@@ -119,7 +121,9 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
     clean = tmp_path / "clean"
     assert main(["animate", str(scene_file), "--out", str(clean), "--size", "96x96",
                  "--duration", "5"]) == 0
-    assert all(np.array_equal(x, y) for x, y in zip(frames(folder), frames(clean)))
+    resumed_frames, clean_frames = frames(folder), frames(clean)
+    assert len(resumed_frames) == len(clean_frames) == 60
+    assert all(np.array_equal(x, y) for x, y in zip(resumed_frames, clean_frames))
 
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):

@@ -10,8 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-moderngl = pytest.importorskip("moderngl")
-imgui = pytest.importorskip("imgui")
+from tools import llvmpipe_context, need_module                    # noqa: E402
+
+moderngl = need_module("moderngl", "the blit needs moderngl")
+imgui = need_module("imgui", "the window's panel needs Dear ImGui's bindings")
 
 from core.settings import RenderSettings
 from app.viewer.blit import Blit  # noqa: E402
@@ -20,10 +22,7 @@ from app.viewer.imgui_backend import ImGuiRenderer, draw_commands  # noqa: E402
 
 @pytest.fixture(scope="module")
 def ctx():
-    try:
-        context = moderngl.create_standalone_context(backend="egl")
-    except Exception as error:  # no EGL / no Mesa on this machine
-        pytest.skip(f"no headless EGL OpenGL context: {error}")
+    context = llvmpipe_context()
     yield context
     context.release()
 

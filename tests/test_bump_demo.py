@@ -111,10 +111,16 @@ def _render_demo(bump_map, bump, size):
 @pytest.mark.parametrize("size", [(500, 500), (333, 333), (301, 199)])
 @pytest.mark.parametrize("bump_map,bump", CASES)
 def test_renderer_draws_the_demo_pixel_for_pixel(size, bump_map, bump):
-    """The scene file through the ordinary z-buffer renderer: every pixel within 1/255."""
+    """The scene file through the ordinary z-buffer renderer, pixel for pixel: equal at the
+    square sizes; at 301 x 199 the two sides' float roundings of the non-square pixel mapping
+    part on 14-329 pixels of 59,899 (measured), each by one level."""
     ours = _render_demo(bump_map, bump, size).astype(int)
     expected = j3dpanel(*size, bump_map, bump).astype(int)
-    assert np.abs(ours - expected).max() <= 1
+    error = np.abs(ours - expected).max(axis=2)
+    if size[0] == size[1]:
+        assert error.max() == 0
+    else:
+        assert error.max() <= 1 and np.count_nonzero(error) <= 0.006 * error.size
 
 
 def test_cli_render_with_bump_map(tmp_path):
@@ -128,17 +134,17 @@ def test_cli_render_with_bump_map(tmp_path):
     assert done.returncode == 0, done.stderr
     assert "B(x,y) = sin(x) + cos(y)" in done.stdout
     ours = np.asarray(Image.open(out)).astype(int)
-    assert np.abs(ours - j3dpanel(64, 64, 1, True)).max() <= 1
+    assert np.abs(ours - j3dpanel(64, 64, 1, True)).max() == 0
     done = subprocess.run([sys.executable, "-m", "app", "render", "scenes/bump_demo.toml",
                            "--no-bump", "--size", "64x64", "--out", str(out)],
                           capture_output=True, text=True, timeout=600)
     assert done.returncode == 0 and "Phong" in done.stdout
-    assert np.abs(np.asarray(Image.open(out)).astype(int) - j3dpanel(64, 64, 0, False)).max() <= 1
+    assert np.abs(np.asarray(Image.open(out)).astype(int) - j3dpanel(64, 64, 0, False)).max() == 0
 
 
 def test_map_past_the_last_is_the_default_case():
     ours = _render_demo(7, True, (40, 40)).astype(int)
-    assert np.abs(ours - j3dpanel(40, 40, 0, True)).max() <= 1
+    assert np.abs(ours - j3dpanel(40, 40, 0, True)).max() == 0
 
 
 def test_window_clicks_toggle_bump_and_cycle_maps():

@@ -12,8 +12,29 @@ from core.pipeline.clip import clip_lines, outcodes, planes
 Z_MIN = -0.25
 
 
+def _halfspaces(projection, z_min):
+    """The canonical view volumes written here from their inequalities (pipeline.md), each as
+    f(x, y, z) <= 0 inside: not the product's ``planes()``, so the reference shares nothing
+    with the clipper under test (a row of ``planes`` gone wrong is caught below)."""
+    def f(a, b, c, d):
+        return [a, b, c, d]
+    if projection == "parallel":       # -1 <= x, y <= 1, -1 <= z <= 0
+        rows = [f(1, 0, 0, -1), f(-1, 0, 0, -1), f(0, 1, 0, -1), f(0, -1, 0, -1),
+                f(0, 0, -1, -1), f(0, 0, 1, 0)]
+    else:                              # z <= x, y <= -z, -1 <= z <= z_min
+        rows = [f(1, 0, 1, 0), f(-1, 0, 1, 0), f(0, 1, 1, 0), f(0, -1, 1, 0),
+                f(0, 0, -1, -1), f(0, 0, 1, -z_min)]
+    return np.array(rows, float)
+
+
+def test_the_products_planes_are_the_canonical_volumes():
+    for projection in ("parallel", "perspective"):
+        ours = {tuple(row) for row in planes(projection, Z_MIN)}
+        assert ours == {tuple(row) for row in _halfspaces(projection, Z_MIN)}
+
+
 def _inside(points, projection, z_min, tol=1e-9):
-    pl = planes(projection, z_min)
+    pl = _halfspaces(projection, z_min)
     return np.all(points @ pl[:, :3].T + pl[:, 3] <= tol, axis=1)
 
 
@@ -21,7 +42,7 @@ def _reference(p0, p1, projection, z_min, tol=0.0):
     """Independent clipper: the parametric interval of the segment inside every half-space
     (Liang–Barsky style, no outcodes). Values within ``tol`` of a plane count as on it.
     Returns (t0, t1) or None."""
-    pl = planes(projection, z_min)
+    pl = _halfspaces(projection, z_min)
     f0 = pl[:, :3] @ p0 + pl[:, 3]
     f1 = pl[:, :3] @ p1 + pl[:, 3]
     f0[np.abs(f0) <= tol] = 0.0

@@ -97,3 +97,36 @@ def test_mesh_files_read_in_linear_time(benchmark, ext, n):
     else:
         triangles = len(benchmark(read_mesh, data, "strip" + ext, ext).triangles)
     assert triangles == n
+
+
+def _cpu_seconds(function, *args, repeats: int = 3) -> float:
+    """The least CPU time of a few runs: other processes on the machine barely move it."""
+    import time
+    best = float("inf")
+    for _ in range(repeats):
+        start = time.process_time()
+        function(*args)
+        best = min(best, time.process_time() - start)
+    return best
+
+
+CASES = {
+    **{f"scene {kind}": (lambda n, kind=kind: (read_scene_file, scene_with(kind, n), "s.toml"))
+       for kind in ("views", "lights", "geometries")},
+    "dotted key": lambda n: (_refuse, CUBE + "a" + ".a" * (n - 1) + " = 1\n"),
+    **{f"mesh {ext}": (lambda n, ext=ext: (read_tri, mesh_text(ext, n), "s.tri") if ext == ".tri"
+                       else (read_mesh, mesh_text(ext, n), "s" + ext, ext))
+       for ext in (".obj", ".off", ".ply", ".stl", ".tri")},
+}
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("case", list(CASES))
+def test_eight_times_the_input_costs_less_than_sixteen_times_the_time(case):
+    """The one timed check, with benchmarks disabled, and generous: linear reading makes
+    t(8n)/t(n) about 8, the quadratic line locator these tests were written for made it
+    ~64 (1,000 views 4.3 s, 4,000 views 39 s). CPU time, least of three runs."""
+    base = 250 if case.startswith("scene") else 1000     # scene tables cost ~1 ms each
+    small, large = (CASES[case](n) for n in (base, 8 * base))
+    ratio = _cpu_seconds(*large) / max(_cpu_seconds(*small), 1e-4)
+    assert ratio < 16, f"{case}: 8x the input took {ratio:.1f}x the CPU time"

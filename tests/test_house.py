@@ -42,6 +42,18 @@ def test_golden_house_views(golden, k, projection):
     golden(f"house_v{k + 1:02d}_{projection}", frame.color)
 
 
+def test_golden_house_file_view_19_in_parallel(golden):
+    """The file's view 19 (F = 40 lies behind the eye at PRP_n = 30) is refused in perspective
+    and drawn in parallel projection, where the eye is at infinity: its picture is held too."""
+    scene = house_scene()
+    view = scene.views[13]
+    assert "view 19" in view.label
+    frame = render(scene, view, RenderSettings.for_scene(scene, projection="parallel",
+                                                         shading="wireframe", size=(500, 500)))
+    assert frame.message is None
+    golden("house_file_view19_parallel", frame.color)
+
+
 def test_front_view_edges_land_where_hand_math_puts_them():
     # Notes' example view (F=1, B=-23), perspective: the front wall lies in the view plane, so
     # its corners map straight through the window (-1..17) onto 500 px: x = (u+1)/18*500.

@@ -239,3 +239,30 @@ def test_a_point_lands_on_the_pixel_the_z_buffer_uses(keep_aspect):
         rows, cols = np.nonzero(np.any(frame.color != before, axis=2))
         assert len(rows) == 1
         assert np.isfinite(depth[rows[0], cols[0]]) == on_wall
+
+
+@pytest.mark.parametrize("projection", ["perspective", "parallel"])
+@pytest.mark.parametrize("listed", ["near first", "far first"])
+def test_particles_blend_back_to_front_whatever_their_order(projection, listed):
+    """Two half-transparent points on one pixel, a red one behind a blue one, over a black
+    frame with nothing to hide them: "over" applied back to front gives, by hand,
+    blue over (red over black) = 0.5 blue + 0.5 (0.5 red) = (0.25, 0, 0.5), in whichever
+    order the particles are listed; front to back would give (0.5, 0, 0.25)."""
+    from core import RenderSettings, render
+    from core.animation.draw import POINT, Sprites, draw_particles
+    scene = read_scene_file(WALL_SCENE, "scene.toml")
+    view = scene.views[0]
+    settings = RenderSettings.for_scene(scene, size=(64, 64), projection=projection)
+    frame = render(scene, view, settings)
+    frame.color[:] = 0
+    frame.depth = None                                 # nothing opaque in front of them
+    far, near = [0.0, 0.0, 2.3], [0.0, 0.0, 2.6]       # the eye looks down -z from z > 3
+    points = np.array([near, far] if listed == "near first" else [far, near])
+    rgb = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]] if listed == "near first"
+                   else [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    sprites = Sprites(position=points, tail=points, radius=np.ones(2), rgb=rgb,
+                      alpha=np.full(2, 0.5), mode=np.full(2, POINT))
+    assert draw_particles(frame, sprites, view, settings) == 2
+    rows, cols = np.nonzero(np.any(frame.color != 0, axis=2))
+    assert len(rows) == 1                              # both on the same pixel
+    assert frame.color[rows[0], cols[0]].tolist() == [64, 0, 128]   # 0.25, 0, 0.5 rounded up

@@ -58,8 +58,8 @@ def test_same_picture_as_the_zbuffer_without_global_terms(name, projection):
     """No mirrors, no glass, shadows off: the traced image is the rasterizer's Phong image.
 
     Both evaluate phong_point with the same normals at the same pixel centres; the only
-    differences allowed are ties — a pixel centre on an edge or on the line where two
-    triangles cross — at most 0.05 % of the pixels. Measured at 300 x 300: the bunny differs
+    differences beyond 1/255 allowed are ties — a pixel centre on an edge or on the line where
+    two triangles cross — at most 0.01 % of the pixels. Measured at 300 x 300: the bunny differs
     by at most 1/255 everywhere with identical coverage in both projections; at 240 x 240 one
     pixel centre falls on an edge (18/255)."""
     if name == "bunny":
@@ -71,8 +71,10 @@ def test_same_picture_as_the_zbuffer_without_global_terms(name, projection):
     difference, covered_z, covered_t, stats = _agreement(path, projection)
     pixels = difference.size
     assert covered_z.sum() > 0.02 * pixels                  # the picture shows something
-    assert np.count_nonzero(covered_z != covered_t) <= 0.0005 * pixels
-    assert np.count_nonzero(difference > 2) <= 0.0005 * pixels
+    # Measured at 240 x 240: beyond 1/255 on at most 2 pixels (a centre on an edge), coverage
+    # apart on at most 1; the bound is 0.01 % (5 pixels).
+    assert np.count_nonzero(covered_z != covered_t) <= 0.0001 * pixels
+    assert np.count_nonzero(difference > 1) <= 0.0001 * pixels
     assert stats["rays"]["primary"] == pixels and stats["rays"]["shadow"] == 0
 
 

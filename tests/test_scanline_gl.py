@@ -12,7 +12,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-pytest.importorskip("moderngl")
+from tools import need_module                                          # noqa: E402
+
+need_module("moderngl", "the OpenGL oracle needs moderngl")
 
 from core.render import render                                        # noqa: E402
 from core.settings import RenderSettings                              # noqa: E402

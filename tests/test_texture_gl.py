@@ -28,6 +28,7 @@ from core.pipeline.raster import rasterize
 from core.pipeline.vertex_kernels import transform_affine, transform_projective
 from core.texture import Texture
 from core.texture.sample import FILTERS
+from tools import llvmpipe_context
 from core.texture.shading import unlit_texture
 from core.texture.tutorial import triangle_constants, uv_at
 
@@ -43,13 +44,9 @@ GRAZING = View(vrp=(0, 0, 0), vpn=(0, 0.25, 1), vup=(0, 1, 0), window=(-1, 1, -1
 
 @pytest.fixture(scope="module")
 def gl():
-    moderngl = pytest.importorskip("moderngl")
     from app.tools.texture_gl import TextureGL
-    try:
-        oracle = TextureGL((SIZE, SIZE))
-    except Exception as error:                      # no EGL / llvmpipe on this machine
-        pytest.skip(f"no standalone EGL context: {error}")
-    assert "llvmpipe" in oracle.renderer_name or moderngl
+    oracle = TextureGL((SIZE, SIZE), ctx=llvmpipe_context())   # only the context may be missing
+    assert "llvmpipe" in oracle.renderer_name
     yield oracle
     oracle.release()
 
@@ -101,13 +98,13 @@ def test_nearest_matches_llvmpipe(gl):
         x, y = u * TEXELS, v * TEXELS
         on_boundary[j, i] = min(abs(x - round(x)), abs(y - round(y))) < 1e-4
     assert on_boundary.sum() < 0.001 * inner.sum()
-    assert diff[inner & ~on_boundary].max() <= 2
+    assert diff[inner & ~on_boundary].max() == 0       # measured: 0 (README: equal)
 
 
 @pytest.mark.parametrize("wrap", ["repeat", "clamp"])
 def test_bilinear_matches_llvmpipe(gl, wrap):
     diff, inner, *_ = _compare(gl, _random_texture(wrap), "bilinear")
-    assert diff[inner].max() <= 2
+    assert diff[inner].max() <= 1                     # measured: 1 (README: at most 1/255)
 
 
 def test_trilinear_level_of_detail_against_llvmpipe(gl):
@@ -121,9 +118,9 @@ def test_trilinear_level_of_detail_against_llvmpipe(gl):
     ours_lambda, gl_lambda = ours[..., 0][inner] * 8, theirs[..., 0][inner] * 8
     minified = (ours_lambda > 0.05) & (ours_lambda < len(levels) - 1.1)
     assert minified.sum() > 10_000                  # the floor spans many levels
-    assert np.abs(gl_lambda - ours_lambda)[minified].max() < 0.15
+    assert np.abs(gl_lambda - ours_lambda)[minified].max() < 0.095   # measured 0.0885 (README: 0.09)
     diff, inner, *_ = _compare(gl, base, "trilinear")
-    assert diff[inner].max() <= 12 and diff[inner].mean() < 0.5
+    assert diff[inner].max() <= 9 and diff[inner].mean() < 0.45   # measured 9, mean 0.39
 
 
 FLOOR_SCENE = """
@@ -149,8 +146,8 @@ direction = [0, 1, 0]
 """
 
 
-@pytest.mark.parametrize("filter_name,tolerance", [("nearest", 2), ("bilinear", 2),
-                                                   ("trilinear", 16)])
+@pytest.mark.parametrize("filter_name,tolerance", [("nearest", 0), ("bilinear", 1),
+                                                   ("trilinear", 11)])
 def test_the_renderer_against_llvmpipe_on_a_textured_floor(gl, tmp_path, filter_name, tolerance):
     """The whole path: a PNG (sRGB) read by the scene reader, the plane generator's (u, v),
     the textured shader in the z-buffer renderer (unlit: ambient 1, k_a 1, so the pixel is the
@@ -179,3 +176,51 @@ def test_the_renderer_against_llvmpipe_on_a_textured_floor(gl, tmp_path, filter_
     diff = np.abs(frame.color.astype(int) - gl8).max(axis=2)[inner]
     assert diff.max() <= tolerance, (diff.max(), diff.mean())
     assert diff.mean() < 0.6            # measured: nearest 0, bilinear 0.003, trilinear 0.34
+
+
+def _bilinear_reduce(fine: np.ndarray, h2: int, w2: int) -> np.ndarray:
+    """llvmpipe's glGenerateMipmap, written here from its description (gallium's
+    util_gen_mipmap blits each level from the one above with GL_LINEAR): the fine level
+    sampled bilinearly, edges clamped, at each coarse texel's centre."""
+    def weights(n, n2):
+        w = np.zeros((n2, n))
+        for i in range(n2):
+            x = (i + 0.5) * n / n2 - 0.5
+            x0 = int(np.floor(x))
+            for k, t in ((x0, 1 - (x - x0)), (x0 + 1, x - x0)):
+                w[i, min(max(k, 0), n - 1)] += t
+        return w
+    coarse = np.tensordot(weights(fine.shape[0], h2), fine, axes=(1, 0))
+    return np.tensordot(weights(fine.shape[1], w2), coarse, axes=(1, 1)).transpose(1, 0, 2)
+
+
+@pytest.mark.parametrize("height,width", [(64, 64), (64, 32), (16, 128), (37, 23), (5, 7)])
+def test_the_mip_chain_against_gl_generate_mipmap(gl, height, width):
+    """Our MIP chain (core.texture.image.mip_chain) against the levels llvmpipe's
+    glGenerateMipmap makes from the same base level, read back level by level.
+
+    Even sizes: the same 2 x 2 box, equal to float32 rounding (measured 6e-8). Odd sizes: GL
+    leaves the filter to the implementation; llvmpipe's levels equal the bilinear blit model
+    above (measured 2e-6), and ours differ from them on purpose: our coarse texel averages
+    exactly its footprint, so every level keeps the base level's mean, which GL's does not.
+    """
+    from core.texture.image import mip_chain
+    image = np.random.default_rng(height * width).random((height, width, 4)).astype(np.float32)
+    tex = gl.ctx.texture((width, height), 4, image.tobytes(), dtype="f4")
+    tex.build_mipmaps()
+    ours = mip_chain(image.astype(np.float64))
+    levels = [np.frombuffer(tex.read(level=k), np.float32).reshape(lv.shape).astype(np.float64)
+              for k, lv in enumerate(ours)]
+    tex.release()
+    assert ours[-1].shape[:2] == (1, 1)
+    even = all(lv.shape[0] in (1, 2 * nxt.shape[0]) and lv.shape[1] in (1, 2 * nxt.shape[1])
+               for lv, nxt in zip(ours, ours[1:]))
+    for k in range(1, len(ours)):
+        assert abs(ours[k].mean(dtype=np.float64) - ours[0].mean(dtype=np.float64)) < 1e-6  # keeps the mean
+        if even:
+            assert np.abs(levels[k] - ours[k]).max() < 1e-6
+        else:
+            model = _bilinear_reduce(levels[k - 1], *ours[k].shape[:2])
+            assert np.abs(levels[k] - model).max() < 1e-5
+    if not even:
+        assert max(np.abs(levels[k] - ours[k]).max() for k in range(1, len(ours))) > 0.01

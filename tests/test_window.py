@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import subprocess
 import sys
 import time
@@ -20,6 +19,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
+from tools import need_module, need_programs, unavailable
 
 from core.settings import RenderSettings
 from app.viewer.state import ViewerState
@@ -188,7 +189,7 @@ def test_compile_notice_only_when_numba_compiles(capsys):
 
 
 def test_gui_text_keeps_to_the_fonts_characters():
-    pytest.importorskip("glfw")
+    need_module("glfw", "the window needs glfw")
     from app.viewer.window import displayable, shipped_scenes
 
     assert displayable("Cohen–Sutherland — “clip” … 1/W ≤ 0 · ok") == \
@@ -246,7 +247,7 @@ def start_xvfb():
             number += chunk
     if not number.strip():
         xvfb.kill()
-        pytest.skip("Xvfb did not start")
+        unavailable("Xvfb did not start")
     return xvfb, f":{number.decode().strip()}"
 
 
@@ -363,10 +364,7 @@ def grab(app, path: Path, crop: str | None = None) -> np.ndarray:
 @pytest.mark.xvfb
 @pytest.mark.slow
 def test_window_click_menu_and_keys_under_xvfb(tmp_path):
-    missing = [tool for tool in (*XVFB_TOOLS, "import") if shutil.which(tool) is None]
-    if missing:
-        pytest.skip(f"{' and '.join(missing)} not installed (apt-get install xvfb xdotool "
-                    "imagemagick)")
+    need_programs(*XVFB_TOOLS, "import", install="apt-get install xvfb xdotool imagemagick")
     from PIL import Image
 
     from app.viewer.window import PANEL_WIDTH

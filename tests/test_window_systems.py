@@ -7,7 +7,6 @@ The helpers (Xvfb, the app with its log, xdotool, screenshots) are test_window.p
 from __future__ import annotations
 
 import re
-import shutil
 import subprocess
 import sys
 import time
@@ -15,6 +14,7 @@ import time
 import numpy as np
 import pytest
 
+from tools import need_programs
 from test_window import ROOT, XVFB_TOOLS, App, grab, start_xvfb
 
 
@@ -34,10 +34,7 @@ class AppOn(App):
 
 
 def _needs_tools():
-    missing = [tool for tool in (*XVFB_TOOLS, "import") if shutil.which(tool) is None]
-    if missing:
-        pytest.skip(f"{' and '.join(missing)} not installed (apt-get install xvfb xdotool "
-                    "imagemagick)")
+    need_programs(*XVFB_TOOLS, "import", install="apt-get install xvfb xdotool imagemagick")
 
 
 @pytest.fixture
@@ -123,11 +120,9 @@ def test_switch_to_ray_traced_changes_the_picture(display, tmp_path):
                                "--size", "160x120", "--renderer", "raytrace", "--out",
                                str(rendered)], cwd=ROOT, capture_output=True, text=True,
                               timeout=300)
-        if done.returncode == 0:
-            from PIL import Image
-            assert np.array_equal(traced, np.asarray(Image.open(rendered).convert("RGB")))
-        else:                             # render --renderer lands with issue 12's CLI
-            assert "--renderer" in done.stderr, done.stderr
+        assert done.returncode == 0, done.stderr
+        from PIL import Image
+        assert np.array_equal(traced, np.asarray(Image.open(rendered).convert("RGB")))
         assert whole.shape[1] > 160
     finally:
         app.stop()

@@ -82,8 +82,8 @@ MODES = tuple(_SHADERS)
 class LeanGL:
     """A standalone EGL context with the lean programs; :meth:`load` uploads a scene once."""
 
-    def __init__(self, size=(500, 500)) -> None:
-        self.ctx = moderngl.create_standalone_context(backend="egl")
+    def __init__(self, size=(500, 500), ctx=None) -> None:
+        self.ctx = ctx or moderngl.create_standalone_context(backend="egl")
         self.size = (int(size[0]), int(size[1]))
         self.programs = {mode: self.ctx.program(vertex_shader=vs, fragment_shader=fs)
                          for mode, (vs, fs) in _SHADERS.items()}

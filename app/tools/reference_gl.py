@@ -308,8 +308,8 @@ class GLRenderer:
     ``finish`` waits for llvmpipe; ``read`` returns the image. ``render`` does all three.
     """
 
-    def __init__(self, size: tuple[int, int] = (500, 500)) -> None:
-        self.ctx = moderngl.create_standalone_context(backend="egl")
+    def __init__(self, size: tuple[int, int] = (500, 500), ctx=None) -> None:
+        self.ctx = ctx or moderngl.create_standalone_context(backend="egl")
         self.programs = {mode: self.ctx.program(vertex_shader=vs, fragment_shader=fs)
                          for mode, (vs, fs) in _SHADERS.items()}
         self.size = (0, 0)

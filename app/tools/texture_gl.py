@@ -52,8 +52,8 @@ FILTERS = {"nearest": (moderngl.NEAREST, moderngl.NEAREST),
 class TextureGL:
     """A standalone llvmpipe context with a float framebuffer of ``size``."""
 
-    def __init__(self, size: tuple[int, int]) -> None:
-        self.ctx = moderngl.create_standalone_context(backend="egl")
+    def __init__(self, size: tuple[int, int], ctx=None) -> None:
+        self.ctx = ctx or moderngl.create_standalone_context(backend="egl")
         self.size = (int(size[0]), int(size[1]))
         self.program = self.ctx.program(vertex_shader=_VERTEX, fragment_shader=_FRAGMENT)
         self.fbo = self.ctx.framebuffer(

@@ -189,6 +189,9 @@ def make(name: str, wrap: str = "repeat", **params) -> Texture:
     for key in ("scale", "rows", "columns", "octaves", "squares"):
         if key in params and not (isinstance(params[key], int) and 1 <= params[key] <= 1024):
             raise ValueError(f"{key} must be a whole number from 1 to 1024 (so the pattern tiles)")
+    if name == "checker" and params.get("scale", 8) % 2:
+        raise ValueError("checker: scale must be even (an odd count puts two squares of one "
+                         "colour side by side where the texture repeats)")
     try:
         image, srgb = PROCEDURALS[name](**params)
     except TypeError as error:
