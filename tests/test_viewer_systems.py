@@ -335,7 +335,7 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
         "zbuffer"
     assert load_scene(SCENES_DIR / "whitted.toml").renderer == "zbuffer"
     bad = tmp_path / "bad.toml"
-    bad.write_text('renderer = "radiosity"\n' + text)
+    bad.write_text('renderer = "photon map"\n' + text)      # (radiosity is one now: issue 19)
     with pytest.raises(ReaderError, match=r"bad.toml:1: renderer: .*raytrace"):
         load_scene(bad)
 
