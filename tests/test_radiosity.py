@@ -314,3 +314,23 @@ def test_cli_messages_for_bad_scenes(tmp_path, capsys):
                  "--out", str(tmp_path / "hot.png")]) == 1
     err = capsys.readouterr().err
     assert "error: panel: cannot path trace: mesh 1" in err and "below 1" in err
+
+
+def test_bench_refuses_an_unknown_renderer(capsys):
+    from app.cli import main
+    assert main(["bench", "--renderer", "radiosity,photons"]) == 2
+    assert "error: --renderer: photons" in capsys.readouterr().err
+
+
+def test_bench_table_reads_its_rows():
+    from app.tools.gi_bench import table
+    report = {"cpus": 2, "loadavg_before": [1.0], "loadavg_after": [1.5],
+              "radiosity": [{"form_factors": "hemicube", "resolution": 128, "elements": 848,
+                             "patches": 212, "seconds_to_1pct": 2.07, "steps": 590,
+                             "rows_per_second": 110.4}],
+              "pathtrace": [{"renderer": "ours", "samples": 100, "seconds": 0.5,
+                             "samples_per_second": 200.0},
+                            {"renderer": "Mitsuba 3 scalar_rgb", "missing": "pip install mitsuba"}]}
+    text = table(report)
+    assert "| hemicube 128 | 848 | 212 | 2.07 | 590 | 110 |" in text
+    assert "| ours | 100 | 0.50 | 200 |" in text and "(pip install mitsuba)" in text

@@ -83,7 +83,7 @@ def main(args) -> int:
     try:
         solution = solve(scene, options, progress)
     except RadiosityError as error:
-        print(f"error: {error}", file=sys.stderr)
+        print(f"error: {scene.name}: cannot solve for radiosity: {error}", file=sys.stderr)
         return 1
     try:
         save(solution, args.out)

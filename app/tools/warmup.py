@@ -45,6 +45,7 @@ def _scenes():
 def steps() -> list[tuple[str, Callable[[], object]]]:
     """(label, run) for every path the window can take; each ``run`` renders one small frame."""
     from core.render import render
+    from core.scene.model import Scene
     from core.settings import RASTERIZERS, SHADINGS, RenderSettings
 
     closed, opened = _scenes()
@@ -67,6 +68,13 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
     add("BSP tree (painter's)", closed, shading="flat", renderer="bsp")
     add("depth sort (painter's), depth-cued", closed, shading="gouraud", renderer="depth-sort",
         depth_cue=True)
+    # hemicube and ray-cast form factors, the solver, the display; the path tracer
+    from core.scene.generators import cube
+    box = Scene(name="warm-up box", meshes=[cube(1.0)], views=closed.views)
+    for method in ("hemicube", "raycast"):
+        add(f"radiosity ({method})", box, renderer="radiosity", form_factors=method,
+            max_elements=64, hemicube_resolution=16)
+    add("path traced", box, renderer="pathtrace")
     return out
 
 

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 import numpy as np
 
 EMITTER_PIECES = 4        # an emitting triangle is at least 4 x 4 patches
-MIN_AREA = 1e-12          # relative to the scene's squared size: below it a triangle is dropped
+MIN_AREA = 1e-12
+MAX_TRIANGLES = 20_000    # one patch each at least: beyond this the hemicube rows take hours          # relative to the scene's squared size: below it a triangle is dropped
 
 
 class RadiosityError(ValueError):
@@ -150,18 +151,23 @@ def mesh_scene(scene, max_elements: int = 2000, elements_per_patch: int = 4) -> 
             mesh_of.append(np.full(n, i))
             sided.append(np.full(n, len(copies) == 2))
     if not tris:
-        raise RadiosityError(f"{scene.name}: no triangles to mesh into patches")
+        raise RadiosityError("no triangles to mesh into patches")
     corners = np.concatenate(tris)
     lo, hi = corners.reshape(-1, 3).min(axis=0), corners.reshape(-1, 3).max(axis=0)
     scale = float(np.linalg.norm(hi - lo)) or 1.0
     area, _, _ = _frames(corners)
     keep = area > MIN_AREA * scale * scale                       # zero-area triangles drop out
     if not keep.any():
-        raise RadiosityError(f"{scene.name}: every triangle has zero area")
+        raise RadiosityError("every triangle has zero area")
     corners, area = corners[keep], area[keep]
     rho, emission = np.concatenate(rho)[keep], np.concatenate(emission)[keep]
     mesh_of, sided = np.concatenate(mesh_of)[keep], np.concatenate(sided)[keep]
-    m = 2 if elements_per_patch >= 4 else 1
+    if len(corners) > MAX_TRIANGLES:
+        raise RadiosityError(f"{len(corners)} triangles (two-sided ones counted "
+                             f"twice) are too many for radiosity (at most {MAX_TRIANGLES:,}); "
+                             "use --renderer pathtrace")
+    # A scene with more triangles than the budget: each triangle one patch and one element.
+    m = 2 if elements_per_patch >= 4 and 4 * len(corners) <= max_elements else 1
     k = _pieces_per_side(area, max(1, max_elements // (m * m)))
     # An emitter shoots from each patch's centre as a point would: cut small lights finer.
     k[emission.max(axis=1) > 0] = np.maximum(k[emission.max(axis=1) > 0], EMITTER_PIECES)

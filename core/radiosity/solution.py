@@ -97,7 +97,7 @@ def start(scene, options: Options, elements: Elements | None = None):
     """``(elements, shooter, source)`` ready to solve: raises RadiosityError for a scene
     the equation cannot use."""
     if not meshing.has_light(scene):
-        raise RadiosityError(f"{scene.name}: nothing emits light (no material with emission, "
+        raise RadiosityError("nothing emits light (no material with emission, "
                              "no [[light]] of any intensity)")
     budget = options.max_elements // 2 if options.adaptive else options.max_elements
     e = elements if elements is not None else meshing.mesh_scene(scene, max(1, budget))
