@@ -67,9 +67,13 @@ def pack_lights(lights) -> np.ndarray:
 
 def pack(scene) -> Packed:
     """The kernel's arrays for ``scene``; raises RadiosityError for a material it cannot use."""
+    from core.radiosity.mesh import RadiosityError
     from core.raytrace.bvh import build
     check_scene(scene)
     meshes = [m for m in scene.meshes if len(m.triangles)]
+    if not meshes:
+        raise RadiosityError("it has no surfaces, only lines (the path tracer draws triangles; "
+                             "the z-buffer draws lines)")
     positions = np.concatenate([m.positions for m in meshes])
     offsets = np.cumsum([0] + [len(m.positions) for m in meshes])
     triangles = np.concatenate([m.triangles + offsets[i] for i, m in enumerate(meshes)])
