@@ -255,6 +255,8 @@ def test_no_runtime_warning_reaches_the_terminal(tmp_path):
 
 
 @pytest.mark.parametrize("geometry, key, words", [
+    ('primitive = "sphere"\nmaterial = { ior = ' + "9" * 400 + " }", "material.ior",
+     "not an integer of 400 digits"),                      # found by the long fuzz run
     ('primitive = "sphere"\nradius = 1e20', "radius", "out of range [1e-06, 1e+06]"),
     ('primitive = "sphere"\nradius = 1e7', "radius", "out of range"),
     ('primitive = "plane"\nchecker = 1e-300', "checker", "over a million checker squares"),

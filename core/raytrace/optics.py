@@ -46,7 +46,11 @@ def index_of_refraction(value, where: str = "ior") -> float:
         return INDICES[value.lower()]
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ValueError(f"{where}: expected a number or a medium name, got {value!r}")
-    value = float(value)
+    try:
+        value = float(value)
+    except OverflowError:                  # an integer of hundreds of digits (issue 23's fuzz)
+        raise ValueError(f"{where}: the index of refraction must be a positive finite number, "
+                         f"not an integer of {len(str(abs(value)))} digits") from None
     if not (math.isfinite(value) and value > 0.0):
         raise ValueError(f"{where}: the index of refraction must be a positive finite number, "
                          f"not {value!r}")
