@@ -539,9 +539,9 @@ def _render(args) -> int:
     if frame.stats.get("particles not born"):
         print(f"warning: {frame.stats['particles not born']:,} particles were not born: at most "
               f"{frame.stats['particle cap']:,} live at once", file=sys.stderr)
-    if frame.message:                    # a view only the other projection can draw
-        print(f"error: {frame.message}", file=sys.stderr)
-        return 2
+    if frame.message:                    # a view only the other projection can draw: 2, as
+        print(f"error: {frame.message}", file=sys.stderr)          # --help says; else 1
+        return 2 if frame.stats.get("refused") == "view" else 1
     for note in frame.stats.get("not drawn", []):           # issue 20: said, never dropped
         print(f"warning: not drawn: {note}", file=sys.stderr)
     out = Path(args.out)

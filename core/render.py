@@ -104,6 +104,7 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     message = _why_not(scene, view, settings, context)
     if message:
         frame.message = message
+        frame.stats["refused"] = "view"       # nothing was drawn: the view (or size) says why
         fill(frame.color, scene.background)
         return frame
     draw = renderer.function()

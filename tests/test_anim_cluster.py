@@ -159,7 +159,7 @@ def test_a_worker_in_an_empty_folder_renders_shipped_files(cluster, tmp_path, mo
     for name in ("scene.toml", "meshes/box.obj", "maps/noise.png"):
         assert len(list(worker_tmp.glob(f"fvd-bundles-*/*/{name}"))) == 1, name
     # the texture is drawn: its noise shows on the box (a flat colour would have few values)
-    assert len(np.unique(b[0].reshape(-1, 3), axis=0)) > 40
+    assert len(np.unique(b[0].reshape(-1, 3), axis=0)) > 12        # untextured: at most 7
 
 
 def test_dask_retries_a_run_that_failed_on_the_worker(cluster, tmp_path, monkeypatch, capsys):

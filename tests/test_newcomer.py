@@ -75,10 +75,13 @@ def test_render_without_out_names_its_file_by_the_rule(tmp_path):
     assert f"wrote {written[0]} (40x30" in done.stdout
 
 
-def test_animate_frames_follow_the_rule():
-    from app.tools import animate
-    source = Path(animate.__file__).read_text()
-    assert "frame_name(k)" in source and "frame_{" not in source     # named in one place
+def test_animate_frames_follow_the_rule(tmp_path):
+    """The frames folder names each frame by the one rule (app.naming.frame_name)."""
+    from app.naming import SAFE_NAME, frame_name
+    from app.tools.movie_files import write_frame
+    write_frame(tmp_path, 42, b"a frame")
+    assert [p.name for p in tmp_path.iterdir()] == [frame_name(42)] == ["frame_00042.png"]
+    assert SAFE_NAME.match(frame_name(42))
 
 
 # -- one exit status for a view that cannot be drawn -------------------------------------------

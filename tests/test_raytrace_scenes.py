@@ -67,7 +67,7 @@ def test_every_shipped_scene_matches_the_zbuffer(name):
     z-buffer's Phong picture, textures with the same filter included (measured at 96 x 96:
     at least 99.95 % on every scene)."""
     scene = _without_global_terms(load_scene(SCENES / name))
-    settings = RenderSettings.for_scene(scene, shading="phong", size=(96, 96))
+    settings = RenderSettings.for_scene(scene, shading="phong", size=(96, 96), renderer="zbuffer")
     zbuffer = render(scene, scene.views[0], settings)
     traced = render(scene, scene.views[0], settings.replace(renderer="raytrace", shadows="off"))
     assert traced.message is None and traced.stats["not drawn"] == []

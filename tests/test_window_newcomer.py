@@ -108,7 +108,7 @@ def test_a_window_narrower_than_the_panel_shows_no_ghost_of_the_old_frame(displa
     from test_window import grab
 
     # a bright background, so that an old frame behind the panel would show through it
-    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "whitted.toml"), "--size", "200x200",
+    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "whitted.toml"), "--size", "200x460",
                 "--renderer", "zbuffer")
     try:
         app.wait_for(r"first frame shown", timeout=120)
@@ -116,25 +116,25 @@ def test_a_window_narrower_than_the_panel_shows_no_ghost_of_the_old_frame(displa
         app.wait_for(r"frame \d+: .* renderer=zbuffer", timeout=60)
         time.sleep(0.5)
         mark = len(app.log())
-        app.xdotool("windowsize", app.window, str(PANEL_WIDTH - 60), "300")
+        app.xdotool("windowsize", app.window, str(PANEL_WIDTH - 60), "500")
         app.wait_for(r"picture hidden: the panel takes the whole window", timeout=10, after=mark)
         time.sleep(1.0)
         narrow = grab(app, tmp_path / "narrow.png")
-        assert narrow.shape[:2] == (300, PANEL_WIDTH - 60)
+        assert narrow.shape[:2] == (500, PANEL_WIDTH - 60)
         # the panel's left margin below its last widget (no text there): the rows where the
-        # old 200-pixel frame was are the panel's plain colour, like the rows below them,
+        # old 460-pixel frame was are the panel's plain colour, like the rows below them,
         # where there never was a frame (a frame behind the panel shows through its alpha)
-        margin = narrow[:295, 2:5].reshape(295, -1)    # not the panel's 1-pixel border
-        plain = margin[290]
+        margin = narrow[:495, 2:5].reshape(495, -1)    # not the panel's 1-pixel border
+        plain = margin[490]
         below = np.flatnonzero(np.any(margin != plain, axis=1))
         last_widget = below.max() if below.size else 0
-        assert last_widget < 185, f"not the panel's plain colour down to row {last_widget}: a frame shows through"
+        assert last_widget < 440, f"not the panel's plain colour down to row {last_widget}: a frame shows through"
         assert np.all(margin[last_widget + 1:] == plain)
         assert app.process.poll() is None
         # widened again, the picture comes back at the size the panel leaves
         mark = len(app.log())
-        app.xdotool("windowsize", app.window, str(PANEL_WIDTH + 120), "300")
-        app.wait_for(r"frame \d+: .* size=120x300", timeout=60, after=mark)
+        app.xdotool("windowsize", app.window, str(PANEL_WIDTH + 120), "500")
+        app.wait_for(r"frame \d+: .* size=120x500", timeout=60, after=mark)
     finally:
         app.stop()
 

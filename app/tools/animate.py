@@ -31,7 +31,7 @@ import sys
 import time
 from pathlib import Path
 
-from app.tools.movie_files import (FRAME_NAME, MOVIE_SUFFIXES, FolderError, clean_folder,  # noqa: F401
+from app.tools.movie_files import (MOVIE_SUFFIXES, FolderError, clean_folder,  # noqa: F401
                                    encode, frame_png, frames_folder, movie_rate, out_problem,
                                    prepare_folder, write_frame)
 

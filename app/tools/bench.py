@@ -107,17 +107,19 @@ GI_RENDERERS, PAINTERS = ("radiosity", "pathtrace"), ("bsp", "depth-sort")
 
 
 def _renderers(text: str) -> str:
-    """``zbuffer``, ``raytrace``, a list of radiosity and pathtrace, or a list of bsp,
-    depth-sort and zbuffer."""
+    """``zbuffer``, ``raytrace``, a list of radiosity and pathtrace (checked by their bench,
+    which names an unknown one), or a list of bsp, depth-sort and zbuffer."""
     chosen = [part.strip() for part in text.split(",") if part.strip()]
     if len(chosen) == 1 and chosen[0] in ("zbuffer", "raytrace", *GI_RENDERERS, *PAINTERS):
         return chosen[0]
-    for allowed in (GI_RENDERERS, (*PAINTERS, "zbuffer")):
-        if chosen and all(name in allowed for name in chosen):
-            return ",".join(chosen)
-    raise argparse.ArgumentTypeError(f"renderer must be zbuffer, raytrace, a list of radiosity "
-                                     f"and pathtrace, or a list of bsp, depth-sort and zbuffer; "
-                                     f"not {text!r}")
+    if any(name in GI_RENDERERS for name in chosen):
+        return ",".join(chosen)
+    for name in chosen:
+        if name not in (*PAINTERS, "zbuffer"):
+            raise argparse.ArgumentTypeError(
+                f"renderer must be zbuffer, raytrace, a list of radiosity and pathtrace, or a "
+                f"list of bsp, depth-sort and zbuffer; not {name!r}")
+    return ",".join(chosen)
 
 
 def _progress(text: str) -> None:

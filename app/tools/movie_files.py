@@ -25,8 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
+from app.naming import frame_name          # one rule for the name of every file written
+
 MOVIE_SUFFIXES = (".mp4", ".gif")
-FRAME_NAME = "frame_{:05d}.png"          # app.naming.frame_name: one rule for every file
 _FRAME = re.compile(r"frame_([0-9]{5})\.png")
 _OWN_TEMP = re.compile(r"frame_([0-9]{5})\.png\.tmp")
 TEXT_KEY = "fvd-animate"             # the PNG text chunk: "<job hash> <frame number>"
@@ -90,7 +91,7 @@ def frame_problem(path: Path, job_hash: str, k: int, size) -> str | None:
 
 def write_frame(folder: Path, k: int, data: bytes) -> None:
     """Write-then-rename: a frame on disk is always a whole frame."""
-    target = folder / FRAME_NAME.format(k)
+    target = folder / frame_name(k)
     tmp = target.with_name(target.name + ".tmp")
     tmp.write_bytes(data)
     os.replace(tmp, target)
@@ -130,7 +131,7 @@ def prepare_folder(folder: Path, job: dict, job_hash: str, force: bool = False
     todo, notes, foreign = [], [], []
     size = job["settings"]["size"]
     for k in range(job["frames"]):
-        path = folder / FRAME_NAME.format(k)
+        path = folder / frame_name(k)
         if not os.path.lexists(path):
             todo.append(k)
             continue
@@ -155,7 +156,7 @@ def clean_folder(folder: Path, count: int) -> list[str]:
     """Remove the job's frames, its record and the folder; return the names of what is left
     (files that are not ours stay, and so does the folder then)."""
     for k in range(count):
-        path = folder / FRAME_NAME.format(k)
+        path = folder / frame_name(k)
         if path.is_file():
             path.unlink()
     (folder / "job.json").unlink(missing_ok=True)
@@ -192,7 +193,7 @@ def encode(folder: Path, count: int, out: Path, fps: float, crf: int = 18) -> No
     """The frames of ``folder`` into ``out`` (H.264 MP4 with PyAV, or GIF with Pillow),
     written beside it and renamed when complete."""
     from app.output_files import write_beside
-    paths = [folder / FRAME_NAME.format(k) for k in range(count)]
+    paths = [folder / frame_name(k) for k in range(count)]
     rate, _ = movie_rate(out, fps)
     if out.suffix.lower() == ".gif":
         write_beside(out, lambda temp: _gif(paths, temp, rate))

@@ -272,13 +272,21 @@ def _bytes(rgb) -> list:
 
 
 def _flat(cap, x, y, corners, weights, face, mesh) -> dict:
-    """Flat: the model once, at the face's centroid with its face normal (FvDFH 16.2.3)."""
+    """Flat: the model once per polygon (FvDFH 16.2.3): at the face's centroid with its face
+    normal, or, for faces that make one planar polygon, at the polygon's centroid with the
+    normal of its lowest face (core.shading.flat.polygons)."""
     s = cap.shade
-    p = s.positions[s.triangles[face]]
-    centroid = [(p[0, c] + p[1, c] + p[2, c]) / 3.0 for c in range(3)]
-    terms = _terms(s, centroid, s.normals[face], mesh)
+    polygon = getattr(s, "polygon", None)
+    own = int(polygon[face]) if polygon is not None and polygon[face] >= 0 else -1
+    if own < 0:
+        p = s.positions[s.triangles[face]]
+        point, where = [(p[0, c] + p[1, c] + p[2, c]) / 3.0 for c in range(3)], "the face centroid"
+    else:
+        point, where = list(s.polygon_point[own]), f"the centroid of polygon {own} (planar faces)"
+    normal = s.normals[face if own < 0 else own]
+    terms = _terms(s, point, normal, mesh)
     rgb = cap.arrays["face_rgb"][face]
-    return {"normal": s.normals[face].tolist(), "evaluated at": "the face centroid",
+    return {"normal": normal.tolist(), "evaluated at": where,
             "phong": terms, "face colour": rgb.tolist(), "color": _bytes(rgb)}
 
 
