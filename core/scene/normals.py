@@ -201,6 +201,7 @@ COPLANAR_TOLERANCE = 1e-12
 
 @njit(cache=True)
 def _root(parent, f):
+    """Union–find's root of ``f`` (shared by the planar polygons and the crease fans)."""
     while parent[f] != f:
         parent[f] = parent[parent[f]]               # path halving
         f = parent[f]
@@ -262,15 +263,6 @@ def planar_polygons(positions: np.ndarray, triangles: np.ndarray,
 # ----------------------------------------------------------------------------- creases
 
 
-
-@njit(cache=True)
-def _find(parent, i):
-    while parent[i] != i:
-        parent[i] = parent[parent[i]]        # path halving
-        i = parent[i]
-    return i
-
-
 @njit(cache=True)
 def _smooth_groups(triangles, vertex_count, corner_a, corner_b, degenerate):
     """``(T, 3)`` new vertex index of each face corner: corners joined across smooth edges
@@ -281,7 +273,7 @@ def _smooth_groups(triangles, vertex_count, corner_a, corner_b, degenerate):
     n = triangles.shape[0] * 3
     parent = np.arange(n)
     for j in range(corner_a.shape[0]):
-        ra, rb = _find(parent, corner_a[j]), _find(parent, corner_b[j])
+        ra, rb = _root(parent, corner_a[j]), _root(parent, corner_b[j])
         if ra != rb:
             parent[max(ra, rb)] = min(ra, rb)
     root_vertex = np.full(n, -1, dtype=np.int64)      # the new vertex of each group's root
@@ -295,7 +287,7 @@ def _smooth_groups(triangles, vertex_count, corner_a, corner_b, degenerate):
         if degenerate[c // 3]:
             corner_vertex[c] = v
             continue
-        r = _find(parent, c)
+        r = _root(parent, c)
         if root_vertex[r] < 0:
             if primary[v] < 0:
                 primary[v] = r
