@@ -15,11 +15,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from tools import need_module
+
 from app.cli import main
 from tests.conftest import ROOT
 
-pytest.importorskip("av", reason="the animate extra (pip install 'fvd-viewer[anim]') writes MP4")
-pytest.importorskip("distributed", reason="the animate extra runs frames on Dask workers")
+need_module("av", "the animate extra (pip install 'fvd-viewer[anim]') writes MP4")
+need_module("distributed", "the animate extra runs frames on Dask workers")
 
 SCENE = """
 name = "output test"

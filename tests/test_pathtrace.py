@@ -4,10 +4,11 @@ edges (every pixel of a 2 x 2 block sees one surface through its whole 3 x 3 nei
 
 from __future__ import annotations
 
-import os
 
 import numpy as np
 import pytest
+
+from tools import unavailable
 
 from app.tools import mitsuba_oracle
 from core.context import RenderContext
@@ -36,10 +37,7 @@ def cornell():
 
 def test_path_tracer_matches_mitsuba(cornell):
     if not mitsuba_oracle.available():
-        if os.environ.get("CI"):
-            pytest.fail("mitsuba is not installed (pip install mitsuba): the oracle is "
-                        "required in CI")
-        pytest.skip("mitsuba is not installed")
+        unavailable("mitsuba is not installed (pip install mitsuba): the path tracer's oracle")
     scene, view, ours, _, mask, _ = cornell
     reference = mitsuba_oracle.render(scene, view, SIZE, SIZE, SAMPLES, seed=1)
     error, blocks = block_relative_error(ours, reference, mask, block=2)

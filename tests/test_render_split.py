@@ -7,10 +7,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from tools import need_module
+
 from app.cli import main
 from tests.conftest import ROOT
 
-pytest.importorskip("distributed", reason="the animate extra runs frames on Dask workers")
+need_module("distributed", "the animate extra runs frames on Dask workers")
 
 
 def png(path):

@@ -158,7 +158,7 @@ def test_the_renderer_against_llvmpipe_on_a_textured_floor(gl, tmp_path, filter_
     from core.settings import RenderSettings
     from core.texture.material import maps_of
     rng = np.random.default_rng(5)
-    Image = pytest.importorskip("PIL.Image")
+    from PIL import Image
     Image.fromarray(rng.integers(0, 256, (64, 64, 3), dtype=np.uint8)).save(tmp_path / "noise.png")
     (tmp_path / "floor.toml").write_text(FLOOR_SCENE.format())
     scene = load_scene(tmp_path / "floor.toml")

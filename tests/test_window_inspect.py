@@ -6,13 +6,14 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import subprocess
 import sys
 import time
 
 import numpy as np
 import pytest
+
+from tools import need_programs
 
 from tests.test_window import ROOT, App, grab, start_xvfb
 
@@ -46,9 +47,7 @@ def _cli_record(x, y) -> dict:
 @pytest.mark.xvfb
 @pytest.mark.slow
 def test_inspect_mode_buffer_views_and_opengl_compare_under_xvfb(tmp_path):
-    missing = [tool for tool in ("Xvfb", "xdotool", "import") if shutil.which(tool) is None]
-    if missing and not os.environ.get("CI"):
-        pytest.skip(f"{' and '.join(missing)} not installed")
+    need_programs("Xvfb", "xdotool", "import", install="apt-get install xvfb xdotool imagemagick")
     xvfb, display = start_xvfb()
     app = SceneApp(display, tmp_path, "scenes/cube.toml", "--size", f"{SIZE[0]}x{SIZE[1]}")
     try:

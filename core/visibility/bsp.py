@@ -33,7 +33,7 @@ import numpy as np
 from numba import njit
 
 from core.settings import BSP_ROOTS as ROOT_RULES      # first, random, fewest-splits
-from core.visibility.split import cut_triangle, side
+from core.visibility.split import cut_triangle, grow, side
 
 CANDIDATES = 8          # fewest-splits: triangles tried as the root of a node
 SAMPLE = 128            # fewest-splits: triangles of the node each candidate is scored on
@@ -135,15 +135,6 @@ def _kind(points, tri, normal, const, eps):
     return _classify(_distance(points, tri[0], normal, const),
                      _distance(points, tri[1], normal, const),
                      _distance(points, tri[2], normal, const), eps)
-
-
-@njit(cache=True, nogil=True)
-def _grow(a, need):
-    if need <= a.shape[0]:
-        return a
-    bigger = np.empty((max(need, 2 * a.shape[0]),) + a.shape[1:], a.dtype)
-    bigger[:a.shape[0]] = a
-    return bigger
 
 
 @njit(cache=True, nogil=True)
@@ -277,11 +268,11 @@ def _build(positions, triangles, rule, seed, eps):
         r = offset + _choose_root(ids[offset:], fragments, points, rule, eps)
         root = ids[r]
         normal, const = _plane_of(points, fragments[root])
-        plane = _grow(plane, node + 1)
-        front = _grow(front, node + 1)
-        back = _grow(back, node + 1)
-        first = _grow(first, node + 1)
-        count = _grow(count, node + 1)
+        plane = grow(plane, node + 1)
+        front = grow(front, node + 1)
+        back = grow(back, node + 1)
+        first = grow(first, node + 1)
+        count = grow(count, node + 1)
         plane[node, 0], plane[node, 1], plane[node, 2], plane[node, 3] = (
             normal[0], normal[1], normal[2], const)
         m = ids.shape[0]
@@ -290,7 +281,7 @@ def _build(positions, triangles, rule, seed, eps):
         nf, nb, nc, ns = _classify_chunks(ids, offset, r, centres, radii, fragments, points,
                                           normal, const, eps, kinds, chunk_kind)
         first[node] = n_node_frags
-        node_fragments = _grow(node_fragments, n_node_frags + 1 + nc)
+        node_fragments = grow(node_fragments, n_node_frags + 1 + nc)
         node_fragments[n_node_frags] = root
         n_node_frags += 1
         front[node], back[node] = -1, -1
@@ -344,16 +335,16 @@ def _build(positions, triangles, rule, seed, eps):
                 for c in range(3):
                     d[c] = _distance(points, tri[c], normal, const)
                 pieces, sides, n_pieces, new, n_new = cut_triangle(tri, d, eps)
-                points = _grow(points, n_points + n_new)
-                recipe = _grow(recipe, n_points + n_new - positions.shape[0])
+                points = grow(points, n_points + n_new)
+                recipe = grow(recipe, n_points + n_new - positions.shape[0])
                 for j in range(n_new):
                     a, b, t = int(new[j, 0]), int(new[j, 1]), new[j, 2]
                     points[n_points] = points[a] + t * (points[b] - points[a])
                     row = n_points - positions.shape[0]
                     recipe[row, 0], recipe[row, 1], recipe[row, 2] = a, b, t
                     n_points += 1
-                fragments = _grow(fragments, n_frags + n_pieces)
-                source = _grow(source, n_frags + n_pieces)
+                fragments = grow(fragments, n_frags + n_pieces)
+                source = grow(source, n_frags + n_pieces)
                 for j in range(n_pieces):
                     for c in range(3):
                         v = pieces[j, c]

@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from core.visibility.split import cut_triangle
+from core.visibility.split import cut_triangle, grow
 
 # Counters in the order FvDFH runs the tests, then what was done about failures.
 COUNTERS = ("z extents", "x extents", "y extents", "P beyond Q's plane",
@@ -76,15 +76,6 @@ def depth_sort(device: np.ndarray, inv_w: np.ndarray, triangles: np.ndarray,
 
 
 # ------------------------------------------------------------------------------- geometry
-
-@njit(cache=True, nogil=True)
-def _grow(a, need):
-    if need <= a.shape[0]:
-        return a
-    bigger = np.empty((max(need, 2 * a.shape[0]),) + a.shape[1:], a.dtype)
-    bigger[:a.shape[0]] = a
-    return bigger
-
 
 @njit(cache=True, nogil=True)
 def _facts(device, tri, box, plane, f):
@@ -292,9 +283,9 @@ def _depth_sort(device_in, inv_w_in, triangles, eps, resolve):
                 p = device[tris[victim][k]]
                 d[k] = cut[0] * p[0] + cut[1] * p[1] + cut[2] * p[2] - cut[3]
         pieces, sides, n_pieces, new, n_new = cut_triangle(tris[victim], d, eps)
-        device = _grow(device, n_points + n_new)
-        inv_w = _grow(inv_w, n_points + n_new)
-        recipe = _grow(recipe, n_points + n_new - n_in)
+        device = grow(device, n_points + n_new)
+        inv_w = grow(inv_w, n_points + n_new)
+        recipe = grow(recipe, n_points + n_new - n_in)
         for k in range(n_new):
             a, b, t = int(new[k, 0]), int(new[k, 1]), new[k, 2]
             device[n_points] = device[a] + t * (device[b] - device[a])
@@ -307,12 +298,12 @@ def _depth_sort(device_in, inv_w_in, triangles, eps, resolve):
         for k in range(at, n_list - 1):
             lst[k] = lst[k + 1]
         n_list -= 1
-        tris = _grow(tris, n_tris + n_pieces)
-        source = _grow(source, n_tris + n_pieces)
-        box = _grow(box, n_tris + n_pieces)
-        plane = _grow(plane, n_tris + n_pieces)
-        marked = _grow(marked, n_tris + n_pieces)
-        lst = _grow(lst, n_list + n_pieces)
+        tris = grow(tris, n_tris + n_pieces)
+        source = grow(source, n_tris + n_pieces)
+        box = grow(box, n_tris + n_pieces)
+        plane = grow(plane, n_tris + n_pieces)
+        marked = grow(marked, n_tris + n_pieces)
+        lst = grow(lst, n_list + n_pieces)
         for k in range(n_pieces):
             for c in range(3):
                 v = pieces[k, c]

@@ -79,3 +79,14 @@ def _fan(polygon, n, out, count):
         out[count, 2] = polygon[k + 1]
         count += 1
     return count
+
+
+@njit(cache=True, nogil=True)
+def grow(a, need):
+    """``a``, or a copy at least twice as long when ``need`` rows do not fit (the splits
+    of a BSP build or a depth sort add triangles as they go)."""
+    if need <= a.shape[0]:
+        return a
+    bigger = np.empty((max(need, 2 * a.shape[0]),) + a.shape[1:], a.dtype)
+    bigger[:a.shape[0]] = a
+    return bigger
