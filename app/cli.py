@@ -369,18 +369,9 @@ def views_on_stdin() -> bool:
 
 
 def _load(source: str, size=None, crease_angle=None):
-    """The scene, or None after printing the reader's message."""
-    from core.scene.formats import ReaderError, load_scene
-    try:
-        scene = load_scene(source, size=size, crease_angle=crease_angle)
-    except ReaderError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return None
-    for message in scene.view_messages:
-        print(f"invalid view: {message}", file=sys.stderr)
-    for message in scene.messages:
-        print(f"warning: {message}", file=sys.stderr)
-    return scene
+    """The scene, or None after printing the reader's message (:mod:`app.loading`)."""
+    from app.loading import load_or_say
+    return load_or_say(source, size, crease_angle)
 
 
 def _pick_view(scene, k: int):

@@ -462,19 +462,9 @@ def _frames_text(frames: list[int]) -> str:
 
 
 def _load(path: str, size=None):
-    """The scene, or None after printing the reader's message; its invalid views and the
-    files it drew without (a texture) are printed as ``render`` prints them."""
-    from core.scene.formats import ReaderError, load_scene
-    try:
-        scene = load_scene(path, size=size)
-    except ReaderError as error:
-        print(f"error: {error}", file=sys.stderr)
-        return None
-    for message in scene.view_messages:
-        print(f"invalid view: {message}", file=sys.stderr)
-    for message in scene.messages:
-        print(f"warning: {message}", file=sys.stderr)
-    return scene
+    """The scene, or None after printing the reader's message (:mod:`app.loading`)."""
+    from app.loading import load_or_say
+    return load_or_say(path, size)
 
 
 def _error(message: str, code: int) -> int:
