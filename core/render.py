@@ -119,7 +119,26 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         draw(scene, view, settings, frame, context, Timer(frame.stats, inspect))
     else:
         _supersample(draw, scene, view, settings, frame, context, inspect)
+    _say_what_is_not_drawn(scene, renderer.name, frame.stats)
     return frame
+
+
+GLOBAL_ILLUMINATION = ("radiosity", "pathtrace")
+
+
+def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict) -> None:
+    """Add to ``stats["not drawn"]`` what of the scene this renderer leaves out by design:
+    the local renderers take no light from area emitters, and the global-illumination ones
+    use each material's colour, not its texture maps."""
+    from core.texture.material import maps_of
+    notes = stats.setdefault("not drawn", [])
+    for mesh in scene.meshes:
+        name = getattr(mesh, "name", None) or "a mesh"
+        if renderer not in GLOBAL_ILLUMINATION and any(c > 0 for c in mesh.material.emission):
+            notes.append(f"the light of the emitter ({name}): only radiosity and pathtrace "
+                         f"light a scene with it")
+        elif renderer in GLOBAL_ILLUMINATION and maps_of(mesh.material):
+            notes.append(f"texture maps ({name}): {renderer} uses the material's own colour")
 
 
 def _why_not(scene: Scene, view: View | None, settings: RenderSettings,

@@ -162,3 +162,22 @@ def test_the_z_buffer_frame_keeps_its_depth():
     # The square lies in the view plane z = 0, halfway between F = 1 and B = -1: N_par puts it
     # at canonical depth -F / (F - B) = -0.5 (larger is nearer; -inf where nothing was drawn).
     assert np.allclose(frame.depth[:, 0], -0.5) and np.isneginf(frame.depth[:, 1:]).all()
+
+
+def test_what_a_renderer_leaves_out_by_design_is_said():
+    """A local renderer takes no light from an area emitter, and radiosity uses a material's
+    colour, not its texture: each frame says so in ``stats["not drawn"]`` (render prints it),
+    and a scene with neither says nothing."""
+    from core import RenderSettings, render
+    from core.scene.formats import load_scene
+    from core.paths import SCENES_DIR
+
+    def notes(name, renderer, **extra):
+        scene = load_scene(SCENES_DIR / name)
+        settings = RenderSettings.for_scene(scene, renderer=renderer, size=(24, 24), **extra)
+        return render(scene, scene.views[0], settings).stats["not drawn"]
+
+    assert any("emitter" in n for n in notes("cornell_box.toml", "zbuffer"))
+    assert any("texture maps (floor)" in n for n in notes(
+        "texture_floor.toml", "radiosity", max_elements=64, hemicube_resolution=16))
+    assert notes("torus.toml", "zbuffer") == []
