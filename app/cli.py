@@ -286,6 +286,10 @@ def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> N
     parser.add_argument("--transparency", choices=("off", "interpolated", "screen-door"),
                         default=None, help="z-buffer, bsp, depth-sort: materials with k_t > 0 "
                         "laid over the opaque picture (default: the scene's, else off)")
+    parser.add_argument("--phong-precision", choices=("float32", "float64"), default=None,
+                        help="Phong's pixel step: float32 over each row, 8 pixels at a time "
+                             "(default; within 1/255 of float64), or the textbook float64 "
+                             "kernel, one pixel at a time")
     parser.add_argument("--depth-cue", action=argparse.BooleanOptionalAction, default=None,
                         help="fade with depth towards the cue colour (FvDFH 16.1.3; the scene's "
                              "[depth_cue] table, default on when it has one)")
@@ -297,7 +301,8 @@ def _painter_overrides(args) -> dict:
     return {"bsp_root": getattr(args, "bsp_root", None),
             "paint_first": getattr(args, "paint_first", None),
             "depth_cue": getattr(args, "depth_cue", None),
-            "transparency": getattr(args, "transparency", None)}
+            "transparency": getattr(args, "transparency", None),
+            "phong_precision": getattr(args, "phong_precision", None)}
 
 
 def _painter_plan(args, scene) -> dict | None:

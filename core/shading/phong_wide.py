@@ -1,0 +1,277 @@
+"""Phong's pixel step at the hardware's width: the same model as
+:func:`core.shading.illumination.phong_point`, evaluated in float32 over each row's span so
+that the compiler turns the loops into 8-wide AVX instructions.
+
+The textbook kernel (:func:`core.shading.phong._resolve_phong`) evaluates the model one pixel
+at a time in float64. Here each row of the visibility buffer is done in passes over its
+span, one quantity per row of a small scratch array (structure of arrays):
+
+1. *gather*: the normal and position interpolated with the barycentrics (float64, then the
+   normal and V = eye − P stored as float32; P kept in float64 for the lights);
+2. *normalise*: N and V made unit, the two-sided flip, the ambient term;
+3. *each light*: L, f_att, N·L, the specular base (reflection or halfway), the power by
+   repeated squaring (the same products as ``specular_power``), the sum;
+4. *store*: clamp and round half up.
+
+Where float32 is not safe the pixel is flagged in pass 2 or 3 and evaluated by
+``phong_point`` in float64 instead: a squared length outside [1e-30, 1e30] (a zero normal, a
+point light on the surface, huge or tiny scenes: the stability suite's extremes). Frames whose
+exponents are not whole numbers up to 2^16 go to the float64 kernel entirely
+(:func:`float32_is_exact_enough`).
+
+Error against the float64 model: at most 1/255 per channel (one rounding step of the
+byte), held by ``tests/test_phong_wide.py`` on every shipped scene and golden.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from core.shading.illumination import SQUARING_LIMIT, phong_point, quantize, unit3
+
+F = np.float32
+# Rows of the per-span scratch: one quantity per row, one pixel per column.
+# Raw (interpolated) N and V, then unit N and V, L, two sets of sums (lights alternate between
+# them: a loop that reads and writes the same rows is not vectorised), the specular terms.
+NX, NY, NZ, VX, VY, VZ, UX, UY, UZ, WX, WY, WZ, LX, LY, LZ, R, G, B, R2, G2, B2, BASE, SPEC, \
+    DIFF, ATT = range(25)
+ROWS = 25
+# Squared lengths float32 handles with room to spare (its range is 1e-38..3e38).
+TINY, HUGE = F(1e-30), F(1e30)
+FLUSH = F(1e-19)                  # its square is still a normal float32
+
+
+def float32_is_exact_enough(surfaces: np.ndarray) -> bool:
+    """Every exponent a whole number in [0, 2^16]: the powers are the same products."""
+    n = surfaces[:, 3]
+    return bool(np.all((n == np.floor(n)) & (n >= 0) & (n <= SQUARING_LIMIT)))
+
+
+@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+def resolve_phong_wide(tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces,
+                       lights, ambient, eye, halfway, out):
+    """Phong at every covered pixel of each row's span, float32 in passes (see the module).
+
+    The span is cut into runs of one surface (material): the passes read the material once
+    per run, as scalars, and loop over the run's pixels. The scratch rows go to the passes as
+    separate arrays, so that the compiler sees that loads and stores do not overlap."""
+    if triangles.shape[0] == 0:
+        return                            # nothing covered (background pixels read triangle 0)
+    for row in prange(tri.shape[0]):
+        lo, m = span[row, 0], span[row, 1] - span[row, 0] + 1
+        if m <= 0:
+            continue
+        q = np.empty((ROWS, m), np.float32)
+        p = np.empty((3, m))
+        flag = np.zeros(m, np.bool_)
+        runs = np.empty(m + 1, np.int64)      # run k: pixels runs[k]..runs[k+1]-1
+        run_surface = np.empty(m, np.int64)
+        n_runs = _gather(tri[row, lo:lo + m], b1[row, lo:lo + m], b2[row, lo:lo + m],
+                         triangles, attrs, source, face_surface, eye, q, p, runs, run_surface)
+        runs, run_surface = runs[:n_runs + 1], run_surface[:n_runs]
+        _normalise(runs, run_surface, surfaces, ambient, flag, q[NX], q[NY], q[NZ], q[VX],
+                   q[VY], q[VZ], q[UX], q[UY], q[UZ], q[WX], q[WY], q[WZ], q[R], q[G], q[B])
+        nx, ny, nz, vx, vy, vz = q[UX], q[UY], q[UZ], q[WX], q[WY], q[WZ]
+        sums = R
+        for k in range(lights.shape[0]):
+            light = lights[k]
+            if light[0] == 0.0:
+                _toward_point(light, p, flag, nx, ny, nz, q[LX], q[LY], q[LZ], q[DIFF], q[ATT])
+            else:
+                _toward_direction(light, nx, ny, nz, q[LX], q[LY], q[LZ], q[DIFF], q[ATT])
+            if halfway:
+                _halfway_base(flag, nx, ny, nz, q[LX], q[LY], q[LZ], vx, vy, vz, q[BASE])
+            else:
+                _mirror_base(nx, ny, nz, q[LX], q[LY], q[LZ], vx, vy, vz, q[DIFF], q[BASE])
+            into = R2 if sums == R else R
+            _add_light(runs, run_surface, surfaces, light, q[DIFF], q[ATT], q[BASE], q[SPEC],
+                       q[sums], q[sums + 1], q[sums + 2], q[into], q[into + 1], q[into + 2])
+            sums = into
+        _store(row, lo, m, tri, b1, b2, triangles, attrs, source, face_surface, surfaces,
+               lights, ambient, eye, halfway, q[sums:sums + 3], flag, out)
+
+
+@njit(cache=True, error_model="numpy")
+def _gather(tri, b1, b2, triangles, attrs, source, face_surface, eye, q, p, runs,
+            run_surface):
+    """Pass 1: N and P interpolated, V unnormalised; the runs of one surface. Returns the
+    number of runs. A run of one triangle reuses its corners (vertex 0 and the edges to
+    vertices 1 and 2: a0 + w1 d1 + w2 d2 is w0 a0 + w1 a1 + w2 a2 with w0 = 1 - w1 - w2)."""
+    corner = np.empty((3, 6))
+    perspective = eye[0] == 1.0
+    last, n_runs = -1, 0
+    for j in range(tri.shape[0]):
+        t = tri[j]
+        if t < 0:                         # background: the last triangle's harmless numbers
+            t = max(last, 0)
+        if t != last:
+            last = t
+            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+            for c in range(6):
+                corner[0, c] = attrs[i0, c]
+                corner[1, c] = attrs[i1, c] - attrs[i0, c]
+                corner[2, c] = attrs[i2, c] - attrs[i0, c]
+            s = face_surface[source[t]]
+            if n_runs == 0 or run_surface[n_runs - 1] != s:
+                runs[n_runs], run_surface[n_runs] = j, s
+                n_runs += 1
+        w1, w2 = b1[j], b2[j]
+        for c in range(3):
+            q[NX + c, j] = corner[0, c] + w1 * corner[1, c] + w2 * corner[2, c]
+            p[c, j] = corner[0, 3 + c] + w1 * corner[1, 3 + c] + w2 * corner[2, 3 + c]
+            q[VX + c, j] = eye[1 + c] - p[c, j] if perspective else eye[1 + c]
+    runs[n_runs] = tri.shape[0]
+    return n_runs
+
+
+@njit(cache=True, error_model="numpy")
+def _normalise(runs, run_surface, surfaces, ambient, flag, nx, ny, nz, vx, vy, vz, ux, uy, uz,
+               wx, wy, wz, r, g, b):
+    """Pass 2: N and V to unit length (into U and W), N turned to the viewer on a two-sided
+    surface; the ambient term. A squared length float32 cannot hold safely flags the pixel."""
+    _unit(nx, ny, nz, ux, uy, uz, flag)
+    _unit(vx, vy, vz, wx, wy, wz, flag)
+    for k in range(run_surface.shape[0]):
+        s, j0, j1 = run_surface[k], runs[k], runs[k + 1]
+        r[j0:j1] = F(ambient[0] * surfaces[s, 0] * surfaces[s, 4])
+        g[j0:j1] = F(ambient[1] * surfaces[s, 0] * surfaces[s, 5])
+        b[j0:j1] = F(ambient[2] * surfaces[s, 0] * surfaces[s, 6])
+        if surfaces[s, 10] != 0.0:
+            for j in range(j0, j1):
+                if ux[j] * wx[j] + uy[j] * wy[j] + uz[j] * wz[j] < F(0.0):
+                    ux[j], uy[j], uz[j] = -ux[j], -uy[j], -uz[j]
+
+
+@njit(cache=True, error_model="numpy")
+def _unit(x, y, z, ux, uy, uz, flag):
+    """(x, y, z) / |(x, y, z)| per pixel; flags lengths² outside [1e-30, 1e30]."""
+    for j in range(x.shape[0]):
+        n2 = x[j] * x[j] + y[j] * y[j] + z[j] * z[j]
+        flag[j] |= not (TINY < n2 < HUGE)
+        inv = F(1.0) / np.sqrt(max(n2, TINY))
+        ux[j], uy[j], uz[j] = x[j] * inv, y[j] * inv, z[j] * inv
+
+
+@njit(cache=True, error_model="numpy")
+def _toward_point(light, p, flag, nx, ny, nz, lx, ly, lz, diff, att):
+    """L = (light − P)/d, f_att = min(1, 1/(c1 + c2 d + c3 d²)) and N·L."""
+    for j in range(nx.shape[0]):
+        x, y, z = F(light[1] - p[0, j]), F(light[2] - p[1, j]), F(light[3] - p[2, j])
+        d2 = x * x + y * y + z * z
+        flag[j] |= not (TINY < d2 < HUGE)           # the light on the surface, or absurdly far
+        d = np.sqrt(max(d2, TINY))
+        inv = F(1.0) / d
+        lx[j], ly[j], lz[j] = x * inv, y * inv, z * inv
+        den = F(light[7]) + F(light[8]) * d + F(light[9]) * d * d
+        att[j] = F(1.0) if den <= F(1.0) else F(1.0) / den
+        diff[j] = nx[j] * lx[j] + ny[j] * ly[j] + nz[j] * lz[j]
+
+
+@njit(cache=True, error_model="numpy")
+def _toward_direction(light, nx, ny, nz, lx, ly, lz, diff, att):
+    x, y, z = F(light[1]), F(light[2]), F(light[3])
+    for j in range(nx.shape[0]):
+        lx[j], ly[j], lz[j], att[j] = x, y, z, F(1.0)
+        diff[j] = nx[j] * x + ny[j] * y + nz[j] * z
+
+
+@njit(cache=True, error_model="numpy")
+def _mirror_base(nx, ny, nz, lx, ly, lz, vx, vy, vz, diff, base):
+    """R·V with R = 2 (N·L) N − L, clamped to [0, 1]."""
+    for j in range(nx.shape[0]):
+        two = F(2.0) * diff[j]
+        dot = ((two * nx[j] - lx[j]) * vx[j] + (two * ny[j] - ly[j]) * vy[j]
+               + (two * nz[j] - lz[j]) * vz[j])
+        base[j] = min(max(dot, F(0.0)), F(1.0))
+
+
+@njit(cache=True, error_model="numpy")
+def _halfway_base(flag, nx, ny, nz, lx, ly, lz, vx, vy, vz, base):
+    """N·H with H = (L + V)/|L + V|, clamped to [0, 1]."""
+    for j in range(nx.shape[0]):
+        hx, hy, hz = lx[j] + vx[j], ly[j] + vy[j], lz[j] + vz[j]
+        h2 = hx * hx + hy * hy + hz * hz
+        flag[j] |= not (TINY < h2)                  # L = −V: H undefined
+        dot = (nx[j] * hx + ny[j] * hy + nz[j] * hz) / np.sqrt(max(h2, TINY))
+        base[j] = min(max(dot, F(0.0)), F(1.0))
+
+
+@njit(cache=True, error_model="numpy")
+def _add_light(runs, run_surface, surfaces, light, diff, att, base, spec, r, g, b, r_out,
+               g_out, b_out):
+    """I_p f_att [k_d O_d N·L + k_s O_s base^n] added where N·L > 0, run by run (each run
+    has one material: k_d, k_s, O_d, O_s and n are scalars in the loops)."""
+    for k in range(run_surface.shape[0]):
+        s, j0, j1 = run_surface[k], runs[k], runs[k + 1]
+        _power(base[j0:j1], spec[j0:j1], int(surfaces[s, 3]))
+        dr, dg, db = (F(light[4] * surfaces[s, 1] * surfaces[s, 4]),
+                      F(light[5] * surfaces[s, 1] * surfaces[s, 5]),
+                      F(light[6] * surfaces[s, 1] * surfaces[s, 6]))
+        sr, sg, sb = (F(light[4] * surfaces[s, 2] * surfaces[s, 7]),
+                      F(light[5] * surfaces[s, 2] * surfaces[s, 8]),
+                      F(light[6] * surfaces[s, 2] * surfaces[s, 9]))
+        for j in range(j0, j1):
+            lit = diff[j] > F(0.0)        # no diffuse, no specular from behind the surface
+            diffuse = att[j] * diff[j] if lit else F(0.0)
+            specular = att[j] * spec[j] if lit else F(0.0)
+            r_out[j] = r[j] + (dr * diffuse + sr * specular)
+            g_out[j] = g[j] + (dg * diffuse + sg * specular)
+            b_out[j] = b[j] + (db * diffuse + sb * specular)
+
+
+@njit(cache=True, error_model="numpy")
+def _power(base, spec, n):
+    """spec = base^n by repeated squaring, the products ``specular_power`` takes. Values
+    below 1e-19 become 0 before they are squared: float32 would go subnormal (a hundred
+    cycles an operation) for a term far below 1/255."""
+    for j in range(base.shape[0]):
+        spec[j] = F(1.0)
+    while n > 0:
+        if n & 1:
+            for j in range(base.shape[0]):
+                spec[j] *= base[j]
+        n >>= 1
+        if n > 0:
+            for j in range(base.shape[0]):
+                x = base[j]
+                base[j] = x * x if x > FLUSH else F(0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _store(row, lo, m, tri, b1, b2, triangles, attrs, source, face_surface, surfaces, lights,
+           ambient, eye, halfway, rgb_sum, flag, out):
+    """Pass 4: bytes for the covered pixels; flagged ones by the float64 model."""
+    rgb = np.empty((3, m), np.uint8)
+    for c in range(3):
+        for j in range(m):               # clamped to [0, 1], so truncation is the floor
+            rgb[c, j] = np.uint8(np.int32(min(max(rgb_sum[c, j], F(0.0)), F(1.0)) * F(255.0)
+                                          + F(0.5)))
+    for j in range(m):
+        col = lo + j
+        t = tri[row, col]
+        if t < 0:
+            continue
+        if not flag[j]:
+            out[row, col, 0], out[row, col, 1], out[row, col, 2] = rgb[0, j], rgb[1, j], rgb[2, j]
+        else:
+            _float64_pixel(row, col, t, b1, b2, triangles, attrs, source, face_surface,
+                           surfaces, lights, ambient, eye, halfway, out)
+
+
+@njit(cache=True, error_model="numpy")
+def _float64_pixel(row, col, t, b1, b2, triangles, attrs, source, face_surface, surfaces,
+                   lights, ambient, eye, halfway, out):
+    """The textbook kernel's evaluation of one pixel (core.shading.phong._resolve_phong)."""
+    i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+    w1, w2 = b1[row, col], b2[row, col]
+    w0 = 1.0 - w1 - w2
+    q = np.empty(6)
+    for c in range(6):
+        q[c] = w0 * attrs[i0, c] + w1 * attrs[i1, c] + w2 * attrs[i2, c]
+    nx, ny, nz, _ = unit3(q[0], q[1], q[2])
+    r, g, b = phong_point(q[3], q[4], q[5], nx, ny, nz, face_surface[source[t]], surfaces,
+                          lights, ambient, eye, halfway)
+    out[row, col, 0], out[row, col, 1], out[row, col, 2] = quantize(r), quantize(g), quantize(b)

@@ -1,0 +1,87 @@
+"""Phong's float32 pixel step (core.shading.phong_wide) against the float64 textbook kernel.
+
+The two are twins: the same model, float32 in 8-wide passes against float64 one pixel at a
+time. The stated tolerance is one level of the byte (1/255) on every pixel, with few pixels
+differing at all; extreme inputs (huge or tiny scenes, zero normals, a light on the surface)
+fall back to float64 pixel by pixel and must match it exactly.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from app.tools.warmup import shipped_scenes
+from core.context import RenderContext
+from core.paths import SCENES_DIR
+from core.render import render
+from core.scene.formats import load_scene
+from core.settings import RenderSettings
+from core.shading.phong_wide import float32_is_exact_enough
+
+SIZE = (160, 120)
+
+
+def _both(scene, view=None, **overrides):
+    settings = RenderSettings.for_scene(scene, shading="phong", size=SIZE, **overrides)
+    view = view or scene.views[0]
+    wide = render(scene, view, settings, RenderContext())
+    exact = render(scene, view, dataclasses.replace(settings, phong_precision="float64"),
+                   RenderContext())
+    return wide, exact
+
+
+def _difference(a, b) -> np.ndarray:
+    return np.abs(a.color.astype(int) - b.color.astype(int)).max(axis=2)
+
+
+@pytest.mark.parametrize("path", [p for p in shipped_scenes()], ids=lambda p: p.name)
+def test_float32_is_within_one_level_of_float64_on_every_shipped_scene(path):
+    scene = load_scene(path)
+    assert scene.views, path.name
+    for projection in ("perspective", "parallel"):
+        wide, exact = _both(scene, projection=projection)
+        error = _difference(wide, exact)
+        assert error.max() <= 1, (path.name, projection, int(error.max()))
+        # A level differs only where a value sits within float32's rounding of a half level.
+        assert np.count_nonzero(error) <= 0.002 * error.size, (path.name, projection)
+        # (line-only scenes such as the house: their lines, drawn alike, are compared too)
+
+
+def test_halfway_specular_and_two_sided_meshes_agree():
+    scene = load_scene(SCENES_DIR / "interpenetrating.tri")      # open meshes: two-sided
+    scene = dataclasses.replace(scene, specular="halfway")
+    wide, exact = _both(scene)
+    assert _difference(wide, exact).max() <= 1
+    assert np.count_nonzero(wide.color != wide.color[0, 0]) > 1000   # something was drawn
+
+
+@pytest.mark.parametrize("scale", [1e-25, 1e25])
+def test_extreme_scales_fall_back_to_float64_and_match_it(scale):
+    """Squares of 1e-25 or 1e25 leave float32's range: every pixel is flagged and done by
+    the float64 model, so the picture is the textbook kernel's exactly."""
+    from core.analysis.stability_kit import scaled_scene
+    scene = scaled_scene(load_scene(SCENES_DIR / "torus.toml"), scale)
+    wide, exact = _both(scene)
+    assert np.count_nonzero(exact.color != exact.color[0, 0]) > 1000
+    np.testing.assert_array_equal(wide.color, exact.color)
+
+
+def test_fractional_exponents_use_the_float64_kernel():
+    scene = load_scene(SCENES_DIR / "torus.toml")
+    mesh = scene.meshes[0]
+    material = dataclasses.replace(mesh.material, n=7.5)
+    scene = dataclasses.replace(scene, meshes=[dataclasses.replace(mesh, material=material)]
+                                + list(scene.meshes[1:]))
+    from core.shading.illumination import pack_surfaces
+    assert not float32_is_exact_enough(pack_surfaces([m.material for m in scene.meshes],
+                                                     [False] * len(scene.meshes)))
+    wide, exact = _both(scene)
+    np.testing.assert_array_equal(wide.color, exact.color)
+
+
+def test_the_setting_is_checked():
+    with pytest.raises(ValueError, match="phong_precision must be one of float32, float64"):
+        RenderSettings(phong_precision="float16")
