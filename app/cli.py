@@ -286,7 +286,7 @@ def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> N
     parser.add_argument("--transparency", choices=("off", "interpolated", "screen-door"),
                         default=None, help="z-buffer, bsp, depth-sort: materials with k_t > 0 "
                         "laid over the opaque picture (default: the scene's, else off)")
-    parser.add_argument("--phong-precision", choices=("float32", "float64"), default=None,
+    parser.add_argument("--shading-precision", choices=("float32", "float64"), default=None,
                         help="Phong's pixel step: float32 over each row, 8 pixels at a time "
                              "(default; within 1/255 of float64), or the textbook float64 "
                              "kernel, one pixel at a time")
@@ -302,7 +302,7 @@ def _painter_overrides(args) -> dict:
             "paint_first": getattr(args, "paint_first", None),
             "depth_cue": getattr(args, "depth_cue", None),
             "transparency": getattr(args, "transparency", None),
-            "phong_precision": getattr(args, "phong_precision", None)}
+            "shading_precision": getattr(args, "shading_precision", None)}
 
 
 def _painter_plan(args, scene) -> dict | None:

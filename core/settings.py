@@ -44,7 +44,7 @@ SOLID_SHADINGS = SHADINGS[1:4]
 SAMPLE_PATTERNS = ("regular", "jittered", "adaptive")   # adaptive: the ray tracer's
 FRESNEL_FORMS = ("schlick", "exact")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
-PHONG_PRECISIONS = ("float32", "float64")    # core.shading.phong_wide, core.shading.phong
+SHADING_PRECISIONS = ("float32", "float64")    # core.shading.phong_wide, core.shading.phong
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace", "radiosity", "pathtrace", "bsp",
                    "depth-sort")   # a scene file's `renderer` (core.renderers)
@@ -118,7 +118,7 @@ class RenderSettings:
     # Phong's pixel step (core.shading.phong_wide): "float32", the model over each row in
     # 8-wide float32 passes (within 1/255 of float64; extreme inputs fall back per pixel), or
     # "float64", the textbook kernel, one pixel at a time.
-    phong_precision: str = "float32"
+    shading_precision: str = "float32"
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:
@@ -127,9 +127,9 @@ class RenderSettings:
         if not (isinstance(self.samples, int) and 1 <= self.samples <= MAX_SAMPLES):
             raise ValueError(f"samples per pixel must be a whole number from 1 to {MAX_SAMPLES}, "
                              f"not {self.samples!r}")
-        if self.phong_precision not in PHONG_PRECISIONS:
-            raise ValueError(f"phong_precision must be one of {', '.join(PHONG_PRECISIONS)}, "
-                             f"not {self.phong_precision!r}")
+        if self.shading_precision not in SHADING_PRECISIONS:
+            raise ValueError(f"shading_precision must be one of {', '.join(SHADING_PRECISIONS)}, "
+                             f"not {self.shading_precision!r}")
         if self.rasterizer not in RASTERIZERS:
             raise ValueError(f"rasterizer must be one of {', '.join(RASTERIZERS)}, "
                              f"not {self.rasterizer!r}")

@@ -70,7 +70,8 @@ def test_flat_colour_is_the_model_once_at_the_polygons_centroid():
     centre = np.array([[0.5, 0.5, 0.0], [-0.5, -0.5, 0.5]])
     expected = il.illuminate(centre, [[0, 0, 1]] * 2, [0, 1], s.surfaces, s.lights, s.ambient,
                              s.eye, False)
-    np.testing.assert_allclose(s.face_rgb[[0, 2]], expected, rtol=1e-12)
+    # float32 passes (core.shading.wide): the float64 model to float32's rounding
+    np.testing.assert_allclose(s.face_rgb[[0, 2]], expected, rtol=2e-6)
     np.testing.assert_array_equal(s.face_rgb[0], s.face_rgb[1])          # no seam
     np.testing.assert_array_equal(s.face_rgb[2], s.face_rgb[3])
     halves = il.illuminate(np.array([[2, 1, 0], [1, 2, 0]]) / 3.0, [[0, 0, 1]] * 2, [0, 0],
@@ -121,7 +122,7 @@ def test_gouraud_vertex_colours_are_the_model_at_the_vertices():
     s = shade.prepare("gouraud", scene, EYE)
     expected = il.illuminate(s.positions, [[0, 0, 1]] * 8, s.vertex_surface, s.surfaces,
                              s.lights, s.ambient, s.eye, False)
-    np.testing.assert_array_equal(s.vertex_attrs, expected)
+    np.testing.assert_allclose(s.vertex_attrs, expected, rtol=2e-6)      # float32 passes
 
 
 def test_two_sided_flat_faces_are_lit_on_the_side_the_viewer_sees():

@@ -64,7 +64,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
             add(f"{shading}, {projection}, open mesh and lines", opened, shading=shading,
                 projection=projection)
     add("flat, 4 samples a pixel", closed, shading="flat", samples=4)
-    add("phong, the float64 pixel kernel", opened, shading="phong", phong_precision="float64")
+    add("phong, the float64 pixel kernel", opened, shading="phong", shading_precision="float64")
     add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")
     add("BSP tree (painter's)", closed, shading="flat", renderer="bsp")
     add("depth sort (painter's), depth-cued", closed, shading="gouraud", renderer="depth-sort",

@@ -132,6 +132,7 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("cull back faces")
 
     inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context, lazy=True)
+    inputs.settings = settings              # the precision of lighting, the texture filter
     stats["computed"].extend(inputs.computed)
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))

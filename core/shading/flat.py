@@ -15,26 +15,48 @@ from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
 from core.scene.normals import face_normals, planar_polygons
 from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_face_normals, cached,
-                                 covered_spans, scene_arrays, visible_items)
+                                 covered_spans, scene_arrays, visible_items, wide_shading)
+from core.shading.wide import illuminate_wide
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")   # no call, no reference counts per face
+def _face_point(positions, triangles, f, polygon, polygon_point):
+    """Where face ``f`` is lit and whose normal it takes: its polygon's centroid and the
+    polygon's row (the same numbers for every face of the polygon), or its own centroid and
+    row when it is alone in its plane."""
+    p = polygon[f]
+    if p >= 0:
+        return polygon_point[p, 0], polygon_point[p, 1], polygon_point[p, 2], p
+    i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
+    cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
+    cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
+    cz = (positions[i0, 2] + positions[i1, 2] + positions[i2, 2]) / 3.0
+    return cx, cy, cz, f
+
+
+@njit(cache=True, inline="always")   # no call, no reference counts per face
 def _phong_face(positions, triangles, f, normals, polygon, polygon_point, face_surface,
                 surfaces, lights, ambient, eye, halfway, out):
-    """The model once for face ``f``: at its polygon's centroid with the polygon's normal (the
-    same numbers for every face of the polygon), or at its own centroid when it is alone."""
-    p = polygon[f]
-    if p < 0:
-        i0, i1, i2 = triangles[f, 0], triangles[f, 1], triangles[f, 2]
-        cx = (positions[i0, 0] + positions[i1, 0] + positions[i2, 0]) / 3.0
-        cy = (positions[i0, 1] + positions[i1, 1] + positions[i2, 1]) / 3.0
-        cz = (positions[i0, 2] + positions[i1, 2] + positions[i2, 2]) / 3.0
-        p = f
-    else:
-        cx, cy, cz = polygon_point[p, 0], polygon_point[p, 1], polygon_point[p, 2]
+    """The model once for face ``f`` (FvDFH 16.2.3), at :func:`_face_point`."""
+    cx, cy, cz, p = _face_point(positions, triangles, f, polygon, polygon_point)
     r, g, b = phong_point(cx, cy, cz, normals[p, 0], normals[p, 1], normals[p, 2],
                           face_surface[f], surfaces, lights, ambient, eye, halfway)
     out[f, 0], out[f, 1], out[f, 2] = r, g, b
+
+
+@njit(cache=True, nogil=True)
+def _face_points(positions, triangles, faces, normals, polygon, polygon_point, face_surface):
+    """:func:`_face_point` of each of ``faces``: points, normals and surface rows, for the
+    float32 passes (core.shading.wide)."""
+    points, unit = np.empty((faces.shape[0], 3)), np.empty((faces.shape[0], 3))
+    surface = np.empty(faces.shape[0], np.int64)
+    for k in range(faces.shape[0]):
+        f = faces[k]
+        cx, cy, cz, p = _face_point(positions, triangles, f, polygon, polygon_point)
+        points[k, 0], points[k, 1], points[k, 2] = cx, cy, cz
+        unit[k, 0], unit[k, 1], unit[k, 2] = normals[p, 0], normals[p, 1], normals[p, 2]
+        surface[k] = face_surface[f]
+    return points, unit, surface
 
 
 @njit(cache=True, parallel=True, nogil=True)
@@ -110,6 +132,13 @@ def _prepare_flat(s: ShadeInput, scene, meshes, weighting) -> None:
 
 
 def _light(s: ShadeInput, faces) -> None:
+    parallel = len(faces) >= PARALLEL_ITEMS
+    if wide_shading(s):
+        points, normals, surface = _face_points(s.positions, s.triangles, faces, s.normals,
+                                                s.polygon, s.polygon_point, s.face_surface)
+        s.face_rgb[faces] = illuminate_wide(points, normals, surface, s.surfaces, s.lights,
+                                            s.ambient, s.eye, s.halfway, parallel)
+        return
     kernel = _phong_faces_parallel if len(faces) >= PARALLEL_ITEMS else _phong_faces_serial
     kernel(s.positions, s.triangles, faces, s.normals, s.polygon, s.polygon_point,
            s.face_surface, s.surfaces, s.lights, s.ambient, s.eye, s.halfway, s.face_rgb)

@@ -9,7 +9,8 @@ from numba import njit, prange
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_vertex_normals, covered_spans,
-                                 unlit, visible_items)
+                                 unlit, visible_items, wide_shading)
+from core.shading.wide import illuminate_wide
 
 
 def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
@@ -32,6 +33,12 @@ def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
 
 def _light(s: ShadeInput, vertices, out) -> None:
     """The model at ``vertices`` into the rows of ``out`` (their first rows are the mesh's)."""
+    if wide_shading(s):
+        out[vertices] = illuminate_wide(s.positions[vertices], s.normals[vertices],
+                                        s.vertex_surface[vertices], s.surfaces, s.lights,
+                                        s.ambient, s.eye, s.halfway,
+                                        len(vertices) >= PARALLEL_ITEMS)
+        return
     kernel = _phong_vertices_parallel if len(vertices) >= PARALLEL_ITEMS else _phong_vertices_serial
     kernel(s.positions, s.normals, vertices, s.vertex_surface, s.surfaces, s.lights, s.ambient,
            s.eye, s.halfway, out)
@@ -47,7 +54,7 @@ def _used_vertices(triangles, faces, vertex_count):
     return np.flatnonzero(used)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")   # no call, no reference counts per point
 def _phong_vertex(positions, normals, i, vertex_surface, surfaces, lights, ambient, eye, halfway,
                   out):
     """The model at vertex ``i`` with its vertex normal (FvDFH 16.2.4)."""

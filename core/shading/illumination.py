@@ -165,7 +165,7 @@ def quantize(c):
     return np.uint8(math.floor(min(max(c, 0.0), 1.0) * 255.0 + 0.5))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")   # no call, no reference counts per point
 def phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfway):
     """The model at world point P with unit (or zero) normal N for surface row ``s``.
 

@@ -8,10 +8,10 @@ import numpy as np
 from numba import njit, prange
 
 from core.shading.illumination import phong_point, quantize, unit3
-from core.shading.phong_wide import float32_is_exact_enough, resolve_phong_wide
+from core.shading.wide import resolve_phong_wide
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import (ShadeInput, all_vertex_normals, cached, covered_spans,
-                                 scene_arrays)
+                                 scene_arrays, wide_shading)
 
 
 def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
@@ -53,11 +53,9 @@ def _resolve_phong(tri, b1, b2, span, triangles, attrs, source, face_surface, su
 
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
-    """float32 passes (core.shading.phong_wide) unless the settings ask for the textbook
+    """float32 passes (core.shading.wide) unless the settings ask for the textbook
     kernel or an exponent is not a whole number up to 2^16 (then float64 throughout)."""
-    precision = getattr(s.settings, "phong_precision", "float32")
-    wide = precision == "float32" and float32_is_exact_enough(s.surfaces)
-    (resolve_phong_wide if wide else _resolve_phong)(np.ascontiguousarray(vis.tri, dtype=np.int32),
+    (resolve_phong_wide if wide_shading(s) else _resolve_phong)(np.ascontiguousarray(vis.tri, dtype=np.int32),
                    np.ascontiguousarray(vis.b1, dtype=np.float64),
                    np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
                    triangles, attrs, source, s.face_surface, s.surfaces, s.lights, s.ambient,

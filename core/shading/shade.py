@@ -343,6 +343,14 @@ def unlit(candidates: np.ndarray, lit: np.ndarray) -> np.ndarray:
     return _take_unlit(np.ascontiguousarray(candidates, dtype=np.int64), lit)
 
 
+def wide_shading(s: ShadeInput) -> bool:
+    """Light in float32 passes (core.shading.wide)? Unless the settings ask for the textbook
+    float64 kernels, or an exponent is not a whole number up to 2^16."""
+    from core.shading.wide import float32_is_exact_enough
+    return (getattr(s.settings, "shading_precision", "float32") == "float32"
+            and float32_is_exact_enough(s.surfaces))
+
+
 def covered_spans(vis) -> np.ndarray:
     """``(H, 2)`` int32: per row, the first and last column a pixel step must look at (the
     rasterizer's spans when it kept them, else whole rows); the rest is background."""

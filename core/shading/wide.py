@@ -1,13 +1,14 @@
-"""Phong's pixel step at the hardware's width: the same model as
-:func:`core.shading.illumination.phong_point`, evaluated in float32 over each row's span so
-that the compiler turns the loops into 8-wide AVX instructions.
+"""The illumination model at the hardware's width: the same model as
+:func:`core.shading.illumination.phong_point`, evaluated in float32 over many points at once
+so that the compiler turns the loops into 8-wide AVX instructions.
 
-The textbook kernel (:func:`core.shading.phong._resolve_phong`) evaluates the model one pixel
-at a time in float64. Here each row of the visibility buffer is done in passes over its
-span, one quantity per row of a small scratch array (structure of arrays):
+The textbook kernels evaluate the model one point at a time in float64. Here a span of points
+(a row of Phong's pixels, :func:`resolve_phong_wide`; a block of flat's faces or Gouraud's
+vertices, :func:`illuminate_wide`) is done in passes, one quantity per row of a small scratch
+array (structure of arrays):
 
-1. *gather*: the normal and position interpolated with the barycentrics (float64, then the
-   normal and V = eye − P stored as float32; P kept in float64 for the lights);
+1. *gather*: the normal and position (Phong: interpolated with the barycentrics, in float64),
+   the normal and V = eye − P stored as float32, P kept in float64 for the lights;
 2. *normalise*: N and V made unit, the two-sided flip, the ambient term;
 3. *each light*: L, f_att, N·L, the specular base (reflection or halfway), the power by
    repeated squaring (the same products as ``specular_power``), the sum;
@@ -20,7 +21,7 @@ exponents are not whole numbers up to 2^16 go to the float64 kernel entirely
 (:func:`float32_is_exact_enough`).
 
 Error against the float64 model: at most 1/255 per channel (one rounding step of the
-byte), held by ``tests/test_phong_wide.py`` on every shipped scene and golden.
+byte), held by ``tests/test_shading_wide.py`` on every shipped scene and golden.
 """
 
 from __future__ import annotations
@@ -71,27 +72,100 @@ def resolve_phong_wide(tri, b1, b2, span, triangles, attrs, source, face_surface
         run_surface = np.empty(m, np.int64)
         n_runs = _gather(tri[row, lo:lo + m], b1[row, lo:lo + m], b2[row, lo:lo + m],
                          triangles, attrs, source, face_surface, eye, q, p, runs, run_surface)
-        runs, run_surface = runs[:n_runs + 1], run_surface[:n_runs]
-        _normalise(runs, run_surface, surfaces, ambient, flag, q[NX], q[NY], q[NZ], q[VX],
-                   q[VY], q[VZ], q[UX], q[UY], q[UZ], q[WX], q[WY], q[WZ], q[R], q[G], q[B])
-        nx, ny, nz, vx, vy, vz = q[UX], q[UY], q[UZ], q[WX], q[WY], q[WZ]
-        sums = R
-        for k in range(lights.shape[0]):
-            light = lights[k]
-            if light[0] == 0.0:
-                _toward_point(light, p, flag, nx, ny, nz, q[LX], q[LY], q[LZ], q[DIFF], q[ATT])
-            else:
-                _toward_direction(light, nx, ny, nz, q[LX], q[LY], q[LZ], q[DIFF], q[ATT])
-            if halfway:
-                _halfway_base(flag, nx, ny, nz, q[LX], q[LY], q[LZ], vx, vy, vz, q[BASE])
-            else:
-                _mirror_base(nx, ny, nz, q[LX], q[LY], q[LZ], vx, vy, vz, q[DIFF], q[BASE])
-            into = R2 if sums == R else R
-            _add_light(runs, run_surface, surfaces, light, q[DIFF], q[ATT], q[BASE], q[SPEC],
-                       q[sums], q[sums + 1], q[sums + 2], q[into], q[into + 1], q[into + 2])
-            sums = into
+        sums = _shade_span(q, p, flag, runs[:n_runs + 1], run_surface[:n_runs], surfaces,
+                           lights, ambient, halfway)
         _store(row, lo, m, tri, b1, b2, triangles, attrs, source, face_surface, surfaces,
                lights, ambient, eye, halfway, q[sums:sums + 3], flag, out)
+
+
+@njit(cache=True, error_model="numpy")
+def _shade_span(q, p, flag, runs, run_surface, surfaces, lights, ambient, halfway):
+    """Passes 2 and 3 over a gathered span; returns the row of the R sums (R or R2)."""
+    _normalise(runs, run_surface, surfaces, ambient, flag, q[NX], q[NY], q[NZ], q[VX], q[VY],
+               q[VZ], q[UX], q[UY], q[UZ], q[WX], q[WY], q[WZ], q[R], q[G], q[B])
+    nx, ny, nz, vx, vy, vz = q[UX], q[UY], q[UZ], q[WX], q[WY], q[WZ]
+    sums = R
+    for k in range(lights.shape[0]):
+        light = lights[k]
+        if light[0] == 0.0:
+            _toward_point(light, p, flag, nx, ny, nz, q[LX], q[LY], q[LZ], q[DIFF], q[ATT])
+        else:
+            _toward_direction(light, nx, ny, nz, q[LX], q[LY], q[LZ], q[DIFF], q[ATT])
+        if halfway:
+            _halfway_base(flag, nx, ny, nz, q[LX], q[LY], q[LZ], vx, vy, vz, q[BASE])
+        else:
+            _mirror_base(nx, ny, nz, q[LX], q[LY], q[LZ], vx, vy, vz, q[DIFF], q[BASE])
+        into = R2 if sums == R else R
+        _add_light(runs, run_surface, surfaces, light, q[DIFF], q[ATT], q[BASE], q[SPEC],
+                   q[sums], q[sums + 1], q[sums + 2], q[into], q[into + 1], q[into + 2])
+        sums = into
+    return sums
+
+
+# Points per block of illuminate_wide: the scratch (about 100 bytes a point) stays in cache.
+BLOCK = 256
+
+
+def illuminate_wide(points, normals, surface, surfaces, lights, ambient, eye, halfway,
+                    parallel: bool) -> np.ndarray:
+    """The model at N world points with their (unit or zero) normals, as
+    :func:`core.shading.illumination.illuminate` but in float32 passes: ``(N, 3)`` RGB in
+    [0, 1]. ``surface`` is each point's row of ``surfaces``; blocks of points run on all
+    cores when ``parallel``."""
+    out = np.empty((len(points), 3))
+    kernel = _illuminate_blocks_parallel if parallel else _illuminate_blocks
+    kernel(points, normals, surface, surfaces, lights, ambient, eye, halfway, out)
+    return out
+
+
+@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+def _illuminate_blocks_parallel(points, normals, surface, surfaces, lights, ambient, eye,
+                                halfway, out):
+    for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
+        _illuminate_block(block * BLOCK, points, normals, surface, surfaces, lights, ambient,
+                          eye, halfway, out)
+
+
+@njit(cache=True, nogil=True, error_model="numpy")
+def _illuminate_blocks(points, normals, surface, surfaces, lights, ambient, eye, halfway, out):
+    for block in range((points.shape[0] + BLOCK - 1) // BLOCK):
+        _illuminate_block(block * BLOCK, points, normals, surface, surfaces, lights, ambient,
+                          eye, halfway, out)
+
+
+@njit(cache=True, error_model="numpy")
+def _illuminate_block(j0, points, normals, surface, surfaces, lights, ambient, eye, halfway,
+                      out):
+    """Points j0 .. j0 + BLOCK - 1: gather, passes 2 and 3, and the clamped sums (flagged
+    points by the float64 model)."""
+    m = min(BLOCK, points.shape[0] - j0)
+    q = np.empty((ROWS, m), np.float32)
+    p = np.empty((3, m))
+    flag = np.zeros(m, np.bool_)
+    runs = np.empty(m + 1, np.int64)
+    run_surface = np.empty(m, np.int64)
+    n_runs = 0
+    for j in range(m):
+        i = j0 + j
+        for c in range(3):
+            q[NX + c, j] = normals[i, c]
+            p[c, j] = points[i, c]
+            q[VX + c, j] = eye[1 + c] - points[i, c] if eye[0] == 1.0 else eye[1 + c]
+        if n_runs == 0 or run_surface[n_runs - 1] != surface[i]:
+            runs[n_runs], run_surface[n_runs] = j, surface[i]
+            n_runs += 1
+    runs[n_runs] = m
+    sums = _shade_span(q, p, flag, runs[:n_runs + 1], run_surface[:n_runs], surfaces, lights,
+                       ambient, halfway)
+    for j in range(m):
+        i = j0 + j
+        if flag[j]:
+            out[i, 0], out[i, 1], out[i, 2] = phong_point(
+                points[i, 0], points[i, 1], points[i, 2], normals[i, 0], normals[i, 1],
+                normals[i, 2], surface[i], surfaces, lights, ambient, eye, halfway)
+        else:
+            for c in range(3):
+                out[i, c] = min(max(q[sums + c, j], F(0.0)), F(1.0))
 
 
 @njit(cache=True, error_model="numpy")

@@ -1,4 +1,4 @@
-"""Phong's float32 pixel step (core.shading.phong_wide) against the float64 textbook kernel.
+"""Phong's float32 pixel step (core.shading.wide) against the float64 textbook kernel.
 
 The two are twins: the same model, float32 in 8-wide passes against float64 one pixel at a
 time. The stated tolerance is one level of the byte (1/255) on every pixel, with few pixels
@@ -19,16 +19,16 @@ from core.paths import SCENES_DIR
 from core.render import render
 from core.scene.formats import load_scene
 from core.settings import RenderSettings
-from core.shading.phong_wide import float32_is_exact_enough
+from core.shading.wide import float32_is_exact_enough
 
 SIZE = (160, 120)
 
 
-def _both(scene, view=None, **overrides):
-    settings = RenderSettings.for_scene(scene, shading="phong", size=SIZE, **overrides)
+def _both(scene, view=None, shading="phong", **overrides):
+    settings = RenderSettings.for_scene(scene, shading=shading, size=SIZE, **overrides)
     view = view or scene.views[0]
     wide = render(scene, view, settings, RenderContext())
-    exact = render(scene, view, dataclasses.replace(settings, phong_precision="float64"),
+    exact = render(scene, view, dataclasses.replace(settings, shading_precision="float64"),
                    RenderContext())
     return wide, exact
 
@@ -41,12 +41,13 @@ def _difference(a, b) -> np.ndarray:
 def test_float32_is_within_one_level_of_float64_on_every_shipped_scene(path):
     scene = load_scene(path)
     assert scene.views, path.name
-    for projection in ("perspective", "parallel"):
-        wide, exact = _both(scene, projection=projection)
+    for projection, shading in (("perspective", "phong"), ("parallel", "phong"),
+                                ("perspective", "flat"), ("perspective", "gouraud")):
+        wide, exact = _both(scene, projection=projection, shading=shading)
         error = _difference(wide, exact)
-        assert error.max() <= 1, (path.name, projection, int(error.max()))
+        assert error.max() <= 1, (path.name, projection, shading, int(error.max()))
         # A level differs only where a value sits within float32's rounding of a half level.
-        assert np.count_nonzero(error) <= 0.002 * error.size, (path.name, projection)
+        assert np.count_nonzero(error) <= 0.002 * error.size, (path.name, projection, shading)
         # (line-only scenes such as the house: their lines, drawn alike, are compared too)
 
 
@@ -58,13 +59,14 @@ def test_halfway_specular_and_two_sided_meshes_agree():
     assert np.count_nonzero(wide.color != wide.color[0, 0]) > 1000   # something was drawn
 
 
+@pytest.mark.parametrize("shading", ["flat", "gouraud", "phong"])
 @pytest.mark.parametrize("scale", [1e-25, 1e25])
-def test_extreme_scales_fall_back_to_float64_and_match_it(scale):
+def test_extreme_scales_fall_back_to_float64_and_match_it(scale, shading):
     """Squares of 1e-25 or 1e25 leave float32's range: every pixel is flagged and done by
     the float64 model, so the picture is the textbook kernel's exactly."""
     from core.analysis.stability_kit import scaled_scene
     scene = scaled_scene(load_scene(SCENES_DIR / "torus.toml"), scale)
-    wide, exact = _both(scene)
+    wide, exact = _both(scene, shading=shading)
     assert np.count_nonzero(exact.color != exact.color[0, 0]) > 1000
     np.testing.assert_array_equal(wide.color, exact.color)
 
@@ -83,5 +85,5 @@ def test_fractional_exponents_use_the_float64_kernel():
 
 
 def test_the_setting_is_checked():
-    with pytest.raises(ValueError, match="phong_precision must be one of float32, float64"):
-        RenderSettings(phong_precision="float16")
+    with pytest.raises(ValueError, match="shading_precision must be one of float32, float64"):
+        RenderSettings(shading_precision="float16")
