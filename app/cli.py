@@ -164,7 +164,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
 
 def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
     """--renderer and the ray tracer's settings; None keeps the defaults."""
-    from core.raytrace.whitted import SHADOW_MODES
+    from core.settings import SHADOW_MODES
     from core.renderers import renderer_names
     parser.add_argument("--renderer", choices=renderer_names(), default=None,
                         help="zbuffer (default), raycast, or raytrace (Whitted: shadows, "

@@ -45,6 +45,11 @@ SAMPLE_PATTERNS = ("regular", "jittered", "adaptive")   # adaptive: the ray trac
 FRESNEL_FORMS = ("schlick", "exact")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
 SHADING_PRECISIONS = ("float32", "float64")    # core.shading.phong_wide, core.shading.phong
+# Radiosity's form factors and solvers (core.radiosity.solve).
+FORM_FACTOR_METHODS = ("hemicube", "raycast")
+SOLVERS = ("progressive", "gauss-seidel")
+# The ray tracer's shadow rays (core.raytrace.whitted): the notes' options.
+SHADOW_MODES = ("off", "background", "object", "transmit")
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace", "radiosity", "pathtrace", "bsp",
                    "depth-sort")   # a scene file's `renderer` (core.renderers)

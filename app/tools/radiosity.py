@@ -10,7 +10,7 @@ import time
 
 def add_options(parser) -> None:
     """The radiosity and path-tracing settings (issue 19); None keeps the defaults."""
-    from core.radiosity.solve import FORM_FACTOR_METHODS, SOLVERS
+    from core.settings import FORM_FACTOR_METHODS, SOLVERS
     g = parser.add_argument_group("global illumination (radiosity, pathtrace)")
     g.add_argument("--form-factors", choices=FORM_FACTOR_METHODS, default=None,
                    help="radiosity: the hemicube drawn by our z-buffer (default) or ray casting "

@@ -17,6 +17,7 @@ from __future__ import annotations
 import logging
 import os
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -110,6 +111,7 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
 
     reason = None if display_available() else "DISPLAY and WAYLAND_DISPLAY are not set"
     if reason is None:
+        prime_kernels(state)
         try:
             from app.viewer.window import ViewerWindow, WindowError
             window = ViewerWindow(state, out_dir=out_dir, started=started)
@@ -122,6 +124,36 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
     log.info("window open, %dx%d framebuffer (%.3f s after process start)",
              state.size[0], state.size[1], time.perf_counter() - started)
     return window.run()
+
+
+def prime_kernels(state) -> threading.Thread | None:
+    """Load numba and the first frame's kernels on a thread while the window opens.
+
+    numba's first use costs ~0.2 s before any kernel runs (its typing and target registries),
+    and each cached kernel ~10 ms to load; the window's own set-up (X11, the GL context, the
+    panel) takes as long again. A 16 x 16 frame with the window's settings needs the same
+    compiled code, so when the window asks for its first frame most kernels are in memory.
+    The default scene (lines only) needs no kernel: nothing is started for it.
+    """
+    settings = state.settings()
+    if os.environ.get("FVD_NO_PRIME"):
+        return None
+    if settings.shading == "wireframe" or not state.scene.triangle_count or not state.renderable:
+        return None
+
+    def prime():
+        from app.tools.warmup import quick
+        from app.viewer.state import render
+        from core.context import RenderContext
+        try:
+            render(state.scene, state.view, quick(settings.replace(size=(16, 16))),
+                   RenderContext())
+        except Exception as error:        # the window's own frame will say what is wrong
+            log.info("kernels not primed: %s", error)
+
+    thread = threading.Thread(target=prime, name="prime kernels", daemon=True)
+    thread.start()
+    return thread
 
 
 def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:

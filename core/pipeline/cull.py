@@ -15,7 +15,7 @@ kept triangles directly (no boolean mask, no gather afterwards).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from core.context import DEFAULT_CONTEXT, RenderContext
 
@@ -51,6 +51,41 @@ def _keep_front(normal, d, triangles, first, eye, eye_is_point, kept, kept_trian
     return count
 
 
+# From this many faces the test runs on all cores, in chunks: each chunk counts its front
+# faces, then writes them at its offset (the same order as one pass).
+PARALLEL_FACES = 50_000
+CHUNKS = 64
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _keep_front_parallel(normal, d, triangles, first, eye, eye_is_point, kept, kept_triangles,
+                         count):
+    n = normal.shape[0]
+    front = np.empty(n, np.bool_)
+    counts = np.zeros(CHUNKS + 1, np.int64)
+    ex, ey, ez = eye[0], eye[1], eye[2]
+    for c in prange(CHUNKS):
+        here = 0
+        for t in range(c * n // CHUNKS, (c + 1) * n // CHUNKS):
+            side = normal[t, 0] * ex + normal[t, 1] * ey + normal[t, 2] * ez
+            if eye_is_point:
+                side -= d[t]
+            front[t] = side >= 0.0
+            here += front[t]
+        counts[c + 1] = here
+    for c in range(CHUNKS):
+        counts[c + 1] += counts[c]
+    for c in prange(CHUNKS):
+        at = count + counts[c]
+        for t in range(c * n // CHUNKS, (c + 1) * n // CHUNKS):
+            if front[t]:
+                kept[at] = first + t
+                for k in range(3):
+                    kept_triangles[at, k] = triangles[first + t, k]
+                at += 1
+    return count + counts[CHUNKS]
+
+
 @njit(cache=True)
 def _keep_all(triangles, first, n, kept, kept_triangles, count):
     for t in range(n):
@@ -81,8 +116,9 @@ def front_faces(meshes, triangles: np.ndarray, eye,
         n = len(mesh.triangles)
         if mesh.closed and n:
             normal, d = face_planes(mesh, context)
-            count = _keep_front(normal, d, triangles, first, e, eye_is_point, kept,
-                                kept_triangles, count)
+            keep = _keep_front_parallel if n >= PARALLEL_FACES else _keep_front
+            count = keep(normal, d, triangles, first, e, eye_is_point, kept, kept_triangles,
+                         count)
         elif n:
             count = _keep_all(triangles, first, n, kept, kept_triangles, count)
         first += n

@@ -27,8 +27,7 @@ from numba import njit
 
 from core.radiosity.mesh import Elements
 
-FORM_FACTOR_METHODS = ("hemicube", "raycast")
-SOLVERS = ("progressive", "gauss-seidel")
+from core.settings import FORM_FACTOR_METHODS, SOLVERS  # noqa: E402,F401  (listed there)
 ROW_CACHE_BYTES = 256 << 20         # form-factor rows kept for patches that shoot again
 MAX_GAUSS_SEIDEL = 40_000_000       # elements x patches of the full matrix
 

@@ -57,7 +57,7 @@ from core.texture.surface import UV, textured_at
 from core.shading.illumination import (EYE_DIRECTION, EYE_POINT, LIGHT_INTENSITY, OD, POINT_LIGHT,
                                        TWO_SIDED, phong_point, unit3)
 
-SHADOW_MODES = ("off", "background", "object", "transmit")
+from core.settings import SHADOW_MODES  # noqa: E402,F401  (listed with the other settings)
 SHADOW_OFF, SHADOW_BACKGROUND, SHADOW_OBJECT, SHADOW_TRANSMIT = 0, 1, 2, 3
 OBJECT_FRACTION = 0.3          # "object" shadows: this fraction of the occluder's colour passes
 MAX_SHADOW_CROSSINGS = 64      # "transmit": surfaces a shadow ray may pass before giving up

@@ -339,6 +339,8 @@ class _Reader:
             mesh.material = self.material(g["material"], path + ("material",), mesh.material)
         if "name" in g:
             mesh.name = self.string(g["name"], path + ("name",))
+        if mesh.normals is not None or not len(mesh.triangles):
+            return mesh                  # nothing to split (and numba stays unimported: lines)
         from core.scene.normals import with_creases      # (numba: only when a mesh is read)
         return with_creases(mesh, self.crease_angle)     # after the transform: its angles
 
