@@ -3,7 +3,9 @@
 Hierarchical z skips triangles and 8 x 8 blocks it proves hidden, and a tile whose later
 triangles look nearer is drawn last to first with ``z > zbuffer``. Each must give exactly the
 buffers of the plain z-buffer (the same kernels with hierarchical z off) and the depth and
-winning triangle of the course's scan-line rasterizer, an independent algorithm.
+winning triangle of the course's scan-line rasterizer, an independent algorithm. Large
+frames go in batches, the later ones set up against the earlier ones' coarse z: every test
+runs both ways.
 """
 
 from __future__ import annotations
@@ -13,6 +15,15 @@ import pytest
 
 from app.tools.depth_bench import depth_layers
 from core.pipeline import raster, raster_scanline
+
+
+@pytest.fixture(autouse=True, params=["one batch", "batches"])
+def batching(request, monkeypatch):
+    """Every test twice: as one batch, and in the three batches of a large frame (whose setup
+    drops triangles behind the earlier batches' coarse z), by lowering the threshold."""
+    if request.param == "batches":
+        monkeypatch.setattr(raster, "BATCH_FROM", 64)
+    return request.param
 
 
 def _plain(xy_z, inv_w, tris, w, h, monkeypatch):
@@ -69,3 +80,19 @@ def test_hidden_triangles_cut_through_visible_ones(monkeypatch):
             assert np.array_equal(getattr(fast, name), getattr(plain, name)), name
         serial = raster.rasterize(xy_z, inv_w, tris[order], w, h, parallel=False)
         assert np.array_equal(fast.tri, serial.tri) and np.array_equal(fast.b2, serial.b2)
+
+
+def test_batches_drop_hidden_triangles_in_setup(monkeypatch):
+    """The point of the batches: deep in a stack, triangles never reach a bin. Counted by the
+    scene slots the last batch used (front to back: its layers are all hidden)."""
+    monkeypatch.setattr(raster, "BATCH_FROM", 64)
+    w, h = 128, 128
+    xy_z, inv_w, tris = depth_layers(64, 200, w, h, front_to_back=True)
+    buffer = raster.rasterize(xy_z, inv_w, tris, w, h)
+    assert np.all(buffer.tri < len(tris) // 64)          # the nearest layer, drawn first
+    # the last batch (triangles n/8 .. n) was set up in chunks; chunk c's slots start at
+    # c m / chunks and end at chunk_end[c]: nothing was kept
+    ends = buffer._scene.chunk_end
+    m = len(tris) - len(tris) // 8
+    starts = np.arange(len(ends)) * m // len(ends)
+    assert np.array_equal(ends, starts)

@@ -75,9 +75,16 @@ TILE_BITS = 6
 TILE = 1 << TILE_BITS  # 64 x 64 pixel tiles: the unit of parallel work, and its z-buffer fits in L2
 BLOCK_BITS = 3
 BLOCK = 1 << BLOCK_BITS  # 8 x 8 pixel blocks inside a tile, each with a coarse z
+N_BLOCKS = (TILE // BLOCK) ** 2  # blocks per tile; coarse-z entry N_BLOCKS is the tile's
 SETUP_CHUNKS = 64  # pieces of the triangle array that setup hands to the cores
 PARALLEL_SETUP = 10_000  # fewer triangles than this are set up on one core
 HIERARCHICAL_Z = True  # skip hidden triangles by tile and by block (the bench compares both)
+# From this many triangles the frame is set up and rasterized in three batches (the first
+# 1/64 of the triangles, up to 1/8, the rest): a later batch's triangle that lies behind the
+# coarse z of every tile its box meets is dropped in setup, before it costs a scene slot, a
+# bin entry or a second look. Deep stacks of layers then cost close to one layer.
+BATCH_FROM = 200_000
+BATCH_CUTS = (64, 8)
 COUNT_CELLS = 1 << 20  # at most this many (chunk, tile) counters: huge frames get fewer chunks
 
 
@@ -101,6 +108,10 @@ class _Scene:
     tile_rows: np.ndarray = field(default_factory=lambda: np.empty((0, TILE, 2), np.int32))
     bins: np.ndarray = field(default_factory=lambda: np.empty(0, np.int32))
     bin_z: np.ndarray = field(default_factory=lambda: np.empty(0))  # each entry's nearest z
+    # per tile, kept from batch to batch: each block's unwritten pixels and coarse z (entry
+    # N_BLOCKS: the tile's unfilled blocks and coarse z)
+    tile_unfilled: np.ndarray = field(default_factory=lambda: np.empty((0, N_BLOCKS + 1), np.int32))
+    tile_zmin: np.ndarray = field(default_factory=lambda: np.empty((0, N_BLOCKS + 1)))
 
     def reserve(self, n_vertices: int, n_triangles: int, n_chunks: int = 1,
                 n_tiles: int = 0) -> None:
@@ -116,6 +127,8 @@ class _Scene:
         if self.tile_start.shape[0] < n_tiles + 1:
             self.tile_start = np.empty(n_tiles + 1, np.int64)
             self.tile_rows = np.empty((n_tiles, TILE, 2), np.int32)
+            self.tile_unfilled = np.empty((n_tiles, N_BLOCKS + 1), np.int32)
+            self.tile_zmin = np.empty((n_tiles, N_BLOCKS + 1))
 
     def reserve_bins(self, n_entries: int) -> None:
         if self.bins.shape[0] < n_entries:
@@ -245,9 +258,10 @@ def _triangle_edges(x0, y0, x1, y1, x2, y2):
 
 
 @njit(cache=True)
-def _snap_vertices(xy_z, inv_w, fixed):
-    """Fixed-point x, y of every vertex, or INVALID for one no triangle may use."""
-    for v in range(xy_z.shape[0]):
+def _snap_vertices(xy_z, inv_w, fixed, first=0, end=-1):
+    """Fixed-point x, y of every vertex (of vertices first..end-1), or INVALID for one no
+    triangle may use."""
+    for v in range(first, xy_z.shape[0] if end < 0 else end):
         x = xy_z[v, 0]
         y = xy_z[v, 1]
         w = inv_w[v]
@@ -323,10 +337,23 @@ def _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty, sev
 
 
 @njit(cache=True)
+def _behind_tiles(z_near, i_min, i_max, j_min, j_max, n_tiles_x, tile_zmin, later_first):
+    """Is a triangle whose depth is at most ``z_near`` hidden in every tile its pixel box
+    meets? (A tile's coarse z is -inf until all its pixels are written.)"""
+    for ty in range(j_min >> TILE_BITS, (j_max >> TILE_BITS) + 1):
+        for tx in range(i_min >> TILE_BITS, (i_max >> TILE_BITS) + 1):
+            if not _hidden(z_near, tile_zmin[ty * n_tiles_x + tx, N_BLOCKS], later_first):
+                return False
+    return True
+
+
+@njit(cache=True)
 def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk, n_chunks,
-                 s_tri, s_xy, s_zw, chunk_end, counts):
+                 s_tri, s_xy, s_zw, chunk_end, counts, offset, tile_zmin, early_z, later_first):
     """Put the triangles of one chunk that can draw something into the scene, in order, and
-    count how many of them each tile will draw (``counts[chunk, tile]``).
+    count how many of them each tile will draw (``counts[chunk, tile]``). ``triangles`` is a
+    batch starting at triangle ``offset``; with ``early_z`` a triangle behind the coarse z of
+    every tile its box meets (the batches before drew there) is dropped here.
 
     Returns how many triangles name a vertex that does not exist (they are never drawn).
     """
@@ -354,6 +381,10 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
         i_min, i_max, j_min, j_max = _pixel_box(x0, y0, x1, y1, x2, y2, width, height)
         if i_min > i_max or j_min > j_max:
             continue  # no pixel centre of the framebuffer in its box
+        if early_z and _behind_tiles(_nearest(xy_z[v0, 2], xy_z[v1, 2], xy_z[v2, 2]),
+                                     i_min, i_max, j_min, j_max, n_tiles_x, tile_zmin,
+                                     later_first):
+            continue  # hidden behind what earlier batches drew
         if i_max - i_min <= 1 and j_max - j_min <= 1:
             if not _quad_covers(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max):
                 continue  # a small triangle between pixel centres: most of a dense mesh
@@ -365,7 +396,7 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
                 if _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty,
                                 several):
                     counts[chunk, ty * n_tiles_x + tx] += 1
-        s_tri[slot] = t
+        s_tri[slot] = offset + t
         s_xy[slot, 0] = x0
         s_xy[slot, 1] = y0
         s_xy[slot, 2] = x1
@@ -437,26 +468,31 @@ def _bin_offsets(counts, tile_start):
 
 @njit(cache=True, parallel=True, nogil=True)
 def _setup_parallel(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri, s_xy,
-                    s_zw, chunk_end, counts):
-    # Snapping is one cheap pass (about 1 ms for 500k vertices); a parallel region of its
-    # own would cost a core's wake-up, and on a loaded machine a scheduler tick, each frame.
-    _snap_vertices(xy_z, inv_w, fixed)
+                    s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first):
     n_chunks = chunk_end.shape[0]
+    if snap:                    # (about 1 ms for 500k vertices on one core)
+        n_vertices = xy_z.shape[0]
+        for chunk in prange(n_chunks):
+            _snap_vertices(xy_z, inv_w, fixed, chunk * n_vertices // n_chunks,
+                           (chunk + 1) * n_vertices // n_chunks)
     bad = 0
     for chunk in prange(n_chunks):
         bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
-                            n_chunks, s_tri, s_xy, s_zw, chunk_end, counts)
+                            n_chunks, s_tri, s_xy, s_zw, chunk_end, counts, offset, tile_zmin,
+                            early_z, later_first)
     return bad
 
 
 @njit(cache=True, nogil=True)
 def _setup_serial(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri, s_xy,
-                  s_zw, chunk_end, counts):
-    _snap_vertices(xy_z, inv_w, fixed)
+                  s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first):
+    if snap:
+        _snap_vertices(xy_z, inv_w, fixed)
     bad = 0
     for chunk in range(chunk_end.shape[0]):
         bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
-                            chunk_end.shape[0], s_tri, s_xy, s_zw, chunk_end, counts)
+                            chunk_end.shape[0], s_tri, s_xy, s_zw, chunk_end, counts, offset,
+                            tile_zmin, early_z, later_first)
     return bad
 
 
@@ -481,8 +517,6 @@ def _bin_serial(width, height, n_triangles, n_tiles_x, s_xy, s_zw, chunk_end, cu
 # --------------------------------------------------------------------------------------------
 # Rasterization (lp_rast_tri.c): one tile at a time, 8 x 8 blocks with a coarse z each
 
-
-N_BLOCKS = (TILE // BLOCK) ** 2  # blocks per tile; coarse-z entry N_BLOCKS is the tile's
 
 
 @njit(cache=True)
@@ -538,23 +572,11 @@ def _later_first(bin_z, start, end):
 
 
 @njit(cache=True)
-def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
-               span, tile_rows, hiz, count_fragments, fragments):
-    """Clear one tile, then draw into it every triangle of its bin, 8 x 8 block by block.
-
-    Hierarchical z: a triangle whose nearest vertex lies behind the tile's coarse z, or a
-    block's, is not visited there at all. With ``later_first`` the tile's triangles come last
-    to first, so a tie keeps what is there (``z > zbuffer``): the same pixel wins as in
-    triangle order with ``z >= zbuffer``.
-
-    Only what the last frame wrote is cleared (each row's span; the rest of the row is still
-    empty), and only depth and tri: b1 and b2 mean nothing where tri is -1 and nobody reads
-    them there. ``tile_rows[k]`` gets, per row of the tile, the columns of the boxes drawn."""
+def _clear_tile(k, ti0, ti1, tj0, tj1, depth, tri, span, tile_rows, unfilled, zmin):
+    """Empty what the last frame wrote in tile k, and start its blocks: per 8 x 8 block (and,
+    at index N_BLOCKS, the tile) the pixels (blocks) not yet written, and the coarse z, -inf
+    until every pixel has been written."""
     height, width = depth.shape
-    ti0 = (k % n_tiles_x) << TILE_BITS
-    tj0 = (k // n_tiles_x) << TILE_BITS
-    ti1 = min(ti0 + TILE, width) - 1
-    tj1 = min(tj0 + TILE, height) - 1
     for j in range(tj0, tj1 + 1):
         row = height - 1 - j
         for i in range(max(span[row, 0], ti0), min(span[row, 1], ti1) + 1):
@@ -562,11 +584,8 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, 
             tri[row, i] = -1
     tile_rows[k, :, 0] = width
     tile_rows[k, :, 1] = -1
-    # per 8 x 8 block (and, at index N_BLOCKS, the tile): pixels (blocks) not yet written,
-    # and the coarse z, -inf until every pixel has been written
     side = TILE // BLOCK
-    unfilled = np.empty(N_BLOCKS + 1, np.int32)
-    zmin = np.full(N_BLOCKS + 1, -np.inf)
+    zmin[:] = -np.inf
     unfilled[N_BLOCKS] = 0
     for bj in range(side):
         for bi in range(side):
@@ -576,9 +595,42 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, 
             unfilled[N_BLOCKS] += w * h > 0
             if w * h == 0:
                 zmin[bj * side + bi] = np.inf  # outside the frame: never in the way
+
+
+@njit(cache=True)
+def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
+               span, tile_rows, hiz, count_fragments, fragments, first, order, tile_unfilled,
+               tile_zmin):
+    """Clear one tile, then draw into it every triangle of its bin, 8 x 8 block by block.
+
+    Hierarchical z: a triangle whose nearest vertex lies behind the tile's coarse z, or a
+    block's, is not visited there at all. With ``later_first`` the tile's triangles come last
+    to first, so a tie keeps what is there (``z > zbuffer``): the same pixel wins as in
+    triangle order with ``z >= zbuffer``.
+
+    Only what the last frame wrote is cleared (each row's span; the rest of the row is still
+    empty), and only depth and tri: b1 and b2 mean nothing where tri is -1 and nobody reads
+    them there. ``tile_rows[k]`` gets, per row of the tile, the columns of the boxes drawn.
+
+    In batches (``first`` false after the first), the tile goes on where the last batch left
+    it: nothing is cleared, and its blocks' counts and coarse z live on in
+    ``tile_unfilled[k]`` and ``tile_zmin[k]``. ``order``: 0 the bin as given, 1 last to first
+    (the whole stream is drawn backwards), -1 the tile decides (one batch)."""
+    height, width = depth.shape
+    ti0 = (k % n_tiles_x) << TILE_BITS
+    tj0 = (k // n_tiles_x) << TILE_BITS
+    ti1 = min(ti0 + TILE, width) - 1
+    tj1 = min(tj0 + TILE, height) - 1
+    unfilled = tile_unfilled[k]
+    zmin = tile_zmin[k]
+    if first:
+        _clear_tile(k, ti0, ti1, tj0, tj1, depth, tri, span, tile_rows, unfilled, zmin)
     start = tile_start[k]
     end = tile_start[k + 1]
-    later_first = hiz and _later_first(bin_z, start, end)
+    if order < 0:
+        later_first = hiz and _later_first(bin_z, start, end)
+    else:
+        later_first = order == 1
     for n in range(end - start):
         entry = end - 1 - n if later_first else start + n
         if hiz and _hidden(bin_z[entry], zmin[N_BLOCKS], later_first):
@@ -698,20 +750,26 @@ def _merge_spans(n_tiles_x, tile_rows, span):
 
 @njit(cache=True, parallel=True, nogil=True)
 def _rast_parallel(n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
-                   span, tile_rows, hiz, count_fragments, fragments):
+                   span, tile_rows, hiz, count_fragments, fragments, first, last, order,
+                   tile_unfilled, tile_zmin):
     for k in prange(tile_rows.shape[0]):
         _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1,
-                   b2, span, tile_rows, hiz, count_fragments, fragments)
-    _merge_spans(n_tiles_x, tile_rows, span)
+                   b2, span, tile_rows, hiz, count_fragments, fragments, first, order,
+                   tile_unfilled, tile_zmin)
+    if last:
+        _merge_spans(n_tiles_x, tile_rows, span)
 
 
 @njit(cache=True, nogil=True)
 def _rast_serial(n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
-                 span, tile_rows, hiz, count_fragments, fragments):
+                 span, tile_rows, hiz, count_fragments, fragments, first, last, order,
+                 tile_unfilled, tile_zmin):
     for k in range(tile_rows.shape[0]):
         _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1,
-                   b2, span, tile_rows, hiz, count_fragments, fragments)
-    _merge_spans(n_tiles_x, tile_rows, span)
+                   b2, span, tile_rows, hiz, count_fragments, fragments, first, order,
+                   tile_unfilled, tile_zmin)
+    if last:
+        _merge_spans(n_tiles_x, tile_rows, span)
 
 
 # --------------------------------------------------------------------------------------------
@@ -750,41 +808,83 @@ def _run(xy_z, inv_w, triangles, width, height, out, parallel, fragments):
     n_tiles_x = -(-width // TILE)
     n_tiles = n_tiles_x * -(-height // TILE)
     n_triangles = triangles.shape[0]
+    count = fragments is not None
+    # counting visits every covered pixel, hidden or not: no hierarchical z
+    hiz = HIERARCHICAL_Z and not count
+    order = -1                              # one batch: each tile picks its order
+    batches = [(0, n_triangles)]
+    if hiz and n_triangles >= BATCH_FROM:
+        order = int(_stream_runs_backwards(xy_z, triangles))
+        batches = _batches(n_triangles, backwards=order == 1)
+    largest = max(end - start for start, end in batches)
     # Below PARALLEL_SETUP triangles setup takes well under a millisecond: waking a second
     # core would cost more than it saves. The bins are the same either way (triangle order).
-    parallel_setup = parallel and n_triangles >= PARALLEL_SETUP
+    parallel_setup = parallel and largest >= PARALLEL_SETUP
     n_chunks = max(1, min(SETUP_CHUNKS, COUNT_CELLS // n_tiles)) if parallel_setup else 1
     scene = out._scene
-    scene.reserve(xy_z.shape[0], n_triangles, n_chunks, n_tiles)
+    scene.reserve(xy_z.shape[0], largest, n_chunks, n_tiles)
+    if not out.spans_known or out.span is None or out.span.shape != (height, 2):
+        out.forget_spans()
+    out.spans_known = False                 # until the rast has run to its end
+    # chunk size 1: chunks and tiles are handed out one at a time, so the cores share the
+    # load even when a few tiles hold most of the triangles
+    with numba.parallel_chunksize(1):
+        for b, (start, end) in enumerate(batches):
+            _batch(xy_z, inv_w, triangles[start:end], start, width, height, n_tiles_x,
+                   n_tiles, n_chunks, scene, out, parallel, parallel_setup, hiz, count,
+                   fragments if count else _NO_FRAGMENTS, b == 0, b == len(batches) - 1,
+                   order)
+    out.spans_known = True
+    return out
+
+
+def _batches(n: int, backwards: bool) -> list[tuple[int, int]]:
+    """``(start, end)`` of three growing batches in drawing order, the first small so that
+    its coarse z already rejects much of the rest; a backwards stream starts at its end."""
+    cuts = [0] + [n // share for share in BATCH_CUTS] + [n]
+    batches = [(cuts[k], cuts[k + 1]) for k in range(len(cuts) - 1)]
+    if backwards:
+        batches = [(n - end, n - start) for start, end in batches]
+    return batches
+
+
+def _stream_runs_backwards(xy_z, triangles) -> bool:
+    """Do the later triangles look nearer than the first ones (a back-to-front stream)? Then
+    the batches go last to first, each tile's bin too, so that the near surfaces land first.
+    Either order gives the same picture (ties go to the later triangle both ways)."""
+    n = triangles.shape[0]
+    sample, step = max(1, n // 64), max(1, n // 64 // 256)
+    vertices = lambda rows: np.clip(rows, 0, len(xy_z) - 1)   # (setup refuses bad ones)
+    head = xy_z[vertices(triangles[:sample:step]), 2].max(axis=1)
+    tail = xy_z[vertices(triangles[n - sample::step]), 2].max(axis=1)
+    finite = np.isfinite(head).all() and np.isfinite(tail).all()
+    return bool(finite and tail.mean() > head.mean())
+
+
+def _batch(xy_z, inv_w, triangles, offset, width, height, n_tiles_x, n_tiles, n_chunks, scene,
+           out, parallel, parallel_setup, hiz, count, frag, first, last, order):
+    """Set up, bin and rasterize one batch of triangles (triangle ``offset`` on)."""
     fixed = scene.fixed[:xy_z.shape[0]]
     chunk_end = scene.chunk_end[:n_chunks]
     counts = scene.counts[:n_chunks * n_tiles].reshape(n_chunks, n_tiles)
     tile_start = scene.tile_start[:n_tiles + 1]
     tile_rows = scene.tile_rows[:n_tiles]
-    count = fragments is not None
-    frag = fragments if count else _NO_FRAGMENTS
+    tile_unfilled = scene.tile_unfilled[:n_tiles]
+    tile_zmin = scene.tile_zmin[:n_tiles]
     setup = _setup_parallel if parallel_setup else _setup_serial
     bin_ = _bin_parallel if parallel_setup else _bin_serial
     rast = _rast_parallel if parallel else _rast_serial
-    # chunk size 1: chunks and tiles are handed out one at a time, so the cores share the
-    # load even when a few tiles hold most of the triangles
-    with numba.parallel_chunksize(1):
-        bad = setup(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, scene.tri,
-                    scene.xy, scene.zw, chunk_end, counts)
-        if bad:
-            raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
-        scene.reserve_bins(_bin_offsets(counts, tile_start))
-        bin_(width, height, n_triangles, n_tiles_x, scene.xy, scene.zw, chunk_end, counts,
-             scene.bins, scene.bin_z)
-        if not out.spans_known or out.span is None or out.span.shape != (height, 2):
-            out.forget_spans()
-        out.spans_known = False             # until the rast has run to its end
-        # counting visits every covered pixel, hidden or not: no hierarchical z
-        hiz = HIERARCHICAL_Z and not count
-        rast(n_tiles_x, scene.bins, scene.bin_z, tile_start, scene.tri, scene.xy, scene.zw,
-             out.depth, out.tri, out.b1, out.b2, out.span, tile_rows, hiz, count, frag)
-        out.spans_known = True
-    return out
+    bad = setup(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, scene.tri, scene.xy,
+                scene.zw, chunk_end, counts, first, offset, tile_zmin, hiz and not first,
+                order == 1)
+    if bad:
+        raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
+    scene.reserve_bins(_bin_offsets(counts, tile_start))
+    bin_(width, height, triangles.shape[0], n_tiles_x, scene.xy, scene.zw, chunk_end, counts,
+         scene.bins, scene.bin_z)
+    rast(n_tiles_x, scene.bins, scene.bin_z, tile_start, scene.tri, scene.xy, scene.zw,
+         out.depth, out.tri, out.b1, out.b2, out.span, tile_rows, hiz, count, frag, first, last,
+         order, tile_unfilled, tile_zmin)
 
 
 def rasterize(xy_z, inv_w, triangles, width, height, out: VisibilityBuffer | None = None,
