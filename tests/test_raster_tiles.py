@@ -19,8 +19,8 @@ from core.pipeline import raster, raster_scanline
 
 @pytest.fixture(autouse=True, params=["one batch", "batches"])
 def batching(request, monkeypatch):
-    """Every test twice: as one batch, and in the three batches of a large frame (whose setup
-    drops triangles behind the earlier batches' coarse z), by lowering the threshold."""
+    """Every test twice: as one batch, and in the two batches of a large frame (whose second
+    setup drops triangles behind the first batch's coarse z), by lowering the threshold."""
     if request.param == "batches":
         monkeypatch.setattr(raster, "BATCH_FROM", 64)
     return request.param
@@ -90,9 +90,9 @@ def test_batches_drop_hidden_triangles_in_setup(monkeypatch):
     xy_z, inv_w, tris = depth_layers(64, 200, w, h, front_to_back=True)
     buffer = raster.rasterize(xy_z, inv_w, tris, w, h)
     assert np.all(buffer.tri < len(tris) // 64)          # the nearest layer, drawn first
-    # the last batch (triangles n/8 .. n) was set up in chunks; chunk c's slots start at
+    # the last batch (triangles n/64 .. n) was set up in chunks; chunk c's slots start at
     # c m / chunks and end at chunk_end[c]: nothing was kept
     ends = buffer._scene.chunk_end
-    m = len(tris) - len(tris) // 8
+    m = len(tris) - len(tris) // 64
     starts = np.arange(len(ends)) * m // len(ends)
     assert np.array_equal(ends, starts)

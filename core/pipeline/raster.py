@@ -42,6 +42,12 @@ Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene and bins it into t
   picks the same winner at every pixel, ties included, and lets the near surface land first.
   So depth complexity costs close to the visible pixels plus a few nanoseconds per hidden
   triangle.
+* **early z in setup**: a frame of ``BATCH_FROM`` triangles or more goes in two batches, the
+  first 1/64 of the stream and then the rest (a stream whose later triangles look nearer
+  starts from its end, every tile drawing last to first). Once the first batch has filled
+  tiles, the second batch's setup drops a triangle behind the coarse z of every tile its box
+  meets, before it takes a scene slot or a bin entry: in a deep stack the hidden triangles
+  cost one box and one comparison each.
 
 Both cores: setup works on chunks of the triangle array, rast on tiles, handed out one at a
 time. A pixel's winner depends only on the triangles of its tile's bin, which is the same list
@@ -79,12 +85,12 @@ N_BLOCKS = (TILE // BLOCK) ** 2  # blocks per tile; coarse-z entry N_BLOCKS is t
 SETUP_CHUNKS = 64  # pieces of the triangle array that setup hands to the cores
 PARALLEL_SETUP = 10_000  # fewer triangles than this are set up on one core
 HIERARCHICAL_Z = True  # skip hidden triangles by tile and by block (the bench compares both)
-# From this many triangles the frame is set up and rasterized in three batches (the first
-# 1/64 of the triangles, up to 1/8, the rest): a later batch's triangle that lies behind the
-# coarse z of every tile its box meets is dropped in setup, before it costs a scene slot, a
-# bin entry or a second look. Deep stacks of layers then cost close to one layer.
+# From this many triangles the frame is set up and rasterized in two batches (the first 1/64
+# of the triangles, then the rest): once tiles are full, a triangle of the second batch that
+# lies behind the coarse z of every tile its box meets is dropped in setup, before it costs a
+# scene slot, a bin entry or a second look. Deep stacks of layers then cost close to one.
 BATCH_FROM = 200_000
-BATCH_CUTS = (64, 8)
+FIRST_BATCH = 64            # the first batch: this fraction (1/64) of the triangles
 COUNT_CELLS = 1 << 20  # at most this many (chunk, tile) counters: huge frames get fewer chunks
 
 
@@ -839,13 +845,10 @@ def _run(xy_z, inv_w, triangles, width, height, out, parallel, fragments):
 
 
 def _batches(n: int, backwards: bool) -> list[tuple[int, int]]:
-    """``(start, end)`` of three growing batches in drawing order, the first small so that
-    its coarse z already rejects much of the rest; a backwards stream starts at its end."""
-    cuts = [0] + [n // share for share in BATCH_CUTS] + [n]
-    batches = [(cuts[k], cuts[k + 1]) for k in range(len(cuts) - 1)]
-    if backwards:
-        batches = [(n - end, n - start) for start, end in batches]
-    return batches
+    """``(start, end)`` of the two batches in drawing order, the first small so that its
+    coarse z can reject much of the rest; a backwards stream starts at its end."""
+    cut = n // FIRST_BATCH
+    return [(n - cut, n), (0, n - cut)] if backwards else [(0, cut), (cut, n)]
 
 
 def _stream_runs_backwards(xy_z, triangles) -> bool:
@@ -874,9 +877,10 @@ def _batch(xy_z, inv_w, triangles, offset, width, height, n_tiles_x, n_tiles, n_
     setup = _setup_parallel if parallel_setup else _setup_serial
     bin_ = _bin_parallel if parallel_setup else _bin_serial
     rast = _rast_parallel if parallel else _rast_serial
+    # early z only once some tile is full (else it would test every triangle for nothing)
+    early_z = hiz and not first and bool(np.isfinite(tile_zmin[:, N_BLOCKS]).any())
     bad = setup(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, scene.tri, scene.xy,
-                scene.zw, chunk_end, counts, first, offset, tile_zmin, hiz and not first,
-                order == 1)
+                scene.zw, chunk_end, counts, first, offset, tile_zmin, early_z, order == 1)
     if bad:
         raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
     scene.reserve_bins(_bin_offsets(counts, tile_start))
