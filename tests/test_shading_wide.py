@@ -87,3 +87,15 @@ def test_fractional_exponents_use_the_float64_kernel():
 def test_the_setting_is_checked():
     with pytest.raises(ValueError, match="shading_precision must be one of float32, float64"):
         RenderSettings(shading_precision="float16")
+
+
+def test_the_bench_times_both_precisions():
+    from app.tools.bench import bench_scene, format_precision, precision_rows
+    rows = precision_rows([bench_scene(1000)], "perspective", (64, 48), frames=2, warmup=1)
+    assert [r["shading"] for r in rows] == ["flat", "gouraud", "phong"]
+    for r in rows:
+        for key in ("float32 pixel step ms", "float64 pixel step ms", "float32 frame ms",
+                    "float64 frame ms"):
+            assert r[key] > 0.0, (r["shading"], key)
+    text = format_precision(rows)
+    assert "float32 passes against the float64 kernels" in text and "phong" in text

@@ -184,6 +184,44 @@ def time_ours(scene, projection: str, shading: str, size, frames: int, warmup: i
     return result
 
 
+def precision_rows(scenes, projection: str, size, frames: int, warmup: int) -> list[dict]:
+    """Each scene's pixel step and whole frame in every lit mode, lit by the float32 passes
+    (the default) and by the float64 textbook kernels (``--shading-precision float64``), in
+    alternation: median ms of each."""
+    from core.context import RenderContext
+    from core.render import render
+    rows = []
+    for scene in scenes:
+        for shading in ("flat", "gouraud", "phong"):
+            runs = {p: ([], []) for p in ("float32", "float64")}
+            contexts = {p: RenderContext() for p in runs}
+            for k in range(warmup + frames):
+                for precision, (pixel, whole) in runs.items():
+                    settings = RenderSettings.for_scene(scene, projection=projection,
+                                                        shading=shading, size=size,
+                                                        shading_precision=precision)
+                    t0 = time.perf_counter()
+                    frame = render(scene, scene.views[0], settings, contexts[precision])
+                    if k >= warmup:
+                        whole.append((time.perf_counter() - t0) * 1e3)
+                        pixel.append(frame.stats["ms"].get("shade: pixel step", 0.0))
+            rows.append({"scene": scene.name, "triangles": scene.triangle_count,
+                         "shading": shading,
+                         **{f"{p} {what}": float(np.median(v)) for p, (px, fr) in runs.items()
+                            for what, v in (("pixel step ms", px), ("frame ms", fr))}})
+    return rows
+
+
+def format_precision(rows: list[dict]) -> str:
+    lines = ["lighting in float32 passes against the float64 kernels (median ms; pixel step "
+             "includes lighting the visible faces or vertices):"]
+    for r in rows:
+        lines.append(f"  {r['triangles']:>9,} {r['shading']:<8} pixel step "
+                     f"{r['float32 pixel step ms']:6.2f} / {r['float64 pixel step ms']:6.2f}"
+                     f"   frame {r['float32 frame ms']:6.2f} / {r['float64 frame ms']:6.2f}")
+    return "\n".join(lines)
+
+
 def time_llvmpipe(renderer, projection: str, shading: str, frames: int, warmup: int) -> dict:
     """llvmpipe frames: draw + finish timed; the readback timed apart."""
     draws, cpu, reads = [], [], []
@@ -597,6 +635,9 @@ def main(args) -> int:
     rows = run_cases(scenes, args.shading, args.projection, args.size, args.frames, args.warmup,
                      threads=not getattr(args, "no_threads", False))
 
+    _progress("lighting: float32 passes against the float64 kernels ...")
+    precision = precision_rows(scenes, args.projection, args.size, args.frames, args.warmup)
+
     startup = {}
     if not args.no_startup:
         _progress("JIT cold and warm start (fresh processes) ...")
@@ -634,7 +675,8 @@ def main(args) -> int:
     info["gl_renderer"] = probe.renderer_name
     probe.release()
 
-    report = {"frames": args.frames, "warmup": args.warmup, "cases": rows, "startup": startup,
+    report = {"frames": args.frames, "warmup": args.warmup, "cases": rows,
+              "precision": precision, "startup": startup,
               "depth_complexity": depth,
               "animation": animation, "machine": info, "bench_seconds": time.perf_counter() - t_start}
     (out / "bench.json").write_text(json.dumps(report, indent=2))
@@ -647,6 +689,8 @@ def main(args) -> int:
     print()
     print("where our time goes (median ms per stage):")
     print(format_stages(rows))
+    print()
+    print(format_precision(precision))
     if any("threads" in r for r in rows):
         print()
         print("thread scaling (median ms per stage, one thread → all):")
