@@ -118,11 +118,13 @@ class _Scene:
     # N_BLOCKS: the tile's unfilled blocks and coarse z)
     tile_unfilled: np.ndarray = field(default_factory=lambda: np.empty((0, N_BLOCKS + 1), np.int32))
     tile_zmin: np.ndarray = field(default_factory=lambda: np.empty((0, N_BLOCKS + 1)))
+    hidden_in: np.ndarray = field(default_factory=lambda: np.empty(0, np.int32))  # (V,)
 
     def reserve(self, n_vertices: int, n_triangles: int, n_chunks: int = 1,
                 n_tiles: int = 0) -> None:
         if self.fixed.shape[0] < n_vertices:
             self.fixed = np.empty((max(n_vertices, 2 * self.fixed.shape[0]), 2), np.int32)
+            self.hidden_in = np.empty(self.fixed.shape[0], np.int32)
         if self.tri.shape[0] < n_triangles:
             n = max(n_triangles, 2 * self.tri.shape[0])
             self.tri = np.empty(n, np.int32)
@@ -353,13 +355,35 @@ def _behind_tiles(z_near, i_min, i_max, j_min, j_max, n_tiles_x, tile_zmin, late
     return True
 
 
+@njit(cache=True, parallel=True, nogil=True)
+def _hidden_vertices(xy_z, fixed, n_tiles_x, width, height, tile_zmin, later_first, margin,
+                     hidden_in):
+    """Per vertex, the tile it lies in when it is behind that tile's coarse z (else -1). A
+    triangle whose three corners are hidden in one tile lies inside it (a tile is convex) and
+    is hidden there: its depth bound (:func:`_nearest`) is at most its largest corner depth
+    plus ``margin`` (3e-9 times the largest |z| of the frame)."""
+    n = xy_z.shape[0]
+    for chunk in prange(SETUP_CHUNKS):
+        for v in range(chunk * n // SETUP_CHUNKS, (chunk + 1) * n // SETUP_CHUNKS):
+            hidden_in[v] = -1
+            x, y = np.int64(fixed[v, 0]), np.int64(fixed[v, 1])
+            if x == INVALID or x < 0 or y < 0 or x >= width << SUBPIXEL_BITS \
+                    or y >= height << SUBPIXEL_BITS:
+                continue
+            k = (y >> (SUBPIXEL_BITS + TILE_BITS)) * n_tiles_x + (x >> (SUBPIXEL_BITS + TILE_BITS))
+            if _hidden(xy_z[v, 2] + margin, tile_zmin[k, N_BLOCKS], later_first):
+                hidden_in[v] = k
+
+
 @njit(cache=True)
 def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk, n_chunks,
-                 s_tri, s_xy, s_zw, chunk_end, counts, offset, tile_zmin, early_z, later_first):
+                 s_tri, s_xy, s_zw, chunk_end, counts, offset, tile_zmin, early_z, later_first,
+                 hidden_in):
     """Put the triangles of one chunk that can draw something into the scene, in order, and
     count how many of them each tile will draw (``counts[chunk, tile]``). ``triangles`` is a
     batch starting at triangle ``offset``; with ``early_z`` a triangle behind the coarse z of
-    every tile its box meets (the batches before drew there) is dropped here.
+    every tile its box meets (the batches before drew there) is dropped here; first, cheaply,
+    one whose three corners are hidden in one tile (``hidden_in``, :func:`_hidden_vertices`).
 
     Returns how many triangles name a vertex that does not exist (they are never drawn).
     """
@@ -376,6 +400,9 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
         if min(v0, v1, v2) < 0 or max(v0, v1, v2) >= n_vertices:
             bad += 1
             continue
+        if early_z and hidden_in[v0] >= 0 and hidden_in[v1] == hidden_in[v0] \
+                and hidden_in[v2] == hidden_in[v0]:
+            continue  # three corners hidden in one tile: the triangle is (the common case)
         x0 = np.int64(fixed[v0, 0])
         y0 = np.int64(fixed[v0, 1])
         x1 = np.int64(fixed[v1, 0])
@@ -474,7 +501,8 @@ def _bin_offsets(counts, tile_start):
 
 @njit(cache=True, parallel=True, nogil=True)
 def _setup_parallel(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri, s_xy,
-                    s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first):
+                    s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first,
+                    hidden_in):
     n_chunks = chunk_end.shape[0]
     if snap:                    # (about 1 ms for 500k vertices on one core)
         n_vertices = xy_z.shape[0]
@@ -485,20 +513,21 @@ def _setup_parallel(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_t
     for chunk in prange(n_chunks):
         bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
                             n_chunks, s_tri, s_xy, s_zw, chunk_end, counts, offset, tile_zmin,
-                            early_z, later_first)
+                            early_z, later_first, hidden_in)
     return bad
 
 
 @njit(cache=True, nogil=True)
 def _setup_serial(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri, s_xy,
-                  s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first):
+                  s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first,
+                  hidden_in):
     if snap:
         _snap_vertices(xy_z, inv_w, fixed)
     bad = 0
     for chunk in range(chunk_end.shape[0]):
         bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
                             chunk_end.shape[0], s_tri, s_xy, s_zw, chunk_end, counts, offset,
-                            tile_zmin, early_z, later_first)
+                            tile_zmin, early_z, later_first, hidden_in)
     return bad
 
 
@@ -879,8 +908,14 @@ def _batch(xy_z, inv_w, triangles, offset, width, height, n_tiles_x, n_tiles, n_
     rast = _rast_parallel if parallel else _rast_serial
     # early z only once some tile is full (else it would test every triangle for nothing)
     early_z = hiz and not first and bool(np.isfinite(tile_zmin[:, N_BLOCKS]).any())
+    hidden_in = scene.hidden_in[:xy_z.shape[0]]
+    if early_z:
+        margin = 3e-9 * float(np.abs(xy_z[:, 2]).max())
+        _hidden_vertices(xy_z, fixed, n_tiles_x, width, height, tile_zmin, order == 1,
+                         margin if np.isfinite(margin) else np.inf, hidden_in)
     bad = setup(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, scene.tri, scene.xy,
-                scene.zw, chunk_end, counts, first, offset, tile_zmin, early_z, order == 1)
+                scene.zw, chunk_end, counts, first, offset, tile_zmin, early_z, order == 1,
+                hidden_in)
     if bad:
         raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
     scene.reserve_bins(_bin_offsets(counts, tile_start))
