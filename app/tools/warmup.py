@@ -42,6 +42,17 @@ def _scenes():
     return closed, opened
 
 
+def _batched_frame():
+    """The rasterizer's path for frames of BATCH_FROM triangles or more: two batches, the
+    second set up against the first's coarse z (21 stacked layers of 10k triangles)."""
+    from app.tools.depth_bench import depth_layers
+    from core.pipeline import raster
+    for front_to_back in (True, False):
+        xy_z, inv_w, triangles = depth_layers(21, 10_000, *SIZE, front_to_back)
+        assert len(triangles) >= raster.BATCH_FROM
+        raster.rasterize(xy_z, inv_w, triangles, *SIZE)
+
+
 def steps() -> list[tuple[str, Callable[[], object]]]:
     """(label, run) for every path the window can take; each ``run`` renders one small frame."""
     from core.render import render
@@ -65,6 +76,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
                 projection=projection)
     add("flat, 4 samples a pixel", closed, shading="flat", samples=4)
     add("phong, the float64 pixel kernel", opened, shading="phong", shading_precision="float64")
+    out.append(("a large frame in two batches (early z)", _batched_frame))
     add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")
     add("BSP tree (painter's)", closed, shading="flat", renderer="bsp")
     add("depth sort (painter's), depth-cued", closed, shading="gouraud", renderer="depth-sort",
