@@ -136,8 +136,8 @@ def _light(s: ShadeInput, faces) -> None:
     if wide_shading(s):
         points, normals, surface = _face_points(s.positions, s.triangles, faces, s.normals,
                                                 s.polygon, s.polygon_point, s.face_surface)
-        s.face_rgb[faces] = illuminate_wide(points, normals, surface, s.surfaces, s.lights,
-                                            s.ambient, s.eye, s.halfway, parallel)
+        illuminate_wide(points, normals, surface, np.arange(len(faces)), s.face_rgb, faces,
+                        s.surfaces, s.lights, s.ambient, s.eye, s.halfway, parallel)
         return
     kernel = _phong_faces_parallel if len(faces) >= PARALLEL_ITEMS else _phong_faces_serial
     kernel(s.positions, s.triangles, faces, s.normals, s.polygon, s.polygon_point,

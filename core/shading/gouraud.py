@@ -34,10 +34,9 @@ def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
 def _light(s: ShadeInput, vertices, out) -> None:
     """The model at ``vertices`` into the rows of ``out`` (their first rows are the mesh's)."""
     if wide_shading(s):
-        out[vertices] = illuminate_wide(s.positions[vertices], s.normals[vertices],
-                                        s.vertex_surface[vertices], s.surfaces, s.lights,
-                                        s.ambient, s.eye, s.halfway,
-                                        len(vertices) >= PARALLEL_ITEMS)
+        illuminate_wide(s.positions, s.normals, s.vertex_surface, vertices, out, vertices,
+                        s.surfaces, s.lights, s.ambient, s.eye, s.halfway,
+                        len(vertices) >= PARALLEL_ITEMS)
         return
     kernel = _phong_vertices_parallel if len(vertices) >= PARALLEL_ITEMS else _phong_vertices_serial
     kernel(s.positions, s.normals, vertices, s.vertex_surface, s.surfaces, s.lights, s.ambient,

@@ -106,39 +106,39 @@ def _shade_span(q, p, flag, runs, run_surface, surfaces, lights, ambient, halfwa
 BLOCK = 256
 
 
-def illuminate_wide(points, normals, surface, surfaces, lights, ambient, eye, halfway,
-                    parallel: bool) -> np.ndarray:
-    """The model at N world points with their (unit or zero) normals, as
-    :func:`core.shading.illumination.illuminate` but in float32 passes: ``(N, 3)`` RGB in
-    [0, 1]. ``surface`` is each point's row of ``surfaces``; blocks of points run on all
-    cores when ``parallel``."""
-    out = np.empty((len(points), 3))
+def illuminate_wide(points, normals, surface, which, out, out_rows, surfaces, lights, ambient,
+                    eye, halfway, parallel: bool) -> None:
+    """The model at the world points ``points[which]`` with their (unit or zero) normals, as
+    :func:`core.shading.illumination.illuminate` but in float32 passes: RGB in [0, 1] into
+    the rows ``out_rows`` of ``out`` (one per point of ``which``). ``surface`` is each
+    point's row of ``surfaces``; blocks of points run on all cores when ``parallel``."""
     kernel = _illuminate_blocks_parallel if parallel else _illuminate_blocks
-    kernel(points, normals, surface, surfaces, lights, ambient, eye, halfway, out)
-    return out
+    kernel(points, normals, surface, which, out, out_rows, surfaces, lights, ambient, eye,
+           halfway)
 
 
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")
-def _illuminate_blocks_parallel(points, normals, surface, surfaces, lights, ambient, eye,
-                                halfway, out):
-    for block in prange((points.shape[0] + BLOCK - 1) // BLOCK):
-        _illuminate_block(block * BLOCK, points, normals, surface, surfaces, lights, ambient,
-                          eye, halfway, out)
+def _illuminate_blocks_parallel(points, normals, surface, which, out, out_rows, surfaces,
+                                lights, ambient, eye, halfway):
+    for block in prange((which.shape[0] + BLOCK - 1) // BLOCK):
+        _illuminate_block(block * BLOCK, points, normals, surface, which, out, out_rows,
+                          surfaces, lights, ambient, eye, halfway)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _illuminate_blocks(points, normals, surface, surfaces, lights, ambient, eye, halfway, out):
-    for block in range((points.shape[0] + BLOCK - 1) // BLOCK):
-        _illuminate_block(block * BLOCK, points, normals, surface, surfaces, lights, ambient,
-                          eye, halfway, out)
+def _illuminate_blocks(points, normals, surface, which, out, out_rows, surfaces, lights,
+                       ambient, eye, halfway):
+    for block in range((which.shape[0] + BLOCK - 1) // BLOCK):
+        _illuminate_block(block * BLOCK, points, normals, surface, which, out, out_rows,
+                          surfaces, lights, ambient, eye, halfway)
 
 
 @njit(cache=True, error_model="numpy")
-def _illuminate_block(j0, points, normals, surface, surfaces, lights, ambient, eye, halfway,
-                      out):
-    """Points j0 .. j0 + BLOCK - 1: gather, passes 2 and 3, and the clamped sums (flagged
-    points by the float64 model)."""
-    m = min(BLOCK, points.shape[0] - j0)
+def _illuminate_block(j0, points, normals, surface, which, out, out_rows, surfaces, lights,
+                      ambient, eye, halfway):
+    """Points which[j0 .. j0 + BLOCK - 1]: gather, passes 2 and 3, and the clamped sums
+    (flagged points by the float64 model)."""
+    m = min(BLOCK, which.shape[0] - j0)
     q = np.empty((ROWS, m), np.float32)
     p = np.empty((3, m))
     flag = np.zeros(m, np.bool_)
@@ -146,7 +146,7 @@ def _illuminate_block(j0, points, normals, surface, surfaces, lights, ambient, e
     run_surface = np.empty(m, np.int64)
     n_runs = 0
     for j in range(m):
-        i = j0 + j
+        i = which[j0 + j]
         for c in range(3):
             q[NX + c, j] = normals[i, c]
             p[c, j] = points[i, c]
@@ -158,14 +158,14 @@ def _illuminate_block(j0, points, normals, surface, surfaces, lights, ambient, e
     sums = _shade_span(q, p, flag, runs[:n_runs + 1], run_surface[:n_runs], surfaces, lights,
                        ambient, halfway)
     for j in range(m):
-        i = j0 + j
+        i, row = which[j0 + j], out_rows[j0 + j]
         if flag[j]:
-            out[i, 0], out[i, 1], out[i, 2] = phong_point(
+            out[row, 0], out[row, 1], out[row, 2] = phong_point(
                 points[i, 0], points[i, 1], points[i, 2], normals[i, 0], normals[i, 1],
                 normals[i, 2], surface[i], surfaces, lights, ambient, eye, halfway)
         else:
             for c in range(3):
-                out[i, c] = min(max(q[sums + c, j], F(0.0)), F(1.0))
+                out[row, c] = min(max(q[sums + c, j], F(0.0)), F(1.0))
 
 
 @njit(cache=True, error_model="numpy")
