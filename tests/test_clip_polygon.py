@@ -239,3 +239,20 @@ def test_clipped_region_matches_brute_force(corners, projection):
         covered |= (w[0] >= -1e-9) & (w[1] >= -1e-9) & (w[2] >= -1e-9)
     assert np.all(covered[deep])
     assert not np.any(covered[out])
+
+
+@pytest.mark.parametrize("projection", ["perspective", "parallel"])
+def test_outcodes_on_all_cores_equal_one_pass(projection):
+    """From PARALLEL_POINTS points the outcodes are found in chunks on all cores: the same
+    codes and the same 'any outside' as one pass, NaN and far points included."""
+    from core.pipeline import clip_polygon as cp
+    rng = np.random.default_rng(21)
+    points = rng.uniform(-1.3, 0.3, size=(cp.PARALLEL_POINTS + 1234, 3))
+    points[::997] = np.nan
+    perspective = projection == "perspective"
+    codes, any_outside = cp._outcodes_and_any(points, perspective, -0.1)
+    one = np.empty(len(points), np.uint8)
+    assert any_outside == cp._outcodes(points, perspective, -0.1, one) != 0
+    np.testing.assert_array_equal(codes, one)
+    inside = np.zeros((cp.PARALLEL_POINTS, 3)) - 0.5
+    assert cp._outcodes_and_any(inside, perspective, -0.1)[1] == 0

@@ -32,7 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from core.settings import PROJECTIONS
 
@@ -70,14 +70,15 @@ def _check_projection(projection: str) -> bool:
 
 
 @njit(cache=True)
-def _outcodes(points, perspective, z_min, codes):
-    """Outcode of every point into ``codes``; returns the OR of them all (0: all inside).
+def _outcodes(points, perspective, z_min, codes, first=0, end=-1):
+    """Outcode of every point (of points first..end-1) into ``codes``; returns the OR of
+    them all (0: all inside).
 
     Each bit is "not inside" rather than "outside", so that a NaN coordinate, which fails
     every comparison, lands outside. No branches: the loop runs at memory speed.
     """
     any_outside = 0
-    for v in range(points.shape[0]):
+    for v in range(first, points.shape[0] if end < 0 else end):
         x = points[v, 0]
         y = points[v, 1]
         z = points[v, 2]
@@ -101,9 +102,9 @@ def outcodes(points: np.ndarray, projection: str, z_min: float = 0.0) -> np.ndar
     (z <= x, y <= -z, -1 <= z <= z_min). A NaN or infinite coordinate sets every bit it
     cannot satisfy; a NaN coordinate is outside both of its planes.
 
-    One compiled pass over the points (under 2 ms for 500k; a thread of its own would cost
-    more to wake than it saves); ``points`` may be a strided view (the first three columns of
-    homogeneous points) and is not copied.
+    One compiled pass over the points (the clipper's own classification runs on all cores
+    from PARALLEL_POINTS points); ``points`` may be a strided view (the first three columns
+    of homogeneous points) and is not copied.
     """
     perspective = _check_projection(projection)
     points = np.asarray(points, dtype=np.float64)
@@ -114,9 +115,29 @@ def outcodes(points: np.ndarray, projection: str, z_min: float = 0.0) -> np.ndar
     return codes
 
 
+# From this many points the outcodes are found on all cores, in chunks (500k points: 2.5 ms
+# on one core).
+PARALLEL_POINTS = 200_000
+CHUNKS = 64
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _outcodes_parallel(points, perspective, z_min, codes):
+    n = points.shape[0]
+    ors = np.zeros(CHUNKS, np.int64)
+    for chunk in prange(CHUNKS):
+        ors[chunk] = _outcodes(points, perspective, z_min, codes, chunk * n // CHUNKS,
+                               (chunk + 1) * n // CHUNKS)
+    any_outside = 0
+    for chunk in range(CHUNKS):
+        any_outside |= ors[chunk]
+    return any_outside
+
+
 def _outcodes_and_any(points, perspective, z_min):
     codes = np.empty(points.shape[0], np.uint8)
-    return codes, _outcodes(points, perspective, float(z_min), codes)
+    kernel = _outcodes_parallel if points.shape[0] >= PARALLEL_POINTS else _outcodes
+    return codes, kernel(points, perspective, float(z_min), codes)
 
 
 @njit(cache=True)
