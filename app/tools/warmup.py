@@ -25,7 +25,7 @@ SIZE = (64, 48)
 
 
 def _scenes():
-    """A closed sphere of 12 288 triangles, the same sphere open, and the house (lines)."""
+    """A closed sphere of 50 688 triangles, the same sphere open, and the house (lines)."""
     import dataclasses
 
     from core.camera.view import View
@@ -34,7 +34,7 @@ def _scenes():
 
     view = View(vrp=(0, 0, 0), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-1.5, 1.5, -1.5, 1.5),
                 prp=(0, 0, 5), front=2, back=-2, label="warm-up view")
-    sphere = uv_sphere(1.0, segments=128, rings=48)
+    sphere = uv_sphere(1.0, segments=256, rings=100)     # 50,688 faces: culled on all cores
     closed = Scene(name="warm-up sphere", meshes=[dataclasses.replace(sphere, closed=True)],
                    views=[view])
     opened = Scene(name="warm-up open sphere", meshes=[dataclasses.replace(sphere, closed=False),
@@ -43,14 +43,19 @@ def _scenes():
 
 
 def _batched_frame():
-    """The rasterizer's path for frames of BATCH_FROM triangles or more: two batches, the
-    second set up against the first's coarse z (21 stacked layers of 10k triangles)."""
+    """The paths of very large frames: the rasterizer's two batches, the second set up
+    against the first's coarse z (21 stacked layers of 10k triangles), and the clipper's
+    classification on all cores."""
+    import numpy as np
+
     from app.tools.depth_bench import depth_layers
-    from core.pipeline import raster
+    from core.pipeline import clip_polygon, raster
     for front_to_back in (True, False):
         xy_z, inv_w, triangles = depth_layers(21, 10_000, *SIZE, front_to_back)
         assert len(triangles) >= raster.BATCH_FROM
         raster.rasterize(xy_z, inv_w, triangles, *SIZE)
+    inside = np.full((clip_polygon.PARALLEL_POINTS, 3), -0.5)
+    clip_polygon.clip_triangles(inside, np.zeros((1, 3), np.int64), None, "parallel")
 
 
 def steps() -> list[tuple[str, Callable[[], object]]]:
