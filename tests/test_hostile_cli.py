@@ -189,3 +189,21 @@ def test_a_view_only_parallel_can_draw_is_explained_by_every_command(tmp_path, c
     status, _ = run(capsys, "render", str(views), "--projection", "parallel", "--size", "8x8",
                     "--out", str(tmp_path / "q.png"))
     assert status == 0 and (tmp_path / "q.png").exists()
+
+
+def test_a_reader_that_goes_away_gets_no_traceback():
+    """``python -m app matrices ... | head -c 1``: stdout's reader has gone; the command ends
+    with status 1 and says nothing on stderr (Python's own BrokenPipeError traceback, and its
+    'Exception ignored' at exit, are what a user used to get)."""
+    import subprocess
+    from core.paths import ROOT
+    read, write = os.pipe()
+    os.close(read)                                  # nobody will read: the first write fails
+    try:
+        done = subprocess.run([sys.executable, "-m", "app", "matrices",
+                               str(SCENES_DIR / "torus.toml"), "--view", "1"],
+                              stdout=write, stderr=subprocess.PIPE, cwd=ROOT, timeout=120)
+    finally:
+        os.close(write)
+    assert done.returncode == 1
+    assert "Traceback" not in done.stderr.decode() and "Broken pipe" not in done.stderr.decode()
