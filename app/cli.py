@@ -87,6 +87,7 @@ def _parser(command: str | None = None) -> argparse.ArgumentParser:
                                           "depth-sort"), default=None,
                    help="draw with the z-buffer (default), the ray tracer, radiosity, the path "
                         "tracer (those three progressive), or a painter's algorithm")
+    _crease_argument(v)
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
@@ -392,11 +393,16 @@ def _pick_view(scene, k: int):
 def _dispatch(args) -> int:
     if args.command == "view":
         from app.viewer.launch import main as viewer_main
+        loader = None
+        if args.crease_angle is not None:        # every scene the window opens, File > Open too
+            import functools
+            from app.viewer.state import load_scene
+            loader = functools.partial(load_scene, crease_angle=args.crease_angle)
         return viewer_main(args.scene, args.size, out_dir=args.out,
                            options={"rasterizer": args.rasterizer,
                                     "keep_aspect": args.keep_aspect,
                                     "course_tri": args.course_tri,
-                                    "renderer_name": args.renderer})
+                                    "renderer_name": args.renderer, "loader": loader})
     if args.command == "render":
         return _render(args)
     if args.command == "matrices":

@@ -136,3 +136,22 @@ def test_cli_option(tmp_path):
     assert main(["render", str(path), "--shading", "gouraud", "--size", "40x40",
                  "--crease-angle", "180", "--out", str(out)]) == 0
     assert out.exists()
+
+
+def test_the_viewer_takes_the_crease_angle_to_its_reader(tmp_path):
+    """``view --crease-angle`` reaches the reader, as ``render``'s does: a bad angle is the
+    reader's one-line error (here without a display, where the viewer writes PNGs)."""
+    import os
+    import subprocess
+    import sys
+    from core.paths import ROOT
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    done = subprocess.run([sys.executable, "-m", "app", "view", "scenes/cube.toml",
+                           "--crease-angle", "-5", "--out", str(tmp_path)], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert "the crease angle must be from 0 to 180 degrees, not -5.0" in done.stderr
+    done = subprocess.run([sys.executable, "-m", "app", "view", "scenes/cube.toml",
+                           "--crease-angle", "90", "--out", str(tmp_path)], cwd=ROOT, env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and len(list(tmp_path.glob("cube-view*.png"))) == 3

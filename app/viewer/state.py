@@ -40,10 +40,11 @@ from core.settings import PROJECTIONS, RASTERIZERS, SHADINGS
 log = logging.getLogger("fvd")
 
 
-def load_scene(source: str | Path, size: tuple[int, int] | None = None) -> Scene:
+def load_scene(source: str | Path, size: tuple[int, int] | None = None,
+               crease_angle: float | None = None) -> Scene:
     """``core.scene.formats.load_scene``, imported when first needed (it pulls in the readers)."""
     from core.scene.formats import load_scene as load
-    return load(source, size=size)
+    return load(source, size=size, crease_angle=crease_angle)
 
 
 def render(scene, view, settings, context=None):
