@@ -25,7 +25,8 @@ SIZE = (64, 48)
 
 
 def _scenes():
-    """A closed sphere of 50 688 triangles, the same sphere open, and the house (lines)."""
+    """A closed sphere of 12 288 triangles, the same sphere open, and the house (lines); and
+    a closed sphere of 50 688, culled on all cores."""
     import dataclasses
 
     from core.camera.view import View
@@ -34,12 +35,14 @@ def _scenes():
 
     view = View(vrp=(0, 0, 0), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-1.5, 1.5, -1.5, 1.5),
                 prp=(0, 0, 5), front=2, back=-2, label="warm-up view")
-    sphere = uv_sphere(1.0, segments=256, rings=100)     # 50,688 faces: culled on all cores
+    sphere = uv_sphere(1.0, segments=128, rings=48)
     closed = Scene(name="warm-up sphere", meshes=[dataclasses.replace(sphere, closed=True)],
                    views=[view])
     opened = Scene(name="warm-up open sphere", meshes=[dataclasses.replace(sphere, closed=False),
                                                        house()], views=[view])
-    return closed, opened
+    large = Scene(name="warm-up large sphere", views=[view], meshes=[
+        dataclasses.replace(uv_sphere(1.0, segments=256, rings=100), closed=True)])
+    return closed, opened, large
 
 
 def _batched_frame():
@@ -50,10 +53,9 @@ def _batched_frame():
 
     from app.tools.depth_bench import depth_layers
     from core.pipeline import clip_polygon, raster
-    for front_to_back in (True, False):
-        xy_z, inv_w, triangles = depth_layers(21, 10_000, *SIZE, front_to_back)
-        assert len(triangles) >= raster.BATCH_FROM
-        raster.rasterize(xy_z, inv_w, triangles, *SIZE)
+    xy_z, inv_w, triangles = depth_layers(21, 10_000, *SIZE)   # (either order: same code)
+    assert len(triangles) >= raster.BATCH_FROM
+    raster.rasterize(xy_z, inv_w, triangles, *SIZE)
     inside = np.full((clip_polygon.PARALLEL_POINTS, 3), -0.5)
     clip_polygon.clip_triangles(inside, np.zeros((1, 3), np.int64), None, "parallel")
 
@@ -64,7 +66,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
     from core.scene.model import Scene
     from core.settings import RASTERIZERS, SHADINGS, RenderSettings
 
-    closed, opened = _scenes()
+    closed, opened, large = _scenes()
     out = []
 
     def add(label, scene, **settings):
@@ -81,6 +83,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
                 projection=projection)
     add("flat, 4 samples a pixel", closed, shading="flat", samples=4)
     add("phong, the float64 pixel kernel", opened, shading="phong", shading_precision="float64")
+    add("flat, 50k faces culled on all cores", large, shading="flat")
     out.append(("a large frame in two batches (early z)", _batched_frame))
     add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")
     add("BSP tree (painter's)", closed, shading="flat", renderer="bsp")
