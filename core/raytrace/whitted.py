@@ -68,7 +68,7 @@ NOTHING, TRIANGLE, SPHERE, PLANE = -1, 0, 1, 2
 FEW_SPHERES = 8        # up to this many spheres are tested one by one; more, through their BVH
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def nearest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     """``(kind, index, t, u, v)`` of the nearest hit in ``(t_min, t_max)``: a triangle (its
     BVH position), a sphere or a plane (its row); ``kind = NOTHING`` when the ray escapes."""
@@ -98,21 +98,21 @@ def nearest(packed, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     return kind, index, t_max, u, v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def surface_at(packed, kind, index, u, v, ox, oy, oz, dx, dy, dz, t):
     """The hit point, the unit shading normal, the unit geometric normal and the surface row.
 
     A triangle's point is ``V0 + u E1 + v E2`` and its shading normal the vertex normals
     interpolated with ``(1 − u − v, u, v)`` — what the z-buffer's Phong shading computes."""
     if kind == TRIANGLE:
-        tree = packed
-        px = tree.v0[index, 0] + u * tree.e1[index, 0] + v * tree.e2[index, 0]
-        py = tree.v0[index, 1] + u * tree.e1[index, 1] + v * tree.e2[index, 1]
-        pz = tree.v0[index, 2] + u * tree.e1[index, 2] + v * tree.e2[index, 2]
-        e1, e2 = tree.e1[index], tree.e2[index]
+        tri = packed.tri            # V0, E1, E2 of each triangle, in BVH order
+        px = tri[index, 0] + u * tri[index, 3] + v * tri[index, 6]
+        py = tri[index, 1] + u * tri[index, 4] + v * tri[index, 7]
+        pz = tri[index, 2] + u * tri[index, 5] + v * tri[index, 8]
+        e1, e2 = tri[index, 3:6], tri[index, 6:9]
         gx, gy, gz, _ = unit3(e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                               e1[0] * e2[1] - e1[1] * e2[0])
-        f = tree.prim[index]
+        f = packed.prim[index]
         i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
         w0 = 1.0 - u - v
         nrm = packed.normals
@@ -132,7 +132,7 @@ def surface_at(packed, kind, index, u, v, ox, oy, oz, dx, dy, dz, t):
     return px, py, pz, row[0], row[1], row[2], row[0], row[1], row[2], int(row[4])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def checker_colour(packed, kind, index, s, px, py, pz, surface_row):
     """Copy surface ``s``'s Phong row into ``surface_row`` with ``O_d`` the checker's square
     colour at P (planes with ``checker > 0``; other surfaces keep their ``O_d``)."""
@@ -150,9 +150,23 @@ def checker_colour(packed, kind, index, s, px, py, pz, surface_row):
             surface_row[0, OD + c] = packed.checker[s, 1 + c]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def surface_of(packed, kind, index):
+    """The surface row of a hit (what a shadow ray needs of it: no point, no normal)."""
+    if kind == TRIANGLE:
+        return packed.face_surface[packed.prim[index]]
+    if kind == SPHERE:
+        return int(packed.spheres[index, 4])
+    return int(packed.planes[index, 4])
+
+
+@njit(cache=True, inline="always")
 def shadow_term(packed, mode, light, px, py, pz, background, offset, stack, counts):
-    """``(S_r, S_g, S_b)``: how much of light row ``light`` reaches P (already offset)."""
+    """``(S_r, S_g, S_b)``: how much of light row ``light`` reaches P (already offset).
+
+    One loop for the three modes: the first surface in the way decides "background" and
+    "object"; "transmit" walks on through every surface up to the light, attenuating by each
+    ``k_t``."""
     if light[0] == POINT_LIGHT:
         lx, ly, lz, distance = unit3(light[1] - px, light[2] - py, light[3] - pz)
         if distance == 0.0:
@@ -161,27 +175,19 @@ def shadow_term(packed, mode, light, px, py, pz, background, offset, stack, coun
     else:
         lx, ly, lz, t_max = light[1], light[2], light[3], np.inf
     counts[SHADOW] += 1
-    if mode == SHADOW_BACKGROUND:
-        kind, _, _, _, _ = nearest(packed, px, py, pz, lx, ly, lz, 0.0, t_max, stack)
-        if kind != NOTHING:
-            return background[0], background[1], background[2]
-        return 1.0, 1.0, 1.0
-    if mode == SHADOW_OBJECT:
-        kind, index, t, u, v = nearest(packed, px, py, pz, lx, ly, lz, 0.0, t_max, stack)
-        if kind == NOTHING:
-            return 1.0, 1.0, 1.0
-        s = surface_at(packed, kind, index, u, v, px, py, pz, lx, ly, lz, t)[9]
-        sr = packed.surfaces
-        return (OBJECT_FRACTION * sr[s, OD], OBJECT_FRACTION * sr[s, OD + 1],
-                OBJECT_FRACTION * sr[s, OD + 2])
-    # Transmit: walk through every surface up to the light, attenuating by each k_t.
     through = 1.0
     ox, oy, oz = px, py, pz
     for _ in range(MAX_SHADOW_CROSSINGS):
-        kind, index, t, u, v = nearest(packed, ox, oy, oz, lx, ly, lz, 0.0, t_max, stack)
+        kind, index, t, _, _ = nearest(packed, ox, oy, oz, lx, ly, lz, 0.0, t_max, stack)
         if kind == NOTHING:
             return through, through, through
-        s = surface_at(packed, kind, index, u, v, ox, oy, oz, lx, ly, lz, t)[9]
+        if mode == SHADOW_BACKGROUND:
+            return background[0], background[1], background[2]
+        s = surface_of(packed, kind, index)
+        if mode == SHADOW_OBJECT:
+            sr = packed.surfaces
+            return (OBJECT_FRACTION * sr[s, OD], OBJECT_FRACTION * sr[s, OD + 1],
+                    OBJECT_FRACTION * sr[s, OD + 2])
         through *= packed.optics[s, 1]
         if through == 0.0:
             return 0.0, 0.0, 0.0
@@ -191,7 +197,7 @@ def shadow_term(packed, mode, light, px, py, pz, background, offset, stack, coun
     return 0.0, 0.0, 0.0
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def has_maps(tex, kind, s):
     """Does the hit surface carry a colour, bump, normal or environment map?"""
     if kind != TRIANGLE:
@@ -202,7 +208,7 @@ def has_maps(tex, kind, s):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights, ambient,
                  eye, halfway, shadows, background, offset, scaled, surface_row, stack, counts):
     """``I_local`` at P with each light's ``I_p`` scaled by its shadow term (Phong's model)."""
@@ -237,7 +243,7 @@ def textured_colour(packed, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights
     return r, g, b
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def shadowed_lights(packed, px, py, pz, nx, ny, nz, gx, gy, gz, lights, eye, shadows,
                     background, offset, scaled, surface_row, stack, counts):
     """The light rows as they arrive at P: ``lights`` itself with shadows off, else
@@ -291,7 +297,7 @@ def uv_derivatives(packed, tex, index, dp, duv):
     """``duv`` = (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) of the texture coordinates on triangle
     ``index`` (BVH order) from the point's derivatives ``dp``: ``dP = dβ₁ E1 + dβ₂ E2``
     solved by least squares in the triangle's plane, then (u, v) interpolated."""
-    e1, e2 = packed.e1[index], packed.e2[index]
+    e1, e2 = packed.tri[index, 3:6], packed.tri[index, 6:9]
     a = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]
     b = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]
     c = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]
