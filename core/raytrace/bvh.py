@@ -482,19 +482,17 @@ def occluded_rays(bvh: BVH, origins, directions, t_min=0.0, t_max=np.inf) -> np.
 def closest_sphere(box, first, count, item, spheres, ox, oy, oz, dx, dy, dz, t_min, t_max,
                    stack):
     """``(row, t)`` of the nearest sphere (rows ``cx, cy, cz, r, …``) a :class:`BoxTree`
-    holds, hit in ``(t_min, t_max)``; ``(-1, inf)`` when none is."""
+    holds, hit in ``(t_min, t_max)``; ``(-1, inf)`` when none is. The walk is
+    :func:`closest`'s: the nearer child first, popped nodes tested against the best hit."""
     best, best_t = -1, t_max
     if item.shape[0] == 0:
         return -1, np.inf
     ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
     near = _sides(ix, iy, iz)
-    stack[0] = 0
-    top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        if _box_entry(box, node, ox, oy, oz, ix, iy, iz, near, best_t) == np.inf:
-            continue
+    if _box_entry(box, 0, ox, oy, oz, ix, iy, iz, near, best_t) == np.inf:
+        return -1, np.inf
+    node, top = 0, 0
+    while True:
         n = count[node]
         if n > 0:
             for k in range(first[node], first[node] + n):
@@ -503,10 +501,25 @@ def closest_sphere(box, first, count, item, spheres, ox, oy, oz, dx, dy, dz, t_m
                                      spheres[i, 2], spheres[i, 3], t_min, best_t)
                 if t < best_t:
                     best, best_t = i, t
-            continue
-        stack[top] = first[node] + 1
-        stack[top + 1] = first[node]
-        top += 2
+        else:
+            left = first[node]
+            t_left = _box_entry(box, left, ox, oy, oz, ix, iy, iz, near, best_t)
+            t_right = _box_entry(box, left + 1, ox, oy, oz, ix, iy, iz, near, best_t)
+            if t_left != np.inf or t_right != np.inf:
+                nearer, farther = (left, left + 1) if t_left <= t_right else (left + 1, left)
+                if max(t_left, t_right) != np.inf:
+                    stack[top] = farther
+                    top += 1
+                node = nearer
+                continue
+        node = -1
+        while top > 0:
+            top -= 1
+            if _box_entry(box, stack[top], ox, oy, oz, ix, iy, iz, near, best_t) != np.inf:
+                node = stack[top]
+                break
+        if node < 0:
+            break
     if best < 0:
         return -1, np.inf
     return best, best_t
