@@ -17,15 +17,18 @@ Build (:func:`build`), top down, in one numba loop over a stack of pending node 
   ``SAH_DEPTH``, are split at the median by index, so the tree stays at most ~``MAX_DEPTH``
   deep and the traversal stack (``STACK``) cannot overflow.
 
-Layout (:class:`BVH`): node ``k`` has its box in ``box[k] = (min xyz, max xyz)``; an inner
-node's children are ``first[k]`` and ``first[k] + 1`` (``count[k] == 0``), a leaf holds
-triangles ``first[k] .. first[k] + count[k] − 1`` of the BVH's own order. Triangles are stored
-in that order as ``V0, E1, E2`` (what Möller–Trumbore reads) with ``prim`` mapping back to the
-scene's triangle index, so a leaf's data is contiguous in memory.
+Layout (:class:`BVH`): node ``k`` has its box in ``box[k] = (min xyz, max xyz)``, float32
+rounded outwards (half the memory, no ray lost); an inner node's children are ``first[k]``
+and ``first[k] + 1`` (``count[k] == 0``), a leaf holds triangles ``first[k] .. first[k] +
+count[k] − 1`` of the BVH's own order. Triangles are stored in that order as one row
+``V0, E1, E2`` each (``tri``, what Möller–Trumbore reads) with ``prim`` mapping back to the
+scene's triangle index, so a leaf's data is one run of memory.
 
 Traversal (:func:`closest`, :func:`occluded`): the slab test against the box with the ray's
-reciprocal direction, the nearer child first, nodes whose entry lies beyond the best hit so
-far skipped. ``occluded`` stops at the first hit (shadow rays).
+reciprocal direction (each axis's near and far slab picked once per ray by the direction's
+sign), the nearer child first, nodes whose entry lies beyond the best hit so far skipped.
+``occluded`` stops at the first hit (shadow rays). ``closest`` is inlined into its callers:
+a numba call that takes the scene's tuple of arrays costs per array in it, per call.
 """
 
 from __future__ import annotations
