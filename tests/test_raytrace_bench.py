@@ -26,3 +26,6 @@ def test_raytrace_bench_rows(tmp_path):
         assert rows["glass bunny"]["triangles"] == 69451
         assert rows["glass bunny"]["embree_rays_per_s"] > 0
     assert "primary Mray/s" in run.stdout and "Embree" in run.stdout
+    spheres = report["spheres"]                      # 10,000 spheres, 100² -> 400² pixels
+    assert spheres["spheres"] == 10_000 and spheres["more_rays"] == 400 ** 2 - 100 ** 2
+    assert spheres["more_cpu_s"] > 0 and "150,000 more primary rays" in run.stdout

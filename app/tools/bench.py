@@ -815,8 +815,9 @@ def raytrace_bench(args) -> int:
                      "rays_per_frame": {k: int(v) for k, v in zip(
                          ("primary", "shadow", "reflected", "refracted", "TIR", "cut by depth",
                           "cut adaptive"), counted.counts)}})
+    spheres = None if args.scene else _many_spheres_row(frames, warmup)
     report = {"size": list(args.size), "projection": args.projection, "frames": frames,
-              "rows": rows, "loadavg_before": list(load_before),
+              "rows": rows, "spheres": spheres, "loadavg_before": list(load_before),
               "loadavg_after": list(os.getloadavg()), "cpus": os.cpu_count()}
     (out / "bench_raytrace.json").write_text(json.dumps(report, indent=2))
     print(f"ray tracer, {args.size[0]} x {args.size[1]} {args.projection}, median of {frames}; "
@@ -839,6 +840,42 @@ def raytrace_bench(args) -> int:
                   f"Embree {r['embree_rays_per_cpu_s'] / 1e6:.2f} Mray (ratio "
                   f"{r['embree_rays_per_cpu_s'] / r['primary_rays_per_cpu_s']:.2f})")
         print(f"{'':<14}rays per frame: " + ", ".join(f"{k} {v}" for k, v in r["rays_per_frame"].items()))
+    if spheres:
+        print(f"{spheres['spheres']:,} spheres (radius {spheres['radius']}), shadows off: "
+              f"{spheres['more_rays']:,} more primary rays ({spheres['small']}² → "
+              f"{spheres['large']}² pixels) cost {spheres['more_cpu_s']:.3f} CPU-s, "
+              f"{spheres['more_wall_s']:.3f} s wall; the spheres' BVH builds in "
+              f"{spheres['build_ms']:.0f} ms")
     print(f"wrote {out / 'bench_raytrace.json'}")
     return 0
+
+
+SPHERES, SPHERE_RADIUS = 10_000, 0.03
+
+
+def _many_spheres_row(frames: int, warmup: int, small: int = 100, large: int = 400) -> dict:
+    """What ``large² − small²`` more primary rays cost on 10,000 small spheres (radius 0.03,
+    uniform in a 4-unit cube in front of the Whitted scene's camera, shadows off): the whole
+    frame, CPU and wall, median of ``frames``."""
+    import dataclasses
+    from core.raytrace import geometry
+    from core.raytrace.renderer import TraceOptions, prepare, render_raw
+    from core.scene.formats import load_scene
+    from core.scene.primitives import Sphere
+    _progress(f"{SPHERES:,} spheres: {small}² and {large}² frames ...")
+    base = load_scene(str(ROOT / "scenes" / "whitted.toml"))
+    centres = np.random.default_rng(1).uniform(-2.0, 2.0, (SPHERES, 3)) + [0.0, 1.0, 0.0]
+    scene = dataclasses.replace(base, meshes=[], primitives=[
+        Sphere(center=tuple(c), radius=SPHERE_RADIUS) for c in centres])
+    options = TraceOptions(shadows="off")
+    start = time.perf_counter()
+    geometry.pack(scene)
+    build_ms = (time.perf_counter() - start) * 1e3
+    times = {n: _median_seconds(lambda: render_raw(prepare(scene, base.views[0], "perspective",
+                                                          (n, n), options)), frames, warmup)
+             for n in (small, large)}
+    return {"spheres": SPHERES, "radius": SPHERE_RADIUS, "small": small, "large": large,
+            "more_rays": large * large - small * small, "build_ms": build_ms,
+            "more_wall_s": times[large][0] - times[small][0],
+            "more_cpu_s": times[large][1] - times[small][1]}
 

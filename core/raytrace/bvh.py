@@ -17,15 +17,18 @@ Build (:func:`build`), top down, in one numba loop over a stack of pending node 
   ``SAH_DEPTH``, are split at the median by index, so the tree stays at most ~``MAX_DEPTH``
   deep and the traversal stack (``STACK``) cannot overflow.
 
-Layout (:class:`BVH`): node ``k`` has its box in ``box[k] = (min xyz, max xyz)``; an inner
-node's children are ``first[k]`` and ``first[k] + 1`` (``count[k] == 0``), a leaf holds
-triangles ``first[k] .. first[k] + count[k] − 1`` of the BVH's own order. Triangles are stored
-in that order as ``V0, E1, E2`` (what Möller–Trumbore reads) with ``prim`` mapping back to the
-scene's triangle index, so a leaf's data is contiguous in memory.
+Layout (:class:`BVH`): node ``k`` has its box in ``box[k] = (min xyz, max xyz)``, float32
+rounded outwards (half the memory, no ray lost); an inner node's children are ``first[k]``
+and ``first[k] + 1`` (``count[k] == 0``), a leaf holds triangles ``first[k] .. first[k] +
+count[k] − 1`` of the BVH's own order. Triangles are stored in that order as one row
+``V0, E1, E2`` each (``tri``, what Möller–Trumbore reads) with ``prim`` mapping back to the
+scene's triangle index, so a leaf's data is one run of memory.
 
 Traversal (:func:`closest`, :func:`occluded`): the slab test against the box with the ray's
-reciprocal direction, the nearer child first, nodes whose entry lies beyond the best hit so
-far skipped. ``occluded`` stops at the first hit (shadow rays).
+reciprocal direction (each axis's near and far slab picked once per ray by the direction's
+sign), the nearer child first, nodes whose entry lies beyond the best hit so far skipped.
+``occluded`` stops at the first hit (shadow rays). ``closest`` is inlined into its callers:
+a numba call that takes the scene's tuple of arrays costs per array in it, per call.
 """
 
 from __future__ import annotations
@@ -49,12 +52,10 @@ STACK = 128            # traversal stack; >= the deepest tree SAH_DEPTH + log2(2
 class BVH(NamedTuple):
     """The flattened tree (numba takes it as one argument)."""
 
-    box: np.ndarray      # (nodes, 6) float64: min x, y, z, max x, y, z
+    box: np.ndarray      # (nodes, 6) float32: min x, y, z, max x, y, z (rounded outwards)
     first: np.ndarray    # (nodes,) int64: first child (inner) or first triangle (leaf)
     count: np.ndarray    # (nodes,) int64: 0 for an inner node, else the leaf's triangles
-    v0: np.ndarray       # (T, 3) float64, in BVH order
-    e1: np.ndarray       # (T, 3) V1 - V0
-    e2: np.ndarray       # (T, 3) V2 - V0
+    tri: np.ndarray      # (T, 9) float64, in BVH order: V0, E1 = V1 - V0, E2 = V2 - V0
     prim: np.ndarray     # (T,) int64: the scene triangle at each BVH position
 
 
@@ -221,14 +222,24 @@ def _build(lo, hi, cent):
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _triangle_arrays(positions, triangles, order, v0, e1, e2):
+def _triangle_arrays(positions, triangles, order, tri):
     for k in prange(order.shape[0]):
         t = order[k]
         a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
         for ax in range(3):
-            v0[k, ax] = positions[a, ax]
-            e1[k, ax] = positions[b, ax] - positions[a, ax]
-            e2[k, ax] = positions[c, ax] - positions[a, ax]
+            tri[k, ax] = positions[a, ax]
+            tri[k, 3 + ax] = positions[b, ax] - positions[a, ax]
+            tri[k, 6 + ax] = positions[c, ax] - positions[a, ax]
+
+
+def outward32(box: np.ndarray) -> np.ndarray:
+    """Boxes ``(N, 6)`` (min xyz, max xyz) in float32, each bound rounded outwards so that the
+    float32 box holds the float64 one: half the memory a node costs, no ray lost."""
+    box32 = box.astype(np.float32)
+    lo, hi = box32[:, :3], box32[:, 3:]
+    lo[...] = np.where(lo > box[:, :3], np.nextafter(lo, np.float32(-np.inf)), lo)
+    hi[...] = np.where(hi < box[:, 3:], np.nextafter(hi, np.float32(np.inf)), hi)
+    return box32
 
 
 def build(positions: np.ndarray, triangles: np.ndarray) -> tuple[BVH, BuildReport]:
@@ -254,9 +265,9 @@ def build(positions: np.ndarray, triangles: np.ndarray) -> tuple[BVH, BuildRepor
         nodes = _build(lo, hi, cent)
     box, first, count, index, depth = nodes
     order = keep[index]
-    v0, e1, e2 = (np.empty((len(order), 3)) for _ in range(3))
-    _triangle_arrays(positions, triangles, order, v0, e1, e2)
-    bvh = BVH(box, first, count, v0, e1, e2, order.astype(np.int64))
+    tri = np.empty((len(order), 9))
+    _triangle_arrays(positions, triangles, order, tri)
+    bvh = BVH(outward32(box), first, count, tri, order.astype(np.int64))
     seconds = time.perf_counter() - start_time
     size = sum(a.nbytes for a in bvh)
     leaves = int(np.count_nonzero(count > 0)) if len(order) else 0
@@ -278,28 +289,14 @@ def build_boxes(lo: np.ndarray, hi: np.ndarray) -> BoxTree:
     lo = np.ascontiguousarray(lo, dtype=np.float64).reshape(-1, 3)
     hi = np.ascontiguousarray(hi, dtype=np.float64).reshape(-1, 3)
     if len(lo) == 0:
-        box = np.array([[np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf]])
+        box = np.array([[np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf]], np.float32)
         return BoxTree(box, np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64))
     box, first, count, index, _ = _build(lo, hi, (lo + hi) * 0.5)
-    return BoxTree(box, first, count, index.astype(np.int64))
+    return BoxTree(outward32(box), first, count, index.astype(np.int64))
 
 
 # --------------------------------------------------------------------------------------------
 # Traversal
-
-
-@njit(cache=True)
-def _box_entry(box, k, ox, oy, oz, ix, iy, iz, t_max):
-    """Where the ray enters box ``k`` (slab test), or +inf when it misses it before ``t_max``."""
-    tx0, tx1 = (box[k, 0] - ox) * ix, (box[k, 3] - ox) * ix
-    ty0, ty1 = (box[k, 1] - oy) * iy, (box[k, 4] - oy) * iy
-    tz0, tz1 = (box[k, 2] - oz) * iz, (box[k, 5] - oz) * iz
-    t_enter = max(min(tx0, tx1), min(ty0, ty1), min(tz0, tz1), 0.0)
-    t_exit = min(max(tx0, tx1), max(ty0, ty1), max(tz0, tz1), t_max)
-    # NaN (origin on a slab of a zero direction) compares false: the box is kept, safely.
-    if t_enter > t_exit:
-        return np.inf
-    return t_enter
 
 
 @njit(cache=True)
@@ -311,47 +308,75 @@ def _reciprocal(d):
 
 
 @njit(cache=True)
+def _box_entry(box, k, ox, oy, oz, ix, iy, iz, near, t_max):
+    """Where the ray enters box ``k`` (slab test), or +inf when it misses it before ``t_max``.
+
+    ``near`` (:func:`_sides`): the box's column of the slab the ray meets first on each axis
+    (its min where the reciprocal direction is positive, its max where negative), then the
+    far ones: each axis costs two products and no min/max. ``i*`` are never 0 or NaN, so no
+    product is NaN."""
+    nx, ny, nz, fx, fy, fz = near
+    t_enter = max((box[k, nx] - ox) * ix, (box[k, ny] - oy) * iy, (box[k, nz] - oz) * iz, 0.0)
+    t_exit = min((box[k, fx] - ox) * ix, (box[k, fy] - oy) * iy, (box[k, fz] - oz) * iz, t_max)
+    if t_enter > t_exit:
+        return np.inf
+    return t_enter
+
+
+@njit(cache=True)
+def _sides(ix, iy, iz):
+    """The near and far columns of a box for a ray of reciprocal direction ``i``."""
+    nx = 0 if ix >= 0.0 else 3
+    ny = 1 if iy >= 0.0 else 4
+    nz = 2 if iz >= 0.0 else 5
+    return nx, ny, nz, 3 - nx, 5 - ny, 7 - nz
+
+
+@njit(cache=True, inline="always")
 def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     """``(k, t, u, v)``: BVH position ``k`` of the nearest triangle hit in ``(t_min, t_max)``
-    (``bvh.prim[k]`` is the scene's triangle), or ``k = -1``. ``stack``: ``STACK`` int64s."""
-    box = bvh.box
-    if box.shape[0] == 0 or bvh.v0.shape[0] == 0:
+    (``bvh.prim[k]`` is the scene's triangle), or ``k = -1``. ``stack``: ``STACK`` int64s.
+
+    The nearer child is visited first and the farther one pushed; a popped node is tested
+    again against the best hit so far (it may have come nearer since it was pushed)."""
+    box, first, count, tri = bvh.box, bvh.first, bvh.count, bvh.tri
+    if tri.shape[0] == 0:
         return -1, np.inf, 0.0, 0.0
     ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
+    near = _sides(ix, iy, iz)
     best_k, best_t, best_u, best_v = -1, t_max, 0.0, 0.0
-    if _box_entry(box, 0, ox, oy, oz, ix, iy, iz, best_t) == np.inf:
+    if _box_entry(box, 0, ox, oy, oz, ix, iy, iz, near, best_t) == np.inf:
         return -1, np.inf, 0.0, 0.0
-    stack[0] = 0
-    top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        n = bvh.count[node]
+    node, top = 0, 0
+    while True:
+        n = count[node]
         if n > 0:                                         # a leaf: test its triangles
-            f = bvh.first[node]
+            f = first[node]
             for k in range(f, f + n):
-                t, u, v = intersect.triangle(ox, oy, oz, dx, dy, dz, bvh.v0[k], bvh.e1[k],
-                                             bvh.e2[k], t_min, best_t)
+                t, u, v = intersect.triangle_row(ox, oy, oz, dx, dy, dz, tri, k, t_min, best_t)
                 if t < best_t:
                     best_k, best_t, best_u, best_v = k, t, u, v
-            continue
-        left = bvh.first[node]
-        t_left = _box_entry(box, left, ox, oy, oz, ix, iy, iz, best_t)
-        t_right = _box_entry(box, left + 1, ox, oy, oz, ix, iy, iz, best_t)
-        # Push the farther child first, so the nearer one is visited next.
-        if t_left <= t_right:
-            if t_right != np.inf:
-                stack[top] = left + 1
-                top += 1
-            if t_left != np.inf:
-                stack[top] = left
-                top += 1
         else:
-            if t_left != np.inf:
-                stack[top] = left
-                top += 1
-            stack[top] = left + 1
-            top += 1
+            left = first[node]
+            t_left = _box_entry(box, left, ox, oy, oz, ix, iy, iz, near, best_t)
+            t_right = _box_entry(box, left + 1, ox, oy, oz, ix, iy, iz, near, best_t)
+            if t_left != np.inf or t_right != np.inf:
+                nearer, farther = (left, left + 1) if t_left <= t_right else (left + 1, left)
+                if max(t_left, t_right) != np.inf:        # both: the farther one waits
+                    stack[top] = farther
+                    top += 1
+                node = nearer
+                continue
+        # pop the next node that the best hit so far has not put out of reach
+        node = -1
+        while top > 0:
+            top -= 1
+            if _box_entry(box, stack[top], ox, oy, oz, ix, iy, iz, near,
+                          best_t) != np.inf:
+                node = stack[top]
+                break
+        if node < 0:
+            break
     if best_k < 0:
         return -1, np.inf, 0.0, 0.0
     return best_k, best_t, best_u, best_v
@@ -360,28 +385,28 @@ def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
 @njit(cache=True)
 def occluded(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     """BVH position of any triangle hit in ``(t_min, t_max)``, or -1 (the shadow-ray query)."""
-    box = bvh.box
-    if bvh.v0.shape[0] == 0:
+    box, first, count, tri = bvh.box, bvh.first, bvh.count, bvh.tri
+    if tri.shape[0] == 0:
         return -1
     ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
+    near = _sides(ix, iy, iz)
     stack[0] = 0
     top = 1
     while top > 0:
         top -= 1
         node = stack[top]
-        if _box_entry(box, node, ox, oy, oz, ix, iy, iz, t_max) == np.inf:
+        if _box_entry(box, node, ox, oy, oz, ix, iy, iz, near, t_max) == np.inf:
             continue
-        n = bvh.count[node]
+        n = count[node]
         if n > 0:
-            f = bvh.first[node]
+            f = first[node]
             for k in range(f, f + n):
-                t, _, _ = intersect.triangle(ox, oy, oz, dx, dy, dz, bvh.v0[k], bvh.e1[k],
-                                             bvh.e2[k], t_min, t_max)
+                t, _, _ = intersect.triangle_row(ox, oy, oz, dx, dy, dz, tri, k, t_min, t_max)
                 if t < t_max:
                     return k
             continue
-        stack[top] = bvh.first[node] + 1
-        stack[top + 1] = bvh.first[node]
+        stack[top] = first[node] + 1
+        stack[top + 1] = first[node]
         top += 2
     return -1
 
@@ -460,18 +485,17 @@ def occluded_rays(bvh: BVH, origins, directions, t_min=0.0, t_max=np.inf) -> np.
 def closest_sphere(box, first, count, item, spheres, ox, oy, oz, dx, dy, dz, t_min, t_max,
                    stack):
     """``(row, t)`` of the nearest sphere (rows ``cx, cy, cz, r, …``) a :class:`BoxTree`
-    holds, hit in ``(t_min, t_max)``; ``(-1, inf)`` when none is."""
+    holds, hit in ``(t_min, t_max)``; ``(-1, inf)`` when none is. The walk is
+    :func:`closest`'s: the nearer child first, popped nodes tested against the best hit."""
     best, best_t = -1, t_max
     if item.shape[0] == 0:
         return -1, np.inf
     ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
-    stack[0] = 0
-    top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        if _box_entry(box, node, ox, oy, oz, ix, iy, iz, best_t) == np.inf:
-            continue
+    near = _sides(ix, iy, iz)
+    if _box_entry(box, 0, ox, oy, oz, ix, iy, iz, near, best_t) == np.inf:
+        return -1, np.inf
+    node, top = 0, 0
+    while True:
         n = count[node]
         if n > 0:
             for k in range(first[node], first[node] + n):
@@ -480,10 +504,25 @@ def closest_sphere(box, first, count, item, spheres, ox, oy, oz, dx, dy, dz, t_m
                                      spheres[i, 2], spheres[i, 3], t_min, best_t)
                 if t < best_t:
                     best, best_t = i, t
-            continue
-        stack[top] = first[node] + 1
-        stack[top + 1] = first[node]
-        top += 2
+        else:
+            left = first[node]
+            t_left = _box_entry(box, left, ox, oy, oz, ix, iy, iz, near, best_t)
+            t_right = _box_entry(box, left + 1, ox, oy, oz, ix, iy, iz, near, best_t)
+            if t_left != np.inf or t_right != np.inf:
+                nearer, farther = (left, left + 1) if t_left <= t_right else (left + 1, left)
+                if max(t_left, t_right) != np.inf:
+                    stack[top] = farther
+                    top += 1
+                node = nearer
+                continue
+        node = -1
+        while top > 0:
+            top -= 1
+            if _box_entry(box, stack[top], ox, oy, oz, ix, iy, iz, near, best_t) != np.inf:
+                node = stack[top]
+                break
+        if node < 0:
+            break
     if best < 0:
         return -1, np.inf
     return best, best_t

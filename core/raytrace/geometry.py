@@ -38,16 +38,14 @@ PLANE_COLUMNS = 13        # a, b, c, d (unit normal), surface, e1 (3), e2 (3), p
 class Packed(NamedTuple):
     """Everything the kernels read about the scene (numba takes it as one argument).
 
-    The first seven fields are the BVH's (:class:`core.raytrace.bvh.BVH`), by the same names,
+    The first five fields are the BVH's (:class:`core.raytrace.bvh.BVH`), by the same names,
     so the traversal reads a Packed as a tree (numba's parallel loops take flat tuples only).
     """
 
     box: np.ndarray
     first: np.ndarray
     count: np.ndarray
-    v0: np.ndarray
-    e1: np.ndarray
-    e2: np.ndarray
+    tri: np.ndarray
     prim: np.ndarray
     corners: np.ndarray        # (T, 3) int64: each scene triangle's vertices
     normals: np.ndarray        # (V, 3) unit vertex normals

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.camera.view import View, check
-from core.raytrace import adaptive, camera, geometry, whitted
+from core.raytrace import adaptive, bvh, camera, geometry, whitted
 from core.raytrace.optics import AIR, index_of_refraction
 from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
@@ -342,15 +342,18 @@ def _trace_one(setup: Setup, origin, direction, t_min, t_max, diff, tree):
         return np.array(setup.background), 0
     rays = np.empty((2 * o.max_depth + 2, whitted.STACK_COLUMNS))
     counts = np.zeros(len(whitted.COUNTERS), dtype=np.int64)
-    r, g, b, recorded = whitted.trace(
-        packed, *map(float, origin), *map(float, direction), float(t_min), float(t_max),
+    raw = np.empty((1, 3))
+    recorded = whitted.trace(
+        packed, np.array([origin], dtype=np.float64), np.array([direction], dtype=np.float64),
+        np.array([t_min], dtype=np.float64), np.array([t_max], dtype=np.float64), 0, 1,
         setup.eye, setup.lights, setup.ambient, setup.halfway, setup.background,
         whitted.SHADOW_MODES.index(o.shadows), o.max_depth, float(o.adaptive_epsilon),
         o.fresnel_code, o.medium, 1e-9 * setup.packing.scale, rays, np.empty(setup.lights.shape),
-        np.empty((1, packed.surfaces.shape[1])), np.empty(4), np.empty(64, dtype=np.int64),
+        np.empty((1, packed.surfaces.shape[1])), np.empty(4), np.empty(bvh.STACK, dtype=np.int64),
         counts, setup.packing.texturing, setup.packing.textured, FILTERS[o.texture_filter],
-        bool(o.bump), np.ascontiguousarray(diff), whitted.scratch(packed), tree,
-        np.array(o.secondary_attenuation, dtype=np.float64))
+        bool(o.bump), np.array([diff], dtype=np.float64),
+        whitted.scratch(packed, setup.packing.textured), tree, np.array(o.secondary_attenuation, dtype=np.float64), raw)
+    r, g, b = raw[0]
     setup.counts += counts
     return np.array([r, g, b]), recorded
 
