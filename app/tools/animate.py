@@ -3,21 +3,23 @@
 Frames are rendered
 
 - in this process (the default; the particles step on from frame to frame),
-- with ``--workers N``, in this process and N - 1 local worker processes (a Dask
-  ``LocalCluster``, started once per job while this process renders the first frames, and
-  not started at all when it cannot win: a job shorter than its start, or a machine with no
-  idle core; the output says which), or
+- with ``--workers N``, in this process and N - 1 local single-thread worker processes
+  (:class:`app.tools.cluster.LocalPool`, started once per job while this process renders
+  the first frames), or not at all when a prediction from two measurements (a frame's time
+  here, the cores other processes left idle since the command started) says it would not
+  win (:func:`predict`; the output says why), or
 - on a running Dask cluster (``--scheduler tcp://host:8786``; the workers need only this
   package: the scene file and every file it names travel with the job, content-addressed,
   :mod:`app.tools.bundle`).
 
-On a cluster the frames go out in contiguous runs, each with the particle state at its first
-frame (:mod:`core.animation.checkpoint`, from a simulation-only pass here), so no worker
-simulates from t = 0; a run that fails is retried by Dask (``--retries``). Frames come back as
-PNG bytes and are written, as they complete, into the frames folder, which makes a killed run
-resumable (:mod:`app.tools.movie_files`). When every frame is there the movie is encoded
-(``.mp4`` H.264 with PyAV, ``.gif`` with Pillow) and the folder removed (``--keep-frames``
-keeps it). Progress and an ETA go to stderr.
+On a cluster the frames go out in contiguous runs, long first and short at the end
+(:class:`Runs`), each with the particle state at its first frame
+(:mod:`core.animation.checkpoint`, from a simulation-only pass here), so no worker simulates
+from t = 0; a run that fails is retried by Dask (``--retries``). Frames come back as PNG bytes
+and pixels: the PNG is written, as it completes, into the frames folder, which makes a killed
+run resumable, and the pixels go to the MP4 encoder in order (:class:`~app.tools.movie_files.Movie`),
+so the movie is encoded while the frames are rendered (a GIF at the end). The folder is
+removed after the movie (``--keep-frames`` keeps it). Progress and an ETA go to stderr.
 """
 
 from __future__ import annotations
@@ -306,12 +308,12 @@ def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, anima
     picture drawn), two runs in flight a worker; hand each run's frames to ``on_frame`` as
     it completes. With ``here`` this process takes runs from the same queue too, looking at
     what came back between its frames."""
-    from dask.distributed import as_completed
+    from app.tools.cluster import completed
     shipped = client.scatter(bundle, broadcast=True, hash=False)
     runs = Runs(frames, workers + here)
     checkpoints = _Checkpoints(animation, job["fps"])
     in_flight = {}
-    done = as_completed()
+    done = completed(client)
 
     def submit():
         run = runs.next()
@@ -628,15 +630,17 @@ def main(args) -> int:
 # ---------------------------------------------------------------------- the bench row
 
 
-def bench_animation(scene: str | Path | None = None, size=(500, 500), frames: int = 240,
-                    workers: int = 2) -> dict:
-    """The whole command, timed as a user meets it: ``animate`` of ``frames`` frames in one
-    process and with ``--workers`` (cluster start included), each in a fresh process."""
-    from app.tools.scaleout import compare
+def bench_animation(scenes=None, size=(500, 500), frames: int = 240, workers: int = 2,
+                    repeats: int = 1) -> dict:
+    """The whole command, timed as a user meets it: ``animate`` of ``frames`` frames of the
+    fountain and the fly-around in one process and with ``--workers`` (cluster start
+    included), each in a fresh process (:mod:`app.tools.scaleout`)."""
+    from app.tools.scaleout import SCENES, compare
     from core.paths import ROOT
-    return compare(Path(scene or ROOT / "scenes" / "fountain.toml"), frames, size, workers)
+    return {"rows": [compare(ROOT / scene, frames, size, workers, repeats)
+                     for scene in (scenes or SCENES)]}
 
 
-def format_animation(row: dict) -> str:
+def format_animation(result: dict) -> str:
     from app.tools.scaleout import format_row
-    return format_row(row)
+    return "\n".join(format_row(row) for row in result["rows"])

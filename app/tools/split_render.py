@@ -88,15 +88,18 @@ def _setup(bundle, view_number, settings, demo):
 def render_split(client, bundle, view_number: int, settings, demo, retries: int = 2,
                  workers: int = 1) -> np.ndarray:
     """The frame, traced band by band on the cluster of ``client`` and assembled here."""
-    from dask.distributed import as_completed
+    from app.tools.cluster import completed
     width, height = settings.size
     color = np.empty((height, width, 3), np.uint8)
     shipped = client.scatter(bundle, broadcast=True, hash=False)
     futures = [client.submit(trace_band, shipped, view_number, settings, demo, rows,
                              retries=retries, pure=False) for rows in bands(height, workers)]
-    for future in as_completed(futures):
-        (row0, row1), band = future.result()
-        color[row0:row1] = band
+    done, left = completed(client, futures), len(futures)
+    while left:
+        for future in done.next_batch(block=True):
+            (row0, row1), band = future.result()
+            color[row0:row1] = band
+            left -= 1
     return color
 
 
