@@ -421,3 +421,38 @@ def test_the_idle_cores_are_measured(monkeypatch):
     from app.tools import animate
     monkeypatch.setattr(animate, "idle_mark", lambda: (12.0, 103.0))
     assert animate.idle_cores((10.0, 100.0)) == pytest.approx(1.5)
+
+
+@pytest.mark.parametrize("hold", [0, 1 << 30])
+def test_frames_encoded_as_they_come_make_the_movie_of_the_folder(tmp_path, monkeypatch, hold):
+    """The MP4 encoded while frames arrive out of order (held in memory, or read back from
+    the folder when not held) is byte for byte the MP4 encoded from the finished folder."""
+    from app.tools import movie_files
+    from app.tools.movie_files import Movie, encode, frame_png, write_frame
+    monkeypatch.setattr(movie_files, "HOLD_BYTES", hold)
+    rng = np.random.default_rng(3)
+    pictures = [rng.integers(0, 256, (30, 41, 3), dtype=np.uint8) for _ in range(9)]
+    folder = tmp_path / "f"
+    folder.mkdir()
+    write_frame(folder, 0, frame_png(pictures[0], "h", 0))          # resumed from a run before
+    movie = Movie(tmp_path / "streamed.mp4", folder, 9, 12.0, done={0})
+    for k in (3, 1, 2, 8, 5, 4, 7, 6):                                # as workers return them
+        write_frame(folder, k, frame_png(pictures[k], "h", k))
+        movie.put(k, pictures[k])
+        assert movie.held_bytes <= max(hold, pictures[0].nbytes)
+    assert movie.next == 9
+    movie.finish()
+    encode(folder, 9, tmp_path / "folder.mp4", 12.0)
+    streamed = (tmp_path / "streamed.mp4").read_bytes()
+    assert len(streamed) > 1000 and streamed == (tmp_path / "folder.mp4").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f", "folder.mp4", "streamed.mp4"]
+
+
+def test_an_abandoned_movie_leaves_nothing(tmp_path):
+    from app.tools.movie_files import Movie
+    (tmp_path / "old.mp4").write_bytes(b"....ftyp old")
+    movie = Movie(tmp_path / "old.mp4", tmp_path, 3, 12.0)
+    movie.put(0, np.zeros((8, 8, 3), np.uint8))
+    movie.abandon()
+    assert [p.name for p in tmp_path.iterdir()] == ["old.mp4"]
+    assert (tmp_path / "old.mp4").read_bytes() == b"....ftyp old"

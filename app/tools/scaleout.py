@@ -76,7 +76,9 @@ def compare(scene: Path, frames: int, size=(500, 500), workers: int = 2, repeats
 
 def format_row(row: dict) -> str:
     one, many = row["one"], row["many"]
-    where = [line for line in many["log"].splitlines() if "rendered in" in line or "note:" in line]
+    # what --workers did: its note when it declined, else where the frames were rendered
+    lines = many["log"].splitlines()
+    where = [line for line in lines if "rendered in" in line] + [line for line in lines if "note:" in line]
     runs = f", median of {row['repeats']}" if row.get("repeats", 1) > 1 else ""
     return (f"animate {row['scene']}, {row['frames']} frames of {row['size'][0]} x {row['size'][1]}"
             f"{runs}: 1 process {one['median_wall']:.1f} s (CPU {one['cpu']:.1f} s, load "
