@@ -43,10 +43,10 @@ from app.tools.movie_files import (MOVIE_SUFFIXES, FolderError, Movie, clean_fol
 MAX_FRAMES = 100_000
 MIN_FPS, MAX_FPS = 1e-3, 1000.0
 MAX_RETRIES = 100
-CLUSTER_START_SECONDS = 2.0    # from starting a local cluster to its worker's first frame,
-                               # measured here: ~0.8 s to the cluster, ~1.1 s for the worker's
-                               # imports and kernel cache
-MIN_GAIN = 1.2                 # a local cluster starts only when predicted this much faster
+CLUSTER_START_SECONDS = 2.0    # from starting local workers to their first frame, with room
+                               # (measured here: ~1.2 s to import the package, ~0.5 s more to
+                               # load the kernel cache and the scene)
+MIN_GAIN = 1.2                 # local workers start only when predicted this much faster
 RUN_SHARE = 2                  # a run is at most 1/(RUN_SHARE x renderers) of what is left
 MAX_RUN = 30                   # frames in one run at most
 RENDER_WHILE_STARTING = True   # this process renders while a local cluster starts
@@ -402,8 +402,8 @@ def _cores() -> int:
 
 
 def predict(frames: int, seconds: float, workers: int, idle: float) -> tuple[float, float]:
-    """``(seconds here, seconds with a local cluster)`` for ``frames`` more frames of
-    ``seconds`` each: this process renders alone while the cluster starts
+    """``(seconds here, seconds with local workers)`` for ``frames`` more frames of
+    ``seconds`` each: this process renders alone while the workers start
     (CLUSTER_START_SECONDS), then with ``workers - 1`` workers, each as fast as this process
     on a core of its own, sharing the ``idle`` cores measured."""
     here = frames * seconds
@@ -412,7 +412,7 @@ def predict(frames: int, seconds: float, workers: int, idle: float) -> tuple[flo
 
 
 def _cannot_win(frames: int, seconds: float, workers: int, idle: float) -> str | None:
-    """Why a local cluster would not finish these frames MIN_GAIN times sooner than this
+    """Why local workers would not finish these frames MIN_GAIN times sooner than this
     process by :func:`predict`, or None."""
     here, there = predict(frames, seconds, workers, idle)
     if there * MIN_GAIN <= here:
