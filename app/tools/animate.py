@@ -470,7 +470,7 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress,
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, "in this process (a cluster could not win)"
     here_s, there_s = predict(len(todo), seconds, workers, idle)
-    start = cluster.LocalStart(workers - 1)          # this process is the N-th renderer
+    start = cluster.LocalStart(workers - 1, preload=(__name__,))   # this process: the N-th
     threads = _one_numba_thread()                    # a core for the start, then the worker
     try:
         if not RENDER_WHILE_STARTING:

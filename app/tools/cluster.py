@@ -184,13 +184,15 @@ def completed(client, futures=()):
     return done
 
 
-def _one_thread_worker() -> None:
+def _one_thread_worker(preload: tuple[str, ...]) -> None:
     """A local worker's start: one kernel thread (the workers are the parallelism), and the
-    package imported now rather than by its first task."""
+    modules its tasks need imported now rather than by its first task."""
+    import importlib
+
     import numba
     numba.set_num_threads(1)
-    import app.tools.animate  # noqa: F401
-    import app.tools.split_render  # noqa: F401
+    for name in preload:
+        importlib.import_module(name)
 
 
 def _started() -> int:
@@ -211,14 +213,14 @@ class LocalPool:
     """``workers`` single-thread worker processes on this machine (spawned: each imports the
     package and loads the kernel cache once), with the part of a Dask client that
     ``animate`` and ``render`` use: ``scatter``, ``submit(..., retries=)`` and
-    :func:`completed`."""
+    :func:`completed`. ``preload`` names the modules each worker imports as it starts."""
 
-    def __init__(self, workers: int):
+    def __init__(self, workers: int, preload: tuple[str, ...] = ()):
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
         self.workers = workers
         self.executor = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
-                                            initializer=_one_thread_worker)
+                                            initializer=_one_thread_worker, initargs=(preload,))
 
     def scatter(self, data, **_):
         return data                                  # sent with each task, by pickle
@@ -258,13 +260,13 @@ class LocalStart:
     caller keeps rendering meanwhile. ``ready`` is set when every worker has started (or the
     start failed: ``error``); ``seconds`` is how long the start took."""
 
-    def __init__(self, workers: int):
+    def __init__(self, workers: int, preload: tuple[str, ...] = ()):
         self.workers = workers
         self.error = None
         self.seconds = None
         self.ready = threading.Event()
         self.t0 = time.perf_counter()
-        self.client = LocalPool(workers)
+        self.client = LocalPool(workers, preload)
         self._waiting = workers
         self._lock = threading.Lock()
         for _ in range(workers):                     # spawns them (a pool starts on demand)

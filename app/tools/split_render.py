@@ -124,7 +124,7 @@ def split_frame(args, settings):
     _, bundle = load_recorded(args.scene, lambda path: load_scene(path, size=args.size))
     demo = (args.bump_map, not args.no_bump)
     if not args.scheduler:
-        start = cluster.LocalStart(workers)
+        start = cluster.LocalStart(workers, preload=(__name__,))
         try:
             start.ready.wait()
             if start.error is not None:
