@@ -8,7 +8,7 @@
 - :class:`LocalStart` starts local workers in the background (the caller keeps working
   meanwhile) and reports how long it took; :func:`connect` reaches a running scheduler.
   Local workers are a plain process pool (:class:`LocalPool`) with the part of Dask's
-  client the callers use: on this two-core machine a Dask ``LocalCluster`` cost ~2.2 s of CPU
+  client the callers use: on this two-core machine a Dask ``LocalCluster`` cost ~2 s of CPU
   to reach its first frame (its import in two processes, its scheduler and nanny) against
   ~1.2 s for a process that imports the package and loads the kernel cache, and a job of a
   few seconds on two cores cannot pay the difference.
