@@ -393,14 +393,16 @@ def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, caps
 
 def test_the_prediction_behind_the_decision():
     """Hand-derived: 100 frames of 0.1 s are 10 s here; with a 2 s start and one idle core
-    the worker joins for the last 8 s of work, halving it: 2 + 8 / 2 = 6 s."""
+    the worker joins for the last 8 s of work, adding 0.7 of this process's speed (two
+    processes do 1.7x one's work here): 2 + 8 / 1.7 = 6.71 s."""
     from app.tools import animate
-    assert animate.predict(100, 0.1, 2, 1.0) == pytest.approx((10.0, 6.0))
-    assert animate.predict(100, 0.1, 2, 0.5) == pytest.approx((10.0, 2 + 8 / 1.5))
-    assert animate.predict(100, 0.1, 4, 1.0) == pytest.approx((10.0, 6.0))   # 1 idle core
+    assert animate.WORKER_SHARE == 0.7
+    assert animate.predict(100, 0.1, 2, 1.0) == pytest.approx((10.0, 2 + 8 / 1.7))
+    assert animate.predict(100, 0.1, 2, 0.5) == pytest.approx((10.0, 2 + 8 / 1.35))
+    assert animate.predict(100, 0.1, 4, 1.0) == pytest.approx((10.0, 2 + 8 / 1.7))  # 1 idle core
     assert animate.predict(100, 0.1, 2, 0.0) == pytest.approx((10.0, 10.0))  # no gain
-    assert animate._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.67
-    assert "~8.4 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 0.25)  # x1.19
+    assert animate._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.49
+    assert "~8.8 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 0.25)  # x1.14
     assert animate._cannot_win(10, 0.1, 2, 1.0).endswith("against ~1.0 s in this process")
 
 

@@ -47,6 +47,8 @@ CLUSTER_START_SECONDS = 2.0    # from starting local workers to their first fram
                                # (measured here: ~1.2 s to import the package, ~0.5 s more to
                                # load the kernel cache and the scene)
 MIN_GAIN = 1.2                 # local workers start only when predicted this much faster
+WORKER_SHARE = 0.7             # of a core, what a second process adds here: two renders at
+                               # once do ~1.7x one's work (they share caches and memory)
 RUN_SHARE = 2                  # a run is at most 1/(RUN_SHARE x renderers) of what is left
 MAX_RUN = 30                   # frames in one run at most
 RENDER_WHILE_STARTING = True   # this process renders while a local cluster starts
@@ -404,10 +406,10 @@ def _cores() -> int:
 def predict(frames: int, seconds: float, workers: int, idle: float) -> tuple[float, float]:
     """``(seconds here, seconds with local workers)`` for ``frames`` more frames of
     ``seconds`` each: this process renders alone while the workers start
-    (CLUSTER_START_SECONDS), then with ``workers - 1`` workers, each as fast as this process
-    on a core of its own, sharing the ``idle`` cores measured."""
+    (CLUSTER_START_SECONDS), then with ``workers - 1`` workers on the ``idle`` cores
+    measured, each adding WORKER_SHARE of this process's speed."""
     here = frames * seconds
-    helpers = min(workers - 1, idle)
+    helpers = WORKER_SHARE * min(workers - 1, idle)
     return here, CLUSTER_START_SECONDS + max(0.0, here - CLUSTER_START_SECONDS) / (1 + helpers)
 
 
