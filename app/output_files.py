@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import os
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -74,10 +75,18 @@ def write_beside(out: Path, write) -> None:
     """``write(temp_path)`` fills a temporary file beside ``out`` (same folder, same suffix,
     so that encoders see the format), which is then renamed over ``out``; on any failure the
     temporary file is removed and ``out`` is left as it was."""
+    with beside(out) as temp:
+        write(temp)
+
+
+@contextmanager
+def beside(out: Path):
+    """:func:`write_beside` as a ``with`` block, for a file written bit by bit (a movie
+    encoded as its frames come): the block fills the temporary path it is given."""
     fd, temp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp" + out.suffix, dir=out.parent)
     os.close(fd)
     try:
-        write(Path(temp))
+        yield Path(temp)
         umask = os.umask(0)
         os.umask(umask)
         os.chmod(temp, 0o666 & ~umask)         # mkstemp made it private; an output is not

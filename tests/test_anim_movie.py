@@ -87,8 +87,8 @@ def on_the_cluster(monkeypatch):
     """A short job on --workers 2 (or any on a busy machine) would be kept in this process
     (a cluster cannot win); these tests want frames rendered by the local cluster's worker."""
     import app.tools.animate as animate
-    monkeypatch.setattr(animate, "CLUSTER_START_GUESS", 0.0)
-    monkeypatch.setattr(animate, "BUSY_LOAD_PER_CORE", float("inf"))
+    monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
+    monkeypatch.setattr(animate, "idle_cores", lambda since: 8.0)
     monkeypatch.setattr(animate, "RENDER_WHILE_STARTING", False)
 
 
@@ -145,7 +145,7 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):
     import app.tools.animate as animate
-    real, calls = animate.render_png, []
+    real, calls = animate.render_frame, []
 
     def flaky(job, k, *rest):
         calls.append(k)
@@ -153,7 +153,7 @@ def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypat
             raise MemoryError("the machine was busy")
         return real(job, k, *rest)
 
-    monkeypatch.setattr(animate, "render_png", flaky)
+    monkeypatch.setattr(animate, "render_frame", flaky)
     out = tmp_path / "seq"
     assert main(["animate", str(scene_file), "--out", str(out), "--size", "32x32"]) == 0
     assert calls.count(4) == 2 and all(calls.count(k) == 1 for k in range(12) if k != 4)

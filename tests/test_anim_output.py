@@ -125,13 +125,22 @@ def test_a_failed_encode_leaves_the_old_movie_and_nothing_else(scene_file, tmp_p
     out = tmp_path / f"old.{kind}"
     assert run(scene_file, "--out", out, "--size", "24x24") == 0
     before = out.read_bytes()
-    real = getattr(movie_files, f"_{kind}")
+    if kind == "gif":                                # a GIF is written in one call at the end
+        real = movie_files._gif
 
-    def full_disk(paths, temp, *rest):
-        real(paths[:2], temp, *rest)                 # part of the movie is written, then:
-        raise OSError(28, "No space left on device")
+        def full_disk(paths, temp, *rest):
+            real(paths[:2], temp, *rest)             # part of the movie is written, then:
+            raise OSError(28, "No space left on device")
+        monkeypatch.setattr(movie_files, "_gif", full_disk)
+    else:                                            # an MP4 as the frames come
+        real = movie_files.Mp4Writer.add
 
-    monkeypatch.setattr(movie_files, f"_{kind}", full_disk)
+        def full_disk(self, rgb):
+            if getattr(self, "added", 0) == 1:       # part of the movie is written, then:
+                raise OSError(28, "No space left on device")
+            self.added = getattr(self, "added", 0) + 1
+            real(self, rgb)
+        monkeypatch.setattr(movie_files.Mp4Writer, "add", full_disk)
     capsys.readouterr()
     assert run(scene_file, "--out", out, "--size", "24x24", "--fps", "4") == 1
     assert "No space left on device" in one_error(capsys)
@@ -324,8 +333,8 @@ view = { front = 4, back = -4 }
 time = 0.5
 view = { front = -4, back = 4 }
 """)
-    code = ("import app.tools.animate as a; a.CLUSTER_START_GUESS = 0; "
-            "a.BUSY_LOAD_PER_CORE = float('inf'); "
+    code = ("import app.tools.animate as a; a.CLUSTER_START_SECONDS = 0; "
+            "a.idle_cores = lambda since: 8.0; "
             "a.RENDER_WHILE_STARTING = False; from app.cli import main; import sys; "
             f"sys.exit(main(['animate', {str(scene)!r}, '--out', {str(tmp_path / 'm.mp4')!r}, "
             "'--size', '24x24', '--workers', '2', '--retries', '1']))")
@@ -365,12 +374,87 @@ def test_the_mp4_bytes_do_not_depend_on_the_cores(tmp_path):
 
 
 def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, capsys, monkeypatch):
+    """The decision is a prediction from two measurements: a frame's time here, and the cores
+    the other processes left idle since the command started."""
     import app.tools.animate as animate
+    monkeypatch.setattr(animate, "idle_cores", lambda since: 1.0)
     assert run(scene_file, "--out", tmp_path / "short", "--size", "24x24", "--workers", "2") == 0
-    assert "the remaining 2 frames take" in capsys.readouterr().err        # shorter than a start
-    monkeypatch.setattr(animate, "CLUSTER_START_GUESS", 0.0)
-    monkeypatch.setattr(animate.os, "getloadavg", lambda: (99.0, 99.0, 99.0))
+    captured = capsys.readouterr()                  # 2 tiny frames left: shorter than a start
+    assert "not starting a local cluster: the remaining 2 frames would take ~2.0 s with 1 " \
+           "local worker (~2 s to start, 1.0 idle core measured) against ~0.0 s" in captured.err
+    assert "in this process (a cluster could not win)" in captured.out
+    monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
+    monkeypatch.setattr(animate, "idle_cores", lambda since: 0.1)    # others keep the cores
     assert run(scene_file, "--out", tmp_path / "busy", "--size", "24x24", "--workers", "2") == 0
     captured = capsys.readouterr()
-    assert "the machine is busy (load average 99.0 on" in captured.err
+    assert "0.1 idle cores measured" in captured.err
     assert "in this process (a cluster could not win)" in captured.out
+
+
+def test_the_prediction_behind_the_decision():
+    """Hand-derived: 100 frames of 0.1 s are 10 s here; with a 2 s start and one idle core
+    the worker joins for the last 8 s of work, adding 0.7 of this process's speed (two
+    processes do 1.7x one's work here): 2 + 8 / 1.7 = 6.71 s."""
+    from app.tools import animate
+    assert animate.WORKER_SHARE == 0.7
+    assert animate.predict(100, 0.1, 2, 1.0) == pytest.approx((10.0, 2 + 8 / 1.7))
+    assert animate.predict(100, 0.1, 2, 0.5) == pytest.approx((10.0, 2 + 8 / 1.35))
+    assert animate.predict(100, 0.1, 4, 1.0) == pytest.approx((10.0, 2 + 8 / 1.7))  # 1 idle core
+    assert animate.predict(100, 0.1, 2, 0.0) == pytest.approx((10.0, 10.0))  # no gain
+    assert animate._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.49
+    assert "~8.8 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 0.25)  # x1.14
+    assert animate._cannot_win(10, 0.1, 2, 1.0).endswith("against ~1.0 s in this process")
+
+
+def test_runs_are_long_first_and_short_at_the_end():
+    """Guided runs: each at most 1/(2 x renderers) of what is left (and MAX_RUN), cut at gaps."""
+    from app.tools.animate import Runs
+    runs = Runs(list(range(100)), 2)
+    lengths = []
+    while runs:
+        lengths.append(len(runs.next()))
+    assert lengths == [25, 19, 14, 11, 8, 6, 5, 3, 3, 2, 1, 1, 1, 1]
+    runs = Runs([0, 1, 2, 5, 6, 7, 8], 1)
+    assert [runs.next() for _ in range(4)] == [[0, 1, 2], [5, 6], [7], [8]] and not runs
+
+
+def test_the_idle_cores_are_measured(monkeypatch):
+    """Idle seconds of every core over wall seconds: 3 s idle in 2 s is 1.5 idle cores."""
+    from app.tools import animate
+    monkeypatch.setattr(animate, "idle_mark", lambda: (12.0, 103.0))
+    assert animate.idle_cores((10.0, 100.0)) == pytest.approx(1.5)
+
+
+@pytest.mark.parametrize("hold", [0, 1 << 30])
+def test_frames_encoded_as_they_come_make_the_movie_of_the_folder(tmp_path, monkeypatch, hold):
+    """The MP4 encoded while frames arrive out of order (held in memory, or read back from
+    the folder when not held) is byte for byte the MP4 encoded from the finished folder."""
+    from app.tools import movie_files
+    from app.tools.movie_files import Movie, encode, frame_png, write_frame
+    monkeypatch.setattr(movie_files, "HOLD_BYTES", hold)
+    rng = np.random.default_rng(3)
+    pictures = [rng.integers(0, 256, (30, 41, 3), dtype=np.uint8) for _ in range(9)]
+    folder = tmp_path / "f"
+    folder.mkdir()
+    write_frame(folder, 0, frame_png(pictures[0], "h", 0))          # resumed from a run before
+    movie = Movie(tmp_path / "streamed.mp4", folder, 9, 12.0, done={0})
+    for k in (3, 1, 2, 8, 5, 4, 7, 6):                                # as workers return them
+        write_frame(folder, k, frame_png(pictures[k], "h", k))
+        movie.put(k, pictures[k])
+        assert movie.held_bytes <= max(hold, pictures[0].nbytes)
+    assert movie.next == 9
+    movie.finish()
+    encode(folder, 9, tmp_path / "folder.mp4", 12.0)
+    streamed = (tmp_path / "streamed.mp4").read_bytes()
+    assert len(streamed) > 1000 and streamed == (tmp_path / "folder.mp4").read_bytes()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f", "folder.mp4", "streamed.mp4"]
+
+
+def test_an_abandoned_movie_leaves_nothing(tmp_path):
+    from app.tools.movie_files import Movie
+    (tmp_path / "old.mp4").write_bytes(b"....ftyp old")
+    movie = Movie(tmp_path / "old.mp4", tmp_path, 3, 12.0)
+    movie.put(0, np.zeros((8, 8, 3), np.uint8))
+    movie.abandon()
+    assert [p.name for p in tmp_path.iterdir()] == ["old.mp4"]
+    assert (tmp_path / "old.mp4").read_bytes() == b"....ftyp old"

@@ -52,3 +52,43 @@ def test_local_workers_say_why_the_frame_stays_here(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("error:") == 1 and "expected a Dask scheduler's address" in err
     assert not (tmp_path / "g.png").exists()
+
+
+@pytest.mark.slow
+def test_local_workers_trace_the_one_process_picture_when_they_have_more_cores(tmp_path, capsys):
+    """With one kernel thread here (NUMBA_NUM_THREADS=1), two local single-thread workers have
+    more cores than this process: ``render --workers 2`` starts them, traces by bands, and the
+    PNG is byte for byte the one this process writes."""
+    import os
+
+    import numba
+    if len(os.sched_getaffinity(0)) < 2:
+        pytest.skip("needs two cores: a local cluster on one cannot have more")
+    scene = str(ROOT / "scenes" / "whitted.toml")
+    common = ["render", scene, "--renderer", "raytrace", "--samples", "4", "--size", "60x44"]
+    assert main([*common, "--out", str(tmp_path / "one.png")]) == 0
+    before = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        assert main([*common, "--out", str(tmp_path / "split.png"), "--workers", "2"]) == 0
+    finally:
+        numba.set_num_threads(before)
+    assert "traced by 2 local workers (started in" in capsys.readouterr().out
+    assert (tmp_path / "one.png").read_bytes() == (tmp_path / "split.png").read_bytes()
+
+
+def test_the_local_rule_compares_cores_with_kernel_threads(monkeypatch):
+    import numba
+
+    from app.tools import split_render
+    monkeypatch.setattr(split_render.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+        if numba.get_num_threads() == 2:               # the tracer on both cores: no
+            assert "runs on 2 of the 2 cores" in split_render.local_problem(2)
+        numba.set_num_threads(1)                       # one kernel thread: two workers win
+        assert split_render.local_problem(2) is None
+        assert "runs on 1 of the 2 cores" in split_render.local_problem(1)
+    finally:
+        numba.set_num_threads(before)

@@ -3,21 +3,23 @@
 Frames are rendered
 
 - in this process (the default; the particles step on from frame to frame),
-- with ``--workers N``, in this process and N - 1 local worker processes (a Dask
-  ``LocalCluster``, started once per job while this process renders the first frames, and
-  not started at all when it cannot win: a job shorter than its start, or a machine with no
-  idle core; the output says which), or
+- with ``--workers N``, in this process and N - 1 local single-thread worker processes
+  (:class:`app.tools.cluster.LocalPool`, started once per job while this process renders
+  the first frames), or not at all when a prediction from two measurements (a frame's time
+  here, the cores other processes left idle since the command started) says it would not
+  win (:func:`predict`; the output says why), or
 - on a running Dask cluster (``--scheduler tcp://host:8786``; the workers need only this
   package: the scene file and every file it names travel with the job, content-addressed,
   :mod:`app.tools.bundle`).
 
-On a cluster the frames go out in contiguous runs, each with the particle state at its first
-frame (:mod:`core.animation.checkpoint`, from a simulation-only pass here), so no worker
-simulates from t = 0; a run that fails is retried by Dask (``--retries``). Frames come back as
-PNG bytes and are written, as they complete, into the frames folder, which makes a killed run
-resumable (:mod:`app.tools.movie_files`). When every frame is there the movie is encoded
-(``.mp4`` H.264 with PyAV, ``.gif`` with Pillow) and the folder removed (``--keep-frames``
-keeps it). Progress and an ETA go to stderr.
+On a cluster the frames go out in contiguous runs, long first and short at the end
+(:class:`Runs`), each with the particle state at its first frame
+(:mod:`core.animation.checkpoint`, from a simulation-only pass here), so no worker simulates
+from t = 0; a run that fails is retried by Dask (``--retries``). Frames come back as PNG bytes
+and pixels: the PNG is written, as it completes, into the frames folder, which makes a killed
+run resumable, and the pixels go to the MP4 encoder in order (:class:`~app.tools.movie_files.Movie`),
+so the movie is encoded while the frames are rendered (a GIF at the end). The folder is
+removed after the movie (``--keep-frames`` keeps it). Progress and an ETA go to stderr.
 """
 
 from __future__ import annotations
@@ -29,20 +31,27 @@ import math
 import os
 import sys
 import time
+from collections import deque
 from pathlib import Path
 
-from app.tools.movie_files import (MOVIE_SUFFIXES, FolderError, clean_folder,  # noqa: F401
-                                   encode, frame_png, frames_folder, movie_rate, out_problem,
+import numpy as np
+
+from app.tools.movie_files import (MOVIE_SUFFIXES, FolderError, Movie, clean_folder,
+                                   frame_png, frames_folder, movie_rate, out_problem,
                                    prepare_folder, write_frame)
 
 MAX_FRAMES = 100_000
 MIN_FPS, MAX_FPS = 1e-3, 1000.0
 MAX_RETRIES = 100
-CLUSTER_START_GUESS = 3.0      # seconds a local cluster of 2 takes to take its first run here
-RUNS_PER_WORKER = 4            # runs dealt per worker (the last ones balance the load)
+CLUSTER_START_SECONDS = 2.0    # from starting local workers to their first frame, with room
+                               # (measured here: ~1.2 s to import the package, ~0.5 s more to
+                               # load the kernel cache and the scene)
+MIN_GAIN = 1.2                 # local workers start only when predicted this much faster
+WORKER_SHARE = 0.7             # of a core, what a second process adds here: two renders at
+                               # once do ~1.7x one's work (they share caches and memory)
+RUN_SHARE = 2                  # a run is at most 1/(RUN_SHARE x renderers) of what is left
 MAX_RUN = 30                   # frames in one run at most
 RENDER_WHILE_STARTING = True   # this process renders while a local cluster starts
-BUSY_LOAD_PER_CORE = 1.0       # a load average above this many a core leaves no idle core
 
 
 def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
@@ -186,8 +195,9 @@ def _animation(path: str, size=None):
     return _loaded["animation"]
 
 
-def render_png(job: dict, k: int, animation=None) -> tuple[int, bytes]:
-    """Frame k of the job, encoded as PNG bytes signed with the job's hash."""
+def render_frame(job: dict, k: int, animation=None) -> tuple[int, bytes, np.ndarray]:
+    """Frame k of the job: ``(k, PNG bytes signed with the job's hash, RGB pixels)`` (the
+    pixels go to the movie's encoder, which need not decode the PNG)."""
     from core.animation.frames import render_at
     from core.settings import RenderSettings
     animation = animation or _animation(job["path"], job.get("load_size"))
@@ -199,10 +209,10 @@ def render_png(job: dict, k: int, animation=None) -> tuple[int, bytes]:
                       paths=s["paths"])
     if frame.message:
         raise RuntimeError(f"frame {k}: {frame.message}")
-    return k, frame_png(frame.color, job_hash(job), k)
+    return k, frame_png(frame.color, job_hash(job), k), frame.color
 
 
-def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tuple[int, bytes]]:
+def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tuple]:
     """A worker's task: the contiguous ``frames`` of the job, the scene read from the bundle
     (unpacked once per worker), the particles restored from ``checkpoint`` (their state at
     the first frame), so that nothing is simulated from t = 0."""
@@ -211,7 +221,7 @@ def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tu
     if checkpoint is not None and animation.particle_system is not None:
         from core.animation.checkpoint import restore
         restore(animation.particle_system, checkpoint)
-    return [render_png(job, k, animation) for k in frames]
+    return [render_frame(job, k, animation) for k in frames]
 
 
 # ---------------------------------------------------------------------- progress
@@ -264,7 +274,7 @@ def render_here(job, frames, on_frame, retries: int, animation, failed: list,
             break
         for attempt in range(retries + 1):
             try:
-                on_frame(*render_png(job, k, animation))
+                on_frame(*render_frame(job, k, animation))
                 break
             except Exception as error:                      # noqa: BLE001 - reported per frame
                 if attempt == retries:
@@ -273,35 +283,42 @@ def render_here(job, frames, on_frame, retries: int, animation, failed: list,
     return taken
 
 
-def runs_of(frames: list[int], workers: int) -> list[list[int]]:
-    """``frames`` cut into contiguous runs (a gap starts a new one), about RUNS_PER_WORKER a
-    worker, so that the last runs even out the load."""
-    length = max(1, min(MAX_RUN, math.ceil(len(frames) / (workers * RUNS_PER_WORKER))))
-    runs, run = [], []
-    for k in frames:
-        if run and (k != run[-1] + 1 or len(run) == length):
-            runs.append(run)
-            run = []
-        run.append(k)
-    return runs + ([run] if run else [])
+class Runs:
+    """The frames still to deal, cut on demand into contiguous runs (a gap starts a new one)
+    whose length follows what is left (guided self-scheduling): long runs first, few
+    checkpoints and round trips; short ones at the end, so that every renderer finishes at
+    about the same time instead of one waiting for another's long last run."""
+
+    def __init__(self, frames: list[int], renderers: int):
+        self.left, self.renderers = deque(frames), max(1, renderers)
+
+    def __bool__(self) -> bool:
+        return bool(self.left)
+
+    def next(self) -> list[int]:
+        length = max(1, min(MAX_RUN, math.ceil(len(self.left) / (RUN_SHARE * self.renderers))))
+        run = [self.left.popleft()]
+        while self.left and len(run) < length and self.left[0] == run[-1] + 1:
+            run.append(self.left.popleft())
+        return run
 
 
 def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, animation,
                       failed: list, workers: int, here: bool = False) -> None:
-    """Deal ``frames`` to the cluster in runs, each with the particles' checkpoint at its
-    first frame (made here by stepping a copy of the simulation on, no picture drawn), two
-    runs in flight a worker; write each run's frames as it completes. With ``here`` this
-    process takes runs from the same queue too, between looking at what came back."""
-    from collections import deque
-
-    from dask.distributed import as_completed
+    """Deal ``frames`` to the cluster in runs (:class:`Runs`), each with the particles'
+    checkpoint at its first frame (made here by stepping a copy of the simulation on, no
+    picture drawn), two runs in flight a worker; hand each run's frames to ``on_frame`` as
+    it completes. With ``here`` this process takes runs from the same queue too, looking at
+    what came back between its frames."""
+    from app.tools.cluster import completed
     shipped = client.scatter(bundle, broadcast=True, hash=False)
-    queue = deque(runs_of(frames, workers + here))
+    runs = Runs(frames, workers + here)
     checkpoints = _Checkpoints(animation, job["fps"])
     in_flight = {}
-    done = as_completed()
+    done = completed(client)
 
-    def submit(run):
+    def submit():
+        run = runs.next()
         future = client.submit(render_run, job, shipped, run, checkpoints.at(run[0]),
                                retries=retries, pure=False)
         in_flight[future] = run
@@ -311,18 +328,19 @@ def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, anima
         for future in futures:
             run = in_flight.pop(future)
             try:
-                for k, data in future.result():
-                    on_frame(k, data)
+                for frame in future.result():
+                    on_frame(*frame)
             except Exception as error:                      # noqa: BLE001 - reported per run
                 failed.append((run, _one_line(error)))
-            if queue:
-                submit(queue.popleft())
+            if runs:
+                submit()
 
-    for _ in range(min(2 * workers, len(queue))):
-        submit(queue.popleft())
-    while queue or in_flight:
-        if here and queue:
-            run = queue.popleft()
+    for _ in range(2 * workers):
+        if runs:
+            submit()
+    while runs or in_flight:
+        if here and runs:
+            run = runs.next()
             checkpoints.restore(run[0])
             for k in run:
                 render_here(job, [k], on_frame, retries, animation, failed)
@@ -362,19 +380,49 @@ class _Checkpoints:
             restore(self.animation.particle_system, self.at(k))
 
 
-def _cannot_win(frames: int, seconds: float, workers: int) -> str | None:
-    """Why a local cluster would not finish these frames sooner than this process, or None:
-    the job is shorter than its start, or no core is idle (more processes would only share
-    the busy ones; the load average counts the runnable processes)."""
-    if frames * seconds < 2 * CLUSTER_START_GUESS:
-        return (f"the remaining {frames} frames take ~{frames * seconds:.1f} s here, less than "
-                f"twice the ~{CLUSTER_START_GUESS:g} s its start costs")
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else 0.0
-    if load > BUSY_LOAD_PER_CORE * cores:
-        return (f"the machine is busy (load average {load:.1f} on {cores} cores): more processes "
-                "would only share the same cores")
-    return None
+def idle_mark() -> tuple[float, float] | None:
+    """``(wall clock, seconds every core has been idle)`` now, to measure the idle cores over
+    an interval with :func:`idle_cores`; None where the machine does not say."""
+    try:
+        import psutil                                   # comes with Dask
+        return time.perf_counter(), psutil.cpu_times().idle
+    except (ImportError, OSError, AttributeError):
+        return None
+
+
+def idle_cores(since: tuple[float, float] | None) -> float:
+    """How many cores were idle on average since ``since`` (:func:`idle_mark`): what other
+    processes on the machine leave to workers (this process's own core is busy)."""
+    now = idle_mark()
+    if since is None or now is None or now[0] <= since[0]:
+        return float(_cores() - 1)                      # unknown: assume a quiet machine
+    return max(0.0, (now[1] - since[1]) / (now[0] - since[0]))
+
+
+def _cores() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def predict(frames: int, seconds: float, workers: int, idle: float) -> tuple[float, float]:
+    """``(seconds here, seconds with local workers)`` for ``frames`` more frames of
+    ``seconds`` each: this process renders alone while the workers start
+    (CLUSTER_START_SECONDS), then with ``workers - 1`` workers on the ``idle`` cores
+    measured, each adding WORKER_SHARE of this process's speed."""
+    here = frames * seconds
+    helpers = WORKER_SHARE * min(workers - 1, idle)
+    return here, CLUSTER_START_SECONDS + max(0.0, here - CLUSTER_START_SECONDS) / (1 + helpers)
+
+
+def _cannot_win(frames: int, seconds: float, workers: int, idle: float) -> str | None:
+    """Why local workers would not finish these frames MIN_GAIN times sooner than this
+    process by :func:`predict`, or None."""
+    here, there = predict(frames, seconds, workers, idle)
+    if there * MIN_GAIN <= here:
+        return None
+    return (f"the remaining {frames} frames would take ~{there:.1f} s with {workers - 1} local "
+            f"worker{'s' if workers > 2 else ''} (~{CLUSTER_START_SECONDS:g} s to start, "
+            f"{idle:.1f} idle core{'' if round(idle, 1) == 1 else 's'} measured) against "
+            f"~{here:.1f} s in this process")
 
 
 def _one_numba_thread() -> int:
@@ -386,9 +434,11 @@ def _one_numba_thread() -> int:
     return before
 
 
-def render_frames(args, job, bundle, animation, todo, on_frame, progress) -> tuple[list, str | None]:
+def render_frames(args, job, bundle, animation, todo, on_frame, progress,
+                  since=None) -> tuple[list, str | None]:
     """Render ``todo`` where the options say; returns ``(failures, what ran where)``, each
-    failure ``(frames, why)``."""
+    failure ``(frames, why)``. ``since`` (:func:`idle_mark`, taken when the command started)
+    is where the idle cores are measured from."""
     from app.tools import cluster
     failed: list = []
     if args.scheduler:
@@ -409,18 +459,21 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress) -> tup
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, None
     # Two frames here first: the second times a frame (the first may load kernels), to
-    # decide whether a cluster can win at all.
+    # predict whether a cluster can win at all.
     head = render_here(job, todo[:1], on_frame, args.retries, animation, failed)
     t0 = time.perf_counter()
     head += render_here(job, todo[1:2], on_frame, args.retries, animation, failed)
     seconds = time.perf_counter() - t0
     todo = todo[head:]
-    why = _cannot_win(len(todo), seconds, workers)
+    idle = idle_cores(since)
+    why = _cannot_win(len(todo), seconds, workers, idle)
     if why:
         progress.say(f"note: --workers {workers}: not starting a local cluster: {why}")
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, "in this process (a cluster could not win)"
-    start = cluster.LocalStart(workers - 1)          # this process is the N-th renderer
+    here_s, there_s = predict(len(todo), seconds, workers, idle)
+    start = cluster.LocalStart(workers - 1, preload=(__name__,))   # this process: the N-th
+    threads = _one_numba_thread()                    # a core for the start, then the worker
     try:
         if not RENDER_WHILE_STARTING:
             start.ready.wait()
@@ -434,17 +487,15 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress) -> tup
                          "rendering here")
             render_here(job, todo[here:], on_frame, args.retries, animation, failed)
             return failed, None
-        threads = _one_numba_thread()
-        try:
-            render_on_cluster(start.client, job, bundle, todo[here:], on_frame, args.retries,
-                              animation, failed, workers - 1, here=True)
-        finally:
-            import numba
-            numba.set_num_threads(threads)
+        render_on_cluster(start.client, job, bundle, todo[here:], on_frame, args.retries,
+                          animation, failed, workers - 1, here=True)
         return failed, (f"this process and {workers - 1} local worker"
                         f"{'s' if workers > 2 else ''}, started once in {start.seconds:.1f} s "
-                        f"while this process rendered {head + here} frames")
+                        f"while this process rendered {head + here} frames (predicted "
+                        f"x{here_s / there_s:.2f} with {idle:.1f} idle cores measured)")
     finally:
+        import numba
+        numba.set_num_threads(threads)
         start.close()
 
 
@@ -478,6 +529,7 @@ def main(args) -> int:
     from core.animation.animation import Animation
     from core.animation.keys import animation_of
     from core.scene.view_numbers import ViewNumberError
+    since = idle_mark()                                  # the idle cores are measured from here
     out = Path(args.out)
     refusal = out_problem(out, args.scene, args.force)
     if refusal:
@@ -518,19 +570,33 @@ def main(args) -> int:
     if len(todo) < total:
         print(f"{total - len(todo)} of {total} frames already in {folder}: skipped", file=sys.stderr)
     progress = Progress(total, total - len(todo))
+    movie = None
+    if out.suffix.lower() in MOVIE_SUFFIXES:             # encoded as the frames come
+        movie = Movie(out, folder, total, job["fps"], args.crf, done=set(range(total)) - set(todo))
 
-    def on_frame(k: int, data: bytes) -> None:
+    def on_frame(k: int, data: bytes, rgb: np.ndarray) -> None:
         write_frame(folder, k, data)
+        if movie is not None:
+            movie.put(k, rgb)
         progress.tick()
 
     t0 = time.perf_counter()
     try:
-        failed, where = render_frames(args, job, bundle, animation, todo, on_frame, progress)
+        failed, where = render_frames(args, job, bundle, animation, todo, on_frame, progress,
+                                      since)
     except (cluster.ClusterError, OSError) as error:
         progress.finish()
+        if movie is not None:
+            movie.abandon()
         return _error(_one_line(error) if not isinstance(error, cluster.ClusterError)
                       else str(error), 1)
+    except BaseException:
+        if movie is not None:
+            movie.abandon()                              # (interrupted: nothing left beside)
+        raise
     progress.finish()
+    if failed and movie is not None:
+        movie.abandon()
     if failed:
         frames = sorted(k for run, _ in failed for k in run)
         first = min(failed, key=lambda f: f[0][0])[1]
@@ -547,7 +613,7 @@ def main(args) -> int:
         print(f"wrote {out} ({total} frames, {w}x{h}, {job['fps']:g} fps; {rendered})")
         return 0
     try:
-        encode(folder, total, out, job["fps"], args.crf)
+        movie.finish()
     except (OSError, ValueError) as error:
         reason = getattr(error, "strerror", None) or error
         return _error(f"cannot write {out}: {reason} (the frames stay in {folder}; the same "
@@ -566,15 +632,17 @@ def main(args) -> int:
 # ---------------------------------------------------------------------- the bench row
 
 
-def bench_animation(scene: str | Path | None = None, size=(500, 500), frames: int = 240,
-                    workers: int = 2) -> dict:
-    """The whole command, timed as a user meets it: ``animate`` of ``frames`` frames in one
-    process and with ``--workers`` (cluster start included), each in a fresh process."""
-    from app.tools.scaleout import compare
+def bench_animation(scenes=None, size=(500, 500), frames: int = 240, workers: int = 2,
+                    repeats: int = 1) -> dict:
+    """The whole command, timed as a user meets it: ``animate`` of ``frames`` frames of the
+    fountain and the fly-around in one process and with ``--workers`` (cluster start
+    included), each in a fresh process (:mod:`app.tools.scaleout`)."""
+    from app.tools.scaleout import SCENES, compare
     from core.paths import ROOT
-    return compare(Path(scene or ROOT / "scenes" / "fountain.toml"), frames, size, workers)
+    return {"rows": [compare(ROOT / scene, frames, size, workers, repeats)
+                     for scene in (scenes or SCENES)]}
 
 
-def format_animation(row: dict) -> str:
+def format_animation(result: dict) -> str:
     from app.tools.scaleout import format_row
-    return format_row(row)
+    return "\n".join(format_row(row) for row in result["rows"])

@@ -92,7 +92,8 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
     parser.add_argument("--no-threads", action="store_true",
                         help="skip the thread-scaling table (every case again on one thread)")
     parser.add_argument("--no-animation", action="store_true",
-                        help="skip the animation row (the fountain on 1 process and 2 workers)")
+                        help="skip the animation rows (the fountain and the fly-around on 1 "
+                             "process and 2 workers)")
     parser.add_argument("--no-depth", action="store_true",
                         help="skip the depth-complexity rows (100 stacked full-screen layers)")
     parser.add_argument("--renderer", type=_renderers, default="zbuffer",
@@ -656,8 +657,9 @@ def main(args) -> int:
         depth = depth_complexity(args.size, min(args.frames, 7), min(args.warmup, 1))
 
     animation = None
-    if not args.no_animation:                  # the fountain, 1 process and 2 workers
-        _progress("animation: the fountain at 500 x 500 on 1 process and 2 Dask workers ...")
+    if not args.no_animation:        # the fountain and the fly-around, 1 process and 2 workers
+        _progress("animation: the fountain and the fly-around at 500 x 500 on 1 process and "
+                  "--workers 2 ...")
         from app.tools.animate import bench_animation
         animation = bench_animation(size=args.size)
 

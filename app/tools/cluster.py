@@ -5,8 +5,13 @@
   answers with something else (an HTTP server, a huge length) is named for what it is not,
   instead of Dask waiting forever or allocating the length it read.
 - :func:`worker_cap` holds ``--workers`` to the cores and the memory this machine has.
-- :class:`LocalStart` starts a ``LocalCluster`` in the background (the caller keeps working
+- :class:`LocalStart` starts local workers in the background (the caller keeps working
   meanwhile) and reports how long it took; :func:`connect` reaches a running scheduler.
+  Local workers are a plain process pool (:class:`LocalPool`) with the part of Dask's
+  client the callers use: on this two-core machine a Dask ``LocalCluster`` cost ~2 s of CPU
+  to reach its first frame (its import in two processes, its scheduler and nanny) against
+  ~1.2 s for a process that imports the package and loads the kernel cache, and a job of a
+  few seconds on two cores cannot pay the difference.
 - The workers' logs are quiet (errors only): a failing task is reported once, by the caller,
   in one line, not by every worker as a traceback.
 
@@ -166,38 +171,118 @@ def connect(text: str):
         raise ClusterError(f"cannot reach the Dask scheduler at {address}: {error}") from None
 
 
-class LocalStart:
-    """A ``LocalCluster`` of ``workers`` single-threaded processes, started in a background
-    thread so that the caller keeps rendering meanwhile. ``ready`` is set when the client is
-    up (or the start failed: ``error``); ``seconds`` is how long the start took."""
+def completed(client, futures=()):
+    """Dask's ``as_completed`` for ``client``'s futures (``add``, ``has_ready``,
+    ``next_batch``), whichever kind of client it is."""
+    if isinstance(client, LocalPool):
+        done = _Completed()
+    else:
+        from dask.distributed import as_completed
+        done = as_completed()
+    for future in futures:
+        done.add(future)
+    return done
 
-    def __init__(self, workers: int):
+
+def _one_thread_worker(preload: tuple[str, ...]) -> None:
+    """A local worker's start: one kernel thread (the workers are the parallelism), and the
+    modules its tasks need imported now rather than by its first task."""
+    import importlib
+
+    import numba
+    numba.set_num_threads(1)
+    for name in preload:
+        importlib.import_module(name)
+
+
+def _started() -> int:
+    return os.getpid()
+
+
+def _retrying(fn, retries: int, *args):
+    """``fn(*args)``, tried again up to ``retries`` times when it raises (Dask's ``retries=``)."""
+    for attempt in range(retries + 1):
+        try:
+            return fn(*args)
+        except Exception:                            # noqa: BLE001 - the last one is raised
+            if attempt == retries:
+                raise
+
+
+class LocalPool:
+    """``workers`` single-thread worker processes on this machine (spawned: each imports the
+    package and loads the kernel cache once), with the part of a Dask client that
+    ``animate`` and ``render`` use: ``scatter``, ``submit(..., retries=)`` and
+    :func:`completed`. ``preload`` names the modules each worker imports as it starts."""
+
+    def __init__(self, workers: int, preload: tuple[str, ...] = ()):
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
         self.workers = workers
-        self.client = self.cluster = self.error = None
+        self.executor = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                                            initializer=_one_thread_worker, initargs=(preload,))
+
+    def scatter(self, data, **_):
+        return data                                  # sent with each task, by pickle
+
+    def submit(self, fn, *args, retries: int = 0, pure=None):
+        return self.executor.submit(_retrying, fn, retries, *args)
+
+    def close(self) -> None:
+        self.executor.shutdown(wait=True, cancel_futures=True)
+
+
+class _Completed:
+    """Futures as they complete, for :class:`LocalPool` (Dask's ``as_completed`` subset)."""
+
+    def __init__(self):
+        import queue
+        self.queue = queue.SimpleQueue()
+
+    def add(self, future) -> None:
+        future.add_done_callback(self.queue.put)
+
+    def has_ready(self) -> bool:
+        return not self.queue.empty()
+
+    def next_batch(self, block: bool = True) -> list:
+        import queue
+        batch = [self.queue.get()] if block else []
+        while True:
+            try:
+                batch.append(self.queue.get_nowait())
+            except queue.Empty:
+                return batch
+
+
+class LocalStart:
+    """A :class:`LocalPool` of ``workers`` processes, started in the background so that the
+    caller keeps rendering meanwhile. ``ready`` is set when every worker has started (or the
+    start failed: ``error``); ``seconds`` is how long the start took."""
+
+    def __init__(self, workers: int, preload: tuple[str, ...] = ()):
+        self.workers = workers
+        self.error = None
         self.seconds = None
         self.ready = threading.Event()
         self.t0 = time.perf_counter()
-        self._thread = threading.Thread(target=self._start, daemon=True)
-        self._thread.start()
+        self.client = LocalPool(workers, preload)
+        self._waiting = workers
+        self._lock = threading.Lock()
+        for _ in range(workers):                     # spawns them (a pool starts on demand)
+            self.client.executor.submit(_started).add_done_callback(self._one_started)
 
-    def _start(self) -> None:
-        try:
-            dask, Client, LocalCluster = _dask()
-            # one numba thread a worker: the workers are the parallelism
-            self.cluster = LocalCluster(n_workers=self.workers, threads_per_worker=1,
-                                        processes=True, dashboard_address=None,
-                                        env={"NUMBA_NUM_THREADS": "1"})
-            self.client = Client(self.cluster)
-        except Exception as error:                   # noqa: BLE001 - reported by the caller
-            self.error = error
-        self.seconds = time.perf_counter() - self.t0
-        self.ready.set()
+    def _one_started(self, future) -> None:
+        with self._lock:
+            if future.exception() is not None and self.error is None:
+                self.error = future.exception()
+            self._waiting -= 1
+            if self._waiting == 0 or self.error is not None:
+                self.seconds = time.perf_counter() - self.t0
+                self.ready.set()
 
     def close(self) -> None:
-        """Close the client and the cluster (after the start, if it is still going on)."""
-        self._thread.join()
+        """Stop the workers (after the start, if it is still going on)."""
         if self.client is not None:
             self.client.close()
-        if self.cluster is not None:
-            self.cluster.close()
-        self.client = self.cluster = None
+        self.client = None

@@ -20,12 +20,14 @@ import json
 import math
 import os
 import re
+from contextlib import ExitStack
 from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
 
 from app.naming import frame_name          # one rule for the name of every file written
+from app.output_files import beside, write_beside
 
 MOVIE_SUFFIXES = (".mp4", ".gif")
 _FRAME = re.compile(r"frame_([0-9]{5})\.png")
@@ -189,16 +191,107 @@ def movie_rate(out: Path, fps: float) -> tuple[object, str | None]:
     return rate, note
 
 
+HOLD_BYTES = 256 << 20     # frames that came before their turn, held in memory at most
+
+
+class Movie:
+    """The movie of a job's ``count`` frames, encoded while they are rendered (MP4), so that
+    no pass over the frames is left for the end; a GIF is made at the end from the folder
+    (Pillow writes one in a single call).
+
+    The encoder takes frames in order. :meth:`put` says frame k is in the folder, with its
+    pixels when at hand: a frame that comes before its turn waits in memory (up to
+    HOLD_BYTES), and one not held (a frame resumed from an earlier run, or one over the
+    limit) is read back from the folder when its turn comes. The file is written beside
+    ``out`` and renamed by :meth:`finish`; :meth:`abandon` (or a failed encoder) leaves
+    ``out`` as it was and nothing behind. An encoder error is kept in ``error``: the frames
+    are still rendered into the folder, and the caller reports it at the end."""
+
+    def __init__(self, out: Path, folder: Path, count: int, fps: float, crf: int = 18,
+                 done=()):
+        self.out, self.folder, self.count, self.crf = out, folder, count, crf
+        self.rate, _ = movie_rate(out, fps)
+        self.done, self.held, self.held_bytes = set(done), {}, 0
+        self.next, self.error = 0, None
+        self._file = self._writer = None
+        if out.suffix.lower() == ".mp4":
+            self._file = ExitStack()
+            try:
+                self._writer = Mp4Writer(self._file.enter_context(beside(out)), self.rate, crf)
+            except BaseException as error:
+                self._fail(error)
+                if not isinstance(error, OSError):
+                    raise
+        self._advance()
+
+    def put(self, k: int, rgb: np.ndarray | None = None) -> None:
+        """Frame ``k`` is in the folder; ``rgb``, its pixels, saves reading it back."""
+        self.done.add(k)
+        if self._writer is not None and rgb is not None and (
+                k == self.next or self.held_bytes + rgb.nbytes <= HOLD_BYTES):
+            self.held[k] = rgb
+            self.held_bytes += rgb.nbytes
+        self._advance()
+
+    def _advance(self) -> None:
+        """Encode every frame whose turn has come."""
+        while self._writer is not None and self.next in self.done:
+            rgb = self.held.pop(self.next, None)
+            if rgb is not None:
+                self.held_bytes -= rgb.nbytes
+            try:
+                self._writer.add(rgb if rgb is not None else read_frame(self.folder, self.next))
+            except (OSError, ValueError) as error:
+                self._fail(error)
+                return
+            self.next += 1
+
+    def finish(self) -> None:
+        """Encode what is left and rename the movie over ``out``; OSError or ValueError when
+        it cannot be written (``out`` is left as it was)."""
+        if self.error is not None:
+            raise self.error
+        if self._writer is None:
+            paths = [self.folder / frame_name(k) for k in range(self.count)]
+            write_beside(self.out, lambda temp: _gif(paths, temp, self.rate))
+            return
+        self.done.update(range(self.count))
+        self._advance()
+        if self.error is not None:
+            raise self.error
+        try:
+            self._writer.close()
+        except (OSError, ValueError) as error:
+            self._fail(error)
+            raise
+        self._file.close()                          # renamed over out
+
+    def abandon(self) -> None:
+        """No movie this time: the temporary file goes, ``out`` stays as it was."""
+        self._fail(None)
+
+    def _fail(self, error) -> None:
+        self.error = self.error or error
+        self.held.clear()
+        if self._writer is not None:
+            self._writer.abort()
+        self._writer = None
+        if self._file is not None:
+            stop = error if isinstance(error, BaseException) else OSError("abandoned")
+            self._file.__exit__(type(stop), stop, None)         # removes the temporary file
+            self._file = None
+
+
+def read_frame(folder: Path, k: int) -> np.ndarray:
+    from PIL import Image
+    with Image.open(folder / frame_name(k)) as image:
+        return np.asarray(image.convert("RGB"))
+
+
 def encode(folder: Path, count: int, out: Path, fps: float, crf: int = 18) -> None:
     """The frames of ``folder`` into ``out`` (H.264 MP4 with PyAV, or GIF with Pillow),
     written beside it and renamed when complete."""
-    from app.output_files import write_beside
-    paths = [folder / frame_name(k) for k in range(count)]
-    rate, _ = movie_rate(out, fps)
-    if out.suffix.lower() == ".gif":
-        write_beside(out, lambda temp: _gif(paths, temp, rate))
-    else:
-        write_beside(out, lambda temp: _mp4(paths, temp, rate, crf))
+    Movie(out, folder, count, fps, crf, done=range(count)).finish()
 
 
 def _gif(paths, temp: Path, cs: int) -> None:
@@ -208,27 +301,44 @@ def _gif(paths, temp: Path, cs: int) -> None:
                    duration=cs * 10)
 
 
-def _mp4(paths, temp: Path, rate: Fraction, crf: int) -> None:
-    """H.264 in one thread with fixed options: the same frames give the same bytes (x264's
-    frame threads make its choices depend on timing)."""
-    try:
-        import av
-    except ImportError:
-        raise OSError("MP4 needs PyAV: pip install 'fvd-viewer[anim]' (or write .gif or PNGs)") from None
-    from PIL import Image
-    with av.open(str(temp), "w", format="mp4") as container:
-        stream = container.add_stream("libx264", rate=rate)
-        first = np.asarray(Image.open(paths[0]).convert("RGB"))
-        # yuv420p halves the chroma resolution, so both sides must be even: pad by one pixel
-        height, width = first.shape[0] + first.shape[0] % 2, first.shape[1] + first.shape[1] % 2
-        stream.width, stream.height, stream.pix_fmt = width, height, "yuv420p"
-        stream.codec_context.thread_count = 1
-        stream.options = {"crf": str(crf), "preset": "medium", "threads": "1"}
-        for p in paths:
-            rgb = np.asarray(Image.open(p).convert("RGB"))
+class Mp4Writer:
+    """H.264 frames into an MP4, one at a time, in one thread with fixed options: the same
+    frames give the same bytes (x264's frame threads make its choices depend on timing)."""
+
+    def __init__(self, temp: Path, rate: Fraction, crf: int):
+        try:
+            import av
+        except ImportError:
+            raise OSError("MP4 needs PyAV: pip install 'fvd-viewer[anim]' (or write .gif or "
+                          "PNGs)") from None
+        self.av, self.crf = av, crf
+        self.container = av.open(str(temp), "w", format="mp4")
+        self.stream = self.container.add_stream("libx264", rate=rate)
+        self.size = None
+
+    def add(self, rgb: np.ndarray) -> None:
+        if self.size is None:
+            # yuv420p halves the chroma resolution, so both sides must be even: pad by one
+            self.size = rgb.shape[0] + rgb.shape[0] % 2, rgb.shape[1] + rgb.shape[1] % 2
+            self.stream.height, self.stream.width = self.size
+            self.stream.pix_fmt = "yuv420p"
+            self.stream.codec_context.thread_count = 1
+            self.stream.options = {"crf": str(self.crf), "preset": "medium", "threads": "1"}
+        height, width = self.size
+        if rgb.shape[:2] != (height, width):
             rgb = np.pad(rgb, ((0, height - rgb.shape[0]), (0, width - rgb.shape[1]), (0, 0)),
                          mode="edge")
-            for packet in stream.encode(av.VideoFrame.from_ndarray(rgb, format="rgb24")):
-                container.mux(packet)
-        for packet in stream.encode():
-            container.mux(packet)
+        for packet in self.stream.encode(self.av.VideoFrame.from_ndarray(
+                np.ascontiguousarray(rgb), format="rgb24")):
+            self.container.mux(packet)
+
+    def close(self) -> None:
+        for packet in self.stream.encode():
+            self.container.mux(packet)
+        self.container.close()
+
+    def abort(self) -> None:
+        try:
+            self.container.close()
+        except Exception:                       # noqa: BLE001 - the file is removed anyway
+            pass

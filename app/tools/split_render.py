@@ -7,14 +7,19 @@ so the worker needs only the package) and prepares it once (BVH and all) for eve
 traces. A pixel's colour depends on its own rays only, so the assembled bands are exactly the
 picture one process traces (the test compares them byte for byte).
 
-Only the ray tracer traces by tiles. A local cluster (``--workers``) on one machine cannot beat
-one process, whose tracer already runs on every core: it is started only when it is given
-more cores than this process uses (it never is here; the option says so and renders here).
+Only the ray tracer traces by tiles. ``--workers N`` starts a local cluster of N single-thread
+workers only when they would have more cores than this process's tracer, whose kernels run on
+``numba.get_num_threads()`` threads: by default one a core, so a local cluster would share the
+same cores, pay its start (~2 s) and build the scene's BVH once more per worker, and cannot
+win (measured: docs/movies.md); the output says so and the frame is traced here. With fewer
+kernel threads than cores (``NUMBA_NUM_THREADS``), the cluster is started and the picture is
+the same.
 """
 
 from __future__ import annotations
 
 import math
+import os
 
 import numpy as np
 
@@ -26,7 +31,22 @@ def can_split(settings) -> str | None:
     """Why this frame cannot be split across a cluster, or None."""
     if settings.renderer != "raytrace":
         return f"only ray-traced frames are split across workers (this one is {settings.renderer})"
+    if settings.sample_pattern == "adaptive":
+        return "adaptive sampling is not split across workers"
     return None
+
+
+def local_problem(workers: int) -> str | None:
+    """Why ``workers`` local single-thread workers cannot beat this process's tracer, or None:
+    they would run on no more cores than its kernel threads already do."""
+    import numba
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    threads = min(numba.get_num_threads(), cores)
+    if min(workers, cores) > threads:
+        return None
+    return (f"a local cluster of {workers} cannot beat this process, whose ray tracer already "
+            f"runs on {threads} of the {cores} cores here (the workers would share them and "
+            "pay their start)")
 
 
 def bands(height: int, workers: int) -> list[tuple[int, int]]:
@@ -68,15 +88,18 @@ def _setup(bundle, view_number, settings, demo):
 def render_split(client, bundle, view_number: int, settings, demo, retries: int = 2,
                  workers: int = 1) -> np.ndarray:
     """The frame, traced band by band on the cluster of ``client`` and assembled here."""
-    from dask.distributed import as_completed
+    from app.tools.cluster import completed
     width, height = settings.size
     color = np.empty((height, width, 3), np.uint8)
     shipped = client.scatter(bundle, broadcast=True, hash=False)
     futures = [client.submit(trace_band, shipped, view_number, settings, demo, rows,
                              retries=retries, pure=False) for rows in bands(height, workers)]
-    for future in as_completed(futures):
-        (row0, row1), band = future.result()
-        color[row0:row1] = band
+    done, left = completed(client, futures), len(futures)
+    while left:
+        for future in done.next_batch(block=True):
+            (row0, row1), band = future.result()
+            color[row0:row1] = band
+            left -= 1
     return color
 
 
@@ -92,18 +115,28 @@ def split_frame(args, settings):
         why = "--time frames are not split across workers"
     if why is None and args.course_tri:
         why = "--course-tri frames are not split across workers"
+    capped = None
     if why is None and not args.scheduler:
         workers, capped = cluster.worker_cap(args.workers)
-        why = ((capped + "; " if capped else "") +
-               f"a local cluster of {workers} cannot beat this process, whose ray tracer already "
-               f"runs on every core of this machine")
+        why = local_problem(workers)
     if why is not None:
-        return None, f"note: {why}: rendering in this process"
+        return None, f"note: {capped + '; ' if capped else ''}{why}: rendering in this process"
     _, bundle = load_recorded(args.scene, lambda path: load_scene(path, size=args.size))
+    demo = (args.bump_map, not args.no_bump)
+    if not args.scheduler:
+        start = cluster.LocalStart(workers, preload=(__name__,))
+        try:
+            start.ready.wait()
+            if start.error is not None:
+                raise cluster.ClusterError(f"the local cluster did not start: {start.error}")
+            color = render_split(start.client, bundle, args.view, settings, demo, workers=workers)
+        finally:
+            start.close()
+        return color, (f"traced by {workers} local workers (started in {start.seconds:.1f} s)"
+                       + (f"; {capped}" if capped else ""))
     client = cluster.connect(args.scheduler)
     try:
         workers = max(1, len(client.scheduler_info().get("workers", {})))
-        demo = (args.bump_map, not args.no_bump)
         color = render_split(client, bundle, args.view, settings, demo, workers=workers)
     finally:
         client.close()
