@@ -252,7 +252,7 @@ def test_outcodes_on_all_cores_equal_one_pass(projection):
     perspective = projection == "perspective"
     codes, any_outside = cp._outcodes_and_any(points, perspective, -0.1)
     one = np.empty(len(points), np.uint8)
-    assert any_outside == cp._outcodes(points, perspective, -0.1, one) != 0
+    assert any_outside == cp._outcodes(points, perspective, -0.1, one, 0, len(points)) != 0
     np.testing.assert_array_equal(codes, one)
     inside = np.zeros((cp.PARALLEL_POINTS, 3)) - 0.5
     assert cp._outcodes_and_any(inside, perspective, -0.1)[1] == 0

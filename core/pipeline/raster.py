@@ -266,10 +266,9 @@ def _triangle_edges(x0, y0, x1, y1, x2, y2):
 
 
 @njit(cache=True)
-def _snap_vertices(xy_z, inv_w, fixed, first=0, end=-1):
-    """Fixed-point x, y of every vertex (of vertices first..end-1), or INVALID for one no
-    triangle may use."""
-    for v in range(first, xy_z.shape[0] if end < 0 else end):
+def _snap_vertices(xy_z, inv_w, fixed, first, end):
+    """Fixed-point x, y of vertices first..end-1, or INVALID for one no triangle may use."""
+    for v in range(first, end):
         x = xy_z[v, 0]
         y = xy_z[v, 1]
         w = inv_w[v]
@@ -522,7 +521,7 @@ def _setup_serial(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri
                   s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first,
                   hidden_in):
     if snap:
-        _snap_vertices(xy_z, inv_w, fixed)
+        _snap_vertices(xy_z, inv_w, fixed, 0, xy_z.shape[0])
     bad = 0
     for chunk in range(chunk_end.shape[0]):
         bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,

@@ -236,7 +236,7 @@ def rasterize(xy_z, inv_w, triangles, width, height, out: VisibilityBuffer | Non
     scene = out._scene
     scene.reserve(xy_z.shape[0], 0)
     fixed = scene.fixed[:xy_z.shape[0]]
-    _snap_vertices(xy_z, inv_w, fixed)
+    _snap_vertices(xy_z, inv_w, fixed, 0, xy_z.shape[0])
     bad = _scan_all(xy_z, triangles, fixed, out.depth, out.tri, out.b1, out.b2)
     if bad:
         raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
