@@ -136,8 +136,6 @@ def prime_kernels(state) -> threading.Thread | None:
     The default scene (lines only) needs no kernel: nothing is started for it.
     """
     settings = state.settings()
-    if os.environ.get("FVD_NO_PRIME"):
-        return None
     if settings.shading == "wireframe" or not state.scene.triangle_count or not state.renderable:
         return None
 
