@@ -885,9 +885,9 @@ def _stream_runs_backwards(xy_z, triangles) -> bool:
     Either order gives the same picture (ties go to the later triangle both ways)."""
     n = triangles.shape[0]
     sample, step = max(1, n // 64), max(1, n // 64 // 256)
-    vertices = lambda rows: np.clip(rows, 0, len(xy_z) - 1)   # (setup refuses bad ones)
-    head = xy_z[vertices(triangles[:sample:step]), 2].max(axis=1)
-    tail = xy_z[vertices(triangles[n - sample::step]), 2].max(axis=1)
+    last = len(xy_z) - 1                       # (a bad index is setup's to refuse)
+    head = xy_z[np.clip(triangles[:sample:step], 0, last), 2].max(axis=1)
+    tail = xy_z[np.clip(triangles[n - sample::step], 0, last), 2].max(axis=1)
     finite = np.isfinite(head).all() and np.isfinite(tail).all()
     return bool(finite and tail.mean() > head.mean())
 

@@ -58,6 +58,7 @@ from core.shading.illumination import (Eye, eye_from_view, pack_ambient, pack_ey
                                         pack_surfaces, to_uint8)
 from core.scene.normals import WEIGHTINGS, face_normals, vertex_normals
 from core.shading.registry import get_shader
+from core.shading.wide import float32_is_exact_enough
 
 __all__ = ["ShadeInput", "Eye", "eye_from_view", "prepare", "resolve"]
 
@@ -346,7 +347,6 @@ def unlit(candidates: np.ndarray, lit: np.ndarray) -> np.ndarray:
 def wide_shading(s: ShadeInput) -> bool:
     """Light in float32 passes (core.shading.wide)? Unless the settings ask for the textbook
     float64 kernels, or an exponent is not a whole number up to 2^16."""
-    from core.shading.wide import float32_is_exact_enough
     return (getattr(s.settings, "shading_precision", "float32") == "float32"
             and float32_is_exact_enough(s.surfaces))
 
