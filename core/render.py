@@ -108,7 +108,7 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         fill(frame.color, scene.background)
         return frame
     draw = renderer.function()
-    if (settings.transparency != "off" and settings.renderer in ("zbuffer", "bsp", "depth-sort")
+    if (settings.transparency != "off" and settings.renderer in TRANSPARENT_WHEN_ASKED
             and any(m.material.kt > 0 for m in scene.meshes)):   # issue 18: k_t > 0 laid over
         from core.shading.transparency import with_transparency
         draw = with_transparency(draw)
@@ -119,17 +119,23 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         draw(scene, view, settings, frame, context, Timer(frame.stats, inspect))
     else:
         _supersample(draw, scene, view, settings, frame, context, inspect)
-    _say_what_is_not_drawn(scene, renderer.name, frame.stats)
+    _say_what_is_not_drawn(scene, renderer.name, frame.stats, settings.transparency)
     return frame
 
 
 GLOBAL_ILLUMINATION = ("radiosity", "pathtrace")
+# Renderers that follow reflected and refracted rays (k_r, k_t); the ones that lay k_t over
+# the opaque picture when asked (core.shading.transparency).
+RECURSIVE = ("raytrace", "pathtrace")
+TRANSPARENT_WHEN_ASKED = ("zbuffer", "bsp", "depth-sort")
 
 
-def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict) -> None:
+def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict,
+                           transparency: str = "off") -> None:
     """Add to ``stats["not drawn"]`` what of the scene this renderer leaves out by design:
-    the local renderers take no light from area emitters, and the global-illumination ones
-    use each material's colour, not its texture maps."""
+    the local renderers take no light from area emitters, and draw mirrors (k_r) without
+    their reflection and glass (k_t) opaque unless asked for transparency; the
+    global-illumination ones use each material's colour, not its texture maps."""
     from core.texture.material import maps_of
     notes = stats.setdefault("not drawn", [])
     for mesh in scene.meshes:
@@ -139,6 +145,14 @@ def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict) -> None:
                          f"light a scene with it")
         elif renderer in GLOBAL_ILLUMINATION and maps_of(mesh.material):
             notes.append(f"texture maps ({name}): {renderer} uses the material's own colour")
+        if renderer not in RECURSIVE and mesh.material.kr > 0:
+            notes.append(f"the reflection in the mirror ({name}): only raytrace and pathtrace "
+                         f"follow reflected rays")
+        if renderer not in RECURSIVE and mesh.material.kt > 0 and not (
+                renderer in TRANSPARENT_WHEN_ASKED and transparency != "off"):
+            notes.append(f"the transparency of {name} (k_t > 0): drawn opaque"
+                         + (" (--transparency interpolated or screen-door shows it)"
+                            if renderer in TRANSPARENT_WHEN_ASKED else ""))
 
 
 def _why_not(scene: Scene, view: View | None, settings: RenderSettings,

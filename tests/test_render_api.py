@@ -181,3 +181,27 @@ def test_what_a_renderer_leaves_out_by_design_is_said():
     assert any("texture maps (floor)" in n for n in notes(
         "texture_floor.toml", "radiosity", max_elements=64, hemicube_resolution=16))
     assert notes("torus.toml", "zbuffer") == []
+
+
+def test_mirrors_and_glass_that_a_local_renderer_draws_opaque_are_said():
+    """Whitted's mirror and glass spheres: the z-buffer and the painters draw them with their
+    local colour only, and say so; asked for transparency, only the reflection is missing;
+    the ray tracer draws both and says nothing of them."""
+    from core import RenderSettings, render
+    from core.scene.formats import load_scene
+    from core.paths import SCENES_DIR
+    scene = load_scene(SCENES_DIR / "whitted.toml")
+
+    def notes(renderer, **extra):
+        settings = RenderSettings.for_scene(scene, renderer=renderer, size=(24, 18), **extra)
+        return render(scene, scene.views[0], settings).stats["not drawn"]
+
+    for renderer in ("zbuffer", "bsp", "depth-sort"):
+        said = notes(renderer)
+        assert "the reflection in the mirror (mirror sphere): only raytrace and pathtrace " \
+               "follow reflected rays" in said, renderer
+        assert any(n.startswith("the transparency of glass sphere (k_t > 0): drawn opaque")
+                   for n in said), renderer
+        shown = notes(renderer, transparency="interpolated")
+        assert not any("transparency" in n for n in shown) and any("mirror" in n for n in shown)
+    assert not any("mirror" in n or "transparency" in n for n in notes("raytrace"))
