@@ -138,21 +138,25 @@ def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict,
     global-illumination ones use each material's colour, not its texture maps."""
     from core.texture.material import maps_of
     notes = stats.setdefault("not drawn", [])
+    said = []                           # meshes of one name (a checker's two) say it once
     for mesh in scene.meshes:
         name = getattr(mesh, "name", None) or "a mesh"
         if renderer not in GLOBAL_ILLUMINATION and any(c > 0 for c in mesh.material.emission):
-            notes.append(f"the light of the emitter ({name}): only radiosity and pathtrace "
+            said.append(f"the light of the emitter ({name}): only radiosity and pathtrace "
                          f"light a scene with it")
         elif renderer in GLOBAL_ILLUMINATION and maps_of(mesh.material):
-            notes.append(f"texture maps ({name}): {renderer} uses the material's own colour")
+            said.append(f"texture maps ({name}): {renderer} uses the material's own colour")
         if renderer not in RECURSIVE and mesh.material.kr > 0:
-            notes.append(f"the reflection in the mirror ({name}): only raytrace and pathtrace "
+            said.append(f"the reflection in the mirror ({name}): only raytrace and pathtrace "
                          f"follow reflected rays")
         if renderer not in RECURSIVE and mesh.material.kt > 0 and not (
                 renderer in TRANSPARENT_WHEN_ASKED and transparency != "off"):
-            notes.append(f"the transparency of {name} (k_t > 0): drawn opaque"
+            said.append(f"the transparency of {name} (k_t > 0): drawn opaque"
                          + (" (--transparency interpolated or screen-door shows it)"
                             if renderer in TRANSPARENT_WHEN_ASKED else ""))
+    for note in said:
+        if note not in notes:
+            notes.append(note)
 
 
 def _why_not(scene: Scene, view: View | None, settings: RenderSettings,

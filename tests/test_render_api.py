@@ -205,3 +205,18 @@ def test_mirrors_and_glass_that_a_local_renderer_draws_opaque_are_said():
         shown = notes(renderer, transparency="interpolated")
         assert not any("transparency" in n for n in shown) and any("mirror" in n for n in shown)
     assert not any("mirror" in n or "transparency" in n for n in notes("raytrace"))
+
+
+def test_the_ray_caster_says_which_meshes_it_leaves_out():
+    """Whitted's scene through the exact ray caster: the spheres are drawn, the checkered
+    floor (a plane, a mesh to the caster) is said once, though it is two meshes."""
+    from core import RenderSettings, render
+    from core.scene.formats import load_scene
+    from core.paths import SCENES_DIR
+    scene = load_scene(SCENES_DIR / "whitted.toml")
+    frame = render(scene, scene.views[0],
+                   RenderSettings.for_scene(scene, renderer="raycast", size=(40, 30)))
+    said = frame.stats["not drawn"]
+    assert said.count("floor: the ray caster draws only the analytic spheres and tori") == 1
+    assert not any("sphere: the ray caster" in n for n in said)
+    assert (frame.color != frame.color[0, 0]).any(axis=2).sum() > 100     # the spheres

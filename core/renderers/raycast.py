@@ -380,6 +380,13 @@ def draw(scene, view: View, settings, frame, context, timer) -> None:
         frame.message = (f"{scene.name}: no analytic primitives; the ray caster draws only those "
                          "(the meshes need the z-buffer)")
         return
+    drawn = {id(shape) for shape in scene.primitives}
+    notes = frame.stats.setdefault("not drawn", [])
+    for mesh in scene.meshes:          # meshes and planes: the z-buffer's and the tracer's
+        note = (f"{getattr(mesh, 'name', None) or 'a mesh'}: the ray caster draws only the "
+                f"analytic spheres and tori")
+        if id(mesh.tessellates) not in drawn and len(mesh.triangles) and note not in notes:
+            notes.append(note)
     side = grid_side(settings.samples)
     reference = render_reference(scene.primitives, scene, view, settings.projection,
                                  settings.size, samples=side, keep_aspect=settings.keep_aspect)
