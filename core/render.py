@@ -152,7 +152,8 @@ def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict,
         if renderer not in RECURSIVE and mesh.material.kt > 0 and not (
                 renderer in TRANSPARENT_WHEN_ASKED and transparency != "off"):
             said.append(f"the transparency of {name} (k_t > 0): drawn opaque"
-                         + (" (--transparency interpolated or screen-door shows it)"
+                         + (" (transparency interpolated or screen-door shows it: "
+                            "--transparency, or the Render menu)"
                             if renderer in TRANSPARENT_WHEN_ASKED else ""))
     for note in said:
         if note not in notes:
