@@ -123,6 +123,27 @@ def test_bvh_finds_what_brute_force_finds():
     assert report.triangles == 300 and report.depth < bvh.STACK
 
 
+def test_the_deal_of_work_items_is_a_permutation_in_order_per_thread(monkeypatch):
+    """``spread`` deals chunk ``j`` of a prange: every chunk exactly once, and each thread's
+    contiguous block of ``j`` the chunks of one remainder mod T, in increasing order (spread
+    over the picture for balance, in order so neighbouring rays share cached nodes)."""
+    deal = bvh.spread.py_func
+    for threads in (1, 2, 3, 16):
+        monkeypatch.setattr(bvh, "DEAL", threads)
+        for chunks in (1, 2, 5, 16, 17, 489, 1000):
+            order = [int(deal(j, chunks)) for j in range(chunks)]
+            assert sorted(order) == list(range(chunks)), (threads, chunks)
+            if threads > 1 and chunks > threads:
+                residues = [m % threads for m in order]
+                assert residues == sorted(residues)         # one remainder after another
+                for r in range(threads):
+                    run = [m for m in order if m % threads == r]
+                    assert run == sorted(run) and len(run) in (chunks // threads,
+                                                               chunks // threads + 1)
+    monkeypatch.setattr(bvh, "DEAL", 2)
+    assert [int(deal(j, 7)) for j in range(7)] == [0, 2, 4, 6, 1, 3, 5]
+
+
 def test_bvh_of_identical_triangles_stays_shallow():
     """Centroids no bin can separate: median splits keep the tree shallow and correct."""
     positions = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float)

@@ -175,7 +175,7 @@ def test_sphere_tree_finds_the_nearest_sphere_as_a_linear_search_does():
     rows[:, :3] = rng.uniform(-3, 3, (500, 3))
     rows[:, 3] = rng.uniform(0.02, 0.3, 500)
     tree = bvh.build_boxes(rows[:, :3] - rows[:, 3:4], rows[:, :3] + rows[:, 3:4])
-    stack = np.empty(bvh.STACK, dtype=np.int64)
+    stack = bvh.new_stack()
     from core.raytrace import intersect
     hits = 0
     for _ in range(400):

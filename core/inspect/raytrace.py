@@ -81,7 +81,7 @@ def ray_tree(setup, origin, direction, t_min, t_max) -> tuple[list, list]:
     packed, o = setup.packing.packed, setup.options
     shadows = whitted.SHADOW_MODES.index(o.shadows)
     offset = 1e-9 * setup.packing.scale
-    stack = np.empty(bvh.STACK, dtype=np.int64)
+    stack = bvh.new_stack()
     counts = np.zeros(len(whitted.COUNTERS), dtype=np.int64)
     surface_row = np.empty((1, packed.surfaces.shape[1]))
     eye = np.empty(4)

@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from core.raytrace.bvh import STACK, closest, occluded, spread
+from core.raytrace.bvh import closest, new_stack, occluded, spread
 
 MAX_BOUNCES = 64
 # materials columns
@@ -325,7 +325,7 @@ def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
     chunks = (n + 255) // 256
     for j in prange(chunks):
         chunk = spread(j, chunks)
-        stack = np.empty(STACK, np.int64)
+        stack = new_stack()
         total = 0
         for i in range(chunk * 256, min(n, (chunk + 1) * 256)):
             state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(first_index + i)
@@ -354,7 +354,7 @@ def trace_recorded(bvh, corners, tri_normal, tri_material, materials, emit_tri, 
     state, _ = _next(state)
     if not t_min < t_max:
         return background[0], background[1], background[2], 0
-    stack = np.empty(STACK, np.int64)
+    stack = new_stack()
     r, g, b, state, depth = trace_path(
         bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
         tri_emit_pdf, lights, background, origin[0], origin[1], origin[2], direction[0],

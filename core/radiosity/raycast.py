@@ -20,7 +20,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from core.raytrace.bvh import STACK, occluded
+from core.raytrace.bvh import new_stack, occluded
 
 
 @njit(cache=True)
@@ -83,7 +83,7 @@ def _to_patch(bvh, points, normals, tri, patch_normal, samples, offset, out):
         f = point_to_polygon(x, n, poly, count)
         if f == 0.0:
             continue
-        stack = np.empty(STACK, np.int64)
+        stack = new_stack()
         ox, oy, oz = x[0] + offset * n[0], x[1] + offset * n[1], x[2] + offset * n[2]
         seen, tried = 0, 0
         for s in range(samples.shape[0]):

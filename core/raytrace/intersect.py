@@ -31,7 +31,7 @@ from numba import njit
 NO_HIT = np.inf
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def triangle(ox, oy, oz, dx, dy, dz, v0, e1, e2, t_min, t_max):
     """``(t, u, v)`` of the ray's hit on triangle ``V0, V0 + E1, V0 + E2`` (Möller–Trumbore);
     ``t = NO_HIT`` when it misses, is parallel, or the triangle is degenerate."""
@@ -59,7 +59,7 @@ def triangle(ox, oy, oz, dx, dy, dz, v0, e1, e2, t_min, t_max):
     return t, u, v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def triangle_row(ox, oy, oz, dx, dy, dz, tri, k, t_min, t_max):
     """:func:`triangle` on row ``k`` of ``tri`` ``(T, 9)``: ``V0, E1, E2`` side by side, so a
     BVH leaf's triangles lie in one run of memory."""
@@ -88,7 +88,7 @@ def triangle_row(ox, oy, oz, dx, dy, dz, tri, k, t_min, t_max):
     return t, u, v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def sphere(ox, oy, oz, dx, dy, dz, cx, cy, cz, radius, t_min, t_max):
     """The ray parameter of the nearest hit on the sphere inside ``(t_min, t_max)``."""
     a = dx * dx + dy * dy + dz * dz
@@ -114,7 +114,7 @@ def sphere(ox, oy, oz, dx, dy, dz, cx, cy, cz, radius, t_min, t_max):
     return NO_HIT
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def plane(ox, oy, oz, dx, dy, dz, a, b, c, d, t_min, t_max):
     """The ray parameter where the ray meets ``a x + b y + c z + d = 0``."""
     denominator = a * dx + b * dy + c * dz

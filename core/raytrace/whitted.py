@@ -569,7 +569,7 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
         scaled = np.empty(lights.shape)
         surface_row = np.empty((1, packed.surfaces.shape[1]))
         eye = np.empty(4)
-        stack = np.empty(bvh.STACK, dtype=np.int64)
+        stack = bvh.new_stack()
         work = scratch(packed, textured)
         trace(packed, origins, directions, t_min, t_max, chunk * CHUNK,
               min(n, (chunk + 1) * CHUNK), primary_eye, lights, ambient, halfway, background,
@@ -587,7 +587,7 @@ def visible_many(packed, origins, directions, t_min, t_max, kind, index, t_hit):
     chunks = (n + CHUNK - 1) // CHUNK
     for m in prange(chunks):
         chunk = bvh.spread(m, chunks)
-        stack = np.empty(bvh.STACK, dtype=np.int64)
+        stack = bvh.new_stack()
         for i in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
             k, j, t, _, _ = nearest(packed, origins[i, 0], origins[i, 1], origins[i, 2],
                                     directions[i, 0], directions[i, 1], directions[i, 2],
