@@ -21,7 +21,7 @@ of it at 100k and 1M triangles. Used only by ``python -m app bench``.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from core.jit import njit, prange
 
 
 @njit(cache=True, parallel=True)

@@ -198,6 +198,7 @@ class ViewerWindow:
         self._scenes = shipped_scenes()
         self._first_frame_logged = False
         self._warming = False
+        self._warm_up_due = False
         self._popup_open = False          # a menu or the pop-up was open in the last frame
         self._close_popups = False        # Esc: close them in the next frame
         self._compiles_at_request = 0
@@ -474,7 +475,7 @@ class ViewerWindow:
         if result is not None and self.state.accept(result):
             if getattr(result, "final", True):
                 self._log_frame()
-                self._start_warm_up()
+                self._warm_up_due = True  # once this frame is on screen (the thread takes the GIL)
                 self.tools.frame_changed(self.state.frame, self.state.frame_seconds)
             else:
                 log.info("partial frame: %s (%s)", result.what,
@@ -508,6 +509,9 @@ class ViewerWindow:
         if not self._first_frame_logged and self.state.frame is not None:
             self._first_frame_logged = True
             self._log_since_start("first frame shown")
+        if self._warm_up_due:
+            self._warm_up_due = False
+            self._start_warm_up()
         return True
 
     def _start_warm_up(self) -> None:

@@ -24,9 +24,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from core.camera.view import normalizing_transform, vrc_basis
+from core.jit import njit
 from core.pipeline import project
 
 POINT, SPRITE, STREAK = 0, 1, 2

@@ -27,7 +27,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
+from core.jit import njit
 
 SHAPES = ("point", "sphere", "disc", "mesh")
 DRAW_MODES = ("point", "sprite", "streak")

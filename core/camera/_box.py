@@ -1,6 +1,6 @@
 """The film's compiled box filter (kept apart so that importing the film loads no numba)."""
 
-from numba import njit, prange
+from core.jit import njit, prange
 
 
 @njit(cache=True, parallel=True, nogil=True)

@@ -17,9 +17,9 @@ outside the viewport sees nothing. What a ray may hit is limited by the front an
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
 from core.camera.view import View, check, eye_from_view, vrc_basis
+from core.jit import njit, prange
 from core.pipeline.project import viewport
 from core.vectors import unit3
 

@@ -30,8 +30,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.raytrace.bvh import closest, new_stack, occluded, spread
 
 MAX_BOUNCES = 64

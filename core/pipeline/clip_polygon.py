@@ -32,8 +32,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.settings import PROJECTIONS
 
 # Outcode bits, in FvDFH's order (parallel volume | perspective volume).

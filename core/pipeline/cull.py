@@ -15,9 +15,9 @@ kept triangles directly (no boolean mask, no gather afterwards).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
 from core.context import DEFAULT_CONTEXT, RenderContext
+from core.jit import njit, prange
 
 
 def face_planes(mesh, context: RenderContext = DEFAULT_CONTEXT) -> tuple[np.ndarray, np.ndarray]:

@@ -21,7 +21,7 @@ They agree with the rasterizer's ``b1``, ``b2`` to the rounding of the fixed-poi
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from core.jit import njit
 
 
 def barycentric_planes(device: np.ndarray, inv_w: np.ndarray, triangles: np.ndarray) -> np.ndarray:

@@ -66,7 +66,7 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
-from numba import njit, prange
+from core.jit import njit, prange
 
 SUBPIXEL_BITS = 8
 SUBPIXEL_ONE = 1 << SUBPIXEL_BITS  # one pixel in fixed point

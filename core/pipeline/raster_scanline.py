@@ -37,8 +37,8 @@ fast path (the edge rasterizer is).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from core.jit import njit
 from core.pipeline.raster import (INVALID, PIXEL_CENTRE, SUBPIXEL_BITS, SUBPIXEL_ONE,
                                   VisibilityBuffer, _checked, _snap_vertices, _triangle_edges)
 

@@ -12,7 +12,7 @@ together); the wireframe path keeps the numpy forms and so needs no compiler.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from core.jit import njit, prange
 
 
 # Below this many points one core is quicker: waking the second costs ~0.1 ms.

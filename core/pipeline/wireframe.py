@@ -15,7 +15,7 @@ Returns the number of segments drawn.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from core.jit import njit
 
 
 @njit(cache=True)

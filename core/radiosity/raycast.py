@@ -18,8 +18,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.raytrace.bvh import new_stack, occluded
 
 

@@ -23,8 +23,8 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
 
+from core.jit import njit
 from core.radiosity.mesh import Elements
 
 from core.settings import FORM_FACTOR_METHODS, SOLVERS  # noqa: E402,F401  (listed there)

@@ -40,8 +40,8 @@ import time
 from typing import NamedTuple
 
 import numpy as np
-from numba import config, njit, prange
 
+from core.jit import config, njit, prange
 from core.raytrace import intersect
 
 BINS = 16

@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from core.jit import njit
 
 NO_HIT = np.inf
 

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from core.jit import njit
 
 AIR, WATER, GLASS = 1.0003, 1.33, 1.52
 INDICES = {"air": AIR, "water": WATER, "glass": GLASS, "vacuum": 1.0}

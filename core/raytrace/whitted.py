@@ -50,8 +50,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.raytrace import bvh, intersect, optics
 from core.texture.surface import UV, textured_at
 from core.shading.illumination import (EYE_DIRECTION, EYE_POINT, LIGHT_INTENSITY, OD, POINT_LIGHT,

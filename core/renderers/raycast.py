@@ -43,8 +43,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights, pack_surfaces,
                                phong_point, unit3)
 from core.camera.film import fill, grid_side, to_rgb8

@@ -30,8 +30,8 @@ Takes a mesh's world positions ``(V, 3)`` and triangles ``(T, 3)``; returns unit
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from core.jit import njit
 from core.scene.model import CREASE_ANGLE  # noqa: F401  (the default, and why: there)
 from core.transforms import unit_rows
 

@@ -15,8 +15,8 @@ colour map, no light involved:
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.shading.illumination import EYE_POINT, quantize
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import ShadeInput, covered_spans

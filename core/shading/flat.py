@@ -9,8 +9,8 @@ alone in its plane is lit at its own centroid, exactly as before."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
 from core.scene.normals import face_normals, planar_polygons

@@ -4,8 +4,8 @@ the colours are interpolated. Varyings: ``rgb`` (3)."""
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_vertex_normals, covered_spans,

@@ -59,10 +59,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from core.camera.film import to_rgb8 as to_uint8  # noqa: F401  (one rounding rule)
 from core.camera.view import Eye, eye_from_view  # noqa: F401  (re-exported)
+from core.jit import njit
 from core.vectors import unit3  # noqa: F401  (re-exported)
 from core.transforms import unit_rows
 

@@ -5,8 +5,8 @@ renormalised and the illumination model evaluated at every pixel. Varyings: ``no
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.shading.illumination import phong_point, quantize, unit3
 from core.shading.wide import resolve_phong_wide
 from core.shading.registry import Shader, register_shader

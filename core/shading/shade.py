@@ -50,10 +50,10 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from numba import njit, prange
 
 from core.camera.film import fill_bytes
 from core.context import DEFAULT_CONTEXT, RenderContext
+from core.jit import njit, prange
 from core.shading.illumination import (Eye, eye_from_view, pack_ambient, pack_eye, pack_lights,
                                         pack_surfaces, to_uint8)
 from core.scene.normals import WEIGHTINGS, face_normals, vertex_normals

@@ -23,8 +23,8 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from numba import njit
 
+from core.jit import njit
 from core.shading.illumination import to_uint8
 
 MODES = ("off", "interpolated", "screen-door")

@@ -3,7 +3,7 @@
 so that the compiler turns the loops into 8-wide AVX instructions.
 
 The textbook kernels evaluate the model one point at a time in float64. Here a span of points
-(a row of Phong's pixels, :func:`resolve_phong_wide`; a block of flat's faces or Gouraud's
+(a band of rows of Phong's pixels, :func:`resolve_phong_wide`; a block of flat's faces or Gouraud's
 vertices, :func:`illuminate_wide`) is done in passes, one quantity per row of a small scratch
 array (structure of arrays):
 
@@ -29,8 +29,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.shading.illumination import SQUARING_LIMIT, phong_point, quantize, unit3
 
 F = np.float32
@@ -51,31 +51,120 @@ def float32_is_exact_enough(surfaces: np.ndarray) -> bool:
     return bool(np.all((n == np.floor(n)) & (n >= 0) & (n <= SQUARING_LIMIT)))
 
 
+BAND_PIXELS = 2048     # Phong's pixels per work item: a band of whole rows of about this many
+
+
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def resolve_phong_wide(tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces,
-                       lights, ambient, eye, halfway, out):
+                        lights, ambient, eye, halfway, out):
     """Phong at every covered pixel of each row's span, float32 in passes (see the module).
 
-    The span is cut into runs of one surface (material): the passes read the material once
-    per run, as scalars, and loop over the run's pixels. The scratch rows go to the passes as
-    separate arrays, so that the compiler sees that loads and stores do not overlap."""
+    The work items are bands of whole rows of about ``BAND_PIXELS`` covered pixels, their
+    spans gathered one after another into one scratch: a call of a pass hands over its
+    arrays (an atomic reference count each, on arrays the cores share), so a pass per band
+    costs less than a pass per row (1k-triangle frame: 1.82 → 1.65 ms of CPU). The span is
+    cut into runs of one surface (material): the passes read the material once per run, as
+    scalars. The scratch rows go to the passes as separate arrays, so that the compiler sees
+    that loads and stores do not overlap."""
     if triangles.shape[0] == 0:
-        return                            # nothing covered (background pixels read triangle 0)
-    for row in prange(tri.shape[0]):
-        lo, m = span[row, 0], span[row, 1] - span[row, 0] + 1
-        if m <= 0:
+        return
+    first = _bands(span)
+    for band in prange(first.shape[0] - 1):
+        r0, r1 = first[band], first[band + 1]
+        m = 0
+        for row in range(r0, r1):
+            m += max(span[row, 1] - span[row, 0] + 1, 0)
+        if m == 0:
             continue
         q = np.empty((ROWS, m), np.float32)
         p = np.empty((3, m))
         flag = np.zeros(m, np.bool_)
-        runs = np.empty(m + 1, np.int64)      # run k: pixels runs[k]..runs[k+1]-1
+        runs = np.empty(m + 1, np.int64)
         run_surface = np.empty(m, np.int64)
-        n_runs = _gather(tri[row, lo:lo + m], b1[row, lo:lo + m], b2[row, lo:lo + m],
-                         triangles, attrs, source, face_surface, eye, q, p, runs, run_surface)
+        n_runs = _gather(r0, r1, span, tri, b1, b2, triangles, attrs, source,
+                              face_surface, eye, q, p, runs, run_surface)
         sums = _shade_span(q, p, flag, runs[:n_runs + 1], run_surface[:n_runs], surfaces,
                            lights, ambient, halfway)
-        _store(row, lo, m, tri, b1, b2, triangles, attrs, source, face_surface, surfaces,
-               lights, ambient, eye, halfway, q[sums:sums + 3], flag, out)
+        _store(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface,
+                    surfaces, lights, ambient, eye, halfway, q[sums:sums + 3], flag, out)
+
+
+@njit(cache=True, error_model="numpy")
+def _bands(span):
+    """First rows of bands of whole rows holding about BAND_PIXELS covered pixels each."""
+    rows = span.shape[0]
+    first = np.empty(rows + 1, np.int64)
+    n, pixels = 1, 0
+    first[0] = 0
+    for row in range(rows):
+        if pixels >= BAND_PIXELS:
+            first[n] = row
+            n += 1
+            pixels = 0
+        pixels += max(span[row, 1] - span[row, 0] + 1, 0)
+    first[n] = rows
+    return first[:n + 1]
+
+
+@njit(cache=True, error_model="numpy")
+def _gather(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface, eye, q, p,
+                 runs, run_surface):
+    """Pass 1 over rows r0 .. r1 - 1, their spans one after another: N and P interpolated,
+    V unnormalised; the runs of one surface. Returns the number of runs. A run of one
+    triangle reuses its corners (vertex 0 and the edges to vertices 1 and 2: a0 + w1 d1 +
+    w2 d2 is w0 a0 + w1 a1 + w2 a2 with w0 = 1 - w1 - w2)."""
+    corner = np.empty((3, 6))
+    perspective = eye[0] == 1.0
+    last, n_runs, j = -1, 0, 0
+    for row in range(r0, r1):
+        for col in range(span[row, 0], span[row, 1] + 1):
+            t = tri[row, col]
+            if t < 0:                     # background: the last triangle's harmless numbers
+                t = max(last, 0)
+            if t != last:
+                last = t
+                i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+                for c in range(6):
+                    corner[0, c] = attrs[i0, c]
+                    corner[1, c] = attrs[i1, c] - attrs[i0, c]
+                    corner[2, c] = attrs[i2, c] - attrs[i0, c]
+                s = face_surface[source[t]]
+                if n_runs == 0 or run_surface[n_runs - 1] != s:
+                    runs[n_runs], run_surface[n_runs] = j, s
+                    n_runs += 1
+            w1, w2 = b1[row, col], b2[row, col]
+            for c in range(3):
+                q[NX + c, j] = corner[0, c] + w1 * corner[1, c] + w2 * corner[2, c]
+                p[c, j] = corner[0, 3 + c] + w1 * corner[1, 3 + c] + w2 * corner[2, 3 + c]
+                q[VX + c, j] = eye[1 + c] - p[c, j] if perspective else eye[1 + c]
+            j += 1
+    runs[n_runs] = j
+    return n_runs
+
+
+@njit(cache=True, error_model="numpy")
+def _store(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface, surfaces,
+                lights, ambient, eye, halfway, rgb_sum, flag, out):
+    """Pass 4 over rows r0 .. r1 - 1: bytes for the covered pixels; flagged ones by the
+    float64 model."""
+    m = rgb_sum.shape[1]
+    rgb = np.empty((3, m), np.uint8)
+    for c in range(3):
+        for j in range(m):
+            rgb[c, j] = np.uint8(np.int32(min(max(rgb_sum[c, j], F(0.0)), F(1.0)) * F(255.0)
+                                          + F(0.5)))   # clamped to [0, 1]: truncation floors
+    j = 0
+    for row in range(r0, r1):
+        for col in range(span[row, 0], span[row, 1] + 1):
+            t = tri[row, col]
+            if t >= 0:
+                if not flag[j]:
+                    out[row, col, 0], out[row, col, 1], out[row, col, 2] = (rgb[0, j], rgb[1, j],
+                                                                            rgb[2, j])
+                else:
+                    _float64_pixel(row, col, t, b1, b2, triangles, attrs, source, face_surface,
+                                   surfaces, lights, ambient, eye, halfway, out)
+            j += 1
 
 
 @njit(cache=True, error_model="numpy")
@@ -166,39 +255,6 @@ def _illuminate_block(j0, points, normals, surface, which, out, out_rows, surfac
         else:
             for c in range(3):
                 out[row, c] = min(max(q[sums + c, j], F(0.0)), F(1.0))
-
-
-@njit(cache=True, error_model="numpy")
-def _gather(tri, b1, b2, triangles, attrs, source, face_surface, eye, q, p, runs,
-            run_surface):
-    """Pass 1: N and P interpolated, V unnormalised; the runs of one surface. Returns the
-    number of runs. A run of one triangle reuses its corners (vertex 0 and the edges to
-    vertices 1 and 2: a0 + w1 d1 + w2 d2 is w0 a0 + w1 a1 + w2 a2 with w0 = 1 - w1 - w2)."""
-    corner = np.empty((3, 6))
-    perspective = eye[0] == 1.0
-    last, n_runs = -1, 0
-    for j in range(tri.shape[0]):
-        t = tri[j]
-        if t < 0:                         # background: the last triangle's harmless numbers
-            t = max(last, 0)
-        if t != last:
-            last = t
-            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-            for c in range(6):
-                corner[0, c] = attrs[i0, c]
-                corner[1, c] = attrs[i1, c] - attrs[i0, c]
-                corner[2, c] = attrs[i2, c] - attrs[i0, c]
-            s = face_surface[source[t]]
-            if n_runs == 0 or run_surface[n_runs - 1] != s:
-                runs[n_runs], run_surface[n_runs] = j, s
-                n_runs += 1
-        w1, w2 = b1[j], b2[j]
-        for c in range(3):
-            q[NX + c, j] = corner[0, c] + w1 * corner[1, c] + w2 * corner[2, c]
-            p[c, j] = corner[0, 3 + c] + w1 * corner[1, 3 + c] + w2 * corner[2, 3 + c]
-            q[VX + c, j] = eye[1 + c] - p[c, j] if perspective else eye[1 + c]
-    runs[n_runs] = tri.shape[0]
-    return n_runs
 
 
 @njit(cache=True, error_model="numpy")
@@ -312,27 +368,6 @@ def _power(base, spec, n):
             for j in range(base.shape[0]):
                 x = base[j]
                 base[j] = x * x if x > FLUSH else F(0.0)
-
-
-@njit(cache=True, error_model="numpy")
-def _store(row, lo, m, tri, b1, b2, triangles, attrs, source, face_surface, surfaces, lights,
-           ambient, eye, halfway, rgb_sum, flag, out):
-    """Pass 4: bytes for the covered pixels; flagged ones by the float64 model."""
-    rgb = np.empty((3, m), np.uint8)
-    for c in range(3):
-        for j in range(m):               # clamped to [0, 1], so truncation is the floor
-            rgb[c, j] = np.uint8(np.int32(min(max(rgb_sum[c, j], F(0.0)), F(1.0)) * F(255.0)
-                                          + F(0.5)))
-    for j in range(m):
-        col = lo + j
-        t = tri[row, col]
-        if t < 0:
-            continue
-        if not flag[j]:
-            out[row, col, 0], out[row, col, 1], out[row, col, 2] = rgb[0, j], rgb[1, j], rgb[2, j]
-        else:
-            _float64_pixel(row, col, t, b1, b2, triangles, attrs, source, face_surface,
-                           surfaces, lights, ambient, eye, halfway, out)
 
 
 @njit(cache=True, error_model="numpy")

@@ -32,8 +32,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from core.jit import njit
 from core.texture.demo_scene import (DEMO_LIGHT, DEMO_VIEWPOINT, LABELS, MAPS,  # noqa: F401
                                      WINDOW_SIZE, apply_demo_options, demo_bump_numpy,
                                      demo_view, label, panel_views)

@@ -38,8 +38,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from core.jit import njit
 from core.texture.modes import (ANISOTROPIC, BILINEAR, CLAMP, FILTERS, MIRROR,  # noqa: F401
                                 NEAREST, REPEAT, TRILINEAR, WRAPS)
 

@@ -22,8 +22,8 @@ only visible triangles pay for them); the filter and the bump switch come from
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.shading.illumination import OD, quantize
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import ShadeInput, all_vertex_normals, cached, scene_arrays

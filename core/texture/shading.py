@@ -11,8 +11,8 @@ not the 2 x 2-quad differences a GPU takes.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.texture.sample import sample
 from core.texture.tutorial import uv_at
 

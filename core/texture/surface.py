@@ -28,8 +28,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
 
+from core.jit import njit, prange
 from core.shading.illumination import OD, TWO_SIDED, phong_point, quantize, unit3
 from core.texture.sample import BILINEAR, sample
 from core.texture.tutorial import uv_at

@@ -33,7 +33,7 @@ the nearest texel, one texel per pixel, with no filtering.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from core.jit import njit, prange
 
 
 def nine_constants(P: np.ndarray, M: np.ndarray, N: np.ndarray) -> np.ndarray:

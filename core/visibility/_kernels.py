@@ -1,7 +1,7 @@
 """Small compiled loops the painter's renderers share."""
 
 import numpy as np
-from numba import njit, prange
+from core.jit import njit, prange
 
 
 @njit(cache=True, nogil=True)

@@ -30,8 +30,8 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from core.jit import njit
 from core.settings import BSP_ROOTS as ROOT_RULES      # first, random, fewest-splits
 from core.visibility.split import cut_triangle, grow, side
 

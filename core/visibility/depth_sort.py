@@ -32,8 +32,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from core.jit import njit
 from core.visibility.split import cut_triangle, grow
 
 # Counters in the order FvDFH runs the tests, then what was done about failures.

@@ -13,7 +13,7 @@ bit, and the mesh stays watertight.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from core.jit import njit
 
 
 @njit(cache=True, nogil=True)
