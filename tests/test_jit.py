@@ -1,0 +1,89 @@
+"""core.jit: a kernel loaded from numba's cache without numba's full registry refresh.
+
+Each case runs in a fresh Python process (the refresh happens once per process) with its own
+kernel cache, on a kernel module written to a temporary folder: the first process compiles
+and caches it, the second loads it.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+
+KERNELS = '''
+import numpy as np
+from core.jit import njit
+
+
+@njit(cache=True)
+def total(a):
+    s = 0.0
+    for x in a:
+        s += x
+    return s
+
+
+@njit(cache=True)
+def scaled(a, k):
+    out = np.empty_like(a)
+    for i in range(a.shape[0]):
+        out[i] = a[i] * k
+    return out
+'''
+
+
+def _run(tmp_path: Path, code: str) -> str:
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+               PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
+    done = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], env=env, cwd=ROOT,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    return done.stdout.strip()
+
+
+def test_a_cached_kernel_loads_without_the_registry_refresh(tmp_path):
+    (tmp_path / "kernels_for_jit_test.py").write_text(KERNELS)
+    first = _run(tmp_path, """
+        import numpy as np, kernels_for_jit_test as k
+        print(k.total(np.arange(5.0)), k.scaled(np.arange(3.0), 2.0).tolist())
+    """)
+    assert first == "10.0 [0.0, 2.0, 4.0]"
+    # a new process: both kernels come from the cache; numba's linear algebra registry (one
+    # of the modules its refresh imports) stays unloaded, and nothing compiles
+    second = _run(tmp_path, """
+        import sys, numpy as np
+        from numba.core import event
+        compiled = []
+        class Listener(event.Listener):
+            def on_start(self, ev): compiled.append(ev.data["dispatcher"].py_func.__name__)
+            def on_end(self, ev): pass
+        event.register("numba:compile", Listener())
+        import core.jit, kernels_for_jit_test as k
+        print(core.jit.QUICK_CACHE_LOADS, k.total(np.arange(5.0)),
+              k.scaled(np.arange(3.0), 2.0).tolist(), "numba.np.linalg" in sys.modules,
+              compiled)
+    """)
+    assert second == "True 10.0 [0.0, 2.0, 4.0] False []"
+
+
+def test_a_compile_after_a_quick_load_still_gets_the_whole_registry(tmp_path):
+    """A kernel that is not in the cache compiles as before (numba's compiler refreshes its
+    contexts itself), here one using numpy's median and a typed list after a quick load."""
+    (tmp_path / "kernels_for_jit_test.py").write_text(KERNELS)
+    _run(tmp_path, "import numpy as np, kernels_for_jit_test as k; k.total(np.ones(2))")
+    out = _run(tmp_path, """
+        import numpy as np, kernels_for_jit_test as k
+        from core.jit import njit
+        k.total(np.ones(2))                        # a quick load
+        @njit
+        def middle(a):
+            seen = [x for x in a if x > 0.0]
+            return np.median(a), len(seen)
+        print(middle(np.array([3.0, -1.0, 2.0])))
+    """)
+    assert out == "(2.0, 2)"
