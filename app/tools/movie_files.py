@@ -63,14 +63,40 @@ def out_problem(out: Path, source: str, force: bool) -> str | None:
 # ---------------------------------------------------------------------- frames
 
 
+# zlib's fastest level: a frame's PNG in 45 % of the default's time (8.7 against 19.4 ms for
+# the Whitted picture at 500 x 500), a third larger; the folder is a resumable work area.
+PNG_LEVEL = 1
+
+
+def rgb_image(color: np.ndarray):
+    """``color`` (H, W, 3) uint8 as a Pillow image. A frame's ``color`` is a view of its
+    padded RGBX pixels (``Frame.rgbx``); Pillow unpacks RGBX in 0.1 ms, where numpy's copy of
+    the strided view takes 1.5–1.9 ms at 500 x 500."""
+    from PIL import Image
+    padded = color.base
+    if (isinstance(padded, np.ndarray) and padded.dtype == np.uint8 and padded.ndim == 3
+            and padded.shape[2] == 4 and padded.flags.c_contiguous
+            and padded.shape[:2] == color.shape[:2] and color.strides == padded.strides
+            and color.__array_interface__["data"][0] == padded.__array_interface__["data"][0]):
+        return Image.frombytes("RGB", (color.shape[1], color.shape[0]), padded.tobytes(),
+                               "raw", "RGBX")
+    return Image.fromarray(np.ascontiguousarray(color))
+
+
+def packed_rgb(color: np.ndarray) -> np.ndarray:
+    """``color`` as a C-contiguous (H, W, 3) array (see :func:`rgb_image`)."""
+    if color.flags.c_contiguous:
+        return color
+    return np.asarray(rgb_image(color))
+
+
 def frame_png(color: np.ndarray, job_hash: str, k: int) -> bytes:
     """Frame ``k`` as PNG bytes, signed with the job's hash and its number."""
-    from PIL import Image
     from PIL.PngImagePlugin import PngInfo
     info = PngInfo()
     info.add_text(TEXT_KEY, f"{job_hash} {k}")
     out = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(color)).save(out, format="PNG", pnginfo=info)
+    rgb_image(color).save(out, format="PNG", pnginfo=info, compress_level=PNG_LEVEL)
     return out.getvalue()
 
 
@@ -323,13 +349,13 @@ class Mp4Writer:
             self.stream.height, self.stream.width = self.size
             self.stream.pix_fmt = "yuv420p"
             self.stream.codec_context.thread_count = 1
-            self.stream.options = {"crf": str(self.crf), "preset": "medium", "threads": "1"}
+            self.stream.options = {"crf": str(self.crf), "preset": "veryfast", "threads": "1"}
         height, width = self.size
         if rgb.shape[:2] != (height, width):
             rgb = np.pad(rgb, ((0, height - rgb.shape[0]), (0, width - rgb.shape[1]), (0, 0)),
                          mode="edge")
         for packet in self.stream.encode(self.av.VideoFrame.from_ndarray(
-                np.ascontiguousarray(rgb), format="rgb24")):
+                packed_rgb(rgb), format="rgb24")):
             self.container.mux(packet)
 
     def close(self) -> None:
