@@ -323,7 +323,40 @@ def _check_ply(data: bytes, file: str, budget: int) -> None:
 def _check_ply_ascii_rows(body: str, elements: list, first_line: int, file: str) -> None:
     """Every element has exactly its count of rows, one a line, each holding its scalars and
     its lists (a count, then that many items); nothing follows the last row. Without this an
-    over-counted element takes the next element's rows as its own."""
+    over-counted element takes the next element's rows as its own.
+
+    The common file (scalars, and at most one list, first in its row) is checked with numpy
+    (the bunny's 105k rows: 0.1 s instead of 0.5 s); any other, or a file that fails that
+    check, row by row, which finds and names the first bad row."""
+    if not _ply_ascii_rows_fit(body, elements):
+        _check_ply_ascii_rows_one_by_one(body, elements, first_line, file)
+
+
+def _ply_ascii_rows_fit(body: str, elements: list) -> bool:
+    """Do the rows fit the elements? False also where this quick check cannot tell."""
+    fields = [line.split() for line in body.split("\n")]
+    fields = [f for f in fields if f]
+    lengths = np.fromiter(map(len, fields), np.int64, len(fields))
+    start = 0
+    for _, count, _, _, lists in elements:
+        rows = lengths[start:start + count]
+        if len(rows) != count or any(lists[1:]):
+            return False
+        expected = len(lists)
+        if lists and lists[0]:
+            tokens = [f[0] for f in fields[start:start + count]]
+            if not all(t.isascii() and t.isdigit() and len(t) < 10 for t in tokens):
+                return False                     # what whole_number would say, row by row
+            items = np.array(tokens, np.int64)
+            expected = expected + items
+        if not np.array_equal(rows, np.broadcast_to(expected, rows.shape)):
+            return False
+        start += count
+    return start == len(fields)
+
+
+def _check_ply_ascii_rows_one_by_one(body: str, elements: list, first_line: int,
+                                     file: str) -> None:
     rows = ((n, line.split()) for n, line in enumerate(body.split("\n"), start=first_line))
     rows = ((n, fields) for n, fields in rows if fields)
     for name, count, header_line, _, lists in elements:
