@@ -11,6 +11,8 @@
 - ``renderers/`` — the z-buffer and the exact ray caster, by name;
 - ``settings``, ``context``, ``plan``, ``render`` — how to draw, what outlives a frame, which
   stages run and why, and the front door;
+- ``jit`` — numba for every kernel: ``from core.jit import njit, prange`` (cached kernels load
+  without numba's full registry refresh);
 - ``analysis/`` — accuracy, stability, exact arithmetic: they import the core, never the
   other way round.
 
