@@ -25,6 +25,8 @@ def test_raytrace_bench_rows(tmp_path):
     if "glass bunny" in rows:                        # the bunny is on this machine
         assert rows["glass bunny"]["triangles"] == 69451
         assert rows["glass bunny"]["embree_rays_per_s"] > 0
+        assert rows["glass bunny"]["primary_rays_per_cpu_s_one_thread"] > 0
+        assert "ours on one thread, as Embree runs here" in run.stdout
     assert "primary Mray/s" in run.stdout and "Embree" in run.stdout
     spheres = report["spheres"]                      # 10,000 spheres, 100² -> 400² pixels
     assert spheres["spheres"] == 10_000 and spheres["more_rays"] == 400 ** 2 - 100 ** 2

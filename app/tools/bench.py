@@ -756,9 +756,9 @@ def _median_seconds(run, frames: int, warmup: int) -> tuple[float, float]:
     return float(np.median(walls)), float(np.median(cpus))
 
 
-def _embree_rays_per_second(scene, origins, directions, frames: int, warmup: int):
-    """Embree's closest-hit ``(rays per wall second, rays per CPU second)`` on the scene's
-    triangles (float32), or None."""
+def _embree_run(scene, origins, directions):
+    """Embree's closest-hit query of the rays on the scene's triangles (float32), as a
+    function to time, or None (no embreex, or no triangles)."""
     try:
         from embreex import rtcore_scene
         from embreex.mesh_construction import TriangleMesh
@@ -772,13 +772,31 @@ def _embree_rays_per_second(scene, origins, directions, frames: int, warmup: int
     oracle = rtcore_scene.EmbreeScene()
     TriangleMesh(oracle, corners)
     o32, d32 = origins.astype(np.float32), directions.astype(np.float32)
-    wall, cpu = _median_seconds(lambda: oracle.run(o32, d32, output=1), frames, warmup)
-    return len(origins) / wall, len(origins) / cpu
+    return lambda: oracle.run(o32, d32, output=1)
+
+
+def _alternating_medians(runs: dict, frames: int, warmup: int) -> dict:
+    """``{name: (median wall s, median CPU s)}`` of each run, timed in turns (one of each,
+    then again): the host's speed drifts on a shared machine, and a ratio of two medians
+    taken minutes apart would carry the drift."""
+    for _ in range(warmup):
+        for run in runs.values():
+            run()
+    times = {name: ([], []) for name in runs}
+    for _ in range(frames):
+        for name, run in runs.items():
+            start, cpu = time.perf_counter(), time.process_time()
+            run()
+            times[name][0].append(time.perf_counter() - start)
+            times[name][1].append(time.process_time() - cpu)
+    return {name: (float(np.median(w)), float(np.median(c))) for name, (w, c) in times.items()}
 
 
 def raytrace_bench(args) -> int:
     """Primary visibility rays/s (ours and Embree's, same rays, same run) and full Whitted
     frames/s at ``--size``, for the classic Whitted scene and the glass bunny."""
+    import numba
+
     from core.raytrace import bvh, geometry, whitted
     from core.raytrace.renderer import TraceOptions, prepare, primary, render_raw
     out = Path(args.out)
@@ -797,19 +815,39 @@ def raytrace_bench(args) -> int:
         o, d = np.ascontiguousarray(origins[live]), np.ascontiguousarray(directions[live])
         lo, hi = np.ascontiguousarray(t_min[live]), np.ascontiguousarray(t_max[live])
         kind, index, t_hit = np.empty(len(o), np.int64), np.empty(len(o), np.int64), np.empty(len(o))
-        primary_s, primary_cpu = _median_seconds(lambda: whitted.visible_many(
-            setup.packing.packed, o, d, lo, hi, kind, index, t_hit), frames, warmup)
+
+        def ours():
+            whitted.visible_many(setup.packing.packed, o, d, lo, hi, kind, index, t_hit)
+
+        def ours_one_thread():
+            threads = numba.get_num_threads()
+            numba.set_num_threads(1)
+            try:
+                ours()
+            finally:
+                numba.set_num_threads(threads)
+
+        runs = {"ours": ours, "ours, one thread": ours_one_thread}
+        embree_run = _embree_run(scene, o, d)
+        if embree_run is not None:
+            runs["embree"] = embree_run
+        timed = _alternating_medians(runs, 2 * frames, warmup)   # ours, Embree, ours, ...
+        primary_s, primary_cpu = timed["ours"]
+        one_thread_cpu = timed["ours, one thread"][1]
+        embree = None
+        if embree_run is not None:
+            embree = len(o) / timed["embree"][0], len(o) / timed["embree"][1]
         frame_s, frame_cpu = _median_seconds(lambda: render_raw(prepare(scene, view, args.projection,
                                                              args.size, TraceOptions())),
                                   frames, warmup)
         counted = prepare(scene, view, args.projection, args.size, TraceOptions())
         render_raw(counted)
-        embree = _embree_rays_per_second(scene, o, d, frames, warmup)
         rows.append({"scene": label, "triangles": build.triangles,
                      "bvh_build_ms": build.seconds * 1e3, "bvh_bytes": build.bytes,
                      "primary_rays": int(live.sum()),
                      "primary_rays_per_s": len(o) / primary_s,
                      "primary_rays_per_cpu_s": len(o) / primary_cpu,
+                     "primary_rays_per_cpu_s_one_thread": len(o) / one_thread_cpu,
                      "embree_rays_per_s": embree[0] if embree else None,
                      "embree_rays_per_cpu_s": embree[1] if embree else None,
                      "whitted_frame_ms": frame_s * 1e3, "whitted_fps": 1.0 / frame_s,
@@ -822,7 +860,8 @@ def raytrace_bench(args) -> int:
               "rows": rows, "spheres": spheres, "loadavg_before": list(load_before),
               "loadavg_after": list(os.getloadavg()), "cpus": os.cpu_count()}
     (out / "bench_raytrace.json").write_text(json.dumps(report, indent=2))
-    print(f"ray tracer, {args.size[0]} x {args.size[1]} {args.projection}, median of {frames}; "
+    print(f"ray tracer, {args.size[0]} x {args.size[1]} {args.projection}, median of {frames} "
+          f"(primary rays: of {2 * frames}, ours and Embree's in turns); "
           f"{os.cpu_count()} CPUs, load average {load_before[0]:.1f} before, "
           f"{report['loadavg_after'][0]:.1f} after")
     cores = os.cpu_count() or 1
@@ -840,7 +879,10 @@ def raytrace_bench(args) -> int:
         if embree:
             print(f"{'':<14}per CPU second: ours {r['primary_rays_per_cpu_s'] / 1e6:.2f} Mray, "
                   f"Embree {r['embree_rays_per_cpu_s'] / 1e6:.2f} Mray (ratio "
-                  f"{r['embree_rays_per_cpu_s'] / r['primary_rays_per_cpu_s']:.2f})")
+                  f"{r['embree_rays_per_cpu_s'] / r['primary_rays_per_cpu_s']:.2f}); ours on one "
+                  f"thread, as Embree runs here: "
+                  f"{r['primary_rays_per_cpu_s_one_thread'] / 1e6:.2f} Mray (ratio "
+                  f"{r['embree_rays_per_cpu_s'] / r['primary_rays_per_cpu_s_one_thread']:.2f})")
         print(f"{'':<14}rays per frame: " + ", ".join(f"{k} {v}" for k, v in r["rays_per_frame"].items()))
     if spheres:
         print(f"{spheres['spheres']:,} spheres (radius {spheres['radius']}), shadows off: "
