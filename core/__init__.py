@@ -12,7 +12,7 @@
 - ``settings``, ``context``, ``plan``, ``render`` — how to draw, what outlives a frame, which
   stages run and why, and the front door;
 - ``jit`` — numba for every kernel: ``from core.jit import njit, prange`` (cached kernels load
-  without numba's full registry refresh);
+  without numba's full registry refresh, and go stale when any kernel file changes);
 - ``analysis/`` — accuracy, stability, exact arithmetic: they import the core, never the
   other way round.
 

@@ -12,18 +12,36 @@ cache load initialises only numba's runtime (NRT: the allocator the kernels call
 the cached code; a kernel that has to be compiled still gets the full refresh (numba's
 compiler does it itself), so what a compile sees is unchanged.
 
-If numba's cache class does not have the shape this expects (another numba version), nothing
-is changed: the kernels load as numba loads them.
+A cached kernel is also tied to the source of every kernel module (``KERNEL_ROOTS``), not
+only to its own file. numba checks a cached kernel against its own file alone, but a kernel
+carries inside it the code of the kernels it inlines from other files: after
+``core/raytrace/intersect.py`` changed, the cached ray-tracing kernels of ``whitted.py`` ran
+the old triangle test until their cache was deleted. Now a change to any file that defines
+kernels makes every kernel compile again when next used (``python -m app warmup`` does them
+all at once).
+
+If numba's cache classes do not have the shape this expects (another numba version),
+nothing is changed: the kernels load as numba loads them.
 """
 
 from __future__ import annotations
+
+import functools
+import hashlib
+import os
+from pathlib import Path
 
 import numba
 from numba import config, njit, prange  # noqa: F401  (re-exported: the kernels' imports)
 from numba.core import caching
 from numba.core.runtime import nrt
 
-__all__ = ["config", "njit", "prange", "quick_cache_loads"]
+__all__ = ["config", "njit", "prange", "quick_cache_loads", "stamp_with_kernel_sources"]
+
+# The packages whose kernels may inline one another: a change to any file of theirs that
+# defines kernels (imports this module) makes every cached kernel of theirs stale.
+JIT_FILE = Path(__file__).resolve()
+KERNEL_ROOTS = [JIT_FILE.parent, JIT_FILE.parent.parent / "app"]
 
 
 def quick_cache_loads() -> bool:
@@ -48,5 +66,59 @@ def quick_cache_loads() -> bool:
     return True
 
 
+@functools.lru_cache(maxsize=None)
+def kernel_sources_digest(roots: tuple[Path, ...]) -> str:
+    """SHA-256 of every file under ``roots`` that defines kernels, names and contents, in
+    order (about 40 files: a few milliseconds, once per process)."""
+    digest = hashlib.sha256()
+    for root in roots:
+        for path in _python_files(root):
+            text = path.read_bytes()
+            if b"core.jit import" in text or path == JIT_FILE:
+                digest.update(str(path.relative_to(root.parent)).encode() + b"\0" + text)
+    return digest.hexdigest()
+
+
+def _python_files(root: Path) -> list[Path]:
+    """The .py files under ``root``, sorted; ``__pycache__`` (thousands of cached kernels) is
+    not walked."""
+    found = []
+    for folder, subfolders, files in os.walk(root):
+        subfolders[:] = [d for d in subfolders if d != "__pycache__" and not d.startswith(".")]
+        found += [Path(folder) / name for name in files if name.endswith(".py")]
+    return sorted(found)
+
+
+def _inside(path: str, roots) -> bool:
+    try:
+        resolved = Path(path).resolve()
+    except OSError:
+        return False
+    return any(root == resolved or root in resolved.parents for root in roots)
+
+
+def stamp_with_kernel_sources() -> bool:
+    """Tie each cached kernel under ``KERNEL_ROOTS`` to the kernel sources' digest as well as
+    to its own file (see the module). Returns whether the change is in place."""
+    mixin = getattr(caching, "_SourceFileBackedLocatorMixin", None)
+    if mixin is None or not hasattr(mixin, "get_source_stamp"):
+        return False
+    own_stamp = mixin.get_source_stamp
+    if getattr(own_stamp, "_with_kernel_sources", False):
+        return True
+
+    def get_source_stamp(self):
+        stamp = own_stamp(self)
+        roots = tuple(KERNEL_ROOTS)
+        if _inside(getattr(self, "_py_file", ""), roots):
+            return stamp, kernel_sources_digest(roots)
+        return stamp
+
+    get_source_stamp._with_kernel_sources = True
+    mixin.get_source_stamp = get_source_stamp
+    return True
+
+
 QUICK_CACHE_LOADS = quick_cache_loads()
+STAMPED_WITH_KERNEL_SOURCES = stamp_with_kernel_sources()
 NUMBA_VERSION = numba.__version__

@@ -1,4 +1,5 @@
-"""core.jit: a kernel loaded from numba's cache without numba's full registry refresh.
+"""core.jit: a kernel loaded from numba's cache without numba's full registry refresh, and a
+cached kernel that goes stale when a kernel it inlines from another file changes.
 
 Each case runs in a fresh Python process (the refresh happens once per process) with its own
 kernel cache, on a kernel module written to a temporary folder: the first process compiles
@@ -87,3 +88,41 @@ def test_a_compile_after_a_quick_load_still_gets_the_whole_registry(tmp_path):
         print(middle(np.array([3.0, -1.0, 2.0])))
     """)
     assert out == "(2.0, 2)"
+
+
+HELPER = """
+from core.jit import njit
+
+
+@njit(cache=True, inline="always")
+def step(x):
+    return x + {step}
+"""
+
+USER = """
+from core.jit import njit
+from helper_for_jit_test import step
+
+
+@njit(cache=True)
+def twice(x):
+    return step(step(x))
+"""
+
+
+def test_a_kernel_compiles_again_when_a_kernel_it_inlines_changes(tmp_path):
+    """numba alone checks a cached kernel against its own file; ``twice`` keeps ``step``'s
+    code inside it, so after ``step`` changes the cache would still answer with the old
+    code. With ``core.jit`` every kernel file under the kernel roots stamps the cache."""
+    (tmp_path / "helper_for_jit_test.py").write_text(HELPER.format(step=1))
+    (tmp_path / "user_for_jit_test.py").write_text(USER)
+    run = f"""
+        import core.jit
+        core.jit.KERNEL_ROOTS.append(__import__("pathlib").Path({str(tmp_path)!r}))
+        import user_for_jit_test as u
+        print(u.twice(10))
+    """
+    assert _run(tmp_path, run) == "12"
+    assert _run(tmp_path, run) == "12"                 # from the cache
+    (tmp_path / "helper_for_jit_test.py").write_text(HELPER.format(step=5))
+    assert _run(tmp_path, run) == "20"                 # not the cached 12
