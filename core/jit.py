@@ -1,7 +1,8 @@
 """numba for every kernel of the core: ``from core.jit import njit, prange``.
 
-One place that knows how the kernels are compiled and loaded. What it changes: loading a
-kernel from numba's on-disk cache no longer imports numba's whole library first.
+One place that knows how the kernels are compiled and loaded. It changes two things about
+numba's on-disk cache: loading a kernel no longer imports numba's whole library first, and a
+cached kernel goes stale when any kernel file changes, not only its own.
 
 Before the first kernel of a process is loaded from the cache, numba refreshes its target
 context: it imports every implementation module it has (arrays, linalg, random, typed
@@ -31,7 +32,6 @@ import hashlib
 import os
 from pathlib import Path
 
-import numba
 from numba import config, njit, prange  # noqa: F401  (re-exported: the kernels' imports)
 from numba.core import caching
 from numba.core.runtime import nrt
@@ -121,4 +121,3 @@ def stamp_with_kernel_sources() -> bool:
 
 QUICK_CACHE_LOADS = quick_cache_loads()
 STAMPED_WITH_KERNEL_SOURCES = stamp_with_kernel_sources()
-NUMBA_VERSION = numba.__version__
