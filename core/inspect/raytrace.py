@@ -126,13 +126,8 @@ def ray_tree(setup, origin, direction, t_min, t_max) -> tuple[list, list]:
         if depth >= o.max_depth:
             node["children"] = "cut: the depth limit"
             continue
-        if not entering:
-            gx, gy, gz = -gx, -gy, -gz
-        fx, fy, fz = nx, ny, nz
-        if fx * dx + fy * dy + fz * dz > 0.0:
-            fx, fy, fz = -fx, -fy, -fz
-        if fx * gx + fy * gy + fz * gz <= 0.0:
-            fx, fy, fz = gx, gy, gz
+        fx, fy, fz, gx, gy, gz = optics.facing_normals(dx, dy, dz, nx, ny, nz, gx, gy, gz,
+                                                       entering)
         me = node["id"]
         if k_t > 0.0:
             n_i, n_t = (o.medium, ior) if entering else (ior, o.medium)

@@ -66,6 +66,21 @@ def check_material(material, where: str) -> None:
     index_of_refraction(material.ior, f"{where}: ior")
 
 
+@njit(cache=True, inline="always")
+def facing_normals(dx, dy, dz, nx, ny, nz, gx, gy, gz, entering):
+    """The geometric and shading normals turned to face a ray of direction D: the geometric
+    one (for offsets and sides) flipped when the ray leaves the surface; the shading one (for
+    the new directions) turned towards the ray, and replaced by the geometric one when it
+    then lies on the other side of the face (an interpolated normal near a silhouette)."""
+    if not entering:
+        gx, gy, gz = -gx, -gy, -gz
+    if nx * dx + ny * dy + nz * dz > 0.0:
+        nx, ny, nz = -nx, -ny, -nz
+    if nx * gx + ny * gy + nz * gz <= 0.0:
+        nx, ny, nz = gx, gy, gz
+    return nx, ny, nz, gx, gy, gz
+
+
 @njit(cache=True)
 def reflect(ix, iy, iz, nx, ny, nz):
     """``R = I − 2 (N·I) N``."""

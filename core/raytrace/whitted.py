@@ -456,16 +456,8 @@ def trace(packed, origins, directions, t_lo, t_hi, begin, end, primary_eye, ligh
             k_r, k_t = packed.optics[s, 0], packed.optics[s, 1]
             if k_r == 0.0 and k_t == 0.0:
                 continue
-            # Normals facing the incoming ray: geometric (for the offsets and the sides) and
-            # shading (for the directions). A shading normal turned away from the ray's side of
-            # the face (an interpolated normal near a silhouette) is replaced by the face's.
-            if not entering:
-                gx, gy, gz = -gx, -gy, -gz
-            fx, fy, fz = nx, ny, nz
-            if fx * dx + fy * dy + fz * dz > 0.0:
-                fx, fy, fz = -fx, -fy, -fz
-            if fx * gx + fy * gy + fz * gz <= 0.0:
-                fx, fy, fz = gx, gy, gz
+            fx, fy, fz, gx, gy, gz = optics.facing_normals(dx, dy, dz, nx, ny, nz, gx, gy, gz,
+                                                           entering)
             tir = False
             if k_t > 0.0:
                 n_i, n_t = (medium, packed.optics[s, 2]) if entering else (packed.optics[s, 2], medium)
