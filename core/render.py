@@ -119,7 +119,8 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         draw(scene, view, settings, frame, context, Timer(frame.stats, inspect))
     else:
         _supersample(draw, scene, view, settings, frame, context, inspect)
-    _say_what_is_not_drawn(scene, renderer.name, frame.stats, settings.transparency)
+    _say_what_is_not_drawn(scene, renderer.name, frame.stats, settings.transparency,
+                           settings.shading)
     return frame
 
 
@@ -128,17 +129,24 @@ GLOBAL_ILLUMINATION = ("radiosity", "pathtrace")
 # the opaque picture when asked (core.shading.transparency).
 RECURSIVE = ("raytrace", "pathtrace")
 TRANSPARENT_WHEN_ASKED = ("zbuffer", "bsp", "depth-sort")
+# Renderers that shade through the registered shaders (core.shading), depth shading included;
+# the others light every surface with the model.
+REGISTERED_SHADERS = ("zbuffer", "bsp", "depth-sort")
 
 
 def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict,
-                           transparency: str = "off") -> None:
+                           transparency: str = "off", shading: str = "") -> None:
     """Add to ``stats["not drawn"]`` what of the scene this renderer leaves out by design:
     the local renderers take no light from area emitters, and draw mirrors (k_r) without
     their reflection and glass (k_t) opaque unless asked for transparency; the
-    global-illumination ones use each material's colour, not its texture maps."""
+    global-illumination ones use each material's colour, not its texture maps; only the
+    z-buffer and the painters colour by depth (``shading = "depth"``)."""
     from core.texture.material import maps_of
     notes = stats.setdefault("not drawn", [])
     said = []                           # meshes of one name (a checker's two) say it once
+    if shading == "depth" and renderer not in REGISTERED_SHADERS and scene.meshes:
+        said.append(f"depth shading (the height colour map): {renderer} lights the surfaces "
+                    f"with the illumination model instead; zbuffer, bsp and depth-sort draw it")
     for mesh in scene.meshes:
         name = getattr(mesh, "name", None) or "a mesh"
         if renderer not in GLOBAL_ILLUMINATION and any(c > 0 for c in mesh.material.emission):

@@ -181,6 +181,10 @@ def test_what_a_renderer_leaves_out_by_design_is_said():
     assert any("texture maps (floor)" in n for n in notes(
         "texture_floor.toml", "radiosity", max_elements=64, hemicube_resolution=16))
     assert notes("torus.toml", "zbuffer") == []
+    # depth shading (the terrain's height colours): the tracers light it instead, and say so
+    depth = "depth shading (the height colour map)"
+    assert any(n.startswith(depth) for n in notes("terrain.toml", "raytrace"))
+    assert not any(n.startswith(depth) for n in notes("terrain.toml", "zbuffer"))
 
 
 def test_mirrors_and_glass_that_a_local_renderer_draws_opaque_are_said():
