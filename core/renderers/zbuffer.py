@@ -174,6 +174,6 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     inputs.settings = settings              # issue 11: the texture filter and the bump switch
     inputs.device = (device, inv_w)         # issue 11: exact (u, v) derivatives per triangle
     stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
-                  out=frame.color)
+                         out=frame.color, trusted=True)     # our clipper's and rasterizer's
     frame.depth = vis.depth
     timer.lap("shade: pixel step")

@@ -180,7 +180,7 @@ def resolve(p: Painting, vis, scene, settings, frame) -> None:
     p.inputs.settings = settings
     p.inputs.device = (p.device, p.inv_w)
     stages.shade.resolve(p.inputs, vis, p.triangles, p.attrs, p.source, scene.background,
-                         out=frame.color)
+                         out=frame.color, trusted=True)     # our clipper's and rasterizer's
 
 
 def true_depth(vis, p: Painting, context=None) -> np.ndarray:
