@@ -2,7 +2,9 @@
 
 One place that knows how the kernels are compiled and loaded. It changes two things about
 numba's on-disk cache: loading a kernel no longer imports numba's whole library first, and a
-cached kernel goes stale when any kernel file changes, not only its own.
+cached kernel goes stale when any kernel file changes, not only its own. It also sets each
+kernel's cache up at its first call rather than at import, and stops numba timing each call
+into LLVM.
 
 Before the first kernel of a process is loaded from the cache, numba refreshes its target
 context: it imports every implementation module it has (arrays, linalg, random, typed
@@ -21,6 +23,16 @@ the old triangle test until their cache was deleted. Now a change to any file th
 kernels makes every kernel compile again when next used (``python -m app warmup`` does them
 all at once).
 
+Setting up a kernel's cache (``@njit(cache=True)``) costs ~0.4 ms even when the kernel is
+never called: numba finds its cache folder, writes and deletes a file there to see that it
+can, and reads its source's stamp. The first frame's modules define ~130 kernels and use
+nine: ~50 ms at every start. :func:`njit` sets a kernel's cache up at its first call instead.
+
+numba also wraps every call into LLVM in a pair of "numba:llvm_lock" events, which feed
+only its compile-time statistics (``metadata["timers"]``); loading the first frame's nine
+cached kernels makes about 2,500 such calls, ~40 ms of events. Those two callbacks are
+removed (llvmlite's own lock stays).
+
 If numba's cache classes do not have the shape this expects (another numba version),
 nothing is changed: the kernels load as numba loads them.
 """
@@ -32,16 +44,49 @@ import hashlib
 import os
 from pathlib import Path
 
-from numba import config, njit, prange  # noqa: F401  (re-exported: the kernels' imports)
+import numba
+from llvmlite.binding import ffi as llvm_ffi
+from numba import config, prange  # noqa: F401  (re-exported: the kernels' imports)
 from numba.core import caching
 from numba.core.runtime import nrt
 
-__all__ = ["config", "njit", "prange", "quick_cache_loads", "stamp_with_kernel_sources"]
+__all__ = ["config", "njit", "prange", "quick_cache_loads", "stamp_with_kernel_sources",
+           "untimed_llvm_calls"]
 
 # The packages whose kernels may inline one another: a change to any file of theirs that
 # defines kernels (imports this module) makes every cached kernel of theirs stale.
 JIT_FILE = Path(__file__).resolve()
 KERNEL_ROOTS = [JIT_FILE.parent, JIT_FILE.parent.parent / "app"]
+
+
+def njit(*args, **options):
+    """``numba.njit``; with ``cache=True`` (and no signature) the kernel's on-disk cache is
+    set up when the kernel is first compiled or loaded, not when its module is imported (see
+    the module)."""
+    if args or not options.get("cache") or not hasattr(numba.core.dispatcher.Dispatcher,
+                                                       "enable_caching"):
+        return numba.njit(*args, **options)
+    options["cache"] = False
+
+    def decorate(function):
+        dispatcher = numba.njit(**options)(function)
+        dispatcher._cache = _CacheOnFirstUse(function)
+        return dispatcher
+    return decorate
+
+
+class _CacheOnFirstUse:
+    """numba's ``FunctionCache`` for a kernel, made the first time the dispatcher asks it
+    anything (what ``enable_caching`` would have made at import)."""
+
+    def __init__(self, function):
+        self._function = function
+        self._cache = None
+
+    def __getattr__(self, name):
+        if self._cache is None:
+            self._cache = caching.FunctionCache(self._function)
+        return getattr(self._cache, name)
 
 
 def quick_cache_loads() -> bool:
@@ -89,6 +134,7 @@ def _python_files(root: Path) -> list[Path]:
     return sorted(found)
 
 
+@functools.lru_cache(maxsize=None)   # asked once per kernel (~130 at start-up): resolve is slow
 def _inside(path: str, roots) -> bool:
     try:
         resolved = Path(path).resolve()
@@ -119,5 +165,18 @@ def stamp_with_kernel_sources() -> bool:
     return True
 
 
+def untimed_llvm_calls() -> bool:
+    """Drop numba's timing of each call into LLVM (see the module). Returns whether it did."""
+    lock = getattr(getattr(llvm_ffi, "lib", None), "_lock", None)
+    callbacks = getattr(lock, "_cblist", None)
+    if not isinstance(callbacks, list) or not hasattr(llvm_ffi, "unregister_lock_callback"):
+        return False
+    for acquire, release in list(callbacks):
+        if getattr(acquire, "__module__", "") == "numba.core.base":   # its llvm_lock events
+            llvm_ffi.unregister_lock_callback(acquire, release)
+    return True
+
+
 QUICK_CACHE_LOADS = quick_cache_loads()
+UNTIMED_LLVM_CALLS = untimed_llvm_calls()
 STAMPED_WITH_KERNEL_SOURCES = stamp_with_kernel_sources()

@@ -126,3 +126,34 @@ def test_a_kernel_compiles_again_when_a_kernel_it_inlines_changes(tmp_path):
     assert _run(tmp_path, run) == "12"                 # from the cache
     (tmp_path / "helper_for_jit_test.py").write_text(HELPER.format(step=5))
     assert _run(tmp_path, run) == "20"                 # not the cached 12
+
+
+def test_a_kernel_cache_is_set_up_at_the_first_call_not_at_import(tmp_path):
+    """Importing a module of kernels touches no cache (numba would find each kernel's cache
+    folder and write a test file there, ~0.4 ms a kernel); the first call caches the kernel it
+    compiles, and the next process loads that one from the cache. numba's llvm_lock timing
+    events are gone (nothing listens to them but its compile statistics)."""
+    (tmp_path / "kernels_for_jit_test.py").write_text(KERNELS)
+    first = _run(tmp_path, """
+        import os, numpy as np
+        from numba.core import event
+        locks = []
+        class Listener(event.Listener):
+            def on_start(self, ev): locks.append(ev)
+            def on_end(self, ev): pass
+        event.register("numba:llvm_lock", Listener())
+        import kernels_for_jit_test as k
+        cache = os.environ["NUMBA_CACHE_DIR"]
+        before = os.path.exists(cache)
+        k.total(np.arange(3.0))
+        kernels = sorted({name.split("-")[0].split(".")[-1] for _, _, names in os.walk(cache)
+                          for name in names})
+        print(before, kernels, len(locks))
+    """)
+    assert first == "False ['total'] 0"
+    second = _run(tmp_path, """
+        import numpy as np, kernels_for_jit_test as k
+        k.total(np.arange(3.0))
+        print(sum(k.total.stats.cache_hits.values()), sum(k.total.stats.cache_misses.values()))
+    """)
+    assert second == "1 0"

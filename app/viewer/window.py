@@ -42,13 +42,35 @@ gets the requested pixels; a minimised (0 x 0) window renders nothing.
 
 from __future__ import annotations
 
+import importlib.util
 import logging
 import os
 import sys
 import time
 from pathlib import Path
 
-import glfw
+
+def _name_bundled_glfw() -> None:
+    """Name the libglfw that pyGLFW's wheel ships (``PYGLFW_LIBRARY``) unless the user named
+    one: otherwise pyGLFW loads every libglfw it finds in a Python subprocess to compare
+    their versions, ~40 ms at every start of the viewer. The variant is the one pyGLFW
+    itself picks (``PYGLFW_LIBRARY_VARIANT``, else Wayland in a Wayland session, else X11)."""
+    if os.environ.get("PYGLFW_LIBRARY") or not sys.platform.startswith("linux"):
+        return
+    spec = importlib.util.find_spec("glfw")
+    if spec is None or not spec.submodule_search_locations:
+        return
+    variant = os.environ.get("PYGLFW_LIBRARY_VARIANT", "").lower()
+    if variant not in ("x11", "wayland"):
+        variant = "wayland" if os.environ.get("XDG_SESSION_TYPE") == "wayland" else "x11"
+    library = Path(list(spec.submodule_search_locations)[0]) / variant / "libglfw.so"
+    if library.is_file():
+        os.environ["PYGLFW_LIBRARY"] = str(library)
+
+
+_name_bundled_glfw()
+
+import glfw  # noqa: E402  (after naming its library)
 import imgui
 import moderngl
 
