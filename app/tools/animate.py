@@ -43,9 +43,9 @@ from app.tools.movie_files import (MOVIE_SUFFIXES, FolderError, Movie, clean_fol
 MAX_FRAMES = 100_000
 MIN_FPS, MAX_FPS = 1e-3, 1000.0
 MAX_RETRIES = 100
-CLUSTER_START_SECONDS = 2.0    # from starting local workers to their first frame, with room
-                               # (measured here: ~1.2 s to import the package, ~0.5 s more to
-                               # load the kernel cache and the scene)
+CLUSTER_START_SECONDS = 1.0    # from starting local workers to their first frames back
+                               # (measured here: ready 0.5 s after the start, a first run of
+                               # the fly-around back at 0.9 s: the package, kernels, scene)
 MIN_GAIN = 1.2                 # local workers start only when predicted this much faster
 WORKER_SHARE = 0.7             # of a core, what a second process adds here: two renders at
                                # once do ~1.7x one's work (they share caches and memory)
