@@ -1,7 +1,11 @@
 import os
 import sys
 
-from app.cli import main
+from app import startup_gc
+
+startup_gc.pause()                  # until the first picture (see app/startup_gc.py)
+
+from app.cli import main  # noqa: E402  (after the pause: its imports are most of a start)
 
 try:
     status = main()

@@ -16,7 +16,7 @@ import sys
 from pathlib import Path
 from types import SimpleNamespace
 
-
+from app import startup_gc
 from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate",
             "warmup", "inspect", "compare", "radiosity")
@@ -344,6 +344,8 @@ def main(argv: list[str] | None = None) -> int:
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help")):
         argv = ["view", *argv]                # `python -m app [SCENE]` opens the viewer
     args = _parser(argv[0]).parse_args(attach_values(argv))
+    if argv[0] != "view":           # the viewer resumes at its first frame
+        startup_gc.resume()
     try:
         return _dispatch(args)
     except KeyboardInterrupt:

@@ -21,6 +21,7 @@ import threading
 import time
 from pathlib import Path
 
+from app import startup_gc
 from app.naming import picture_name
 
 log = logging.getLogger("fvd")
@@ -156,6 +157,7 @@ def prime_kernels(state) -> threading.Thread | None:
 
 def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:
     """No display: every view (scene's projection and shading) to a PNG; 0 if all were written."""
+    startup_gc.resume()                 # no first frame on screen to wait for
     from PIL import Image
 
     out = Path(out_dir or os.environ.get("FVD_OUT") or DEFAULT_OUT_DIR)

@@ -74,6 +74,7 @@ import glfw  # noqa: E402  (after naming its library)
 import imgui
 import moderngl
 
+from app import startup_gc
 from app.naming import picture_name, unused
 from app.viewer.blit import Blit
 from app.viewer.imgui_backend import GlfwInput, ImGuiRenderer
@@ -531,6 +532,9 @@ class ViewerWindow:
         if not self._first_frame_logged and self.state.frame is not None:
             self._first_frame_logged = True
             self._log_since_start("first frame shown")
+            startup_gc.resume()
+        elif self.started is not None and time.perf_counter() - self.started > startup_gc.LATEST_S:
+            startup_gc.resume()
         if self._warm_up_due:
             self._warm_up_due = False
             self._start_warm_up()
