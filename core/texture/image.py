@@ -121,11 +121,13 @@ class Texture:
 
     @classmethod
     def from_array(cls, image: np.ndarray, wrap: str = "repeat", srgb: bool = False,
-                   source: str = "", mipmaps: bool = True, divisor: float = 1.0) -> "Texture":
+                   source: str = "", mipmaps: bool = True, divisor: float = 1.0,
+                   decoded: bool = False) -> "Texture":
         """A texture from ``image (h, w)`` or ``(h, w, 1 … 4)`` in [0, 1], row 0 at v = 0.
 
         Grey is spread to RGB, missing alpha is 1. With ``srgb`` the colour channels are
-        decoded to linear (alpha never is). ``image / divisor`` is used (integer pixels of a
+        decoded to linear (alpha never is), unless ``decoded`` says they are already (a
+        procedural's palette, decoded colour by colour). ``image / divisor`` is used (integer pixels of a
         file are divided a band of rows at a time, never copied whole to float64); values
         outside [0, 1] are clamped to it (a signed 32-bit TIFF holds negative ones).
         """
@@ -139,7 +141,7 @@ class Texture:
 
         def convert(band):
             rgba = _to_rgba(np.clip(np.asarray(band, dtype=np.float64) / divisor, 0.0, 1.0))
-            if srgb:
+            if srgb and not decoded:
                 rgba[..., :3] = srgb_to_linear(rgba[..., :3])
             return rgba
         if mipmaps:
