@@ -44,6 +44,32 @@ def test_ply_rows_must_match_the_header(data, line, reason):
     assert error.line == line and reason in error.reason
 
 
+_TOKENS = ["0", "1", "2", "3", "4", "12", "x", "-1", "1e3", "0" * 11, "é"]
+_GAPS = [" ", "  ", "\t", "\r", "\n", "\n\n", "\x0b", "\x1c"]
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.lists(st.tuples(st.sampled_from(_TOKENS), st.sampled_from(_GAPS)), max_size=40),
+       st.integers(0, 5), st.integers(0, 5))
+def test_the_quick_ply_row_check_agrees_with_the_row_by_row_one(pairs, vertices, faces):
+    """Consistency check between our two checks (the row-by-row one, which names the bad
+    row, is the reference): whatever the numpy check accepts, the row-by-row one accepts too,
+    and on ASCII text they agree."""
+    from core.scene.formats.meshfile import (_check_ply_ascii_rows_one_by_one,
+                                             _ply_ascii_rows_fit)
+    body = "".join(token + gap for token, gap in pairs)
+    elements = [["vertex", vertices, 3, 0, [False] * 3], ["face", faces, 7, 0, [True]]]
+    try:
+        _check_ply_ascii_rows_one_by_one(body, elements, 10, "f.ply")
+        fits = True
+    except ReaderError:
+        fits = False
+    quick = _ply_ascii_rows_fit(body, elements)
+    assert not quick or fits
+    if body.isascii() and not any("0" * 10 in token for token, _ in pairs):
+        assert quick == fits
+
+
 def test_a_valid_ascii_ply_still_loads():
     mesh = read_mesh(PLY_HEAD % (4, 2) + PLY_ROWS, "ok.ply", ".ply")
     assert mesh.triangles.tolist() == [[0, 1, 2], [0, 2, 3]]

@@ -290,7 +290,8 @@ def _check_indices(shading: ShadeInput, tri, triangles, source, attrs) -> None:
                                          0 <= source.min() <= source.max() < len(shading.triangles)):
         raise ValueError("source must give, for each clipped triangle, its row of "
                          f"shading.triangles (0..{len(shading.triangles) - 1})")
-    if attrs.shape[1] and triangles.size and not 0 <= triangles.min() <= triangles.max() < len(attrs):
+    if attrs.shape[1] and triangles.size and not (0 <= triangles.min()
+                                                  <= triangles.max() < len(attrs)):
         raise ValueError(f"clipped triangles index {len(attrs)} attribute rows out of range")
 
 

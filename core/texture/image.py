@@ -127,9 +127,10 @@ class Texture:
 
         Grey is spread to RGB, missing alpha is 1. With ``srgb`` the colour channels are
         decoded to linear (alpha never is), unless ``decoded`` says they are already (a
-        procedural's palette, decoded colour by colour). ``image / divisor`` is used (integer pixels of a
-        file are divided a band of rows at a time, never copied whole to float64); values
-        outside [0, 1] are clamped to it (a signed 32-bit TIFF holds negative ones).
+        procedural's palette, decoded colour by colour). ``image / divisor`` is used
+        (integer pixels of a file are divided a band of rows at a time, never copied whole to
+        float64); values outside [0, 1] are clamped to it (a signed 32-bit TIFF holds
+        negative ones).
         """
         if wrap not in WRAPS:
             raise ValueError(f"wrap must be one of {', '.join(WRAPS)}, not {wrap!r}")

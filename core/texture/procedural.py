@@ -285,6 +285,6 @@ def make(name: str, wrap: str = "repeat", **params) -> Texture:
     image, srgb = PROCEDURALS[name](**check_parameters(name, params))
     if isinstance(image, Palette):
         colours = srgb_to_linear(image.colours) if srgb else image.colours
-        return Texture.from_array(colours[image.pick], wrap=wrap, srgb=srgb, decoded=True,
+        return Texture.from_array(colours[image.pick], wrap=wrap, srgb=srgb, decoded=srgb,
                                   source=f"procedural {name}")
     return Texture.from_array(image, wrap=wrap, srgb=srgb, source=f"procedural {name}")
