@@ -233,6 +233,26 @@ def test_tiles_make_the_whole_picture():
     assert np.array_equal(pieces, whole)
 
 
+def test_the_whole_frame_is_traced_in_bands_of_bounded_rays(monkeypatch):
+    """render_raw holds about RAYS_PER_BAND rays at once (a 500 x 500 x 64 frame in one band
+    held 1.7 GB), and the bands give the one-band picture exactly, stats included."""
+    from core.camera.film import sample_offsets
+    from core.raytrace import renderer
+    from core.scene.formats import load_scene
+    scene = load_scene(str(SCENES / "whitted.toml"))
+    assert renderer.band_rows(500, 64) == 32 and renderer.band_rows(10**6, 64) == 1
+    four = sample_offsets(4, "regular", 0)
+    whole = prepare(scene, scene.views[0], "perspective", (70, 50), offsets=four)
+    one_band = renderer.render_raw(whole)
+    monkeypatch.setattr(renderer, "RAYS_PER_BAND", 70 * 4 * 3)       # bands of 3 rows
+    calls = []
+    monkeypatch.setattr(renderer, "trace_tile",
+                        lambda setup, *box: calls.append(box) or trace_tile(setup, *box))
+    banded = prepare(scene, scene.views[0], "perspective", (70, 50), offsets=four)
+    assert np.array_equal(renderer.render_raw(banded), one_band)
+    assert calls[0] == (0, 3, 0, 70) and calls[-1] == (48, 50, 0, 70) and len(calls) == 17
+    assert np.array_equal(banded.counts, whole.counts)
+
 def test_whitted_scene_reads_and_renders_in_both_renderers():
     from core.render import render
     from core.scene.formats import load_scene
