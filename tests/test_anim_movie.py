@@ -145,7 +145,7 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):
     import app.tools.animate as animate
-    real, calls = animate.render_frame, []
+    real, calls = animate.render_pixels, []
 
     def flaky(job, k, *rest):
         calls.append(k)
@@ -153,7 +153,7 @@ def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypat
             raise MemoryError("the machine was busy")
         return real(job, k, *rest)
 
-    monkeypatch.setattr(animate, "render_frame", flaky)
+    monkeypatch.setattr(animate, "render_pixels", flaky)
     out = tmp_path / "seq"
     assert main(["animate", str(scene_file), "--out", str(out), "--size", "32x32"]) == 0
     assert calls.count(4) == 2 and all(calls.count(k) == 1 for k in range(12) if k != 4)
@@ -177,3 +177,36 @@ def test_gif_and_frames_and_refusals(scene_file, tmp_path, capsys):
     bad.write_text(SCENE.replace("rate = 300", "rate = 'many'"))
     assert main(["animate", str(bad), "--out", str(tmp_path / "x.mp4")]) == 2
     assert "emitter[1].rate: expected a number" in capsys.readouterr().err
+
+
+def test_frames_are_written_beside_the_rendering_and_a_failed_write_stops_the_command(
+        scene_file, tmp_path, monkeypatch, capsys):
+    """The PNGs and the movie are made on the frame writer's thread, in frame order; a write
+    that fails (a full disk) is the command's error, said once, not a frame to retry."""
+    import threading
+
+    import app.tools.animate as animate
+    real, written = animate.write_frame, []
+
+    def recording(folder, k, data):
+        written.append((k, threading.current_thread().name))
+        real(folder, k, data)
+    monkeypatch.setattr(animate, "write_frame", recording)
+    out = tmp_path / "seq"
+    assert main(["animate", str(scene_file), "--out", str(out), "--size", "32x32"]) == 0
+    assert written == [(k, "frame writer") for k in range(12)]
+    assert len(frames(out)) == 12
+    written.clear()
+
+    def full(folder, k, data):
+        written.append(k)
+        if k == 5:
+            raise OSError(28, "No space left on device")
+        real(folder, k, data)
+    monkeypatch.setattr(animate, "write_frame", full)
+    assert main(["animate", str(scene_file), "--out", str(tmp_path / "full"),
+                 "--size", "32x32"]) == 1
+    err = capsys.readouterr().err
+    assert "No space left on device" in err and err.count("No space left") == 1
+    assert written == [0, 1, 2, 3, 4, 5]                 # nothing written after the failure
+    assert len(frames(tmp_path / "full")) == 5           # what was written stays: resumable

@@ -403,7 +403,13 @@ def test_the_prediction_behind_the_decision():
     assert animate.predict(100, 0.1, 2, 0.0) == pytest.approx((10.0, 10.0))  # no gain
     assert animate._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.59
     assert "~8.7 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 0.25)  # x1.15
-    assert animate._cannot_win(10, 0.1, 2, 1.0).endswith("against ~1.0 s in this process")
+    assert animate._cannot_win(10, 0.1, 2, 1.0).endswith("against ~1.0 s in this process "
+                                                         "(on 1.0 cores)")
+    # A process already on 1.5 cores (its kernel threads and frame writer) is 1.5 cores'
+    # worth: the same worker on the idle core gives 1 + 9 x 1.5 / 1.7 = 8.94 s, not enough.
+    assert animate.predict(100, 0.1, 2, 1.0, 1.5) == pytest.approx((10.0, 1 + 9 * 1.5 / 1.7))
+    assert animate.predict(100, 0.1, 2, 1.0, 0.5) == animate.predict(100, 0.1, 2, 1.0)
+    assert "~8.9 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 1.0, 1.5)
 
 
 def test_runs_are_long_first_and_short_at_the_end():

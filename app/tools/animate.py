@@ -18,7 +18,9 @@ On a cluster the frames go out in contiguous runs, long first and short at the e
 from t = 0; a run that fails is retried by Dask (``--retries``). Frames come back as PNG bytes
 and pixels: the PNG is written, as it completes, into the frames folder, which makes a killed
 run resumable, and the pixels go to the MP4 encoder in order (:class:`~app.tools.movie_files.Movie`),
-so the movie is encoded while the frames are rendered (a GIF at the end). The folder is
+so the movie is encoded while the frames are rendered (a GIF at the end): all on a writer
+thread beside the rendering (:class:`FrameWriter`; a frame rendered here is made into its PNG
+there too). The folder is
 removed after the movie (``--keep-frames`` keeps it). Progress and an ETA go to stderr.
 """
 
@@ -198,6 +200,12 @@ def _animation(path: str, size=None):
 def render_frame(job: dict, k: int, animation=None) -> tuple[int, bytes, np.ndarray]:
     """Frame k of the job: ``(k, PNG bytes signed with the job's hash, RGB pixels)`` (the
     pixels go to the movie's encoder, which need not decode the PNG)."""
+    color = render_pixels(job, k, animation)
+    return k, frame_png(color, job_hash(job), k), color
+
+
+def render_pixels(job: dict, k: int, animation=None) -> np.ndarray:
+    """Frame k of the job, its RGB pixels."""
     from core.animation.frames import render_at
     from core.settings import RenderSettings
     animation = animation or _animation(job["path"], job.get("load_size"))
@@ -209,7 +217,7 @@ def render_frame(job: dict, k: int, animation=None) -> tuple[int, bytes, np.ndar
                       paths=s["paths"])
     if frame.message:
         raise RuntimeError(f"frame {k}: {frame.message}")
-    return k, frame_png(frame.color, job_hash(job), k), frame.color
+    return frame.color
 
 
 def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tuple]:
@@ -256,6 +264,45 @@ class Progress:
             print(file=self.stream)
 
 
+class FrameWriter:
+    """Frames made into PNGs, written to the folder and encoded into the movie on a thread of
+    its own, in the order they come, while the next frame renders: Pillow's zlib and x264 let
+    go of Python's lock, so the two run on two cores (one process's fly-around spent 12 of its
+    18 ms a frame on these after rendering). At most DEPTH frames wait. A write that fails
+    stops the writing; :meth:`put` and :meth:`close` raise its error in the caller."""
+
+    DEPTH = 4
+
+    def __init__(self, consume):
+        import queue
+        import threading
+        self.consume, self.error = consume, None
+        self.queue = queue.Queue(maxsize=self.DEPTH)
+        self.thread = threading.Thread(target=self._run, name="frame writer", daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        while (item := self.queue.get()) is not None:
+            if self.error is None:
+                try:
+                    self.consume(*item)
+                except BaseException as error:              # noqa: BLE001 - raised in put
+                    self.error = error
+
+    def put(self, *item) -> None:
+        if self.error is not None:
+            raise self.error
+        self.queue.put(item)
+
+    def close(self) -> None:
+        """Write what waits; raise a write's error."""
+        if self.thread.is_alive():
+            self.queue.put(None)
+            self.thread.join()
+        if self.error is not None:
+            raise self.error
+
+
 # ---------------------------------------------------------------------- running the frames
 
 
@@ -267,18 +314,21 @@ def _one_line(error: BaseException) -> str:
 def render_here(job, frames, on_frame, retries: int, animation, failed: list,
                 stop=lambda: False) -> int:
     """Render ``frames`` in this process, in order, until ``stop()``; returns how many were
-    taken (rendered or failed)."""
+    taken (rendered or failed). Each goes to ``on_frame(k, None, pixels)``: its PNG is made
+    where it is written (:class:`FrameWriter`), beside the next frame's rendering."""
     taken = 0
     for k in frames:
         if stop():
             break
         for attempt in range(retries + 1):
             try:
-                on_frame(*render_frame(job, k, animation))
-                break
+                pixels = render_pixels(job, k, animation)
             except Exception as error:                      # noqa: BLE001 - reported per frame
                 if attempt == retries:
                     failed.append(([k], _one_line(error)))
+            else:
+                on_frame(k, None, pixels)
+                break
         taken += 1
     return taken
 
@@ -403,26 +453,31 @@ def _cores() -> int:
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
-def predict(frames: int, seconds: float, workers: int, idle: float) -> tuple[float, float]:
+def predict(frames: int, seconds: float, workers: int, idle: float,
+            used: float = 1.0) -> tuple[float, float]:
     """``(seconds here, seconds with local workers)`` for ``frames`` more frames of
     ``seconds`` each: this process renders alone while the workers start
     (CLUSTER_START_SECONDS), then with ``workers - 1`` workers on the ``idle`` cores
-    measured, each adding WORKER_SHARE of this process's speed."""
+    measured, each adding WORKER_SHARE of a core. ``used``: the cores this process keeps
+    busy rendering alone (its kernel threads and the frame writer): its speed is that many
+    cores' worth, not one's."""
     here = frames * seconds
-    helpers = WORKER_SHARE * min(workers - 1, idle)
-    return here, CLUSTER_START_SECONDS + max(0.0, here - CLUSTER_START_SECONDS) / (1 + helpers)
+    cores = 1 + WORKER_SHARE * min(workers - 1, idle)
+    return here, (CLUSTER_START_SECONDS
+                  + max(0.0, here - CLUSTER_START_SECONDS) * max(1.0, used) / cores)
 
 
-def _cannot_win(frames: int, seconds: float, workers: int, idle: float) -> str | None:
+def _cannot_win(frames: int, seconds: float, workers: int, idle: float,
+                used: float = 1.0) -> str | None:
     """Why local workers would not finish these frames MIN_GAIN times sooner than this
     process by :func:`predict`, or None."""
-    here, there = predict(frames, seconds, workers, idle)
+    here, there = predict(frames, seconds, workers, idle, used)
     if there * MIN_GAIN <= here:
         return None
     return (f"the remaining {frames} frames would take ~{there:.1f} s with {workers - 1} local "
             f"worker{'s' if workers > 2 else ''} (~{CLUSTER_START_SECONDS:g} s to start, "
             f"{idle:.1f} idle core{'' if round(idle, 1) == 1 else 's'} measured) against "
-            f"~{here:.1f} s in this process")
+            f"~{here:.1f} s in this process (on {used:.1f} cores)")
 
 
 def _one_numba_thread() -> int:
@@ -461,17 +516,18 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress,
     # Two frames here first: the second times a frame (the first may load kernels), to
     # predict whether a cluster can win at all.
     head = render_here(job, todo[:1], on_frame, args.retries, animation, failed)
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), time.process_time()
     head += render_here(job, todo[1:2], on_frame, args.retries, animation, failed)
     seconds = time.perf_counter() - t0
     todo = todo[head:]
+    used = max(1.0, (time.process_time() - cpu0) / max(seconds, 1e-9))
     idle = idle_cores(since)
-    why = _cannot_win(len(todo), seconds, workers, idle)
+    why = _cannot_win(len(todo), seconds, workers, idle, used)
     if why:
         progress.say(f"note: --workers {workers}: not starting a local cluster: {why}")
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, "in this process (a cluster could not win)"
-    here_s, there_s = predict(len(todo), seconds, workers, idle)
+    here_s, there_s = predict(len(todo), seconds, workers, idle, used)
     start = cluster.LocalStart(workers - 1, preload=(__name__,))   # this process: the N-th
     threads = _one_numba_thread()                    # a core for the start, then the worker
     try:
@@ -492,7 +548,8 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress,
         return failed, (f"this process and {workers - 1} local worker"
                         f"{'s' if workers > 2 else ''}, started once in {start.seconds:.1f} s "
                         f"while this process rendered {head + here} frames (predicted "
-                        f"x{here_s / there_s:.2f} with {idle:.1f} idle cores measured)")
+                        f"x{here_s / there_s:.2f} with {idle:.1f} idle cores measured, "
+                        f"this process alone on {used:.1f})")
     finally:
         import numba
         numba.set_num_threads(threads)
@@ -574,16 +631,22 @@ def main(args) -> int:
     if out.suffix.lower() in MOVIE_SUFFIXES:             # encoded as the frames come
         movie = Movie(out, folder, total, job["fps"], args.crf, done=set(range(total)) - set(todo))
 
-    def on_frame(k: int, data: bytes, rgb: np.ndarray) -> None:
-        write_frame(folder, k, data)
+    signature = job_hash(job)
+
+    def write(k: int, data: bytes | None, rgb: np.ndarray) -> None:
+        write_frame(folder, k, data if data is not None else frame_png(rgb, signature, k))
         if movie is not None:
             movie.put(k, rgb)
         progress.tick()
 
     t0 = time.perf_counter()
+    writer = FrameWriter(write)
     try:
-        failed, where = render_frames(args, job, bundle, animation, todo, on_frame, progress,
-                                      since)
+        try:
+            failed, where = render_frames(args, job, bundle, animation, todo, writer.put,
+                                          progress, since)
+        finally:
+            writer.close()                               # (interrupted: nothing left waiting)
     except (cluster.ClusterError, OSError) as error:
         progress.finish()
         if movie is not None:
