@@ -1,0 +1,38 @@
+"""The viewer loads numba and its renderer's kernels while the scene loads
+(app.viewer.launch.prime_while_loading): the renderer and shading peeked from the file."""
+
+from __future__ import annotations
+
+from app.viewer.launch import _peeked_settings, prime_while_loading
+from tests.conftest import ROOT
+
+
+def test_the_renderer_and_shading_come_from_the_scene_files_top_level(tmp_path):
+    bunny = _peeked_settings(str(ROOT / "scenes" / "glass_bunny.toml"), None)
+    assert (bunny.renderer, bunny.shading, bunny.size) == ("raytrace", "phong", (16, 16))
+    floor = _peeked_settings(str(ROOT / "scenes" / "texture_floor.toml"), None)
+    assert (floor.renderer, floor.shading) == ("zbuffer", "phong")
+    # the command line's renderer first
+    assert _peeked_settings(str(ROOT / "scenes" / "glass_bunny.toml"), "zbuffer").renderer \
+        == "zbuffer"
+    plain = tmp_path / "plain.toml"
+    plain.write_text('name = "no keys"\n')
+    assert (_peeked_settings(str(plain), None).renderer,
+            _peeked_settings(str(plain), None).shading) == ("zbuffer", "flat")
+
+
+def test_nothing_is_primed_for_wireframe_other_files_or_unreadable_ones(tmp_path):
+    assert _peeked_settings(str(ROOT / "scenes" / "house.toml"), None) is None   # wireframe
+    assert prime_while_loading(str(ROOT / "scenes" / "house.toml"), None) is None
+    assert _peeked_settings(str(ROOT / "scenes" / "few_triangles.tri"), None) is None
+    broken = tmp_path / "broken.toml"
+    broken.write_text("shading = [unclosed\n")
+    assert _peeked_settings(str(broken), None) is None
+    assert _peeked_settings(str(tmp_path / "missing.toml"), None) is None
+
+
+def test_a_stand_in_frame_is_drawn_on_a_thread():
+    thread = prime_while_loading(str(ROOT / "scenes" / "sphere.toml"), None)
+    assert thread is not None and thread.name == "prime kernels early"
+    thread.join(timeout=120)
+    assert not thread.is_alive()
