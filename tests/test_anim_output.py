@@ -378,14 +378,16 @@ def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, caps
     the other processes left idle since the command started."""
     import app.tools.animate as animate
     monkeypatch.setattr(animate, "idle_cores", lambda since: 1.0)
-    assert run(scene_file, "--out", tmp_path / "short", "--size", "24x24", "--workers", "2") == 0
+    assert run(scene_file, "--out", tmp_path / "short", "--size", "24x24", "--workers", "2",
+               "--frames", "6") == 0
     captured = capsys.readouterr()                  # 2 tiny frames left: shorter than a start
     assert "not starting a local cluster: the remaining 2 frames would take ~1.0 s with 1 " \
            "local worker (~1 s to start, 1.0 idle core measured) against ~0.0 s" in captured.err
     assert "in this process (a cluster could not win)" in captured.out
     monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
     monkeypatch.setattr(animate, "idle_cores", lambda since: 0.1)    # others keep the cores
-    assert run(scene_file, "--out", tmp_path / "busy", "--size", "24x24", "--workers", "2") == 0
+    assert run(scene_file, "--out", tmp_path / "busy", "--size", "24x24", "--workers", "2",
+               "--frames", "6") == 0
     captured = capsys.readouterr()
     assert "0.1 idle cores measured" in captured.err
     assert "in this process (a cluster could not win)" in captured.out
@@ -393,23 +395,23 @@ def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, caps
 
 def test_the_prediction_behind_the_decision():
     """Hand-derived: 100 frames of 0.1 s are 10 s here; with a 1 s start and one idle core
-    the worker joins for the last 9 s of work, adding 0.7 of this process's speed (two
-    processes do 1.7x one's work here): 1 + 9 / 1.7 = 6.29 s."""
+    the worker joins for the last 9 s of work, adding 0.35 of a core (measured: what a
+    second process adds beside this one and its frame writer): 1 + 9 / 1.35 = 7.67 s."""
     from app.tools import animate
-    assert animate.WORKER_SHARE == 0.7 and animate.CLUSTER_START_SECONDS == 1.0
-    assert animate.predict(100, 0.1, 2, 1.0) == pytest.approx((10.0, 1 + 9 / 1.7))
-    assert animate.predict(100, 0.1, 2, 0.5) == pytest.approx((10.0, 1 + 9 / 1.35))
-    assert animate.predict(100, 0.1, 4, 1.0) == pytest.approx((10.0, 1 + 9 / 1.7))  # 1 idle core
+    assert animate.WORKER_SHARE == 0.35 and animate.CLUSTER_START_SECONDS == 1.0
+    assert animate.predict(100, 0.1, 2, 1.0) == pytest.approx((10.0, 1 + 9 / 1.35))
+    assert animate.predict(100, 0.1, 2, 0.5) == pytest.approx((10.0, 1 + 9 / 1.175))
+    assert animate.predict(100, 0.1, 4, 1.0) == pytest.approx((10.0, 1 + 9 / 1.35))  # 1 idle core
     assert animate.predict(100, 0.1, 2, 0.0) == pytest.approx((10.0, 10.0))  # no gain
-    assert animate._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.59
-    assert "~8.7 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 0.25)  # x1.15
+    assert animate._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.30
+    assert "~9.3 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 0.25)  # x1.08
     assert animate._cannot_win(10, 0.1, 2, 1.0).endswith("against ~1.0 s in this process "
                                                          "(on 1.0 cores)")
     # A process already on 1.5 cores (its kernel threads and frame writer) is 1.5 cores'
-    # worth: the same worker on the idle core gives 1 + 9 x 1.5 / 1.7 = 8.94 s, not enough.
-    assert animate.predict(100, 0.1, 2, 1.0, 1.5) == pytest.approx((10.0, 1 + 9 * 1.5 / 1.7))
+    # worth: the same worker on the idle core gives 1 + 9 x 1.5 / 1.35 = 11.0 s, no gain.
+    assert animate.predict(100, 0.1, 2, 1.0, 1.5) == pytest.approx((10.0, 1 + 9 * 1.5 / 1.35))
     assert animate.predict(100, 0.1, 2, 1.0, 0.5) == animate.predict(100, 0.1, 2, 1.0)
-    assert "~8.9 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 1.0, 1.5)
+    assert "~11.0 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 1.0, 1.5)
 
 
 def test_runs_are_long_first_and_short_at_the_end():

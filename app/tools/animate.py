@@ -49,11 +49,14 @@ CLUSTER_START_SECONDS = 1.0    # from starting local workers to their first fram
                                # (measured here: ready 0.5 s after the start, a first run of
                                # the fly-around back at 0.9 s: the package, kernels, scene)
 MIN_GAIN = 1.2                 # local workers start only when predicted this much faster
-WORKER_SHARE = 0.7             # of a core, what a second process adds here: two renders at
-                               # once do ~1.7x one's work (they share caches and memory)
+WORKER_SHARE = 0.35            # of a core, what a second process adds here: with this one
+                               # writing on a thread of its own, the workers' start, the
+                               # checkpoints and the pixels sent back leave 0.2-0.35 (the
+                               # fountain, the fly-around, 500 x 500, two cores); 0.7 before
 RUN_SHARE = 2                  # a run is at most 1/(RUN_SHARE x renderers) of what is left
 MAX_RUN = 30                   # frames in one run at most
 RENDER_WHILE_STARTING = True   # this process renders while a local cluster starts
+HEAD = 4                       # frames here before deciding on workers (the first untimed)
 
 
 def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
@@ -288,11 +291,16 @@ class FrameWriter:
                     self.consume(*item)
                 except BaseException as error:              # noqa: BLE001 - raised in put
                     self.error = error
+            self.queue.task_done()
 
     def put(self, *item) -> None:
         if self.error is not None:
             raise self.error
         self.queue.put(item)
+
+    def wait(self) -> None:
+        """Until every frame put so far is written (or the writing stopped)."""
+        self.queue.join()
 
     def close(self) -> None:
         """Write what waits; raise a write's error."""
@@ -489,13 +497,15 @@ def _one_numba_thread() -> int:
     return before
 
 
-def render_frames(args, job, bundle, animation, todo, on_frame, progress,
+def render_frames(args, job, bundle, animation, todo, writer, progress,
                   since=None) -> tuple[list, str | None]:
     """Render ``todo`` where the options say; returns ``(failures, what ran where)``, each
-    failure ``(frames, why)``. ``since`` (:func:`idle_mark`, taken when the command started)
-    is where the idle cores are measured from."""
+    failure ``(frames, why)``. ``writer`` (:class:`FrameWriter`) takes the frames. ``since``
+    (:func:`idle_mark`, taken when the command started) is where the idle cores are measured
+    from."""
     from app.tools import cluster
     failed: list = []
+    on_frame = writer.put
     if args.scheduler:
         client = cluster.connect(args.scheduler)
         try:
@@ -513,14 +523,23 @@ def render_frames(args, job, bundle, animation, todo, on_frame, progress,
     if workers == 1 or not todo:
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, None
-    # Two frames here first: the second times a frame (the first may load kernels), to
-    # predict whether a cluster can win at all.
+    # A few frames here first: the first may load kernels; the next HEAD - 1, written too,
+    # time a frame and the cores this process keeps busy, to predict whether a cluster can
+    # win at all.
     head = render_here(job, todo[:1], on_frame, args.retries, animation, failed)
+    writer.wait()
     t0, cpu0 = time.perf_counter(), time.process_time()
-    head += render_here(job, todo[1:2], on_frame, args.retries, animation, failed)
-    seconds = time.perf_counter() - t0
+    timed = render_here(job, todo[1:HEAD], on_frame, args.retries, animation, failed)
+    writer.wait()
+    wall = max(time.perf_counter() - t0, 1e-9)
+    seconds = wall / max(timed, 1)
+    used = max(1.0, (time.process_time() - cpu0) / wall)
+    head += timed
     todo = todo[head:]
-    used = max(1.0, (time.process_time() - cpu0) / max(seconds, 1e-9))
+    if not todo:
+        progress.say(f"note: --workers {workers}: not starting a local cluster: all {head} "
+                     "frames were rendered here while timing one")
+        return failed, "in this process (a cluster could not win)"
     idle = idle_cores(since)
     why = _cannot_win(len(todo), seconds, workers, idle, used)
     if why:
@@ -643,7 +662,7 @@ def main(args) -> int:
     writer = FrameWriter(write)
     try:
         try:
-            failed, where = render_frames(args, job, bundle, animation, todo, writer.put,
+            failed, where = render_frames(args, job, bundle, animation, todo, writer,
                                           progress, since)
         finally:
             writer.close()                               # (interrupted: nothing left waiting)
