@@ -56,7 +56,7 @@ def test_the_quick_ply_row_check_agrees_with_the_row_by_row_one(pairs, vertices,
     row, is the reference): whatever the numpy check accepts, the row-by-row one accepts too,
     and on ASCII text they agree."""
     from core.scene.formats.meshfile import (_check_ply_ascii_rows_one_by_one,
-                                             _ply_ascii_rows_fit)
+                                             _ply_ascii_layout)
     body = "".join(token + gap for token, gap in pairs)
     elements = [["vertex", vertices, 3, 0, [False] * 3], ["face", faces, 7, 0, [True]]]
     try:
@@ -64,7 +64,7 @@ def test_the_quick_ply_row_check_agrees_with_the_row_by_row_one(pairs, vertices,
         fits = True
     except ReaderError:
         fits = False
-    quick = _ply_ascii_rows_fit(body, elements)
+    quick = _ply_ascii_layout(body, elements) is not None
     assert not quick or fits
     if body.isascii() and not any("0" * 10 in token for token, _ in pairs):
         assert quick == fits

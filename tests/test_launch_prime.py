@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import logging
+
 from app.viewer.launch import _peeked_settings, prime_while_loading
 from tests.conftest import ROOT
 
@@ -31,8 +33,22 @@ def test_nothing_is_primed_for_wireframe_other_files_or_unreadable_ones(tmp_path
     assert _peeked_settings(str(tmp_path / "missing.toml"), None) is None
 
 
-def test_a_stand_in_frame_is_drawn_on_a_thread():
-    thread = prime_while_loading(str(ROOT / "scenes" / "sphere.toml"), None)
-    assert thread is not None and thread.name == "prime kernels early"
-    thread.join(timeout=120)
+def test_a_stand_in_frame_is_drawn_on_a_thread(caplog, monkeypatch):
+    """The stand-in is drawn with the peeked settings; a failure is logged, not raised."""
+    import app.viewer.state as state
+    drawn = []
+    real = state.render
+    monkeypatch.setattr(state, "render", lambda scene, view, settings, context:
+                        drawn.append(settings) or real(scene, view, settings, context))
+    with caplog.at_level(logging.INFO, logger="fvd"):
+        thread = prime_while_loading(str(ROOT / "scenes" / "glass_bunny.toml"), None)
+        assert thread is not None and thread.name == "prime kernels early"
+        thread.join(timeout=120)
     assert not thread.is_alive()
+    assert [(s.renderer, s.shading, s.size) for s in drawn] == [("raytrace", "phong", (16, 16))]
+    assert "not primed early" not in caplog.text
+    monkeypatch.setattr(state, "render", lambda *args: 1 / 0)
+    with caplog.at_level(logging.INFO, logger="fvd"):
+        thread = prime_while_loading(str(ROOT / "scenes" / "sphere.toml"), None)
+        thread.join(timeout=120)
+    assert "kernels not primed early: division by zero" in caplog.text

@@ -362,18 +362,12 @@ _WHITE[[9, 10, 11, 12, 13, 28, 29, 30, 31, 32]] = True
 
 
 class _AsciiRows(NamedTuple):
-    """Where the numbers of an ASCII PLY body are: its bytes, where each token starts and
-    ends, and per row the number of its line (0: the line after end_header) and of tokens."""
+    """Where the numbers of an ASCII PLY body are: its bytes, where each token starts, and
+    per row the number of its line (0: the line after end_header) and of tokens."""
     body: bytes
     starts: np.ndarray
-    ends: np.ndarray
     lines: np.ndarray
     sizes: np.ndarray
-
-
-def _ply_ascii_rows_fit(body: str, elements: list) -> bool:
-    """Do the rows fit the elements? False also where this quick check cannot tell."""
-    return _ply_ascii_layout(body, elements) is not None
 
 
 def _ply_ascii_layout(body: str, elements: list) -> _AsciiRows | None:
@@ -422,7 +416,7 @@ def _ply_ascii_layout(body: str, elements: list) -> _AsciiRows | None:
         start += count
     if start != len(first):
         return None
-    return _AsciiRows(data, starts, ends, lines, lengths)
+    return _AsciiRows(data, starts, lines, lengths)
 
 
 def _check_ply_ascii_rows_one_by_one(body: str, elements: list, first_line: int,
