@@ -166,3 +166,20 @@ def test_vertex_normals_prefers_the_files_normals():
 def test_unknown_weighting_is_refused():
     with pytest.raises(ValueError, match="weighting"):
         vertex_normals_from_faces(CORNERS, cube(), "median")
+
+
+@pytest.mark.parametrize("n, vertices", [(0, 1), (1, 1), (7, 3), (5000, 40), (60_000, 20_000)])
+def test_edge_order_is_lexsorts_order(n, vertices):
+    """The crease split and the orienting sort edges with one stable integer key: the same
+    order as ``np.lexsort((high, low))``, ties (a shared edge) in their own order."""
+    from core.scene.normals import _edge_order
+    rng = np.random.default_rng(n)
+    a, b = rng.integers(0, vertices, n), rng.integers(0, vertices, n)
+    low, high = np.minimum(a, b), np.maximum(a, b)
+    assert np.array_equal(_edge_order(low, high), np.lexsort((high, low)))
+
+
+def test_edge_order_falls_back_where_the_key_would_not_be_one_to_one():
+    from core.scene.normals import _edge_order
+    low, high = np.array([-1, 3, 2, -1]), np.array([4, 5, 6, 2])
+    assert np.array_equal(_edge_order(low, high), np.lexsort((high, low)))

@@ -93,6 +93,44 @@ def test_fractional_exponents_use_the_float64_kernel():
     np.testing.assert_array_equal(wide.color, exact.color)
 
 
+@pytest.mark.parametrize("intensity, fits", [(1.0, True), (1e29, True), (1e31, False),
+                                              (1e308, False), (np.inf, False), (np.nan, False)])
+def test_lights_past_float32_use_the_float64_kernels(intensity, fits):
+    """I x k_d x O_d is formed in float32 by the passes: past 1e30 it would overflow, and
+    inf x 0 is NaN where the light does not reach (the stability suite's 1e308 lights)."""
+    from core.scene.model import Light, Material
+    from core.shading.illumination import pack_ambient, pack_lights, pack_surfaces
+    from core.shading.shade import float32_holds_the_terms
+    surfaces = pack_surfaces([Material(ka=0.2, kd=0.6, ks=0.3, n=20.0)], [False])
+    bright = pack_lights([Light(intensity=(intensity, 1.0, 1.0), position=(0.0, 0.0, 4.0))])
+    normal = pack_lights([Light(intensity=(1.0, 1.0, 1.0), position=(0.0, 0.0, 4.0))])
+    ambient = pack_ambient((0.1, 0.1, 0.1))
+    assert float32_holds_the_terms(surfaces, bright, ambient) == fits
+    assert float32_holds_the_terms(surfaces, normal, pack_ambient((intensity, 0, 0))) == fits
+    far = normal.copy()
+    far[0, 7:10] = (1.0, 0.0, intensity)           # an attenuation coefficient
+    assert float32_holds_the_terms(surfaces, far, ambient) == fits
+
+
+@pytest.mark.parametrize("shading", ["flat", "gouraud", "phong"])
+def test_very_bright_lights_light_every_face_finite(shading):
+    """Lit in the vertex step (a small scene), every face or vertex colour is a number."""
+    from core.analysis.stability_cases import _lit_sphere
+    from core.scene.model import Light, Material
+    lights = [Light(intensity=(1e308,) * 3, position=(0.0, 0.0, 4.0)),
+              Light(intensity=(1e308,) * 3, direction=(0.0, 0.0, 1.0))]
+    scene = _lit_sphere(Material(ka=0.2, kd=0.6, ks=0.3, n=20.0), lights)
+    seen = {}
+    frame = render(scene, scene.views[0], RenderSettings.for_scene(scene, shading=shading,
+                                                                   size=SIZE),
+                   RenderContext(), inspect=lambda stage, found: seen.update(found))
+    for name in ("face_rgb", "vertex_attrs"):
+        if name in seen:
+            assert np.all(np.isfinite(seen[name])), name
+    covered = np.any(frame.color != frame.color[0, 0], axis=2)
+    assert covered.sum() > 500 and np.all(frame.color[covered] == 255)
+
+
 def test_the_setting_is_checked():
     with pytest.raises(ValueError, match="shading_precision must be one of float32, float64"):
         RenderSettings(shading_precision="float16")

@@ -31,6 +31,7 @@ def test_deferred_lighting_gives_the_eager_image_bit_for_bit(scene, shading, mon
     from core.shading import shade
     view = _cutting_view(scene)
     settings = RenderSettings.for_scene(scene, shading=shading, size=(160, 120))
+    monkeypatch.setattr(shade, "LIGHT_ALL_BELOW", 0)      # defer even for this small scene
     lazy = render(scene, view, settings, context=RenderContext())
     eager_prepare = shade.prepare
 
@@ -41,6 +42,26 @@ def test_deferred_lighting_gives_the_eager_image_bit_for_bit(scene, shading, mon
     monkeypatch.setattr(shade, "prepare", eager)
     eager_frame = render(scene, view, settings, context=RenderContext())
     assert np.array_equal(lazy.color, eager_frame.color)
+
+
+@pytest.mark.parametrize("triangles, lazy", [(4000, False), (20_000, True)])
+def test_small_scenes_light_every_front_face_at_once(triangles, lazy, monkeypatch):
+    """Below shade.LIGHT_ALL_BELOW triangles the z-buffer lights in the vertex step (the
+    pass that finds the visible faces would cost more); above it, it defers."""
+    from core.shading import shade
+    asked = []
+    prepare = shade.prepare
+
+    def spy(*args, **kwargs):
+        asked.append(kwargs["lazy"])
+        return prepare(*args, **kwargs)
+
+    monkeypatch.setattr(shade, "prepare", spy)
+    small = sphere_torus(triangles=triangles)
+    render(small, small.views[0], RenderSettings.for_scene(small, shading="gouraud",
+                                                           size=(64, 48)),
+           context=RenderContext())
+    assert asked == [lazy] and (small.triangle_count < shade.LIGHT_ALL_BELOW) != lazy
 
 
 def test_the_cutting_view_really_clips(scene):

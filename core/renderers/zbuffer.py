@@ -131,7 +131,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
         stats["culled"] = int(len(all_triangles) - len(kept))
     timer.lap("cull back faces")
 
-    inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context, lazy=True)
+    inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context,
+                                  lazy=scene.triangle_count >= stages.shade.LIGHT_ALL_BELOW)
     inputs.settings = settings              # the precision of lighting, the texture filter
     stats["computed"].extend(inputs.computed)
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,

@@ -146,15 +146,20 @@ def _light(s: ShadeInput, faces) -> None:
 
 @njit(cache=True, parallel=True, nogil=True)
 def _resolve_flat(tri, span, source, face_rgb, out):
-    """Each covered pixel of each row's span gets its face's colour (the rest is background)."""
+    """Each covered pixel of each row's span gets its face's colour (the rest is background).
+    A triangle's pixels come in runs along a row: its bytes are made once a run."""
     for row in prange(tri.shape[0]):
+        last = -1
+        r = g = b = np.uint8(0)
         for col in range(span[row, 0], span[row, 1] + 1):
             t = tri[row, col]
             if t >= 0:
-                f = source[t]
-                for c in range(3):
-                    out[row, col, c] = quantize(face_rgb[f, c])
-
+                if t != last:
+                    last = t
+                    f = source[t]
+                    r, g, b = (quantize(face_rgb[f, 0]), quantize(face_rgb[f, 1]),
+                               quantize(face_rgb[f, 2]))
+                out[row, col, 0], out[row, col, 1], out[row, col, 2] = r, g, b
 
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:

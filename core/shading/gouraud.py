@@ -81,18 +81,26 @@ def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surface
 
 @njit(cache=True, parallel=True, nogil=True)
 def _resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
-    """Interpolate the vertex colours over each row's covered span (the rest is background)."""
+    """Interpolate the vertex colours over each row's covered span (the rest is background).
+    A triangle's pixels come in runs along a row: its corner colours are read once a run."""
     for row in prange(tri.shape[0]):
+        last = -1
+        r0 = g0 = b0 = r1 = g1 = b1_ = r2 = g2 = b2_ = 0.0
         for col in range(span[row, 0], span[row, 1] + 1):
             t = tri[row, col]
             if t < 0:
                 continue                # background, filled before
-            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+            if t != last:
+                last = t
+                i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+                r0, g0, b0 = rgb[i0, 0], rgb[i0, 1], rgb[i0, 2]
+                r1, g1, b1_ = rgb[i1, 0], rgb[i1, 1], rgb[i1, 2]
+                r2, g2, b2_ = rgb[i2, 0], rgb[i2, 1], rgb[i2, 2]
             w1, w2 = b1[row, col], b2[row, col]
             w0 = 1.0 - w1 - w2
-            for c in range(3):
-                out[row, col, c] = quantize(w0 * rgb[i0, c] + w1 * rgb[i1, c] + w2 * rgb[i2, c])
-
+            out[row, col, 0] = quantize(w0 * r0 + w1 * r1 + w2 * r2)
+            out[row, col, 1] = quantize(w0 * g0 + w1 * g1 + w2 * g2)
+            out[row, col, 2] = quantize(w0 * b0 + w1 * b1_ + w2 * b2_)
 
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
