@@ -333,23 +333,33 @@ def _halfway_base(flag, nx, ny, nz, lx, ly, lz, vx, vy, vz, base):
 def _add_light(runs, run_surface, surfaces, light, diff, att, base, spec, r, g, b, r_out,
                g_out, b_out):
     """I_p f_att [k_d O_d N·L + k_s O_s base^n] added where N·L > 0, run by run (each run
-    has one material: k_d, k_s, O_d, O_s and n are scalars in the loops)."""
+    has one material: k_d, k_s, O_d, O_s and n are scalars in the loops). The two terms go
+    through ``base`` and ``spec`` first: a loop reading seven rows and writing three needs
+    more overlap checks than the compiler will emit, and then runs one pixel at a time."""
     for k in range(run_surface.shape[0]):
         s, j0, j1 = run_surface[k], runs[k], runs[k + 1]
         _power(base[j0:j1], spec[j0:j1], int(surfaces[s, 3]))
-        dr, dg, db = (F(light[4] * surfaces[s, 1] * surfaces[s, 4]),
-                      F(light[5] * surfaces[s, 1] * surfaces[s, 5]),
-                      F(light[6] * surfaces[s, 1] * surfaces[s, 6]))
-        sr, sg, sb = (F(light[4] * surfaces[s, 2] * surfaces[s, 7]),
-                      F(light[5] * surfaces[s, 2] * surfaces[s, 8]),
-                      F(light[6] * surfaces[s, 2] * surfaces[s, 9]))
-        for j in range(j0, j1):
-            lit = diff[j] > F(0.0)        # no diffuse, no specular from behind the surface
-            diffuse = att[j] * diff[j] if lit else F(0.0)
-            specular = att[j] * spec[j] if lit else F(0.0)
-            r_out[j] = r[j] + (dr * diffuse + sr * specular)
-            g_out[j] = g[j] + (dg * diffuse + sg * specular)
-            b_out[j] = b[j] + (db * diffuse + sb * specular)
+        _terms(diff[j0:j1], att[j0:j1], spec[j0:j1], base[j0:j1])
+        for c, (sums, into) in enumerate(((r, r_out), (g, g_out), (b, b_out))):
+            kd = F(light[4 + c] * surfaces[s, 1] * surfaces[s, 4 + c])
+            ks = F(light[4 + c] * surfaces[s, 2] * surfaces[s, 7 + c])
+            _add_channel(sums[j0:j1], base[j0:j1], spec[j0:j1], kd, ks, into[j0:j1])
+
+
+@njit(cache=True, error_model="numpy")
+def _terms(diff, att, spec, diffuse):
+    """``diffuse`` = f_att N·L and ``spec`` = f_att base^n where N·L > 0, else 0 (no
+    diffuse, no specular from behind the surface)."""
+    for j in range(diff.shape[0]):
+        lit = diff[j] > F(0.0)
+        diffuse[j] = att[j] * diff[j] if lit else F(0.0)
+        spec[j] = att[j] * spec[j] if lit else F(0.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _add_channel(sums, diffuse, specular, kd, ks, out):
+    for j in range(sums.shape[0]):
+        out[j] = sums[j] + (kd * diffuse[j] + ks * specular[j])
 
 
 @njit(cache=True, error_model="numpy")
