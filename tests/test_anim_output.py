@@ -383,6 +383,7 @@ def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, caps
     captured = capsys.readouterr()                  # 2 tiny frames left: shorter than a start
     assert "not starting a local cluster: the remaining 2 frames would take ~1.0 s with 1 " \
            "local worker (~1 s to start, 1.0 idle core measured) against ~0.0 s" in captured.err
+    assert "a cluster starts when it promises x1.2, this is x0.0" in captured.err
     assert "in this process (a cluster could not win)" in captured.out
     monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
     monkeypatch.setattr(animate, "idle_cores", lambda since: 0.1)    # others keep the cores

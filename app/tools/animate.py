@@ -485,7 +485,8 @@ def _cannot_win(frames: int, seconds: float, workers: int, idle: float,
     return (f"the remaining {frames} frames would take ~{there:.1f} s with {workers - 1} local "
             f"worker{'s' if workers > 2 else ''} (~{CLUSTER_START_SECONDS:g} s to start, "
             f"{idle:.1f} idle core{'' if round(idle, 1) == 1 else 's'} measured) against "
-            f"~{here:.1f} s in this process (on {used:.1f} cores)")
+            f"~{here:.1f} s in this process (on {used:.1f} cores): a cluster starts when it "
+            f"promises x{MIN_GAIN:g}, this is x{here / max(there, 1e-9):.2f}")
 
 
 def _one_numba_thread() -> int:
