@@ -18,7 +18,9 @@ Where float32 is not safe the pixel is flagged in pass 2 or 3 and evaluated by
 ``phong_point`` in float64 instead: a squared length outside [1e-30, 1e30] (a zero normal, a
 point light on the surface, huge or tiny scenes: the stability suite's extremes). Frames whose
 exponents are not whole numbers up to 2^16 go to the float64 kernel entirely
-(:func:`float32_is_exact_enough`).
+(:func:`float32_is_exact_enough`), and so do frames whose light x material products pass
+1e30 (``core.shading.shade.float32_holds_the_terms``: float32 would overflow, and inf x 0 is
+NaN).
 
 Error against the float64 model: at most 1/255 per channel (one rounding step of the
 byte), held by ``tests/test_shading_wide.py`` on every shipped scene and golden.
