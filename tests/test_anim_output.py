@@ -406,8 +406,11 @@ def test_the_prediction_behind_the_decision():
     assert animate.predict(100, 0.1, 2, 0.0) == pytest.approx((10.0, 10.0))  # no gain
     assert animate._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.30
     assert "~9.3 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 0.25)  # x1.08
-    assert animate._cannot_win(10, 0.1, 2, 1.0).endswith("against ~1.0 s in this process "
-                                                         "(on 1.0 cores)")
+    assert animate._cannot_win(100, 0.1, 2, 0.25).endswith(
+        "a cluster starts when it promises x1.2, this is x1.08")          # 10 / 9.28
+    assert animate._cannot_win(10, 0.1, 2, 1.0).endswith(
+        "against ~1.0 s in this process (on 1.0 cores): a cluster starts when it promises "
+        "x1.2, this is x1.00")
     # A process already on 1.5 cores (its kernel threads and frame writer) is 1.5 cores'
     # worth: the same worker on the idle core gives 1 + 9 x 1.5 / 1.35 = 11.0 s, no gain.
     assert animate.predict(100, 0.1, 2, 1.0, 1.5) == pytest.approx((10.0, 1 + 9 * 1.5 / 1.35))
