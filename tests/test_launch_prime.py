@@ -1,4 +1,4 @@
-"""The viewer loads numba and its renderer's kernels while the scene loads
+"""The viewer loads its renderer's kernels while the scene loads
 (app.viewer.launch.prime_while_loading): the renderer and shading peeked from the file."""
 
 from __future__ import annotations
@@ -52,3 +52,27 @@ def test_a_stand_in_frame_is_drawn_on_a_thread(caplog, monkeypatch):
         thread = prime_while_loading(str(ROOT / "scenes" / "sphere.toml"), None)
         thread.join(timeout=120)
     assert "kernels not primed early: division by zero" in caplog.text
+
+
+def test_numba_is_imported_before_the_thread_starts():
+    """Two threads importing numba at once can meet each other's half-made modules (CI saw
+    the viewer exit on "partially initialized module 'numba.core.event'"): in a fresh
+    process, numba is already imported when the priming thread starts."""
+    import subprocess
+    import sys
+    code = (
+        "import sys, threading\n"
+        "seen = []\n"
+        "start = threading.Thread.start\n"
+        "def spy(self):\n"
+        "    seen.append('numba' in sys.modules)\n"
+        "    start(self)\n"
+        "threading.Thread.start = spy\n"
+        "from app.viewer.launch import prime_while_loading\n"
+        "before = 'numba' in sys.modules\n"
+        f"prime_while_loading({str(ROOT / 'scenes' / 'sphere.toml')!r}, None).join(120)\n"
+        "print(before, seen)\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True,
+                         text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split("\n")[0] == "False [True]"

@@ -157,7 +157,8 @@ def prime_kernels(state) -> threading.Thread | None:
 
 
 def prime_while_loading(source: str, renderer: str | None) -> threading.Thread | None:
-    """Load numba and the kernels of the scene's renderer on a thread while the scene loads.
+    """Load the kernels of the scene's renderer on a thread while the scene loads (numba
+    itself is imported here first, see below).
 
     A scene that takes a while to read (a mesh to parse, textures to build, creases to
     split) otherwise loads them after it, in :func:`prime_kernels`. The renderer and shading
@@ -168,12 +169,17 @@ def prime_while_loading(source: str, renderer: str | None) -> threading.Thread |
     settings = _peeked_settings(source, renderer)
     if settings is None:
         return None
+    # numba's modules import one another: imported on two threads at once (this one and the
+    # scene reader's, for creases), one thread may meet the other's half-made module and the
+    # viewer exits ("partially initialized module 'numba.core.event'", seen once in CI). So
+    # numba, and what the thread imports, come in here before it starts.
+    import core.jit  # noqa: F401
+    from app.tools.warmup import quick
+    from app.viewer.state import render
+    from core.context import RenderContext
+    from core.scene.generators import sphere_torus
 
     def prime():
-        from app.tools.warmup import quick
-        from app.viewer.state import render
-        from core.context import RenderContext
-        from core.scene.generators import sphere_torus
         stand_in = sphere_torus(triangles=200)
         try:
             render(stand_in, stand_in.views[0], quick(settings), RenderContext())
