@@ -98,6 +98,7 @@ class ShadeInput:
     # asks ``before_clip(vertices)`` for the few it interpolates. ``lit`` flags what is done.
     lazy: bool = False
     lit: np.ndarray | None = None
+    float32_safe: bool | None = None     # wide_shading's answer on the materials and lights
     normals: np.ndarray | None = None
     before_clip: Callable | None = None
     # Set by the renderer before the pixel step, for shaders that read them (issue 11's
@@ -198,8 +199,8 @@ PARALLEL_ITEMS = 4_096
 # Below this many triangles the z-buffer lights every front face (flat) or its vertices
 # (Gouraud) in the vertex step, as the painters do, instead of deferring to the visible ones:
 # finding those is a pass over the covered pixels, which costs more than lighting them all.
-# Measured (1k triangles, 500 x 500, 50k covered pixels): the pass 0.12-0.21 ms, lighting all
-# 434 front faces 0.03 ms; lighting costs ~16 µs per 1,000 points, the pass ~0.2 ms.
+# Measured (1k triangles, 500 x 500, 50k covered pixels): the pass 0.12-0.21 ms before the
+# visible ones are lit; lighting all 434 front faces 0.10 ms (Gouraud: their 310 vertices, 0.08).
 LIGHT_ALL_BELOW = 8_192
 
 
@@ -366,9 +367,12 @@ def wide_shading(s: ShadeInput) -> bool:
     """Light in float32 passes (core.shading.wide)? Unless the settings ask for the textbook
     float64 kernels, an exponent is not a whole number up to 2^16, or a light's terms would
     not fit in float32."""
-    return (getattr(s.settings, "shading_precision", "float32") == "float32"
-            and float32_is_exact_enough(s.surfaces)
-            and float32_holds_the_terms(s.surfaces, s.lights, s.ambient))
+    if getattr(s.settings, "shading_precision", "float32") != "float32":
+        return False
+    if s.float32_safe is None:          # asked up to three times a frame; ~35 µs to answer
+        s.float32_safe = (float32_is_exact_enough(s.surfaces)
+                          and float32_holds_the_terms(s.surfaces, s.lights, s.ambient))
+    return s.float32_safe
 
 
 # The float32 passes multiply each light's intensity by the material's terms in float32 (and
