@@ -1,8 +1,10 @@
 """The GPU side shows exactly what the CPU drew: the blit and the ImGui backend, headless (EGL).
 
 The blit must give back the CPU framebuffer bit for bit (row order and the 1-byte row alignment
-of odd widths are the usual ways to get this wrong). The ImGui backend must put ImGui's
-rectangles where ImGui says, clipped by its clip rectangles, at 1x and at 2x (HiDPI) scale.
+of odd widths are the usual ways to get this wrong). Dear ImGui's OpenGL 3 renderer (the
+binding's own, on our moderngl context) must put ImGui's rectangles where ImGui says, clipped
+by its clip rectangles, at 1x, 2x (HiDPI) and fractional scales, and leave the GL state the
+blit needs as it found it.
 """
 
 from __future__ import annotations
@@ -13,11 +15,12 @@ import pytest
 from tools import llvmpipe_context, need_module                    # noqa: E402
 
 moderngl = need_module("moderngl", "the blit needs moderngl")
-imgui = need_module("imgui", "the window's panel needs Dear ImGui's bindings")
+imgui_bundle = need_module("imgui_bundle", "the window's panel needs Dear ImGui (imgui-bundle)")
+imgui = imgui_bundle.imgui
 
 from core.settings import RenderSettings
 from app.viewer.blit import Blit  # noqa: E402
-from app.viewer.imgui_backend import ImGuiRenderer, draw_commands  # noqa: E402
+from app.viewer.gui_backend import GuiRenderer, framebuffer_scale, set_display  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -89,13 +92,13 @@ def test_blit_rejects_wrong_image(ctx):
     blit.release()
 
 
-# -- the ImGui backend --------------------------------------------------------------------
+# -- the ImGui renderer --------------------------------------------------------------------
 
 @pytest.fixture
 def gui(ctx):
     context = imgui.create_context()
-    imgui.get_io().ini_file_name = None       # no imgui.ini left in the working directory
-    renderer = ImGuiRenderer(ctx)
+    imgui.get_io().set_ini_filename(None)     # no imgui.ini left in the working directory
+    renderer = GuiRenderer()
     yield renderer
     renderer.release()
     imgui.destroy_context(context)
@@ -104,20 +107,20 @@ def gui(ctx):
 def draw_gui(ctx, renderer, build, display=(200, 150), scale=1):
     """Run one ImGui frame with ``build()`` and draw it into a fresh black framebuffer."""
     io = imgui.get_io()
-    io.display_size = display
-    io.display_fb_scale = (scale, scale)
+    fb_size = (round(display[0] * scale), round(display[1] * scale))
+    set_display(io, display, fb_size)
     io.delta_time = 1.0 / 60.0
+    renderer.new_frame()
     imgui.new_frame()
     build()
     imgui.render()
-    fbo = ctx.simple_framebuffer((display[0] * scale, display[1] * scale), components=4)
+    fbo = ctx.simple_framebuffer(fb_size, components=4)
     fbo.use()
     fbo.clear(0.0, 0.0, 0.0, 1.0)
-    draw_data = imgui.get_draw_data()
-    renderer.render(draw_data)
+    renderer.render(imgui.get_draw_data())
     image = read_image(fbo)
     fbo.release()
-    return image, draw_data
+    return image
 
 
 RED = 0xFF0000FF        # IM_COL32(255, 0, 0, 255): ImGui packs colours as A B G R bytes
@@ -130,9 +133,9 @@ def red_mask(image):
 @pytest.mark.parametrize("scale", [1, 2])
 def test_imgui_rect_lands_where_imgui_puts_it(ctx, gui, scale):
     def build():
-        imgui.get_background_draw_list().add_rect_filled(10, 20, 50, 30, RED)
+        imgui.get_background_draw_list().add_rect_filled((10, 20), (50, 30), RED)
 
-    image, _ = draw_gui(ctx, gui, build, scale=scale)
+    image = draw_gui(ctx, gui, build, scale=scale)
     expected = np.zeros(image.shape[:2], bool)
     expected[20 * scale:30 * scale, 10 * scale:50 * scale] = True
     assert np.array_equal(red_mask(image), expected)
@@ -143,11 +146,11 @@ def test_imgui_clip_rect_becomes_scissor(ctx, gui, scale):
     # The clip rectangle (display points, y down) must cut the rectangle, y flipped correctly.
     def build():
         draw_list = imgui.get_background_draw_list()
-        draw_list.push_clip_rect(20, 22, 40, 60)
-        draw_list.add_rect_filled(10, 10, 50, 30, RED)
+        draw_list.push_clip_rect((20, 22), (40, 60))
+        draw_list.add_rect_filled((10, 10), (50, 30), RED)
         draw_list.pop_clip_rect()
 
-    image, _ = draw_gui(ctx, gui, build, scale=scale)
+    image = draw_gui(ctx, gui, build, scale=scale)
     expected = np.zeros(image.shape[:2], bool)
     expected[22 * scale:30 * scale, 20 * scale:40 * scale] = True
     assert np.array_equal(red_mask(image), expected)
@@ -155,39 +158,46 @@ def test_imgui_clip_rect_becomes_scissor(ctx, gui, scale):
 
 def test_imgui_window_draws_text_inside_its_rectangle(ctx, gui):
     def build():
-        imgui.set_next_window_position(30, 40)
-        imgui.set_next_window_size(120, 60)
+        imgui.set_next_window_pos((30, 40))
+        imgui.set_next_window_size((120, 60))
         imgui.begin("Panel")
-        imgui.text("view 3 of 7")
+        imgui.text("view 3 of 7 (100% of 50%d)")   # a '%' is text, not a format
         imgui.end()
 
-    image, draw_data = draw_gui(ctx, gui, build)
+    image = draw_gui(ctx, gui, build)
     lit = image.any(axis=2)
     inside = lit[40:100, 30:150]
     # The panel's background and title bar cover its rectangle; nothing is drawn outside it.
     assert inside.mean() > 0.9
     assert not lit[:40].any() and not lit[100:].any()
     assert not lit[:, :30].any() and not lit[:, 150:].any()
-    # Several draw commands (window, title, text), each starting at its own index offset.
-    commands = np.concatenate([draw_commands(dl) for dl in draw_data.commands_lists])
-    assert len(commands) >= 2
-    for draw_list in draw_data.commands_lists:
-        records = draw_commands(draw_list)
-        assert list(records["elem_count"]) == [c.elem_count for c in draw_list.commands]
-        assert list(records["idx_offset"]) == list(np.cumsum([0, *records["elem_count"][:-1]]))
-        assert records["elem_count"].sum() == draw_list.idx_buffer_size
+    # The text is drawn: the body holds pixels of two colours at least (text on background).
+    body = image[70:100, 32:148].reshape(-1, 3)
+    assert len(np.unique(body, axis=0)) > 2
 
 
-def test_imgui_buffers_grow(ctx, gui):
-    # Far more vertices than the initial buffers hold: everything must still be drawn.
+def test_imgui_draws_many_vertices(ctx, gui):
+    # Far more vertices than a first buffer holds: everything must still be drawn.
     def build():
         draw_list = imgui.get_background_draw_list()
         for i in range(4000):
             x, y = i % 200, (i // 200) % 150
-            draw_list.add_rect_filled(x, y, x + 1, y + 1, RED)
+            draw_list.add_rect_filled((x, y), (x + 1, y + 1), RED)
 
-    image, _ = draw_gui(ctx, gui, build)
+    image = draw_gui(ctx, gui, build)
     assert red_mask(image)[:20].all()
+
+
+def test_the_blit_still_draws_after_the_gui(ctx, gui):
+    # The GUI renderer restores the GL state it changed: the blit that follows it in the next
+    # frame must still give back its picture bit for bit.
+    draw_gui(ctx, gui, lambda: imgui.get_background_draw_list().add_rect_filled(
+        (0, 0), (100, 100), RED))
+    rng = np.random.default_rng(3)
+    image = rng.integers(0, 256, size=(31, 45, 3), dtype=np.uint8)
+    blit = Blit(ctx)
+    assert np.array_equal(blit_through(ctx, blit, image), image)
+    blit.release()
 
 
 def test_a_rendered_frame_round_trips_through_its_padded_upload(ctx):
@@ -206,22 +216,32 @@ def test_a_rendered_frame_round_trips_through_its_padded_upload(ctx):
 
 
 def test_imgui_at_a_fractional_scale_fills_the_framebuffer_to_its_last_row(ctx, gui):
-    # 401 points at 501/401 pixels a point: float32 makes the product 500.99997. The scissor's
-    # y flip counts from the framebuffer's top, so a height one pixel short shifts it by one.
-    io = imgui.get_io()
-    io.display_size = (401, 401)
-    io.display_fb_scale = (501 / 401, 501 / 401)
-    io.delta_time = 1.0 / 60.0
-    imgui.new_frame()
-    draw_list = imgui.get_background_draw_list()
-    draw_list.push_clip_rect(0, 0, 401, 200.4)              # the top 250 framebuffer rows
-    draw_list.add_rect_filled(0, 0, 401, 401, RED)
-    draw_list.pop_clip_rect()
-    imgui.render()
-    fbo = ctx.simple_framebuffer((501, 501), components=4)
-    fbo.use()
-    fbo.clear(0.0, 0.0, 0.0, 1.0)
-    gui.render(imgui.get_draw_data())
-    rows = np.flatnonzero(red_mask(read_image(fbo)).any(axis=1))
-    fbo.release()
-    assert rows[0] == 0 and rows[-1] == 249
+    # 401 points at 501/401 pixels a point: float32 makes the product 500.99997, and the
+    # renderer truncates it to size its viewport: one pixel short would leave the last row and
+    # column empty and shift the picture. framebuffer_scale rounds the scale up to 501.
+    assert np.float32(401) * np.float32(framebuffer_scale(401, 501)) >= 501
+    assert framebuffer_scale(401, 501) - 501 / 401 < 1e-6
+
+    def build():
+        draw_list = imgui.get_background_draw_list()
+        draw_list.add_rect_filled((0, 0), (401, 401), RED)          # the whole display
+        draw_list.push_clip_rect((0, 0), (401, 200.4))              # the top 250.4 pixels
+        draw_list.add_rect_filled((0, 0), (401, 401), 0xFF00FF00)   # green
+        draw_list.pop_clip_rect()
+
+    image = draw_gui(ctx, gui, build, display=(401, 401), scale=501 / 401)
+    assert image.shape[:2] == (501, 501)
+    red, green = red_mask(image), (image == (0, 255, 0)).all(axis=2)
+    assert (red | green).all()                  # every pixel, to the last row and column
+    rows = np.flatnonzero(green.any(axis=1))
+    # Dear ImGui's OpenGL 3 renderer truncates the scissor's bottom edge counted from the
+    # framebuffer's bottom, so a clip edge at 250.4 pixels moves the band by up to a row.
+    assert rows[0] <= 1 and rows[-1] - rows[0] == 249 and green[rows].all()
+
+
+@pytest.mark.parametrize("points, pixels", [(1, 1), (400, 800), (401, 501), (333, 417),
+                                            (1000, 1250), (7, 11)])
+def test_framebuffer_scale_reaches_the_framebuffer(points, pixels):
+    scale = np.float32(framebuffer_scale(points, pixels))
+    assert np.float32(points) * scale >= pixels
+    assert int(np.float32(points) * scale) == pixels           # and not a pixel more

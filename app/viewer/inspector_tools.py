@@ -197,15 +197,16 @@ class InspectorTools:
 
     def panel(self, imgui, displayable) -> None:
         header = "Inspector" + (" (click a pixel)" if self.inspecting else "")
-        expanded, _ = imgui.collapsing_header(f"{header}###inspector",
-                                              flags=imgui.TREE_NODE_DEFAULT_OPEN)
+        expanded = imgui.collapsing_header(f"{header}###inspector",
+                                           imgui.TreeNodeFlags_.default_open)
         if not expanded:
             return
         imgui.push_text_wrap_pos(0.0)
         if self.buffer != PICTURE:
-            imgui.text_colored(f"showing the {self.buffer} buffer (v: next)", 0.55, 0.8, 1.0)
+            imgui.text_colored((0.55, 0.8, 1.0, 1.0),
+                               f"showing the {self.buffer} buffer (v: next)")
         if self.verdict:
-            imgui.text_colored(displayable(self.verdict), 1.0, 0.75, 0.4)
+            imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(self.verdict))
             if self.heat is not None:
                 imgui.text_disabled("h: " + ("picture" if self.showing_heat else "heat map"))
         if not self.lines and not self.inspecting:
@@ -219,17 +220,16 @@ class InspectorTools:
 
     def _plots(self, imgui) -> None:
         """The last frames' times, and the progress of a frame still refining."""
-        from array import array
         if self.frame_ms:
-            values = array("f", self.frame_ms)
+            values = np.array(self.frame_ms, np.float32)
             imgui.plot_lines("##frame ms", values, overlay_text=f"frame {values[-1]:.1f} ms",
                              graph_size=(0, 40))
         if len(self.convergence) > 1:
-            imgui.plot_lines("##convergence", array("f", self.convergence),
+            imgui.plot_lines("##convergence", np.array(self.convergence, np.float32),
                              overlay_text=f"convergence {self.convergence[-1]:.4g}",
                              graph_size=(0, 40))
         if len(self.progress) > 1:
-            imgui.plot_lines("##progress", array("f", self.progress), scale_min=0.0,
+            imgui.plot_lines("##progress", np.array(self.progress, np.float32), scale_min=0.0,
                              scale_max=1.0, overlay_text="progressive frame",
                              graph_size=(0, 40))
 

@@ -42,7 +42,6 @@ gets the requested pixels; a minimised (0 x 0) window renders nothing.
 
 from __future__ import annotations
 
-import importlib.util
 import logging
 import os
 import sys
@@ -50,34 +49,17 @@ import time
 from pathlib import Path
 
 
-def _name_bundled_glfw() -> None:
-    """Name the libglfw that pyGLFW's wheel ships (``PYGLFW_LIBRARY``) unless the user named
-    one: otherwise pyGLFW loads every libglfw it finds in a Python subprocess to compare
-    their versions, ~40 ms at every start of the viewer. The variant is the one pyGLFW
-    itself picks (``PYGLFW_LIBRARY_VARIANT``, else Wayland in a Wayland session, else X11)."""
-    if os.environ.get("PYGLFW_LIBRARY") or not sys.platform.startswith("linux"):
-        return
-    spec = importlib.util.find_spec("glfw")
-    if spec is None or not spec.submodule_search_locations:
-        return
-    variant = os.environ.get("PYGLFW_LIBRARY_VARIANT", "").lower()
-    if variant not in ("x11", "wayland"):
-        variant = "wayland" if os.environ.get("XDG_SESSION_TYPE") == "wayland" else "x11"
-    library = Path(list(spec.submodule_search_locations)[0]) / variant / "libglfw.so"
-    if library.is_file():
-        os.environ["PYGLFW_LIBRARY"] = str(library)
-
-
-_name_bundled_glfw()
-
-import glfw  # noqa: E402  (after naming its library)
-import imgui
-import moderngl
+# imgui-bundle points pyGLFW at the libglfw in its own wheel (``PYGLFW_LIBRARY``) unless the user
+# named one: one GLFW in the process, and pyGLFW does not load every libglfw it finds in a
+# Python subprocess to compare their versions (~40 ms at every start).
+from imgui_bundle import imgui  # noqa: E402,I001  (first: it names the library glfw loads)
+import glfw  # noqa: E402
+import moderngl  # noqa: E402
 
 from app import startup_gc
 from app.naming import picture_name, unused
 from app.viewer.blit import Blit
-from app.viewer.imgui_backend import GlfwInput, ImGuiRenderer
+from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
 from app.viewer.state import ViewerState, compile_count
 from app.viewer.worker import RenderWorker
@@ -113,10 +95,10 @@ NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
 # After an event, draw a few frames so that ImGui's hover and menu states settle; then sleep
 # until the next event (a busy loop would take the CPU the rasterizer needs).
 FRAMES_AFTER_EVENT = 3
-PANEL_FLAGS = (imgui.WINDOW_NO_TITLE_BAR | imgui.WINDOW_NO_RESIZE | imgui.WINDOW_NO_MOVE
-               | imgui.WINDOW_NO_COLLAPSE | imgui.WINDOW_MENU_BAR | imgui.WINDOW_NO_SAVED_SETTINGS
-               | imgui.WINDOW_NO_BRING_TO_FRONT_ON_FOCUS)
-ANY_POPUP = imgui.POPUP_ANY_POPUP_ID | imgui.POPUP_ANY_POPUP_LEVEL
+_W = imgui.WindowFlags_
+PANEL_FLAGS = (_W.no_title_bar | _W.no_resize | _W.no_move | _W.no_collapse | _W.menu_bar
+               | _W.no_saved_settings | _W.no_bring_to_front_on_focus)
+ANY_POPUP = imgui.PopupFlags_.any_popup_id | imgui.PopupFlags_.any_popup_level
 
 
 # ImGui's built-in font covers Latin-1 only; the core's messages use a few typographic marks.
@@ -202,9 +184,8 @@ class ViewerWindow:
         try:
             self.blit = Blit(self.ctx)
             self.gui_context = imgui.create_context()
-            io = imgui.get_io()
-            io.ini_file_name = None       # keep no imgui.ini in the user's directory
-            self.gui = ImGuiRenderer(self.ctx)
+            imgui.get_io().set_ini_filename(None)     # keep no imgui.ini in the user's directory
+            self.gui = GuiRenderer()
             self.input = GlfwInput(self.window)
         except Exception as error:        # e.g. a shader that does not compile: close it all
             if self.gui_context is not None:
@@ -264,8 +245,8 @@ class ViewerWindow:
         glfw.set_key_callback(w, self._on_key)
         glfw.set_char_callback(w, self._on_char)
         glfw.set_scroll_callback(w, self._on_scroll)
-        glfw.set_cursor_pos_callback(w, lambda *_: self._wake())
-        glfw.set_cursor_enter_callback(w, lambda *_: self._wake())
+        glfw.set_cursor_pos_callback(w, self._on_cursor)
+        glfw.set_cursor_enter_callback(w, self._on_cursor_enter)
         glfw.set_framebuffer_size_callback(w, self._on_framebuffer_size)
         glfw.set_window_refresh_callback(w, lambda *_: self._wake())
         glfw.set_window_focus_callback(w, lambda *_: self._wake())
@@ -341,6 +322,14 @@ class ViewerWindow:
             self.tools.next_buffer("key v")
         elif char == "h":
             self.tools.flip("key h")
+
+    def _on_cursor(self, window, x, y) -> None:
+        self.input.on_cursor(x, y)
+        self._wake()
+
+    def _on_cursor_enter(self, window, entered) -> None:
+        self.input.on_cursor_enter(bool(entered))
+        self._wake()
 
     def _on_scroll(self, window, x_offset, y_offset) -> None:
         self.input.on_scroll(x_offset, y_offset)
@@ -488,6 +477,7 @@ class ViewerWindow:
             return False                  # minimised: nothing to render or draw
         self._busy -= 1
         self.input.new_frame()
+        self.gui.new_frame()
         imgui.new_frame()
         self._handle_clicks()
 
@@ -612,8 +602,7 @@ class ViewerWindow:
 
     def _projection_items(self, how: str) -> None:
         for value, label, key in PROJECTION_LABELS:
-            clicked, _ = imgui.menu_item(label, key, self.state.projection == value)
-            if clicked:
+            if imgui.menu_item_simple(label, key, self.state.projection == value):
                 self.choose("projection", value, how)
 
     def _shading_items(self, how: str) -> None:
@@ -623,18 +612,18 @@ class ViewerWindow:
             imgui.text_disabled(NO_TRIANGLES)
             imgui.pop_text_wrap_pos()
         for value, label, key in SHADING_LABELS:
-            clicked, _ = imgui.menu_item(label, key, self.state.shading == value, solid)
-            if clicked:
+            if imgui.menu_item_simple(label, key, self.state.shading == value, solid):
                 self.choose("shading", value, how)
 
     def _panel(self) -> None:
         scale = self._scale()
         width, height = self.state.size
         fb_w, fb_h = glfw.get_framebuffer_size(self.window)
-        imgui.set_next_window_position(width / scale, 0, imgui.ALWAYS)
+        imgui.set_next_window_pos((width / scale, 0), imgui.Cond_.always)
         # no wider than the window, so that its text wraps where it can be read
-        imgui.set_next_window_size(min(PANEL_WIDTH, fb_w / scale), fb_h / scale, imgui.ALWAYS)
-        imgui.begin("panel", False, PANEL_FLAGS)
+        imgui.set_next_window_size((min(PANEL_WIDTH, fb_w / scale), fb_h / scale),
+                                   imgui.Cond_.always)
+        imgui.begin("panel", None, PANEL_FLAGS)
         self._menu_bar()
         self._status()
         self._timeline()
@@ -646,47 +635,48 @@ class ViewerWindow:
         imgui.end()
 
     def _menu_bar(self) -> None:
-        if not imgui.begin_menu_bar().opened:
+        if not imgui.begin_menu_bar():
             return
-        if imgui.begin_menu("File").opened:
+        if imgui.begin_menu("File"):
             self._closing()
-            if imgui.begin_menu("Open scene").opened:
+            if imgui.begin_menu("Open scene"):
                 self._closing()
                 imgui.text("Path:")               # first: on screen however long the list
                 entered, self._path = imgui.input_text(
-                    "##path", self._path, flags=imgui.INPUT_TEXT_ENTER_RETURNS_TRUE)
+                    "##path", self._path, flags=imgui.InputTextFlags_.enter_returns_true)
                 imgui.same_line()
                 if (imgui.button("Open") or entered) and self._path.strip():
                     self.open_scene(self._path, "menu File > Open path")
                     imgui.close_current_popup()
                 imgui.separator()
                 for path in self._scenes:
-                    if imgui.menu_item(path.name, None, str(path) == self.state.scene_source)[0]:
+                    if imgui.menu_item_simple(path.name, None,
+                                              str(path) == self.state.scene_source):
                         self.open_scene(str(path), "menu File > Open")
                 imgui.end_menu()
-            if imgui.menu_item("Save screenshot", "S")[0]:
+            if imgui.menu_item_simple("Save screenshot", "S"):
                 self.save_screenshot("menu File > Save screenshot")
             imgui.separator()
-            if imgui.menu_item("Quit", "Q")[0]:
+            if imgui.menu_item_simple("Quit", "Q"):
                 self.quit("menu File > Quit")
             imgui.end_menu()
-        if imgui.begin_menu("Projection").opened:
+        if imgui.begin_menu("Projection"):
             self._closing()
             self._projection_items("menu Projection")
             imgui.end_menu()
-        if imgui.begin_menu("Shading").opened:
+        if imgui.begin_menu("Shading"):
             self._closing()
             self._shading_items("menu Shading")
             imgui.end_menu()
-        if imgui.begin_menu("Render").opened:
+        if imgui.begin_menu("Render"):
             self._closing()
             self._render_items()
             imgui.end_menu()
-        if imgui.begin_menu("View", self.state.view_count > 0).opened:
+        if imgui.begin_menu("View", self.state.view_count > 0):
             self._closing()
-            if imgui.menu_item("Next view", "Right")[0]:
+            if imgui.menu_item_simple("Next view", "Right"):
                 self.step_view(+1, "menu View > Next")
-            if imgui.menu_item("Previous view", "Left")[0]:
+            if imgui.menu_item_simple("Previous view", "Left"):
                 self.step_view(-1, "menu View > Previous")
             imgui.separator()
             self._inspector_items()
@@ -695,50 +685,50 @@ class ViewerWindow:
             for i, view in enumerate(self.state.scene.views):
                 number = file_number(self.state.scene, i)
                 label = displayable(f"{number}: {view.label}###view{i}")
-                if imgui.menu_item(label, None, i == self.state.view_index)[0]:
+                if imgui.menu_item_simple(label, None, i == self.state.view_index):
                     self.go_to_view(i, "menu View")
             imgui.end_menu()
         imgui.end_menu_bar()
 
     def _inspector_items(self) -> None:
         """Issue 22: inspect mode, the buffer views, the comparison with OpenGL."""
-        if imgui.menu_item("Inspect mode (click a pixel)", "I", self.tools.inspecting)[0]:
+        if imgui.menu_item_simple("Inspect mode (click a pixel)", "I", self.tools.inspecting):
             self.tools.toggle_inspect("menu View > Inspect mode")
-        if imgui.begin_menu("Buffer view").opened:
+        if imgui.begin_menu("Buffer view"):
             from core.inspect.buffers import BUFFERS
             for name in ("picture", *BUFFERS):
-                if imgui.menu_item(name, None, self.tools.buffer == name)[0]:
+                if imgui.menu_item_simple(name, None, self.tools.buffer == name):
                     self.tools.choose_buffer(name, "menu View > Buffer view")
             imgui.end_menu()
-        if imgui.menu_item("Compare with OpenGL", "H", self.tools.showing_heat)[0]:
+        if imgui.menu_item_simple("Compare with OpenGL", "H", self.tools.showing_heat):
             self.tools.flip("menu View > Compare with OpenGL")
 
     def _render_items(self) -> None:
         from core.renderers import renderer_names
         imgui.text_disabled("Renderer")
         for value, label, key in RENDERER_LABELS:
-            if value in renderer_names() and imgui.menu_item(
-                    label, key, self.state.renderer_name == value)[0]:
+            if value in renderer_names() and imgui.menu_item_simple(
+                    label, key, self.state.renderer_name == value):
                 self.choose("renderer", value, "menu Render")
         imgui.separator()
         imgui.text_disabled("Texture filter")
         for value, label in FILTER_LABELS:
-            if imgui.menu_item(label, "T", self.state.texture_filter == value)[0]:
+            if imgui.menu_item_simple(label, "T", self.state.texture_filter == value):
                 self.choose("texture_filter", value, "menu Render")
-        if imgui.menu_item("Bump and normal maps", "B", self.state.bump)[0]:
+        if imgui.menu_item_simple("Bump and normal maps", "B", self.state.bump):
             self.choose("bump", not self.state.bump, "menu Render")
         imgui.separator()
         imgui.text_disabled("Rasterizer")
         for value, label in RASTERIZER_LABELS:
-            if imgui.menu_item(label, None, self.state.rasterizer == value,
-                               self.state.has_triangles)[0]:
+            if imgui.menu_item_simple(label, None, self.state.rasterizer == value,
+                               self.state.has_triangles):
                 self.choose("rasterizer", value, "menu Render")
         imgui.separator()
-        if imgui.menu_item("Keep the window's aspect (letterbox)", "A",
-                           bool(self.state.keep_aspect))[0]:
+        if imgui.menu_item_simple("Keep the window's aspect (letterbox)", "A",
+                           bool(self.state.keep_aspect)):
             self.choose("keep_aspect", not self.state.keep_aspect, "menu Render")
-        if imgui.menu_item("Course .tri rules (back faces, mouse)", None,
-                           self.state.course_tri)[0]:
+        if imgui.menu_item_simple("Course .tri rules (back faces, mouse)", None,
+                           self.state.course_tri):
             self.choose("course_tri", not self.state.course_tri, "menu Render")
         self._issue18_items()
 
@@ -746,12 +736,12 @@ class ViewerWindow:
     def _issue18_items(self) -> None:
         imgui.separator()
         cued = bool(self.state.settings().depth_cue)
-        if imgui.menu_item("Depth cueing", None, cued)[0]:
+        if imgui.menu_item_simple("Depth cueing", None, cued):
             self.choose("depth_cue", not cued, "menu Render")
         imgui.text_disabled("Transparency (k_t > 0)")
         current = self.state.settings().transparency
         for value, label in TRANSPARENCY_LABELS:
-            if imgui.menu_item(label, None, current == value)[0]:
+            if imgui.menu_item_simple(label, None, current == value):
                 self.choose("transparency", value, "menu Render")
 
     def _draw_order(self) -> None:
@@ -771,7 +761,7 @@ class ViewerWindow:
 
     def _popup(self) -> None:
         # The course's GLUT pop-up menu: projection and shading at the click.
-        if imgui.begin_popup("popup").opened:
+        if imgui.begin_popup("popup"):
             self._closing()
             imgui.text_disabled("Projection")
             self._projection_items("pop-up")
@@ -779,7 +769,7 @@ class ViewerWindow:
             imgui.text_disabled("Shading")
             self._shading_items("pop-up")
             imgui.separator()
-            if imgui.menu_item("Next view", "Right", False, self.state.view_count > 0)[0]:
+            if imgui.menu_item_simple("Next view", "Right", False, self.state.view_count > 0):
                 self.step_view(+1, "pop-up Next view")
             imgui.end_popup()
 
@@ -805,18 +795,18 @@ class ViewerWindow:
         if extras:
             imgui.text(", ".join(extras))
         for note in (s.frame.stats.get("not drawn", []) if s.frame is not None else []):
-            imgui.text_colored(displayable(f"not drawn: {note}"), 1.0, 0.7, 0.3)   # issue 20
+            imgui.text_colored((1.0, 0.7, 0.3, 1.0), displayable(f"not drawn: {note}"))
         if s.bump_label:
-            imgui.text_colored(displayable(s.bump_label), 0.6, 0.7, 1.0)
+            imgui.text_colored((0.6, 0.7, 1.0, 1.0), displayable(s.bump_label))
             imgui.text_disabled("left click: bump / Phong; other buttons: next map")
         if not s.renderable:
-            imgui.text_colored("the panel takes the whole window: widen it to see the picture",
-                               1.0, 0.75, 0.4)
+            imgui.text_colored((1.0, 0.75, 0.4, 1.0),
+                               "the panel takes the whole window: widen it to see the picture")
         elif s.frame is None:
             imgui.text("")
         else:
             imgui.text(f"{s.size[0]} x {s.size[1]}, frame {s.frame_seconds * 1e3:.1f} ms")
-        imgui.text_colored(displayable(self._progress_text()), 0.55, 0.8, 1.0)
+        imgui.text_colored((0.55, 0.8, 1.0, 1.0), displayable(self._progress_text()))
         if self._notice:
             imgui.text_disabled(displayable(self._notice))
         imgui.pop_text_wrap_pos()
@@ -874,8 +864,8 @@ class ViewerWindow:
         frame = self.state.frame
         if frame is None:
             return
-        expanded, _ = imgui.collapsing_header(f"Plan  {self.state.frame_seconds * 1e3:.1f} ms"
-                                              "###plan")
+        expanded = imgui.collapsing_header(f"Plan  {self.state.frame_seconds * 1e3:.1f} ms"
+                                           "###plan")
         if not expanded:
             return
         stage_ms = frame.stats.get("ms", {}) if isinstance(frame.stats, dict) else {}
@@ -885,9 +875,9 @@ class ViewerWindow:
             ms = stage_ms.get(name)
             timing = f" ({ms:.1f} ms)" if ms is not None else ""
             if getattr(stage, "runs", True):
-                imgui.text_colored(displayable(f"run   {name}{timing}"), 0.55, 0.9, 0.55)
+                imgui.text_colored((0.55, 0.9, 0.55, 1.0), displayable(f"run   {name}{timing}"))
             else:
-                imgui.text_colored(displayable(f"skip  {name}"), 0.6, 0.6, 0.6)
+                imgui.text_colored((0.6, 0.6, 0.6, 1.0), displayable(f"skip  {name}"))
             reason = getattr(stage, "reason", "")
             if reason:
                 imgui.indent(16)
@@ -899,25 +889,25 @@ class ViewerWindow:
         invalid = self.state.invalid_messages
         if not invalid:
             return
-        expanded, _ = imgui.collapsing_header(f"Invalid views ({len(invalid)})###invalid")
+        expanded = imgui.collapsing_header(f"Invalid views ({len(invalid)})###invalid")
         if expanded:
             imgui.push_text_wrap_pos(0.0)
             for message in invalid:
-                imgui.text_colored(displayable(message), 1.0, 0.75, 0.4)
+                imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(message))
             imgui.pop_text_wrap_pos()
 
     def _messages_strip(self) -> None:
         notices = self.state.notices
         if not notices:
             return
-        expanded, _ = imgui.collapsing_header(f"Messages ({len(notices)})###messages",
-                                              flags=imgui.TREE_NODE_DEFAULT_OPEN)
+        expanded = imgui.collapsing_header(f"Messages ({len(notices)})###messages",
+                                           imgui.TreeNodeFlags_.default_open)
         if expanded:
             if self.state.open_messages and imgui.small_button("Clear"):
                 self.state.clear_messages()
             imgui.push_text_wrap_pos(0.0)
             for message in notices:
-                imgui.text_colored(displayable(message), 1.0, 0.75, 0.4)
+                imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(message))
             imgui.pop_text_wrap_pos()
 
     def close(self) -> None:
