@@ -52,8 +52,8 @@ def _open_path(app, tmp_path, path: str, name: str, width: int) -> None:
 
 
 def _hold(app, keys: str) -> None:
-    """Press ``keys`` for a few frames, as a hand does: ImGui 1.82 reads Enter and Ctrl+A as
-    keys held down at a frame, and misses a press and release between two frames."""
+    """Press ``keys`` for a few frames, as a hand does (Dear ImGui's input queue would also
+    see a press and a release between two frames, but a hand holds a key for a while)."""
     app.xdotool("keydown", "--window", app.window, keys)
     time.sleep(0.25)
     app.xdotool("keyup", "--window", app.window, keys)
@@ -111,7 +111,7 @@ def test_a_window_narrower_than_the_panel_shows_no_ghost_of_the_old_frame(displa
     from test_window import grab
 
     # a bright background, so that an old frame behind the panel would show through it
-    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "whitted.toml"), "--size", "200x460",
+    app = AppOn(display, tmp_path, str(ROOT / "scenes" / "whitted.toml"), "--size", "200x700",
                 "--renderer", "zbuffer")
     try:
         app.wait_for(r"first frame shown", timeout=120)
@@ -119,25 +119,28 @@ def test_a_window_narrower_than_the_panel_shows_no_ghost_of_the_old_frame(displa
         app.wait_for(r"frame \d+: .* renderer=zbuffer", timeout=60)
         time.sleep(0.5)
         mark = len(app.log())
-        app.xdotool("windowsize", app.window, str(PANEL_WIDTH - 60), "500")
+        app.xdotool("windowsize", app.window, str(PANEL_WIDTH - 60), "740")
         app.wait_for(r"picture hidden: the panel takes the whole window", timeout=10, after=mark)
         time.sleep(1.0)
         narrow = grab(app, tmp_path / "narrow.png")
-        assert narrow.shape[:2] == (500, PANEL_WIDTH - 60)
+        assert narrow.shape[:2] == (740, PANEL_WIDTH - 60)
         # the panel's left margin below its last widget (no text there): the rows where the
-        # old 460-pixel frame was are the panel's plain colour, like the rows below them,
+        # old 700-pixel frame was are the panel's plain colour, like the rows below them,
         # where there never was a frame (a frame behind the panel shows through its alpha)
-        margin = narrow[:495, 2:5].reshape(495, -1)    # not the panel's 1-pixel border
-        plain = margin[490]
+        margin = narrow[:735, 2:5].reshape(735, -1)    # not the panel's 1-pixel border
+        plain = margin[730]
         below = np.flatnonzero(np.any(margin != plain, axis=1))
         last_widget = below.max() if below.size else 0
-        assert last_widget < 440, f"not the panel's plain colour down to row {last_widget}: a frame shows through"
+        # the panel's widgets end near row 470 (its font and the whitted scene's notes), so
+        # rows from there to 700 are where an old frame would show
+        assert last_widget < 600, (f"not the panel's plain colour down to row {last_widget}: "
+                                   "a frame shows through")
         assert np.all(margin[last_widget + 1:] == plain)
         assert app.process.poll() is None
         # widened again, the picture comes back at the size the panel leaves
         mark = len(app.log())
-        app.xdotool("windowsize", app.window, str(PANEL_WIDTH + 120), "500")
-        app.wait_for(r"frame \d+: .* size=120x500", timeout=60, after=mark)
+        app.xdotool("windowsize", app.window, str(PANEL_WIDTH + 120), "740")
+        app.wait_for(r"frame \d+: .* size=120x740", timeout=60, after=mark)
     finally:
         app.stop()
 
