@@ -177,6 +177,9 @@ class ViewerState:
     depth_cue: bool | None = None
     transparency: str = ""
     paint_first: int | None = None
+    # The window's kernel gate while the warm-up compiles in worker processes (issue 33,
+    # app.viewer.kernels.gated): wraps each frame's job; None renders it as it is.
+    gate: Callable | None = None
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -618,6 +621,8 @@ class ViewerState:
         if not self.dirty or not self.renderable:
             return False
         run, what = self._job()
+        if self.gate is not None:
+            run = self.gate(run)
         worker.submit(run, what, control=True)
         self.dirty = False
         return True

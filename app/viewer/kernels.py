@@ -1,0 +1,114 @@
+"""Frames while the kernels compile in worker processes: draw what needs none, wait for the rest.
+
+On a fresh clone (or after a pull that changed a kernel) numba's disk cache is cold. The window
+does not compile in its own process then: it starts the warm-up (``python -m app warmup``) in
+worker processes, one per core (:class:`app.tools.warmup.BackgroundWarmup`), shows its progress
+in the panel, and renders each frame under :func:`gated`:
+
+- the frame is first tried with compiling refused on the render thread: numba announces each
+  compile (a cache miss) with a ``numba:compile`` event before it starts, and the listener
+  raises :class:`KernelsNotReady` there. A frame whose kernels are all cached (the default
+  scene's wireframe needs none) is drawn at once, whatever the warm-up is doing;
+- a frame that stopped so waits on the render thread, saying so, until the warm-up has done
+  the steps of its scene (``ready_for``) and then tries again, loading what the workers wrote;
+  if it still misses a kernel it waits for the whole warm-up; once the warm-up has finished
+  (or failed) nothing is refused and a kernel still missing compiles here, off the UI thread.
+
+A newer request cancels the wait (:meth:`app.viewer.worker.Control.check`).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+
+_refusing = threading.local()
+_listening: list[bool] = []
+
+
+class KernelsNotReady(Exception):
+    """A frame needed a kernel that is not in the disk cache yet (named in the message)."""
+
+
+def _listen() -> bool:
+    """Register the listener that refuses compiles on threads that ask it to (once)."""
+    if _listening:
+        return True
+    try:
+        from numba.core import event
+    except ImportError:                  # no numba: nothing can compile, nothing to refuse
+        return False
+
+    class RefuseCompiles(event.Listener):
+        def on_start(self, ev):
+            if getattr(_refusing, "on", False):
+                dispatcher = (ev.data or {}).get("dispatcher")
+                name = getattr(getattr(dispatcher, "py_func", None), "__qualname__", "a kernel")
+                raise KernelsNotReady(name)
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", RefuseCompiles())
+    _listening.append(True)
+    return True
+
+
+@contextlib.contextmanager
+def compiles_refused():
+    """Inside the block, a numba compile on this thread raises :class:`KernelsNotReady`."""
+    _listen()
+    before = getattr(_refusing, "on", False)
+    _refusing.on = True
+    try:
+        yield
+    finally:
+        _refusing.on = before
+
+
+def gated(run, warmup, scene_source: str | None, poll: float = 0.25):
+    """``run(control)`` that draws at once when its kernels are cached and otherwise waits for
+    ``warmup`` (a :class:`app.tools.warmup.BackgroundWarmup`) as the module says."""
+
+    def run_gated(control=None):
+        waited_for_scene = False
+        while not warmup.finished:
+            try:
+                with compiles_refused():
+                    return run(control)
+            except KernelsNotReady as missing:
+                whole = waited_for_scene      # the scene's steps were done and still missing
+                _wait(warmup, scene_source, control, str(missing), whole, poll)
+                waited_for_scene = True
+        return run(control)
+
+    return run_gated
+
+
+def _wait(warmup, scene_source, control, kernel: str, whole: bool, poll: float) -> None:
+    """Until the warm-up has done ``scene_source``'s steps (or all of them, ``whole``)."""
+    def ready():
+        return warmup.finished or (not whole and warmup.ready_for(scene_source))
+
+    while not ready():
+        if control is not None:
+            control.check()
+            total = max(warmup.total, 1)
+            control.report(warmup.done / total,
+                           f"waiting for its kernels ({kernel}): {warmup.done} of "
+                           f"{warmup.total} warm-up steps done in worker processes")
+        warmup.wait_for(None if whole else scene_source, poll)
+
+
+def status(warmup) -> str:
+    """The panel's line about the warm-up, or "" when there is none to speak of."""
+    if warmup is None:
+        return ""
+    if warmup.finished:
+        if warmup.ok:
+            return "all kernels ready"
+        failed = warmup.failed
+        return (f"kernel warm-up failed ({failed[0] if failed else 'see the log'}): "
+                "frames that need a missing kernel compile it here")
+    return (f"compiling kernels in worker processes: {warmup.done} of {warmup.total} steps"
+            + (f" ({', '.join(warmup.current)})" if warmup.current else ""))
