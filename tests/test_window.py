@@ -353,6 +353,31 @@ def test_view_command_without_display_falls_back_to_png(tmp_path):
     assert all(f"wrote {f}" in done.stdout for f in files)
 
 
+@pytest.mark.xvfb
+def test_a_display_without_opengl_3_3_falls_back_to_png_and_says_why(tmp_path):
+    # Mesa told to offer OpenGL 2.1 only: glfw cannot make the 3.3 core context, and the
+    # viewer says so in one line (glfw's own words, not a traceback) and writes the PNGs.
+    need_programs(*XVFB_TOOLS, install="apt-get install xvfb xdotool")
+    xvfb, display = start_xvfb()
+    try:
+        env = {**os.environ, "DISPLAY": display, "PYTHONPATH": str(ROOT),
+               "FVD_OUT": str(tmp_path / "out"), "MESA_GL_VERSION_OVERRIDE": "2.1",
+               "MESA_GLSL_VERSION_OVERRIDE": "120"}
+        env.pop("WAYLAND_DISPLAY", None)
+        done = subprocess.run([sys.executable, "-m", "app", "view"], cwd=tmp_path, env=env,
+                              stdin=subprocess.DEVNULL, capture_output=True, text=True,
+                              timeout=120)
+    finally:
+        xvfb.kill()
+        xvfb.wait(timeout=10)
+    assert done.returncode == 0, done.stderr
+    match = re.search(r"no window could be opened on this display \((.+)\): rendering the "
+                      r"(\d+) views to PNG in", done.stderr)
+    assert match, done.stderr
+    assert "Traceback" not in done.stderr and "(65543)" not in match[1]
+    assert len(sorted((tmp_path / "out").glob("*.png"))) == int(match[2]) > 0
+
+
 def grab(app, path: Path, crop: str | None = None) -> np.ndarray:
     """The window as the X server shows it (``crop``: ImageMagick's WxH+X+Y)."""
     from PIL import Image

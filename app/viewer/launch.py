@@ -112,7 +112,9 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
              time.perf_counter() - started)
 
     reason = None if display_available() else "DISPLAY and WAYLAND_DISPLAY are not set"
+    what = "no display found"
     if reason is None:
+        what = "no window could be opened on this display"
         prime_kernels(state)
         try:
             from app.viewer.window import ViewerWindow, WindowError
@@ -122,7 +124,7 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
         except Exception as error:           # e.g. moderngl: no OpenGL 3.3 on this display
             reason = f"{type(error).__name__}: {error}"
     if reason is not None:
-        return render_all_views(state, out_dir, reason)
+        return render_all_views(state, out_dir, reason, what)
     log.info("window open, %dx%d framebuffer (%.3f s after process start)",
              state.size[0], state.size[1], time.perf_counter() - started)
     return window.run()
@@ -210,14 +212,16 @@ def _peeked_settings(source: str, renderer: str | None):
         return None
 
 
-def render_all_views(state, out_dir: str | Path | None, reason: str) -> int:
-    """No display: every view (scene's projection and shading) to a PNG; 0 if all were written."""
+def render_all_views(state, out_dir: str | Path | None, reason: str,
+                     what: str = "no display found") -> int:
+    """No display (or no window on it, ``what``): every view (the scene's projection and
+    shading) to a PNG; 0 if all were written."""
     startup_gc.resume()                 # no first frame on screen to wait for
     from PIL import Image
 
     out = Path(out_dir or os.environ.get("FVD_OUT") or DEFAULT_OUT_DIR)
     scene = state.scene
-    print(f"no display found ({reason}): rendering the {len(scene.views)} views to PNG in "
+    print(f"{what} ({reason}): rendering the {len(scene.views)} views to PNG in "
           f"{out}{os.sep} instead", file=sys.stderr)
     try:
         out.mkdir(parents=True, exist_ok=True)
