@@ -32,6 +32,7 @@ from core.context import RenderContext  # noqa: E402
 from core.render import Frame, render  # noqa: E402
 from core.scene.model import Light, Material, Mesh, Scene  # noqa: E402
 from core.settings import Projection, RenderSettings, Shading  # noqa: E402
+import core.systems  # noqa: E402,F401  (the systems' scene keys, registered before any file is read)
 
 __all__ = ["render", "Frame", "RenderContext", "RenderSettings", "Projection", "Shading", "View",
            "ViewError", "Scene", "Mesh", "Material", "Light"]

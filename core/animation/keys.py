@@ -38,6 +38,7 @@ import numpy as np
 
 from core.animation import quaternion as qt
 from core.animation.animation import Animation, ObjectTracks, ViewTracks, frame_quaternion
+from core.scene.formats.keys import register_scene_keys
 from core.scene.model import meshes_named
 from core.animation.tracks import METHODS, ORIENTATION_METHODS, OrientationTrack, Track
 
@@ -305,3 +306,6 @@ def _base_view(reader, scene, path):
         raise reader.fail(path, "a keyed view needs a still view for the fields no key gives "
                                 "(add a [[view]] or views = \"auto\")")
     return scene.views[0]
+
+
+register_scene_keys("animation", TOP_KEYS, read_animation, arrays=TABLE_ARRAYS)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.scene.formats.keys import register_scene_keys
 from core.shading.illumination import to_uint8
 
 KEYS = ("front", "back", "s_front", "s_back", "color")
@@ -229,3 +230,11 @@ def read_table(reader, value, path) -> DepthCue:
     return DepthCue(front, back, 1.0 if s_front is None else s_front,
                     0.0 if s_back is None else s_back,
                     None if color is None else tuple(float(c) for c in color))
+
+
+def read_scene_keys(reader, doc: dict, scene) -> None:
+    if "depth_cue" in doc:
+        scene.depth_cue = read_table(reader, doc["depth_cue"], ("depth_cue",))
+
+
+register_scene_keys("depth cue", ("depth_cue",), read_scene_keys)

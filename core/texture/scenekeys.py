@@ -1,4 +1,4 @@
-"""The scene file's texture keys, inside a ``material`` table (read by core.scene.formats.scenefile).
+"""The scene file's texture keys, inside a ``material`` table (registered with the scene reader).
 
 ::
 
@@ -22,10 +22,11 @@ A procedural past the budget is an error of the scene (its ``resolution`` is the
 
 from __future__ import annotations
 
+from core.scene.formats.keys import register_material_keys, register_scene_keys
 from core.texture import procedural
-from core.texture.image import TextureError, load_image
+from core.texture.image import TexelBudget, TextureError, load_image
 from core.texture.material import DemoMaterial, SurfaceMaps
-from core.texture.demo_scene import MAPS
+from core.texture.demo_scene import MAPS, panel_views
 from core.texture.modes import WRAPS
 
 TEXTURE_KEYS = ("texture", "bump", "bump_scale", "normal_map", "environment", "reflectivity",
@@ -40,7 +41,7 @@ def read_maps(reader, table: dict, path: tuple) -> SurfaceMaps | None:
     """The :class:`SurfaceMaps` of a material table (None when it names no texture key).
 
     ``reader`` is the scene reader (its ``fail``, ``number``, ``vector``, ``string``,
-    ``choice``, ``table``, ``boolean`` checks, ``folder``/``file`` and ``texel_budget``, the
+    ``choice``, ``table``, ``boolean`` checks, ``folder``/``file``, and in its ``state`` the
     :class:`core.texture.image.TexelBudget` every texture of the scene draws from).
     """
     if not any(key in table for key in TEXTURE_KEYS):
@@ -78,7 +79,7 @@ def _texture(reader, value, path: tuple, srgb: bool, maps: SurfaceMaps):
         shown = f"{reader.file}: {name}" if not name.startswith("/") else name
         try:
             return load_image(reader.folder / name, key, wrap=wrap, srgb=srgb, shown=shown,
-                              budget=reader.texel_budget)
+                              budget=_budget(reader))
         except TextureError as error:
             maps.messages.append(str(error))
             return None
@@ -91,7 +92,7 @@ def _texture(reader, value, path: tuple, srgb: bool, maps: SurfaceMaps):
     except procedural.ParameterError as error:
         raise reader.fail(path + (error.key,), str(error)) from None
     resolution = params.get("resolution", procedural.DEFAULT_RESOLUTION)
-    over = reader.texel_budget.take(resolution * resolution,
+    over = _budget(reader).take(resolution * resolution,
                                 f"{name} at resolution {resolution}")
     if over:
         raise reader.fail(path + ("resolution",), over)
@@ -112,3 +113,30 @@ def _demo(reader, value, path: tuple) -> DemoMaterial:
     if "viewpoint" in t:
         demo.viewpoint = reader.vector(t["viewpoint"], path + ("viewpoint",))
     return demo
+
+
+def _budget(reader) -> TexelBudget:
+    """What the textures of the file being read may still hold (one budget per file)."""
+    return reader.state.setdefault("texel_budget", TexelBudget())
+
+
+def read_material(reader, table: dict, path: tuple, material):
+    """A material's textures ride on ``Material.extra["maps"]``; a file that cannot be used
+    leaves the mesh untextured, and its message (naming file and key) is the scene's."""
+    maps = read_maps(reader, table, path)
+    if maps is not None:
+        material.extra = {**material.extra, "maps": maps}
+        reader.notes.extend(maps.messages)
+    return material
+
+
+def add_panel_view(reader, doc: dict, scene) -> None:
+    """The bump demo's panel: the file's first view when a material is the demo's."""
+    panel = panel_views(scene)
+    scene.views = panel + scene.views
+    if scene.view_order:
+        scene.view_order = panel + list(scene.view_order)
+
+
+register_material_keys("textures", TEXTURE_KEYS, read_material)
+register_scene_keys("bump demo panel", (), add_panel_view)

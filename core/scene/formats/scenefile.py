@@ -45,40 +45,23 @@ from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, SHADINGS, Light, Mate
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
 from core.settings import RASTERIZERS, SCENE_RENDERERS, SPECULAR_FORMS
+from core.scene.formats.keys import (material_keys, material_readers, scene_readers, table_arrays,
+                                     top_keys)
+from core.scene.media import index_of_refraction
 
 MAX_NUMBER = MAX_COORDINATE
 
-TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
-            "line_color", "views", "view", "geometry", "light", "keep_aspect", "rasterizer",
-            "renderer", "crease_angle")
 GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
-# Analytic primitives (issue 12: the ray tracer intersects them, the z-buffer draws them
-# tessellated): [[geometry]] primitive = "sphere" | "plane" with these keys.
+# Analytic primitives (the ray tracer intersects them, the z-buffer draws them tessellated):
+# [[geometry]] primitive = "sphere" | "plane" with these keys.
 PRIMITIVE_KEYS = ("primitive", "center", "radius", "point", "normal", "checker", "checker_color",
                   "extent", "segments")
 GEOMETRY_KEYS += PRIMITIVE_KEYS
 TRANSFORM_KEYS = ("scale", "rotate", "translate")
-MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os")
-MATERIAL_KEYS += ("kr", "kt", "ior")      # Whitted's global terms (issue 12)
-MATERIAL_KEYS += ("emission", "two_sided")  # area lights (issue 19)
 LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
-TOP_KEYS += ("tone",)                       # issue 19: linear | srgb (radiosity, pathtrace)
-TABLE_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
-# Animation (issue 13): [animation], [[key]] and [[emitter]] are read by core/animation/keys.py.
-from core.animation import keys as animation_keys     # noqa: E402  (after the constants it extends)
-TOP_KEYS += animation_keys.TOP_KEYS
-TABLE_ARRAYS += animation_keys.TABLE_ARRAYS
-
-# -- issue 18: the [depth_cue] table (core.shading.depth_cue)
-TOP_KEYS += ("depth_cue", "transparency")
-# --
-
-# -- issue 11: a material's texture keys (texture, bump, normal_map, …; core.texture.scenekeys)
-from core.texture.image import TexelBudget  # noqa: E402
-from core.texture.scenekeys import TEXTURE_KEYS, read_maps  # noqa: E402
-MATERIAL_KEYS = MATERIAL_KEYS + TEXTURE_KEYS
-# --
+# The top-level and material keys: the reader's own and those the systems registered
+# (core/scene/formats/keys.py: animation, the depth cue, textures, the bump demo).
 
 Path_ = tuple            # a key path: ("geometry", 2, "material", "kd")
 
@@ -117,8 +100,8 @@ class _Reader:
         self.crease_angle = crease_angle          # None: the file's, else CREASE_ANGLE
         self.file = file
         self.folder = folder
-        self.texture_messages: list[str] = []       # files a material could not use (issue 11)
-        self.texel_budget = TexelBudget()           # what the scene's textures may hold
+        self.notes: list[str] = []      # the systems' readers' messages (an unusable texture)
+        self.state: dict = {}           # what one file's registered readers share
         self.lines = text.split("\n")
         # Indexed once, so that locating a key costs the lines of its own table, not the
         # file's: every [[view]] asks for its line, and a rescan per view was quadratic.
@@ -143,7 +126,7 @@ class _Reader:
         """Best-effort line of ``path``: its ``[[table]]`` block, then the key inside it."""
         start, stop = 0, len(self.lines)
         keys = list(path)
-        in_block = len(keys) >= 2 and keys[0] in TABLE_ARRAYS and isinstance(keys[1], int)
+        in_block = len(keys) >= 2 and keys[0] in table_arrays() and isinstance(keys[1], int)
         if in_block:
             name, index = keys[0], keys[1]
             starts = self._starts(name)
@@ -236,7 +219,7 @@ class _Reader:
             raise ReaderError(self.file, f"TOML: a number cannot be read: "
                                          f"{str(error).split(':')[0]}",
                               _long_number_line(self.text)) from None
-        self.table(doc, (), TOP_KEYS)
+        self.table(doc, (), top_keys())
         if "geometry" not in doc:
             raise self.fail((), "a scene needs at least one [[geometry]] table")
         if self.crease_angle is None:
@@ -261,7 +244,7 @@ class _Reader:
         order = self.views(doc, points)
         views = [v for v in order if isinstance(v, View)]
         messages = [v for v in order if not isinstance(v, View)]
-        emitters = any(any(m.material.emission) for m in meshes)     # issue 19: area lights
+        emitters = any(any(m.material.emission) for m in meshes)     # area lights light it
         lights = ([self.light(t, ("light", i + 1))
                    for i, t in enumerate(self.tables(doc["light"], ("light",)))]
                   if "light" in doc else [] if emitters else default_lights(points))
@@ -293,22 +276,13 @@ class _Reader:
             scene.size = (int(w), int(h))
         if size is not None:
             scene.size = tuple(size)
-        if "depth_cue" in doc:                                  # issue 18
-            from core.shading.depth_cue import read_table
-            scene.depth_cue = read_table(self, doc["depth_cue"], ("depth_cue",))
         if "transparency" in doc:
             from core.settings import TRANSPARENCIES
             scene.transparency = self.choice(doc["transparency"], ("transparency",),
                                              TRANSPARENCIES)
-        # -- issue 11: texture files that could not be used; the bump demo's panel view
-        scene.messages += self.texture_messages
-        from core.texture.demo_scene import panel_views
-        panel = panel_views(scene)
-        scene.views = panel + scene.views
-        if scene.view_order:                  # the panel is the file's first view
-            scene.view_order = panel + list(scene.view_order)
-        # --
-        animation_keys.read_animation(self, doc, scene)     # keys and emitters, if any
+        for entry in scene_readers():                         # the systems' keys
+            entry.read(self, doc, scene)
+        scene.messages += self.notes
         return scene
 
     def geometry(self, g, path: Path_) -> Mesh:
@@ -395,7 +369,7 @@ class _Reader:
         return mesh
 
     def material(self, value, path: Path_, base: Material) -> Material:
-        t = self.table(value, path, MATERIAL_KEYS)
+        t = self.table(value, path, material_keys())
         fields = {}
         for key in ("ka", "kd", "ks"):
             if key in t:
@@ -406,21 +380,16 @@ class _Reader:
             if key in t:
                 fields[key] = self.vector(t[key], path + (key,), 3, 0.0, 1.0)
         fields.update(self.whitted_terms(t, path))
-        if "emission" in t:       # issue 19: finite and >= 0 (NaN fails the range check)
+        if "emission" in t:       # finite and >= 0 (NaN fails the range check)
             fields["emission"] = self.vector(t["emission"], path + ("emission",), 3, 0.0, 1e6)
         if "two_sided" in t:
             fields["two_sided"] = self.boolean(t["two_sided"], path + ("two_sided",))
         material = Material(**{**base.__dict__, **fields})
-        # -- issue 11: textures ride on Material.extra["maps"]; a file that cannot be used
-        # leaves the mesh untextured, and its message (naming file and key) is shown.
-        maps = read_maps(self, t, path)
-        if maps is not None:
-            material.extra = {**material.extra, "maps": maps}
-            self.texture_messages += maps.messages
-        # --
+        for entry in material_readers():                      # the systems' keys
+            material = entry.read(self, t, path, material)
         return material
 
-    # ------------------------------------------------------------------ ray tracing (issue 12)
+    # ------------------------------------------------------------------ ray tracing
 
     def whitted_terms(self, t: dict, path: Path_) -> dict:
         """``kr``, ``kt`` in [0, 1] and ``ior``: a positive number or a medium's name."""
@@ -429,7 +398,6 @@ class _Reader:
             if key in t:
                 fields[key] = self.number(t[key], path + (key,), 0.0, 1.0)
         if "ior" in t:
-            from core.raytrace.optics import index_of_refraction    # (loads numba: only here)
             try:
                 fields["ior"] = index_of_refraction(t["ior"], "ior")
             except ValueError as error:

@@ -1,0 +1,94 @@
+"""Scene-file keys that the systems above the reader bring: each system registers what it reads.
+
+The scene reader (``scenefile.py``) knows the keys of the scene itself — geometry, views,
+lights, materials' Phong and Whitted terms, the default settings. A system that adds keys
+(animation's ``[animation]``, ``[[key]]`` and ``[[emitter]]``; the depth cue's table; the
+textures of a material; the bump demo's panel view) registers a reader for them here when its
+module is imported, and the reader only routes the keys to whoever registered them — as
+Mitsuba's loader routes a table to the plugin that registered its type name. So nothing in
+``core/scene`` imports a package above it; ``core/systems.py`` imports the systems once.
+
+- :func:`register_scene_keys`: top-level keys (``arrays``: those written ``[[name]]``) and
+  ``read(reader, doc, scene)``, called once per file after the scene's own keys are read,
+  whether or not the file has the keys (a reader may add to every scene: the demo's panel).
+- :func:`register_material_keys`: keys inside a ``material`` table and
+  ``read(reader, table, path, material) -> material``, called for every material.
+
+A reader gets the scene reader itself: its checks (``fail``, ``number``, ``vector``,
+``string``, ``choice``, ``table``, ``tables``, ``boolean``), ``file`` and ``folder``, a
+``notes`` list whose lines become the scene's messages, and ``state``, a dict for what one
+file's readers share (the textures' texel budget).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+
+@dataclass(frozen=True)
+class SceneKeys:
+    keys: tuple[str, ...]
+    arrays: tuple[str, ...]
+    read: Callable
+
+
+@dataclass(frozen=True)
+class MaterialKeys:
+    keys: tuple[str, ...]
+    read: Callable
+
+
+_SCENE: dict[str, SceneKeys] = {}
+_MATERIAL: dict[str, MaterialKeys] = {}
+
+
+def register_scene_keys(name: str, keys: tuple[str, ...], read: Callable,
+                        arrays: tuple[str, ...] = ()) -> None:
+    """``read(reader, doc, scene)`` for the top-level ``keys`` (registered again under the
+    same ``name``, it replaces the earlier reader: a module reloaded in a test)."""
+    taken = {k for other, entry in _SCENE.items() if other != name for k in entry.keys}
+    clash = sorted(set(keys) & (taken | set(_OWN_TOP_KEYS)))
+    if clash:
+        raise ValueError(f"scene keys {clash} are read elsewhere already")
+    _SCENE[name] = SceneKeys(tuple(keys), tuple(arrays), read)
+
+
+def register_material_keys(name: str, keys: tuple[str, ...], read: Callable) -> None:
+    """``read(reader, table, path, material) -> material`` for the material ``keys``."""
+    taken = {k for other, entry in _MATERIAL.items() if other != name for k in entry.keys}
+    clash = sorted(set(keys) & (taken | set(_OWN_MATERIAL_KEYS)))
+    if clash:
+        raise ValueError(f"material keys {clash} are read elsewhere already")
+    _MATERIAL[name] = MaterialKeys(tuple(keys), read)
+
+
+def scene_readers() -> tuple[SceneKeys, ...]:
+    return tuple(_SCENE.values())
+
+
+def material_readers() -> tuple[MaterialKeys, ...]:
+    return tuple(_MATERIAL.values())
+
+
+def top_keys() -> tuple[str, ...]:
+    """Every top-level key a scene file may have: the reader's own and the registered."""
+    return _OWN_TOP_KEYS + tuple(k for entry in _SCENE.values() for k in entry.keys)
+
+
+def table_arrays() -> tuple[str, ...]:
+    return _OWN_ARRAYS + tuple(k for entry in _SCENE.values() for k in entry.arrays)
+
+
+def material_keys() -> tuple[str, ...]:
+    return _OWN_MATERIAL_KEYS + tuple(k for entry in _MATERIAL.values() for k in entry.keys)
+
+
+# The reader's own keys (scenefile.py reads them); registered ones may not take their names.
+_OWN_TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
+                 "line_color", "views", "view", "geometry", "light", "keep_aspect",
+                 "rasterizer", "renderer", "crease_angle", "tone", "transparency")
+_OWN_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
+_OWN_MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os",
+                      "kr", "kt", "ior",              # Whitted's global terms
+                      "emission", "two_sided")        # area lights (radiosity, path tracing)
