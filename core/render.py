@@ -108,33 +108,23 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         fill(frame.color, scene.background)
         return frame
     draw = renderer.function()
-    if (settings.transparency != "off" and settings.renderer in TRANSPARENT_WHEN_ASKED
-            and any(m.material.kt > 0 for m in scene.meshes)):   # issue 18: k_t > 0 laid over
-        from core.shading.transparency import with_transparency
+    if (settings.transparency != "off" and renderer.transparency
+            and any(m.material.kt > 0 for m in scene.meshes)):   # k_t > 0 laid over the picture
+        from core.effects.transparency import with_transparency
         draw = with_transparency(draw)
-    if settings.depth_cue:                    # issue 18: any renderer's picture, cued by depth
-        from core.shading.depth_cue import depth_cued
+    if settings.depth_cue:                    # any renderer's picture, cued by its depth
+        from core.effects.depth_cue import depth_cued
         draw = depth_cued(draw)
     if settings.samples == 1 or renderer.samples_itself:
         draw(scene, view, settings, frame, context, Timer(frame.stats, inspect))
     else:
         _supersample(draw, scene, view, settings, frame, context, inspect)
-    _say_what_is_not_drawn(scene, renderer.name, frame.stats, settings.transparency,
+    _say_what_is_not_drawn(scene, renderer, frame.stats, settings.transparency,
                            settings.shading)
     return frame
 
 
-GLOBAL_ILLUMINATION = ("radiosity", "pathtrace")
-# Renderers that follow reflected and refracted rays (k_r, k_t); the ones that lay k_t over
-# the opaque picture when asked (core.shading.transparency).
-RECURSIVE = ("raytrace", "pathtrace")
-TRANSPARENT_WHEN_ASKED = ("zbuffer", "bsp", "depth-sort")
-# Renderers that shade through the registered shaders (core.shading), depth shading included;
-# the others light every surface with the model.
-REGISTERED_SHADERS = ("zbuffer", "bsp", "depth-sort")
-
-
-def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict,
+def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,
                            transparency: str = "off", shading: str = "") -> None:
     """Add to ``stats["not drawn"]`` what of the scene this renderer leaves out by design:
     the local renderers take no light from area emitters, and draw mirrors (k_r) without
@@ -144,28 +134,36 @@ def _say_what_is_not_drawn(scene: Scene, renderer: str, stats: dict,
     from core.texture.material import maps_of
     notes = stats.setdefault("not drawn", [])
     said = []                           # meshes of one name (a checker's two) say it once
-    if shading == "depth" and renderer not in REGISTERED_SHADERS and scene.meshes:
-        said.append(f"depth shading (the height colour map): {renderer} lights the surfaces "
-                    f"with the illumination model instead; zbuffer, bsp and depth-sort draw it")
+    name_of = renderer.name
+    if shading == "depth" and not renderer.shaders and scene.meshes:
+        said.append(f"depth shading (the height colour map): {name_of} lights the surfaces "
+                    f"with the illumination model instead; {_who('shaders')} draw it")
     for mesh in scene.meshes:
         name = getattr(mesh, "name", None) or "a mesh"
-        if renderer not in GLOBAL_ILLUMINATION and any(c > 0 for c in mesh.material.emission):
-            said.append(f"the light of the emitter ({name}): only radiosity and pathtrace "
-                         f"light a scene with it")
-        elif renderer in GLOBAL_ILLUMINATION and maps_of(mesh.material):
-            said.append(f"texture maps ({name}): {renderer} uses the material's own colour")
-        if renderer not in RECURSIVE and mesh.material.kr > 0:
-            said.append(f"the reflection in the mirror ({name}): only raytrace and pathtrace "
-                         f"follow reflected rays")
-        if renderer not in RECURSIVE and mesh.material.kt > 0 and not (
-                renderer in TRANSPARENT_WHEN_ASKED and transparency != "off"):
+        if not renderer.emitters and any(c > 0 for c in mesh.material.emission):
+            said.append(f"the light of the emitter ({name}): only {_who('emitters')} "
+                        f"light a scene with it")
+        elif not renderer.textures and maps_of(mesh.material):
+            said.append(f"texture maps ({name}): {name_of} uses the material's own colour")
+        if not renderer.recursive and mesh.material.kr > 0:
+            said.append(f"the reflection in the mirror ({name}): only {_who('recursive')} "
+                        f"follow reflected rays")
+        if not renderer.recursive and mesh.material.kt > 0 and not (
+                renderer.transparency and transparency != "off"):
             said.append(f"the transparency of {name} (k_t > 0): drawn opaque"
                          + (" (transparency interpolated or screen-door shows it: "
                             "--transparency, or the Render menu)"
-                            if renderer in TRANSPARENT_WHEN_ASKED else ""))
+                            if renderer.transparency else ""))
     for note in said:
         if note not in notes:
             notes.append(note)
+
+
+def _who(capability: str) -> str:
+    """The renderers that can do ``capability``, as a phrase: "zbuffer, bsp and depth-sort"."""
+    from core.registry import names_that
+    names = names_that(capability)
+    return " and ".join(n for n in (", ".join(names[:-1]), names[-1]) if n) if names else "none"
 
 
 def _why_not(scene: Scene, view: View | None, settings: RenderSettings,

@@ -51,10 +51,8 @@ SOLVERS = ("progressive", "gauss-seidel")
 # The ray tracer's shadow rays (core.raytrace.whitted): the notes' options.
 SHADOW_MODES = ("off", "background", "object", "transmit")
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
-SCENE_RENDERERS = ("zbuffer", "raycast", "raytrace", "radiosity", "pathtrace", "bsp",
-                   "depth-sort")   # a scene file's `renderer` (core.renderers)
 BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
-TRANSPARENCIES = ("off", "interpolated", "screen-door")   # core.shading.transparency.MODES
+TRANSPARENCIES = ("off", "interpolated", "screen-door")   # core.effects.transparency.MODES
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
@@ -112,12 +110,12 @@ class RenderSettings:
     # the painting order to paint (None: all).
     bsp_root: str = "fewest-splits"
     paint_first: int | None = None
-    # Depth cueing (issue 18; core.shading.depth_cue) on any renderer, with the scene's
+    # Depth cueing (issue 18; core.effects.depth_cue) on any renderer, with the scene's
     # [depth_cue] parameters (on by default for a scene that has the table).
     depth_cue: bool = False
     # Depth shading's scalar (core.shading.depth.MODES): "height" (world y) | "view" (eye distance).
     depth_shading: str = "height"
-    # Transparency of materials with k_t > 0 in the z-buffer family (core.shading.transparency):
+    # Transparency of materials with k_t > 0 in the z-buffer family (core.effects.transparency):
     # "off" (drawn opaque, as before) | "interpolated" | "screen-door".
     transparency: str = "off"
     # Phong's pixel step (core.shading.phong_wide): "float32", the model over each row in

@@ -8,5 +8,5 @@ panel becomes the file's first view before the animation's keys name views.
 """
 
 from core.texture import scenekeys  # noqa: F401  (textures of a material; the demo's panel)
-from core.shading import depth_cue  # noqa: F401  ([depth_cue])
+from core.effects import depth_cue  # noqa: F401  ([depth_cue])
 from core.animation import keys  # noqa: F401  ([animation], [[key]], [[emitter]])

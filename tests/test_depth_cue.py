@@ -12,7 +12,7 @@ from core.render import render
 from core.scene.formats import ReaderError, read_scene_file
 from core.scene.model import Light, Material, Mesh, Scene
 from core.settings import RenderSettings
-from core.shading.depth_cue import DepthCue, scale_factor
+from core.effects.depth_cue import DepthCue, scale_factor
 
 # Three squares facing the viewer at view depths -2, -5, -8 (along the VPN from the VRP), lit
 # by ambient light only (k_a = 1, I_a = 1: I = O_d = 0.8 exactly, on every renderer). The cue

@@ -78,3 +78,74 @@ def test_no_import_cycles_between_modules():
         if node not in state:
             visit(node)
     assert cycles == []
+
+
+# -- the order inside core ---------------------------------------------------------------
+# Each package of core, lowest first, as docs/architecture.md lists them; a module may import
+# from its own package, from a package of its own rank, or from one of a lower rank. Packages
+# of one rank may use each other's public parts (the renderers: the z-buffer draws radiosity's
+# elements, the path tracer reads radiosity's patches).
+CORE_RANKS = {
+    "core.jit": 0, "core.vectors": 0, "core.transforms": 0, "core.settings": 0, "core.paths": 0,
+    "core.registry": 0,
+    "core.camera": 1,
+    "core.scene": 2,
+    "core.context": 3,
+    "core.pipeline": 4,
+    "core.shading": 5,
+    "core.texture": 6,
+    "core.raytrace": 7, "core.visibility": 7,
+    "core.effects": 8,
+    "core.plan": 9,
+    "core.renderers": 10, "core.radiosity": 10, "core.pathtrace": 10,
+    "core.render": 11,
+    "core.inspect": 12, "core.animation": 12, "core.systems": 12, "core": 12,
+    "core.analysis": 13,
+}
+
+
+def core_package(module: str) -> str:
+    parts = module.split(".")
+    return ".".join(parts[:2]) if len(parts) > 1 else parts[0]
+
+
+def upward_imports() -> list[tuple[str, str]]:
+    """(module, imported module) where core's order is broken (imports in functions too)."""
+    wrong = []
+    for a, targets in import_graph().items():
+        if not a.startswith("core"):
+            continue
+        pa = core_package(a)
+        for b in targets:
+            pb = core_package(b)
+            if b.startswith("core") and pa != pb and CORE_RANKS[pb] > CORE_RANKS[pa]:
+                wrong.append((a, b))
+    return sorted(wrong)
+
+
+def test_every_core_package_has_a_rank():
+    packages = {core_package(m) for m in import_graph() if m.startswith("core")}
+    assert packages <= set(CORE_RANKS), sorted(packages - set(CORE_RANKS))
+    assert set(CORE_RANKS) <= packages, sorted(set(CORE_RANKS) - packages)
+
+
+def test_core_packages_import_only_their_own_rank_or_below():
+    assert upward_imports() == []
+
+
+def private_imports() -> list[tuple[str, str, str]]:
+    """(module, from module, name): a name with a leading underscore imported from another
+    package (a helper two packages share is public in the one that owns it)."""
+    found = []
+    for name, path in _modules().items():
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+                if core_package(node.module) == core_package(name):
+                    continue
+                found += [(name, node.module, a.name) for a in node.names
+                          if a.name.startswith("_") and node.module.split(".")[0] in ("core", "app")]
+    return sorted(found)
+
+
+def test_no_private_name_is_imported_across_packages():
+    assert private_imports() == []

@@ -210,7 +210,7 @@ def test_no_order_of_whole_polygons_exists(name, monkeypatch):
 # ------------------------------------------------------------- looking at the painting
 
 def test_paint_first_overdraw_and_pixel_history():
-    from core.renderers.painters import inspect_pixel, overdraw
+    from core.inspect.painters import inspect_pixel, overdraw
     scene = _scene("interpenetrating.tri")
     view = scene.views[0]
     context = RenderContext()

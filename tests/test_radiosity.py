@@ -253,7 +253,7 @@ def test_every_view_draws_from_one_solution():
 
 def test_inspect_pixel_matches_the_picture():
     from core.context import RenderContext
-    from core.radiosity.renderer import inspect_pixel
+    from core.inspect.radiosity import inspect_pixel
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
     settings = RenderSettings.for_scene(scene, renderer="radiosity", size=(48, 48),
                                         max_elements=100, hemicube_resolution=16)

@@ -18,7 +18,8 @@ import pytest
 
 from tools import need_module
 
-from core.raytrace import bvh, camera, intersect
+from core.camera.rays import primary_rays
+from core.raytrace import bvh, intersect
 from core.scene.normals import face_normals
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -176,7 +177,7 @@ def _compare_with_embree(positions, triangles, view, size, light):
     """Primary and shadow rays of every pixel of ``view``, ours against Embree's."""
     tree, _ = bvh.build(positions, triangles)
     oracle = _embree_scene(positions, triangles)
-    origins, directions, inside = camera.tile_rays(view, "perspective", *size, [[0.5, 0.5]])
+    origins, directions, inside = primary_rays(view, "perspective", *size, [[0.5, 0.5]])
     origins, directions = origins[inside], directions[inside]
     # Both tracers get the same (float32-representable) rays.
     origins = origins.astype(np.float32).astype(np.float64)

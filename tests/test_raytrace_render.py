@@ -287,17 +287,30 @@ def test_primitive_errors_name_the_key():
             read_scene_file(text, "prim.toml")
 
 
-def test_tile_rays_are_the_cameras_primary_rays():
-    from core.camera.rays import primary_rays
-    from core.raytrace.camera import tile_rays
+def test_camera_rays_are_the_primary_rays_between_the_front_and_back_planes():
+    # One camera_rays for the tracer, the path tracer and radiosity's display: the camera's
+    # primary rays; perspective ones keep their origin, parallel ones start on the front
+    # plane (n = F along VPN) and end on the back one; outside the viewport t_min is inf.
+    from core.camera.rays import camera_rays, primary_rays
+    from core.camera.view import vrc_basis
     from core.scene.formats import load_scene
     scene = load_scene(str(SCENES / "whitted.toml"))
+    view = scene.views[0]
     offsets = [[0.25, 0.25], [0.75, 0.25], [0.25, 0.75], [0.75, 0.75]]
+    n_axis = vrc_basis(view)[2]
     for projection in ("perspective", "parallel"):
-        ours = tile_rays(scene.views[0], projection, 40, 30, offsets)
-        theirs = primary_rays(scene.views[0], projection, 40, 30, offsets)
-        for a, b in zip(ours, theirs):
-            assert np.array_equal(a, b)
+        o, d, inside = primary_rays(view, projection, 40, 30, offsets, True)
+        origins, directions, t_min, t_max = camera_rays(view, projection, 40, 30, offsets, True)
+        assert np.array_equal(directions, d) and not inside.all() and inside.any()
+        assert np.all(np.isinf(t_min[~inside]))
+        if projection == "perspective":
+            assert np.array_equal(origins, o) and np.all(t_min[inside] >= 0)
+        else:
+            n_start = (origins[inside] - np.asarray(view.vrp)) @ n_axis
+            np.testing.assert_allclose(n_start, view.front, atol=1e-9)
+            n_end = (origins[inside] + t_max[inside, None] * directions[inside]
+                     - np.asarray(view.vrp)) @ n_axis
+            np.testing.assert_allclose(n_end, view.back, atol=1e-9)
 
 
 def test_registered_renderer_through_the_front_door():

@@ -764,8 +764,8 @@ def _embree_run(scene, origins, directions):
         from embreex.mesh_construction import TriangleMesh
     except ImportError:
         return None
-    from core.raytrace.geometry import _traced_meshes
-    meshes = _traced_meshes(scene)
+    from core.raytrace.geometry import traced_meshes
+    meshes = traced_meshes(scene)
     if not meshes:
         return None                                      # spheres and planes only
     corners = np.concatenate([m.positions[m.triangles] for m in meshes]).astype(np.float32)

@@ -15,12 +15,6 @@ import numpy as np
 from core.animation.draw import draw_particles
 
 
-def settings_for(animation, **overrides):
-    """The render settings of the animation's scene, with ``overrides`` (size, samples, …)."""
-    from core import RenderSettings
-    return RenderSettings.for_scene(animation.scene, **overrides)
-
-
 def render_at(animation, t: float, settings, context=None, view_index: int = 0,
               paths: bool = False):
     """The frame at time ``t`` of ``scene_at(t)``, seen through its view ``view_index`` (0: the

@@ -120,3 +120,35 @@ def fill_bytes(color: np.ndarray, rgb8) -> None:
         return
     color[0] = rgb8
     color[1:] = color[0]
+
+
+def viewport(window: tuple[float, float, float, float], width: int, height: int,
+             keep_aspect: bool = False):
+    """The device rectangle the view window maps onto: ``(x_min, x_max, y_min, y_max)`` pixels.
+
+    The course's mapping (the notes: "if Window + viewport have different dimensions, a
+    scaling is done"; M_vv3dv) is the default: the window fills the whole framebuffer, each
+    axis scaled on its own, so a window whose aspect differs from the framebuffer's is
+    stretched. ``keep_aspect`` instead gives the largest whole-pixel rectangle of the window's
+    aspect, centred (letterboxed), so that a circle stays round.
+    """
+    if not keep_aspect:
+        return 0.0, float(width), 0.0, float(height)
+    u_min, u_max, v_min, v_max = window
+    aspect = (u_max - u_min) / (v_max - v_min)
+    if width >= height * aspect:
+        w, h = max(1, min(width, round(height * aspect))), height
+    else:
+        w, h = width, max(1, min(height, round(width / aspect)))
+    x0, y0 = (width - w) // 2, (height - h) // 2
+    return float(x0), float(x0 + w), float(y0), float(y0 + h)
+
+
+def sample_viewport(vp, pixel_offset):
+    """The viewport moved so that the sample at ``pixel_offset`` (x right, y down, in its
+    pixel) lands where the scan conversion samples, the pixel centre."""
+    dx, dy = 0.5 - pixel_offset[0], pixel_offset[1] - 0.5       # device y runs up
+    if dx == 0.0 and dy == 0.0:
+        return vp
+    x0, x1, y0, y1 = vp
+    return x0 + dx, x1 + dx, y0 + dy, y1 + dy

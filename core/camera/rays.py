@@ -3,7 +3,7 @@
 The sample at device point (x, y) (x right, y **up**, pixel (i, j) spanning [i, i+1] x [j, j+1])
 looks through the view-plane point ``VRP + u·u_vrc + v·v_vrc`` with
 ``u = u_min + (x − x0)/(x1 − x0)·(u_max − u_min)`` (and v alike) over the viewport
-``(x0, x1, y0, y1)`` of :func:`core.pipeline.project.viewport` — the same mapping the z-buffer's
+``(x0, x1, y0, y1)`` of :func:`core.camera.film.viewport` — the same mapping the z-buffer's
 M_vv3dv makes, run backwards. Perspective rays start at the PRP (in world coordinates) and are
 unit vectors; parallel rays start on the view plane and run along the unit DOP. A sample
 outside the viewport sees nothing. What a ray may hit is limited by the front and back planes,
@@ -11,7 +11,10 @@ outside the viewport sees nothing. What a ray may hit is limited by the front an
 
 - :func:`pack_camera` → a float array that numba kernels take (``CAMERA_*`` name its slots);
 - :func:`camera_ray` (numba) → one ray for one device point;
-- :func:`primary_rays` (numpy entry) → all rays for a frame's pixel samples.
+- :func:`primary_rays` (numpy entry) → all rays for a frame's pixel samples;
+- :func:`clip_interval` → the front and back planes as each ray's interval of t;
+- :func:`camera_rays` → both: what every ray-based renderer traces (the Whitted tracer, the
+  path tracer, radiosity's ray-cast display).
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ import numpy as np
 
 from core.camera.view import View, check, eye_from_view, vrc_basis
 from core.jit import njit, prange
-from core.pipeline.project import viewport
+from core.camera.film import viewport
 from core.vectors import unit3
 
 # Slots of a packed camera.
@@ -114,3 +117,45 @@ def primary_rays(view: View, projection: str, width: int, height: int,
     _rays(pack_camera(view, projection, width, height, keep_aspect), int(height), int(row0),
           int(row1), int(col0), int(col1), offsets, origins, directions, inside)
     return origins, directions, inside
+
+
+def clip_interval(view: View, origins: np.ndarray, directions: np.ndarray,
+                  from_origin: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """``(t_min, t_max)`` per ray: the part of the ray between the back and front planes.
+
+    ``from_origin``: only ``t >= 0`` (perspective: nothing behind the PRP is seen). A parallel
+    projection sees the whole line through the view-plane point (``from_origin=False``):
+    objects between the view plane and F are in front of it."""
+    _, _, n_axis = vrc_basis(view)
+    n0 = (origins - np.asarray(view.vrp, dtype=np.float64)) @ n_axis    # n of the origin
+    dn = directions @ n_axis                                           # dn/dt
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_front = (view.front - n0) / dn
+        t_back = (view.back - n0) / dn
+    t_min = np.minimum(t_front, t_back)
+    if from_origin:
+        t_min = np.maximum(t_min, 0.0)
+    t_max = np.maximum(t_front, t_back)
+    # A ray parallel to the planes: all of it if it runs between them, none of it otherwise.
+    parallel = dn == 0.0
+    between = (view.back <= n0) & (n0 <= view.front)
+    t_min[parallel] = np.where(between[parallel], 0.0, np.inf)
+    t_max[parallel] = np.where(between[parallel], np.inf, -np.inf)
+    return t_min, t_max
+
+
+def camera_rays(view: View, projection: str, width: int, height: int, offsets=((0.5, 0.5),),
+                keep_aspect: bool = False, rows=None, cols=None):
+    """``(origins, directions, t_min, t_max)``: :func:`primary_rays` with the part of each
+    that lies between the front and back planes. A parallel ray starts on the front plane,
+    so that t >= 0 along every ray; a sample outside the viewport has ``t_min = inf``."""
+    origins, directions, inside = primary_rays(view, projection, width, height, offsets,
+                                               keep_aspect, rows, cols)
+    perspective = projection == "perspective"
+    t_min, t_max = clip_interval(view, origins, directions, from_origin=perspective)
+    if not perspective:
+        start = np.where(inside & np.isfinite(t_min), t_min, 0.0)
+        origins = origins + start[:, None] * directions
+        t_min, t_max = t_min - start, t_max - start
+    t_min[~inside] = np.inf
+    return origins, directions, t_min, t_max

@@ -21,9 +21,15 @@ from core.camera.view import ViewError, problems
 from core.context import DEFAULT_CONTEXT
 from core.renderers import get_renderer
 
-# Stand-ins for renderers whose module defines no inspect_pixel (yet): theirs wins.
+# The inspectors that live here, for renderers whose module defines none: those that draw the
+# frame through the front door (the painters', radiosity's) sit above core.render, and the
+# records that follow a renderer's kernels from outside (raytrace, raycast). A renderer's
+# own inspect_pixel wins.
 FALLBACKS = {"raytrace": "core.inspect.raytrace:inspect_pixel",
-             "raycast": "core.inspect.raycast:inspect_pixel"}
+             "raycast": "core.inspect.raycast:inspect_pixel",
+             "bsp": "core.inspect.painters:inspect_pixel",
+             "depth-sort": "core.inspect.painters:inspect_pixel",
+             "radiosity": "core.inspect.radiosity:inspect_pixel"}
 
 
 class NotInspectable(ValueError):

@@ -50,10 +50,10 @@ def buffer(scene, view, settings, name: str, context=None) -> tuple[np.ndarray, 
     uint8 picture. Raises :class:`NotInspectable` when the renderer keeps no such buffer."""
     if name not in BUFFERS:
         raise NotInspectable(f"buffer must be one of {', '.join(BUFFERS)}, not {name!r}")
-    module = renderer_module(settings.renderer)
     values = None
-    if name == "overdraw" and hasattr(module, "overdraw"):        # painter's renderers
-        values = module.overdraw(scene, view, settings, context)
+    if name == "overdraw" and settings.renderer in ("bsp", "depth-sort"):   # the painters
+        from core.inspect.painters import overdraw
+        values = overdraw(scene, view, settings, context)
     else:
         provider = _provider(settings.renderer)
         if provider is not None:

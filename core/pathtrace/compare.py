@@ -17,11 +17,11 @@ def surface_ids(scene, view, projection: str, width: int, height: int,
                 with_meshes: bool = False):
     """(H, W) int64: the planar surface seen at each pixel centre (-1: nothing); with
     ``with_meshes`` also (H, W) the index of its mesh among those with triangles."""
-    from core.pathtrace.renderer import camera_rays, pack
+    from core.camera.rays import camera_rays
+    from core.pathtrace.renderer import pack
     from core.raytrace.bvh import intersect_rays
     packed = pack(scene)
-    origins, directions, t_min, t_max = camera_rays(view, projection, width, height,
-                                                    (0.5, 0.5), False)
+    origins, directions, t_min, t_max = camera_rays(view, projection, width, height)
     prim, _, _, _ = intersect_rays(packed.bvh, origins, directions, t_min, t_max)
     normal = np.round(packed.normal, 6)
     plane = np.round(np.einsum("ij,ij->i", normal, packed.corners[:, 0]) / packed.scale, 6)

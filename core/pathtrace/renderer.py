@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.camera.film import sample_offsets
+from core.camera.rays import camera_rays
 from core.pathtrace import kernel
 from core.radiosity.mesh import check_scene, has_light, reflectance
 from core.radiosity.tone import tone_map
@@ -121,20 +122,6 @@ def trace(packed: Packed, origins, directions, t_min, t_max, seed: int) -> tuple
     return out, int(bounces.sum())
 
 
-def camera_rays(view, projection, width, height, offset, keep_aspect, rows=None, cols=None):
-    from core.raytrace.camera import clip_interval, tile_rays
-    origins, directions, inside = tile_rays(view, projection, width, height, [offset],
-                                            rows=rows, cols=cols, keep_aspect=keep_aspect)
-    perspective = projection == "perspective"
-    t_min, t_max = clip_interval(view, origins, directions, from_origin=perspective)
-    if not perspective:
-        start = np.where(inside & np.isfinite(t_min), t_min, 0.0)
-        origins = origins + start[:, None] * directions
-        t_min, t_max = t_min - start, t_max - start
-    t_min[~inside] = np.inf
-    return origins, directions, t_min, t_max
-
-
 def pass_offsets(samples: int, seed: int) -> np.ndarray:
     """One film offset per pass: jittered strata (a single pass: the pixel centre)."""
     return sample_offsets(samples, "jittered" if samples > 1 else "regular", seed)
@@ -152,7 +139,7 @@ def render_passes(scene, view, settings, context, first: int = 0, count: int | N
     total = np.zeros((height * width, 3))
     bounces, began = 0, time.perf_counter()
     for k in range(first, first + count):
-        rays = camera_rays(view, settings.projection, width, height, offsets[k],
+        rays = camera_rays(view, settings.projection, width, height, [offsets[k]],
                            settings.keep_aspect)
         radiance, b = trace(packed, *rays, seed=settings.seed * 1_000_003 + k)
         total += radiance
@@ -206,7 +193,7 @@ def inspect_pixel(scene, view, settings, x, y, context) -> dict:
     total = np.zeros(3)
     path = []
     for k, offset in enumerate(offsets):
-        o, d, t0, t1 = camera_rays(view, settings.projection, width, height, offset,
+        o, d, t0, t1 = camera_rays(view, settings.projection, width, height, [offset],
                                    settings.keep_aspect, rows=(y, y + 1), cols=(x, x + 1))
         rays = np.zeros((16, kernel.RECORD_WIDTH))
         r, g, b, depth = kernel.trace_recorded(

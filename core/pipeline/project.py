@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.camera.film import viewport  # noqa: F401  (the device rectangle: the film's)
 from core.transforms import scale, translate
 
 
@@ -43,28 +44,6 @@ def m_vv3dv(x_min, x_max, y_min, y_max, z_min=-1.0, z_max=0.0) -> np.ndarray:
     return (translate(x_min, y_min, z_min)
             @ scale((x_max - x_min) / 2, (y_max - y_min) / 2, z_max - z_min)
             @ translate(1, 1, 1))
-
-
-def viewport(window: tuple[float, float, float, float], width: int, height: int,
-             keep_aspect: bool = False):
-    """The device rectangle the view window maps onto: ``(x_min, x_max, y_min, y_max)`` pixels.
-
-    The course's mapping (the notes: "if Window + viewport have different dimensions, a
-    scaling is done"; M_vv3dv) is the default: the window fills the whole framebuffer, each
-    axis scaled on its own, so a window whose aspect differs from the framebuffer's is
-    stretched. ``keep_aspect`` instead gives the largest whole-pixel rectangle of the window's
-    aspect, centred (letterboxed), so that a circle stays round.
-    """
-    if not keep_aspect:
-        return 0.0, float(width), 0.0, float(height)
-    u_min, u_max, v_min, v_max = window
-    aspect = (u_max - u_min) / (v_max - v_min)
-    if width >= height * aspect:
-        w, h = max(1, min(width, round(height * aspect))), height
-    else:
-        w, h = width, max(1, min(height, round(width / aspect)))
-    x0, y0 = (width - w) // 2, (height - h) // 2
-    return float(x0), float(x0 + w), float(y0), float(y0 + h)
 
 
 def divide_by_w(homogeneous: np.ndarray) -> np.ndarray:

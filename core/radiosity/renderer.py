@@ -11,8 +11,8 @@ are radiosities clamped to [0, 1] (``scene.tone`` "srgb": through the sRGB curve
 Display meshes: the two-sided pairs are one mesh marked closed, so back-face culling shows
 each side's own copy; the one-sided elements another, drawn from both sides.
 
-``inspect_pixel`` tells what one pixel shows: its element, emission, reflectance, radiosity
-and the vertex values interpolated there.
+What one pixel shows (its element, emission, reflectance, radiosity and the vertex values
+interpolated there) is told by :mod:`core.inspect.radiosity`.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ SHADER = "radiosity"
 
 
 def _register_shader() -> None:
-    from core.shading.gouraud import _resolve_gouraud
+    from core.shading.gouraud import resolve_gouraud
     from core.shading.registry import Shader, register_shader
     from core.shading.shade import concatenated, covered_spans
 
@@ -39,7 +39,7 @@ def _register_shader() -> None:
         s.computed.append("radiosity at vertices")
 
     def pixel(s, vis, triangles, attrs, source, background8, out) -> None:
-        _resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
+        resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
                          np.ascontiguousarray(vis.b1, dtype=np.float64),
                          np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
                          triangles, attrs, out)
@@ -94,7 +94,7 @@ def use_solution(scene, solution: Solution, context) -> None:
     cache.pop("radiosity display", None)
 
 
-def _display(scene, solution, context) -> Scene:
+def display(scene, solution, context) -> Scene:
     cache = context.cache(scene)
     held = cache.get("radiosity display")
     if held is None or held[0] is not solution:
@@ -106,7 +106,8 @@ def _display(scene, solution, context) -> Scene:
 def draw(scene, view, settings, frame, context, timer) -> None:
     """Fill ``frame`` with the radiosity solution of ``scene`` seen through ``view``."""
     from core.pipeline import project
-    from core.renderers.zbuffer import _sample_viewport, draw_triangles
+    from core.camera.film import sample_viewport
+    from core.renderers.zbuffer import draw_triangles
     if not has_light(scene):
         fill(frame.color, (0.0, 0.0, 0.0))
         frame.stats.setdefault("warnings", []).append(
@@ -122,10 +123,10 @@ def draw(scene, view, settings, frame, context, timer) -> None:
         frame.message = f"{scene.name}: cannot solve for radiosity: {error}"
         return
     timer.lap("radiosity solution")
-    shown = _display(scene, solution, context)
+    shown = display(scene, solution, context)
     n, z_min = context.normalizing_transform(view, settings.projection)
     height, width = frame.color.shape[:2]
-    vp = _sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
+    vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
     draw_triangles(frame, shown, view, settings.projection, SHADER, n, z_min, vp, context,
                    timer, settings)
@@ -133,51 +134,16 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     frame.stats["computed"].append("radiosity")
 
 
-def inspect_pixel(scene, view, settings, x, y, context) -> dict:
-    """The element seen at image pixel (x, y): its emission, reflectance, radiosity, and the
-    vertex values interpolated there (the pixel's colour)."""
-    from core.render import render
-    frame = render(scene, view, settings, context)
-    record = {"renderer": "radiosity", "pixel": [int(x), int(y)],
-              "color": [int(c) for c in frame.color[y, x]]}
-    if frame.message:
-        record["message"] = frame.message
-        return record
-    vis = context.buffer("visibility", (settings.size[0], settings.size[1]), lambda: None)
-    solution = context.cache(scene)["radiosity solution"]
-    shown = _display(scene, solution, context)
-    record["solution"] = {k: v for k, v in solution.stats.items() if k != "rounds"}
-    t = int(vis.tri[y, x]) if vis is not None else -1
-    if t < 0:
-        record["hit"] = None
-        return record
-    element = _element_at(scene, shown, view, settings, context, x, y)
-    if element is None:
-        record["hit"] = None
-        return record
-    e = solution.elements
-    record.update({"element": int(element), "patch": int(e.patch[element]),
-                   "mesh": scene.meshes[int(e.mesh[element])].name,
-                   "area": float(e.area[element]),
-                   "emission": e.emission[element].tolist(), "reflectance": e.rho[element].tolist(),
-                   "radiosity": solution.radiosity[element].tolist(),
-                   "ambient": solution.ambient[element].tolist()})
-    w1, w2 = float(vis.b1[y, x]), float(vis.b2[y, x])
-    record["barycentric"] = [1.0 - w1 - w2, w1, w2]
-    return record
-
-
 def radiosity_image(solution: Solution, view, projection: str, width: int, height: int
                     ) -> np.ndarray:
     """(H, W, 3) float: the displayed radiosity (vertex values interpolated, no ambient
     term, no tone) at each pixel centre, found by casting a ray per pixel into the elements
     (the oracle tests compare it with the path tracer's radiance)."""
-    from core.pathtrace.renderer import camera_rays
+    from core.camera.rays import camera_rays
     from core.raytrace.bvh import build, intersect_rays
     e = solution.elements
     positions, triangles, at_vertex = vertex_values(e, solution.radiosity)
-    origins, directions, t_min, t_max = camera_rays(view, projection, width, height,
-                                                    (0.5, 0.5), False)
+    origins, directions, t_min, t_max = camera_rays(view, projection, width, height)
     # one-sided elements only: of a coplanar two-sided pair the ray could take either copy
     keep = np.flatnonzero(~e.two_sided)
     bvh, _ = build(positions, triangles[keep])
@@ -187,26 +153,3 @@ def radiosity_image(solution: Solution, view, projection: str, width: int, heigh
              + v[:, None] * at_vertex[tri[:, 2]])
     image[prim < 0] = 0.0
     return image.reshape(height, width, 3)
-
-
-def _element_at(scene, shown, view, settings, context, x, y):
-    """The element drawn at (x, y): a ray through the pixel centre to the nearest display
-    triangle (the z-buffer and the ray see the same surface)."""
-    from core.camera.rays import primary_rays
-    from core.raytrace.bvh import build, intersect_rays
-    origins, directions, inside = primary_rays(view, settings.projection, settings.size[0],
-                                               settings.size[1], np.array([[0.5, 0.5]]),
-                                               settings.keep_aspect, (y, y + 1), (x, x + 1))
-    positions = np.concatenate([m.positions for m in shown.meshes])
-    offsets = np.cumsum([0] + [len(m.positions) for m in shown.meshes])
-    triangles = np.concatenate([m.triangles + offsets[i] for i, m in enumerate(shown.meshes)])
-    rows = np.concatenate([m.element_rows for m in shown.meshes])
-    # Of a two-sided pair (coplanar) only the copy facing the ray can be the one drawn.
-    corners = positions[triangles]
-    normal = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    two = np.concatenate([np.full(len(m.triangles), m.closed) for m in shown.meshes])
-    keep = np.flatnonzero(~two | (normal @ directions[0] < 0.0))
-    triangles, rows = triangles[keep], rows[keep]
-    bvh, _ = build(positions, triangles)
-    prim, _, _, _ = intersect_rays(bvh, origins, directions)
-    return None if prim[0] < 0 else rows[prim[0]]

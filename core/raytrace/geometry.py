@@ -87,7 +87,7 @@ class Packing(NamedTuple):
 _cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 
-def _traced_meshes(scene) -> list:
+def traced_meshes(scene) -> list:
     return [m for m in scene.meshes if m.tessellates is None
             and len(m.triangles)]
 
@@ -109,7 +109,7 @@ def pack(scene) -> Packing:
 
     Raises ValueError (naming the mesh or primitive) for a material the tracer cannot use.
     """
-    meshes = _traced_meshes(scene)
+    meshes = traced_meshes(scene)
     spheres, planes = _primitives(scene)
     key = tuple(id(a) for m in meshes for a in (m, m.positions, m.triangles)) + tuple(
         id(p) for p in spheres + planes)
@@ -182,7 +182,7 @@ def _texturing(meshes, surfaces: int, positions, normals) -> Texturing:
     """The textured meshes' varyings and maps, packed as the z-buffer's textured shader packs
     them (the same filters then sample the same texels)."""
     from core.texture.material import maps_of
-    from core.texture.shaders import _mesh_varyings
+    from core.texture.shaders import mesh_varyings
     from core.texture.surface import VARYING_COLUMNS, pack_maps
     all_maps = [maps_of(m.material) for m in meshes]
     usable = [m if m is not None and m.demo is None else None for m in all_maps]
@@ -191,7 +191,7 @@ def _texturing(meshes, surfaces: int, positions, normals) -> Texturing:
         return Texturing(np.zeros((0, VARYING_COLUMNS)), maps, np.zeros((1, 4), np.float32),
                          np.array([[0, 1, 1]], np.int64), np.zeros((0, 3), np.int64))
     texels, levels, textures, rows = pack_maps(usable + [None] * (surfaces - len(meshes)))
-    varyings = np.concatenate([_mesh_varyings(m) for m in meshes])
+    varyings = np.concatenate([mesh_varyings(m) for m in meshes])
     attrs = np.ascontiguousarray(np.concatenate([normals, positions, varyings], axis=1))
     return Texturing(attrs, rows, texels, levels, textures)
 

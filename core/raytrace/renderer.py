@@ -21,8 +21,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.camera.rays import camera_rays, primary_rays
 from core.camera.view import View, check
-from core.raytrace import adaptive, bvh, camera, geometry, whitted
+from core.raytrace import adaptive, bvh, geometry, whitted
 from core.raytrace.optics import AIR, index_of_refraction
 from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
@@ -163,19 +164,9 @@ def trace_rays(setup: Setup, origins, directions, t_min, t_max,
 def primary(setup: Setup, row0: int, row1: int, col0: int, col1: int, offsets=None):
     """Primary rays of a tile, sample-major then row-major, and their [F, B] intervals
     (``offsets``: the samples in each pixel, default the setup's)."""
-    origins, directions, inside = camera.tile_rays(
-        setup.view, setup.projection, setup.width, setup.height,
-        setup.offsets if offsets is None else offsets,
-        rows=(row0, row1), cols=(col0, col1), keep_aspect=setup.keep_aspect)
-    perspective = setup.projection == "perspective"
-    t_min, t_max = camera.clip_interval(setup.view, origins, directions, from_origin=perspective)
-    if not perspective:
-        # Start each parallel ray on the front plane, so that t >= 0 along every ray.
-        start = np.where(inside & np.isfinite(t_min), t_min, 0.0)
-        origins = origins + start[:, None] * directions
-        t_min, t_max = t_min - start, t_max - start
-    t_min[~inside] = np.inf
-    return origins, directions, t_min, t_max
+    return camera_rays(setup.view, setup.projection, setup.width, setup.height,
+                       setup.offsets if offsets is None else offsets, setup.keep_aspect,
+                       (row0, row1), (col0, col1))
 
 
 def differentials(setup: Setup, row0: int, row1: int, col0: int, col1: int,
@@ -185,9 +176,8 @@ def differentials(setup: Setup, row0: int, row1: int, col0: int, col1: int,
     offsets = setup.offsets if offsets is None else offsets
 
     def rays(shift):
-        o, d, _ = camera.tile_rays(setup.view, setup.projection, setup.width, setup.height,
-                                   offsets + shift, rows=(row0, row1), cols=(col0, col1),
-                                   keep_aspect=setup.keep_aspect)
+        o, d, _ = primary_rays(setup.view, setup.projection, setup.width, setup.height,
+                               offsets + shift, setup.keep_aspect, (row0, row1), (col0, col1))
         return o, d
     o, d = rays(np.zeros(2))
     ox, dx = rays(np.array([1.0, 0.0]))
@@ -395,7 +385,7 @@ def _ray_record(scene, setup: Setup, row) -> dict:
 
 def _material_name(scene, s: int) -> str:
     """The name of surface row ``s`` (meshes, then spheres, then planes, as packed)."""
-    meshes = geometry._traced_meshes(scene)
+    meshes = geometry.traced_meshes(scene)
     if s < len(meshes):
         return f"mesh {meshes[s].name!r}"
     spheres, planes = geometry._primitives(scene)

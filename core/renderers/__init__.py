@@ -16,57 +16,31 @@ kernels) only when it is first used.
 
 from __future__ import annotations
 
-import importlib
-from dataclasses import dataclass
-from typing import Callable
+from core.registry import (_RENDERERS, Renderer, get_renderer, names_that,  # noqa: F401
+                           register_renderer, renderer_names, renderers, unregister_renderer)
 
-
-@dataclass(frozen=True)
-class Renderer:
-    name: str
-    target: str | Callable          # "package.module:function", or the function itself
-    samples_itself: bool = False    # True: it places the film's samples itself
-    description: str = ""
-
-    def function(self) -> Callable:
-        if callable(self.target):
-            return self.target
-        module, _, name = self.target.partition(":")
-        return getattr(importlib.import_module(module), name)
-
-
-_RENDERERS: dict[str, Renderer] = {}
-
-
-def register_renderer(name: str, target, samples_itself: bool = False,
-                      description: str = "") -> None:
-    """Make ``name`` a value of ``RenderSettings.renderer``."""
-    _RENDERERS[name] = Renderer(name, target, samples_itself, description)
-
-
-def get_renderer(name: str) -> Renderer:
-    if name not in _RENDERERS:
-        raise ValueError(f"renderer must be one of {', '.join(_RENDERERS)}, not {name!r}")
-    return _RENDERERS[name]
-
-
-def renderer_names() -> tuple[str, ...]:
-    return tuple(_RENDERERS)
-
-
+# The built-in renderers and what each can do (core/registry.py names the capabilities).
 register_renderer("zbuffer", "core.renderers.zbuffer:draw",
-                  description="the FvDFH viewing pipeline: clip, project, scan-line z-buffer")
+                  description="the FvDFH viewing pipeline: clip, project, scan-line z-buffer",
+                  label="Z-buffer", transparency=True, shaders=True)
 register_renderer("raycast", "core.renderers.raycast:draw", samples_itself=True,
-                  description="the analytic surfaces ray-cast exactly (the reference)")
+                  description="the analytic surfaces ray-cast exactly (the reference)",
+                  label="Ray cast (exact analytic surfaces)")
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
-                  description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)")
+                  description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
+                  label="Ray traced", recursive=True, progressive=True)
 register_renderer("radiosity", "core.radiosity.renderer:draw",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
-                              "refinement), drawn Gouraud by the z-buffer (core.radiosity)")
+                              "refinement), drawn Gouraud by the z-buffer (core.radiosity)",
+                  label="Radiosity", emitters=True, textures=False, progressive=True)
 register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
                   description="Kajiya's rendering equation by path tracing on the BVH "
-                              "(core.pathtrace)")
+                              "(core.pathtrace)",
+                  label="Path traced", emitters=True, recursive=True, textures=False,
+                  progressive=True)
 register_renderer("bsp", "core.renderers.painters:draw_bsp",
-                  description="a BSP tree built once in world space, painted back to front")
+                  description="a BSP tree built once in world space, painted back to front",
+                  label="BSP tree (painter's)", transparency=True, shaders=True)
 register_renderer("depth-sort", "core.renderers.painters:draw_depth_sort",
-                  description="Newell, Newell and Sancha's depth sort, painted back to front")
+                  description="Newell, Newell and Sancha's depth sort, painted back to front",
+                  label="Depth sort (Newell, painter's)", transparency=True, shaders=True)

@@ -19,7 +19,7 @@ threads arrays from one to the next and records what ran in ``frame.stats``:
 
 from __future__ import annotations
 
-from core.camera.film import fill, to_rgb8
+from core.camera.film import fill, sample_viewport, to_rgb8
 from core.pipeline import clip, project, raster_lines
 from core.transforms import apply
 
@@ -30,7 +30,7 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     projection, shading = settings.projection, settings.shading
     height, width = frame.color.shape[:2]
     n, z_min = context.normalizing_transform(view, projection)
-    vp = _sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
+    vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
     timer.lap("normalize")
     solid = shading != "wireframe" and scene.triangle_count > 0
@@ -50,25 +50,15 @@ def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
     :mod:`core.renderers.zbuffer_inspect`)."""
     from core.renderers.zbuffer_inspect import Stages, inspect_pixel as record
     return record(scene, view, settings, x, y, context,
-                  Stages(draw, draw_lines, _sample_viewport))
+                  Stages(draw, draw_lines, sample_viewport))
 
 
 def buffers(scene, view, settings, context=None, names=()) -> dict:
     """The buffer views of this frame (issue 22): depth, normal, triangle id, barycentrics,
     (u, v), MIP level, overdraw, as named in ``names``."""
     from core.renderers.zbuffer_inspect import Stages, buffers as views
-    return views(scene, view, settings, context, Stages(draw, draw_lines, _sample_viewport),
+    return views(scene, view, settings, context, Stages(draw, draw_lines, sample_viewport),
                  names)
-
-
-def _sample_viewport(vp, pixel_offset):
-    """The viewport moved so that the sample at ``pixel_offset`` (x right, y down, in its
-    pixel) lands where the scan conversion samples, the pixel centre."""
-    dx, dy = 0.5 - pixel_offset[0], pixel_offset[1] - 0.5       # device y runs up
-    if dx == 0.0 and dy == 0.0:
-        return vp
-    x0, x1, y0, y1 = vp
-    return x0 + dx, x1 + dx, y0 + dy, y1 + dy
 
 
 # From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,
@@ -89,7 +79,7 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         if len(edges) == 0:
             continue
         if len(edges) >= COMPILED_LINES_FROM:
-            from core.renderers import triangles  # noqa: F401 (one BLAS thread, see there)
+            from core.shading import stages  # noqa: F401 (one BLAS thread, see there)
             from core.pipeline.wireframe import draw_edges
             points = apply(n, mesh.positions)[:, :3]     # as the numpy path: the same pixels
             timer.lap("normalize")
@@ -117,7 +107,7 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     ``settings.rasterizer`` "scanline" the course's ET/AET algorithm scan-converts
     (screen-linear weights)."""
     rasterizer = settings.rasterizer if settings is not None else "edge"
-    from core.renderers import triangles as stages      # the compiled stages, on first use
+    from core.shading import stages      # the compiled stages, on first use
     from core.texture.shaders import shading_for        # issue 11: Phong of textured materials
     shading = shading_for(scene, shading)
     stats = frame.stats

@@ -165,7 +165,7 @@ def _capture(scene, view, settings, zbuffer: Stages) -> Capture:
 def _shade_input(scene, view, settings, mode):
     """The shading inputs of ``mode`` (surfaces, lights, eye, normals, texture maps), made
     lazily in a context of their own: nothing is lit, nothing the capture holds is touched."""
-    from core.renderers import triangles as stages
+    from core.shading import stages
     eye = stages.shade.eye_from_view(view, settings.projection)
     s = stages.shade.prepare(mode, scene, eye, context=RenderContext(), lazy=True)
     s.settings = settings

@@ -17,7 +17,7 @@ from core.shading.illumination import OD, TWO_SIDED, quantize
 from core.shading.terms import phong_terms
 from core.texture import sample as sampling
 from core.texture.surface import (BUMP_SCALE, COLOR, COLOR_SRGB, DPDU, DPDV, ENVIRONMENT, HEIGHT,
-                                  NORMAL, NORMAL_MAP, POSITION, REFLECTIVITY, UV, _lookup,
+                                  NORMAL, NORMAL_MAP, POSITION, REFLECTIVITY, UV, lookup,
                                   bumped_normal, encode_srgb, environment, mapped_normal,
                                   textured_pixel, unit3)
 from core.texture.tutorial import plane_constants, uv_at
@@ -27,7 +27,7 @@ FILTER_NAMES = {sampling.NEAREST: "nearest", sampling.BILINEAR: "bilinear",
 
 
 def textured_record(cap, x, y, corners, weights, face, mesh) -> dict:
-    from core.texture.shaders import _demo
+    from core.texture.shaders import demo_shade
     s, attrs = cap.shade, cap.arrays["clipped_attrs"]
     i0, i1, i2 = corners
     w0, w1, w2 = weights
@@ -39,7 +39,7 @@ def textured_record(cap, x, y, corners, weights, face, mesh) -> dict:
         from core.texture.bump_demo import DEMO_LIGHT, java_color_byte
         light = (s.lights[0, 1:4].copy() if len(s.lights) and s.lights[0, 0] == 0.0
                  else np.array(DEMO_LIGHT))
-        blue = _demo(attrs, i0, i1, i2, w0, w1, w2, s.demo, mesh, light)
+        blue = demo_shade(attrs, i0, i1, i2, w0, w1, w2, s.demo, mesh, light)
         return {"bump demo": {"blue": float(blue)}, "color": [0, 0, int(java_color_byte(blue))]}
     constants = np.zeros((1, 3, 3))
     if cap.device_h.shape[0]:
@@ -92,7 +92,7 @@ def _breakdown(cap, x, y, corners, weights, mesh, constants, filter_, bump) -> d
     surf = s.surfaces.copy()
     if maps[mesh, COLOR] >= 0:
         k = int(maps[mesh, COLOR])
-        r, g, b, _ = _lookup(texels, levels, textures, k, filter_, u, v, *derivs)
+        r, g, b, _ = lookup(texels, levels, textures, k, filter_, u, v, *derivs)
         out["texture"] = _texels_read(texels, levels, textures, k, filter_, u, v, derivs)
         out["texture"]["filtered (linear)"] = [r, g, b]
         if maps[mesh, COLOR_SRGB] > 0.5:
@@ -103,8 +103,8 @@ def _breakdown(cap, x, y, corners, weights, mesh, constants, filter_, bump) -> d
     out["phong"] = terms
     rgb = list(terms["clamped"])
     if maps[mesh, ENVIRONMENT] >= 0 and maps[mesh, REFLECTIVITY] > 0.0:
-        from core.texture.surface import _view_direction
-        vx, vy, vz = _view_direction(s.eye, *p)
+        from core.texture.surface import view_direction
+        vx, vy, vz = view_direction(s.eye, *p)
         d = nx * vx + ny * vy + nz * vz
         if d < 0.0 and surf[mesh, TWO_SIDED] != 0.0:
             nx, ny, nz, d = -nx, -ny, -nz, -d

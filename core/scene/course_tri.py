@@ -35,7 +35,7 @@ def startup_code_keeps(positions: np.ndarray, triangles: np.ndarray,
 
 def course_tri_scene(scene: Scene, view) -> Scene:
     """``scene`` with each mesh's triangles filtered by the startup code's rule."""
-    from core.shading.illumination import eye_from_view
+    from core.camera.view import eye_from_view
     per_scene = _cache.setdefault(scene, {})
     if view not in per_scene:
         viewpoint = eye_from_view(view, "perspective").point

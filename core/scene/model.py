@@ -36,7 +36,7 @@ class Material:
     os: tuple[float, float, float] = (1.0, 1.0, 1.0)
     # Whitted's global terms (issue 12; the ray tracer's): the mirror coefficient k_r, the
     # transmission coefficient k_t and the index of refraction. The z-buffer family uses k_t
-    # too when settings.transparency is on (issue 18, core.shading.transparency).
+    # too when settings.transparency is on (issue 18, core.effects.transparency).
     kr: float = 0.0
     kt: float = 0.0
     ior: float = 1.52                      # glass (the notes); only used where kt > 0
@@ -146,7 +146,7 @@ class Scene:
     source: str = ""                      # file the scene came from
     keep_aspect: bool = False             # letterbox the window instead of stretching it
     rasterizer: str = "edge"              # "edge" | "scanline" (the course's ET/AET algorithm)
-    renderer: str = "zbuffer"             # the scene file's renderer (settings.SCENE_RENDERERS)
+    renderer: str = "zbuffer"             # the scene file's renderer (core.registry)
     # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
     primitives: list = field(default_factory=list)
     # The crease angle (degrees) the reader split vertices at (core.scene.normals.with_creases):
@@ -156,7 +156,7 @@ class Scene:
     # into pixels: "linear" (clamped, as the Phong model's intensities) or "srgb" (the sRGB
     # transfer curve, for scenes in physical units such as the Cornell box).
     tone: str = "linear"
-    # The [depth_cue] table (core.shading.depth_cue.DepthCue), None when the file has none.
+    # The [depth_cue] table (core.effects.depth_cue.DepthCue), None when the file has none.
     depth_cue: object | None = None
     # How the z-buffer family draws materials with k_t > 0 (settings.TRANSPARENCIES).
     transparency: str = "off"

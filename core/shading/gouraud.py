@@ -80,7 +80,7 @@ def _phong_vertices_serial(positions, normals, vertices, vertex_surface, surface
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
+def resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
     """Interpolate the vertex colours over each row's covered span (the rest is background).
     A triangle's pixels come in runs along a row: its corner colours are read once a run."""
     for row in prange(tri.shape[0]):
@@ -106,7 +106,7 @@ def _resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
     if s.lazy:      # light the mesh vertices that visible triangles use (new ones are done)
         _light(s, visible_items(vis, triangles, 3, s.lit), attrs)
-    _resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
+    resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
                      np.ascontiguousarray(vis.b1, dtype=np.float64),
                      np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
                      triangles, attrs, out)

@@ -45,7 +45,7 @@ def shading_for(scene, shading: str) -> str:
     return shading
 
 
-def _mesh_varyings(mesh) -> np.ndarray:
+def mesh_varyings(mesh) -> np.ndarray:
     """``(V, 8)``: (u, v) scaled, ∂P/∂u, ∂P/∂v of one mesh (zeros where it has no (u, v))."""
     out = np.zeros((len(mesh.positions), 8))
     maps = maps_of(mesh.material)
@@ -90,7 +90,7 @@ def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
     # Maps are read from the materials each frame (a window may switch the demo's map); the
     # arrays that depend only on the geometry are kept with the scene.
     extra = cached(s.context, scene, scene_arrays(meshes), "texture varyings",
-                   lambda: np.concatenate([_mesh_varyings(m) for m in meshes]) if meshes
+                   lambda: np.concatenate([mesh_varyings(m) for m in meshes]) if meshes
                    else np.zeros((0, 8)))
     s.vertex_attrs = cached(s.context, scene, scene_arrays(meshes),
                             f"textured attributes {weighting}",
@@ -122,7 +122,7 @@ def _resolve(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surf
             w0 = 1.0 - w1 - w2
             s = face_surface[source[t]]
             if demo[s, 0] > 0.5:                # the course's bump demo: its own model
-                blue = _demo(attrs, i0, i1, i2, w0, w1, w2, demo, s, demo_light)
+                blue = demo_shade(attrs, i0, i1, i2, w0, w1, w2, demo, s, demo_light)
                 out[row, col, 0] = 0
                 out[row, col, 1] = 0
                 out[row, col, 2] = java_color_byte(blue)
@@ -147,7 +147,7 @@ def _resolve(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surf
 
 
 @njit(cache=True)
-def _demo(attrs, i0, i1, i2, w0, w1, w2, demo, s, light):
+def demo_shade(attrs, i0, i1, i2, w0, w1, w2, demo, s, light):
     """The demo's pixel step at the interpolated point and normal."""
     n = np.empty(6)                 # normal, position: the first six varyings
     for c in range(6):

@@ -88,7 +88,7 @@ def pack_maps(maps_per_surface: list) -> tuple[np.ndarray, np.ndarray, np.ndarra
 
 
 @njit(cache=True)
-def _lookup(texels, levels, textures, k, filter_, u, v, dudx, dvdx, dudy, dvdy):
+def lookup(texels, levels, textures, k, filter_, u, v, dudx, dvdx, dudy, dvdy):
     first, count, wrap = textures[k, 0], textures[k, 1], textures[k, 2]
     return sample(texels, levels, wrap, filter_, u, v, dudx, dvdx, dudy, dvdy, first, count)
 
@@ -120,10 +120,10 @@ def bumped_normal(nx, ny, nz, pux, puy, puz, pvx, pvy, pvz, texels, levels, text
               math.sqrt((dudy * w) ** 2 + (dvdy * h) ** 2))
     step = max(rho, 1.0) if math.isfinite(rho) else 1.0
     du, dv = step / w, step / h
-    hu1 = _lookup(texels, levels, textures, k, filter_, u + du, v, dudx, dvdx, dudy, dvdy)[0]
-    hu0 = _lookup(texels, levels, textures, k, filter_, u - du, v, dudx, dvdx, dudy, dvdy)[0]
-    hv1 = _lookup(texels, levels, textures, k, filter_, u, v + dv, dudx, dvdx, dudy, dvdy)[0]
-    hv0 = _lookup(texels, levels, textures, k, filter_, u, v - dv, dudx, dvdx, dudy, dvdy)[0]
+    hu1 = lookup(texels, levels, textures, k, filter_, u + du, v, dudx, dvdx, dudy, dvdy)[0]
+    hu0 = lookup(texels, levels, textures, k, filter_, u - du, v, dudx, dvdx, dudy, dvdy)[0]
+    hv1 = lookup(texels, levels, textures, k, filter_, u, v + dv, dudx, dvdx, dudy, dvdy)[0]
+    hv0 = lookup(texels, levels, textures, k, filter_, u, v - dv, dudx, dvdx, dudy, dvdy)[0]
     fu = scale * (hu1 - hu0) / (2 * du)
     fv = scale * (hv1 - hv0) / (2 * dv)
     cx, cy, cz = _cross(pux, puy, puz, pvx, pvy, pvz)
@@ -141,7 +141,7 @@ def bumped_normal(nx, ny, nz, pux, puy, puz, pvx, pvy, pvz, texels, levels, text
 def mapped_normal(nx, ny, nz, pux, puy, puz, pvx, pvy, pvz, texels, levels, textures, k,
                   filter_, u, v, dudx, dvdx, dudy, dvdy):
     """The tangent-space normal map ``k``: n = 2 rgb − 1 in the frame (T, B, N)."""
-    r, g, b, _ = _lookup(texels, levels, textures, k, filter_, u, v, dudx, dvdx, dudy, dvdy)
+    r, g, b, _ = lookup(texels, levels, textures, k, filter_, u, v, dudx, dvdx, dudy, dvdy)
     d = pux * nx + puy * ny + puz * nz
     tx, ty, tz, length = unit3(pux - d * nx, puy - d * ny, puz - d * nz)
     if not length > 0.0:
@@ -160,12 +160,12 @@ def environment(texels, levels, textures, k, rx, ry, rz):
     """The equirectangular environment in direction R (unit): ``(r, g, b)``, linear."""
     u = 0.5 + math.atan2(rx, -rz) / (2 * math.pi)
     v = 0.5 + math.asin(min(max(ry, -1.0), 1.0)) / math.pi
-    r, g, b, _ = _lookup(texels, levels, textures, k, BILINEAR, u, v, 0.0, 0.0, 0.0, 0.0)
+    r, g, b, _ = lookup(texels, levels, textures, k, BILINEAR, u, v, 0.0, 0.0, 0.0, 0.0)
     return r, g, b
 
 
 @njit(cache=True)
-def _view_direction(eye, px, py, pz):
+def view_direction(eye, px, py, pz):
     if eye[0] == 1.0:                                   # a point: perspective
         vx, vy, vz, _ = unit3(eye[1] - px, eye[2] - py, eye[3] - pz)
         return vx, vy, vz
@@ -221,14 +221,14 @@ def textured_at(attrs, i0, i1, i2, w0, w1, w2, u, v, dudx, dvdx, dudy, dvdy, s, 
                                        levels, textures, int(maps[s, NORMAL_MAP]), filter_,
                                        u, v, dudx, dvdx, dudy, dvdy)
     if maps[s, COLOR] >= 0:
-        r, g, b, _ = _lookup(texels, levels, textures, int(maps[s, COLOR]), filter_, u, v,
+        r, g, b, _ = lookup(texels, levels, textures, int(maps[s, COLOR]), filter_, u, v,
                              dudx, dvdx, dudy, dvdy)
         if maps[s, COLOR_SRGB] > 0.5:
             r, g, b = encode_srgb(r), encode_srgb(g), encode_srgb(b)
         surf[s, OD], surf[s, OD + 1], surf[s, OD + 2] = r, g, b
     r, g, b = phong_point(px, py, pz, nx, ny, nz, s, surf, lights, ambient, eye, halfway)
     if maps[s, ENVIRONMENT] >= 0 and maps[s, REFLECTIVITY] > 0.0:
-        vx, vy, vz = _view_direction(eye, px, py, pz)
+        vx, vy, vz = view_direction(eye, px, py, pz)
         d = nx * vx + ny * vy + nz * vz
         if d < 0.0 and surf[s, TWO_SIDED] != 0.0:      # the side the viewer sees
             nx, ny, nz, d = -nx, -ny, -nz, -d

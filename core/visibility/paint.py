@@ -1,5 +1,5 @@
 """Painting triangles in a given order through the unchanged rasterizer: what the painter's
-renderers (:mod:`core.renderers.painters`) and transparency (:mod:`core.shading.transparency`)
+renderers (:mod:`core.renderers.painters`) and transparency (:mod:`core.effects.transparency`)
 share.
 
 A :class:`Painting` is a list of triangles in painting order, already clipped and projected,
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.pipeline import project
-from core.renderers.zbuffer import _sample_viewport
+from core.camera.film import sample_viewport
 from core.visibility import bsp as bsp_tree
 
 
@@ -72,7 +72,7 @@ def _inputs(stages, scene, settings, eye, kept, context):
 
 
 def bsp_painting(scene, view, settings, context, timer, n, z_min, vp) -> Painting:
-    from core.renderers import triangles as stages
+    from core.shading import stages
     eye = stages.shade.eye_from_view(view, settings.projection)
     positions, triangles = stages.shade.geometry(scene, context)
     tree = scene_tree(scene, settings, context)
@@ -104,7 +104,7 @@ def bsp_painting(scene, view, settings, context, timer, n, z_min, vp) -> Paintin
 
 
 def depth_sorted_painting(scene, view, settings, context, timer, n, z_min, vp) -> Painting:
-    from core.renderers import triangles as stages
+    from core.shading import stages
     from core.visibility.depth_sort import depth_sort
     eye = stages.shade.eye_from_view(view, settings.projection)
     positions, triangles = stages.shade.geometry(scene, context)
@@ -164,7 +164,7 @@ def paint_ranks(p: Painting):
 
 
 def paint(p: Painting, width, height, context):
-    from core.renderers import triangles as stages
+    from core.shading import stages
     xy_z, inv_w, triangles = paint_ranks(p)
     return stages.rasterize(xy_z, inv_w, triangles, width, height,
                             out=context.buffer("painter visibility", (width, height),
@@ -173,7 +173,7 @@ def paint(p: Painting, width, height, context):
 
 
 def resolve(p: Painting, vis, scene, settings, frame) -> None:
-    from core.renderers import triangles as stages
+    from core.shading import stages
     vis.planes = None
     if stages.shade.get_shader(p.inputs.mode).needs_derivatives:
         vis.planes = stages.barycentric_planes(p.device, p.inv_w, p.triangles)
@@ -204,7 +204,7 @@ def painting(scene, view, settings, context=None, timer=None) -> Painting | None
         return None
     width, height = settings.size
     n, z_min = context.normalizing_transform(view, settings.projection)
-    vp = _sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
+    vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
     make = {"bsp": bsp_painting, "depth-sort": depth_sorted_painting}[settings.renderer]
     return make(scene, view, settings, context, timer or _NoClock(), n, z_min, vp)

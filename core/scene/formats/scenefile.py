@@ -44,7 +44,8 @@ from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_ve
 from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
-from core.settings import RASTERIZERS, SCENE_RENDERERS, SPECULAR_FORMS
+from core.registry import renderer_names
+from core.settings import RASTERIZERS, SPECULAR_FORMS
 from core.scene.formats.keys import (material_keys, material_readers, scene_readers, table_arrays,
                                      top_keys)
 from core.scene.media import index_of_refraction
@@ -265,7 +266,7 @@ class _Reader:
                           ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS)),
                           ("keep_aspect", self.boolean),
                           ("rasterizer", lambda v, p: self.choice(v, p, RASTERIZERS)),
-                          ("renderer", lambda v, p: self.choice(v, p, SCENE_RENDERERS)),
+                          ("renderer", lambda v, p: self.choice(v, p, renderer_names())),
                           ("tone", lambda v, p: self.choice(v, p, ("linear", "srgb")))):
             if key in doc:
                 setattr(scene, key, read(doc[key], (key,)))

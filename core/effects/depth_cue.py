@@ -113,7 +113,7 @@ def apply(scene, view, settings, frame, context) -> None:
 
 def _viewport(view, settings, width, height):
     """The viewport moved so that the frame's sample offset lands on the pixel centre (as the
-    z-buffer's ``_sample_viewport`` does)."""
+    z-buffer's ``core.camera.film.sample_viewport`` does)."""
     from core.pipeline import project
     vp = project.viewport(view.window, width, height, settings.keep_aspect)
     dx, dy = 0.5 - settings.pixel_offset[0], settings.pixel_offset[1] - 0.5

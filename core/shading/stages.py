@@ -1,5 +1,5 @@
-"""The compiled stages of the triangle path, imported together the first time a frame fills
-triangles (a wireframe frame never loads numba)."""
+"""The compiled stages of the triangle path (the pipeline's kernels and the shading step),
+imported together the first time a frame fills triangles (a wireframe frame never loads numba)."""
 
 from threadpoolctl import threadpool_limits
 

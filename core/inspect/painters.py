@@ -1,0 +1,91 @@
+"""Looking at the painter's renderers' work: writes per pixel, and one pixel's history.
+
+- :func:`overdraw`: ``(H, W)`` int32, how many times each pixel is written (the buffer view);
+- :func:`inspect_pixel`: RenderDoc's pixel history for ``bsp`` and ``depth-sort``: every
+  triangle painted over the pixel, in painting order, with its colour and depth.
+
+Both draw through the front door (:func:`core.render.render`), so they live here, above it,
+rather than with the renderers in :mod:`core.renderers.painters`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core.pipeline.raster import count_fragments
+from core.visibility.paint import (Painting, SimpleFrame, paint, paint_ranks, painting, resolve,
+                                   true_depth)
+
+
+def overdraw(scene, view, settings, context=None) -> np.ndarray:
+    """``(H, W)`` int32: how many times each pixel is written. For bsp and depth-sort every
+    painted fragment covering the pixel centre is a write; for the z-buffer (any other
+    renderer name) it is the number of fragments scan-converted there, each of which is
+    depth-tested (an upper bound on its writes: FvDFH's cost of the z-buffer)."""
+    from core.shading import stages
+    width, height = settings.size
+    if settings.renderer in ("bsp", "depth-sort"):
+        p = painting(scene, view, settings, context)
+        if p is None:
+            return np.zeros((height, width), np.int32)
+        xy_z, inv_w, triangles = paint_ranks(p)
+        return count_fragments(xy_z, inv_w, triangles, width, height)
+    kept = {}
+
+    def grab(stage, arrays):
+        if stage == "project":
+            kept["device"] = arrays["device_points"].copy()
+            kept["inv_w"] = arrays["inv_w"].copy()
+        if stage == "clip triangles":
+            kept["triangles"] = arrays["clipped_triangles"].copy()
+
+    from core.render import render
+    render(scene, view, settings.replace(renderer="zbuffer", samples=1), context, inspect=grab)
+    if "triangles" not in kept:
+        return np.zeros((height, width), np.int32)
+    return count_fragments(kept["device"], kept["inv_w"], kept["triangles"], width,
+                                  height)
+
+
+def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
+    """The pixel's history (RenderDoc's pixel history): every triangle painted over pixel
+    ``(x, y)`` (x right, y down, row 0 at the top), in painting order, with its colour; the
+    last one is what the frame shows."""
+    from core.context import DEFAULT_CONTEXT
+    from core.render import render
+    context = context or DEFAULT_CONTEXT
+    width, height = settings.size
+    frame = render(scene, view, settings.replace(samples=1), context)
+    record = {"renderer": settings.renderer, "pixel": [int(x), int(y)],
+              "color": [int(c) for c in frame.color[y, x]], "writes": []}
+    p = painting(scene, view, settings.replace(samples=1), context)
+    if p is None or frame.message:
+        record["message"] = frame.message or "no triangles are painted"
+        return record
+    record["painted triangles"] = int(len(p.triangles))
+    record.update({k: v for k, v in frame.stats.items() if k in ("BSP tree", "depth sort")})
+    xy_z, inv_w, triangles = paint_ranks(p)
+    from core.shading import stages
+    covered = count_fragments(xy_z, inv_w, triangles, width, height)
+    if covered[y, x] == 0:
+        return record
+    # which painted triangles cover the pixel: rasterize only the candidates whose box holds it
+    px, py = x + 0.5, height - 1 - y + 0.5
+    corners = p.device[p.triangles]
+    near = np.flatnonzero((corners[:, :, 0].min(1) <= px + 1) & (corners[:, :, 0].max(1) >= px - 1)
+                          & (corners[:, :, 1].min(1) <= py + 1)
+                          & (corners[:, :, 1].max(1) >= py - 1))
+    for rank in near:
+        one = stages.rasterize(xy_z[3 * rank:3 * rank + 3], inv_w[3 * rank:3 * rank + 3],
+                               np.array([[0, 1, 2]], np.int64), width, height)
+        if one.tri[y, x] < 0:
+            continue
+        single = Painting(p.device, p.inv_w, p.triangles[rank:rank + 1], p.attrs,
+                          p.source[rank:rank + 1], p.inputs, {})
+        vis = paint(single, width, height, context)
+        color = np.empty((height, width, 3), np.uint8)
+        resolve(single, vis, scene, settings, SimpleFrame(color))
+        record["writes"].append({"rank": int(rank), "triangle": int(p.source[rank]),
+                                 "color": [int(c) for c in color[y, x]],
+                                 "depth": float(true_depth(vis, single)[y, x])})
+    return record

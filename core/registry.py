@@ -1,0 +1,92 @@
+"""The registered renderers by name, and what each can do (read by everything that chooses one).
+
+A renderer is one module with a ``draw(scene, view, settings, frame, context, timer)`` and one
+:func:`register_renderer` call (in :mod:`core.renderers`, or in the module that brings it).
+Its entry says what it can do, so that the front door, the plan, the scene reader, the
+command line, the window's menus and the warm-up read the registry instead of lists of names:
+
+- ``samples_itself``: it places the film's samples (the front door does not run it per sample);
+- ``emitters``: it takes light from area emitters (global illumination);
+- ``recursive``: it follows reflected and refracted rays (``k_r``, ``k_t``);
+- ``transparency``: it lays ``k_t > 0`` over its opaque picture when asked;
+- ``shaders``: it shades through the registered shading modes (depth shading among them);
+- ``textures``: it draws a material's texture maps;
+- ``progressive``: the window shows its picture coarse first, then refining;
+- ``label``: its name in the window's Render menu.
+
+The entries are data and the targets strings (``"package.module:function"``), imported when
+first drawn, so this module sits at the bottom of the core: the scene reader checks a file's
+``renderer`` key against :func:`renderer_names` without importing a renderer.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from typing import Callable
+
+
+@dataclass(frozen=True)
+class Renderer:
+    name: str
+    target: str | Callable          # "package.module:function", or the function itself
+    samples_itself: bool = False
+    description: str = ""
+    label: str = ""
+    emitters: bool = False
+    recursive: bool = False
+    transparency: bool = False
+    shaders: bool = False
+    textures: bool = True
+    progressive: bool = False
+
+    def function(self) -> Callable:
+        if callable(self.target):
+            return self.target
+        module, _, name = self.target.partition(":")
+        return getattr(importlib.import_module(module), name)
+
+    @property
+    def module(self) -> str:
+        """The module that defines it (for its inspector and its buffers)."""
+        return self.target.__module__ if callable(self.target) else self.target.partition(":")[0]
+
+
+_RENDERERS: dict[str, Renderer] = {}
+
+
+def register_renderer(name: str, target, samples_itself: bool = False, description: str = "",
+                      **capabilities) -> Renderer:
+    """Make ``name`` a value of ``RenderSettings.renderer`` (and of a scene file's
+    ``renderer`` key, the command line's ``--renderer`` and the Render menu)."""
+    unknown = set(capabilities) - set(Renderer.__dataclass_fields__)
+    if unknown:
+        raise TypeError(f"unknown renderer capabilities: {', '.join(sorted(unknown))}")
+    capabilities.setdefault("label", name)
+    entry = Renderer(name, target, samples_itself, description, **capabilities)
+    _RENDERERS[name] = entry
+    return entry
+
+
+def unregister_renderer(name: str) -> None:
+    """Remove ``name`` (a test's or a plug-in's renderer); the built-in ones stay registered."""
+    _RENDERERS.pop(name, None)
+
+
+def get_renderer(name: str) -> Renderer:
+    if name not in _RENDERERS:
+        raise ValueError(f"renderer must be one of {', '.join(_RENDERERS)}, not {name!r}")
+    return _RENDERERS[name]
+
+
+def renderer_names() -> tuple[str, ...]:
+    return tuple(_RENDERERS)
+
+
+def renderers() -> tuple[Renderer, ...]:
+    return tuple(_RENDERERS.values())
+
+
+def names_that(capability: str) -> tuple[str, ...]:
+    """The renderers that can do ``capability`` (a field of :class:`Renderer`), in order."""
+    return tuple(r.name for r in _RENDERERS.values() if getattr(r, capability))
