@@ -12,7 +12,7 @@ from core import RenderContext, RenderSettings, View, render
 from core.camera.film import Film, sample_offsets
 from core.camera.rays import primary_rays
 from core.paths import SCENES_DIR
-from core.renderers import get_renderer, register_renderer
+from core.renderers import get_renderer, register_renderer, renderer_names
 from core.renderers.raycast import render_reference
 from core.scene.formats import load_scene
 from core.scene.model import Light, Material, Scene
@@ -151,8 +151,9 @@ def test_renderers_are_found_by_name_and_can_be_added():
         assert len(calls) == 4 and all(0 <= x < 1 and 0 <= y < 1 for x, y in calls)
         assert frame.color[:, 0].min() == 255 and frame.color[:, 1].max() == 0
     finally:
-        from core.renderers import _RENDERERS
-        _RENDERERS.pop("stripes")
+        from core.renderers import unregister_renderer
+        unregister_renderer("stripes")
+    assert "stripes" not in renderer_names()
     assert get_renderer("zbuffer").name == "zbuffer"
 
 

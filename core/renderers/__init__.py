@@ -16,8 +16,8 @@ kernels) only when it is first used.
 
 from __future__ import annotations
 
-from core.registry import (_RENDERERS, Renderer, get_renderer, names_that,  # noqa: F401
-                           register_renderer, renderer_names, renderers, unregister_renderer)
+from core.registry import (Renderer, get_renderer, names_that, register_renderer,  # noqa: F401
+                           renderer_names, renderers, unregister_renderer)
 
 # The built-in renderers and what each can do (core/registry.py names the capabilities).
 register_renderer("zbuffer", "core.renderers.zbuffer:draw",
