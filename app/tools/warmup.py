@@ -300,6 +300,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help=argparse.SUPPRESS)     # steps whose label contains TEXT (tests)
     parser.add_argument("--extra-steps", default=None, metavar="MODULE:FUNCTION",
                         help=argparse.SUPPRESS)     # more (label, run) steps (tests)
+    parser.add_argument("--stamp", default=None, metavar="PATH",
+                        help=argparse.SUPPRESS)     # the stamp's path (tests)
     return parser
 
 
@@ -339,8 +341,12 @@ def main(args=None) -> int:
         if not as_json:
             print(text, file=to, flush=True)
 
-    if not warm_stamp.is_warm():
-        warm_stamp.remove()                     # another version's stamp: not ours to keep
+    # A run of some steps (--only) says nothing about the whole cache: it writes a stamp only
+    # where it is told to (the tests), never the real one.
+    partial = bool(options.only or options.extra_steps)
+    stamp = Path(options.stamp) if options.stamp else None if partial else warm_stamp.stamp_path()
+    if stamp is not None and not warm_stamp.is_warm(stamp):
+        warm_stamp.remove(stamp)                # another version's stamp: not ours to keep
     say("warming up: compiling the kernels once (numba keeps them on disk)")
     if not compile_bytecode():
         say("  (some Python bytecode could not be written: starts will compile it)")
@@ -355,7 +361,8 @@ def main(args=None) -> int:
         first = None                            # a file of the user's: no step of its own
     todo = warmup_pool.order(listed, COSTS, DEFAULT_COST,
                              first=lambda label: first is not None
-                             and first in scenes.get(label, ()))
+                             and first in scenes.get(label, ()),
+                             later=lambda label: label in scenes)
     jobs = options.jobs if options.jobs and options.jobs > 0 else warmup_pool.default_jobs()
     jobs = max(1, min(jobs, len(todo) or 1))
     n = len(todo)
@@ -403,10 +410,11 @@ def main(args=None) -> int:
         signal.signal(signal.SIGTERM, previous)
     seconds = time.perf_counter() - start
     failed = [outcome for outcome in outcomes if outcome.error is not None]
-    if failed:
-        warm_stamp.remove()
-    else:
-        warm_stamp.write(seconds, n)
+    if stamp is not None:
+        if failed:
+            warm_stamp.remove(stamp)
+        else:
+            warm_stamp.write(seconds, n, stamp)
     if as_json:
         emit({"event": "finished", "seconds": round(seconds, 3), "ok": not failed,
               "failed": [outcome.label for outcome in failed]})

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.arrays import read_only
 from core.jit import njit, prange
 from core.settings import PROJECTIONS
 
@@ -348,7 +349,7 @@ def clip_triangles(points, triangles, attrs, projection: str,
     """
     perspective = _check_projection(projection)
     points = np.asarray(points, dtype=np.float64)       # a strided view is fine: no copy
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64)
+    triangles = read_only(np.ascontiguousarray(triangles, dtype=np.int64))   # one kernel type
     if attrs is None:
         attrs = np.empty((points.shape[0], 0))
     attrs = np.asarray(attrs, dtype=np.float64)
