@@ -585,6 +585,11 @@ class BackgroundWarmup:
     def stop(self, timeout: float = 10.0) -> None:
         """End the warm-up: SIGTERM (it terminates its workers and exits), SIGKILL after
         ``timeout`` seconds (the workers then exit on their own: they watch their parent)."""
+        if self.finished and self._process.poll() is None:
+            try:                                # it has said its last: let it exit itself
+                self._process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                pass
         if self._process.poll() is None:
             self._process.terminate()
             try:
