@@ -35,12 +35,24 @@ removed (llvmlite's own lock stays).
 
 If numba's cache classes do not have the shape this expects (another numba version),
 nothing is changed: the kernels load as numba loads them.
+
+Two processes may compile the same kernel at once (``python -m app warmup`` compiles on every
+core; the window compiles what it needs while a warm-up runs). numba writes each file of the
+cache atomically (a temporary file, then ``os.replace``) but saves a new signature as
+read-index, pick-a-free-data-number, write-index, write-data without a lock: two processes
+saving two signatures of one kernel at once both pick ``….1.nbc``, one signature drops out
+of the index and the other's entry can name the data of the first (the wrong machine code
+for its argument types). :func:`serialised_cache_saves` holds an exclusive lock on
+``<index>.lock`` (``fcntl.flock``, released by the OS if the process dies) over the whole
+save, and writes the data before the index, so that no index names a file not yet written.
 """
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
+import itertools
 import os
 from pathlib import Path
 
@@ -50,8 +62,8 @@ from numba import config, prange  # noqa: F401  (re-exported: the kernels' impor
 from numba.core import caching
 from numba.core.runtime import nrt
 
-__all__ = ["config", "njit", "prange", "quick_cache_loads", "stamp_with_kernel_sources",
-           "untimed_llvm_calls"]
+__all__ = ["config", "njit", "prange", "quick_cache_loads", "serialised_cache_saves",
+           "stamp_with_kernel_sources", "untimed_llvm_calls"]
 
 # The packages whose kernels may inline one another: a change to any file of theirs that
 # defines kernels (imports this module) makes every cached kernel of theirs stale.
@@ -177,6 +189,56 @@ def untimed_llvm_calls() -> bool:
     return True
 
 
+@contextlib.contextmanager
+def _exclusive(lock_path: str):
+    """An exclusive ``flock`` on ``lock_path`` (created empty) for the ``with`` block."""
+    import fcntl
+    with open(lock_path, "a+b") as lock:
+        fcntl.flock(lock.fileno(), fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock.fileno(), fcntl.LOCK_UN)
+
+
+def serialised_cache_saves() -> bool:
+    """One process at a time saves a kernel's cache entry, data before index (see the
+    module). Returns whether the change is in place (not on Windows: no ``fcntl``)."""
+    try:
+        import fcntl  # noqa: F401
+    except ImportError:
+        return False
+    cache_file = getattr(caching, "IndexDataCacheFile", None)
+    needed = ("save", "flush", "_load_index", "_save_index", "_save_data", "_data_name")
+    if cache_file is None or not all(hasattr(cache_file, name) for name in needed):
+        return False
+    if getattr(cache_file.save, "_serialised", False):
+        return True
+
+    def save(self, key, data):
+        with _exclusive(self._index_path + ".lock"):
+            overloads = self._load_index()          # as it is now, not when this compile began
+            data_name = overloads.get(key)
+            if data_name is None:
+                taken = set(overloads.values())
+                data_name = next(name for name in map(self._data_name, itertools.count(1))
+                                 if name not in taken)
+                overloads[key] = data_name
+            self._save_data(data_name, data)
+            self._save_index(overloads)
+
+    def flush(self):
+        with _exclusive(self._index_path + ".lock"):
+            self._save_index({})
+
+    save._serialised = True
+    save.__doc__ = cache_file.save.__doc__
+    cache_file.save = save
+    cache_file.flush = flush
+    return True
+
+
 QUICK_CACHE_LOADS = quick_cache_loads()
+SERIALISED_CACHE_SAVES = serialised_cache_saves()
 UNTIMED_LLVM_CALLS = untimed_llvm_calls()
 STAMPED_WITH_KERNEL_SOURCES = stamp_with_kernel_sources()

@@ -13,13 +13,27 @@ pixel. :func:`scene_steps` then opens every shipped scene (``scenes/``) the way 
 does (:class:`app.viewer.state.ViewerState`), in every renderer and shading, and in every
 texture filter when it has textures, so that no first picture the user asks for compiles
 (issue 21; ``tests/test_warmup_complete.py`` checks it from an empty kernel cache).
+
+The steps run in worker processes, one a core (``--jobs``), each taking the next step from
+one queue, the longest first by :data:`COSTS` (``app/tools/warmup_pool.py``). When every step
+has succeeded a stamp says the cache is warm (``app/tools/warm_stamp.py``: :func:`is_warm`).
+``--progress-json`` prints one JSON object a line instead of the table, and
+:class:`BackgroundWarmup` runs the whole thing as a subprocess for the window (issue 33).
 """
 
 from __future__ import annotations
 
+import argparse
+import json
+import signal
+import subprocess
 import sys
+import threading
 import time
+from pathlib import Path
 from typing import Callable
+
+from app.tools.warm_stamp import is_warm  # noqa: F401  (the viewer's import)
 
 SIZE = (64, 48)
 
@@ -149,6 +163,11 @@ def quick(settings):
     return settings.replace(**QUICK.get(settings.renderer, {}))
 
 
+def scene_label(path) -> str:
+    """The label of the step that opens scene file ``path``."""
+    return f"{Path(path).name}, every renderer, shading and filter"
+
+
 def scene_steps() -> list[tuple[str, Callable[[], object]]]:
     """One step per shipped scene: its first pictures in every renderer, shading, filter."""
     def opener(path):
@@ -156,13 +175,23 @@ def scene_steps() -> list[tuple[str, Callable[[], object]]]:
             for _, job in scene_jobs(path):
                 job()
         return run
-    return [(f"{path.name}, every renderer, shading and filter", opener(path))
-            for path in shipped_scenes()]
+    return [(scene_label(path), opener(path)) for path in shipped_scenes()]
+
+
+def all_steps() -> list[tuple[str, Callable[[], object]]]:
+    """Every step of ``python -m app warmup``: the paths, then the shipped scenes."""
+    return steps() + scene_steps()
+
+
+def step_scenes() -> dict[str, list[str]]:
+    """label → the shipped scene files (names) that the step opens (none for the paths)."""
+    return {scene_label(path): [path.name] for path in shipped_scenes()}
 
 
 def run(progress: Callable[[int, int, str, float], None] | None = None) -> float:
-    """Run every step; ``progress(k, n, label, seconds)`` after each. Returns the total."""
-    todo = steps() + scene_steps()
+    """Run every step in this process, one after another; ``progress(k, n, label, seconds)``
+    after each. Returns the total."""
+    todo = all_steps()
     start = time.perf_counter()
     for k, (label, job) in enumerate(todo, start=1):
         t = time.perf_counter()
@@ -181,18 +210,400 @@ def compile_bytecode() -> bool:
     return all(compileall.compile_dir(ROOT / package, quiet=2) for package in ("app", "core"))
 
 
+# Seconds each step took from an empty kernel cache, all of them one after another in one
+# process (the warm-up before issue 33, a 2-core machine; docs/bench/warmup-before.txt): the
+# scheduler starts the longest first, so that no long step is left for the end while the
+# other cores idle. A step's cost includes the kernels it was the first to need; a step not
+# listed counts as DEFAULT_COST. Refresh it from a cold run's lines when the steps change.
+COSTS: dict[str, float] = {
+    "ray traced (Whitted)": 70.64,
+    "bezier.toml, every renderer, shading and filter": 44.31,
+    "texture_bump_sphere.toml, every renderer, shading and filter": 30.69,
+    "flat, perspective, edge rasterizer": 23.89,
+    "BSP tree (painter's)": 14.09,
+    "texture_sphere_torus.toml, every renderer, shading and filter": 12.57,
+    "terrain.toml, every renderer, shading and filter": 11.12,
+    "big.toml, every renderer, shading and filter": 10.05,
+    "bump_demo.toml, every renderer, shading and filter": 9.77,
+    "transparent_pane.toml, every renderer, shading and filter": 9.39,
+    "depth sort (painter's), depth-cued": 9.01,
+    "phong, perspective, edge rasterizer": 8.54,
+    "path traced": 7.77,
+    "whitted.toml, every renderer, shading and filter": 6.68,
+    "glass_bunny.toml, every renderer, shading and filter": 4.82,
+    "radiosity (hemicube)": 4.55,
+    "flat, perspective, open mesh and lines": 4.51,
+    "radiosity (raycast)": 4.28,
+    "flat, 50k faces culled on all cores": 3.48,
+    "flat, perspective, scanline rasterizer": 3.04,
+    "gouraud, perspective, edge rasterizer": 3.03,
+    "phong, the float64 pixel kernel": 3.02,
+    "wireframe, perspective": 2.15,
+    "texture_env_normal.toml, every renderer, shading and filter": 1.88,
+    "torus.toml, every renderer, shading and filter": 1.58,
+    "depth, perspective, edge rasterizer": 1.51,
+    "cornell_box.toml, every renderer, shading and filter": 1.5,
+    "flat, 4 samples a pixel": 1.22,
+    "sphere.toml, every renderer, shading and filter": 1.19,
+    "crossing_front_plane.tri, every renderer, shading and filter": 1.18,
+    "a large frame in two batches (early z)": 0.92,
+    "gouraud, perspective, open mesh and lines": 0.55,
+    "house_mirror.toml, every renderer, shading and filter": 0.52,
+    "texture_floor.toml, every renderer, shading and filter": 0.44,
+    "icosphere.toml, every renderer, shading and filter": 0.43,
+    "fountain.toml, every renderer, shading and filter": 0.39,
+    "house_flyaround.toml, every renderer, shading and filter": 0.19,
+    "radiosity_room.toml, every renderer, shading and filter": 0.16,
+    "snow_house.toml, every renderer, shading and filter": 0.12,
+    "refraction.toml, every renderer, shading and filter": 0.11,
+    "smoke.toml, every renderer, shading and filter": 0.07,
+    "fireworks.toml, every renderer, shading and filter": 0.06,
+    "three_bars.toml, every renderer, shading and filter": 0.06,
+    "interpenetrating.tri, every renderer, shading and filter": 0.05,
+    "cube.toml, every renderer, shading and filter": 0.04,
+    "few_triangles.tri, every renderer, shading and filter": 0.04,
+    "house_solid.obj, every renderer, shading and filter": 0.04,
+    "pierced_triangles.tri, every renderer, shading and filter": 0.04,
+    "house_depth_cue.toml, every renderer, shading and filter": 0.03,
+    "house.toml, every renderer, shading and filter": 0.02,
+    "gouraud, perspective, scanline rasterizer": 0.0,
+    "phong, perspective, scanline rasterizer": 0.0,
+    "phong, perspective, open mesh and lines": 0.0,
+    "depth, perspective, scanline rasterizer": 0.0,
+    "depth, perspective, open mesh and lines": 0.0,
+    "wireframe, parallel": 0.0,
+    "flat, parallel, edge rasterizer": 0.0,
+    "flat, parallel, scanline rasterizer": 0.0,
+    "flat, parallel, open mesh and lines": 0.0,
+    "gouraud, parallel, edge rasterizer": 0.0,
+    "gouraud, parallel, scanline rasterizer": 0.0,
+    "gouraud, parallel, open mesh and lines": 0.0,
+    "phong, parallel, edge rasterizer": 0.0,
+    "phong, parallel, scanline rasterizer": 0.0,
+    "phong, parallel, open mesh and lines": 0.0,
+    "depth, parallel, edge rasterizer": 0.0,
+    "depth, parallel, scanline rasterizer": 0.0,
+    "depth, parallel, open mesh and lines": 0.0,
+}
+DEFAULT_COST = 5.0
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """The options of ``python -m app warmup``."""
+    parser.add_argument("--jobs", type=int, default=None, metavar="N",
+                        help="worker processes (default: one a core)")
+    parser.add_argument("--progress-json", action="store_true",
+                        help="one JSON object a line instead of the progress table")
+    parser.add_argument("--first", default=None, metavar="PATH",
+                        help="the steps for this scene file first")
+    parser.add_argument("--only", action="append", default=None, metavar="TEXT",
+                        help=argparse.SUPPRESS)     # steps whose label contains TEXT (tests)
+    parser.add_argument("--extra-steps", default=None, metavar="MODULE:FUNCTION",
+                        help=argparse.SUPPRESS)     # more (label, run) steps (tests)
+    parser.add_argument("--stamp", default=None, metavar="PATH",
+                        help=argparse.SUPPRESS)     # the stamp's path (tests)
+    return parser
+
+
+def _options(args) -> argparse.Namespace:
+    """``args`` as parsed by app/cli.py (which may not know these options yet: their
+    defaults), a list of strings, or None (``sys.argv``)."""
+    parser = add_arguments(argparse.ArgumentParser(prog="python -m app warmup"))
+    if args is None or isinstance(args, (list, tuple)):
+        return parser.parse_args(args)
+    defaults = parser.parse_args([])
+    for name, value in vars(defaults).items():
+        if not hasattr(args, name):
+            setattr(args, name, value)
+    return args
+
+
+class _Interrupted(KeyboardInterrupt):
+    """SIGTERM, handled as Ctrl-C is."""
+
+
+def _on_sigterm(signum, frame):
+    raise _Interrupted()
+
+
 def main(args=None) -> int:
-    print("warming up: compiling the kernels once (numba keeps them on disk)", flush=True)
+    """``python -m app warmup``: every step on ``--jobs`` workers; the stamp when all succeed.
+    Exit status 0 when every step succeeded, 1 when one failed, 130 when interrupted."""
+    from app.tools import warm_stamp, warmup_pool
+
+    options = _options(args)
+    as_json = options.progress_json
+
+    def emit(event: dict) -> None:
+        print(json.dumps(event), flush=True)
+
+    def say(text: str, to=sys.stdout) -> None:
+        if not as_json:
+            print(text, file=to, flush=True)
+
+    # A run of some steps (--only) says nothing about the whole cache: it writes a stamp only
+    # where it is told to (the tests), never the real one.
+    partial = bool(options.only or options.extra_steps)
+    stamp = Path(options.stamp) if options.stamp else None if partial else warm_stamp.stamp_path()
+    if stamp is not None and not warm_stamp.is_warm(stamp):
+        warm_stamp.remove(stamp)                # another version's stamp: not ours to keep
+    say("warming up: compiling the kernels once (numba keeps them on disk)")
     if not compile_bytecode():
-        print("  (some Python bytecode could not be written: starts will compile it)",
-              flush=True)
+        say("  (some Python bytecode could not be written: starts will compile it)")
 
-    def say(k, n, label, seconds):
-        print(f"  [{k:2d}/{n}] {label}: {seconds:.2f} s", flush=True)
+    listed = [label for label, _ in warmup_pool.load_steps(options.extra_steps)]
+    if options.only:
+        listed = [label for label in listed if any(text in label for text in options.only)]
+    scenes = step_scenes()
+    first = Path(options.first).name if options.first else None
+    shipped = {p.resolve() for p in shipped_scenes()}
+    if options.first and Path(options.first).resolve() not in shipped:
+        first = None                            # a file of the user's: no step of its own
+    todo = warmup_pool.order(listed, COSTS, DEFAULT_COST,
+                             first=lambda label: first is not None
+                             and first in scenes.get(label, ()),
+                             later=lambda label: label in scenes)
+    jobs = options.jobs if options.jobs and options.jobs > 0 else warmup_pool.default_jobs()
+    jobs = max(1, min(jobs, len(todo) or 1))
+    n = len(todo)
+    if as_json:
+        emit({"event": "start", "total": n, "jobs": jobs})
+    else:
+        say(f"  {n} steps on {jobs} worker process{'es' if jobs > 1 else ''}")
+    finished = []
 
-    total = run(say)
-    print(f"warm: {total:.1f} s in all; later starts load the compiled kernels", flush=True)
-    return 0
+    def on_begin(label):
+        if as_json:
+            emit({"event": "begin", "label": label, "scenes": scenes.get(label, [])})
+
+    def on_outcome(outcome):
+        finished.append(outcome)
+        k = len(finished)
+        common = {"k": k, "total": n, "label": outcome.label,
+                  "seconds": round(outcome.seconds, 3), "scenes": scenes.get(outcome.label, [])}
+        if outcome.error is None:
+            if as_json:
+                emit({"event": "done", **common})
+            say(f"  [{k:2d}/{n}] {outcome.label}: {outcome.seconds:.2f} s")
+        else:
+            if as_json:
+                emit({"event": "failed", **common, "error": outcome.error})
+            else:
+                print(f"  [{k:2d}/{n}] FAILED {outcome.label}: {outcome.error}",
+                      file=sys.stderr, flush=True)
+
+    start = time.perf_counter()
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        outcomes = warmup_pool.run_parallel(todo, jobs, extra=options.extra_steps,
+                                            on_begin=on_begin, on_outcome=on_outcome)
+    except KeyboardInterrupt:
+        seconds = time.perf_counter() - start
+        if as_json:
+            emit({"event": "finished", "seconds": round(seconds, 3), "ok": False,
+                  "interrupted": True, "failed": []})
+        else:
+            print(f"warm-up interrupted after {seconds:.1f} s ({len(finished)} of {n} steps "
+                  "done; run it again for the rest)", file=sys.stderr, flush=True)
+        return 130
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    seconds = time.perf_counter() - start
+    failed = [outcome for outcome in outcomes if outcome.error is not None]
+    if stamp is not None:
+        if failed:
+            warm_stamp.remove(stamp)
+        else:
+            warm_stamp.write(seconds, n, stamp)
+    if as_json:
+        emit({"event": "finished", "seconds": round(seconds, 3), "ok": not failed,
+              "failed": [outcome.label for outcome in failed]})
+    elif failed:
+        print(f"warm-up: {len(failed)} of {n} steps failed ("
+              + "; ".join(outcome.label for outcome in failed) + "); the cache is not marked "
+              "warm", file=sys.stderr, flush=True)
+    else:
+        say(f"warm: {seconds:.1f} s in all on {jobs} worker process{'es' if jobs > 1 else ''}; "
+            "later starts load the compiled kernels")
+    return 1 if failed else 0
+
+
+class BackgroundWarmup:
+    """``python -m app warmup --progress-json`` in a subprocess, for the window.
+
+    Its stdout is read on a daemon thread; its stderr goes to ``log_path`` (by default
+    ``warmup.log`` beside the stamp). The properties are safe to read from any thread.
+    ``on_event``, when given, is called with no arguments after each event has been taken in
+    (the window passes ``glfw.post_empty_event`` to wake its loop); it runs on the reader
+    thread and what it raises is ignored.
+    """
+
+    def __init__(self, first_scene=None, jobs: int | None = None,
+                 on_event: Callable[[], object] | None = None, log_path=None,
+                 extra_args=()):
+        from app.tools.warm_stamp import stamp_path
+        from core.paths import ROOT
+        self._lock = threading.Condition()
+        self._total: int | None = None
+        self._done: list[str] = []
+        self._current: list[str] = []
+        self._scenes_done: set[str] = set()
+        self._failed: list[str] = []
+        self._finished = False
+        self._ok: bool | None = None
+        self._on_event = on_event
+        self._scenes_dir = (ROOT / "scenes").resolve()
+        command = [sys.executable, "-m", "app.tools.warmup", "--progress-json"]
+        if first_scene is not None:
+            command += ["--first", str(first_scene)]
+        if jobs:
+            command += ["--jobs", str(int(jobs))]
+        command += [str(arg) for arg in extra_args]
+        self.log_path = Path(log_path) if log_path else stamp_path().with_name("warmup.log")
+        self.log_path.parent.mkdir(parents=True, exist_ok=True)
+        self._log = open(self.log_path, "ab")
+        self._process = subprocess.Popen(command, cwd=ROOT, stdin=subprocess.DEVNULL,
+                                         stdout=subprocess.PIPE, stderr=self._log,
+                                         text=True, encoding="utf-8", errors="replace",
+                                         bufsize=1)
+        self._reader = threading.Thread(target=self._read, name="warm-up progress",
+                                        daemon=True)
+        self._reader.start()
+
+    # what the subprocess says
+    def _read(self) -> None:
+        for line in self._process.stdout:
+            try:
+                event = json.loads(line)
+            except ValueError:
+                continue                        # not one of ours (a stray print)
+            if isinstance(event, dict):
+                self._take(event)
+        code = self._process.wait()
+        with self._lock:
+            if not self._finished:              # it ended without saying so (killed, crashed)
+                self._finished, self._ok = True, False
+                self._failed.append(f"the warm-up exited with code {code} before it finished")
+            self._lock.notify_all()
+        self._wake()
+        self._log.close()
+
+    def _take(self, event: dict) -> None:
+        kind = event.get("event")
+        with self._lock:
+            if kind == "start":
+                self._total = int(event.get("total", 0))
+            elif kind == "begin":
+                self._current.append(str(event.get("label")))
+            elif kind in ("done", "failed"):
+                label = str(event.get("label"))
+                if label in self._current:
+                    self._current.remove(label)
+                if kind == "done":
+                    self._done.append(label)
+                    self._scenes_done.update(event.get("scenes") or ())
+                else:
+                    self._failed.append(f"{label}: {event.get('error')}")
+            elif kind == "finished":
+                self._finished = True
+                self._ok = bool(event.get("ok"))
+                self._current.clear()
+            self._lock.notify_all()
+        self._wake()
+
+    def _wake(self) -> None:
+        if self._on_event is not None:
+            try:
+                self._on_event()
+            except Exception:                   # noqa: BLE001  (the window's; not ours)
+                pass
+
+    # what the window asks
+    @property
+    def total(self) -> int | None:
+        """How many steps the warm-up runs (None until it has said)."""
+        with self._lock:
+            return self._total
+
+    @property
+    def done(self) -> int:
+        """How many steps have succeeded."""
+        with self._lock:
+            return len(self._done)
+
+    @property
+    def current(self) -> tuple[str, ...]:
+        """The labels of the steps the workers are on now."""
+        with self._lock:
+            return tuple(self._current)
+
+    @property
+    def finished(self) -> bool:
+        """Whether the warm-up has ended (every step run, stopped, or the process gone)."""
+        with self._lock:
+            return self._finished
+
+    @property
+    def ok(self) -> bool | None:
+        """True when every step succeeded (the stamp is written), False when not, None
+        while it runs."""
+        with self._lock:
+            return self._ok
+
+    @property
+    def failed(self) -> list[str]:
+        """One message a failed step (``label: error``), and one if the process died."""
+        with self._lock:
+            return list(self._failed)
+
+    def ready_for(self, scene_path) -> bool:
+        """Whether the first pictures of ``scene_path`` will load, not compile: the step for
+        that shipped scene has succeeded, or the whole warm-up has finished."""
+        with self._lock:
+            return self._finished or self._covers(scene_path)
+
+    def _covers(self, scene_path) -> bool:
+        path = Path(scene_path).resolve()
+        return path.parent == self._scenes_dir and path.name in self._scenes_done
+
+    def wait_for(self, scene_path, timeout: float | None = None) -> bool:
+        """Block until :meth:`ready_for` ``scene_path`` (or ``timeout`` seconds); its value."""
+        with self._lock:
+            return self._lock.wait_for(lambda: self._finished or self._covers(scene_path),
+                                       timeout)
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Block until the warm-up has finished (or ``timeout`` seconds); :attr:`finished`."""
+        with self._lock:
+            return self._lock.wait_for(lambda: self._finished, timeout)
+
+    @property
+    def returncode(self) -> int | None:
+        """The subprocess's exit status, None while it runs."""
+        return self._process.poll()
+
+    def stop(self, timeout: float = 10.0) -> None:
+        """End the warm-up: SIGTERM (it terminates its workers and exits), SIGKILL after
+        ``timeout`` seconds (the workers then exit on their own: they watch their parent)."""
+        if self.finished and self._process.poll() is None:
+            try:                                # it has said its last: let it exit itself
+                self._process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                pass
+        if self._process.poll() is None:
+            self._process.terminate()
+            try:
+                self._process.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self._process.kill()
+                self._process.wait()
+        self._reader.join(timeout)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.stop()
 
 
 if __name__ == "__main__":

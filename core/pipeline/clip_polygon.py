@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.arrays import read_only
 from core.jit import njit, prange
 from core.settings import PROJECTIONS
 
@@ -362,7 +363,7 @@ def clip_triangles(points, triangles, attrs, projection: str,
     if not any_outside:  # the whole mesh is inside: trivial accept for every triangle
         return ClippedTriangles(points, triangles, attrs, _arange(triangles.shape[0]))
 
-    kept, todo, bad = _classify(triangles, codes)
+    kept, todo, bad = _classify(read_only(triangles), codes)     # one kernel type (core.arrays)
     if bad:
         raise ValueError(f"{bad} triangles name a vertex outside 0..{points.shape[0] - 1}")
     if todo.size == 0:
@@ -371,7 +372,7 @@ def clip_triangles(points, triangles, attrs, projection: str,
     if before_clip is not None:
         before_clip(triangles[todo].reshape(-1))
     new_points, new_attrs, new_triangles, new_source = _sutherland_hodgman(
-        points, triangles, attrs, codes, todo, perspective, float(z_min))
+        points, read_only(triangles), read_only(attrs), codes, todo, perspective, float(z_min))
     return ClippedTriangles(
         points=np.concatenate([points, new_points]),
         triangles=np.concatenate([triangles[kept], new_triangles]),

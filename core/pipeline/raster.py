@@ -66,6 +66,7 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
+from core.arrays import read_only
 from core.jit import njit, prange
 
 SUBPIXEL_BITS = 8
@@ -828,7 +829,7 @@ def _checked(xy_z, inv_w, triangles, width, height):
         raise ValueError(f"framebuffer size {width}x{height} outside 1..{MAX_SIZE}")
     xy_z = np.ascontiguousarray(xy_z, dtype=np.float64)
     inv_w = np.ascontiguousarray(inv_w, dtype=np.float64)
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64)
+    triangles = read_only(np.ascontiguousarray(triangles, dtype=np.int64))   # one kernel type
     if xy_z.ndim != 2 or xy_z.shape[1] != 3:
         raise ValueError(f"xy_z must be (V, 3), got {xy_z.shape}")
     if inv_w.shape != (xy_z.shape[0],):

@@ -12,6 +12,8 @@ together); the wireframe path keeps the numpy forms and so needs no compiler.
 from __future__ import annotations
 
 import numpy as np
+
+from core.arrays import read_only
 from core.jit import njit, prange
 
 
@@ -66,8 +68,8 @@ def transform_affine(m: np.ndarray, points: np.ndarray, out: np.ndarray | None =
     (into ``out`` when given)."""
     out = np.empty((len(points), 3)) if out is None else out
     kernel = _affine_parallel if len(points) >= PARALLEL_POINTS else _affine_serial
-    kernel(np.ascontiguousarray(m, dtype=np.float64), np.ascontiguousarray(points, dtype=np.float64),
-           out)
+    kernel(read_only(np.ascontiguousarray(m, dtype=np.float64)),
+           read_only(np.ascontiguousarray(points, dtype=np.float64)), out)
     return out
 
 
@@ -78,6 +80,6 @@ def transform_projective(m: np.ndarray, points: np.ndarray, out: np.ndarray | No
     out = np.empty((len(points), 3)) if out is None else out
     inv_w = np.empty(len(points)) if inv_w is None else inv_w
     kernel = _projective_parallel if len(points) >= PARALLEL_POINTS else _projective_serial
-    kernel(np.ascontiguousarray(m, dtype=np.float64),
-           np.ascontiguousarray(points, dtype=np.float64), out, inv_w)
+    kernel(read_only(np.ascontiguousarray(m, dtype=np.float64)),
+           read_only(np.ascontiguousarray(points, dtype=np.float64)), out, inv_w)
     return out, inv_w

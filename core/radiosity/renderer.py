@@ -31,6 +31,7 @@ SHADER = "radiosity"
 def _register_shader() -> None:
     from core.shading.gouraud import resolve_gouraud
     from core.shading.registry import Shader, register_shader
+    from core.arrays import read_only
     from core.shading.shade import concatenated, covered_spans
 
     def vertex(s, scene, meshes, weighting) -> None:
@@ -42,7 +43,7 @@ def _register_shader() -> None:
         resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
                          np.ascontiguousarray(vis.b1, dtype=np.float64),
                          np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
-                         triangles, attrs, out)
+                         triangles, read_only(attrs), out)
 
     register_shader(Shader(SHADER, vertex, pixel, varyings=("rgb",), width=3,
                            description="radiosity at the vertices, interpolated (Gouraud)"))

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.arrays import read_only
 from core.jit import njit, prange
 from core.shading.illumination import EYE_POINT, quantize
 from core.shading.registry import Shader, register_shader
@@ -93,7 +94,8 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
     _resolve_depth(np.ascontiguousarray(vis.tri, dtype=np.int32),
                    np.ascontiguousarray(vis.b1, dtype=np.float64),
                    np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
-                   triangles, np.ascontiguousarray(attrs, dtype=np.float64), axis, low, high,
+                   triangles, read_only(np.ascontiguousarray(attrs, dtype=np.float64)), axis,
+                   low, high,
                    lut, out)
 
 

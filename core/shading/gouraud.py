@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.arrays import read_only
 from core.jit import njit, prange
 from core.shading.illumination import phong_point, quantize
 from core.shading.registry import Shader, register_shader
@@ -109,7 +110,7 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
     resolve_gouraud(np.ascontiguousarray(vis.tri, dtype=np.int32),
                      np.ascontiguousarray(vis.b1, dtype=np.float64),
                      np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
-                     triangles, attrs, out)
+                     triangles, read_only(attrs), out)
 
 
 register_shader(Shader("gouraud", _prepare_gouraud, _pixel, varyings=("rgb",), width=3,

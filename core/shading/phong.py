@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.arrays import read_only
 from core.jit import njit, prange
 from core.shading.illumination import phong_point, quantize, unit3
 from core.shading.wide import resolve_phong_wide
@@ -58,8 +59,8 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
     (resolve_phong_wide if wide_shading(s) else _resolve_phong)(np.ascontiguousarray(vis.tri, dtype=np.int32),
                    np.ascontiguousarray(vis.b1, dtype=np.float64),
                    np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
-                   triangles, attrs, source, s.face_surface, s.surfaces, s.lights, s.ambient,
-                   s.eye, s.halfway, out)
+                   triangles, read_only(attrs), source, s.face_surface, s.surfaces, s.lights,
+                   s.ambient, s.eye, s.halfway, out)
 
 
 register_shader(Shader("phong", _prepare_phong, _pixel, varyings=("normal", "position"), width=6,

@@ -53,6 +53,7 @@ import numpy as np
 
 from core.camera.film import fill_bytes
 from core.context import DEFAULT_CONTEXT, RenderContext
+from core.arrays import read_only
 from core.jit import njit, prange
 from core.shading.illumination import (Eye, eye_from_view, pack_ambient, pack_eye, pack_lights,
                                         pack_surfaces, to_uint8)
@@ -272,8 +273,9 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
     if out is None:
         out = np.empty((height, width, 3), dtype=np.uint8)
     background8 = to_uint8(background).reshape(3)
-    triangles = np.ascontiguousarray(clipped_triangles, dtype=np.int64).reshape(-1, 3)
-    source = np.ascontiguousarray(source, dtype=np.int64).reshape(-1)
+    # read-only whether cached or fresh: each pixel kernel compiles for one type (core/arrays)
+    triangles = read_only(np.ascontiguousarray(clipped_triangles, dtype=np.int64).reshape(-1, 3))
+    source = read_only(np.ascontiguousarray(source, dtype=np.int64).reshape(-1))
     attrs = np.ascontiguousarray(clipped_attrs, dtype=np.float64)
     shader = get_shader(shading.mode)
     k = shader.width

@@ -32,6 +32,7 @@ import math
 
 import numpy as np
 
+from core.arrays import read_only
 from core.jit import njit, prange
 from core.shading.illumination import SQUARING_LIMIT, phong_point, quantize, unit3
 
@@ -204,8 +205,8 @@ def illuminate_wide(points, normals, surface, which, out, out_rows, surfaces, li
     the rows ``out_rows`` of ``out`` (one per point of ``which``). ``surface`` is each
     point's row of ``surfaces``; blocks of points run on all cores when ``parallel``."""
     kernel = _illuminate_blocks_parallel if parallel else _illuminate_blocks
-    kernel(points, normals, surface, which, out, out_rows, surfaces, lights, ambient, eye,
-           halfway)
+    kernel(read_only(points), read_only(normals), read_only(surface), which, out, out_rows,
+           surfaces, lights, ambient, eye, halfway)
 
 
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.arrays import read_only
 from core.jit import njit, prange
 from core.shading.illumination import OD, quantize
 from core.shading.registry import Shader, register_shader
@@ -172,7 +173,8 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
     demo_light = (s.lights[0, 1:4].copy() if len(s.lights) and s.lights[0, 0] == 0.0
                   else np.array(DEMO_LIGHT))
     _resolve(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
-             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, attrs, device_h, source,
+             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, read_only(attrs), device_h,
+             source,
              s.face_surface, s.surfaces, maps, texels, levels, textures, s.demo, demo_light, filter_, bump,
              s.lights, s.ambient, s.eye, s.halfway, background8, out)
 

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.arrays import read_only
 from core.jit import njit
 from core.visibility.split import cut_triangle, grow
 
@@ -67,7 +68,7 @@ def depth_sort(device: np.ndarray, inv_w: np.ndarray, triangles: np.ndarray,
     polygons overlap in z and in the image; the tests show it)."""
     device = np.ascontiguousarray(device, dtype=np.float64).reshape(-1, 3)
     inv_w = np.ascontiguousarray(inv_w, dtype=np.float64).reshape(-1)
-    triangles = np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3)
+    triangles = read_only(np.ascontiguousarray(triangles, dtype=np.int64).reshape(-1, 3))
     scale = float(np.abs(device).max()) + 1.0 if len(device) else 1.0
     out = _depth_sort(device, inv_w, triangles, EPSILON * scale, resolve)
     dev, iw, recipe, tris, source, counts = out
