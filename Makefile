@@ -34,7 +34,9 @@ warmup: $(STAMP)
 	$(WARMUP)
 	touch $(WARM)
 
-run: $(WARM)
+# The window does not wait for the warm-up: on a cold cache it compiles the kernels in worker
+# processes itself, draws what needs none at once, and says in its panel what is compiling.
+run: $(STAMP)
 	$(PY) -m app
 
 test: $(WARM)

@@ -37,6 +37,9 @@ class FakeWarmup:
         if self.on_wait is not None:
             self.on_wait(self, scene)
 
+    def wait(self, timeout):
+        self.wait_for(None, timeout)
+
 
 class FakeControl:
     def __init__(self, cancel_after=None):

@@ -63,14 +63,22 @@ class Outcome:
     error: str | None = None
 
 
+# The steps a worker runs, named rather than imported: app.tools.warmup starts this pool, so
+# the pool finds its list by name in the worker process (no import cycle between the two).
+STEPS = "app.tools.warmup:all_steps"
+
+
+def _named(target: str):
+    module, _, name = target.partition(":")
+    return getattr(importlib.import_module(module), name)
+
+
 def load_steps(extra: str | None):
     """(label, run) of every warm-up step, and of ``extra`` (``module:function`` returning
     more of them; the tests' steps)."""
-    from app.tools import warmup
-    todo = warmup.all_steps()
+    todo = _named(STEPS)()
     if extra:
-        module, _, name = extra.partition(":")
-        todo += getattr(importlib.import_module(module), name)()
+        todo += _named(extra)()
     return todo
 
 

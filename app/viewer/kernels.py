@@ -93,11 +93,14 @@ def _wait(warmup, scene_source, control, kernel: str, whole: bool, poll: float) 
     while not ready():
         if control is not None:
             control.check()
-            total = max(warmup.total, 1)
-            control.report(warmup.done / total,
+            total = warmup.total or 0
+            control.report(warmup.done / max(total, 1),
                            f"waiting for its kernels ({kernel}): {warmup.done} of "
-                           f"{warmup.total} warm-up steps done in worker processes")
-        warmup.wait_for(None if whole else scene_source, poll)
+                           f"{total or '?'} warm-up steps done in worker processes")
+        if whole:
+            warmup.wait(poll)
+        else:
+            warmup.wait_for(scene_source, poll)
 
 
 def status(warmup) -> str:
@@ -110,5 +113,5 @@ def status(warmup) -> str:
         failed = warmup.failed
         return (f"kernel warm-up failed ({failed[0] if failed else 'see the log'}): "
                 "frames that need a missing kernel compile it here")
-    return (f"compiling kernels in worker processes: {warmup.done} of {warmup.total} steps"
+    return (f"compiling kernels in worker processes: {warmup.done} of {warmup.total or '?'} steps"
             + (f" ({', '.join(warmup.current)})" if warmup.current else ""))

@@ -137,10 +137,15 @@ def prime_kernels(state) -> threading.Thread | None:
     and each cached kernel ~10 ms to load; the window's own set-up (X11, the GL context, the
     panel) takes as long again. A 16 x 16 frame with the window's settings needs the same
     compiled code, so when the window asks for its first frame most kernels are in memory.
-    The default scene (lines only) needs no kernel: nothing is started for it.
+    The default scene (lines only) needs no kernel: nothing is started for it; nor on a cold
+    kernel cache, which the window's worker processes fill (a compile here would hold the GIL
+    the window needs).
     """
     settings = state.settings()
     if settings.shading == "wireframe" or not state.scene.triangle_count or not state.renderable:
+        return None
+    from app.tools.warm_stamp import is_warm
+    if not is_warm():
         return None
 
     def prime():
@@ -171,6 +176,9 @@ def prime_while_loading(source: str, renderer: str | None) -> threading.Thread |
     settings = _peeked_settings(source, renderer)
     if settings is None:
         return None
+    from app.tools.warm_stamp import is_warm
+    if not is_warm():
+        return None                       # a cold cache: the window's worker processes fill it
     # numba's modules import one another: imported on two threads at once (this one and the
     # scene reader's, for creases), one thread may meet the other's half-made module and the
     # viewer exits ("partially initialized module 'numba.core.event'", seen once in CI). So

@@ -125,6 +125,15 @@ def shipped_scenes() -> list[Path]:
                   and p.suffix not in NOT_SCENES)
 
 
+def _glfw_message(error) -> str:
+    """glfw's own words for ``error``: pyGLFW's message is ``(code) b'words'``."""
+    text = str(error)
+    code, _, words = text.partition(" ")
+    if code.startswith("(") and words.startswith(("b'", 'b"')) and len(words) > 3:
+        return words[2:-1]
+    return text
+
+
 def create_window(size: tuple[int, int], title: str):
     """A glfw window with an OpenGL 3.3 core context whose framebuffer is ``size`` pixels
     (the picture and the panel beside it).
@@ -146,7 +155,7 @@ def create_window(size: tuple[int, int], title: str):
             raise WindowError("glfw could not create a window")
     except glfw.GLFWError as error:
         glfw.terminate()
-        raise WindowError(str(error)) from None
+        raise WindowError(f"glfw: {_glfw_message(error)}") from None
     finally:
         glfw.ERROR_REPORTING = reporting
     # HiDPI: the window size is in screen points; scale it so the framebuffer gets the pixels.
@@ -208,6 +217,8 @@ class ViewerWindow:
         self._compiles_at_request = 0
         self.tools = InspectorTools(state)    # issue 22: inspect mode, buffer views, compare
         self._install_callbacks()
+        self.warmup = None
+        self._start_kernel_processes()
 
     # -- geometry: the picture at the top-left, the panel to its right -----------------------
     def _scale(self) -> float:
@@ -481,6 +492,7 @@ class ViewerWindow:
         imgui.new_frame()
         self._handle_clicks()
 
+        self._note_kernels()
         self.state.tick(time.perf_counter(), busy=self.worker.waiting)
         if self.state.request(self.worker):
             self._compiles_at_request = compile_count()
@@ -530,10 +542,40 @@ class ViewerWindow:
             self._start_warm_up()
         return True
 
+    def _start_kernel_processes(self) -> None:
+        """A cold kernel cache: compile it in worker processes, and gate the frames on it
+        (app/viewer/kernels.py); a warm one needs nothing."""
+        from app.tools.warmup import BackgroundWarmup, is_warm
+        if is_warm():
+            return
+        from app.viewer.kernels import gated
+        try:
+            self.warmup = BackgroundWarmup(first_scene=self.state.scene_source,
+                                           on_event=glfw.post_empty_event)
+        except OSError as error:          # no process could be started: compile here instead
+            log.warning("could not start the kernel warm-up processes: %s", error)
+            return
+        log.info("kernel cache cold: compiling the kernels in worker processes (log: %s)",
+                 self.warmup.log_path)
+        self._kernels_logged = False
+        self.state.gate = lambda run: gated(run, self.warmup, self.state.scene_source)
+
+    def _note_kernels(self) -> None:
+        """Once the warm-up's processes are done: say so, and stop gating frames."""
+        if self.warmup is None or not self.warmup.finished or self._kernels_logged:
+            return
+        self._kernels_logged = True
+        self.state.gate = None
+        if self.warmup.ok:
+            self._log_since_start("all kernels ready")
+        else:
+            log.warning("kernel warm-up failed: %s", "; ".join(self.warmup.failed) or "see above")
+        self._wake()
+
     def _start_warm_up(self) -> None:
         """After the first frame: load (or compile) every other kernel in the background."""
-        if self._warming:
-            return
+        if self._warming or self.warmup is not None:
+            return                        # worker processes compile them (issue 33)
         self._warming = True
         from app.tools.warmup import steps
         self.worker.add_background(steps())
@@ -814,7 +856,11 @@ class ViewerWindow:
 
     def _progress_text(self) -> str:
         """What the worker is doing, how long it has taken, and whether it compiles."""
+        from app.viewer.kernels import status
         p = self.worker.progress()
+        compiling = status(self.warmup) if self.warmup is not None else ""
+        if compiling and not self.warmup.finished and not (p.what and p.frame):
+            return compiling
         compiled = compile_count() - self._compiles_at_request
         extra = f", compiling kernels ({compiled} so far)" if compiled else ""
         if p.what and p.frame:
@@ -826,7 +872,7 @@ class ViewerWindow:
                     f"{p.what}) {time.perf_counter() - p.since:.1f} s{extra}")
         if p.done < p.total:
             return f"loading kernels in the background: {p.done} of {p.total}"
-        return "ready"
+        return compiling or "ready"
 
     def _timeline(self) -> None:
         """An animated scene: play / pause, step, the timeline slider and the speed."""
@@ -912,6 +958,8 @@ class ViewerWindow:
 
     def close(self) -> None:
         self.worker.stop()
+        if self.warmup is not None:
+            self.warmup.stop()            # its processes end with the window
         self.gui.release()
         self.blit.release()
         imgui.destroy_context(self.gui_context)
