@@ -15,10 +15,19 @@ packages=(${FVD_WHEEL_PACKAGES:-"numpy>=1.26" "numba>=0.59" llvmlite "moderngl>=
           kiwisolver fonttools cycler pyparsing python-dateutil packaging
           "threadpoolctl>=3" "av>=12" "dask>=2024.1" distributed msgpack psutil tornado pyyaml
           markupsafe})
+tags() {           # pip takes manylinux_2_28_x86_64 literally: name every glibc up to 2.28
+  case "$1" in
+    manylinux_2_28_*) local arch=${1#manylinux_2_28_} v
+                      for v in $(seq 17 28); do printf -- '--platform manylinux_2_%s_%s ' "$v" "$arch"; done
+                      printf -- '--platform manylinux2014_%s' "$arch" ;;
+    *) printf -- '--platform %s' "$1" ;;        # pip widens macosx_14_0_arm64 itself
+  esac
+}
 check() {                               # package python platform
   local dir; dir=$(mktemp -d)
+  # shellcheck disable=SC2046
   if "${pip[@]}" download -q --only-binary :all: --no-deps --python-version "$2" \
-       --platform "$3" -d "$dir" "$1" >/dev/null 2>&1; then
+       $(tags "$3") -d "$dir" "$1" >/dev/null 2>&1; then
     printf '%s\t%s\t%s\t%s\n' "$1" "$2" "$3" "$(ls "$dir")"
   else
     printf '%s\t%s\t%s\tMISSING\n' "$1" "$2" "$3"
