@@ -8,7 +8,7 @@ startup_gc.pause()                  # until the first picture (see app/startup_g
 from app.cli import main  # noqa: E402  (after the pause: its imports are most of a start)
 
 try:
-    status = main()
+    status = main(prog="python -m app")
     sys.stdout.flush()
 except BrokenPipeError:
     # The reader went away (``python -m app stability --json | head``): not an error of ours.

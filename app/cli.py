@@ -1,8 +1,11 @@
-"""The command line: ``python -m app COMMAND ...``, COMMAND one of view, render, matrices, plan,
-bench, report, stability, animate, warmup, inspect, compare (``view`` when none is given).
+"""The command line: ``fvd-viewer COMMAND ...`` or ``python -m app COMMAND ...``, COMMAND one of
+view, render, matrices, plan, bench, report, stability, animate, warmup, inspect, compare,
+radiosity (``view`` when none is given), with the global options ``--version``, ``-v`` /
+``--verbose`` and ``-q`` / ``--quiet`` before or after it.
 
 Only parsing and dispatch live here; each command's body is in its own module and is imported
-when that command runs, so that ``python -m app --help`` and the window start fast.
+when that command runs, so that ``--help`` and the window start fast (``--version`` imports
+neither numpy nor numba).
 """
 
 from __future__ import annotations
@@ -17,7 +20,6 @@ from pathlib import Path
 from types import SimpleNamespace
 
 from app import startup_gc
-from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate",
             "warmup", "inspect", "compare", "radiosity")
 RASTERIZER_CHOICES = ("edge", "scanline")
@@ -65,13 +67,81 @@ def attach_values(argv: list[str], options=("--size",)) -> list[str]:
     return out
 
 
-def _parser(command: str | None = None) -> argparse.ArgumentParser:
+def __getattr__(name: str):
+    """``PROJECTION_CHOICES`` and ``SHADING_CHOICES`` on first use: importing ``core`` imports
+    numpy, which ``--version`` does without."""
+    if name in ("PROJECTION_CHOICES", "SHADING_CHOICES"):
+        from core import settings
+        return settings.PROJECTIONS if name == "PROJECTION_CHOICES" else settings.SHADINGS
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+# -- global options: --version, -v / --verbose, -q / --quiet, before or after the command
+VERBOSE = ("-v", "--verbose")
+QUIET = ("-q", "--quiet")
+
+
+def global_options(argv: list[str]) -> tuple[list[str], bool, str | None]:
+    """``(argv without them, --version asked, "verbose" | "quiet" | None)``: the global options
+    taken out wherever they stand before a ``--``, so that every command accepts them before
+    or after its name (``fvd-viewer -q render ...``, ``fvd-viewer render ... -q``)."""
+    rest, version, loudness = [], False, None
+    for i, token in enumerate(argv):
+        if token == "--":
+            rest.extend(argv[i:])
+            break
+        if token == "--version":
+            version = True
+        elif token in VERBOSE + QUIET:
+            said = "verbose" if token in VERBOSE else "quiet"
+            if loudness not in (None, said):
+                raise ValueError("-v/--verbose and -q/--quiet cannot be used together")
+            loudness = said
+        else:
+            rest.append(token)
+    return rest, version, loudness
+
+
+def _global_arguments(parser: argparse.ArgumentParser, top: bool) -> None:
+    """The global options in a parser's --help (:func:`global_options` has taken them out of
+    the command line before argparse sees it)."""
+    g = parser.add_argument_group("global options (before or after the command)")
+    if top:
+        g.add_argument("--version", action="store_true",
+                       help="print the version, and Python's and the key packages', and exit")
+    g.add_argument("-v", "--verbose", action="store_true",
+                   help="also log what happens and how long it takes (INFO lines on stderr)")
+    g.add_argument("-q", "--quiet", action="store_true",
+                   help="log errors only (a command's own results and error lines stay)")
+
+
+class _CommandParser(argparse.ArgumentParser):
+    """A command's parser: its --help lists -v and -q too."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        _global_arguments(self, top=False)
+
+
+def default_prog() -> str:
+    """The program's name as it was started: ``fvd-viewer`` (the installed script, by its
+    file's name) or ``python -m app``."""
+    name = Path(sys.argv[0]).name if sys.argv and sys.argv[0] else ""
+    if not name or name in ("__main__.py", "-c") or name.startswith("python"):
+        return "python -m app"
+    return name.removesuffix(".exe").removesuffix("-script.py")
+# --
+
+
+def _parser(command: str | None = None, prog: str = "python -m app") -> argparse.ArgumentParser:
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
     p = argparse.ArgumentParser(
-        prog="python -m app",
+        prog=prog,
         description="A CPU reference renderer: the Foley-van Dam viewing pipeline, scan-line "
                     "z-buffer and shading, shown through OpenGL. With no command, opens the "
                     "viewer on the default scene (the FvDFH house).")
-    sub = p.add_subparsers(dest="command")
+    _global_arguments(p, top=True)
+    sub = p.add_subparsers(dest="command", parser_class=_CommandParser)
     scene_help = ("a scene file (.toml), a .tri file, a mesh (.obj/.ply/.off/.stl), a bare view "
                   "file (shown with the house), or - for a view file on standard input")
 
@@ -337,13 +407,29 @@ def _course_options(p: argparse.ArgumentParser) -> None:
                         "and mouse buttons left Phong, middle Gouraud, right flat")
 
 
-def main(argv: list[str] | None = None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
+def main(argv: list[str] | None = None, prog: str | None = None) -> int:
+    """Run the command line ``argv`` (default: this process's); 0 on success. ``prog`` names
+    the program in --help and in usage errors (default: as it was started)."""
+    argv = sys.argv[1:] if argv is None else list(argv)
+    prog = prog or default_prog()
+    try:
+        argv, version, loudness = global_options(argv)
+    except ValueError as error:
+        print(f"{prog}: error: {error}", file=sys.stderr)
+        return 2
+    if version:
+        from app.versions import version_text
+        print(version_text())
+        return 0
+    import logging
+    from app.viewer.launch import setup_logging
+    setup_logging({"verbose": logging.INFO, "quiet": logging.ERROR}.get(loudness,
+                                                                        logging.WARNING))
     if not argv and views_on_stdin():
         argv = ["view", "-"]                  # `python -m app < grade.data`, as the course grades
     if not argv or (argv[0] not in COMMANDS and argv[0] not in ("-h", "--help")):
         argv = ["view", *argv]                # `python -m app [SCENE]` opens the viewer
-    args = _parser(argv[0]).parse_args(attach_values(argv))
+    args = _parser(argv[0], prog).parse_args(attach_values(argv))
     if argv[0] != "view":           # the viewer resumes at its first frame
         startup_gc.resume()
     try:
@@ -671,6 +757,7 @@ def _buffer_argument(parser) -> None:
 
 
 def _inspector_parsers(sub, scene_help: str) -> None:
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
     i = sub.add_parser("inspect", help="why one pixel has its colour: the renderer's record")
     c = sub.add_parser("compare", help="hold a picture (PNG) against our render of the same "
                                        "view: a diff heat map and a verdict (exit 1: differs)")

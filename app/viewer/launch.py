@@ -46,9 +46,17 @@ def process_age() -> float:
 _IMPORTED_AT = time.perf_counter()
 
 
-def setup_logging() -> None:
-    """Logger ``fvd`` to stderr, and to ``$FVD_LOG`` when it is set. Idempotent."""
+def setup_logging(level: int | None = None) -> None:
+    """Logger ``fvd``: to stderr at ``level`` and up (WARNING unless told: the command line's
+    ``-v`` gives INFO, ``-q`` ERROR), and every INFO line to ``$FVD_LOG`` when it is set,
+    whatever ``level`` is (the window tests read it). Called again, only the level changes.
+
+    What a user must see is not logged but printed (the no-display notice, the files written,
+    a saved screenshot's path, errors), so the quiet default hides only the timings and the
+    record of actions."""
     if getattr(log, "_fvd_configured", False):
+        if level is not None:
+            log._fvd_stderr.setLevel(level)
         return
     log._fvd_configured = True
     log.setLevel(logging.INFO)
@@ -56,7 +64,9 @@ def setup_logging() -> None:
     fmt = logging.Formatter("fvd %(relativeCreated)8.0fms %(message)s")
     stderr = logging.StreamHandler(sys.stderr)
     stderr.setFormatter(fmt)
+    stderr.setLevel(logging.WARNING if level is None else level)
     log.addHandler(stderr)
+    log._fvd_stderr = stderr
     path = os.environ.get("FVD_LOG")
     if path:
         try:
@@ -65,6 +75,7 @@ def setup_logging() -> None:
             print(f"FVD_LOG={path}: cannot write the log: {error}", file=sys.stderr)
         else:
             handler.setFormatter(fmt)
+            handler.setLevel(logging.INFO)
             log.addHandler(handler)
 
 

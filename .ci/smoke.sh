@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# The smoke set for one Python, on a clean clone: does the program install from wheels alone
+# and run there?
+#
+#   .ci/smoke.sh PYTHON [REPO]     e.g. .ci/smoke.sh /root/.pyenv/versions/3.13.0/bin/python
+#
+# REPO (default: this checkout) is cloned into a temporary folder (its committed HEAD: commit
+# first), with ../shared beside it linked when REPO has one. Then, each phase timed:
+#   install  a venv; `pip install --only-binary :all: REPO[test]` with CC=false CXX=false:
+#            every dependency from a wheel, no compiler (pip builds only the project itself,
+#            which is pure Python)
+#   cli      the installed `fvd-viewer --help` and `--version`, and `python -m app --version`
+#   render   every shipped scene (app.tools.warmup.shipped_scenes) at 64x48 by the installed
+#            program, each PNG checked to exist, be 64x48 and not be one flat colour (the
+#            first run on a Python compiles the numba kernels from nothing: most of the time)
+#   window   the real-window smoke tests under Xvfb (first frame, clicks, menus, keys,
+#            screenshots), from the clone, with the test extras installed on this Python
+# FVD_SMOKE_PHASES="cli render" runs only those (install always runs). Any failure exits
+# non-zero with a line naming the Python and the phase. FVD_SMOKE_KEEP=1 keeps the folder.
+set -euo pipefail
+
+python=${1:?usage: .ci/smoke.sh PYTHON [REPO]}
+repo=$(cd "${2:-$(dirname "$0")/..}" && pwd)
+phases=${FVD_SMOKE_PHASES:-cli render window}
+name=$("$python" -c 'import sys; print("Python %d.%d.%d" % sys.version_info[:3])' 2>/dev/null) \
+  || { echo "smoke: $python: not a working Python" >&2; exit 1; }
+work=$(mktemp -d "${TMPDIR:-/tmp}/fvd-smoke.XXXXXX")
+[ -n "${FVD_SMOKE_KEEP:-}" ] || trap 'rm -rf "$work"' EXIT
+clone=$work/fvd-viewer
+venv=$work/venv
+py=$venv/bin/python
+phase=set-up
+started=$SECONDS
+phase_started=$SECONDS
+times=()
+
+fail() { echo "smoke: $name ($python): $phase failed${1:+: $1}" >&2; exit 1; }
+trap 'fail "exit status $? at line $LINENO"' ERR
+begin() { phase=$1; phase_started=$SECONDS; echo "smoke: $name: $phase ..."; }
+end() {
+  local took=$((SECONDS - phase_started))
+  times+=("$phase ${took}s")
+  echo "smoke: $name: $phase done in ${took}s"
+}
+
+begin clone
+git clone -q "$repo" "$clone"
+if [ -d "$repo/../shared" ]; then ln -s "$(cd "$repo/../shared" && pwd)" "$work/shared"; fi
+end
+
+begin install
+"$python" -m venv "$venv"
+# No compiler: a dependency without a wheel for this Python fails here, loudly.
+CC=false CXX=false PIP_ONLY_BINARY=:all: "$py" -m pip install -q --disable-pip-version-check \
+  "$clone[test]" || fail "a dependency has no wheel for $name (see pip's message above)"
+end
+
+cd "$work"                          # not the clone: the installed program is the one that runs
+if [[ " $phases " == *" cli "* ]]; then
+  begin cli
+  "$venv/bin/fvd-viewer" --help > help.txt
+  grep -q '^usage: fvd-viewer ' help.txt || fail "--help does not name fvd-viewer"
+  for v in "$venv/bin/fvd-viewer --version" "$py -m app --version"; do
+    out=$($v)
+    [[ "$out" == "fvd-viewer "* && "$out" == *"Python ${name#Python }"* ]] \
+      || fail "'$v' printed: $out"
+  done
+  end
+fi
+
+if [[ " $phases " == *" render "* ]]; then
+  begin render
+  # the scene list from the installed package; the files from the clone (a scene may read
+  # ../../shared beside the repository, as the bunny does)
+  mapfile -t scenes < <("$py" -c 'from app.tools.warmup import shipped_scenes
+print(*(p.name for p in shipped_scenes()), sep="\n")')
+  [ ${#scenes[@]} -gt 0 ] || fail "no shipped scenes in the installed package"
+  mkdir -p png
+  for scene in "${scenes[@]}"; do
+    t=$SECONDS
+    [ -f "$clone/scenes/$scene" ] || fail "$scene is in the package but not in scenes/"
+    "$venv/bin/fvd-viewer" -q render "$clone/scenes/$scene" --size 64x48 \
+      --out "png/${scene%.*}.png" > /dev/null || fail "render $scene"
+    "$py" - "png/${scene%.*}.png" <<'EOF' || fail "render $scene: the PNG is missing or blank"
+import sys
+from PIL import Image
+with Image.open(sys.argv[1]) as image:
+    low, high = zip(*image.convert("RGB").getextrema())
+    assert image.size == (64, 48), image.size
+    assert low != high, f"one flat colour {low}"
+EOF
+    echo "  $scene $((SECONDS - t))s"
+  done
+  end
+fi
+
+if [[ " $phases " == *" window "* ]]; then
+  begin window
+  cd "$clone"
+  CI=true "$py" -m pytest -q -p no:cacheprovider tests/test_window.py tests/test_window_newcomer.py \
+    -k "click_menu_and_keys_under_xvfb or screenshots_follow_the_naming_rule" \
+    || fail "the window tests"
+  end
+fi
+
+echo "smoke: $name: passed in $((SECONDS - started))s (${times[*]})"
