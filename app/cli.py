@@ -228,7 +228,10 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
     st = sub.add_parser("stability", help="the stiff and extreme cases, PASS/FAIL")
     st.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
-    sub.add_parser("warmup", help="compile every kernel once (make does it), with progress")
+    wu = sub.add_parser("warmup", help="compile every kernel once, on every core, with progress")
+    if command == "warmup":                   # its options live with its body (app/tools/warmup.py)
+        from app.tools.warmup import add_arguments as warmup_arguments
+        warmup_arguments(wu)
     _inspector_parsers(sub, scene_help)       # issue 22
     return p
 
