@@ -34,9 +34,9 @@ warmup: $(STAMP)
 	$(WARMUP)
 	touch $(WARM)
 
-# The warm-up runs on every core first (about 150 s from nothing on 2 cores); the window can
-# also compile in worker processes itself (app/viewer/kernels.py), not yet the default here.
-run: $(WARM)
+# The window opens at once: on a cold kernel cache it starts the warm-up in worker processes
+# itself and draws each frame as soon as its kernels are ready (app/viewer/kernels.py).
+run: $(STAMP)
 	$(PY) -m app
 
 test: $(WARM)

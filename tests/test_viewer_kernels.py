@@ -25,20 +25,24 @@ class FakeWarmup:
     def __init__(self, total=10, on_wait=None):
         self.total, self.done, self.current = total, 0, []
         self.finished, self.ok, self.failed = False, True, []
-        self.ready: set = set()
+        self.ready: set = set()             # files whose first picture is compiled
+        self.ready_all: set = set()         # files whose every-setting step is done
         self.waits: list = []
         self.on_wait = on_wait
 
-    def ready_for(self, scene):
-        return self.finished or scene in self.ready
+    def ready_for(self, scene, every_setting=False):
+        return self.finished or scene in self.ready_all or (
+            not every_setting and scene in self.ready)
 
-    def wait_for(self, scene, timeout):
-        self.waits.append(scene)
+    def wait_for(self, scene, timeout, every_setting=False):
+        self.waits.append(scene if not every_setting else (scene, "every setting"))
         if self.on_wait is not None:
-            self.on_wait(self, scene)
+            self.on_wait(self, self.waits[-1])
 
     def wait(self, timeout):
-        self.wait_for(None, timeout)
+        self.waits.append(None)
+        if self.on_wait is not None:
+            self.on_wait(self, None)
 
 
 class FakeControl:
@@ -113,15 +117,29 @@ def test_a_frame_waits_for_its_scenes_steps_then_draws():
 def test_a_kernel_the_scenes_steps_did_not_make_waits_for_the_whole_warm_up():
     kernel = fresh_kernel()
 
-    def on_wait(warmup, scene):
-        if scene is None:                         # waiting for everything now
+    def on_wait(warmup, waited):
+        if waited is None:                        # waiting for everything now
             warmup.finished = True
+        elif isinstance(waited, tuple):           # its every-setting step done: still missing
+            warmup.ready_all.add(waited[0])
         else:
-            warmup.ready.add(scene)               # its steps done, yet the kernel is missing
+            warmup.ready.add(waited)              # its first picture done, yet still missing
 
     warmup = FakeWarmup(on_wait=on_wait)
     assert gated(lambda c: kernel(1), warmup, "odd.obj")(FakeControl()) == 2
-    assert warmup.waits == ["odd.obj", None]      # then compiled here, the warm-up over
+    # its first picture, then its every setting, then everything; then compiled here
+    assert warmup.waits == ["odd.obj", ("odd.obj", "every setting"), None]
+
+
+def test_a_frame_without_a_file_waits_for_the_whole_warm_up():
+    kernel = fresh_kernel()
+
+    def on_wait(warmup, waited):
+        warmup.finished = True
+
+    warmup = FakeWarmup(on_wait=on_wait)
+    assert gated(lambda c: kernel(1), warmup, None)(FakeControl()) == 2
+    assert warmup.waits == [None]
 
 
 def test_a_newer_request_ends_the_wait():

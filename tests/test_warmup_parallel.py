@@ -232,6 +232,7 @@ def test_ready_for_a_shipped_scene_when_its_step_is_done():
     import threading
     run._lock = threading.Condition()
     run._total, run._done, run._current, run._scenes_done = None, [], [], set()
+    run._opened = set()
     run._failed, run._finished, run._ok, run._on_event = [], False, None, None
     run._scenes_dir = (ROOT / "scenes").resolve()
     bunny = ROOT / "scenes" / "glass_bunny.toml"
@@ -241,13 +242,44 @@ def test_ready_for_a_shipped_scene_when_its_step_is_done():
     run._take({"event": "done", "k": 1, "total": 2, "label": warmup.scene_label(bunny),
                "seconds": 1.0, "scenes": [bunny.name]})
     assert run.ready_for(bunny) and not run.ready_for(ROOT / "scenes" / "sphere.toml")
+    assert run.ready_for(bunny, every_setting=True)
     assert not run.ready_for(Path("/elsewhere") / bunny.name)   # a file of the same name
     assert run.wait_for(bunny, timeout=0)
-    run._take({"event": "failed", "k": 2, "total": 2, "label": "x", "error": "E: e",
+    mine = Path("/elsewhere/mine.obj")
+    run._take({"event": "done", "k": 2, "total": 3, "label": warmup.opening_label(mine),
+               "seconds": 1.0, "scenes": [], "opens": str(mine)})
+    assert run.ready_for(mine) and not run.ready_for(mine, every_setting=True)
+    run._take({"event": "failed", "k": 3, "total": 3, "label": "x", "error": "E: e",
                "seconds": 0.1, "scenes": []})
     run._take({"event": "finished", "seconds": 2.0, "ok": False, "failed": ["x"]})
-    assert (run.done, run.finished, run.ok, run.failed) == (1, True, False, ["x: E: e"])
+    assert (run.done, run.finished, run.ok, run.failed) == (2, True, False, ["x: E: e"])
     assert run.ready_for(ROOT / "scenes" / "sphere.toml")
+
+
+def test_first_puts_the_files_first_picture_ahead_of_every_step(tmp_path):
+    """``--first FILE`` (the window's cold start) adds one step, run first: FILE's first
+    picture with its own settings; its ``done`` event names the file it opens."""
+    scene = tmp_path / "mine.obj"                      # a file of the user's, not shipped
+    scene.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    command = _command(tmp_path / "warm.json", "test: quick", jobs=1) + ["--first", str(scene)]
+    done = subprocess.run(command, cwd=ROOT, env=_env(tmp_path), capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    events = _events(done.stdout)
+    assert events[0] == {"event": "start", "total": 2, "jobs": 1}
+    begun = [e["label"] for e in events if e["event"] == "begin"]
+    assert begun == ["mine.obj as it opens", "test: quick"]
+    opened = [e for e in events if e["event"] == "done" and "opens" in e]
+    assert [e["opens"] for e in opened] == [str(scene.resolve())]
+
+
+def test_first_with_a_missing_file_adds_no_step(tmp_path):
+    command = _command(tmp_path / "warm.json", "test: quick", jobs=1) + [
+        "--first", str(tmp_path / "gone.toml")]
+    done = subprocess.run(command, cwd=ROOT, env=_env(tmp_path), capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert [e["label"] for e in _events(done.stdout) if e["event"] == "begin"] == ["test: quick"]
 
 
 # ---------------------------------------------------------------------------------------

@@ -178,6 +178,22 @@ def scene_steps() -> list[tuple[str, Callable[[], object]]]:
     return [(scene_label(path), opener(path)) for path in shipped_scenes()]
 
 
+def opening_label(path) -> str:
+    """The label of the step that draws file ``path``'s first picture as the window opens it."""
+    return f"{Path(path).name} as it opens"
+
+
+def opening_steps(path) -> list[tuple[str, Callable[[], object]]]:
+    """One step: ``path``'s first picture with its own settings (the window's first frame).
+    Far fewer kernels than the scene's every-renderer step, so the window that asked for it
+    (``--first``) draws after this one step, not after the whole warm-up."""
+    def run():
+        from app.viewer.state import ViewerState
+        state = ViewerState.open(path, size=SIZE)
+        state._job()[0]()
+    return [(opening_label(path), run)]
+
+
 def all_steps() -> list[tuple[str, Callable[[], object]]]:
     """Every step of ``python -m app warmup``: the paths, then the shipped scenes."""
     return steps() + scene_steps()
@@ -295,7 +311,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     parser.add_argument("--progress-json", action="store_true",
                         help="one JSON object a line instead of the progress table")
     parser.add_argument("--first", default=None, metavar="PATH",
-                        help="the steps for this scene file first")
+                        help="first, the picture this file opens on (the window's first "
+                             "frame)")
     parser.add_argument("--only", action="append", default=None, metavar="TEXT",
                         help=argparse.SUPPRESS)     # steps whose label contains TEXT (tests)
     parser.add_argument("--extra-steps", default=None, metavar="MODULE:FUNCTION",
@@ -355,13 +372,14 @@ def main(args=None) -> int:
     if options.only:
         listed = [label for label in listed if any(text in label for text in options.only)]
     scenes = step_scenes()
-    first = Path(options.first).name if options.first else None
-    shipped = {p.resolve() for p in shipped_scenes()}
-    if options.first and Path(options.first).resolve() not in shipped:
-        first = None                            # a file of the user's: no step of its own
+    first = str(Path(options.first).resolve()) if options.first else None
+    if first is not None and not Path(first).is_file():
+        first = None                            # nothing to open: no step of its own
+    if first is not None:
+        listed.append(opening_label(first))
     todo = warmup_pool.order(listed, COSTS, DEFAULT_COST,
                              first=lambda label: first is not None
-                             and first in scenes.get(label, ()),
+                             and label == opening_label(first),
                              later=lambda label: label in scenes)
     jobs = options.jobs if options.jobs and options.jobs > 0 else warmup_pool.default_jobs()
     jobs = max(1, min(jobs, len(todo) or 1))
@@ -381,6 +399,8 @@ def main(args=None) -> int:
         k = len(finished)
         common = {"k": k, "total": n, "label": outcome.label,
                   "seconds": round(outcome.seconds, 3), "scenes": scenes.get(outcome.label, [])}
+        if first is not None and outcome.label == opening_label(first):
+            common["opens"] = first             # the window's first picture will load now
         if outcome.error is None:
             if as_json:
                 emit({"event": "done", **common})
@@ -395,7 +415,7 @@ def main(args=None) -> int:
     start = time.perf_counter()
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
-        outcomes = warmup_pool.run_parallel(todo, jobs, extra=options.extra_steps,
+        outcomes = warmup_pool.run_parallel(todo, jobs, extra=options.extra_steps, first=first,
                                             on_begin=on_begin, on_outcome=on_outcome)
     except KeyboardInterrupt:
         seconds = time.perf_counter() - start
@@ -448,6 +468,7 @@ class BackgroundWarmup:
         self._done: list[str] = []
         self._current: list[str] = []
         self._scenes_done: set[str] = set()
+        self._opened: set[str] = set()          # files whose first picture is compiled
         self._failed: list[str] = []
         self._finished = False
         self._ok: bool | None = None
@@ -502,6 +523,8 @@ class BackgroundWarmup:
                 if kind == "done":
                     self._done.append(label)
                     self._scenes_done.update(event.get("scenes") or ())
+                    if event.get("opens"):
+                        self._opened.add(str(event["opens"]))
                 else:
                     self._failed.append(f"{label}: {event.get('error')}")
             elif kind == "finished":
@@ -556,21 +579,26 @@ class BackgroundWarmup:
         with self._lock:
             return list(self._failed)
 
-    def ready_for(self, scene_path) -> bool:
-        """Whether the first pictures of ``scene_path`` will load, not compile: the step for
-        that shipped scene has succeeded, or the whole warm-up has finished."""
+    def ready_for(self, scene_path, every_setting: bool = False) -> bool:
+        """Whether pictures of ``scene_path`` will load, not compile: its first picture (the
+        ``--first`` step) or the step for that shipped scene in every renderer, shading and
+        filter (only that one with ``every_setting``) has succeeded, or the whole warm-up
+        has finished."""
         with self._lock:
-            return self._finished or self._covers(scene_path)
+            return self._finished or self._covers(scene_path, every_setting)
 
-    def _covers(self, scene_path) -> bool:
+    def _covers(self, scene_path, every_setting: bool) -> bool:
         path = Path(scene_path).resolve()
+        if not every_setting and str(path) in self._opened:
+            return True
         return path.parent == self._scenes_dir and path.name in self._scenes_done
 
-    def wait_for(self, scene_path, timeout: float | None = None) -> bool:
+    def wait_for(self, scene_path, timeout: float | None = None,
+                 every_setting: bool = False) -> bool:
         """Block until :meth:`ready_for` ``scene_path`` (or ``timeout`` seconds); its value."""
         with self._lock:
-            return self._lock.wait_for(lambda: self._finished or self._covers(scene_path),
-                                       timeout)
+            return self._lock.wait_for(
+                lambda: self._finished or self._covers(scene_path, every_setting), timeout)
 
     def wait(self, timeout: float | None = None) -> bool:
         """Block until the warm-up has finished (or ``timeout`` seconds); :attr:`finished`."""

@@ -66,6 +66,7 @@ class Outcome:
 # The steps a worker runs, named rather than imported: app.tools.warmup starts this pool, so
 # the pool finds its list by name in the worker process (no import cycle between the two).
 STEPS = "app.tools.warmup:all_steps"
+OPENING = "app.tools.warmup:opening_steps"     # (label, run) of one file's first picture
 
 
 def _named(target: str):
@@ -73,12 +74,14 @@ def _named(target: str):
     return getattr(importlib.import_module(module), name)
 
 
-def load_steps(extra: str | None):
-    """(label, run) of every warm-up step, and of ``extra`` (``module:function`` returning
-    more of them; the tests' steps)."""
+def load_steps(extra: str | None, first: str | None = None):
+    """(label, run) of every warm-up step, of ``extra`` (``module:function`` returning
+    more of them; the tests' steps), and of the first picture of the file ``first``."""
     todo = _named(STEPS)()
     if extra:
         todo += _named(extra)()
+    if first:
+        todo += _named(OPENING)(first)
     return todo
 
 
@@ -105,12 +108,12 @@ def one_line(error: BaseException) -> str:
     return f"{type(error).__name__}: {message}{where}"
 
 
-def _worker(tasks, results, extra: str | None) -> None:
+def _worker(tasks, results, extra: str | None, first: str | None = None) -> None:
     """Run the steps the queue hands out, until a ``None``."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)       # the parent decides; it terminates us
     _exit_with_parent()
     try:
-        todo = dict(load_steps(extra))
+        todo = dict(load_steps(extra, first))
     except BaseException as error:                     # noqa: BLE001  (reported, not raised)
         results.put(("broken", os.getpid(), one_line(error)))
         return
@@ -129,6 +132,7 @@ def _worker(tasks, results, extra: str | None) -> None:
 
 
 def run_parallel(labels: list[str], jobs: int, *, extra: str | None = None,
+                 first: str | None = None,
                  on_begin: Callable[[str], None] = lambda label: None,
                  on_outcome: Callable[[Outcome], None] = lambda outcome: None) -> list[Outcome]:
     """Run the steps ``labels`` (in that order off the queue) on ``jobs`` worker processes;
@@ -144,7 +148,7 @@ def run_parallel(labels: list[str], jobs: int, *, extra: str | None = None,
         tasks.put(None)
 
     def start():
-        worker = context.Process(target=_worker, args=(tasks, results, extra),
+        worker = context.Process(target=_worker, args=(tasks, results, extra, first),
                                  name="warm-up worker", daemon=True)
         worker.start()
         return worker

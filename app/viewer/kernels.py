@@ -9,10 +9,12 @@ in the panel, and renders each frame under :func:`gated`:
   compile (a cache miss) with a ``numba:compile`` event before it starts, and the listener
   raises :class:`KernelsNotReady` there. A frame whose kernels are all cached (the default
   scene's wireframe needs none) is drawn at once, whatever the warm-up is doing;
-- a frame that stopped so waits on the render thread, saying so, until the warm-up has done
-  the steps of its scene (``ready_for``) and then tries again, loading what the workers wrote;
-  if it still misses a kernel it waits for the whole warm-up; once the warm-up has finished
-  (or failed) nothing is refused and a kernel still missing compiles here, off the UI thread.
+- a frame that stopped so waits on the render thread, saying so, until the warm-up has
+  compiled its file's first picture (the step ``--first`` puts ahead of all others) and then
+  tries again, loading what the workers wrote; if it still misses a kernel (another renderer
+  or shading) it waits for its file's step in every setting, then for the whole warm-up
+  (:data:`STAGES`); once the warm-up has finished (or failed) nothing is refused and a
+  kernel still missing compiles here, off the UI thread.
 
 A newer request cancels the wait (:meth:`app.viewer.worker.Control.check`).
 """
@@ -66,29 +68,35 @@ def compiles_refused():
         _refusing.on = before
 
 
+# What a frame that found a kernel missing waits for, in turn: its file's first picture (the
+# warm-up's --first step), the file's step in every renderer, shading and filter, everything.
+STAGES = ("its first picture", "every setting of its file", "the whole warm-up")
+
+
 def gated(run, warmup, scene_source: str | None, poll: float = 0.25):
     """``run(control)`` that draws at once when its kernels are cached and otherwise waits for
     ``warmup`` (a :class:`app.tools.warmup.BackgroundWarmup`) as the module says."""
 
     def run_gated(control=None):
-        waited_for_scene = False
+        stage = 0
         while not warmup.finished:
             try:
                 with compiles_refused():
                     return run(control)
             except KernelsNotReady as missing:
-                whole = waited_for_scene      # the scene's steps were done and still missing
-                _wait(warmup, scene_source, control, str(missing), whole, poll)
-                waited_for_scene = True
+                _wait(warmup, scene_source, control, str(missing), stage, poll)
+                stage = min(stage + 1, len(STAGES) - 1)
         return run(control)
 
     return run_gated
 
 
-def _wait(warmup, scene_source, control, kernel: str, whole: bool, poll: float) -> None:
-    """Until the warm-up has done ``scene_source``'s steps (or all of them, ``whole``)."""
+def _wait(warmup, scene_source, control, kernel: str, stage: int, poll: float) -> None:
+    """Until the warm-up has done what :data:`STAGES` ``[stage]`` names for ``scene_source``."""
+    whole = stage == len(STAGES) - 1 or scene_source is None
+
     def ready():
-        return warmup.finished or (not whole and warmup.ready_for(scene_source))
+        return warmup.finished or (not whole and warmup.ready_for(scene_source, stage == 1))
 
     while not ready():
         if control is not None:
@@ -100,7 +108,7 @@ def _wait(warmup, scene_source, control, kernel: str, whole: bool, poll: float) 
         if whole:
             warmup.wait(poll)
         else:
-            warmup.wait_for(scene_source, poll)
+            warmup.wait_for(scene_source, poll, stage == 1)
 
 
 def status(warmup) -> str:
