@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import signal
 import subprocess
 import sys
@@ -319,7 +320,23 @@ def add_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
                         help=argparse.SUPPRESS)     # more (label, run) steps (tests)
     parser.add_argument("--stamp", default=None, metavar="PATH",
                         help=argparse.SUPPRESS)     # the stamp's path (tests)
+    parser.add_argument("--until-stdin-closes", action="store_true",
+                        help=argparse.SUPPRESS)     # the window's: end when the window has gone
     return parser
+
+
+def _end_when_stdin_closes() -> None:
+    """A daemon thread that interrupts the warm-up (as SIGTERM does) once standard input is
+    closed: the window that started it holds the other end, so a window that is killed or
+    crashes does not leave this process compiling on."""
+    def watch():
+        try:        # the raw descriptor: a daemon thread in a buffered read aborts at exit
+            while os.read(0, 4096):
+                pass
+        except OSError:
+            pass
+        os.kill(os.getpid(), signal.SIGTERM)
+    threading.Thread(target=watch, name="end with the window", daemon=True).start()
 
 
 def _options(args) -> argparse.Namespace:
@@ -414,6 +431,8 @@ def main(args=None) -> int:
 
     start = time.perf_counter()
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    if options.until_stdin_closes:
+        _end_when_stdin_closes()
     try:
         outcomes = warmup_pool.run_parallel(todo, jobs, extra=options.extra_steps, first=first,
                                             on_begin=on_begin, on_outcome=on_outcome)
@@ -474,7 +493,8 @@ class BackgroundWarmup:
         self._ok: bool | None = None
         self._on_event = on_event
         self._scenes_dir = (ROOT / "scenes").resolve()
-        command = [sys.executable, "-m", "app.tools.warmup", "--progress-json"]
+        command = [sys.executable, "-m", "app.tools.warmup", "--progress-json",
+                   "--until-stdin-closes"]
         if first_scene is not None:
             command += ["--first", str(first_scene)]
         if jobs:
@@ -483,7 +503,8 @@ class BackgroundWarmup:
         self.log_path = Path(log_path) if log_path else stamp_path().with_name("warmup.log")
         self.log_path.parent.mkdir(parents=True, exist_ok=True)
         self._log = open(self.log_path, "ab")
-        self._process = subprocess.Popen(command, cwd=ROOT, stdin=subprocess.DEVNULL,
+        # its stdin is ours: when this process ends, however it ends, the warm-up ends too
+        self._process = subprocess.Popen(command, cwd=ROOT, stdin=subprocess.PIPE,
                                          stdout=subprocess.PIPE, stderr=self._log,
                                          text=True, encoding="utf-8", errors="replace",
                                          bufsize=1)
