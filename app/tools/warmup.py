@@ -369,7 +369,10 @@ def main(args=None) -> int:
     as_json = options.progress_json
 
     def emit(event: dict) -> None:
-        print(json.dumps(event), flush=True)
+        try:
+            print(json.dumps(event), flush=True)
+        except BrokenPipeError:               # the reader (a window) has gone: no one to tell
+            sys.stdout = open(os.devnull, "w")
 
     def say(text: str, to=sys.stdout) -> None:
         if not as_json:
