@@ -225,13 +225,13 @@ def render_pixels(job: dict, k: int, animation=None) -> np.ndarray:
 
 def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tuple]:
     """A worker's task: the contiguous ``frames`` of the job, the scene read from the bundle
-    (unpacked once per worker), the particles restored from ``checkpoint`` (their state at
+    (unpacked once per worker), the simulations restored from ``checkpoint`` (their state at
     the first frame), so that nothing is simulated from t = 0."""
     from app.tools.bundle import unpack
     animation = _animation(str(unpack(bundle)), job.get("load_size"))
-    if checkpoint is not None and animation.particle_system is not None:
-        from core.animation.checkpoint import restore
-        restore(animation.particle_system, checkpoint)
+    if checkpoint is not None:
+        from core.animation.checkpoint import restore_animation
+        restore_animation(animation, checkpoint)
     return [render_frame(job, k, animation) for k in frames]
 
 
@@ -409,33 +409,25 @@ def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, anima
 
 
 class _Checkpoints:
-    """The particle state at the first frame of each run, asked for in order: a second
-    particle system steps on from where this process's is (simulation only) and is
-    snapshotted at each run's start. Without emitters there is nothing to carry (None)."""
+    """The simulations' state (particles, rigid bodies, flocks) at the first frame of each
+    run, asked for in order: copies of the simulations step on from where this process's
+    are (simulation only, :class:`core.animation.checkpoint.Shadow`). Without any there is
+    nothing to carry (None)."""
 
     def __init__(self, animation, fps: float):
-        from core.animation.checkpoint import restore, snapshot
+        from core.animation.checkpoint import Shadow
         self.animation, self.fps = animation, fps
-        system = animation.particle_system
-        self.sim = None
-        if system is not None:
-            from core.animation.particles import ParticleSystem
-            self.sim = ParticleSystem([system.specs[i] for i in system.roots], system.fps,
-                                      system.seed, system.substeps)
-            restore(self.sim, snapshot(system))
+        self.shadow = Shadow(animation)
 
     def at(self, k: int):
-        from core.animation.checkpoint import snapshot
-        if self.sim is None:
-            return None
-        self.sim.state_at(self.animation.local_time(k / self.fps))
-        return snapshot(self.sim)
+        return self.shadow.at(k / self.fps)
 
     def restore(self, k: int) -> None:
-        """Put this process's particles at frame ``k`` (the start of a run it renders)."""
-        from core.animation.checkpoint import restore
-        if self.sim is not None:
-            restore(self.animation.particle_system, self.at(k))
+        """Put this process's simulations at frame ``k`` (the start of a run it renders)."""
+        from core.animation.checkpoint import restore_animation
+        state = self.at(k)
+        if state is not None:
+            restore_animation(self.animation, state)
 
 
 def idle_mark() -> tuple[float, float] | None:
