@@ -11,3 +11,4 @@ from core.texture import scenekeys  # noqa: F401  (textures of a material; the d
 from core.effects import depth_cue  # noqa: F401  ([depth_cue])
 from core.animation import keys  # noqa: F401  ([animation], [[key]], [[emitter]])
 from core.animation import dynamics_keys  # noqa: F401  ([dynamics], [[body]])
+from core.animation import linkage_keys  # noqa: F401  ([[linkage]])
