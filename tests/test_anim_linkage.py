@@ -92,7 +92,7 @@ def test_joint_limits_hold_on_10000_random_targets_and_the_closed_form_is_found(
                                                                      L1 + L2 * np.cos(elbow))
     ok = inside & (elbow <= hi[1] - 1e-3) & (shoulder >= lo[0] + 1e-3) & (shoulder <= hi[0] - 1e-3)
     assert ok.sum() > 2500
-    assert np.abs(theta[ok, 1] - elbow[ok]).max() < 1e-8
+    assert np.abs(theta[ok, 1] - elbow[ok]).max() < 1e-6          # ill-conditioned near |c| = 1
     misses = np.linalg.norm([end(t) for t in theta[ok]] - targets[ok], axis=1)
     assert misses.max() < 1e-9
 
