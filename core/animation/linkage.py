@@ -210,10 +210,7 @@ def _descend(base, axes, bones, theta0, lo, hi, target, solver, damping, iterati
         tried = _error(base, axes, bones, trial, target, points, world_axes)
         if tried < error:
             theta[:] = trial
-            crawl = error - tried < 1e-9 * error        # the linear last approach: CCD's
             error, mu = tried, max(mu / 3.0, 1e-9)
-            if crawl:
-                break
         elif mu < 1e6:
             mu *= 4.0
         else:
