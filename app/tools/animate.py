@@ -82,6 +82,13 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     p.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's)")
     p.add_argument("--renderer", default=None, help="a registered renderer (default: zbuffer)")
     p.add_argument("--samples", type=_number(int, 1, 1024), default=None, help="samples per pixel")
+    p.add_argument("--motion-blur", type=_number(int, 1, 1024), default=1, metavar="SAMPLES",
+                   help="motion blur: each frame the mean of SAMPLES frames over the shutter "
+                        "interval (the accumulation buffer; 1: sharp)")
+    p.add_argument("--shutter", type=_number(float, -1.0, 1.0), nargs=2, default=None,
+                   metavar=("OPEN", "CLOSE"),
+                   help="when the shutter opens and closes, in frames from the frame's time "
+                        "(default -0.25 0.25: a 180-degree shutter centred on it)")
     p.add_argument("--projection", choices=PROJECTIONS, default=None)
     p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
     p.add_argument("--view", type=_number(int, 1, 10 ** 6), default=None, metavar="K",
@@ -142,9 +149,31 @@ def job_of(args, animation, bundle, view_index: int) -> dict:
                 "projection": args.projection or scene.projection,
                 "shading": args.shading or scene.shading,
                 "renderer": args.renderer or "zbuffer", "view": view_index, "paths": args.paths}
+    shutter = _shutter(args)
+    if shutter.samples > 1:                  # (sharp jobs keep the hash they had)
+        settings["motion_blur"] = [shutter.samples, shutter.open, shutter.close]
     return {"scene": Path(args.scene).name, "bundle": bundle.digest, "fps": fps,
             "frames": int(count), "settings": settings,
             "load_size": list(args.size) if args.size else None}
+
+
+def _shutter(args):
+    """The options' :class:`~core.animation.frames.Shutter` (JobError when it cannot be)."""
+    from core.animation.frames import Shutter
+    samples = getattr(args, "motion_blur", 1) or 1
+    opening = getattr(args, "shutter", None)
+    if opening is not None and samples == 1:
+        raise JobError("--shutter is the motion blur's: give --motion-blur SAMPLES too")
+    try:
+        return Shutter(samples, *(opening or (Shutter.open, Shutter.close)))
+    except ValueError as error:
+        raise JobError(f"--shutter: {error}") from None
+
+
+def job_shutter(job: dict):
+    from core.animation.frames import Shutter
+    blur = job["settings"].get("motion_blur")
+    return Shutter(*blur) if blur else None
 
 
 def job_hash(job: dict) -> str:
@@ -217,7 +246,7 @@ def render_pixels(job: dict, k: int, animation=None) -> np.ndarray:
                                         samples=s["samples"], projection=s["projection"],
                                         shading=s["shading"], renderer=s["renderer"])
     frame = render_at(animation, k / job["fps"], settings, view_index=s["view"],
-                      paths=s["paths"])
+                      paths=s["paths"], shutter=job_shutter(job))
     if frame.message:
         raise RuntimeError(f"frame {k}: {frame.message}")
     return frame.color
@@ -371,7 +400,7 @@ def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, anima
     from app.tools.cluster import completed
     shipped = client.scatter(bundle, broadcast=True, hash=False)
     runs = Runs(frames, workers + here)
-    checkpoints = _Checkpoints(animation, job["fps"])
+    checkpoints = _Checkpoints(animation, job["fps"], job_shutter(job))
     in_flight = {}
     done = completed(client)
 
@@ -414,13 +443,15 @@ class _Checkpoints:
     are (simulation only, :class:`core.animation.checkpoint.Shadow`). Without any there is
     nothing to carry (None)."""
 
-    def __init__(self, animation, fps: float):
+    def __init__(self, animation, fps: float, shutter=None):
         from core.animation.checkpoint import Shadow
-        self.animation, self.fps = animation, fps
+        self.animation, self.fps, self.shutter = animation, fps, shutter
         self.shadow = Shadow(animation)
 
     def at(self, k: int):
-        return self.shadow.at(k / self.fps)
+        """The state at frame k's first time (its shutter's first sample when blurred)."""
+        t = k / self.fps
+        return self.shadow.at(self.shutter.times(t, self.fps)[0] if self.shutter else t)
 
     def restore(self, k: int) -> None:
         """Put this process's simulations at frame ``k`` (the start of a run it renders)."""
