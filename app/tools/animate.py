@@ -82,9 +82,10 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     p.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's)")
     p.add_argument("--renderer", default=None, help="a registered renderer (default: zbuffer)")
     p.add_argument("--samples", type=_number(int, 1, 1024), default=None, help="samples per pixel")
-    p.add_argument("--motion-blur", type=_number(int, 1, 1024), default=1, metavar="SAMPLES",
+    p.add_argument("--motion-blur", type=_number(int, 1, 1024), default=None, metavar="SAMPLES",
                    help="motion blur: each frame the mean of SAMPLES frames over the shutter "
-                        "interval (the accumulation buffer; 1: sharp)")
+                        "interval (the accumulation buffer; 1: sharp; default: the scene's "
+                        "[animation] motion_blur, else 1)")
     p.add_argument("--shutter", type=_number(float, -1.0, 1.0), nargs=2, default=None,
                    metavar=("OPEN", "CLOSE"),
                    help="when the shutter opens and closes, in frames from the frame's time "
@@ -149,21 +150,29 @@ def job_of(args, animation, bundle, view_index: int) -> dict:
                 "projection": args.projection or scene.projection,
                 "shading": args.shading or scene.shading,
                 "renderer": args.renderer or "zbuffer", "view": view_index, "paths": args.paths}
-    shutter = _shutter(args)
-    if shutter.samples > 1:                  # (sharp jobs keep the hash they had)
+    shutter = _shutter(args, animation)
+    if shutter.samples > 1 or getattr(animation, "shutter", None) is not None:
+        # (recorded only where frames are blurred, or kept sharp against the scene's
+        # blur: the sharp jobs of sharp scenes keep the hash they had)
         settings["motion_blur"] = [shutter.samples, shutter.open, shutter.close]
     return {"scene": Path(args.scene).name, "bundle": bundle.digest, "fps": fps,
             "frames": int(count), "settings": settings,
             "load_size": list(args.size) if args.size else None}
 
 
-def _shutter(args):
-    """The options' :class:`~core.animation.frames.Shutter` (JobError when it cannot be)."""
+def _shutter(args, animation):
+    """The options' :class:`~core.animation.frames.Shutter`, else the scene file's (None:
+    sharp); JobError when it cannot be."""
     from core.animation.frames import Shutter
-    samples = getattr(args, "motion_blur", 1) or 1
+    scene = getattr(animation, "shutter", None)
+    samples = getattr(args, "motion_blur", None)
     opening = getattr(args, "shutter", None)
+    if samples is None:
+        samples = scene.samples if scene is not None else 1
     if opening is not None and samples == 1:
         raise JobError("--shutter is the motion blur's: give --motion-blur SAMPLES too")
+    if opening is None and scene is not None:
+        opening = (scene.open, scene.close)
     try:
         return Shutter(samples, *(opening or (Shutter.open, Shutter.close)))
     except ValueError as error:

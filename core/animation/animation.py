@@ -107,6 +107,7 @@ class Animation:
     # ``matrices_at(t) -> {mesh index: 4 x 4}``, applied after the keyed transform; those that
     # simulate step by step also have ``snapshot()``, ``restore(state)`` and ``copy()``.
     movers: list = field(default_factory=list)
+    shutter: object | None = None           # the file's motion blur (frames.Shutter); None: sharp
     _system: object = field(default=None, repr=False, compare=False)   # made on first use
 
     @property

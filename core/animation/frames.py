@@ -52,6 +52,7 @@ class Shutter:
 
 
 MAX_BLUR_SAMPLES = 1024
+SHARP = Shutter(1)
 
 
 def render_at(animation, t: float, settings, context=None, view_index: int = 0,
@@ -59,8 +60,11 @@ def render_at(animation, t: float, settings, context=None, view_index: int = 0,
     """The frame at time ``t`` of ``scene_at(t)``, seen through its view ``view_index`` (0: the
     keyed view, or the scene's first view when none is keyed; then the file's views). With
     ``paths`` the keyed paths are drawn over it (:mod:`core.animation.paths`). With a
-    ``shutter`` of more than one sample, the motion-blurred frame (the module's text).
+    ``shutter`` of more than one sample (default: the scene file's, ``animation.shutter``),
+    the motion-blurred frame (the module's text); ``Shutter(1)`` is sharp.
     """
+    if shutter is None:
+        shutter = getattr(animation, "shutter", None)
     if shutter is not None and shutter.samples > 1:
         return _blurred(animation, t, settings, context, view_index, paths, shutter)
     scene = animation.scene_at(t)
@@ -79,7 +83,7 @@ def _blurred(animation, t, settings, context, view_index, paths, shutter):
     exactly, the mean of equal bytes being those bytes)."""
     total, first = None, None
     for s in shutter.times(t, animation.fps):
-        frame = render_at(animation, s, settings, context, view_index, paths)
+        frame = render_at(animation, s, settings, context, view_index, paths, SHARP)
         if frame.message is not None:
             return frame
         if total is None:
