@@ -279,3 +279,34 @@ def test_an_open_mesh_and_a_keyed_mesh_cannot_be_bodies():
     with pytest.raises(ReaderError) as error:
         world(keyed)
     assert "'box' is keyed ([[key]] object.box) and a body" in str(error.value)
+
+
+@pytest.fixture
+def on_the_cluster(monkeypatch):
+    """A short job on --workers 2 would be kept in this process (a cluster cannot win);
+    this test wants frames rendered by the local cluster's worker from checkpoints."""
+    import app.tools.animate as animate
+    monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
+    monkeypatch.setattr(animate, "idle_cores", lambda since: 8.0)
+    monkeypatch.setattr(animate, "RENDER_WHILE_STARTING", False)
+
+
+def test_one_and_two_workers_give_the_same_frames_byte_for_byte(tmp_path, on_the_cluster, capsys):
+    """The shipped blocks falling, motion-blurred (two samples a frame, so each run's
+    checkpoint is taken at its first frame's first sample): the worker steps on from the
+    checkpoints it is sent, this process from t = 0, and every PNG is the same file."""
+    from tools import need_module
+
+    from app.cli import main
+    from core.paths import ROOT
+    need_module("distributed", "the animate extra runs frames on Dask workers")
+    scene = str(ROOT / "scenes" / "blocks_falling.toml")
+    common = ["--size", "48x36", "--frames", "40", "--motion-blur", "2"]
+    assert main(["animate", scene, "--out", str(tmp_path / "one")] + common) == 0
+    assert main(["animate", scene, "--out", str(tmp_path / "two"), "--workers", "2"] + common) == 0
+    assert "this process and 1 local worker" in capsys.readouterr().out
+    one = sorted((tmp_path / "one").glob("frame_*.png"))
+    two = sorted((tmp_path / "two").glob("frame_*.png"))
+    assert len(one) == len(two) == 40
+    assert all(a.read_bytes() == b.read_bytes() for a, b in zip(one, two))
+    assert one[0].read_bytes() != one[-1].read_bytes()             # and the blocks did fall
