@@ -75,6 +75,69 @@ def _batched_frame():
     clip_polygon.clip_triangles(inside, np.zeros((1, 3), np.int64), None, "parallel")
 
 
+_MOVERS = """
+name = "warm-up movers"
+[[geometry]]
+primitive = "sphere"
+name = "ball"
+center = [0, 1, 0]
+radius = 0.2
+[[geometry]]
+generator = "cube"
+name = "box"
+transform = { scale = [0.2, 0.2, 0.2], translate = [1, 1, 0] }
+[[geometry]]
+generator = "cube"
+name = "arm"
+transform = { scale = [0.5, 0.05, 0.05], translate = [0.5, 3, 0] }
+[[view]]
+vrp = [0, 0, 0]
+vpn = [0, 0, 1]
+vup = [0, 1, 0]
+window = [-2, 2, -2, 2]
+prp = [0, 0, 6]
+front = 3
+back = -3
+[animation]
+duration = 1
+[dynamics]
+planes = [{ point = [0, 0, 0] }]
+spheres = [{ center = [3, 0, 0], radius = 0.5 }]
+[[body]]
+mesh = "ball"
+[[body]]
+mesh = "box"
+[[linkage]]
+base = [0, 3, 0]
+[[linkage.joint]]
+bone = [1, 0, 0]
+meshes = ["arm"]
+[[linkage.joint]]
+bone = [0.5, 0, 0]
+[[linkage.key]]
+time = 0
+target = [0.8, 3.5, 0]
+"""
+
+
+def _movers():
+    """The rigid bodies' step and the linkages' kinematics (both solvers), which a scene's
+    first picture does not reach (no step is taken at t = 0; one solver is used)."""
+    import numpy as np
+
+    from core.animation import linkage
+    from core.animation.keys import animation_of
+    from core.scene.formats import read_scene_file
+    anim = animation_of(read_scene_file(_MOVERS, "warm-up movers.toml"))
+    world, arm = anim.movers
+    world.state_at(0.1)
+    for solver in (linkage.DLS, linkage.CCD):
+        arm.solver = solver
+        arm.angles_at(0.0)
+        linkage.solve_many(arm.base, arm.axes, arm.bones, np.zeros(2), arm.lo, arm.hi,
+                           np.array([[0.5, 3.5, 0.0]]), solver, 0.5, 10)
+
+
 def steps() -> list[tuple[str, Callable[[], object]]]:
     """(label, run) for every path the window can take; each ``run`` renders one small frame."""
     from core.render import render
@@ -118,6 +181,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
         add(f"radiosity ({method})", box, renderer="radiosity", form_factors=method,
             max_elements=64, hemicube_resolution=16)
     add("path traced", box, renderer="pathtrace")
+    out.append(("rigid bodies and linkages (both IK solvers)", _movers))
     return out
 
 
