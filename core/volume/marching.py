@@ -16,7 +16,10 @@ were meant to be read:
    when the bilinear interpolant's saddle value lies inside, i.e. when the product of the
    inside diagonal's offsets from ``iso`` exceeds the outside diagonal's (a tie separates them);
 3. every crossed edge ends one segment and starts another, so the segments chain into closed
-   loops; each loop is fanned into triangles from its first vertex.
+   loops; each loop is cut into triangles ear by ear, never by a diagonal between two
+   crossings of one face (on an ambiguous face, the neighbouring cell could draw the same
+   diagonal and the edge would have four triangles); a loop left with no such ear is fanned
+   from a vertex added at its centre.
 
 Two cells that share a face see the same four values there and make the same decision, so the
 mesh is closed wherever the surface stays inside the grid (every edge shared by exactly two
@@ -58,6 +61,9 @@ def _face_edges() -> np.ndarray:
 
 
 FACE_EDGES = _face_edges()           # FACE_EDGES[f, q]: the edge from corner q to corner q + 1
+# EDGE_FACES[e]: the two faces edge e lies on.
+EDGE_FACES = np.array([[f for f in range(6) if e in FACE_EDGES[f]] for e in range(12)],
+                      dtype=np.int64)
 
 
 @njit(cache=True)
@@ -106,9 +112,9 @@ def edge_vertices(v, iso, axis, ids, positions, normals, start, write):
 
 
 @njit(cache=True)
-def face_segments(w, inside, face_corners, face_edges, nxt):
-    """Join the crossings on each face (step 1 and 2 of the module): ``nxt[e]`` = the edge the
-    segment starting at crossed edge ``e`` ends on."""
+def face_segments(w, inside, face_corners, face_edges, nxt, ambiguous):
+    """Join the crossings on each face (steps 1 and 2 of the module): ``nxt[e]`` = the edge
+    the segment starting at crossed edge ``e`` ends on; ``ambiguous[f]``: face f had four."""
     cross = np.empty(4, np.int64)
     enter = np.empty(4, np.bool_)
     for f in range(6):
@@ -119,6 +125,7 @@ def face_segments(w, inside, face_corners, face_edges, nxt):
                 cross[n] = face_edges[f, q]
                 enter[n] = inside[b]           # outside → inside, walking counter-clockwise
                 n += 1
+        ambiguous[f] = n == 4
         if n == 2:
             if enter[0]:
                 nxt[cross[0]] = cross[1]
@@ -137,16 +144,56 @@ def face_segments(w, inside, face_corners, face_edges, nxt):
 
 
 @njit(cache=True)
-def cell_triangles(v, iso, ids_x, ids_y, ids_z, corners, edges, face_corners, face_edges,
-                   triangles, write):
-    """Every cell's loops fanned into triangles (step 3). Returns the number of triangles;
-    with ``write``, fills ``triangles`` with vertex indices."""
+def share_face(e1, e2, edge_faces):
+    """Whether cell edges e1 and e2 lie on one face."""
+    return (edge_faces[e1, 0] == edge_faces[e2, 0] or edge_faces[e1, 0] == edge_faces[e2, 1]
+            or edge_faces[e1, 1] == edge_faces[e2, 0] or edge_faces[e1, 1] == edge_faces[e2, 1])
+
+
+@njit(cache=True)
+def clip_ears(loop, length, edge_faces, vert, triangles, count, write):
+    """Triangulate the loop by cutting ears whose new diagonal joins two crossings on no
+    common face (the neighbouring cell, which sees that face, could draw the same diagonal).
+    Returns the triangle count and the vertices left (3 when done)."""
+    while length > 3:
+        cut = -1
+        for m in range(length):
+            if not share_face(loop[(m + length - 1) % length], loop[(m + 1) % length],
+                              edge_faces):
+                cut = m
+                break
+        if cut < 0:
+            return count, length
+        if write:
+            triangles[count, 0] = vert[loop[(cut + length - 1) % length]]
+            triangles[count, 1] = vert[loop[cut]]
+            triangles[count, 2] = vert[loop[(cut + 1) % length]]
+        count += 1
+        for m in range(cut, length - 1):
+            loop[m] = loop[m + 1]
+        length -= 1
+    if write:
+        triangles[count, 0] = vert[loop[0]]
+        triangles[count, 1] = vert[loop[1]]
+        triangles[count, 2] = vert[loop[2]]
+    return count + 1, 3
+
+
+@njit(cache=True)
+def cell_triangles(v, iso, ids_x, ids_y, ids_z, tables, first_extra, triangles, positions,
+                   normals, write):
+    """Every cell's loops fanned into triangles (step 3). Returns the number of triangles and
+    of loop-centre vertices; with ``write``, fills ``triangles`` (and the centres' rows of
+    ``positions`` and ``normals``, from ``first_extra`` on)."""
+    corners, edges, face_corners, face_edges, edge_faces = tables
     n0, n1, n2 = v.shape
     w = np.empty(8)
     inside = np.empty(8, np.bool_)
+    ambiguous = np.empty(6, np.bool_)     # (kept for the record: which faces had four)
     nxt = np.empty(12, np.int64)
     vert = np.empty(12, np.int64)
-    count = 0
+    loop = np.empty(12, np.int64)
+    count, extra = 0, 0
     for i in range(n0 - 1):
         for j in range(n1 - 1):
             for k in range(n2 - 1):
@@ -158,7 +205,7 @@ def cell_triangles(v, iso, ids_x, ids_y, ids_z, corners, edges, face_corners, fa
                 if ins == 0 or ins == 8:
                     continue
                 nxt[:] = -1
-                face_segments(w, inside, face_corners, face_edges, nxt)
+                face_segments(w, inside, face_corners, face_edges, nxt, ambiguous)
                 for e in range(12):
                     if nxt[e] < 0:
                         continue
@@ -170,18 +217,35 @@ def cell_triangles(v, iso, ids_x, ids_y, ids_z, corners, edges, face_corners, fa
                 for e in range(12):
                     if nxt[e] < 0:
                         continue
-                    first, prev, cur = e, nxt[e], nxt[nxt[e]]
-                    nxt[first] = -1
-                    while cur != first:        # the fan (first, prev, cur) around the loop
+                    length, cur = 0, e
+                    while True:                # the loop through e, in order
+                        loop[length] = cur
+                        length += 1
+                        after = nxt[cur]
+                        nxt[cur] = -1
+                        cur = after
+                        if cur == e:
+                            break
+                    count, length = clip_ears(loop, length, edge_faces, vert, triangles, count,
+                                              write)
+                    if length == 3:
+                        continue
+                    centre = first_extra + extra      # no ear to cut: a centre vertex
+                    extra += 1
+                    for m in range(length):
                         if write:
-                            triangles[count, 0] = vert[first]
-                            triangles[count, 1] = vert[prev]
-                            triangles[count, 2] = vert[cur]
+                            triangles[count, 0] = centre
+                            triangles[count, 1] = vert[loop[m]]
+                            triangles[count, 2] = vert[loop[(m + 1) % length]]
                         count += 1
-                        nxt[prev] = -1
-                        prev, cur = cur, nxt[cur]
-                    nxt[prev] = -1
-    return count
+                    if write:
+                        for d in range(3):
+                            positions[centre, d] = 0.0
+                            normals[centre, d] = 0.0
+                            for m in range(length):
+                                positions[centre, d] += positions[vert[loop[m]], d] / length
+                                normals[centre, d] += normals[vert[loop[m]], d] / length
+    return count, extra
 
 
 def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
@@ -201,10 +265,13 @@ def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
     start = 0
     for axis in range(3):
         start = edge_vertices(v, iso, axis, ids[axis], positions, normals, start, True)
-    none = np.empty((0, 3), np.int64)
-    count = cell_triangles(v, iso, *ids, CORNERS, EDGES, FACES, FACE_EDGES, none, False)
+    tables = (CORNERS, EDGES, FACES, FACE_EDGES, EDGE_FACES)
+    count, extra = cell_triangles(v, iso, *ids, tables, total, np.empty((0, 3), np.int64),
+                                  positions, normals, False)
     triangles = np.empty((count, 3), np.int64)
-    cell_triangles(v, iso, *ids, CORNERS, EDGES, FACES, FACE_EDGES, triangles, True)
+    positions = np.concatenate([positions, np.empty((extra, 3))])
+    normals = np.concatenate([normals, np.empty((extra, 3))])
+    cell_triangles(v, iso, *ids, tables, total, triangles, positions, normals, True)
     return positions, triangles, normals
 
 
