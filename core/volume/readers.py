@@ -149,7 +149,8 @@ def _check_nifti_size(path: Path, image, dims, shown: str) -> None:
     if str(path).lower().endswith(".gz"):
         return                                  # nibabel finds a short gzip stream itself
     header = image.header
-    need = int(header.get_data_offset()) + math.prod(dims) * header.get_data_dtype().itemsize
+    offset = int(getattr(image.dataobj, "offset", header.get_data_offset()))  # where data starts
+    need = offset + math.prod(dims) * header.get_data_dtype().itemsize
     have = file_size(path, shown)
     if have < need:
         raise VolumeError(f"{shown}: the file is truncated: it has {have} bytes, and its "
