@@ -43,12 +43,17 @@ MODIFIED_INTENSITIES = np.array([1.0, -0.8, -0.2, -0.2, 0.1, 0.1, 0.1, 0.1, 0.1,
 VARIANTS = ("modified", "original")
 
 
-def grid(size: int):
-    """The sample points of the cube: three ``(n, n, n)`` coordinate arrays and the spacing."""
-    if isinstance(size, bool) or not float(size).is_integer() or not 2 <= size <= MAX_SIZE:
+def samples_a_side(size) -> int:
+    if (isinstance(size, bool) or not isinstance(size, (int, float))
+            or not float(size).is_integer() or not 2 <= size <= MAX_SIZE):
         raise VolumeError(f"size must be a whole number of samples from 2 to {MAX_SIZE}, "
                           f"not {size!r}")
-    axis = np.linspace(-1.0, 1.0, int(size))
+    return int(size)
+
+
+def grid(size: int):
+    """The sample points of the cube: three ``(n, n, n)`` coordinate arrays and the spacing."""
+    axis = np.linspace(-1.0, 1.0, samples_a_side(size))
     x, y, z = np.meshgrid(axis, axis, axis, indexing="ij")
     return x, y, z, 2.0 / (int(size) - 1)
 
@@ -65,17 +70,22 @@ def euler_rows(phi: float, theta: float, psi: float) -> np.ndarray:
 def shepp_logan(size: int = 128, variant: str = "modified"):
     if variant not in VARIANTS:
         raise VolumeError(f"variant must be one of {', '.join(VARIANTS)}, not {variant!r}")
-    x, y, z, h = grid(size)
-    values = np.zeros(x.shape, dtype=np.float32)
+    n = samples_a_side(size)
+    axis, h = np.linspace(-1.0, 1.0, n), 2.0 / (n - 1)
+    values = np.zeros((n, n, n), dtype=np.float32)
     intensities = SHEPP_LOGAN[:, 0] if variant == "original" else MODIFIED_INTENSITIES
     for row, amount in zip(SHEPP_LOGAN, intensities):
         a, b, c, x0, y0, z0 = row[1:7]
         rot = euler_rows(*row[7:10])
+        # only the samples within the ellipsoid's bounding sphere (its centre: rotᵀ · x0)
+        centre, reach = rot.T @ np.array([x0, y0, z0]), max(a, b, c)
+        box = [slice(*np.searchsorted(axis, [m - reach, m + reach + 1e-12])) for m in centre]
+        x, y, z = np.meshgrid(axis[box[0]], axis[box[1]], axis[box[2]], indexing="ij")
         xr = rot[0, 0] * x + rot[0, 1] * y + rot[0, 2] * z
         yr = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z
         zr = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z
         inside = ((xr - x0) / a) ** 2 + ((yr - y0) / b) ** 2 + ((zr - z0) / c) ** 2 <= 1.0
-        values[inside] += np.float32(amount)
+        values[tuple(box)][inside] += np.float32(amount)
     return values, (h, h, h)
 
 
