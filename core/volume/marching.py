@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.jit import njit
+from core.jit import njit, prange
 from core.scene.model import Mesh
 from core.volume.data import VolumeError, check_iso
 
@@ -81,40 +81,50 @@ def gradient_at(v, i, j, k):
 
 
 @njit(cache=True)
-def edge_vertices(v, iso, axis, ids, positions, normals, start, write):
-    """Number (and, with ``write``, place) the crossing of every edge along ``axis``: ``ids``
-    gets each crossed edge's vertex index from ``start`` on, -1 elsewhere. Returns the next
-    free index."""
-    n0, n1, n2 = ids.shape
+def edge_slab(v, iso, axis, i, ids, positions, normals, start, write):
+    """Number (and, with ``write``, place) the crossing of every edge along ``axis`` in slab
+    ``i``: ``ids[i]`` gets each crossed edge's vertex index from ``start`` on, -1 elsewhere.
+    Returns the next free index."""
+    _, n1, n2 = ids.shape
     count = start
-    for i in range(n0):
-        for j in range(n1):
-            for k in range(n2):
-                a = v[i, j, k] - iso
-                i2, j2, k2 = i + (axis == 0), j + (axis == 1), k + (axis == 2)
-                b = v[i2, j2, k2] - iso
-                if (a > 0.0) == (b > 0.0):
-                    ids[i, j, k] = -1
-                    continue
-                ids[i, j, k] = count
-                if write:
-                    t = a / (a - b)
-                    positions[count, 0] = i + t * (i2 - i)
-                    positions[count, 1] = j + t * (j2 - j)
-                    positions[count, 2] = k + t * (k2 - k)
-                    ax, ay, az = gradient_at(v, i, j, k)
-                    bx, by, bz = gradient_at(v, i2, j2, k2)
-                    normals[count, 0] = -(ax + t * (bx - ax))
-                    normals[count, 1] = -(ay + t * (by - ay))
-                    normals[count, 2] = -(az + t * (bz - az))
-                count += 1
+    for j in range(n1):
+        for k in range(n2):
+            a = v[i, j, k] - iso
+            i2, j2, k2 = i + (axis == 0), j + (axis == 1), k + (axis == 2)
+            b = v[i2, j2, k2] - iso
+            if (a > 0.0) == (b > 0.0):
+                ids[i, j, k] = -1
+                continue
+            ids[i, j, k] = count
+            if write:
+                t = a / (a - b)
+                positions[count, 0] = i + t * (i2 - i)
+                positions[count, 1] = j + t * (j2 - j)
+                positions[count, 2] = k + t * (k2 - k)
+                ax, ay, az = gradient_at(v, i, j, k)
+                bx, by, bz = gradient_at(v, i2, j2, k2)
+                normals[count, 0] = -(ax + t * (bx - ax))
+                normals[count, 1] = -(ay + t * (by - ay))
+                normals[count, 2] = -(az + t * (bz - az))
+            count += 1
     return count
 
 
+@njit(cache=True, parallel=True)
+def edge_vertices(v, iso, axis, ids, positions, normals, starts, write):
+    """Every slab's crossings along ``axis`` on all cores: without ``write``, ``starts[i + 1]``
+    gets slab i's count; with it, slab i numbers its vertices from ``starts[i]``."""
+    for i in prange(ids.shape[0]):
+        first = starts[i] if write else 0
+        found = edge_slab(v, iso, axis, i, ids, positions, normals, first, write) - first
+        if not write:
+            starts[i + 1] = found
+
+
 @njit(cache=True)
-def face_segments(w, inside, face_corners, face_edges, nxt, ambiguous):
+def face_segments(w, inside, face_corners, face_edges, nxt):
     """Join the crossings on each face (steps 1 and 2 of the module): ``nxt[e]`` = the edge
-    the segment starting at crossed edge ``e`` ends on; ``ambiguous[f]``: face f had four."""
+    the segment starting at crossed edge ``e`` ends on."""
     cross = np.empty(4, np.int64)
     enter = np.empty(4, np.bool_)
     for f in range(6):
@@ -125,7 +135,6 @@ def face_segments(w, inside, face_corners, face_edges, nxt, ambiguous):
                 cross[n] = face_edges[f, q]
                 enter[n] = inside[b]           # outside → inside, walking counter-clockwise
                 n += 1
-        ambiguous[f] = n == 4
         if n == 2:
             if enter[0]:
                 nxt[cross[0]] = cross[1]
@@ -180,72 +189,90 @@ def clip_ears(loop, length, edge_faces, vert, triangles, count, write):
 
 
 @njit(cache=True)
-def cell_triangles(v, iso, ids_x, ids_y, ids_z, tables, first_extra, triangles, positions,
-                   normals, write):
-    """Every cell's loops fanned into triangles (step 3). Returns the number of triangles and
-    of loop-centre vertices; with ``write``, fills ``triangles`` (and the centres' rows of
-    ``positions`` and ``normals``, from ``first_extra`` on)."""
+def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, positions,
+              normals, write):
+    """The cells of slab ``i``, their loops cut into triangles (step 3), numbered from
+    ``count`` (triangles) and ``extra`` (loop-centre vertices, rows of ``positions``). Returns
+    both next free numbers; with ``write``, fills ``triangles`` and the centres' rows."""
     corners, edges, face_corners, face_edges, edge_faces = tables
     n0, n1, n2 = v.shape
     w = np.empty(8)
     inside = np.empty(8, np.bool_)
-    ambiguous = np.empty(6, np.bool_)     # (kept for the record: which faces had four)
     nxt = np.empty(12, np.int64)
     vert = np.empty(12, np.int64)
     loop = np.empty(12, np.int64)
-    count, extra = 0, 0
-    for i in range(n0 - 1):
-        for j in range(n1 - 1):
-            for k in range(n2 - 1):
-                ins = 0
-                for c in range(8):
-                    w[c] = v[i + corners[c, 0], j + corners[c, 1], k + corners[c, 2]] - iso
-                    inside[c] = w[c] > 0.0
-                    ins += inside[c]
-                if ins == 0 or ins == 8:
+    for j in range(n1 - 1):
+        # the cell's corners slide along k: the far four of one cell are the near four of
+        # the next (corner c = x + 2y + 4z), so each cell loads four samples, not eight
+        w[4], w[5] = v[i, j, 0] - iso, v[i + 1, j, 0] - iso
+        w[6], w[7] = v[i, j + 1, 0] - iso, v[i + 1, j + 1, 0] - iso
+        for k in range(n2 - 1):
+            w[0], w[1], w[2], w[3] = w[4], w[5], w[6], w[7]
+            w[4], w[5] = v[i, j, k + 1] - iso, v[i + 1, j, k + 1] - iso
+            w[6], w[7] = v[i, j + 1, k + 1] - iso, v[i + 1, j + 1, k + 1] - iso
+            ins = 0
+            for c in range(8):
+                inside[c] = w[c] > 0.0
+                ins += inside[c]
+            if ins == 0 or ins == 8:
+                continue
+            nxt[:] = -1
+            face_segments(w, inside, face_corners, face_edges, nxt)
+            for e in range(12):
+                if nxt[e] < 0:
                     continue
-                nxt[:] = -1
-                face_segments(w, inside, face_corners, face_edges, nxt, ambiguous)
-                for e in range(12):
-                    if nxt[e] < 0:
-                        continue
-                    base = edges[e, 0]
-                    a, b, c = i + corners[base, 0], j + corners[base, 1], k + corners[base, 2]
-                    axis = e // 4
-                    vert[e] = ids_x[a, b, c] if axis == 0 else (
-                        ids_y[a, b, c] if axis == 1 else ids_z[a, b, c])
-                for e in range(12):
-                    if nxt[e] < 0:
-                        continue
-                    length, cur = 0, e
-                    while True:                # the loop through e, in order
-                        loop[length] = cur
-                        length += 1
-                        after = nxt[cur]
-                        nxt[cur] = -1
-                        cur = after
-                        if cur == e:
-                            break
-                    count, length = clip_ears(loop, length, edge_faces, vert, triangles, count,
-                                              write)
-                    if length == 3:
-                        continue
-                    centre = first_extra + extra      # no ear to cut: a centre vertex
-                    extra += 1
-                    for m in range(length):
-                        if write:
-                            triangles[count, 0] = centre
-                            triangles[count, 1] = vert[loop[m]]
-                            triangles[count, 2] = vert[loop[(m + 1) % length]]
-                        count += 1
+                base = edges[e, 0]
+                a, b, c = i + corners[base, 0], j + corners[base, 1], k + corners[base, 2]
+                axis = e // 4
+                vert[e] = ids_x[a, b, c] if axis == 0 else (
+                    ids_y[a, b, c] if axis == 1 else ids_z[a, b, c])
+            for e in range(12):
+                if nxt[e] < 0:
+                    continue
+                length, cur = 0, e
+                while True:                # the loop through e, in order
+                    loop[length] = cur
+                    length += 1
+                    after = nxt[cur]
+                    nxt[cur] = -1
+                    cur = after
+                    if cur == e:
+                        break
+                count, length = clip_ears(loop, length, edge_faces, vert, triangles, count,
+                                          write)
+                if length == 3:
+                    continue
+                centre = extra                    # no ear to cut: a centre vertex
+                extra += 1
+                for m in range(length):
                     if write:
-                        for d in range(3):
-                            positions[centre, d] = 0.0
-                            normals[centre, d] = 0.0
-                            for m in range(length):
-                                positions[centre, d] += positions[vert[loop[m]], d] / length
-                                normals[centre, d] += normals[vert[loop[m]], d] / length
+                        triangles[count, 0] = centre
+                        triangles[count, 1] = vert[loop[m]]
+                        triangles[count, 2] = vert[loop[(m + 1) % length]]
+                    count += 1
+                if write:
+                    for d in range(3):
+                        positions[centre, d] = 0.0
+                        normals[centre, d] = 0.0
+                        for m in range(length):
+                            positions[centre, d] += positions[vert[loop[m]], d] / length
+                            normals[centre, d] += normals[vert[loop[m]], d] / length
     return count, extra
+
+
+@njit(cache=True, parallel=True)
+def cell_triangles(v, iso, ids_x, ids_y, ids_z, tables, tri_starts, extra_starts, triangles,
+                   positions, normals, write):
+    """Every slab of cells on all cores: without ``write``, ``tri_starts[i + 1]`` and
+    ``extra_starts[i + 1]`` get slab i's counts; with it, slab i writes from ``tri_starts[i]``
+    and ``extra_starts[i]``."""
+    for i in prange(v.shape[0] - 1):
+        t0 = tri_starts[i] if write else 0
+        e0 = extra_starts[i] if write else 0
+        t1, e1 = cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, t0, e0, triangles,
+                           positions, normals, write)
+        if not write:
+            tri_starts[i + 1], extra_starts[i + 1] = t1 - t0, e1 - e0
 
 
 def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
@@ -258,20 +285,28 @@ def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
     ids = [np.empty((n0 - 1, n1, n2), np.int64), np.empty((n0, n1 - 1, n2), np.int64),
            np.empty((n0, n1, n2 - 1), np.int64)]
     empty = np.empty((0, 3))
-    total = 0
-    for axis in range(3):                      # count the crossings, then place them
-        total = edge_vertices(v, iso, axis, ids[axis], empty, empty, total, False)
+    starts = []
+    for axis in range(3):                      # count each slab's crossings, then place them
+        counts = np.zeros(ids[axis].shape[0] + 1, np.int64)
+        edge_vertices(v, iso, axis, ids[axis], empty, empty, counts, False)
+        starts.append(counts)
+    offsets = np.cumsum([0] + [int(c.sum()) for c in starts])
+    total = int(offsets[-1])
     positions, normals = np.empty((total, 3)), np.empty((total, 3))
-    start = 0
     for axis in range(3):
-        start = edge_vertices(v, iso, axis, ids[axis], positions, normals, start, True)
+        first = offsets[axis] + np.cumsum(starts[axis])
+        edge_vertices(v, iso, axis, ids[axis], positions, normals, first, True)
     tables = (CORNERS, EDGES, FACES, FACE_EDGES, EDGE_FACES)
-    count, extra = cell_triangles(v, iso, *ids, tables, total, np.empty((0, 3), np.int64),
-                                  positions, normals, False)
-    triangles = np.empty((count, 3), np.int64)
+    tri_counts, extra_counts = np.zeros(n0, np.int64), np.zeros(n0, np.int64)
+    cell_triangles(v, iso, *ids, tables, tri_counts, extra_counts,
+                   np.empty((0, 3), np.int64), positions, normals, False)
+    tri_starts, extra_starts = np.cumsum(tri_counts), total + np.cumsum(extra_counts)
+    triangles = np.empty((int(tri_starts[-1]), 3), np.int64)
+    extra = int(extra_starts[-1]) - total
     positions = np.concatenate([positions, np.empty((extra, 3))])
     normals = np.concatenate([normals, np.empty((extra, 3))])
-    cell_triangles(v, iso, *ids, tables, total, triangles, positions, normals, True)
+    cell_triangles(v, iso, *ids, tables, tri_starts, extra_starts, triangles, positions,
+                   normals, True)
     return positions, triangles, normals
 
 
