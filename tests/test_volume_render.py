@@ -155,3 +155,45 @@ def test_gradient_shading_lights_the_side_facing_the_light():
     row = image[16, :, 0]
     assert row[16 + 8] > row[16 - 8] + 0.2                     # the lit side is brighter
     assert row[16 - 8] > 0.05                                  # the dark side has ambient
+
+
+def test_the_inspector_names_the_ray_the_volumes_and_the_isosurface_cell():
+    from core.inspect import inspect_pixel
+    from core.volume.marching import isosurface
+    values, spacing = generators.sphere(17, radius=0.5, density=1.0)
+    surface_volume = Volume(values=values, spacing=spacing, mode="isosurface", iso=0.5,
+                            name="ball", material=Material(ka=1.0, kd=0.0, ks=0.0))
+    fog = Volume(values=np.ones((5, 5, 5), np.float32), spacing=(0.5, 0.5, 0.5),
+                 lighting="none", name="fog",
+                 transfer=np.array([[0.0, 0.5, 0.5, 0.5, 0.7], [1.0, 0.5, 0.5, 0.5, 0.7]]))
+    glow = Volume(values=values, spacing=spacing, mode="mip", name="glow",
+                  transform=np.diag([1.0, 1.0, 1.0, 1.0]))
+    glow.transform[:3, 3] = (0.0, 0.0, -0.9)
+    scene = scene_with([surface_volume, fog], [isosurface(surface_volume)])
+    settings = RenderSettings.for_scene(scene, renderer="volume", size=(21, 21),
+                                        projection="parallel", shading="flat")
+    frame = render(scene, scene.views[0], settings)
+    for x, y in ((10, 10), (1, 1)):
+        record = inspect_pixel(scene, scene.views[0], settings, x, y)
+        assert record["renderer"] == "volume" and record["pixel"] == [x, y]
+        assert record["color"] == frame.color[y, x].tolist()
+        (fogged,) = record["volumes"]
+        assert fogged["volume"] == "fog" and fogged["samples"] > 0
+    centre = inspect_pixel(scene, scene.views[0], settings, 10, 10)
+    cell = centre["isosurface cell"]
+    # the ray through the centre meets the ball's near pole (0, 0, 0.5): index z 12 of 16
+    assert cell["volume"] == "ball" and cell["cell"][2] in (11, 12)
+    corners = np.array(cell["corner values"])
+    assert corners.min() <= 0.5 <= corners.max()          # the surface crosses this cell
+    assert centre["ray"]["stopped by the opaque surface at t"] < np.inf
+    # the fog is marched only up to the ball: from its front face (z = 1) to z = 0.5
+    fogged = centre["volumes"][0]
+    assert fogged["enters at t"] == pytest.approx(3.0 - 1.0)
+    assert fogged["leaves at t"] == pytest.approx(3.0 - 0.5, abs=0.01)
+    # MIP: the largest sample and the cell it lies in
+    scene = scene_with([glow])
+    record = inspect_pixel(scene, scene.views[0], settings, 10, 10)
+    (mip,) = record["volumes"]
+    assert mip["largest sample"] == pytest.approx(1.0)
+    assert np.max(mip["at"]["corner values"]) == pytest.approx(1.0)
+    assert record["color"] == render(scene, scene.views[0], settings).color[10, 10].tolist()

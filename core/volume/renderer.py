@@ -70,6 +70,15 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     timer.lap("ray march")
 
 
+def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
+    """The record of image pixel (x, y) (:mod:`core.volume.inspect`): the opaque surface's
+    z-buffer record, the ray, and what each volume did along it."""
+    from core.context import DEFAULT_CONTEXT
+    from core.volume.inspect import pixel_record
+    return pixel_record(scene, view, settings, x, y, context or DEFAULT_CONTEXT, step_of,
+                        farthest_first)
+
+
 def step_of(volume) -> float:
     """:data:`STEP` times the smallest world length of one sample step along an axis."""
     m = volume.world_from_index()
