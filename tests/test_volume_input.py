@@ -164,3 +164,46 @@ def test_nibabels_own_mr_volume():
     assert np.array_equal(values, np.asarray(image.dataobj, dtype=np.float32).reshape(
         values.shape))
     assert math.isfinite(float(values.max())) and values.max() > values.min()
+
+
+def ct_series(folder: Path, count: int = 5, gap: float = 5.0) -> list[Path]:
+    """``count`` slices made from pydicom's own CT slice, ``gap`` mm apart along z, each
+    slice's pixels offset by its number (so the order can be checked)."""
+    pydicom = need_module("pydicom", "DICOM series are read through pydicom")
+    from pydicom.data import get_testdata_file
+    source = get_testdata_file("CT_small.dcm")
+    folder.mkdir()
+    paths = []
+    for k in range(count):
+        ds = pydicom.dcmread(source)
+        x, y, z = (float(c) for c in ds.ImagePositionPatient)
+        ds.ImagePositionPatient = [x, y, z + gap * k]
+        ds.PixelData = (ds.pixel_array + np.int16(10 * k)).astype(np.int16).tobytes()
+        path = folder / f"slice{(count - k) % count:02d}.dcm"      # file names out of order
+        ds.save_as(path)
+        paths.append(path)
+    return paths
+
+
+def test_a_dicom_series_in_slice_order(tmp_path):
+    pydicom = need_module("pydicom", "DICOM series are read through pydicom")
+    paths = ct_series(tmp_path / "ct")
+    scene = load(tmp_path, 'file = "ct"\nmode = "mip"')
+    (volume,) = volumes_of(scene)
+    assert volume.dims == (128, 128, 5)
+    assert volume.spacing == pytest.approx((0.661468, 0.661468, 5.0))
+    first = pydicom.dcmread(paths[0])
+    hounsfield = first.pixel_array.astype(np.float64) * float(first.RescaleSlope) \
+        + float(first.RescaleIntercept)
+    assert np.array_equal(volume.values[:, :, 0], hounsfield.T.astype(np.float32))
+    assert np.array_equal(volume.values[:, :, 3] - volume.values[:, :, 0],
+                          np.full((128, 128), 30.0, np.float32))
+
+
+def test_a_dicom_series_with_a_missing_slice(tmp_path):
+    paths = ct_series(tmp_path / "ct")
+    paths[2].unlink()
+    message = refused(tmp_path, 'file = "ct"\nmode = "mip"')
+    assert message.endswith("volume[1].file: ct: a slice is missing between slice04.dcm "
+                            "(-70.7 mm) and slice02.dcm (-60.7 mm): a gap of 10 mm where the "
+                            "slices are 5 mm apart")

@@ -8,7 +8,9 @@ promises (:data:`core.volume.data.MAX_VOXELS`).
 - :func:`read_nrrd`: NRRD through ``pynrrd`` (header first: its ``sizes`` are checked against
   the budget, and for raw encoding against the file's size, before the data is read);
 - :func:`read_nifti`: NIfTI-1 or -2 through ``nibabel`` (its header's shape and the file's
-  size checked first; a fourth axis of one sample is dropped, more is refused).
+  size checked first; a fourth axis of one sample is dropped, more is refused);
+- :func:`read_dicom`: a DICOM series, a folder of slices, through ``pydicom`` (the headers
+  first: one size and orientation, even steps along the slice normal, no missing slice).
 
 The samples then pass :func:`core.volume.data.checked_samples` (NaN and infinity refused).
 """
@@ -25,10 +27,13 @@ from core.volume.data import VolumeError, check_dims, check_spacing, checked_sam
 
 DTYPES = ("uint8", "int8", "uint16", "int16", "uint32", "int32", "float32", "float64")
 BYTE_ORDERS = ("little", "big")
-EXTENSIONS = (".raw", ".nrrd", ".nhdr", ".nii", ".nii.gz")
+EXTENSIONS = (".raw", ".nrrd", ".nhdr", ".nii", ".nii.gz", "a folder of DICOM slices")
 
 
-def kind_of(path: str | Path) -> str:
+def kind_of(path: str | Path, folder: Path | None = None) -> str:
+    """The reader for ``path``: by its extension, or ``"dicom"`` for a folder (a series)."""
+    if folder is not None and (folder / path).is_dir():
+        return "dicom"
     name = str(path).lower()
     for ext, kind in ((".nii.gz", "nifti"), (".nii", "nifti"), (".nrrd", "nrrd"),
                       (".nhdr", "nrrd"), (".raw", "raw")):
@@ -155,3 +160,85 @@ def _check_nifti_size(path: Path, image, dims, shown: str) -> None:
     if have < need:
         raise VolumeError(f"{shown}: the file is truncated: it has {have} bytes, and its "
                           f"header's shape {' x '.join(map(str, dims))} needs {need}")
+
+
+# A gap between neighbouring slices this many times the series' usual one is a missing slice.
+MISSING_GAP = 1.5
+
+
+def read_dicom(folder: Path, shown: str | None = None):
+    """A DICOM series: every file of ``folder`` is one slice (pydicom). The headers are read
+    first (no pixels): the slices must share their size and orientation, lie on one line along
+    the slice normal at even steps (a gap of more than 1.5 steps is a missing slice), and fit
+    the budget; then the pixels, rescaled (``RescaleSlope``, ``RescaleIntercept``). Columns run
+    along x, rows along y, slices along z."""
+    import pydicom                               # only when a DICOM series is read
+    from pydicom.errors import InvalidDicomError
+    shown = shown or str(folder)
+    files = sorted(p for p in Path(folder).iterdir() if p.is_file()) if Path(folder).is_dir() \
+        else []
+    if len(files) < 2:
+        raise VolumeError(f"{shown}: a DICOM series is a folder of at least 2 slice files, "
+                          f"found {len(files)}")
+    try:
+        headers = [pydicom.dcmread(p, stop_before_pixels=True) for p in files]
+        slices = _dicom_order(headers, files, shown)
+        rows, cols = int(headers[0].Rows), int(headers[0].Columns)
+        check_dims((cols, rows, len(slices)), shown)
+        pixels = np.empty((cols, rows, len(slices)), np.float32)
+        for k, (path, ds) in enumerate(slices):
+            image = pydicom.dcmread(path).pixel_array
+            if image.shape != (rows, cols):
+                raise VolumeError(f"{shown}: {path.name} holds a {image.shape} image, not "
+                                  f"{rows} x {cols}")
+            slope, intercept = float(ds.get("RescaleSlope", 1)), float(ds.get("RescaleIntercept", 0))
+            pixels[:, :, k] = (image.astype(np.float64) * slope + intercept).T
+    except VolumeError:
+        raise
+    except (InvalidDicomError, AttributeError, KeyError, OSError, ValueError, TypeError,
+            RuntimeError, NotImplementedError) as error:
+        raise VolumeError(f"{shown}: not a readable DICOM series ({type(error).__name__}: "
+                          f"{error})") from None
+    gaps = np.diff([position for position, _ in _positions(slices)])
+    spacing = tuple(float(s) for s in headers[0].PixelSpacing)[::-1] + (float(np.median(gaps)),)
+    return checked_samples(pixels, shown), check_spacing(spacing, f"{shown}: spacing")
+
+
+def _positions(slices):
+    ds = slices[0][1]
+    row, col = np.asarray(ds.ImageOrientationPatient, dtype=np.float64).reshape(2, 3)
+    normal = np.cross(row, col)
+    return [(float(np.asarray(s.ImagePositionPatient, dtype=np.float64) @ normal), s)
+            for _, s in slices]
+
+
+def _dicom_order(headers, files, shown):
+    """The slices sorted along the slice normal; refuses mixed sizes or orientations,
+    two slices at one position and a missing slice."""
+    first = headers[0]
+    for path, ds in zip(files, headers):
+        for key in ("Rows", "Columns", "ImageOrientationPatient", "ImagePositionPatient",
+                    "PixelSpacing"):
+            if key not in ds:
+                raise VolumeError(f"{shown}: {path.name} has no {key}")
+        if (ds.Rows, ds.Columns) != (first.Rows, first.Columns) or not np.allclose(
+                ds.ImageOrientationPatient, first.ImageOrientationPatient, atol=1e-4):
+            raise VolumeError(f"{shown}: {path.name} is not of the series' size and "
+                              f"orientation ({first.Rows} x {first.Columns})")
+    placed = sorted(_positions(list(zip(files, headers))), key=lambda pair: pair[0])
+    by_header = {id(ds): path for path, ds in zip(files, headers)}
+    slices = [(by_header[id(ds)], ds) for _, ds in placed]
+    along = np.array([position for position, _ in placed])
+    gaps = np.diff(along)
+    if np.any(gaps <= 1e-6):
+        k = int(np.argmax(gaps <= 1e-6))
+        raise VolumeError(f"{shown}: {slices[k][0].name} and {slices[k + 1][0].name} lie at "
+                          f"one position ({along[k]:g} mm along the slice normal)")
+    step = float(np.median(gaps))
+    if np.any(gaps > MISSING_GAP * step):
+        k = int(np.argmax(gaps > MISSING_GAP * step))
+        raise VolumeError(f"{shown}: a slice is missing between {slices[k][0].name} "
+                          f"({along[k]:g} mm) and {slices[k + 1][0].name} ({along[k + 1]:g} "
+                          f"mm): a gap of {gaps[k]:g} mm where the slices are {step:g} mm "
+                          f"apart")
+    return slices

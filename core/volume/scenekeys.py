@@ -5,7 +5,8 @@ the table, the key and its line)::
     name = "head"
     generator = "shepp-logan"            # or "sphere", "metaballs", "torus"
     params = { size = 96 }               # the generator's own (core.volume.generators)
-    # file = "ct.nrrd"                   # or .nii / .nii.gz, or .raw with a header table:
+    # file = "ct.nrrd"                   # or .nii / .nii.gz, a folder of DICOM slices, or
+    #                                    # .raw with a header table:
     # raw = { dims = [64, 64, 32], dtype = "uint16", byte_order = "little", offset = 0 }
     spacing = [0.02, 0.02, 0.02]         # world units between samples (default: the file's)
     transform = { scale = 1.0, rotate = [0, 0, 0], translate = [0, 0, 0] }
@@ -128,7 +129,7 @@ def read_drawing(reader, t, path, volume) -> None:
 def read_file(reader, t, path):
     name = reader.string(t["file"], path + ("file",))
     target = reader.folder / name
-    kind = readers.kind_of(name)
+    kind = readers.kind_of(name, reader.folder)
     if (kind == "raw") != ("raw" in t):
         raise reader.fail(path + ("raw",) if "raw" in t else path + ("file",),
                           "a .raw file needs a raw = { dims, dtype, byte_order } table"
@@ -137,6 +138,8 @@ def read_file(reader, t, path):
         return readers.read_nrrd(target, name)
     if kind == "nifti":
         return readers.read_nifti(target, name)
+    if kind == "dicom":
+        return readers.read_dicom(target, name)
     raw = reader.table(t["raw"], path + ("raw",), RAW_KEYS)
     if "dims" not in raw:
         raise reader.fail(path + ("raw",), "the raw header needs dims = [nx, ny, nz]")
