@@ -186,6 +186,8 @@ def main(args) -> int:
         paths += tuple(raytrace_rows(out, config.size, cache=config.cache, progress=say))
         from app.tools.raytrace_report import write_adaptive          # issue 20
         paths += tuple(write_adaptive(out, progress=say))
+        from app.tools.volume_report import write as volume_rows
+        paths += tuple(volume_rows(out, progress=say))
     for line in accuracy.reading(points):
         print(line)
     print(f"wrote {', '.join(str(p) for p in paths)} ({wall:.0f} s sweep)")

@@ -138,6 +138,30 @@ def _movers():
                            np.array([[0.5, 3.5, 0.0]]), solver, 0.5, 10)
 
 
+def _volume_frames():
+    """Marching cubes, and the ray marcher's emission-absorption (lit and unlit) and MIP
+    over an opaque mesh (the z-buffer's depth cuts the rays)."""
+    import numpy as np
+
+    from core.render import render
+    from core.scene.model import Scene
+    from core.settings import RenderSettings
+    from core.volume import generators
+    from core.volume.data import Volume, attach_volumes
+    from core.volume.marching import isosurface
+
+    closed, _, _ = _scenes()
+    values, spacing = generators.sphere(12)
+    transfer = np.array([[0.0, 1, 1, 1, 0.0], [1.0, 1, 0.5, 0.2, 2.0]])
+    surface = isosurface(Volume(values=values, spacing=spacing, mode="isosurface", iso=0.5))
+    scene = Scene(name="warm-up volume", views=closed.views, meshes=[surface])
+    attach_volumes(scene, [Volume(values=values, spacing=spacing, transfer=transfer),
+                           Volume(values=values, spacing=spacing, transfer=transfer,
+                                  lighting="none"),
+                           Volume(values=values, spacing=spacing, mode="mip")])
+    render(scene, scene.views[0], RenderSettings.for_scene(scene, size=SIZE, renderer="volume"))
+
+
 def steps() -> list[tuple[str, Callable[[], object]]]:
     """(label, run) for every path the window can take; each ``run`` renders one small frame."""
     from core.render import render
@@ -182,6 +206,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
             max_elements=64, hemicube_resolution=16)
     add("path traced", box, renderer="pathtrace")
     out.append(("rigid bodies and linkages (both IK solvers)", _movers))
+    out.append(("volume: marching cubes, emission-absorption and MIP", _volume_frames))
     return out
 
 

@@ -578,6 +578,13 @@ class ViewerState:
             def run(control=None):
                 prepare()
                 return progressively(scene, view, settings, context, renderer, control)
+        elif settings.renderer == "volume" and view is not None:
+            from app.viewer.progressive_volume import volume_progressively
+            what = f"{what}, volume"
+
+            def run(control=None):
+                prepare()
+                return volume_progressively(scene, view, settings, context, renderer, control)
         elif settings.renderer == "raytrace" and view is not None:
             from app.viewer.progressive import trace_progressively
             what = f"{what}, ray traced"

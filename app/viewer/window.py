@@ -73,7 +73,8 @@ SHADING_LABELS = (("wireframe", "Wireframe", "W"), ("flat", "Flat", "1"),
 RENDERER_LABELS = (("zbuffer", "Z-buffer", "R"), ("raytrace", "Ray traced", "R"),
                    ("radiosity", "Radiosity", ""), ("pathtrace", "Path traced", ""),
                    ("bsp", "BSP tree (painter's)", ""),
-                   ("depth-sort", "Depth sort (Newell, painter's)", ""))
+                   ("depth-sort", "Depth sort (Newell, painter's)", ""),
+                   ("volume", "Volume (ray marching)", ""))
 TRANSPARENCY_LABELS = (("off", "Opaque (k_t ignored)"), ("interpolated", "Interpolated"),
                        ("screen-door", "Screen door"))
 FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),

@@ -11,7 +11,9 @@ kernels) only when it is first used.
 
 - ``zbuffer``: the FvDFH pipeline, lines and triangles (:mod:`core.renderers.zbuffer`);
 - ``bsp``, ``depth-sort``: the painter's algorithms (:mod:`core.renderers.painters`);
-- ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`).
+- ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`);
+- ``volume``: the opaque geometry by the z-buffer, then the scene's volumes ray-marched
+  (emission–absorption, MIP), cut at the z-buffer's depth (:mod:`core.volume.renderer`).
 """
 
 from __future__ import annotations
@@ -44,3 +46,8 @@ register_renderer("bsp", "core.renderers.painters:draw_bsp",
 register_renderer("depth-sort", "core.renderers.painters:draw_depth_sort",
                   description="Newell, Newell and Sancha's depth sort, painted back to front",
                   label="Depth sort (Newell, painter's)", transparency=True, shaders=True)
+register_renderer("volume", "core.volume.renderer:draw",
+                  description="volumes ray-marched (emission-absorption with gradient "
+                              "shading, or MIP) over the z-buffer's opaque geometry "
+                              "(core.volume)",
+                  label="Volume (ray marching)", shaders=True, progressive=True)
