@@ -90,6 +90,8 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
     ]
     if renderer in PAINTERS:
         _painter_stages(stages, renderer, triangle_stage)
+    if renderer == "scanline":
+        _scanline_stages(stages, triangle_stage)
     if shading == "depth":
         _depth_shading_stages(stages, solid)
     return stages
@@ -102,7 +104,8 @@ def _depth_shading_stages(stages: list, solid: bool) -> None:
     for i, s in enumerate(stages):
         if s.name in unlit:
             stages[i] = Stage(s.name, False, "depth shading uses no normals and no light")
-    at = next(i for i, s in enumerate(stages) if s.name == "z-buffer scan conversion") + 1
+    at = next(i for i, s in enumerate(stages)
+              if s.name in ("z-buffer scan conversion", "scan-line visible surface")) + 1
     stages.insert(at, Stage("depth shading", solid,
                             "each pixel's height (or eye distance) through a colour map"
                             if solid else "no triangles are drawn"))
@@ -129,6 +132,22 @@ def _painter_stages(stages: list, renderer: str, triangle_stage) -> None:
         if s.name == "depth buffer" and s.runs:
             stages[i] = Stage(s.name, True, "the rasterizer's depth holds each triangle's paint "
                                             "rank: the later painted covers the earlier")
+
+
+def _scanline_stages(stages: list, triangle_stage) -> None:
+    """Watkins' algorithm decides visibility span by span: no depth test per pixel."""
+    for i, s in enumerate(stages):
+        if s.name == "depth buffer":
+            stages[i] = triangle_stage(s.name, s.runs, "not read to decide visibility: each "
+                                       "pixel gets its visible polygon's depth, for what is "
+                                       "drawn after (transparency, depth cueing)")
+        if s.name == "z-buffer scan conversion":
+            stages[i] = triangle_stage(
+                "scan-line visible surface", s.runs,
+                "Watkins (FvDFH 15.6): edge table by first scan line, polygon table with "
+                "in/out flags, active edge table sorted in x; one polygon in a span needs no "
+                "depth, several are compared at the span's ends, and penetrating ones cut the "
+                "span where their depths cross; the z-buffer's fill rule")
 
 
 def _texture_stage(scene, shading, texture_filter):        # issue 11
