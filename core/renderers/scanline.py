@@ -52,10 +52,11 @@ def draw(scene, view, settings, frame, context, timer) -> None:
 def _update_plan(frame, stats) -> None:
     """Put this frame's counters into the plan's scan-line stage."""
     from core.plan import Stage
-    for i, stage in enumerate(frame.plan):
+    plan = getattr(frame, "plan", None) or []           # (an inspector's frame has none)
+    for i, stage in enumerate(plan):
         if stage.name == STAGE and stage.runs:
             numbers = ", ".join(f"{k} {v}" for k, v in stats.items())
-            frame.plan[i] = Stage(stage.name, True, f"{stage.reason} ({numbers})")
+            plan[i] = Stage(stage.name, True, f"{stage.reason} ({numbers})")
 
 
 def scan_line(scene, view, settings, y: int, context=None) -> dict:
@@ -78,8 +79,11 @@ def scan_line(scene, view, settings, y: int, context=None) -> dict:
             height)
     rec = visible.records[-1]
     source = arrays["source"]
+    # each edge's crossing x, and the pixel it bounds: a left edge's first pixel in, a right
+    # edge's last (the AET is sorted by the pixel after a right edge, where its polygon is out)
     out["aet"] = [{"triangle": int(source[int(p)]), "edge": "left" if side > 0 else "right",
-                   "x": round(float(x), 4), "pixel key": int(k)} for p, side, x, k in rec.aet]
+                   "x": round(float(x), 4), "pixel": int(k) if side > 0 else int(k) - 1}
+                  for p, side, x, k in rec.aet]
     out["spans"] = [{"pixels": [int(a), int(b)],
                      "visible triangle": int(source[t]) if t >= 0 else None,
                      "polygons in": int(n), "decided": watkins.DECIDED[int(how)]}
