@@ -746,7 +746,8 @@ def _plan(args) -> int:
     out = {"scene": scene.name, "projection": projection, "shading": shading,
            "rasterizer": rasterizer, "keep_aspect": keep, "renderer": renderer,
            **plan_as_dict(plan(scene, projection, shading, keep, rasterizer,
-                               renderer=renderer)), **painter}
+                               renderer=renderer,
+                               transparency=getattr(args, "transparency", None))), **painter}
     print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0
 

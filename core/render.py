@@ -98,7 +98,8 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     width, height = settings.size
     frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8),
                   plan=plan(scene, settings.projection, settings.shading, settings.keep_aspect,
-                            settings.rasterizer, settings.texture_filter, settings.renderer),
+                            settings.rasterizer, settings.texture_filter, settings.renderer,
+                            settings.transparency),
                   stats={"allocated": ["color"], "computed": [], "renderer": renderer.name,
                          "projection": settings.projection, "shading": settings.shading})
     message = _why_not(scene, view, settings, context)

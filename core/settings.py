@@ -179,9 +179,19 @@ class RenderSettings:
                   "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect,
                   "renderer": scene.renderer,
                   "depth_cue": getattr(scene, "depth_cue", None) is not None,
-                  "transparency": getattr(scene, "transparency", "off")}
+                  "transparency": getattr(scene, "transparency", None)
+                  or needed_transparency(scene)}
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)
 
     def replace(self, **changes) -> "RenderSettings":
         return dataclasses.replace(self, **changes)
+
+
+def needed_transparency(scene) -> str:
+    """What a scene that names no ``transparency`` gets: "interpolated" where any material has
+    k_t > 0 (the scene needs it: drawn opaque, a glass pane would hide what is behind it; the
+    ray tracers refract instead, as before), else "off". ``--transparency off`` still draws
+    it opaque."""
+    meshes = getattr(scene, "meshes", ())
+    return "interpolated" if any(m.material.kt > 0 for m in meshes) else "off"

@@ -59,7 +59,7 @@ PRIMITIVE_KEYS = ("primitive", "center", "radius", "point", "normal", "checker",
                   "extent", "segments")
 GEOMETRY_KEYS += PRIMITIVE_KEYS
 TRANSFORM_KEYS = ("scale", "rotate", "translate")
-LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
+LIGHT_KEYS = ("position", "direction", "intensity", "attenuation", "attenuation_cap")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 # The top-level and material keys: the reader's own and those the systems registered
 # (core/scene/formats/keys.py: animation, the depth cue, textures, the bump demo).
@@ -468,6 +468,12 @@ class _Reader:
             light.attenuation = self.vector(t["attenuation"], path + ("attenuation",), 3, 0.0)
             if not any(light.attenuation):
                 raise self.fail(path + ("attenuation",), "c1, c2 and c3 are all zero")
+        if "attenuation_cap" in t:
+            if not isinstance(t["attenuation_cap"], bool):
+                raise self.fail(path + ("attenuation_cap",),
+                                "must be true (FvDFH's min(1, f_att)) or false (the notes' "
+                                f"f_att uncapped), not {t['attenuation_cap']!r}")
+            light.attenuation_cap = t["attenuation_cap"]
         return light
 
     def views(self, doc: dict, points: np.ndarray) -> list[View | str]:
