@@ -359,7 +359,8 @@ def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> N
                         help="bsp, depth-sort: paint only the first K triangles of the order")
     parser.add_argument("--transparency", choices=("off", "interpolated", "screen-door"),
                         default=None, help="z-buffer, bsp, depth-sort: materials with k_t > 0 "
-                        "laid over the opaque picture (default: the scene's, else off)")
+                        "laid over the opaque picture (default: the scene's, else "
+                        "interpolated where a material has k_t > 0; off draws them opaque)")
     parser.add_argument("--shading-precision", choices=("float32", "float64"), default=None,
                         help="Phong's pixel step: float32 over each row, 8 pixels at a time "
                              "(default; within 1/255 of float64), or the textbook float64 "
@@ -712,7 +713,9 @@ def _matrices(args) -> int:
     except ViewError as error:           # a view only the other projection can draw
         print(f"error: {error}", file=sys.stderr)
         return 2
-    out = {"view": view.label, "projection": args.projection}
+    from core.camera.taxonomy import describe
+    out = {"view": view.label, "projection": args.projection,
+           "class": describe(view, args.projection)}      # its place in the projection tree
     for name, m in factors.items():
         out[name] = float(m) if m.ndim == 0 else m.tolist()
     keep = scene.keep_aspect if args.keep_aspect is None else args.keep_aspect
