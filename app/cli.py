@@ -406,6 +406,10 @@ def _course_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--keep-aspect", action="store_true", default=None,
                    help="letterbox the view window instead of stretching it over the viewport "
                         "(the course's mapping stretches)")
+    p.add_argument("--clipper", choices=("cohen-sutherland", "liang-barsky", "homogeneous"),
+                   default=None, help="the line clipper: cohen-sutherland (the course's "
+                   "outcodes, default), liang-barsky (parametric) or homogeneous (in clip space "
+                   "before the divide); the same picture")
     p.add_argument("--course-tri", action="store_true",
                    help="the .tri startup code's rules: skip triangles with viewpoint . N < 0, "
                         "and mouse buttons left Phong, middle Gouraud, right flat")
@@ -587,6 +591,7 @@ def _render(args) -> int:
         settings = RenderSettings.for_scene(scene, projection=args.projection,
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
+                                            clipper=getattr(args, "clipper", None),
                                             keep_aspect=args.keep_aspect, **texture_options,
                                             **_renderer_overrides(args),
                                             **_gi_overrides(args))       # issue 19
@@ -806,6 +811,7 @@ def _inspector_command(args) -> int:
         settings = RenderSettings.for_scene(scene, projection=args.projection,
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
+                                            clipper=getattr(args, "clipper", None),
                                             keep_aspect=args.keep_aspect, **texture_options,
                                             **_renderer_overrides(args))
     except ValueError as error:

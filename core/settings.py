@@ -50,6 +50,7 @@ FORM_FACTOR_METHODS = ("hemicube", "raycast")
 SOLVERS = ("progressive", "gauss-seidel")
 # The ray tracer's shadow rays (core.raytrace.whitted): the notes' options.
 SHADOW_MODES = ("off", "background", "object", "transmit")
+CLIPPERS = ("cohen-sutherland", "liang-barsky", "homogeneous")   # core.pipeline.clip.CLIPPERS
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
 TRANSPARENCIES = ("off", "interpolated", "screen-door")   # core.effects.transparency.MODES
@@ -118,6 +119,10 @@ class RenderSettings:
     # Transparency of materials with k_t > 0 in the z-buffer family (core.effects.transparency):
     # "off" (drawn opaque, as before) | "interpolated" | "screen-door".
     transparency: str = "off"
+    # The line clipper (core.pipeline.clip): "cohen-sutherland" (the course's outcodes, in the
+    # canonical volume) | "liang-barsky" (parametric) | "homogeneous" (in clip space, before
+    # the divide). The same picture; triangles are clipped by Sutherland–Hodgman either way.
+    clipper: str = "cohen-sutherland"
     # Phong's pixel step (core.shading.phong_wide): "float32", the model over each row in
     # 8-wide float32 passes (within 1/255 of float64; extreme inputs fall back per pixel), or
     # "float64", the textbook kernel, one pixel at a time.
@@ -159,6 +164,9 @@ class RenderSettings:
             raise ValueError(f"the adaptive threshold must be from 0 to 1, "
                              f"not {self.adaptive_threshold!r}")
         object.__setattr__(self, "secondary_attenuation", (c1, c2))
+        if self.clipper not in CLIPPERS:
+            raise ValueError(f"clipper must be one of {', '.join(CLIPPERS)}, "
+                             f"not {self.clipper!r}")
         if self.transparency not in TRANSPARENCIES:
             raise ValueError(f"transparency must be one of {', '.join(TRANSPARENCIES)}, "
                              f"not {self.transparency!r}")

@@ -44,7 +44,7 @@ def draw(scene, view, settings, frame, context, timer, rasterize=None) -> None:
     line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
     if line_meshes:
         draw_lines(frame.color, line_meshes, projection, n, z_min, vp, scene.line_color, context,
-                   timer, frame.stats)
+                   timer, frame.stats, settings.clipper)
 
 
 def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
@@ -70,8 +70,9 @@ COMPILED_LINES_FROM = 256
 
 
 def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, timer,
-               stats) -> None:
-    """Wireframe: transform, Cohen–Sutherland clip, M_per · M_vv3dv, divide, scan-convert."""
+               stats, clipper: str = "cohen-sutherland") -> None:
+    """Wireframe: transform, clip (Cohen–Sutherland, or ``clipper``), M_per · M_vv3dv, divide,
+    scan-convert."""
     drawn = 0
     for mesh in meshes:
         cache = context.cache(mesh)
@@ -80,7 +81,7 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         edges = cache["edges"][1]
         if len(edges) == 0:
             continue
-        if len(edges) >= COMPILED_LINES_FROM:
+        if len(edges) >= COMPILED_LINES_FROM and clipper == "cohen-sutherland":
             from core.shading import stages  # noqa: F401 (one BLAS thread, see there)
             from core.pipeline.wireframe import draw_edges
             points = apply(n, mesh.positions)[:, :3]     # as the numpy path: the same pixels
@@ -91,7 +92,8 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
             continue
         points = apply(n, mesh.positions)[:, :3]
         timer.lap("normalize")
-        q0, q1 = clip.clip_lines(points[edges[:, 0]], points[edges[:, 1]], projection, z_min)
+        q0, q1 = clip.clip_lines_with(clipper, points[edges[:, 0]], points[edges[:, 1]],
+                                      projection, z_min)
         timer.lap("clip lines")
         d0 = project.project_lines(q0, projection, vp)
         d1 = project.project_lines(q1, projection, vp)
