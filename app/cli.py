@@ -247,6 +247,12 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
                         help="samples per pixel (1, 4, 9, 16 ...), or 'adaptive' (raytrace: "
                              "Whitted's adaptive supersampling, up to 16 a pixel, or up to "
                              "--samples-max)")
+    parser.add_argument("--filter", choices=("box", "tent", "gaussian", "mitchell"),
+                        default=None, dest="pixel_filter",
+                        help="the reconstruction filter of a supersampled frame (default box: "
+                             "the mean of the pixel's samples)")
+    parser.add_argument("--filter-radius", type=float, default=None, metavar="PIXELS",
+                        help="its radius (default: box 0.5, tent 1, gaussian 1.5, mitchell 2)")
     parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
                         help="raytrace: what an object between a point and a light does "
                              "(default transmit: attenuate by k_t)")
@@ -326,6 +332,8 @@ def _renderer_overrides(args) -> dict:
             "adaptive_threshold": args.adaptive_threshold,
             "secondary_attenuation": (tuple(args.attenuation) if args.attenuation is not None
                                       else None),
+            "pixel_filter": getattr(args, "pixel_filter", None),
+            "filter_radius": getattr(args, "filter_radius", None),
             **_painter_overrides(args)}
 
 

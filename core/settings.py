@@ -123,6 +123,11 @@ class RenderSettings:
     # canonical volume) | "liang-barsky" (parametric) | "homogeneous" (in clip space, before
     # the divide). The same picture; triangles are clipped by Sutherland–Hodgman either way.
     clipper: str = "cohen-sutherland"
+    # The reconstruction filter of a supersampled frame (core.camera.filters): "box" (the
+    # mean of each pixel's samples, as before) | "tent" | "gaussian" | "mitchell", and its
+    # radius in pixels (None: the filter's own default).
+    pixel_filter: str = "box"
+    filter_radius: float | None = None
     # Phong's pixel step (core.shading.phong_wide): "float32", the model over each row in
     # 8-wide float32 passes (within 1/255 of float64; extreme inputs fall back per pixel), or
     # "float64", the textbook kernel, one pixel at a time.
@@ -164,6 +169,8 @@ class RenderSettings:
             raise ValueError(f"the adaptive threshold must be from 0 to 1, "
                              f"not {self.adaptive_threshold!r}")
         object.__setattr__(self, "secondary_attenuation", (c1, c2))
+        from core.camera.filters import check as check_filter
+        check_filter(self.pixel_filter, self.filter_radius)
         if self.clipper not in CLIPPERS:
             raise ValueError(f"clipper must be one of {', '.join(CLIPPERS)}, "
                              f"not {self.clipper!r}")
