@@ -414,6 +414,9 @@ def _course_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--keep-aspect", action="store_true", default=None,
                    help="letterbox the view window instead of stretching it over the viewport "
                         "(the course's mapping stretches)")
+    p.add_argument("--antialias-lines", action="store_true", default=None,
+                   help="draw the wireframe with Wu's antialiased lines instead of the "
+                        "midpoint line")
     p.add_argument("--clipper", choices=("cohen-sutherland", "liang-barsky", "homogeneous"),
                    default=None, help="the line clipper: cohen-sutherland (the course's "
                    "outcodes, default), liang-barsky (parametric) or homogeneous (in clip space "
@@ -600,6 +603,8 @@ def _render(args) -> int:
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
                                             clipper=getattr(args, "clipper", None),
+                                            antialias_lines=getattr(args, "antialias_lines",
+                                                                    None),
                                             keep_aspect=args.keep_aspect, **texture_options,
                                             **_renderer_overrides(args),
                                             **_gi_overrides(args))       # issue 19
@@ -820,6 +825,8 @@ def _inspector_command(args) -> int:
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
                                             clipper=getattr(args, "clipper", None),
+                                            antialias_lines=getattr(args, "antialias_lines",
+                                                                    None),
                                             keep_aspect=args.keep_aspect, **texture_options,
                                             **_renderer_overrides(args))
     except ValueError as error:

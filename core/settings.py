@@ -127,6 +127,9 @@ class RenderSettings:
     # mean of each pixel's samples, as before) | "tent" | "gaussian" | "mitchell", and its
     # radius in pixels (None: the filter's own default).
     pixel_filter: str = "box"
+    # The wireframe's lines: False the midpoint line (the course's), True Wu's antialiased
+    # line (core.pipeline.raster_lines.draw_lines_wu), each pixel weighted by its coverage.
+    antialias_lines: bool = False
     filter_radius: float | None = None
     # Phong's pixel step (core.shading.phong_wide): "float32", the model over each row in
     # 8-wide float32 passes (within 1/255 of float64; extreme inputs fall back per pixel), or

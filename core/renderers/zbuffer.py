@@ -44,7 +44,7 @@ def draw(scene, view, settings, frame, context, timer, rasterize=None) -> None:
     line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
     if line_meshes:
         draw_lines(frame.color, line_meshes, projection, n, z_min, vp, scene.line_color, context,
-                   timer, frame.stats, settings.clipper)
+                   timer, frame.stats, settings.clipper, settings.antialias_lines)
 
 
 def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
@@ -70,7 +70,7 @@ COMPILED_LINES_FROM = 256
 
 
 def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, timer,
-               stats, clipper: str = "cohen-sutherland") -> None:
+               stats, clipper: str = "cohen-sutherland", antialias: bool = False) -> None:
     """Wireframe: transform, clip (Cohen–Sutherland, or ``clipper``), M_per · M_vv3dv, divide,
     scan-convert."""
     drawn = 0
@@ -81,7 +81,7 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         edges = cache["edges"][1]
         if len(edges) == 0:
             continue
-        if len(edges) >= COMPILED_LINES_FROM and clipper == "cohen-sutherland":
+        if len(edges) >= COMPILED_LINES_FROM and clipper == "cohen-sutherland" and not antialias:
             from core.shading import stages  # noqa: F401 (one BLAS thread, see there)
             from core.pipeline.wireframe import draw_edges
             points = apply(n, mesh.positions)[:, :3]     # as the numpy path: the same pixels
@@ -98,7 +98,8 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         d0 = project.project_lines(q0, projection, vp)
         d1 = project.project_lines(q1, projection, vp)
         timer.lap("project")
-        raster_lines.draw_lines(color, d0, d1, to_rgb8(line_color))
+        (raster_lines.draw_lines_wu if antialias else raster_lines.draw_lines)(
+            color, d0, d1, to_rgb8(line_color))
         timer.lap("scan-convert lines")
         drawn += len(q0)
     stats["segments drawn"] = drawn
