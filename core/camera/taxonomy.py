@@ -82,7 +82,8 @@ def classify(view: View, projection: str) -> ProjectionClass:
 
 def _perspective(n) -> ProjectionClass:
     cut = [AXES[i] for i in range(3) if not _zero(n[i])]
-    name = ("one-point perspective", "two-point perspective", "three-point perspective")[len(cut) - 1]
+    name = ("one-point perspective", "two-point perspective",
+            "three-point perspective")[len(cut) - 1]
     return ProjectionClass(name, "perspective", f"the projection plane cuts {len(cut)} principal "
                            f"ax{'is' if len(cut) == 1 else 'es'} ({', '.join(cut)}): VPN "
                            f"{_v(n)} has {len(cut)} non-zero component"

@@ -150,7 +150,7 @@ def liang_barsky(p0, p1, projection: str, z_min: float = 0.0):
 def homogeneous_planes(projection: str, z_min: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """``(M, H)``: the matrix into homogeneous clip space (the perspective-to-parallel M of
     FvDFH 6.5.4 for perspective, the identity for parallel) and the (6, 4) rows of the clip
-    volume ``−W ≤ X ≤ W, −W ≤ Y ≤ W, −W ≤ Z ≤ 0`` as ``h · (X, Y, Z, W) <= 0``."""
+    volume ``−W ≤ X ≤ W, −W ≤ Y ≤ W, −W ≤ Z ≤ 0``, each as ``h · (X, Y, Z, W) <= 0``."""
     if projection == "perspective":
         m = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0],
                       [0, 0, 1.0 / (1.0 + z_min), -z_min / (1.0 + z_min)], [0, 0, -1.0, 0]])
