@@ -50,6 +50,9 @@ FORM_FACTOR_METHODS = ("hemicube", "raycast")
 SOLVERS = ("progressive", "gauss-seidel")
 # The ray tracer's shadow rays (core.raytrace.whitted): the notes' options.
 SHADOW_MODES = ("off", "background", "object", "transmit")
+PIXEL_FILTERS = ("box", "tent", "gaussian", "mitchell")     # core.camera.filters
+FILTER_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": 1.5, "mitchell": 2.0}   # their defaults
+MAX_FILTER_RADIUS = 8.0
 CLIPPERS = ("cohen-sutherland", "liang-barsky", "homogeneous")   # core.pipeline.clip.CLIPPERS
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
@@ -172,7 +175,6 @@ class RenderSettings:
             raise ValueError(f"the adaptive threshold must be from 0 to 1, "
                              f"not {self.adaptive_threshold!r}")
         object.__setattr__(self, "secondary_attenuation", (c1, c2))
-        from core.camera.filters import check as check_filter
         check_filter(self.pixel_filter, self.filter_radius)
         if self.clipper not in CLIPPERS:
             raise ValueError(f"clipper must be one of {', '.join(CLIPPERS)}, "
@@ -213,3 +215,18 @@ def needed_transparency(scene) -> str:
     it opaque."""
     meshes = getattr(scene, "meshes", ())
     return "interpolated" if any(m.material.kt > 0 for m in meshes) else "off"
+
+
+def check_filter(name: str, radius: float | None) -> float:
+    """The radius a pixel filter uses (its default for None); ValueError with a message for an
+    unknown filter or a radius outside (0, 8] pixels."""
+    if name not in PIXEL_FILTERS:
+        raise ValueError(f"the pixel filter must be one of {', '.join(PIXEL_FILTERS)}, "
+                         f"not {name!r}")
+    if radius is None:
+        return FILTER_RADIUS[name]
+    r = float(radius)
+    if not (0.0 < r <= MAX_FILTER_RADIUS):
+        raise ValueError(f"the filter radius must be above 0 and at most "
+                         f"{MAX_FILTER_RADIUS:g} pixels, not {radius!r}")
+    return r

@@ -23,24 +23,11 @@ import math
 
 import numpy as np
 
-FILTERS = ("box", "tent", "gaussian", "mitchell")
-DEFAULT_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": 1.5, "mitchell": 2.0}
-MAX_RADIUS = 8.0
+from core.settings import FILTER_RADIUS as DEFAULT_RADIUS  # noqa: F401  (the names, listed once)
+from core.settings import PIXEL_FILTERS as FILTERS
+from core.settings import check_filter as check  # noqa: F401
+
 B = C = 1.0 / 3.0
-
-
-def check(name: str, radius: float | None) -> float:
-    """The radius to use (the filter's default for None); ValueError with a message for an
-    unknown filter or a radius outside (0, 8] pixels."""
-    if name not in FILTERS:
-        raise ValueError(f"the pixel filter must be one of {', '.join(FILTERS)}, not {name!r}")
-    if radius is None:
-        return DEFAULT_RADIUS[name]
-    r = float(radius)
-    if not (0.0 < r <= MAX_RADIUS):
-        raise ValueError(f"the filter radius must be above 0 and at most {MAX_RADIUS:g} pixels, "
-                         f"not {radius!r}")
-    return r
 
 
 def weight(name: str, d, radius: float) -> np.ndarray:
