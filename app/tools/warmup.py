@@ -198,6 +198,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
     add("BSP tree (painter's)", small, shading="flat", renderer="bsp")
     add("depth sort (painter's), depth-cued", small, shading="gouraud", renderer="depth-sort",
         depth_cue=True)
+    add("scan-line visible surface (Watkins)", small, shading="phong", renderer="scanline")
     # hemicube and ray-cast form factors, the solver, the display; the path tracer
     from core.scene.generators import cube
     box = Scene(name="warm-up box", meshes=[cube(1.0)], views=closed.views)

@@ -74,7 +74,8 @@ RENDERER_LABELS = (("zbuffer", "Z-buffer", "R"), ("raytrace", "Ray traced", "R")
                    ("radiosity", "Radiosity", ""), ("pathtrace", "Path traced", ""),
                    ("bsp", "BSP tree (painter's)", ""),
                    ("depth-sort", "Depth sort (Newell, painter's)", ""),
-                   ("volume", "Volume (ray marching)", ""))
+                   ("volume", "Volume (ray marching)", ""),
+                   ("scanline", "Scan line (Watkins, FvDFH 15.6)", ""))
 TRANSPARENCY_LABELS = (("off", "Opaque (k_t ignored)"), ("interpolated", "Interpolated"),
                        ("screen-door", "Screen door"))
 FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),

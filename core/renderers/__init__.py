@@ -11,6 +11,7 @@ kernels) only when it is first used.
 
 - ``zbuffer``: the FvDFH pipeline, lines and triangles (:mod:`core.renderers.zbuffer`);
 - ``bsp``, ``depth-sort``: the painter's algorithms (:mod:`core.renderers.painters`);
+- ``scanline``: Watkins' scan-line visible-surface algorithm (:mod:`core.renderers.scanline`);
 - ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`);
 - ``volume``: the opaque geometry by the z-buffer, then the scene's volumes ray-marched
   (emission–absorption, MIP), cut at the z-buffer's depth (:mod:`core.volume.renderer`).
@@ -43,6 +44,10 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
 register_renderer("bsp", "core.renderers.painters:draw_bsp",
                   description="a BSP tree built once in world space, painted back to front",
                   label="BSP tree (painter's)", transparency=True, shaders=True)
+register_renderer("scanline", "core.renderers.scanline:draw",
+                  description="Watkins' scan-line visible-surface algorithm (FvDFH 15.6): edge, "
+                              "polygon and active edge tables, depth only at span ends",
+                  label="Scan line (Watkins)", transparency=True, shaders=True)
 register_renderer("depth-sort", "core.renderers.painters:draw_depth_sort",
                   description="Newell, Newell and Sancha's depth sort, painted back to front",
                   label="Depth sort (Newell, painter's)", transparency=True, shaders=True)
