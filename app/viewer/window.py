@@ -59,6 +59,7 @@ import moderngl  # noqa: E402
 from app import startup_gc
 from app.naming import picture_name, unused
 from app.viewer.blit import Blit
+from app.viewer.hands import KEYS_HELP, CameraHands, save_view, view_lines
 from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
 from app.viewer.state import ViewerState, compile_count
@@ -90,6 +91,7 @@ PANEL_WIDTH = 340            # the side panel, in screen points
 NO_TRIANGLES = ("This scene has no triangles: it is drawn as lines whatever the shading, "
                 "so the shading modes change nothing.")
 SCREENSHOTS_DIR = "screenshots"
+SAVED_VIEWS = "saved.views"        # View > Save view appends here (in the current folder)
 # Files in scenes/ that are not scenes.
 NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
 # After an event, draw a few frames so that ImGui's hover and menu states settle; then sleep
@@ -205,7 +207,8 @@ class ViewerWindow:
             raise WindowError(f"could not set up the window: {error}") from error
         self.worker = RenderWorker(wake=glfw.post_empty_event)
         self._busy = FRAMES_AFTER_EVENT
-        self._clicks: list[tuple[int, float, float]] = []   # (button, x, y) since last frame
+        # (button, action, x, y, mods) since the last frame: presses and releases
+        self._clicks: list[tuple[int, int, float, float, int]] = []
         self._path = ""                   # File > Open: the path being typed
         self._notice = ""                 # the last screenshot, for the status line
         self._scenes = shipped_scenes()
@@ -216,6 +219,7 @@ class ViewerWindow:
         self._close_popups = False        # Esc: close them in the next frame
         self._compiles_at_request = 0
         self.tools = InspectorTools(state)    # issue 22: inspect mode, buffer views, compare
+        self._init_hands()
         self._install_callbacks()
         self.warmup = None
         self._start_kernel_processes()
@@ -267,10 +271,10 @@ class ViewerWindow:
 
     def _on_mouse_button(self, window, button, action, mods) -> None:
         self.input.on_mouse_button(button, action)
-        if action == glfw.PRESS and button in (glfw.MOUSE_BUTTON_LEFT, glfw.MOUSE_BUTTON_RIGHT,
-                                               glfw.MOUSE_BUTTON_MIDDLE):
+        if action in (glfw.PRESS, glfw.RELEASE) and button in (
+                glfw.MOUSE_BUTTON_LEFT, glfw.MOUSE_BUTTON_RIGHT, glfw.MOUSE_BUTTON_MIDDLE):
             # Decided in the next frame, once ImGui has seen this press at this position.
-            self._clicks.append((button, *glfw.get_cursor_pos(window)))
+            self._clicks.append((button, action, *glfw.get_cursor_pos(window), mods))
         self._wake()
 
     def _on_key(self, window, key, scancode, action, mods) -> None:
@@ -288,6 +292,8 @@ class ViewerWindow:
             return
         if imgui.get_io().want_capture_keyboard:
             return                        # typing in a text field
+        if self._hand_key(key, mods):
+            return
         if key == glfw.KEY_ESCAPE:
             self.quit("key Esc")
         elif key == glfw.KEY_SPACE and action == glfw.PRESS:
@@ -333,6 +339,8 @@ class ViewerWindow:
             self.tools.next_buffer("key v")
         elif char == "h":
             self.tools.flip("key h")
+        elif char == "f":
+            self.fit_view("key f")
 
     def _on_cursor(self, window, x, y) -> None:
         self.input.on_cursor(x, y)
@@ -345,6 +353,7 @@ class ViewerWindow:
     def _on_scroll(self, window, x_offset, y_offset) -> None:
         self.input.on_scroll(x_offset, y_offset)
         self._wake()
+        self._hand_wheel(y_offset)
 
     def _on_framebuffer_size(self, window, width, height) -> None:
         self._fit_picture()
@@ -385,6 +394,8 @@ class ViewerWindow:
                   "paint_first": self.state.set_paint_first}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
+        if what == "projection":
+            self.hands.projection_changed()     # a moved camera's F and B for the new one
         self._wake()
 
     # -- an animated scene's timeline ---------------------------------------------------------
@@ -590,32 +601,195 @@ class ViewerWindow:
                      time.perf_counter() - self.started, user + system)
 
     def _handle_clicks(self) -> None:
-        """Left click: next view; right click: the pop-up (or, with the course's rules, the
-        startup code's buttons) — only on the picture, and unless ImGui wants this click."""
+        """Presses and releases since the last frame, in order. A left or middle press on the
+        picture starts a gesture (app.viewer.hands): past ImGui's drag threshold it orbits or
+        pans, released before it is a click. Right press: the pop-up (or, with the course's
+        rules, the startup code's buttons) at once — only on the picture, and unless ImGui
+        wants this click."""
         clicks, self._clicks = self._clicks, []
-        if not clicks:
-            return
-        captured = imgui.get_io().want_capture_mouse or self._popup_open
-        for button, x, y in clicks:
+        captured = bool(clicks) and (imgui.get_io().want_capture_mouse or self._popup_open)
+        for button, action, x, y, mods in clicks:
+            if action == glfw.RELEASE:
+                self._hand_release(button, x, y)
+                continue
             name = {glfw.MOUSE_BUTTON_LEFT: "left", glfw.MOUSE_BUTTON_RIGHT: "right"}.get(
                 button, "middle") + " click"
             where = f"{name} at ({x:.0f}, {y:.0f})"
             if captured or not self._on_picture(x, y):
                 log.info("action: %s -> taken by the menu/panel, view unchanged", where)
-            elif (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
-                log.info("action: %s -> the bump demo: %s", where, demo)
-            elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
-                self.toggle_play(where)
-            elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:    # issue 22
-                scale = self._scale()
-                self.tools.inspect(int(x * scale), int(y * scale), where)
-            elif self.state.course_tri:
-                self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
-            elif button == glfw.MOUSE_BUTTON_LEFT:
-                self.step_view(+1, where)
             elif button == glfw.MOUSE_BUTTON_RIGHT:
-                log.info("action: %s -> pop-up menu", where)
-                imgui.open_popup("popup")
+                self._click(button, x, y, where)
+            else:
+                self._hand_press(button, x, y, mods, where)
+        self._hand_follow()
+
+    def _click(self, button: int, x: float, y: float, where: str) -> None:
+        """A click on the picture (a press released without a drag, or a right press)."""
+        if (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
+            log.info("action: %s -> the bump demo: %s", where, demo)
+        elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
+            self.toggle_play(where)
+        elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:    # issue 22
+            scale = self._scale()
+            self.tools.inspect(int(x * scale), int(y * scale), where)
+        elif self.state.course_tri:
+            self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
+        elif button == glfw.MOUSE_BUTTON_LEFT:
+            self.step_view(+1, where)
+        elif button == glfw.MOUSE_BUTTON_RIGHT:
+            log.info("action: %s -> pop-up menu", where)
+            imgui.open_popup("popup")
+
+    # -- the camera's hands (app.viewer.hands): drags, the wheel, Enter and F ----------------
+    def _init_hands(self) -> None:
+        self.hands = CameraHands(self.state)
+        self._pressed: tuple[int, float, float, str] | None = None   # button, x, y, where
+        self._view_file = Path.cwd() / SAVED_VIEWS
+
+    def _drag_threshold(self) -> float:
+        """ImGui's drag threshold, in framebuffer pixels."""
+        return float(imgui.get_io().mouse_drag_threshold) * self._scale()
+
+    def _hand_press(self, button: int, x: float, y: float, mods: int, where: str) -> None:
+        pan = button == glfw.MOUSE_BUTTON_MIDDLE or bool(mods & glfw.MOD_SHIFT)
+        scale = self._scale()
+        self.hands.press(x * scale, y * scale, pan)
+        self._pressed = (button, x, y, where)
+
+    def _hand_release(self, button: int, x: float, y: float) -> None:
+        if self._pressed is None or self._pressed[0] != button:
+            return
+        _, x0, y0, where = self._pressed
+        self._pressed = None
+        scale = self._scale()
+        pan = self.hands.drag is not None and self.hands.drag.pan
+        if not self.hands.release(x * scale, y * scale, self._drag_threshold()):
+            self._click(button, x0, y0, where)
+            return
+        what = "pan" if pan else "orbit"
+        self._log_camera(f"drag {what} from ({x0:.0f}, {y0:.0f}) to ({x:.0f}, {y:.0f})")
+
+    def _hand_follow(self) -> None:
+        """While a button is down: the gesture follows the pointer (the latest camera wins:
+        the worker renders only the newest request)."""
+        if self.hands.drag is None:
+            return
+        x, y = glfw.get_cursor_pos(self.window)
+        scale = self._scale()
+        if self.hands.move(x * scale, y * scale, self._drag_threshold()):
+            self._wake()
+
+    def _hand_wheel(self, notches: float) -> None:
+        """The wheel on the picture: dolly; Ctrl: the window (field of view); Alt: the loupe."""
+        x, y = glfw.get_cursor_pos(self.window)
+        if imgui.get_io().want_capture_mouse or not self._on_picture(x, y) or not notches:
+            return
+        held = lambda *keys: any(glfw.get_key(self.window, k) == glfw.PRESS for k in keys)
+        if held(glfw.KEY_LEFT_ALT, glfw.KEY_RIGHT_ALT) and hasattr(self, "loupe"):
+            self.loupe.wheel(notches, x * self._scale(), y * self._scale())
+            return
+        zoom = held(glfw.KEY_LEFT_CONTROL, glfw.KEY_RIGHT_CONTROL)
+        if self.hands.wheel(notches, field_of_view=zoom):
+            self._log_camera(f"wheel {notches:+g}{' with Ctrl (window)' if zoom else ' (dolly)'}")
+        elif self.hands.message:
+            log.info("action: wheel -> %s", self.hands.message)
+
+    def _hand_key(self, key: int, mods: int) -> bool:
+        """Enter: the file's view; F1: the keys' help; Ctrl+S: save the view. Returns whether
+        the key was taken."""
+        if key == glfw.KEY_S and mods & glfw.MOD_CONTROL:
+            self.save_view("key Ctrl+S")
+            return True
+        if key in (glfw.KEY_ENTER, glfw.KEY_KP_ENTER):
+            self.reset_view("key Enter")
+            return True
+        if key == glfw.KEY_F1:
+            self.toggle_help("key F1")
+            return True
+        return False
+
+    def reset_view(self, how: str) -> None:
+        moved = self.hands.reset()
+        log.info("action: %s -> %s", how, "the file's view again" if moved
+                 else "already the file's view")
+        self._wake()
+
+    def fit_view(self, how: str) -> None:
+        if self.hands.fit():
+            self._log_camera(how + " (fit the scene's bounds)")
+        else:
+            log.info("action: %s -> %s", how, self.hands.message)
+        self._wake()
+
+    def toggle_help(self, how: str) -> None:
+        self._help = not getattr(self, "_help", False)
+        log.info("action: %s -> keys help %s", how, "shown" if self._help else "hidden")
+        self._wake()
+
+    def _log_camera(self, how: str) -> None:
+        v = self.state.view
+        numbers = lambda values: "(" + ", ".join(f"{float(c):.17g}" for c in values) + ")"
+        log.info("action: %s -> camera VRP %s VPN %s VUP %s window %s PRP %s F %.17g B %.17g",
+                 how, numbers(v.vrp), numbers(v.vpn), numbers(v.vup), numbers(v.window),
+                 numbers(v.prp), v.front, v.back)
+        self._wake()
+
+    def save_view(self, how: str, path: Path | None = None) -> int | None:
+        """Append the view shown to a view file (six lines); returns its number there."""
+        view = self.state.view
+        if view is None:
+            return None
+        path = Path(path) if path is not None else self._view_file
+        s = self.state
+        comment = (f"saved from the viewer: {s.scene.name}, {s.projection}, {s.shading}, "
+                   f"{s.size[0]}x{s.size[1]} ({view.label})")
+        try:
+            number = save_view(view, path, displayable(comment))
+        except (OSError, ValueError) as error:
+            self._notice = f"could not save the view to {path}: {error}"
+            log.info("action: %s -> %s", how, self._notice)
+            print(self._notice, file=sys.stderr)
+            return None
+        self._notice = f"view saved to {path.name} as view {number}"
+        log.info("action: %s -> view saved to %s as view %d", how, path, number)
+        return number
+
+    def _help_strip(self) -> None:
+        """F1 / Help > Keys: every key and mouse action, in the panel (never on the picture)."""
+        if not getattr(self, "_help", False):
+            return
+        imgui.set_next_item_open(True, imgui.Cond_.always)
+        if not imgui.collapsing_header("Keys and mouse (F1 closes)###help"):
+            return
+        imgui.push_text_wrap_pos(0.0)
+        for key, what in KEYS_HELP:
+            if not what:
+                imgui.text_colored((0.55, 0.8, 1.0, 1.0), key)
+            else:
+                imgui.bullet()
+                imgui.text_wrapped(displayable(f"{key}: {what}"))
+        imgui.pop_text_wrap_pos()
+        imgui.separator()
+
+    def _camera_strip(self) -> None:
+        """The view's numbers, live: VRP ... B and each factor of N_per / N_par."""
+        view = self.state.view
+        if view is None:
+            return
+        moved = " (moved)" if self.state.hand_view is not None else ""
+        if not imgui.collapsing_header(f"Camera{moved}###camera",
+                                       imgui.TreeNodeFlags_.default_open):
+            if self.hands.message:
+                imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(self.hands.message))
+            return
+        imgui.push_text_wrap_pos(0.0)
+        if self.hands.message:
+            imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(self.hands.message))
+        for line in view_lines(view, self.state.projection):
+            imgui.text(displayable(line))
+        imgui.text_disabled("drag orbit, Shift/middle drag pan, wheel dolly, Ctrl+wheel window, "
+                            "F fit, Enter the file's view")
+        imgui.pop_text_wrap_pos()
 
     def _log_frame(self) -> None:
         log.info("%s", self.state.frame_summary())
@@ -667,10 +841,12 @@ class ViewerWindow:
                                    imgui.Cond_.always)
         imgui.begin("panel", None, PANEL_FLAGS)
         self._menu_bar()
+        self._help_strip()
         self._status()
         self._timeline()
         self.tools.panel(imgui, displayable)
         self._draw_order()                    # issue 18
+        self._camera_strip()
         self._plan_strip()
         self._invalid_views_strip()
         self._messages_strip()
@@ -720,6 +896,7 @@ class ViewerWindow:
                 self.step_view(+1, "menu View > Next")
             if imgui.menu_item_simple("Previous view", "Left"):
                 self.step_view(-1, "menu View > Previous")
+            self._camera_items()
             imgui.separator()
             self._inspector_items()
             imgui.separator()
@@ -730,7 +907,22 @@ class ViewerWindow:
                 if imgui.menu_item_simple(label, None, i == self.state.view_index):
                     self.go_to_view(i, "menu View")
             imgui.end_menu()
+        if imgui.begin_menu("Help"):
+            self._closing()
+            if imgui.menu_item_simple("Keys and mouse", "F1", getattr(self, "_help", False)):
+                self.toggle_help("menu Help > Keys")
+            imgui.end_menu()
         imgui.end_menu_bar()
+
+    def _camera_items(self) -> None:
+        imgui.separator()
+        if imgui.menu_item_simple("Reset to the file's view", "Enter", False,
+                                  self.state.hand_view is not None):
+            self.reset_view("menu View > Reset")
+        if imgui.menu_item_simple("Fit the scene", "F"):
+            self.fit_view("menu View > Fit")
+        if imgui.menu_item_simple(f"Save view (append to {SAVED_VIEWS})", "Ctrl+S"):
+            self.save_view("menu View > Save view")
 
     def _inspector_items(self) -> None:
         """Issue 22: inspect mode, the buffer views, the comparison with OpenGL."""
