@@ -59,6 +59,7 @@ import moderngl  # noqa: E402
 from app import startup_gc
 from app.naming import picture_name, unused
 from app.viewer.blit import Blit
+from app.viewer.files import FileDialog, RecentFiles, check_drop
 from app.viewer.hands import KEYS_HELP, CameraHands, save_view, view_lines
 from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
@@ -220,6 +221,7 @@ class ViewerWindow:
         self._compiles_at_request = 0
         self.tools = InspectorTools(state)    # issue 22: inspect mode, buffer views, compare
         self._init_hands()
+        self._init_files()
         self._install_callbacks()
         self.warmup = None
         self._start_kernel_processes()
@@ -265,6 +267,7 @@ class ViewerWindow:
         glfw.set_framebuffer_size_callback(w, self._on_framebuffer_size)
         glfw.set_window_refresh_callback(w, lambda *_: self._wake())
         glfw.set_window_focus_callback(w, lambda *_: self._wake())
+        self._install_drop()
 
     def _wake(self) -> None:
         self._busy = FRAMES_AFTER_EVENT
@@ -428,6 +431,7 @@ class ViewerWindow:
         earlier = len(self.state.open_messages)
         if self.state.open_scene(source):
             log.info("action: %s -> opened %s (%s)", how, source, self.state.view_label)
+            self.recent.add(source)
             for message in self.state.scene.view_messages:
                 print(f"invalid view: {message}", file=sys.stderr)
             glfw.set_window_title(self.window, self._title())
@@ -504,6 +508,7 @@ class ViewerWindow:
         self._handle_clicks()
 
         self._note_kernels()
+        self._poll_dialog()
         self.state.tick(time.perf_counter(), busy=self.worker.waiting)
         if self.state.request(self.worker):
             self._compiles_at_request = compile_count()
@@ -754,6 +759,89 @@ class ViewerWindow:
         log.info("action: %s -> view saved to %s as view %d", how, path, number)
         return number
 
+    # -- files: dropped, recent, the native dialog (app.viewer.files) -----------------------
+    def _init_files(self) -> None:
+        self.recent = RecentFiles()
+        self.dialog = FileDialog()
+        if self.state.scene_source != "-" and Path(self.state.scene_source).is_file():
+            self.recent.add(self.state.scene_source)
+
+    def _install_drop(self) -> None:
+        """glfw's drop callback, given the raw bytes of each path: pyGLFW's own wrapper
+        decodes them as UTF-8 and a name that is not would raise inside the callback."""
+        dropfun = getattr(glfw, "_GLFWdropfun", None)
+        library = getattr(glfw, "_glfw", None)
+        if dropfun is None or not hasattr(library, "glfwSetDropCallback"):
+            glfw.set_drop_callback(self.window, lambda _w, paths: self.on_drop(paths))
+            return
+
+        def raw(_window, count, c_paths):
+            try:
+                self.on_drop([c_paths[i] for i in range(count)])
+            except Exception as error:        # never out of a C callback
+                log.error("drop: %s", error, exc_info=error)
+        self._drop_callback = dropfun(raw)    # kept: glfw holds only the C pointer
+        library.glfwSetDropCallback(self.window, self._drop_callback)
+
+    def on_drop(self, paths) -> bool:
+        """Files dropped on the window: open the one dropped, or say why not (one message)."""
+        path, why = check_drop(paths)
+        if path is None:
+            self.state.open_messages.append(why)
+            log.info("action: drop -> %s", why)
+            print(why, file=sys.stderr)
+            self._wake()
+            return False
+        self.open_scene(path, "drop")
+        return self.state.scene_source == path
+
+    def _file_items(self) -> None:
+        if imgui.menu_item_simple("Open with the file dialog...", None, False,
+                                  not self.dialog.open):
+            self._start_dialog("open", "Open a scene, mesh, .tri or view file")
+        if imgui.begin_menu("Recent", bool(self.recent.paths)):
+            for path, there in self.recent.items():
+                if not there:
+                    imgui.push_style_color(imgui.Col_.text,
+                                           imgui.get_style_color_vec4(imgui.Col_.text_disabled))
+                chosen = imgui.menu_item_simple(displayable(path), None,
+                                                path == self.state.scene_source)
+                if not there:
+                    imgui.pop_style_color()
+                if chosen:
+                    self.open_recent(path)
+            imgui.end_menu()
+        if imgui.menu_item_simple("Save view as...", None, False, not self.dialog.open):
+            self._start_dialog("save view", "Append the view to a view file", save=True)
+
+    def open_recent(self, path: str) -> None:
+        if not Path(path).is_file():
+            why = f"{path} is no longer there (moved or deleted since it was opened)"
+            self.state.open_messages.append(why)
+            log.info("action: menu File > Recent -> %s", why)
+            self._wake()
+            return
+        self.open_scene(path, "menu File > Recent")
+
+    def _start_dialog(self, purpose: str, title: str, save: bool = False) -> None:
+        why = self.dialog.start(purpose, title, save=save)
+        if why:
+            self._notice = why
+            log.info("action: file dialog (%s) -> %s", purpose, why)
+
+    def _poll_dialog(self) -> None:
+        done = self.dialog.poll()
+        if done is None:
+            return
+        purpose, path = done
+        if not path:
+            log.info("action: file dialog (%s) -> cancelled", purpose)
+        elif purpose == "open":
+            self.open_scene(path, "file dialog")
+        elif purpose == "save view":
+            self.save_view("file dialog Save view as", Path(path))
+        self._wake()
+
     def _help_strip(self) -> None:
         """F1 / Help > Keys: every key and mouse action, in the panel (never on the picture)."""
         if not getattr(self, "_help", False):
@@ -872,6 +960,7 @@ class ViewerWindow:
                                               str(path) == self.state.scene_source):
                         self.open_scene(str(path), "menu File > Open")
                 imgui.end_menu()
+            self._file_items()
             if imgui.menu_item_simple("Save screenshot", "S"):
                 self.save_screenshot("menu File > Save screenshot")
             imgui.separator()

@@ -1,0 +1,230 @@
+"""The camera's hands in the real window under Xvfb, driven by xdotool (app.viewer.hands).
+
+One session of the default scene (the house, 500 x 500, perspective wireframe): a drag
+changes the picture and the panel's VPN and does not step the view; Ctrl+S appends the view to
+saved.views and ``python -m app render saved.views`` draws the screen's picture with 0 pixels
+different; Enter gives back the file's view with 0 pixels different from the first picture;
+the wheel then grows the picture monotonically; a click without a drag advances exactly one view;
+F1 shows the keys in the panel and leaves the picture alone.
+"""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from tools import need_programs
+
+from core.paths import SCENES_DIR as ROOT_SCENES
+from tests.test_window import App, frames, grab, start_xvfb
+
+
+def drag(app, path, button: int = 1) -> None:
+    """Press at the first point, move through the others, release at the last."""
+    app.xdotool("mousemove", "--window", app.window, *map(str, path[0]))
+    time.sleep(0.15)
+    app.xdotool("mousedown", str(button))
+    for x, y in path[1:]:
+        time.sleep(0.05)
+        app.xdotool("mousemove", "--window", app.window, str(x), str(y))
+    time.sleep(0.1)
+    app.xdotool("mouseup", str(button))
+
+
+def settled(app, tmp_path, name: str, mark: int) -> np.ndarray:
+    """The picture once a frame newer than ``mark`` is logged and shown."""
+    app.wait_for(r"^.*frame \d+: view", timeout=20, after=mark)
+    time.sleep(0.4)
+    return grab(app, tmp_path / f"{name}.png", "500x500+0+0")
+
+
+def extent(picture: np.ndarray) -> int:
+    """Width of the lines drawn (the columns with any lit pixel)."""
+    columns = np.flatnonzero(picture.any(axis=(0, 2)))
+    return int(columns[-1] - columns[0]) if len(columns) else 0
+
+
+@pytest.mark.xvfb
+@pytest.mark.slow
+def test_orbit_save_wheel_reset_click_and_help_under_xvfb(tmp_path):
+    need_programs("Xvfb", "xdotool", "import", install="apt-get install xvfb xdotool imagemagick")
+    from PIL import Image
+
+    xvfb, display = start_xvfb()
+    app = App(display, tmp_path)
+    try:
+        app.wait_for(r"first frame shown", timeout=90)
+        app.find_window()
+        time.sleep(0.4)
+        first = grab(app, tmp_path / "first.png", "500x500+0+0")
+        panel = grab(app, tmp_path / "panel0.png", "340x500+500+0")
+
+        # A drag orbits: VPN leaves (0, 0, 1), the picture and the panel change, view 1 stays.
+        mark = len(app.log())
+        drag(app, [(250, 250), (262, 252), (280, 255), (300, 255)])
+        line = app.wait_for(r"drag orbit from \(250, 250\) to \(300, 255\) -> camera .*VPN "
+                            r"\(([^)]*)\)", timeout=10, after=mark)
+        vpn = np.array([float(c) for c in line[1].split(",")])
+        assert vpn[0] < -0.1 and abs(np.linalg.norm(vpn) - 1) < 1e-12
+        moved = settled(app, tmp_path, "moved", mark)
+        assert frames(app.log())[-1]["view"] == 1 and "camera=moved" in app.log()[mark:]
+        assert not np.array_equal(moved, first)
+        assert not np.array_equal(grab(app, tmp_path / "panel1.png", "340x500+500+0"), panel)
+
+        # Ctrl+S: the view appended to saved.views; render draws the same picture exactly.
+        mark = len(app.log())
+        app.key("ctrl+s")
+        number = int(app.wait_for(r"view saved to .*saved\.views as view (\d+)", timeout=10,
+                                  after=mark)[1])
+        assert number == 1
+        out = tmp_path / "saved.png"
+        done = subprocess.run([sys.executable, "-m", "app", "render", "saved.views", "--view",
+                               "1", "--out", str(out)], cwd=tmp_path, env=app.env,
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        rendered = np.asarray(Image.open(out).convert("RGB"))
+        assert int((rendered != moved).any(axis=2).sum()) == 0
+
+        # Enter: the file's view, bit for bit.
+        mark = len(app.log())
+        app.key("Return")
+        app.wait_for(r"key Enter -> the file's view again", timeout=10, after=mark)
+        back = settled(app, tmp_path, "back", mark)
+        assert "camera=moved" not in app.log()[mark:]
+        assert int((back != first).any(axis=2).sum()) == 0
+
+        # The wheel dollies in: the house grows with every notch.
+        widths = [extent(back)]
+        for _ in range(3):
+            mark = len(app.log())
+            app.xdotool("mousemove", "--window", app.window, "250", "250")
+            app.xdotool("click", "4")
+            app.wait_for(r"wheel \+1 \(dolly\)", timeout=10, after=mark)
+            widths.append(extent(settled(app, tmp_path, "wheel", mark)))
+        assert all(b > a for a, b in zip(widths, widths[1:])), widths
+
+        mark = len(app.log())
+        app.key("Return")
+        assert int((settled(app, tmp_path, "back2", mark) != first).any(axis=2).sum()) == 0
+
+        # A click without a drag still advances exactly one view.
+        mark = len(app.log())
+        app.click(250, 250)
+        app.wait_for(r"frame \d+: view 2 of 20", timeout=10, after=mark)
+        time.sleep(0.5)
+        assert [f["view"] for f in frames(app.log()[mark:])] == [2]
+
+        # F1: the keys in the panel, the picture untouched.
+        picture = grab(app, tmp_path / "before-help.png", "500x500+0+0")
+        mark = len(app.log())
+        app.key("F1")
+        app.wait_for(r"key F1 -> keys help shown", timeout=10, after=mark)
+        time.sleep(0.4)
+        whole = grab(app, tmp_path / "help.png")
+        assert np.array_equal(whole[:, :500], picture)
+        assert not np.array_equal(whole[:, 500:], panel)
+    finally:
+        app.stop()
+        xvfb.kill()
+        xvfb.wait(timeout=10)
+
+
+# -- files: dropped, recent (the handlers called directly) --------------------------------
+
+def hostile_drops(tmp_path):
+    """(what glfw would hand the callback, the words its one message must have)."""
+    import os
+    folder = tmp_path / "a folder"
+    folder.mkdir()
+    empty = tmp_path / "empty.tri"
+    empty.write_bytes(b"")
+    fifo = tmp_path / "pipe.tri"
+    os.mkfifo(fifo)
+    huge = tmp_path / "huge.ply"
+    with open(huge, "wb") as out:
+        out.truncate(2 << 30)                           # 2 GiB, sparse
+    odd = os.fsencode(tmp_path) + b"/caf\xe9.tri"
+    with open(odd, "wb") as out:
+        out.write(b"x")
+    many = [str(tmp_path / f"{k}.tri") for k in range(40)]
+    return [([str(folder)], "a folder"), ([str(empty)], "empty (0 bytes)"),
+            ([str(fifo)], "a FIFO"), ([str(huge)], f"{2 << 30} bytes, more than any reader"),
+            ([odd], "not UTF-8"), (many, "dropped 40 files at once"),
+            ([str(tmp_path / "gone.tri")], "no such file")]
+
+
+def test_hostile_drops_give_one_message_each(tmp_path):
+    from app.viewer.files import check_drop
+    for paths, words in hostile_drops(tmp_path):
+        path, why = check_drop(paths)
+        assert path is None and words in why, (paths[:1], why)
+        assert "\n" not in why
+    good = ROOT_SCENES / "few_triangles.tri"
+    assert check_drop([str(good)]) == (str(good), "")
+
+
+def test_recent_files_survive_a_restart_and_a_bad_list_is_ignored(tmp_path, capsys):
+    from app.viewer.files import RECENT_COUNT, RecentFiles
+    listed = tmp_path / "cfg" / "recent.json"
+    recent = RecentFiles(listed)
+    files = []
+    for k in range(RECENT_COUNT + 2):
+        f = tmp_path / f"s{k}.tri"
+        f.write_text("0\n")
+        files.append(f)
+        recent.add(str(f))
+    recent.add(str(files[3]))                        # opened again: first, not twice
+    again = RecentFiles(listed)                      # a restart
+    assert again.paths[0] == str(files[3]) and len(again.paths) == RECENT_COUNT
+    assert again.paths[1] == str(files[-1]) and str(files[0]) not in again.paths
+    files[-1].unlink()                               # gone since: listed, marked
+    assert again.items()[1] == (str(files[-1]), False) and again.items()[0][1]
+    # corrupt: ignored with one warning, the viewer goes on with an empty list
+    listed.write_text('{"recent": [1, 2')
+    broken = RecentFiles(listed)
+    assert broken.paths == [] and "is ignored" in broken.warning
+    assert "warning: the recent-files list" in capsys.readouterr().err
+    listed.write_text('{"recent": "not a list"}')
+    assert RecentFiles(listed).paths == []
+    # unwritable: the warning, no exception
+    blocked = tmp_path / "file-not-dir"
+    blocked.write_text("")
+    stuck = RecentFiles(blocked / "recent.json")
+    stuck.add(str(files[0]))
+    assert stuck.paths == [str(files[0])] and "could not be saved" in stuck.warning
+
+
+@pytest.mark.xvfb
+def test_a_dropped_file_opens_in_the_window_and_enters_recent(tmp_path, monkeypatch):
+    # The window in this process on Xvfb: its drop handler called as glfw would call it.
+    need_programs("Xvfb", install="apt-get install xvfb")
+    xvfb, display = start_xvfb()
+    monkeypatch.setenv("DISPLAY", display)
+    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
+    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    from app.viewer.state import ViewerState
+    from app.viewer.window import ViewerWindow
+    state = ViewerState.open(ROOT_SCENES / "house.toml", size=(160, 120))
+    window = ViewerWindow(state, out_dir=tmp_path)
+    try:
+        window.draw_frame()
+        for paths, words in hostile_drops(tmp_path):
+            assert window.on_drop(paths) is False
+            assert words in state.open_messages[-1]
+            window.draw_frame()                      # the window goes on
+        assert state.scene.name.lower().startswith("fvdfh house")
+        tri = ROOT_SCENES / "few_triangles.tri"
+        assert window.on_drop([str(tri)]) is True
+        assert state.scene_source == str(tri) and state.open_messages == []
+        window.draw_frame()
+        from app.viewer.files import RecentFiles
+        assert RecentFiles().paths[:2] == [str(tri), str((ROOT_SCENES / "house.toml"))]
+    finally:
+        window.close()
+        xvfb.kill()
+        xvfb.wait(timeout=10)
