@@ -5,7 +5,8 @@ changes the picture and the panel's VPN and does not step the view; Ctrl+S appen
 saved.views and ``python -m app render saved.views`` draws the screen's picture with 0 pixels
 different; Enter gives back the file's view with 0 pixels different from the first picture;
 the wheel then grows the picture monotonically; a click without a drag advances exactly one view;
-F1 shows the keys in the panel and leaves the picture alone.
+the loupe at 8x shows each frame pixel as an 8 x 8 block of its colour; F1 shows the keys
+in the panel and leaves the picture alone.
 """
 
 from __future__ import annotations
@@ -119,8 +120,38 @@ def test_orbit_save_wheel_reset_click_and_help_under_xvfb(tmp_path):
         time.sleep(0.5)
         assert [f["view"] for f in frames(app.log()[mark:])] == [2]
 
+        # The loupe: Alt+wheel three notches at a lit pixel (cx, cy) is 8x round it: screen
+        # pixel q shows frame pixel c + floor((q - c) / 8), an 8 x 8 block each.
+        picture = grab(app, tmp_path / "before-loupe.png", "500x500+0+0")
+        lit = np.argwhere(picture.any(axis=2))
+        cy, cx = lit[np.abs(lit - 250).sum(axis=1).argmin()]
+        app.xdotool("mousemove", "--window", app.window, str(cx), str(cy))
+        for k in (2, 4, 8):
+            mark = len(app.log())
+            app.xdotool("keydown", "--window", app.window, "alt")
+            app.xdotool("click", "4")
+            app.xdotool("keyup", "--window", app.window, "alt")
+            app.wait_for(rf"Alt\+wheel \+1 at \({cx}, {cy}\) -> loupe {k}x", timeout=10, after=mark)
+        time.sleep(0.5)
+        loupe = grab(app, tmp_path / "loupe.png", "500x500+0+0")
+        q = np.arange(500)
+        rows, cols = cy + (q - cy) // 8, cx + (q - cx) // 8
+        inside = lambda i: (i >= 0) & (i < 500)
+        expected = np.zeros_like(picture)
+        expected[np.ix_(inside(rows), inside(cols))] = picture[np.ix_(rows[inside(rows)],
+                                                                     cols[inside(cols)])]
+        assert np.array_equal(loupe, expected)
+        assert (loupe[cy:cy + 8, cx:cx + 8] == picture[cy, cx]).all()
+        assert len(np.unique(loupe.reshape(-1, 3), axis=0)) >= 2      # lines, not all black
+        for _ in range(3):
+            app.xdotool("keydown", "--window", app.window, "alt")
+            app.xdotool("click", "5")
+            app.xdotool("keyup", "--window", app.window, "alt")
+        app.wait_for(r"-> loupe 1x", timeout=10)
+        time.sleep(0.5)
+        assert np.array_equal(grab(app, tmp_path / "unloupe.png", "500x500+0+0"), picture)
+
         # F1: the keys in the panel, the picture untouched.
-        picture = grab(app, tmp_path / "before-help.png", "500x500+0+0")
         mark = len(app.log())
         app.key("F1")
         app.wait_for(r"key F1 -> keys help shown", timeout=10, after=mark)

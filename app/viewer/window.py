@@ -63,6 +63,7 @@ from app.viewer.files import FileDialog, RecentFiles, check_drop
 from app.viewer.hands import KEYS_HELP, CameraHands, save_view, view_lines
 from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
+from app.viewer.loupe import Loupe, value_at
 from app.viewer.state import ViewerState, compile_count
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
@@ -636,7 +637,7 @@ class ViewerWindow:
             self.toggle_play(where)
         elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:    # issue 22
             scale = self._scale()
-            self.tools.inspect(int(x * scale), int(y * scale), where)
+            self.tools.inspect(*self.loupe.texel_at(x * scale, y * scale), where)
         elif self.state.course_tri:
             self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
         elif button == glfw.MOUSE_BUTTON_LEFT:
@@ -648,6 +649,7 @@ class ViewerWindow:
     # -- the camera's hands (app.viewer.hands): drags, the wheel, Enter and F ----------------
     def _init_hands(self) -> None:
         self.hands = CameraHands(self.state)
+        self.loupe = Loupe()
         self._pressed: tuple[int, float, float, str] | None = None   # button, x, y, where
         self._view_file = Path.cwd() / SAVED_VIEWS
 
@@ -690,8 +692,10 @@ class ViewerWindow:
         if imgui.get_io().want_capture_mouse or not self._on_picture(x, y) or not notches:
             return
         held = lambda *keys: any(glfw.get_key(self.window, k) == glfw.PRESS for k in keys)
-        if held(glfw.KEY_LEFT_ALT, glfw.KEY_RIGHT_ALT) and hasattr(self, "loupe"):
-            self.loupe.wheel(notches, x * self._scale(), y * self._scale())
+        if held(glfw.KEY_LEFT_ALT, glfw.KEY_RIGHT_ALT):
+            m = self.loupe.wheel(notches, x * self._scale(), y * self._scale())
+            self.blit.loupe(**self.loupe.uniforms())
+            log.info("action: Alt+wheel %+g at (%.0f, %.0f) -> loupe %dx", notches, x, y, m)
             return
         zoom = held(glfw.KEY_LEFT_CONTROL, glfw.KEY_RIGHT_CONTROL)
         if self.hands.wheel(notches, field_of_view=zoom):
@@ -841,6 +845,16 @@ class ViewerWindow:
         elif purpose == "save view":
             self.save_view("file dialog Save view as", Path(path))
         self._wake()
+
+    def _cursor_line(self) -> None:
+        """The status line's value under the cursor (through the loupe), and the loupe's m."""
+        x, y = glfw.get_cursor_pos(self.window)
+        if self.state.frame is None or not self._on_picture(x, y):
+            return
+        scale = self._scale()
+        column, row = self.loupe.texel_at(x * scale, y * scale)
+        zoom = f"loupe {self.loupe.magnification}x, " if self.loupe.magnification > 1 else ""
+        imgui.text_disabled(zoom + value_at(self.state.frame, column, row))
 
     def _help_strip(self) -> None:
         """F1 / Help > Keys: every key and mouse action, in the panel (never on the picture)."""
@@ -1132,6 +1146,7 @@ class ViewerWindow:
         imgui.text_colored((0.55, 0.8, 1.0, 1.0), displayable(self._progress_text()))
         if self._notice:
             imgui.text_disabled(displayable(self._notice))
+        self._cursor_line()
         imgui.pop_text_wrap_pos()
         imgui.separator()
 
