@@ -1010,7 +1010,7 @@ class ViewerWindow:
                 if imgui.menu_item_simple(label, None, i == self.state.view_index):
                     self.go_to_view(i, "menu View")
             imgui.end_menu()
-        if imgui.begin_menu("Help"):
+        if imgui.begin_menu("?###Help"):            # Help: short, the bar is full
             self._closing()
             if imgui.menu_item_simple("Keys and mouse", "F1", getattr(self, "_help", False)):
                 self.toggle_help("menu Help > Keys")
