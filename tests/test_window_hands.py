@@ -259,3 +259,104 @@ def test_a_dropped_file_opens_in_the_window_and_enters_recent(tmp_path, monkeypa
         window.close()
         xvfb.kill()
         xvfb.wait(timeout=10)
+
+
+# -- the hands on a ViewerState, and --reference (no window) --------------------------------
+
+def house_state(size=(160, 120)):
+    from app.viewer.state import ViewerState
+    return ViewerState.open(ROOT_SCENES / "house.toml", size=size)
+
+
+def test_a_refused_pose_keeps_the_last_good_view_and_reset_is_exact():
+    from app.viewer.hands import CameraHands
+    state = house_state()
+    hands = CameraHands(state)
+    file_view = state.view
+    hands.press(80, 60, pan=False)
+    assert not hands.move(82, 61, threshold=6)              # within the threshold: no drag
+    assert hands.move(120, 60, threshold=6) and state.hand_view is not None
+    assert hands.release(120, 60, threshold=6)             # it was a drag, not a click
+    moved = state.view
+    assert moved.vpn != file_view.vpn and state.view_index == 0
+    # dolly in until the eye nears the VRP: refused with its reason, the last pose kept
+    refused = 0
+    for _ in range(400):
+        before = state.view
+        if not hands.wheel(+1):
+            refused += 1
+            assert state.view == before and "refused, the last good view kept" in hands.message
+    assert refused > 0
+    # Enter: the file's view, the very object (every number and F, B as in the file)
+    assert hands.reset() and state.view is file_view and state.hand_view is None
+    # a click (press and release within the threshold) is not a drag
+    hands.press(10, 10, pan=True)
+    assert hands.release(13, 12, threshold=6) is False and state.hand_view is None
+
+
+def test_the_panel_numbers_are_the_matrices_commands(tmp_path):
+    import json
+
+    from app.viewer.hands import save_view, view_lines
+    state = house_state()
+    view = state.view
+    lines = view_lines(view, "perspective")
+    assert lines[:2] == ["VRP 0 0 0", "VPN 0 0 1"] and "N_per =" in lines
+    done = subprocess.run([sys.executable, "-m", "app", "matrices", "scenes/house.toml",
+                           "--view", "1"], cwd=ROOT_SCENES.parent, capture_output=True,
+                          text=True, timeout=120)
+    printed = json.loads(done.stdout)
+    row = lines[lines.index("N_per =") + 1].split()
+    assert [float(c) for c in row] == pytest.approx(printed["N_per"][0], rel=1e-3)
+    # saved and read back: the same 18 numbers, bit for bit, after an existing view
+    from core.scene.formats.viewfile import read_views
+    path = tmp_path / "mine.views"
+    path.write_text("0 0 0 0 0 1 0 1 0 -1 1 -1 1 0 0 5 1 -1")          # no newline at the end
+    odd = view.__class__(vrp=(0.1, 1 / 3, -2e-17), vpn=view.vpn, vup=view.vup,
+                         window=view.window, prp=view.prp, front=view.front, back=view.back)
+    assert save_view(odd, path, "test") == 2
+    views, messages = read_views(path.read_text(), str(path))
+    assert messages == [] and np.array_equal(views[1].numbers, odd.numbers)
+    path.write_text("0 0 0 1 2 3")                                    # a truncated view
+    with pytest.raises(ValueError, match="truncated"):
+        save_view(odd, path, "test")
+
+
+def test_the_reference_cycles_picture_reference_difference(tmp_path):
+    from PIL import Image
+
+    from app.viewer.inspector_tools import InspectorTools
+    from app.viewer.reference import ReferenceView, load_reference
+    from core.inspect.compare import compare
+    state = house_state()
+    state.update()
+    ours = state.frame.color
+    teacher = ours.copy()
+    teacher[10:20, 30:40] = (255, 0, 0)                   # 100 pixels differ
+    png = tmp_path / "teacher.png"
+    Image.fromarray(teacher).save(png)
+    tools = InspectorTools(state)
+    tools.reference = ReferenceView(load_reference(png), png.name)
+    tools.frame_changed(state.frame, 0.01)
+    assert tools.picture(state.frame) is state.frame.rgbx
+    tools.flip("key h")
+    assert tools.reference.mode == "reference"
+    assert np.array_equal(tools.picture(state.frame)[..., :3], teacher)
+    tools.flip("key h")
+    heat = tools.picture(state.frame)[..., :3]
+    assert tools.reference.mode == "difference"
+    assert tools.reference.verdict == "against teacher.png: " + compare(ours, teacher).verdict()
+    assert "100 of 19200 pixels beyond the tolerance" in tools.reference.verdict
+    assert (heat[10:20, 30:40] != teacher[10:20, 30:40] // 4).any(axis=2).all()
+    tools.flip("key h")
+    assert tools.reference.mode == "picture" and tools.picture(state.frame) is state.frame.rgbx
+    # bad references: one clear message each
+    (tmp_path / "notes.png").write_text("not a png")
+    Image.fromarray(teacher).save(tmp_path / "photo.jpg")
+    for name, words in (("missing.png", "no such file"), ("notes.png", "cannot read it"),
+                        ("photo.jpg", "not a PNG")):
+        with pytest.raises(ValueError, match=words):
+            load_reference(tmp_path / name)
+    small = ReferenceView(teacher[:50, :50], "small.png")
+    small.cycle(state.frame, "key h")
+    assert small.mode == "picture" and "50 x 50, the picture 160 x 120" in small.verdict
