@@ -360,3 +360,58 @@ def test_the_reference_cycles_picture_reference_difference(tmp_path):
     small = ReferenceView(teacher[:50, :50], "small.png")
     small.cycle(state.frame, "key h")
     assert small.mode == "picture" and "50 x 50, the picture 160 x 120" in small.verdict
+
+
+def test_while_dragging_the_latest_camera_wins():
+    # A slow renderer and fifty pointer moves while its frame runs: the worker renders the
+    # first request and then only the newest camera, never the ones in between.
+    import threading
+
+    from app.viewer.hands import CameraHands
+    from app.viewer.worker import RenderWorker
+    from core.render import render
+    drawn, release = [], threading.Event()
+
+    def slow(scene, view, settings, context=None):
+        drawn.append(view)
+        if len(drawn) == 1:
+            release.wait(10)
+        return render(scene, view, settings, context)
+
+    state = house_state()
+    state.renderer = slow
+    hands = CameraHands(state)
+    worker = RenderWorker()
+    try:
+        hands.press(80, 60, pan=False)
+        hands.move(100, 60, threshold=6)
+        assert state.request(worker)
+        deadline = time.monotonic() + 10
+        while not drawn and time.monotonic() < deadline:
+            time.sleep(0.01)
+        for k in range(50):                       # the frame is still being drawn
+            hands.move(100 + k, 60 + k % 7, threshold=6)
+            state.request(worker)
+        latest = state.view
+        release.set()
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline:
+            result = worker.collect()
+            if result is not None and state.accept(result) and len(drawn) == 2:
+                break
+            time.sleep(0.01)
+        assert len(drawn) == 2 and drawn[1] == latest
+    finally:
+        worker.stop()
+
+
+def test_the_loupe_maps_pans_and_returns_to_one_to_one():
+    from app.viewer.loupe import Loupe
+    loupe = Loupe()
+    assert loupe.wheel(+3, 100.4, 50.9) == 8 and loupe.texel_at(100, 50) == (100, 50)
+    assert loupe.texel_at(107, 57) == (100, 50) and loupe.texel_at(108, 49) == (101, 49)
+    assert loupe.wheel(+5, 0, 0) == 32                       # at most 32x
+    loupe.pan_from(loupe.screen, 64, -32)                    # the picture follows the pointer
+    start = loupe.texel
+    assert loupe.texel_at(loupe.screen[0], loupe.screen[1]) == start
+    assert loupe.set(1, 3, 3) == 1 and loupe.texel_at(17, 5) == (17, 5)   # 1:1 is the picture

@@ -48,6 +48,16 @@ class Loupe:
         self.magnification = m
         return m
 
+    def set(self, m: int, x: float, y: float) -> int:
+        """Magnification ``m`` (1 to 32, a power of two) round picture pixel (x, y)."""
+        steps = round(math.log2(min(max(int(m), 1), MAX_MAGNIFICATION) / self.magnification))
+        return self.wheel(steps, x, y) if steps else self.magnification
+
+    def pan_from(self, start: tuple[int, int], dx: float, dy: float) -> None:
+        """A drag of (dx, dy) picture pixels moves the magnified picture with the pointer
+        (``start``: the screen anchor when the drag began)."""
+        self.screen = (start[0] + int(round(dx)), start[1] + int(round(dy)))
+
     def reset(self) -> None:
         self.magnification, self.screen, self.texel = 1, (0, 0), (0, 0)
 

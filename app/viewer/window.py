@@ -54,6 +54,7 @@ from pathlib import Path
 # Python subprocess to compare their versions (~40 ms at every start).
 from imgui_bundle import imgui  # noqa: E402,I001  (first: it names the library glfw loads)
 import glfw  # noqa: E402
+import numpy as np  # noqa: E402
 import moderngl  # noqa: E402
 
 from app import startup_gc
@@ -650,6 +651,7 @@ class ViewerWindow:
     def _init_hands(self) -> None:
         self.hands = CameraHands(self.state)
         self.loupe = Loupe()
+        self._loupe_drag: tuple[int, int] | None = None     # a drag moving the loupe's picture
         self._pressed: tuple[int, float, float, str] | None = None   # button, x, y, where
         self._view_file = Path.cwd() / SAVED_VIEWS
 
@@ -662,6 +664,8 @@ class ViewerWindow:
         scale = self._scale()
         self.hands.press(x * scale, y * scale, pan)
         self._pressed = (button, x, y, where)
+        # magnified, a drag moves the loupe's picture instead of the camera
+        self._loupe_drag = self.loupe.screen if self.loupe.magnification > 1 else None
 
     def _hand_release(self, button: int, x: float, y: float) -> None:
         if self._pressed is None or self._pressed[0] != button:
@@ -670,6 +674,14 @@ class ViewerWindow:
         self._pressed = None
         scale = self._scale()
         pan = self.hands.drag is not None and self.hands.drag.pan
+        if self._loupe_drag is not None:
+            self.hands.drag, start, self._loupe_drag = None, self._loupe_drag, None
+            if np.hypot(x - x0, y - y0) * scale <= self._drag_threshold():
+                self._click(button, x0, y0, where)
+            else:
+                self._pan_loupe(start, x - x0, y - y0)
+                log.info("action: drag the loupe by (%.0f, %.0f)", x - x0, y - y0)
+            return
         if not self.hands.release(x * scale, y * scale, self._drag_threshold()):
             self._click(button, x0, y0, where)
             return
@@ -683,8 +695,26 @@ class ViewerWindow:
             return
         x, y = glfw.get_cursor_pos(self.window)
         scale = self._scale()
+        if self._loupe_drag is not None:
+            d = self.hands.drag
+            if np.hypot(x * scale - d.x, y * scale - d.y) > self._drag_threshold():
+                self._pan_loupe(self._loupe_drag, x * scale - d.x, y * scale - d.y)
+            return
         if self.hands.move(x * scale, y * scale, self._drag_threshold()):
             self._wake()
+
+    def _pan_loupe(self, start, dx: float, dy: float) -> None:
+        self.loupe.pan_from(start, dx, dy)
+        self.blit.loupe(**self.loupe.uniforms())
+        self._wake()
+
+    def set_loupe(self, m: int, how: str) -> None:
+        """View > Loupe: 1:1 or a magnification round the picture's centre."""
+        width, height = self.state.size
+        self.loupe.set(m, width / 2, height / 2)
+        self.blit.loupe(**self.loupe.uniforms())
+        log.info("action: %s -> loupe %dx", how, self.loupe.magnification)
+        self._wake()
 
     def _hand_wheel(self, notches: float) -> None:
         """The wheel on the picture: dolly; Ctrl: the window (field of view); Alt: the loupe."""
@@ -817,6 +847,9 @@ class ViewerWindow:
             imgui.end_menu()
         if imgui.menu_item_simple("Save view as...", None, False, not self.dialog.open):
             self._start_dialog("save view", "Append the view to a view file", save=True)
+        if imgui.menu_item_simple("Save screenshot as...", None, False,
+                                  not self.dialog.open and self.state.frame is not None):
+            self._start_dialog("save screenshot", "Save the frame as a PNG", save=True)
 
     def open_recent(self, path: str) -> None:
         if not Path(path).is_file():
@@ -844,6 +877,8 @@ class ViewerWindow:
             self.open_scene(path, "file dialog")
         elif purpose == "save view":
             self.save_view("file dialog Save view as", Path(path))
+        elif purpose == "save screenshot":
+            self._save_frame_to(Path(path), "file dialog Save screenshot as")
         self._wake()
 
     def _cursor_line(self) -> None:
@@ -855,6 +890,18 @@ class ViewerWindow:
         column, row = self.loupe.texel_at(x * scale, y * scale)
         zoom = f"loupe {self.loupe.magnification}x, " if self.loupe.magnification > 1 else ""
         imgui.text_disabled(zoom + value_at(self.state.frame, column, row))
+
+    def _save_frame_to(self, path: Path, how: str) -> None:
+        """The CPU frame as a PNG at ``path`` (a dialog's choice; .png added when missing)."""
+        from PIL import Image
+        path = path if path.suffix.lower() == ".png" else path.with_name(path.name + ".png")
+        try:
+            Image.fromarray(self.state.frame.color).save(path)
+        except (OSError, ValueError) as error:
+            self._notice = f"could not save {path}: {error}"
+        else:
+            self._notice = f"saved {path.name}"
+        log.info("action: %s -> %s", how, self._notice)
 
     def _help_strip(self) -> None:
         """F1 / Help > Keys: every key and mouse action, in the panel (never on the picture)."""
@@ -1026,6 +1073,12 @@ class ViewerWindow:
             self.fit_view("menu View > Fit")
         if imgui.menu_item_simple(f"Save view (append to {SAVED_VIEWS})", "Ctrl+S"):
             self.save_view("menu View > Save view")
+        if imgui.begin_menu("Loupe (Alt+wheel)"):
+            for m in (1, 2, 4, 8, 16, 32):
+                if imgui.menu_item_simple("1:1" if m == 1 else f"{m}x", None,
+                                          self.loupe.magnification == m):
+                    self.set_loupe(m, "menu View > Loupe")
+            imgui.end_menu()
 
     def _inspector_items(self) -> None:
         """Issue 22: inspect mode, the buffer views, the comparison with OpenGL."""
