@@ -411,7 +411,8 @@ def test_the_loupe_maps_pans_and_returns_to_one_to_one():
     assert loupe.wheel(+3, 100.4, 50.9) == 8 and loupe.texel_at(100, 50) == (100, 50)
     assert loupe.texel_at(107, 57) == (100, 50) and loupe.texel_at(108, 49) == (101, 49)
     assert loupe.wheel(+5, 0, 0) == 32                       # at most 32x
-    loupe.pan_from(loupe.screen, 64, -32)                    # the picture follows the pointer
-    start = loupe.texel
-    assert loupe.texel_at(loupe.screen[0], loupe.screen[1]) == start
+    (sx, sy), shown = loupe.screen, loupe.texel_at(*loupe.screen)
+    loupe.pan_from((sx, sy), 64, -32)                        # the picture follows the pointer
+    assert loupe.texel_at(sx + 64, sy - 32) == shown and loupe.texel_at(sx, sy) == (
+        shown[0] - 2, shown[1] + 1)
     assert loupe.set(1, 3, 3) == 1 and loupe.texel_at(17, 5) == (17, 5)   # 1:1 is the picture
