@@ -237,7 +237,7 @@ def test_a_dropped_file_opens_in_the_window_and_enters_recent(tmp_path, monkeypa
     xvfb, display = start_xvfb()
     monkeypatch.setenv("DISPLAY", display)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    monkeypatch.setenv("XDG_CONFIG_HOME", str(tmp_path / "config"))
+    monkeypatch.setenv("FVD_CONFIG_DIR", str(tmp_path / "config"))
     from app.viewer.state import ViewerState
     from app.viewer.window import ViewerWindow
     state = ViewerState.open(ROOT_SCENES / "house.toml", size=(160, 120))
@@ -249,7 +249,16 @@ def test_a_dropped_file_opens_in_the_window_and_enters_recent(tmp_path, monkeypa
             assert words in state.open_messages[-1]
             window.draw_frame()                      # the window goes on
         assert state.scene.name.lower().startswith("fvdfh house")
+        # glfw's own call: C strings, one of them not UTF-8
+        import ctypes
+        import os
+        names = [os.fsencode(tmp_path) + b"/caf\xe9.tri"]
+        window._drop_callback(None, 1, (ctypes.c_char_p * 1)(*names))
+        assert "not UTF-8" in state.open_messages[-1]
         tri = ROOT_SCENES / "few_triangles.tri"
+        window._drop_callback(None, 1, (ctypes.c_char_p * 1)(str(tri).encode()))
+        assert state.scene_source == str(tri)
+        window.open_scene(str(ROOT_SCENES / "house.toml"), "test")
         assert window.on_drop([str(tri)]) is True
         assert state.scene_source == str(tri) and state.open_messages == []
         window.draw_frame()

@@ -6,7 +6,7 @@
   FIFO or device, a file over every reader's limit, a name that is not UTF-8, a path that does
   not exist. The readers check again (and say what is wrong inside a file).
 - :class:`RecentFiles`: the last ten files opened, kept as JSON in the user's config
-  directory (``platformdirs``; ``$XDG_CONFIG_HOME`` on Linux). A list that cannot be read or
+  directory (``platformdirs``; ``$XDG_CONFIG_HOME`` on Linux; ``$FVD_CONFIG_DIR`` first). A list that cannot be read or
   parsed, or a directory that cannot be written, is ignored with one warning: the viewer works
   without it. A file that has since gone stays listed, greyed, and says so when chosen.
 - :class:`FileDialog`: the native open / save dialog of imgui-bundle's portable file dialogs,
@@ -86,6 +86,9 @@ def check_drop(paths) -> tuple[str | None, str]:
 
 # -- the recent list ---------------------------------------------------------------------------
 def config_dir() -> Path:
+    """``$FVD_CONFIG_DIR`` when set (the tests' own), else the user's config directory."""
+    if os.environ.get("FVD_CONFIG_DIR"):
+        return Path(os.environ["FVD_CONFIG_DIR"])
     import platformdirs
     return Path(platformdirs.user_config_dir(APP_NAME))
 
