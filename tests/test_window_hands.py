@@ -425,3 +425,16 @@ def test_the_loupe_maps_pans_and_returns_to_one_to_one():
     assert loupe.texel_at(sx + 64, sy - 32) == shown and loupe.texel_at(sx, sy) == (
         shown[0] - 2, shown[1] + 1)
     assert loupe.set(1, 3, 3) == 1 and loupe.texel_at(17, 5) == (17, 5)   # 1:1 is the picture
+
+
+def test_view_refuses_a_reference_that_is_not_a_png(tmp_path):
+    import os
+    (tmp_path / "notes.png").write_text("not a png")
+    env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+    done = subprocess.run([sys.executable, "-m", "app", "view", "--reference",
+                           str(tmp_path / "notes.png")], cwd=ROOT_SCENES.parent, env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert done.stderr.strip().startswith(f"error: --reference {tmp_path / 'notes.png'}: cannot "
+                                          "read it as a PNG")
+    assert "Traceback" not in done.stderr
