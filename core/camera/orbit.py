@@ -70,8 +70,12 @@ def q_from_axis_angle(axis, angle: float) -> np.ndarray:
 
 
 def q_matrix(q: np.ndarray) -> np.ndarray:
-    """The 3 x 3 matrix R with ``R v = q_rotate(q, v)``."""
-    return np.column_stack([q_rotate(q, e) for e in np.eye(3)])
+    """The 3 x 3 matrix R with ``R v = q_rotate(q, v)`` for a unit ``q = (s, x, y, z)``: the
+    usual rotation matrix of the conjugate, since the notes rotate by ``q^-1 v q``."""
+    s, x, y, z = (float(c) for c in q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y + s * z), 2 * (x * z - s * y)],
+                     [2 * (x * y - s * z), 1 - 2 * (x * x + z * z), 2 * (y * z + s * x)],
+                     [2 * (x * z + s * y), 2 * (y * z - s * x), 1 - 2 * (x * x + y * y)]])
 
 
 # -- the arcball -----------------------------------------------------------------------------
@@ -105,9 +109,9 @@ def _with(view: View, **changes) -> View:
     numbers = {"vrp": view.vrp, "vpn": view.vpn, "vup": view.vup, "window": view.window,
                "prp": view.prp, "front": view.front, "back": view.back}
     numbers.update(changes)
-    floats = {k: (float(v) if np.ndim(v) == 0 else tuple(float(c) for c in v))
+    floats = {k: (float(v) if k in ("front", "back") else tuple(float(c) for c in v))
               for k, v in numbers.items()}
-    return View(**floats, label=changes.get("label", view.label))
+    return View(**floats, label=view.label)
 
 
 def orbit(view: View, q: np.ndarray) -> View:
@@ -167,9 +171,11 @@ def follow_bounds(view: View, lo, hi, projection: str) -> View:
     in front of the eye by a thousandth of the eye's reach, and B behind F."""
     centre, radius = sphere(lo, hi)
     _, _, n = vrc_basis(view)
-    corners = np.array([[a, b, c] for a in (lo[0], hi[0]) for b in (lo[1], hi[1])
-                        for c in (lo[2], hi[2])], dtype=np.float64)
-    depth = (corners - np.asarray(view.vrp, dtype=np.float64)) @ n
+    # the box's extreme depths along n: each axis contributes its nearer or farther end
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    base = (lo + hi) / 2 - np.asarray(view.vrp, dtype=np.float64)
+    reach = float(np.abs(n) @ ((hi - lo) / 2))
+    depth = np.array([base @ n - reach, base @ n + reach])
     margin = DEPTH_MARGIN * radius
     front, back = float(depth.max()) + margin, float(depth.min()) - margin
     if projection == "perspective":
