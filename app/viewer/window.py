@@ -519,7 +519,7 @@ class ViewerWindow:
         self._note_kernels()
         self._poll_dialog()
         self.state.tick(time.perf_counter(), busy=self.worker.waiting)
-        if self.state.request(self.worker):
+        if not self._hold_request() and self.state.request(self.worker):
             self._compiles_at_request = compile_count()
         result = self.worker.collect()
         if result is not None and self.state.accept(result):
@@ -709,6 +709,14 @@ class ViewerWindow:
             return
         if self.hands.move(x * scale, y * scale, self._drag_threshold()):
             self._wake()
+
+    def _hold_request(self) -> bool:
+        """While a drag moves the camera, ask for the next frame only once the last one is
+        in: the worker drops a finished frame that a newer request overtook, so asking at
+        every pointer move would show nothing until the drag stopped. The frame asked for
+        then is the newest camera (the ones in between are never drawn)."""
+        drag = self.hands.drag
+        return drag is not None and drag.start is not None and self.worker.waiting
 
     def _pan_loupe(self, start, dx: float, dy: float) -> None:
         self.loupe.pan_from(start, dx, dy)
