@@ -38,10 +38,20 @@ def drag(app, path, button: int = 1) -> None:
 
 
 def settled(app, tmp_path, name: str, mark: int) -> np.ndarray:
-    """The picture once a frame newer than ``mark`` is logged and shown."""
+    """The picture once a frame newer than ``mark`` is logged and the screen has stopped
+    changing (two grabs apart with no frame logged between them: a drag's last frames may
+    still be arriving)."""
     app.wait_for(r"^.*frame \d+: view", timeout=20, after=mark)
-    time.sleep(0.4)
-    return grab(app, tmp_path / f"{name}.png", "500x500+0+0")
+    deadline = time.monotonic() + 20
+    before = grab(app, tmp_path / f"{name}.png", "500x500+0+0")
+    while time.monotonic() < deadline:
+        count = len(frames(app.log()))
+        time.sleep(0.4)
+        now = grab(app, tmp_path / f"{name}.png", "500x500+0+0")
+        if np.array_equal(now, before) and len(frames(app.log())) == count:
+            return now
+        before = now
+    pytest.fail(f"the picture {name} did not settle")
 
 
 def extent(picture: np.ndarray) -> int:
@@ -438,3 +448,15 @@ def test_view_refuses_a_reference_that_is_not_a_png(tmp_path):
     assert done.stderr.strip().startswith(f"error: --reference {tmp_path / 'notes.png'}: cannot "
                                           "read it as a PNG")
     assert "Traceback" not in done.stderr
+
+
+def test_without_a_dialog_program_the_dialog_says_so(monkeypatch):
+    import shutil as shutil_module
+
+    from app.viewer import files
+    monkeypatch.setattr(files.sys, "platform", "linux")
+    monkeypatch.setattr(shutil_module, "which", lambda name: None)
+    dialog = files.FileDialog()
+    why = dialog.start("open", "Open")
+    assert "no file dialog program found (zenity, kdialog" in why and "File > Open scene" in why
+    assert not dialog.open and dialog.poll() is None
