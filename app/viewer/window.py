@@ -701,6 +701,10 @@ class ViewerWindow:
         if self.hands.drag is None:
             return
         x, y = glfw.get_cursor_pos(self.window)
+        if (self._pressed is not None and not self._clicks
+                and glfw.get_mouse_button(self.window, self._pressed[0]) != glfw.PRESS):
+            self._hand_release(self._pressed[0], x, y)    # a release the window never saw
+            return
         scale = self._scale()
         if self._loupe_drag is not None:
             d = self.hands.drag
