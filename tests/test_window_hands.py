@@ -46,7 +46,7 @@ def settled(app, tmp_path, name: str, mark: int) -> np.ndarray:
     before = grab(app, tmp_path / f"{name}.png", "500x500+0+0")
     while time.monotonic() < deadline:
         count = len(frames(app.log()))
-        time.sleep(0.4)
+        time.sleep(0.25)
         now = grab(app, tmp_path / f"{name}.png", "500x500+0+0")
         if np.array_equal(now, before) and len(frames(app.log())) == count:
             return now
@@ -108,6 +108,12 @@ def test_orbit_save_wheel_reset_click_and_help_under_xvfb(tmp_path):
         back = settled(app, tmp_path, "back", mark)
         assert "camera=moved" not in app.log()[mark:]
         assert int((back != first).any(axis=2).sum()) == 0
+        cli = tmp_path / "view1.png"                 # and `render` of the file's view 1
+        done = subprocess.run([sys.executable, "-m", "app", "render", "scenes/house.toml",
+                               "--view", "1", "--out", str(cli)], cwd=ROOT_SCENES.parent,
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0, done.stderr
+        assert int((np.asarray(Image.open(cli).convert("RGB")) != back).any(axis=2).sum()) == 0
 
         # The wheel dollies in: the house grows with every notch.
         widths = [extent(back)]
