@@ -158,6 +158,9 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
                    help="draw with the z-buffer (default), the ray tracer, radiosity, the path "
                         "tracer (those three progressive), or a painter's algorithm")
     _crease_argument(v)
+    v.add_argument("--reference", default=None, metavar="PNG",
+                   help="a picture to hold ours against: h cycles our picture, the reference "
+                        "and their difference heat map (with the numbers compare prints)")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
@@ -505,7 +508,7 @@ def _dispatch(args) -> int:
             import functools
             from app.viewer.state import load_scene
             loader = functools.partial(load_scene, crease_angle=args.crease_angle)
-        return viewer_main(args.scene, args.size, out_dir=args.out,
+        return viewer_main(args.scene, args.size, out_dir=args.out, reference=args.reference,
                            options={"rasterizer": args.rasterizer,
                                     "keep_aspect": args.keep_aspect,
                                     "course_tri": args.course_tri,

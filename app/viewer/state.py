@@ -180,6 +180,9 @@ class ViewerState:
     # The window's kernel gate while the warm-up compiles in worker processes (issue 33,
     # app.viewer.kernels.gated): wraps each frame's job; None renders it as it is.
     gate: Callable | None = None
+    # A camera the user made with the mouse (app.viewer.hands): shown in place of the file's
+    # view until the view is stepped, reset or the scene changes; None shows the file's.
+    hand_view: object = None
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -252,7 +255,26 @@ class ViewerState:
     def view(self):
         if self.keyed_view:
             return self.playback.animation.view_at(self.playback.time)
+        if self.hand_view is not None:
+            return self.hand_view
         return self.scene.views[self.view_index] if self.view_count else None
+
+    @property
+    def file_view(self):
+        """The file's view at the current index (what Reset returns to), or None."""
+        return self.scene.views[self.view_index] if self.view_count else None
+
+    def set_hand_view(self, view) -> None:
+        """Show ``view`` (a moved camera, already checked) in place of the file's."""
+        if view != self.hand_view:
+            self.hand_view, self.dirty = view, True
+
+    def reset_view(self) -> bool:
+        """Back to the file's view, bit for bit; returns whether the camera had moved."""
+        if self.hand_view is None:
+            return False
+        self.hand_view, self.dirty = None, True
+        return True
 
     @property
     def animated(self) -> bool:
@@ -331,6 +353,7 @@ class ViewerState:
                 f"renderer={self.renderer_name} filter={self.texture_filter}{moment} "
                 f"rasterizer={self.rasterizer} aspect={'kept' if self.keep_aspect else 'stretched'} "
                 f"size={self.size[0]}x{self.size[1]} render={self.frame_seconds * 1e3:.1f}ms"
+                + (" camera=moved" if self.hand_view is not None else "")
                 + (f" message={message!r}" if message else ""))
 
     @property
@@ -357,13 +380,14 @@ class ViewerState:
         self.keyed_view = there < 0
         if there >= 0:
             self.view_index = there
+        self.hand_view = None
         self.dirty = True
 
     def set_view(self, index: int) -> None:
         if not 0 <= index < max(self.view_count, 1):
             raise ValueError(f"view index must be in 0..{self.view_count - 1}, not {index}")
-        if index != self.view_index or self.keyed_view:
-            self.view_index, self.keyed_view = index, False
+        if index != self.view_index or self.keyed_view or self.hand_view is not None:
+            self.view_index, self.keyed_view, self.hand_view = index, False, None
             self.dirty = True
 
     # -- issue 12: the renderer; issue 11: texture filter and the bump demo ------------------
@@ -523,7 +547,7 @@ class ViewerState:
             return False
         self.scene = scene
         self.scene_source = str(source)
-        self.view_index = 0
+        self.view_index, self.hand_view = 0, None
         self._scene_defaults()
         self.open_messages.clear()
         self.frame = None
