@@ -594,28 +594,15 @@ class ViewerState:
                 frame = render_animated(playback.animation, t, settings, context, index, control)
                 frame.stats["time"] = t           # the moment drawn (the clock moves on)
                 return frame
-        elif settings.renderer in ("radiosity", "pathtrace") and view is not None:   # issue 19
-            from app.viewer import progressive_gi
-            progressively = getattr(progressive_gi, f"{settings.renderer}_progressively")
-            what = f"{what}, {settings.renderer}"
+        elif view is not None and get_renderer(settings.renderer).progressive:
+            from app.viewer.progressive import progressive_drawer
+            from core.registry import get_renderer
+            progressively = progressive_drawer(settings.renderer)
+            what = f"{what}, {get_renderer(settings.renderer).label.lower()}"
 
             def run(control=None):
                 prepare()
                 return progressively(scene, view, settings, context, renderer, control)
-        elif settings.renderer == "volume" and view is not None:
-            from app.viewer.progressive_volume import volume_progressively
-            what = f"{what}, volume"
-
-            def run(control=None):
-                prepare()
-                return volume_progressively(scene, view, settings, context, renderer, control)
-        elif settings.renderer == "raytrace" and view is not None:
-            from app.viewer.progressive import trace_progressively
-            what = f"{what}, ray traced"
-
-            def run(control=None):
-                prepare()
-                return trace_progressively(scene, view, settings, context, renderer, control)
         else:
             def run(control=None):
                 prepare()

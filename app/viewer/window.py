@@ -81,12 +81,9 @@ log = logging.getLogger("fvd")
 PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel", "O"))
 SHADING_LABELS = (("wireframe", "Wireframe", "W"), ("flat", "Flat", "1"),
                   ("gouraud", "Gouraud", "2"), ("phong", "Phong", "3"))
-RENDERER_LABELS = (("zbuffer", "Z-buffer", "R"), ("raytrace", "Ray traced", "R"),
-                   ("radiosity", "Radiosity", ""), ("pathtrace", "Path traced", ""),
-                   ("bsp", "BSP tree (painter's)", ""),
-                   ("depth-sort", "Depth sort (Newell, painter's)", ""),
-                   ("volume", "Volume (ray marching)", ""),
-                   ("scanline", "Scan line (Watkins, FvDFH 15.6)", ""))
+# The Render menu lists the registry's renderers by their labels (core/registry.py): a renderer
+# registered there is in the menu with no line here. `r` flips between these two.
+RENDERER_KEYS = {"zbuffer": "R", "raytrace": "R"}
 TRANSPARENCY_LABELS = (("off", "Opaque (k_t ignored)"), ("interpolated", "Interpolated"),
                        ("screen-door", "Screen door"))
 FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),
@@ -1128,12 +1125,13 @@ class ViewerWindow:
             self.tools.flip("menu View > Compare with OpenGL")
 
     def _render_items(self) -> None:
-        from core.renderers import renderer_names
+        from core.renderers import renderers
         imgui.text_disabled("Renderer")
-        for value, label, key in RENDERER_LABELS:
-            if value in renderer_names() and imgui.menu_item_simple(
-                    label, key, self.state.renderer_name == value):
-                self.choose("renderer", value, "menu Render")
+        for entry in renderers():
+            if entry.in_menu and imgui.menu_item_simple(
+                    entry.label, RENDERER_KEYS.get(entry.name, ""),
+                    self.state.renderer_name == entry.name):
+                self.choose("renderer", entry.name, "menu Render")
         imgui.separator()
         imgui.text_disabled("Texture filter")
         for value, label in FILTER_LABELS:

@@ -28,7 +28,7 @@ register_renderer("zbuffer", "core.renderers.zbuffer:draw",
                   label="Z-buffer", transparency=True, shaders=True)
 register_renderer("raycast", "core.renderers.raycast:draw", samples_itself=True,
                   description="the analytic surfaces ray-cast exactly (the reference)",
-                  label="Ray cast (exact analytic surfaces)")
+                  label="Ray cast (exact analytic surfaces)", in_menu=False)
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
                   label="Ray traced", recursive=True, progressive=True)

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from core.jit import njit, prange
-from core.shading.illumination import OD, SURFACE_COLUMNS, phong_point
+from core.shading.illumination import LIGHT_COLUMNS, OD, SURFACE_COLUMNS, phong_point
 
 EMISSION_ABSORPTION, MIP = 0, 1
 # The march stops when less than this of the light behind can still come through: what it
@@ -186,7 +186,7 @@ def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient,
           np.ascontiguousarray(t_lo, dtype=np.float64), np.ascontiguousarray(t_hi, dtype=np.float64),
           float(step), MIP if volume.mode == "mip" else EMISSION_ABSORPTION,
           np.ascontiguousarray(transfer, dtype=np.float64), volume.lighting == "gradient",
-          material, np.ascontiguousarray(lights, dtype=np.float64).reshape(-1, 10),
+          material, np.ascontiguousarray(lights, dtype=np.float64).reshape(-1, LIGHT_COLUMNS),
           np.asarray(ambient, dtype=np.float64), np.asarray(eye, dtype=np.float64),
           bool(halfway), FLAT_GRADIENT * max(hi - lo, 1e-30), color, transmittance, largest)
     return color, transmittance, largest
