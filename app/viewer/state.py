@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from core.registry import get_renderer
 from core.scene.model import Scene
 from core.scene import view_numbers
 from core.settings import PROJECTIONS, RASTERIZERS, SHADINGS
@@ -596,7 +597,6 @@ class ViewerState:
                 return frame
         elif view is not None and get_renderer(settings.renderer).progressive:
             from app.viewer.progressive import progressive_drawer
-            from core.registry import get_renderer
             progressively = progressive_drawer(settings.renderer)
             what = f"{what}, {get_renderer(settings.renderer).label.lower()}"
 
