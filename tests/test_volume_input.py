@@ -207,3 +207,9 @@ def test_a_dicom_series_with_a_missing_slice(tmp_path):
     assert message.endswith("volume[1].file: ct: a slice is missing between slice04.dcm "
                             "(-70.7 mm) and slice02.dcm (-60.7 mm): a gap of 10 mm where the "
                             "slices are 5 mm apart")
+
+
+def test_a_generator_beyond_the_budget(tmp_path):
+    message = refused(tmp_path, 'generator = "sphere"\nparams = { size = 500 }\nmode = "mip"')
+    assert message.endswith("volume[1].params: sphere: size must be a whole number of samples "
+                            "from 2 to 406, not 500")
