@@ -12,6 +12,8 @@ command line, the window's menus and the warm-up read the registry instead of li
 - ``shaders``: it shades through the registered shading modes (depth shading among them);
 - ``textures``: it draws a material's texture maps;
 - ``progressive``: the window shows its picture coarse first, then refining;
+- ``volumes``: it draws a scene's emission–absorption and MIP volumes (every renderer draws an
+  isosurface, which is a mesh);
 - ``label``: its name in the window's Render menu.
 
 The entries are data and the targets strings (``"package.module:function"``), imported when
@@ -39,6 +41,7 @@ class Renderer:
     shaders: bool = False
     textures: bool = True
     progressive: bool = False
+    volumes: bool = False
 
     def function(self) -> Callable:
         if callable(self.target):
