@@ -12,6 +12,8 @@ command line, the window's menus and the warm-up read the registry instead of li
 - ``shaders``: it shades through the registered shading modes (depth shading among them);
 - ``textures``: it draws a material's texture maps;
 - ``progressive``: the window shows its picture coarse first, then refining;
+- ``volumes``: it draws a scene's emission–absorption and MIP volumes (every renderer draws an
+  isosurface, which is a mesh);
 - ``label``: its name in the window's Render menu;
 - ``in_menu``: whether the Render menu lists it (the exact ray caster draws only analytic
   primitives, so it is chosen from the command line, not offered for every scene).
@@ -41,6 +43,7 @@ class Renderer:
     shaders: bool = False
     textures: bool = True
     progressive: bool = False
+    volumes: bool = False
     in_menu: bool = True
 
     def function(self) -> Callable:

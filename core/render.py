@@ -155,6 +155,12 @@ def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,
                          + (" (transparency interpolated or screen-door shows it: "
                             "--transparency, or the Render menu)"
                             if renderer.transparency else ""))
+    from core.volume.data import volumes_of
+    marched = [v.name for v in volumes_of(scene) if v.mode != "isosurface"]
+    if marched and not renderer.volumes:
+        from core.registry import names_that
+        said.append(f"the volumes drawn by ray marching ({', '.join(marched)}): "
+                    f"--renderer {' or '.join(names_that('volumes'))} draws them")
     for note in said:
         if note not in notes:
             notes.append(note)

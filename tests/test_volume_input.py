@@ -9,7 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from core.render import render
 from core.scene.formats import ReaderError
+from core.settings import RenderSettings
 from core.scene.formats.scenefile import read_scene_file
 from core.volume.data import MAX_VOXELS, volumes_of
 from tests.tools import need_module
@@ -207,3 +209,42 @@ def test_a_dicom_series_with_a_missing_slice(tmp_path):
     assert message.endswith("volume[1].file: ct: a slice is missing between slice04.dcm "
                             "(-70.7 mm) and slice02.dcm (-60.7 mm): a gap of 10 mm where the "
                             "slices are 5 mm apart")
+
+
+def test_a_generator_beyond_the_budget(tmp_path):
+    message = refused(tmp_path, 'generator = "sphere"\nparams = { size = 500 }\nmode = "mip"')
+    assert message.endswith("volume[1].params: sphere: size must be a whole number of samples "
+                            "from 2 to 406, not 500")
+
+
+VALUES = ["0", "-1", "1e308", "nan", "inf", "-inf", '"x"', "[]", "[1, 2]", "[0, 0, 0]",
+          "[[1, 2, 3, 4, 5]]", "true", "{}", "9223372036854775807", "2.5", '"mip"',
+          '"isosurface"', '"shepp-logan"', "[2, 2, 2]", "[[0, 0, 0, 0, 0], [0, 1, 1, 1, 1]]"]
+GOOD = {"generator": '"sphere"', "params": "{ size = 6, radius = 0.5 }",
+        "mode": '"emission-absorption"', "iso": "0.5", "spacing": "[0.5, 0.5, 0.5]",
+        "transfer": "[[0.0, 0, 0, 0, 0], [1.0, 1, 1, 1, 2]]", "lighting": '"gradient"',
+        "window": "[0, 1]", "transform": "{ scale = 2 }", "material": "{ ka = 0.5 }",
+        "name": '"v"'}
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_mutated_volume_tables_are_read_or_refused_never_crash(tmp_path, seed):
+    import random
+    rng = random.Random(seed)
+    for _ in range(40):
+        table = dict(GOOD)
+        for key in rng.sample(sorted(table), rng.randint(1, 3)):
+            table[key] = rng.choice(VALUES)
+        if rng.random() < 0.2:
+            table[rng.choice(["file", "raw", "dims", "bogus"])] = rng.choice(VALUES)
+        text = "\n".join(f"{k} = {v}" for k, v in table.items())
+        try:
+            scene = load(tmp_path, text)
+        except ReaderError as error:
+            assert "volume[1]" in str(error) or "TOML" in str(error), str(error)
+            continue
+        (volume,) = volumes_of(scene)
+        assert np.all(np.isfinite(volume.values))
+        settings = RenderSettings.for_scene(scene, renderer="volume", size=(6, 5))
+        frame = render(scene, scene.views[0], settings)
+        assert frame.color.shape == (5, 6, 3)

@@ -197,3 +197,15 @@ def test_the_inspector_names_the_ray_the_volumes_and_the_isosurface_cell():
     assert mip["largest sample"] == pytest.approx(1.0)
     assert np.max(mip["at"]["corner values"]) == pytest.approx(1.0)
     assert record["color"] == render(scene, scene.views[0], settings).color[10, 10].tolist()
+
+
+def test_other_renderers_say_they_leave_the_marched_volumes_out():
+    values, spacing = generators.sphere(9)
+    fog = Volume(values=values, spacing=spacing, mode="mip", name="fog")
+    scene = scene_with([fog], [uv_sphere(0.3)])
+    settings = RenderSettings.for_scene(scene, renderer="zbuffer", size=(8, 8))
+    notes = render(scene, scene.views[0], settings).stats["not drawn"]
+    assert "the volumes drawn by ray marching (fog): --renderer volume draws them" in notes
+    settings = settings.replace(renderer="volume")
+    assert not any("ray marching" in n for n in render(scene, scene.views[0], settings).stats[
+        "not drawn"])

@@ -55,4 +55,5 @@ register_renderer("volume", "core.volume.renderer:draw",
                   description="volumes ray-marched (emission-absorption with gradient "
                               "shading, or MIP) over the z-buffer's opaque geometry "
                               "(core.volume)",
-                  label="Volume (ray marching)", shaders=True, progressive=True)
+                  label="Volume (ray marching)", shaders=True, progressive=True,
+                  volumes=True)

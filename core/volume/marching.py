@@ -16,7 +16,12 @@ were meant to be read:
    when the bilinear interpolant's saddle value lies inside, i.e. when the product of the
    inside diagonal's offsets from ``iso`` exceeds the outside diagonal's (a tie separates them);
 3. every crossed edge ends one segment and starts another, so the segments chain into closed
-   loops; each loop is cut into triangles ear by ear, never by a diagonal between two
+   loops. A cell with exactly two loops may be a tunnel rather than two discs: the side the
+   discs cut off (the corners that fall in two groups on the cell's boundary) is joined
+   through the interior when the trilinear interpolant has a body saddle inside the cell on
+   that side (Natarajan, "Enhancing the marching cubes method", 1994: ∇f = 0 is a quadratic in
+   z); then the two loops are zipped into a tube, each loop's edges run as its disc ran them;
+4. otherwise each loop is cut into triangles ear by ear, never by a diagonal between two
    crossings of one face (on an ambiguous face, the neighbouring cell could draw the same
    diagonal and the edge would have four triangles); a loop left with no such ear is fanned
    from a vertex added at its centre.
@@ -24,8 +29,9 @@ were meant to be read:
 Two cells that share a face see the same four values there and make the same decision, so the
 mesh is closed wherever the surface stays inside the grid (every edge shared by exactly two
 triangles), and each triangle winds counter-clockwise seen from the outside (its normal points
-towards lower values). Ambiguity inside a cell (a tunnel joining two opposite faces) is not
-decided: its loops stay separate, which still closes the surface.
+towards lower values). Interior ambiguity beyond two loops (a tunnel through a face's saddle,
+Lewiner's cases 6, 7, 10, 12 and 13) is not decided: its loops stay discs, which still closes
+the surface.
 
 Vertex normals are the negated gradient of the data (central differences at the samples,
 one-sided at the grid's border), interpolated along the edge like the position: the normal of
@@ -34,6 +40,8 @@ the smooth field the samples come from, rather than the facets' (Lorensen and Cl
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 
@@ -122,13 +130,15 @@ def edge_vertices(v, iso, axis, ids, positions, normals, starts, write):
 
 
 @njit(cache=True)
-def face_segments(w, inside, face_corners, face_edges, nxt):
+def face_segments(w, inside, face_corners, face_edges, nxt, joined):
     """Join the crossings on each face (steps 1 and 2 of the module): ``nxt[e]`` = the edge
-    the segment starting at crossed edge ``e`` ends on."""
+    the segment starting at crossed edge ``e`` ends on; ``joined[f]``: on an ambiguous face,
+    1 when the inside corners are joined, 0 when the outside ones are, -1 on the others."""
     cross = np.empty(4, np.int64)
     enter = np.empty(4, np.bool_)
     for f in range(6):
         n = 0
+        joined[f] = -1
         for q in range(4):
             a, b = face_corners[f, q], face_corners[f, (q + 1) % 4]
             if inside[a] != inside[b]:
@@ -144,12 +154,13 @@ def face_segments(w, inside, face_corners, face_edges, nxt):
             c0, c1, c2, c3 = face_corners[f, 0], face_corners[f, 1], face_corners[f, 2], \
                 face_corners[f, 3]
             if inside[c0]:
-                joined = w[c0] * w[c2] > w[c1] * w[c3]
+                inner = w[c0] * w[c2] > w[c1] * w[c3]
             else:
-                joined = w[c1] * w[c3] > w[c0] * w[c2]
+                inner = w[c1] * w[c3] > w[c0] * w[c2]
+            joined[f] = 1 if inner else 0
             for m in range(4):
                 if enter[m]:
-                    nxt[cross[m]] = cross[(m + 3) % 4] if joined else cross[(m + 1) % 4]
+                    nxt[cross[m]] = cross[(m + 3) % 4] if inner else cross[(m + 1) % 4]
 
 
 @njit(cache=True)
@@ -189,6 +200,145 @@ def clip_ears(loop, length, edge_faces, vert, triangles, count, write):
 
 
 @njit(cache=True)
+def cap(loop, length, edge_faces, vert, triangles, count, extra, positions, normals, write):
+    """One loop as a disc: cut ear by ear, or fanned from a centre vertex (numbered
+    ``extra``) when no ear is left. Returns the next triangle and centre numbers."""
+    count, length = clip_ears(loop, length, edge_faces, vert, triangles, count, write)
+    if length == 3:
+        return count, extra
+    centre = extra
+    for m in range(length):
+        if write:
+            triangles[count, 0] = centre
+            triangles[count, 1] = vert[loop[m]]
+            triangles[count, 2] = vert[loop[(m + 1) % length]]
+        count += 1
+    if write:
+        for d in range(3):
+            positions[centre, d] = 0.0
+            normals[centre, d] = 0.0
+            for m in range(length):
+                positions[centre, d] += positions[vert[loop[m]], d] / length
+                normals[centre, d] += normals[vert[loop[m]], d] / length
+    return count, extra + 1
+
+
+@njit(cache=True)
+def split_sign(inside, joined, edges, face_corners):
+    """With two loops the cell's boundary is two discs and a band between them: 1 when the
+    discs are the inside corners' (they fall in two groups), 0 when the outside ones'."""
+    group = np.arange(8)
+    for e in range(12):
+        a, b = edges[e, 0], edges[e, 1]
+        if inside[a] == inside[b]:
+            _union(group, a, b)
+    for f in range(6):
+        if joined[f] >= 0:                       # ambiguous: which diagonal is joined
+            c0, c1 = face_corners[f, 0], face_corners[f, 1]
+            c2, c3 = face_corners[f, 2], face_corners[f, 3]
+            if (joined[f] == 1) == bool(inside[c0]):
+                _union(group, c0, c2)
+            else:
+                _union(group, c1, c3)
+    groups_in = 0
+    for c in range(8):
+        if inside[c] and _root(group, c) == c:
+            groups_in += 1
+    return 1 if groups_in == 2 else 0
+
+
+@njit(cache=True)
+def _root(group, c):
+    while group[c] != c:
+        c = group[c]
+    return c
+
+
+@njit(cache=True)
+def _union(group, a, b):
+    ra, rb = _root(group, a), _root(group, b)
+    if ra != rb:
+        group[max(ra, rb)] = min(ra, rb)
+
+
+@njit(cache=True)
+def tunnel(w, inside, joined, edges, face_corners):
+    """Whether the two discs' side is joined through the cell's interior: whether the
+    trilinear interpolant has a body saddle inside the cell on that side (Natarajan's test:
+    ∇f = 0 is a quadratic in z, then x and y follow)."""
+    a, b, c, d = w[0], w[1] - w[0], w[2] - w[0], w[4] - w[0]
+    e = w[0] - w[1] - w[2] + w[3]
+    f = w[0] - w[2] - w[4] + w[6]
+    g = w[0] - w[1] - w[4] + w[5]
+    h = -w[0] + w[1] + w[2] - w[3] + w[4] - w[5] - w[6] + w[7]
+    qa, qb = h * (d * h - f * g), 2.0 * e * (d * h - f * g)
+    qc = d * e * e - e * (f * b + g * c) + h * b * c
+    roots = np.empty(2)
+    found = 0
+    if abs(qa) > 1e-12:
+        disc = qb * qb - 4.0 * qa * qc
+        if disc < 0.0:
+            return False
+        root = math.sqrt(disc)
+        roots[0], roots[1] = (-qb - root) / (2.0 * qa), (-qb + root) / (2.0 * qa)
+        found = 2
+    elif abs(qb) > 1e-12:
+        roots[0] = -qc / qb
+        found = 1
+    side = split_sign(inside, joined, edges, face_corners)
+    for r in range(found):
+        z = roots[r]
+        den = e + h * z
+        if not (0.0 < z < 1.0) or den == 0.0:
+            continue
+        x, y = -(c + f * z) / den, -(b + g * z) / den
+        if not (0.0 < x < 1.0 and 0.0 < y < 1.0):
+            continue
+        value = a + b * x + c * y + d * z + e * x * y + f * y * z + g * x * z + h * x * y * z
+        if (value > 0.0) == (side == 1):
+            return True
+    return False
+
+
+@njit(cache=True)
+def zip_tube(one, m, two, n, vert, positions, triangles, count, write):
+    """The band between two loops: each loop's edges run as the discs ran them, so the zipper
+    walks the first loop forward and the second backward, taking the shorter rung each step
+    (m + n triangles). Returns the next triangle number."""
+    start, best = 0, np.inf
+    if write:
+        for q in range(n):                     # the second loop's vertex nearest one[0]
+            dist = 0.0
+            for k in range(3):
+                dist += (positions[vert[one[0]], k] - positions[vert[two[q]], k]) ** 2
+            if dist < best:
+                start, best = q, dist
+    i, j, done_i, done_j = 0, start, 0, 0
+    while done_i < m or done_j < n:
+        a, a_next = vert[one[i % m]], vert[one[(i + 1) % m]]
+        b, b_prev = vert[two[j % n]], vert[two[(j - 1) % n]]
+        forward = done_j >= n
+        if done_i < m and done_j < n and write:
+            da = db = 0.0
+            for k in range(3):
+                da += (positions[a_next, k] - positions[b, k]) ** 2
+                db += (positions[a, k] - positions[b_prev, k]) ** 2
+            forward = da <= db
+        elif done_i < m and done_j < n:
+            forward = True
+        if forward:
+            if write:
+                triangles[count, 0], triangles[count, 1], triangles[count, 2] = a, a_next, b
+            i, done_i = i + 1, done_i + 1
+        else:
+            if write:
+                triangles[count, 0], triangles[count, 1], triangles[count, 2] = b_prev, b, a
+            j, done_j = j - 1, done_j + 1
+        count += 1
+    return count
+
+
+@njit(cache=True)
 def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, positions,
               normals, write):
     """The cells of slab ``i``, their loops cut into triangles (step 3), numbered from
@@ -201,6 +351,9 @@ def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, p
     nxt = np.empty(12, np.int64)
     vert = np.empty(12, np.int64)
     loop = np.empty(12, np.int64)
+    ring = np.empty((4, 12), np.int64)          # the cell's loops (at most four)
+    sizes = np.empty(4, np.int64)
+    joined = np.empty(6, np.int64)
     for j in range(n1 - 1):
         # the cell's corners slide along k: the far four of one cell are the near four of
         # the next (corner c = x + 2y + 4z), so each cell loads four samples, not eight
@@ -217,7 +370,7 @@ def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, p
             if ins == 0 or ins == 8:
                 continue
             nxt[:] = -1
-            face_segments(w, inside, face_corners, face_edges, nxt)
+            face_segments(w, inside, face_corners, face_edges, nxt, joined)
             for e in range(12):
                 if nxt[e] < 0:
                     continue
@@ -226,37 +379,29 @@ def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, p
                 axis = e // 4
                 vert[e] = ids_x[a, b, c] if axis == 0 else (
                     ids_y[a, b, c] if axis == 1 else ids_z[a, b, c])
+            loops = 0
             for e in range(12):
                 if nxt[e] < 0:
                     continue
                 length, cur = 0, e
                 while True:                # the loop through e, in order
-                    loop[length] = cur
+                    ring[loops, length] = cur
                     length += 1
                     after = nxt[cur]
                     nxt[cur] = -1
                     cur = after
                     if cur == e:
                         break
-                count, length = clip_ears(loop, length, edge_faces, vert, triangles, count,
-                                          write)
-                if length == 3:
-                    continue
-                centre = extra                    # no ear to cut: a centre vertex
-                extra += 1
-                for m in range(length):
-                    if write:
-                        triangles[count, 0] = centre
-                        triangles[count, 1] = vert[loop[m]]
-                        triangles[count, 2] = vert[loop[(m + 1) % length]]
-                    count += 1
-                if write:
-                    for d in range(3):
-                        positions[centre, d] = 0.0
-                        normals[centre, d] = 0.0
-                        for m in range(length):
-                            positions[centre, d] += positions[vert[loop[m]], d] / length
-                            normals[centre, d] += normals[vert[loop[m]], d] / length
+                sizes[loops] = length
+                loops += 1
+            if loops == 2 and tunnel(w, inside, joined, edges, face_corners):
+                count = zip_tube(ring[0], sizes[0], ring[1], sizes[1], vert, positions,
+                                 triangles, count, write)
+                continue
+            for m in range(loops):
+                loop[:sizes[m]] = ring[m, :sizes[m]]
+                count, extra = cap(loop, sizes[m], edge_faces, vert, triangles, count, extra,
+                                   positions, normals, write)
     return count, extra
 
 
