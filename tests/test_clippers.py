@@ -52,3 +52,21 @@ def test_an_unknown_clipper_is_one_message():
     with pytest.raises(ValueError, match="clipper must be one of cohen-sutherland, liang-barsky, "
                                          "homogeneous, not 'cyrus'"):
         RenderSettings(clipper="cyrus")
+
+
+def test_the_command_line_takes_each_clipper(tmp_path):
+    import subprocess
+    import sys
+    from PIL import Image
+    from core.paths import ROOT
+    pictures = []
+    for clipper in clip.CLIPPERS:
+        out = tmp_path / f"{clipper}.png"
+        done = subprocess.run([sys.executable, "-m", "app", "render", "scenes/house.toml",
+                               "--view", "9", "--size", "64x64", "--clipper", clipper,
+                               "--out", str(out)], cwd=ROOT, capture_output=True, text=True,
+                              timeout=300)
+        assert done.returncode == 0, done.stderr
+        pictures.append(np.asarray(Image.open(out)))
+    assert all(np.array_equal(pictures[0], p) for p in pictures[1:])
+    assert pictures[0].any()
