@@ -154,7 +154,7 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
     v.add_argument("--renderer", choices=("zbuffer", "raytrace", "radiosity", "pathtrace", "bsp",
-                                          "depth-sort"), default=None,
+                                          "depth-sort", "scanline"), default=None,
                    help="draw with the z-buffer (default), the ray tracer, radiosity, the path "
                         "tracer (those three progressive), or a painter's algorithm")
     _crease_argument(v)
@@ -256,6 +256,13 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
                              "the mean of the pixel's samples)")
     parser.add_argument("--filter-radius", type=float, default=None, metavar="PIXELS",
                         help="its radius (default: box 0.5, tent 1, gaussian 1.5, mitchell 2)")
+    parser.add_argument("--antialias-lines", action="store_true", default=None,
+                        help="draw the wireframe with Wu's antialiased lines instead of the "
+                             "midpoint line")
+    parser.add_argument("--clipper", choices=("cohen-sutherland", "liang-barsky", "homogeneous"),
+                        default=None, help="the line clipper: cohen-sutherland (the course's "
+                        "outcodes, default), liang-barsky (parametric) or homogeneous (in clip "
+                        "space before the divide); the same picture")
     parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
                         help="raytrace: what an object between a point and a light does "
                              "(default transmit: attenuate by k_t)")
@@ -417,13 +424,6 @@ def _course_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--keep-aspect", action="store_true", default=None,
                    help="letterbox the view window instead of stretching it over the viewport "
                         "(the course's mapping stretches)")
-    p.add_argument("--antialias-lines", action="store_true", default=None,
-                   help="draw the wireframe with Wu's antialiased lines instead of the "
-                        "midpoint line")
-    p.add_argument("--clipper", choices=("cohen-sutherland", "liang-barsky", "homogeneous"),
-                   default=None, help="the line clipper: cohen-sutherland (the course's "
-                   "outcodes, default), liang-barsky (parametric) or homogeneous (in clip space "
-                   "before the divide); the same picture")
     p.add_argument("--course-tri", action="store_true",
                    help="the .tri startup code's rules: skip triangles with viewpoint . N < 0, "
                         "and mouse buttons left Phong, middle Gouraud, right flat")

@@ -52,3 +52,20 @@ def test_an_unknown_clipper_is_one_message():
     with pytest.raises(ValueError, match="clipper must be one of cohen-sutherland, liang-barsky, "
                                          "homogeneous, not 'cyrus'"):
         RenderSettings(clipper="cyrus")
+
+
+def test_the_command_line_takes_a_clipper(tmp_path):
+    import subprocess
+    import sys
+    from PIL import Image
+    from core.paths import ROOT
+    out = tmp_path / "homogeneous.png"
+    done = subprocess.run([sys.executable, "-m", "app", "render", "scenes/house.toml",
+                           "--view", "9", "--size", "64x64", "--clipper", "homogeneous",
+                           "--out", str(out)], cwd=ROOT, capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    scene = load_scene("scenes/house.toml")
+    view = next(v for v in scene.views if "view 9 (" in v.label)
+    today = render(scene, view, RenderSettings.for_scene(scene, size=(64, 64))).color
+    assert today.any() and np.array_equal(np.asarray(Image.open(out))[:, :, :3], today)

@@ -69,3 +69,15 @@ def test_a_bad_sample_count_is_one_message(samples):
     with pytest.raises(ValueError, match=r"samples per pixel must be a whole number from 1 to "
                                          r"256, not "):
         RenderSettings(samples=samples)
+
+
+def test_the_ray_tracer_reconstructs_with_the_same_filters():
+    scene = load_scene("scenes/whitted.toml")
+    settings = RenderSettings.for_scene(scene, size=(40, 30), samples=4, renderer="raytrace")
+    box = render(scene, scene.views[0], settings).color.astype(int)
+    same = render(scene, scene.views[0],
+                  settings.replace(filter_radius=0.49)).color.astype(int)   # the same samples
+    assert np.abs(box - same).max() <= 1
+    tent = render(scene, scene.views[0], settings.replace(pixel_filter="gaussian"))
+    assert tent.stats["pixel filter"] == "gaussian, radius 1.5"
+    assert 0 < np.abs(tent.color.astype(int) - box).max() < 160

@@ -193,6 +193,24 @@ def trace_tile(setup: Setup, row0: int, row1: int, col0: int, col1: int) -> np.n
     return raw.reshape(len(setup.offsets), row1 - row0, col1 - col0, 3).mean(axis=0)
 
 
+def render_filtered(setup: Setup, name: str, radius: float) -> np.ndarray:
+    """The whole frame as :func:`render_raw`, each pixel reconstructed from the samples around
+    it with the pixel filter ``name`` of ``radius`` (core.camera.filters), not their mean."""
+    from core.camera.filters import reconstruct
+    rows = band_rows(setup.width, len(setup.offsets))
+    bands = []
+    for r in range(0, setup.height, rows):
+        end = min(r + rows, setup.height)
+        origins, directions, t_min, t_max = primary(setup, r, end, 0, setup.width)
+        diffs = (differentials(setup, r, end, 0, setup.width) if setup.packing.textured
+                 else None)
+        raw = trace_rays(setup, origins, directions, t_min, t_max, diffs)
+        bands.append(raw.reshape(len(setup.offsets), end - r, setup.width, 3))
+    samples = np.concatenate(bands, axis=1)
+    # unclamped, as the box's mean is; on 0-255 for the filter, back to the tracer's 0-1
+    return reconstruct(samples * 255.0, setup.offsets, name, radius) / 255.0
+
+
 def tiles(width: int, height: int, tile: int = 32) -> list[tuple[int, int, int, int]]:
     """``(row0, row1, col0, col1)`` tiles covering the image, centre first (what the viewer
     looks at), spiralling out by distance — the order a progressive display fills in."""
@@ -283,7 +301,14 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
     if timer is not None:
         timer.lap("pack scene, build BVH")
     start = time.perf_counter()
-    frame.color[...] = to_uint8(render_raw(setup))
+    if setup.adaptive is None and (settings.pixel_filter != "box"
+                                   or settings.filter_radius not in (None, 0.5)):
+        from core.settings import check_filter
+        radius = check_filter(settings.pixel_filter, settings.filter_radius)
+        frame.color[...] = to_uint8(render_filtered(setup, settings.pixel_filter, radius))
+        frame.stats["pixel filter"] = f"{settings.pixel_filter}, radius {radius:g}"
+    else:
+        frame.color[...] = to_uint8(render_raw(setup))
     frame.stats.update(stats_of(setup, time.perf_counter() - start))
     frame.stats["samples per pixel"] = (
         setup.counts[whitted.PRIMARY] / (setup.width * setup.height) if setup.adaptive
