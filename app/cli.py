@@ -408,6 +408,11 @@ def _course_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--course-tri", action="store_true",
                    help="the .tri startup code's rules: skip triangles with viewpoint . N < 0, "
                         "and mouse buttons left Phong, middle Gouraud, right flat")
+    from core.shading.models import lighting_models
+    p.add_argument("--lighting-model", choices=[m.name for m in lighting_models()], default=None,
+                   help="light every material with this model (default: each material's own "
+                        "model key, Phong where it has none): "
+                        + "; ".join(f"{m.name}: {m.label}" for m in lighting_models()))
 
 
 def main(argv: list[str] | None = None, prog: str | None = None) -> int:
@@ -493,6 +498,7 @@ def _dispatch(args) -> int:
                            options={"rasterizer": args.rasterizer,
                                     "keep_aspect": args.keep_aspect,
                                     "course_tri": args.course_tri,
+                                    "lighting_model": args.lighting_model,
                                     "renderer_name": args.renderer, "loader": loader})
     if args.command == "render":
         return _render(args)
@@ -587,6 +593,7 @@ def _render(args) -> int:
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
                                             keep_aspect=args.keep_aspect, **texture_options,
+                                            lighting_model=args.lighting_model,
                                             **_renderer_overrides(args),
                                             **_gi_overrides(args))       # issue 19
     except ValueError as error:            # e.g. --samples 0 (issue 12's options)
@@ -803,6 +810,7 @@ def _inspector_command(args) -> int:
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
                                             keep_aspect=args.keep_aspect, **texture_options,
+                                            lighting_model=args.lighting_model,
                                             **_renderer_overrides(args))
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)
