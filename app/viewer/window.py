@@ -382,7 +382,8 @@ class ViewerWindow:
                   "bump": self.state.set_bump,
                   "depth_cue": self.state.set_depth_cue,                    # issue 18
                   "transparency": self.state.set_transparency,
-                  "paint_first": self.state.set_paint_first}[what]
+                  "paint_first": self.state.set_paint_first,
+                  "lighting_model": self.state.set_lighting_model}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
         self._wake()
@@ -745,6 +746,15 @@ class ViewerWindow:
         if imgui.menu_item_simple("Compare with OpenGL", "H", self.tools.showing_heat):
             self.tools.flip("menu View > Compare with OpenGL")
 
+    def _lighting_model_items(self) -> None:
+        """Every material lit by one registered lighting model, or each by its own."""
+        from core.shading.models import lighting_models
+        imgui.text_disabled("Lighting model")
+        for value, label in (("", "Each material's own"),) + tuple(
+                (m.name, m.label) for m in lighting_models()):
+            if imgui.menu_item_simple(label, None, self.state.lighting_model == value):
+                self.choose("lighting_model", value, "menu Render")
+
     def _render_items(self) -> None:
         from core.renderers import renderer_names
         imgui.text_disabled("Renderer")
@@ -752,6 +762,8 @@ class ViewerWindow:
             if value in renderer_names() and imgui.menu_item_simple(
                     label, key, self.state.renderer_name == value):
                 self.choose("renderer", value, "menu Render")
+        imgui.separator()
+        self._lighting_model_items()
         imgui.separator()
         imgui.text_disabled("Texture filter")
         for value, label in FILTER_LABELS:
