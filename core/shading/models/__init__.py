@@ -15,3 +15,10 @@ from core.shading.models.registry import (DEFAULT_MODEL, LightingModel, Paramete
 
 register_lighting_model("phong", "core.shading.models.phong", label="Phong (FvDFH 16.2)",
                         description="ambient + Lambert diffuse + (R·V)^n or (N·H)^n specular")
+register_lighting_model("cook-torrance", "core.shading.models.cook_torrance",
+                        label="Cook–Torrance (FvDFH 16.7)",
+                        description="microfacets: Beckmann's D, the V-cavity G, Schlick's F",
+                        parameters=(Parameter("roughness", 0.3, 0.01, 1.0,
+                                              help="Beckmann's rms slope of the facets, m"),
+                                    Parameter("f0", (0.04, 0.04, 0.04), 0.0, 1.0, size=3,
+                                              help="reflectance at normal incidence (Schlick)")))
