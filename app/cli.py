@@ -153,10 +153,11 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
                    help="where screenshots go, and the PNGs when there is no display "
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
-    v.add_argument("--renderer", choices=("zbuffer", "raytrace", "radiosity", "pathtrace", "bsp",
-                                          "depth-sort"), default=None,
-                   help="draw with the z-buffer (default), the ray tracer, radiosity, the path "
-                        "tracer (those three progressive), or a painter's algorithm")
+    from core.renderers import renderers
+    v.add_argument("--renderer", choices=[r.name for r in renderers()], default=None,
+                   help="draw with one of the registered renderers (default zbuffer): "
+                        + "; ".join(f"{r.name}: {r.label or r.description}"
+                                    for r in renderers()))
     _crease_argument(v)
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
