@@ -44,6 +44,3 @@ register_renderer("bsp", "core.renderers.painters:draw_bsp",
 register_renderer("depth-sort", "core.renderers.painters:draw_depth_sort",
                   description="Newell, Newell and Sancha's depth sort, painted back to front",
                   label="Depth sort (Newell, painter's)", transparency=True, shaders=True)
-register_renderer("normals", "core.renderers.normals:draw",
-                  description="each pixel the unit normal it sees, as (N + 1) / 2 (a toy)",
-                  label="Normals (toy)", textures=False)
