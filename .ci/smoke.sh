@@ -10,9 +10,10 @@
 #            every dependency from a wheel, no compiler (pip builds only the project itself,
 #            which is pure Python)
 #   cli      the installed `fvd-viewer --help` and `--version`, and `python -m app --version`
+#   warmup   the installed program's `warmup`: every kernel compiled from nothing on this
+#            Python, one worker process a core, the stamp written
 #   render   every shipped scene (app.tools.warmup.shipped_scenes) at 64x48 by the installed
-#            program, each PNG checked to exist, be 64x48 and not be one flat colour (the
-#            first run on a Python compiles the numba kernels from nothing: most of the time)
+#            program, each PNG checked to exist, be 64x48 and not be one flat colour
 #   window   the real-window smoke tests under Xvfb (first frame, clicks, menus, keys,
 #            screenshots), from the clone, with the test extras installed on this Python
 # FVD_SMOKE_PHASES="cli render" runs only those (install always runs). Any failure exits
@@ -21,7 +22,7 @@ set -euo pipefail
 
 python=${1:?usage: .ci/smoke.sh PYTHON [REPO]}
 repo=$(cd "${2:-$(dirname "$0")/..}" && pwd)
-phases=${FVD_SMOKE_PHASES:-cli render window}
+phases=${FVD_SMOKE_PHASES:-cli warmup render window}
 name=$("$python" -c 'import sys; print("Python %d.%d.%d" % sys.version_info[:3])' 2>/dev/null) \
   || { echo "smoke: $python: not a working Python" >&2; exit 1; }
 work=$(mktemp -d "${TMPDIR:-/tmp}/fvd-smoke.XXXXXX")
@@ -65,6 +66,12 @@ if [[ " $phases " == *" cli "* ]]; then
     [[ "$out" == "fvd-viewer "* && "$out" == *"Python ${name#Python }"* ]] \
       || fail "'$v' printed: $out"
   done
+  end
+fi
+
+if [[ " $phases " == *" warmup "* ]]; then
+  begin warmup                      # every kernel compiled on all cores, as `make` does
+  "$venv/bin/fvd-viewer" -q warmup > warmup.txt || { tail -20 warmup.txt; fail "the warm-up"; }
   end
 fi
 

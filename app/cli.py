@@ -159,6 +159,9 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
                         + "; ".join(f"{r.name}: {r.label or r.description}"
                                     for r in renderers()))
     _crease_argument(v)
+    v.add_argument("--reference", default=None, metavar="PNG",
+                   help="a picture to hold ours against: h cycles our picture, the reference "
+                        "and their difference heat map (with the numbers compare prints)")
 
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
@@ -248,6 +251,12 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
                         help="samples per pixel (1, 4, 9, 16 ...), or 'adaptive' (raytrace: "
                              "Whitted's adaptive supersampling, up to 16 a pixel, or up to "
                              "--samples-max)")
+    parser.add_argument("--filter", choices=("box", "tent", "gaussian", "mitchell"),
+                        default=None, dest="pixel_filter",
+                        help="the reconstruction filter of a supersampled frame (default box: "
+                             "the mean of the pixel's samples)")
+    parser.add_argument("--filter-radius", type=float, default=None, metavar="PIXELS",
+                        help="its radius (default: box 0.5, tent 1, gaussian 1.5, mitchell 2)")
     parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
                         help="raytrace: what an object between a point and a light does "
                              "(default transmit: attenuate by k_t)")
@@ -327,6 +336,8 @@ def _renderer_overrides(args) -> dict:
             "adaptive_threshold": args.adaptive_threshold,
             "secondary_attenuation": (tuple(args.attenuation) if args.attenuation is not None
                                       else None),
+            "pixel_filter": getattr(args, "pixel_filter", None),
+            "filter_radius": getattr(args, "filter_radius", None),
             **_painter_overrides(args)}
 
 
@@ -360,7 +371,8 @@ def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> N
                         help="bsp, depth-sort: paint only the first K triangles of the order")
     parser.add_argument("--transparency", choices=("off", "interpolated", "screen-door"),
                         default=None, help="z-buffer, bsp, depth-sort: materials with k_t > 0 "
-                        "laid over the opaque picture (default: the scene's, else off)")
+                        "laid over the opaque picture (default: the scene's, else "
+                        "interpolated where a material has k_t > 0; off draws them opaque)")
     parser.add_argument("--shading-precision", choices=("float32", "float64"), default=None,
                         help="Phong's pixel step: float32 over each row, 8 pixels at a time "
                              "(default; within 1/255 of float64), or the textbook float64 "
@@ -406,6 +418,13 @@ def _course_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--keep-aspect", action="store_true", default=None,
                    help="letterbox the view window instead of stretching it over the viewport "
                         "(the course's mapping stretches)")
+    p.add_argument("--antialias-lines", action="store_true", default=None,
+                   help="draw the wireframe with Wu's antialiased lines instead of the "
+                        "midpoint line")
+    p.add_argument("--clipper", choices=("cohen-sutherland", "liang-barsky", "homogeneous"),
+                   default=None, help="the line clipper: cohen-sutherland (the course's "
+                   "outcodes, default), liang-barsky (parametric) or homogeneous (in clip space "
+                   "before the divide); the same picture")
     p.add_argument("--course-tri", action="store_true",
                    help="the .tri startup code's rules: skip triangles with viewpoint . N < 0, "
                         "and mouse buttons left Phong, middle Gouraud, right flat")
@@ -495,7 +514,7 @@ def _dispatch(args) -> int:
             import functools
             from app.viewer.state import load_scene
             loader = functools.partial(load_scene, crease_angle=args.crease_angle)
-        return viewer_main(args.scene, args.size, out_dir=args.out,
+        return viewer_main(args.scene, args.size, out_dir=args.out, reference=args.reference,
                            options={"rasterizer": args.rasterizer,
                                     "keep_aspect": args.keep_aspect,
                                     "course_tri": args.course_tri,
@@ -593,6 +612,9 @@ def _render(args) -> int:
         settings = RenderSettings.for_scene(scene, projection=args.projection,
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
+                                            clipper=getattr(args, "clipper", None),
+                                            antialias_lines=getattr(args, "antialias_lines",
+                                                                    None),
                                             keep_aspect=args.keep_aspect, **texture_options,
                                             lighting_model=args.lighting_model,
                                             **_renderer_overrides(args),
@@ -720,7 +742,9 @@ def _matrices(args) -> int:
     except ViewError as error:           # a view only the other projection can draw
         print(f"error: {error}", file=sys.stderr)
         return 2
-    out = {"view": view.label, "projection": args.projection}
+    from core.camera.taxonomy import describe
+    out = {"view": view.label, "projection": args.projection,
+           "class": describe(view, args.projection)}      # its place in the projection tree
     for name, m in factors.items():
         out[name] = float(m) if m.ndim == 0 else m.tolist()
     keep = scene.keep_aspect if args.keep_aspect is None else args.keep_aspect
@@ -754,7 +778,8 @@ def _plan(args) -> int:
     out = {"scene": scene.name, "projection": projection, "shading": shading,
            "rasterizer": rasterizer, "keep_aspect": keep, "renderer": renderer,
            **plan_as_dict(plan(scene, projection, shading, keep, rasterizer,
-                               renderer=renderer)), **painter}
+                               renderer=renderer,
+                               transparency=getattr(args, "transparency", None))), **painter}
     print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0
 
@@ -810,6 +835,9 @@ def _inspector_command(args) -> int:
         settings = RenderSettings.for_scene(scene, projection=args.projection,
                                             shading=args.shading, size=args.size,
                                             rasterizer=args.rasterizer,
+                                            clipper=getattr(args, "clipper", None),
+                                            antialias_lines=getattr(args, "antialias_lines",
+                                                                    None),
                                             keep_aspect=args.keep_aspect, **texture_options,
                                             lighting_model=args.lighting_model,
                                             **_renderer_overrides(args))

@@ -23,10 +23,11 @@ class Stage:
 
 def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
          rasterizer: str = "edge", texture_filter: str = "trilinear",
-         renderer: str = "zbuffer") -> list[Stage]:
+         renderer: str = "zbuffer", transparency: str | None = None) -> list[Stage]:
     """The stages for ``scene`` drawn with ``projection`` and ``shading``, in the order the
-    renderer runs them (``core/render.py``, ``core/renderers/zbuffer.py``); ``keep_aspect``
-    and ``rasterizer`` as in :class:`core.settings.RenderSettings`."""
+    renderer runs them (``core/render.py``, ``core/renderers/zbuffer.py``); ``keep_aspect``,
+    ``rasterizer`` and ``transparency`` as in :class:`core.settings.RenderSettings`
+    (``transparency`` None: what the scene asks for, else what it needs)."""
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {', '.join(SHADINGS)}, not {shading!r}")
     has_tris = scene.triangle_count > 0
@@ -90,9 +91,43 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
     ]
     if renderer in PAINTERS:
         _painter_stages(stages, renderer, triangle_stage)
+    if renderer == "scanline":
+        _scanline_stages(stages, triangle_stage)
     if shading == "depth":
         _depth_shading_stages(stages, solid)
+    stages.append(_transparency_stage(scene, solid, renderer, transparency))
     return stages
+
+
+def _transparency_stage(scene, solid, renderer, transparency) -> Stage:
+    """Whether k_t > 0 is laid over the opaque picture, and why (core.effects.transparency)."""
+    from core.registry import get_renderer
+    from core.settings import needed_transparency
+    clear = [m.name or "a mesh" for m in scene.meshes if m.material.kt > 0]
+    if transparency is None:
+        transparency = getattr(scene, "transparency", None) or needed_transparency(scene)
+    name = "transparency"
+    if not clear:
+        return Stage(name, False, "no material has k_t > 0")
+    if not solid:
+        return Stage(name, False, "no triangles are drawn")
+    try:
+        entry = get_renderer(renderer)
+    except ValueError:
+        entry = None
+    if entry is not None and entry.recursive:
+        return Stage(name, False, f"{renderer} refracts through k_t > 0 itself")
+    if entry is not None and not entry.transparency:
+        return Stage(name, False, f"{renderer} draws k_t > 0 opaque")
+    if transparency == "off":
+        return Stage(name, False, f"off: {', '.join(clear)} (k_t > 0) drawn opaque "
+                                  "(--transparency off)")
+    how = ("each transparent surface blended over what lies behind it, "
+           "I = (1 - k_t) I_near + k_t I_far (FvDFH 16.5.1)" if transparency == "interpolated"
+           else "a mesh of k_t's share of pixels left open (screen door)")
+    return Stage(name, True, f"{transparency}: {', '.join(clear)} has k_t > 0, so the scene "
+                             f"needs it (the default wherever a material is transparent; "
+                             f"--transparency off draws it opaque); {how}")
 
 
 def _depth_shading_stages(stages: list, solid: bool) -> None:
@@ -102,7 +137,8 @@ def _depth_shading_stages(stages: list, solid: bool) -> None:
     for i, s in enumerate(stages):
         if s.name in unlit:
             stages[i] = Stage(s.name, False, "depth shading uses no normals and no light")
-    at = next(i for i, s in enumerate(stages) if s.name == "z-buffer scan conversion") + 1
+    at = next(i for i, s in enumerate(stages)
+              if s.name in ("z-buffer scan conversion", "scan-line visible surface")) + 1
     stages.insert(at, Stage("depth shading", solid,
                             "each pixel's height (or eye distance) through a colour map"
                             if solid else "no triangles are drawn"))
@@ -129,6 +165,22 @@ def _painter_stages(stages: list, renderer: str, triangle_stage) -> None:
         if s.name == "depth buffer" and s.runs:
             stages[i] = Stage(s.name, True, "the rasterizer's depth holds each triangle's paint "
                                             "rank: the later painted covers the earlier")
+
+
+def _scanline_stages(stages: list, triangle_stage) -> None:
+    """Watkins' algorithm decides visibility span by span: no depth test per pixel."""
+    for i, s in enumerate(stages):
+        if s.name == "depth buffer":
+            stages[i] = triangle_stage(s.name, s.runs, "not read to decide visibility: each "
+                                       "pixel gets its visible polygon's depth, for what is "
+                                       "drawn after (transparency, depth cueing)")
+        if s.name == "z-buffer scan conversion":
+            stages[i] = triangle_stage(
+                "scan-line visible surface", s.runs,
+                "Watkins (FvDFH 15.6): edge table by first scan line, polygon table with "
+                "in/out flags, active edge table sorted in x; one polygon in a span needs no "
+                "depth, several are compared at the span's ends, and penetrating ones cut the "
+                "span where their depths cross; the z-buffer's fill rule")
 
 
 def _texture_stage(scene, shading, texture_filter):        # issue 11

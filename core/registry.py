@@ -12,7 +12,9 @@ command line, the window's menus and the warm-up read the registry instead of li
 - ``shaders``: it shades through the registered shading modes (depth shading among them);
 - ``textures``: it draws a material's texture maps;
 - ``progressive``: the window shows its picture coarse first, then refining;
-- ``label``: its name in the window's Render menu.
+- ``label``: its name in the window's Render menu;
+- ``in_menu``: whether the Render menu lists it (the exact ray caster draws only analytic
+  primitives, so it is chosen from the command line, not offered for every scene).
 
 The entries are data and the targets strings (``"package.module:function"``), imported when
 first drawn, so this module sits at the bottom of the core: the scene reader checks a file's
@@ -39,6 +41,7 @@ class Renderer:
     shaders: bool = False
     textures: bool = True
     progressive: bool = False
+    in_menu: bool = True
 
     def function(self) -> Callable:
         if callable(self.target):

@@ -99,7 +99,8 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     width, height = settings.size
     frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8),
                   plan=plan(scene, settings.projection, settings.shading, settings.keep_aspect,
-                            settings.rasterizer, settings.texture_filter, settings.renderer),
+                            settings.rasterizer, settings.texture_filter, settings.renderer,
+                            settings.transparency),
                   stats={"allocated": ["color"], "computed": [], "renderer": renderer.name,
                          "projection": settings.projection, "shading": settings.shading})
     message = _why_not(scene, view, settings, context)
@@ -197,10 +198,13 @@ def _why_not(scene: Scene, view: View | None, settings: RenderSettings,
 
 
 def _supersample(draw, scene, view, settings, frame, context, inspect) -> None:
-    """Run a one-sample renderer over the film's samples and box-filter them into ``frame``."""
+    """Run a one-sample renderer over the film's samples and box-filter them into ``frame``
+    (or reconstruct them with ``settings.pixel_filter``)."""
     width, height = settings.size
     side = grid_side(settings.samples)
     frame.stats["samples per pixel"] = settings.samples
+    if settings.pixel_filter != "box" or settings.filter_radius not in (None, 0.5):
+        return _filtered(draw, scene, view, settings, frame, context, inspect)
     if (settings.sample_pattern == "regular" and side * side == settings.samples
             and width * height * settings.samples <= MAX_PASS_PIXELS):
         big = Frame(rgbx=np.empty((height * side, width * side, 4), np.uint8), plan=frame.plan,
@@ -218,3 +222,32 @@ def _supersample(draw, scene, view, settings, frame, context, inspect) -> None:
              Timer(frame.stats, inspect))
         film.add(one.color)
     frame.color[:] = film.resolve()
+
+
+def _filtered(draw, scene, view, settings, frame, context, inspect) -> None:
+    """The film's samples (a regular grid in one pass where it fits, else one frame per
+    sample) reconstructed with the settings' filter (core.camera.filters)."""
+    from core.camera.filters import check, reconstruct, regular_grid
+    width, height = settings.size
+    side = grid_side(settings.samples)
+    radius = check(settings.pixel_filter, settings.filter_radius)
+    frame.stats["pixel filter"] = f"{settings.pixel_filter}, radius {radius:g}"
+    if (settings.sample_pattern == "regular" and side * side == settings.samples
+            and width * height * settings.samples <= MAX_PASS_PIXELS):
+        big = Frame(rgbx=np.empty((height * side, width * side, 4), np.uint8), plan=frame.plan,
+                    stats=frame.stats)
+        draw(scene, view, settings.replace(samples=1, size=(width * side, height * side)), big,
+             context, Timer(frame.stats, inspect))
+        images, offsets = regular_grid(big.color, side)
+        frame.sample_color = big.color
+    else:
+        film = Film(width, height, settings.samples, settings.sample_pattern, settings.seed)
+        images, offsets = [], [tuple(o) for o in film.offsets]
+        for offset in offsets:
+            one = Frame(rgbx=np.empty_like(frame.rgbx), plan=frame.plan, stats=frame.stats)
+            draw(scene, view, settings.replace(samples=1, pixel_offset=offset), one, context,
+                 Timer(frame.stats, inspect))
+            images.append(one.color.copy())
+    frame.filtered = reconstruct(images, offsets, settings.pixel_filter, radius)
+    frame.color[:] = np.floor(frame.filtered + 0.5).astype(np.uint8)
+

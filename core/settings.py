@@ -50,6 +50,10 @@ FORM_FACTOR_METHODS = ("hemicube", "raycast")
 SOLVERS = ("progressive", "gauss-seidel")
 # The ray tracer's shadow rays (core.raytrace.whitted): the notes' options.
 SHADOW_MODES = ("off", "background", "object", "transmit")
+PIXEL_FILTERS = ("box", "tent", "gaussian", "mitchell")     # core.camera.filters
+FILTER_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": 1.5, "mitchell": 2.0}   # their defaults
+MAX_FILTER_RADIUS = 8.0
+CLIPPERS = ("cohen-sutherland", "liang-barsky", "homogeneous")   # core.pipeline.clip.CLIPPERS
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
 TRANSPARENCIES = ("off", "interpolated", "screen-door")   # core.effects.transparency.MODES
@@ -118,6 +122,18 @@ class RenderSettings:
     # Transparency of materials with k_t > 0 in the z-buffer family (core.effects.transparency):
     # "off" (drawn opaque, as before) | "interpolated" | "screen-door".
     transparency: str = "off"
+    # The line clipper (core.pipeline.clip): "cohen-sutherland" (the course's outcodes, in the
+    # canonical volume) | "liang-barsky" (parametric) | "homogeneous" (in clip space, before
+    # the divide). The same picture; triangles are clipped by Sutherland–Hodgman either way.
+    clipper: str = "cohen-sutherland"
+    # The reconstruction filter of a supersampled frame (core.camera.filters): "box" (the
+    # mean of each pixel's samples, as before) | "tent" | "gaussian" | "mitchell", and its
+    # radius in pixels (None: the filter's own default).
+    pixel_filter: str = "box"
+    # The wireframe's lines: False the midpoint line (the course's), True Wu's antialiased
+    # line (core.pipeline.raster_lines.draw_lines_wu), each pixel weighted by its coverage.
+    antialias_lines: bool = False
+    filter_radius: float | None = None
     # Phong's pixel step (core.shading.phong_wide): "float32", the model over each row in
     # 8-wide float32 passes (within 1/255 of float64; extreme inputs fall back per pixel), or
     # "float64", the textbook kernel, one pixel at a time.
@@ -163,6 +179,10 @@ class RenderSettings:
             raise ValueError(f"the adaptive threshold must be from 0 to 1, "
                              f"not {self.adaptive_threshold!r}")
         object.__setattr__(self, "secondary_attenuation", (c1, c2))
+        check_filter(self.pixel_filter, self.filter_radius)
+        if self.clipper not in CLIPPERS:
+            raise ValueError(f"clipper must be one of {', '.join(CLIPPERS)}, "
+                             f"not {self.clipper!r}")
         if self.transparency not in TRANSPARENCIES:
             raise ValueError(f"transparency must be one of {', '.join(TRANSPARENCIES)}, "
                              f"not {self.transparency!r}")
@@ -183,9 +203,34 @@ class RenderSettings:
                   "rasterizer": scene.rasterizer, "keep_aspect": scene.keep_aspect,
                   "renderer": scene.renderer,
                   "depth_cue": getattr(scene, "depth_cue", None) is not None,
-                  "transparency": getattr(scene, "transparency", "off")}
+                  "transparency": getattr(scene, "transparency", None)
+                  or needed_transparency(scene)}
         values.update({k: v for k, v in overrides.items() if v is not None})
         return cls(**values)
 
     def replace(self, **changes) -> "RenderSettings":
         return dataclasses.replace(self, **changes)
+
+
+def needed_transparency(scene) -> str:
+    """What a scene that names no ``transparency`` gets: "interpolated" where any material has
+    k_t > 0 (the scene needs it: drawn opaque, a glass pane would hide what is behind it; the
+    ray tracers refract instead, as before), else "off". ``--transparency off`` still draws
+    it opaque."""
+    meshes = getattr(scene, "meshes", ())
+    return "interpolated" if any(m.material.kt > 0 for m in meshes) else "off"
+
+
+def check_filter(name: str, radius: float | None) -> float:
+    """The radius a pixel filter uses (its default for None); ValueError with a message for an
+    unknown filter or a radius outside (0, 8] pixels."""
+    if name not in PIXEL_FILTERS:
+        raise ValueError(f"the pixel filter must be one of {', '.join(PIXEL_FILTERS)}, "
+                         f"not {name!r}")
+    if radius is None:
+        return FILTER_RADIUS[name]
+    r = float(radius)
+    if not (0.0 < r <= MAX_FILTER_RADIUS):
+        raise ValueError(f"the filter radius must be above 0 and at most "
+                         f"{MAX_FILTER_RADIUS:g} pixels, not {radius!r}")
+    return r

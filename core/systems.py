@@ -10,4 +10,8 @@ panel becomes the file's first view before the animation's keys name views.
 from core.texture import scenekeys  # noqa: F401  (textures of a material; the demo's panel)
 from core.effects import depth_cue  # noqa: F401  ([depth_cue])
 from core.animation import keys  # noqa: F401  ([animation], [[key]], [[emitter]])
+from core.animation import dynamics_keys  # noqa: F401  ([dynamics], [[body]])
+from core.animation import linkage_keys  # noqa: F401  ([[linkage]])
+from core.animation import actor_keys  # noqa: F401  ([[actor]])
+from core.volume import scenekeys as volume_keys  # noqa: F401  ([[volume]])
 from core.shading.models import scenekeys as lighting_keys  # noqa: F401  (a material's model)

@@ -53,6 +53,36 @@ def shear_xy(shx: float, shy: float) -> np.ndarray:
     return m
 
 
+def shear(xy=(0.0, 0.0), xz=(0.0, 0.0), yz=(0.0, 0.0)) -> np.ndarray:
+    """The three shears of FvDFH 5.7, composed as SH_yz · SH_xz · SH_xy: ``xy`` = (shx, shy)
+    moves x and y by z (SH_xy, eq. 5.45), ``xz`` = (shx, shz) moves x and z by y, ``yz`` =
+    (shy, shz) moves y and z by x."""
+    a, b, c = np.eye(4), np.eye(4), np.eye(4)
+    a[0, 2], a[1, 2] = xy
+    b[0, 1], b[2, 1] = xz
+    c[1, 0], c[2, 0] = yz
+    return c @ b @ a
+
+
+def rotate_axis(axis, theta: float, point=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """Rotation by ``theta`` radians about the line through ``point`` along ``axis``,
+    counter-clockwise looking from the axis' tip towards ``point``: T(P) · R · T(−P) with
+    R = cos θ I + (1 − cos θ) k kᵀ + sin θ [k]ₓ for the unit axis k (the notes' and FvDFH
+    5.7's rotation about an arbitrary axis, the product of their five rotations worked out).
+    Raises ValueError for a zero axis."""
+    k = np.asarray(axis, dtype=np.float64)
+    length = np.linalg.norm(k)
+    if not length > 0.0 or not np.isfinite(length):
+        raise ValueError("the axis is zero: no direction to rotate about")
+    kx, ky, kz = k / length
+    c, s = np.cos(theta), np.sin(theta)
+    cross = np.array([[0.0, -kz, ky], [kz, 0.0, -kx], [-ky, kx, 0.0]])
+    m = np.eye(4)
+    m[:3, :3] = c * np.eye(3) + (1.0 - c) * np.outer((kx, ky, kz), (kx, ky, kz)) + s * cross
+    p = np.asarray(point, dtype=np.float64)
+    return translate(*p) @ m @ translate(*(-p))
+
+
 def rows_as_rotation(u: np.ndarray, v: np.ndarray, n: np.ndarray) -> np.ndarray:
     """The rotation whose rows are the orthonormal basis u, v, n (FvDFH eq. 6.25)."""
     m = np.eye(4)

@@ -29,6 +29,20 @@ def pytest_addoption(parser):
                      help="rewrite the golden images from the current renderer (look at them!)")
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _own_config_dir(tmp_path_factory):
+    """The viewer keeps File > Recent in the user's config directory: tests and the windows
+    they start (which inherit the environment) keep theirs in a temporary one instead."""
+    import os
+    before = os.environ.get("FVD_CONFIG_DIR")
+    os.environ["FVD_CONFIG_DIR"] = str(tmp_path_factory.mktemp("config"))
+    yield
+    if before is None:
+        os.environ.pop("FVD_CONFIG_DIR", None)
+    else:
+        os.environ["FVD_CONFIG_DIR"] = before
+
+
 @pytest.fixture(autouse=True)
 def _numpy_strict():
     """Seed numpy and make every silent NaN, overflow or division by zero fail the test."""

@@ -245,3 +245,29 @@ def test_framebuffer_scale_reaches_the_framebuffer(points, pixels):
     scale = np.float32(framebuffer_scale(points, pixels))
     assert np.float32(points) * scale >= pixels
     assert int(np.float32(points) * scale) == pixels           # and not a pixel more
+
+
+def test_the_loupe_shows_each_pixel_as_a_block_of_one_colour(ctx):
+    # Oracle: numpy indexing of the image by the loupe's mapping, worked out for the anchor
+    # (the framebuffer pixel (13, 9) stays under the cursor at picture pixel (21, 17)).
+    from app.viewer.loupe import Loupe
+    rng = np.random.default_rng(8)
+    image = rng.integers(0, 256, size=(40, 48, 3), dtype=np.uint8)
+    blit = Blit(ctx)
+    loupe = Loupe()
+    loupe.texel = (13, 9)                      # as if zoomed round there before
+    loupe.screen = (21, 17)
+    loupe.magnification = 8
+    blit.loupe(**loupe.uniforms())
+    out = blit_through(ctx, blit, image)
+    blit.release()
+    rows, cols = np.mgrid[0:40, 0:48]
+    src_c, src_r = 13 + (cols - 21) // 8, 9 + (rows - 17) // 8
+    inside = (src_c >= 0) & (src_c < 48) & (src_r >= 0) & (src_r < 40)
+    expected = np.zeros_like(image)
+    expected[inside] = image[src_r[inside], src_c[inside]]
+    assert np.array_equal(out, expected)
+    assert np.array_equal(out[17, 21], image[9, 13])
+    block = out[17:25, 21:29]             # the 8 x 8 block that starts at the anchor
+    assert (block == image[9, 13]).all()
+    assert loupe.texel_at(21, 17) == (13, 9) and loupe.texel_at(20, 16) == (12, 8)

@@ -97,7 +97,7 @@ CORE_RANKS = {
     "core.raytrace": 7, "core.visibility": 7,
     "core.effects": 8,
     "core.plan": 9,
-    "core.renderers": 10, "core.radiosity": 10, "core.pathtrace": 10,
+    "core.renderers": 10, "core.radiosity": 10, "core.pathtrace": 10, "core.volume": 10,
     "core.render": 11,
     "core.inspect": 12, "core.animation": 12, "core.systems": 12, "core": 12,
     "core.analysis": 13,

@@ -15,6 +15,7 @@ import os
 import signal
 import subprocess
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -226,6 +227,36 @@ def test_background_warmup_stops_its_workers(tmp_path, monkeypatch):
     assert _gone(worker)
 
 
+def test_the_warm_up_ends_when_the_window_that_started_it_is_killed(tmp_path):
+    """The window holds the warm-up's standard input: a window killed with SIGKILL (no
+    clean-up of its own) closes it, and the warm-up stops its workers and exits, no stamp."""
+    stamp = tmp_path / "warm.json"
+    starter = textwrap.dedent(f"""
+        import sys, time
+        from app.tools import warmup
+        run = warmup.BackgroundWarmup(jobs=1, log_path={str(tmp_path / "warmup.log")!r},
+            extra_args={[*EXTRA, "--stamp", str(stamp), "--only", "test: waits"]!r})
+        print(run._process.pid, flush=True)
+        time.sleep(600)
+    """)
+    window = subprocess.Popen([sys.executable, "-c", starter], cwd=ROOT, env=_env(tmp_path),
+                              stdout=subprocess.PIPE, text=True)
+    try:
+        child = int(window.stdout.readline())
+        while not list(tmp_path.glob("sleeping.*")):      # its worker is in the step
+            assert window.poll() is None
+            time.sleep(0.05)
+        worker = int(next(tmp_path.glob("sleeping.*")).read_text())
+        window.kill()                                     # no chance to stop it itself
+        window.wait(timeout=10)
+        assert _gone(child), "the warm-up outlived the window"
+        assert _gone(worker), "its worker outlived the window"
+        assert not stamp.exists()
+    finally:
+        if window.poll() is None:
+            window.kill()
+
+
 def test_ready_for_a_shipped_scene_when_its_step_is_done():
     """The bookkeeping alone: the events a run would print, fed to the reader."""
     run = warmup.BackgroundWarmup.__new__(warmup.BackgroundWarmup)
@@ -268,7 +299,7 @@ def test_first_puts_the_files_first_picture_ahead_of_every_step(tmp_path):
     events = _events(done.stdout)
     assert events[0] == {"event": "start", "total": 2, "jobs": 1}
     begun = [e["label"] for e in events if e["event"] == "begin"]
-    assert begun == ["mine.obj as it opens", "test: quick"]
+    assert begun == ["mine.obj as it opens", "test: quick kernel"]
     opened = [e for e in events if e["event"] == "done" and "opens" in e]
     assert [e["opens"] for e in opened] == [str(scene.resolve())]
 
@@ -279,7 +310,7 @@ def test_first_with_a_missing_file_adds_no_step(tmp_path):
     done = subprocess.run(command, cwd=ROOT, env=_env(tmp_path), capture_output=True,
                           text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
-    assert [e["label"] for e in _events(done.stdout) if e["event"] == "begin"] == ["test: quick"]
+    assert [e["label"] for e in _events(done.stdout) if e["event"] == "begin"] == ["test: quick kernel"]
 
 
 # ---------------------------------------------------------------------------------------

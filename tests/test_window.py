@@ -254,11 +254,11 @@ def start_xvfb():
 class App:
     """``python -m app`` on an X display, with its log file and the xdotool calls we need."""
 
-    def __init__(self, display: str, workdir: Path):
+    def __init__(self, display: str, workdir: Path, env: dict | None = None):
         self.display, self.workdir = display, workdir
         self.log_path = workdir / "fvd.log"
         self.env = {**os.environ, "DISPLAY": display, "FVD_LOG": str(self.log_path),
-                    "PYTHONPATH": str(ROOT)}
+                    "PYTHONPATH": str(ROOT), **(env or {})}
         self.env.pop("WAYLAND_DISPLAY", None)
         # stdin /dev/null: a terminal's stand-in (a file or pipe there would be read as views)
         self.process = subprocess.Popen([sys.executable, "-m", "app"], cwd=workdir, env=self.env,
@@ -388,6 +388,47 @@ def grab(app, path: Path, crop: str | None = None) -> np.ndarray:
 
 @pytest.mark.xvfb
 @pytest.mark.slow
+def _processes_with(variable: str, value: str) -> list[int]:
+    """The pids whose environment has ``variable=value`` (Linux's /proc)."""
+    wanted, found = f"{variable}={value}".encode(), []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if wanted in (entry / "environ").read_bytes().split(b"\0"):
+                    found.append(int(entry.name))
+            except OSError:
+                pass
+    return found
+
+
+def test_a_cold_kernel_cache_opens_the_window_at_once(tmp_path):
+    """A fresh clone's first start: no kernel is cached, yet the window and the house (which
+    needs none) are on screen at once while worker processes compile; a window killed then
+    leaves no warm-up compiling on."""
+    need_programs(*XVFB_TOOLS, install="apt-get install xvfb xdotool")
+    if not Path("/proc/self/environ").exists():
+        unavailable("no /proc to find the warm-up's processes by")
+    cache = tmp_path / "cold-cache"
+    xvfb, display = start_xvfb()
+    app = App(display, tmp_path, env={"NUMBA_CACHE_DIR": str(cache)})
+    try:
+        app.wait_for(r"kernel cache cold: compiling the kernels in worker processes", 60)
+        app.wait_for(r"first frame shown", timeout=60)
+        assert frames(app.log())[0]["shading"] == "wireframe"
+        others = set(_processes_with("NUMBA_CACHE_DIR", str(cache))) - {app.process.pid}
+        assert others, "no warm-up process beside the window"
+    finally:
+        app.process.kill()                # no clean-up of its own: the warm-up sees it gone
+        app.process.wait(timeout=10)
+        xvfb.kill()
+    deadline = time.monotonic() + 90
+    while _processes_with("NUMBA_CACHE_DIR", str(cache)) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    left = _processes_with("NUMBA_CACHE_DIR", str(cache))
+    assert left == [], f"the warm-up outlived the window: pids {left}"
+    assert not (cache / "fvd-warm.json").exists()     # stopped half-way: not marked warm
+
+
 def test_window_click_menu_and_keys_under_xvfb(tmp_path):
     need_programs(*XVFB_TOOLS, "import", install="apt-get install xvfb xdotool imagemagick")
     from PIL import Image

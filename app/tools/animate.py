@@ -82,6 +82,14 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     p.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's)")
     p.add_argument("--renderer", default=None, help="a registered renderer (default: zbuffer)")
     p.add_argument("--samples", type=_number(int, 1, 1024), default=None, help="samples per pixel")
+    p.add_argument("--motion-blur", type=_number(int, 1, 1024), default=None, metavar="SAMPLES",
+                   help="motion blur: each frame the mean of SAMPLES frames over the shutter "
+                        "interval (the accumulation buffer; 1: sharp; default: the scene's "
+                        "[animation] motion_blur, else 1)")
+    p.add_argument("--shutter", type=_number(float, -1.0, 1.0), nargs=2, default=None,
+                   metavar=("OPEN", "CLOSE"),
+                   help="when the shutter opens and closes, in frames from the frame's time "
+                        "(default -0.25 0.25: a 180-degree shutter centred on it)")
     p.add_argument("--projection", choices=PROJECTIONS, default=None)
     p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
     p.add_argument("--view", type=_number(int, 1, 10 ** 6), default=None, metavar="K",
@@ -142,9 +150,39 @@ def job_of(args, animation, bundle, view_index: int) -> dict:
                 "projection": args.projection or scene.projection,
                 "shading": args.shading or scene.shading,
                 "renderer": args.renderer or "zbuffer", "view": view_index, "paths": args.paths}
+    shutter = _shutter(args, animation)
+    if shutter.samples > 1 or getattr(animation, "shutter", None) is not None:
+        # (recorded only where frames are blurred, or kept sharp against the scene's
+        # blur: the sharp jobs of sharp scenes keep the hash they had)
+        settings["motion_blur"] = [shutter.samples, shutter.open, shutter.close]
     return {"scene": Path(args.scene).name, "bundle": bundle.digest, "fps": fps,
             "frames": int(count), "settings": settings,
             "load_size": list(args.size) if args.size else None}
+
+
+def _shutter(args, animation):
+    """The options' :class:`~core.animation.frames.Shutter`, else the scene file's (None:
+    sharp); JobError when it cannot be."""
+    from core.animation.frames import Shutter
+    scene = getattr(animation, "shutter", None)
+    samples = getattr(args, "motion_blur", None)
+    opening = getattr(args, "shutter", None)
+    if samples is None:
+        samples = scene.samples if scene is not None else 1
+    if opening is not None and samples == 1:
+        raise JobError("--shutter is the motion blur's: give --motion-blur SAMPLES too")
+    if opening is None and scene is not None:
+        opening = (scene.open, scene.close)
+    try:
+        return Shutter(samples, *(opening or (Shutter.open, Shutter.close)))
+    except ValueError as error:
+        raise JobError(f"--shutter: {error}") from None
+
+
+def job_shutter(job: dict):
+    from core.animation.frames import Shutter
+    blur = job["settings"].get("motion_blur")
+    return Shutter(*blur) if blur else None
 
 
 def job_hash(job: dict) -> str:
@@ -217,7 +255,7 @@ def render_pixels(job: dict, k: int, animation=None) -> np.ndarray:
                                         samples=s["samples"], projection=s["projection"],
                                         shading=s["shading"], renderer=s["renderer"])
     frame = render_at(animation, k / job["fps"], settings, view_index=s["view"],
-                      paths=s["paths"])
+                      paths=s["paths"], shutter=job_shutter(job))
     if frame.message:
         raise RuntimeError(f"frame {k}: {frame.message}")
     return frame.color
@@ -225,13 +263,13 @@ def render_pixels(job: dict, k: int, animation=None) -> np.ndarray:
 
 def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tuple]:
     """A worker's task: the contiguous ``frames`` of the job, the scene read from the bundle
-    (unpacked once per worker), the particles restored from ``checkpoint`` (their state at
+    (unpacked once per worker), the simulations restored from ``checkpoint`` (their state at
     the first frame), so that nothing is simulated from t = 0."""
     from app.tools.bundle import unpack
     animation = _animation(str(unpack(bundle)), job.get("load_size"))
-    if checkpoint is not None and animation.particle_system is not None:
-        from core.animation.checkpoint import restore
-        restore(animation.particle_system, checkpoint)
+    if checkpoint is not None:
+        from core.animation.checkpoint import restore_animation
+        restore_animation(animation, checkpoint)
     return [render_frame(job, k, animation) for k in frames]
 
 
@@ -371,7 +409,7 @@ def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, anima
     from app.tools.cluster import completed
     shipped = client.scatter(bundle, broadcast=True, hash=False)
     runs = Runs(frames, workers + here)
-    checkpoints = _Checkpoints(animation, job["fps"])
+    checkpoints = _Checkpoints(animation, job["fps"], job_shutter(job))
     in_flight = {}
     done = completed(client)
 
@@ -409,33 +447,27 @@ def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, anima
 
 
 class _Checkpoints:
-    """The particle state at the first frame of each run, asked for in order: a second
-    particle system steps on from where this process's is (simulation only) and is
-    snapshotted at each run's start. Without emitters there is nothing to carry (None)."""
+    """The simulations' state (particles, rigid bodies, flocks) at the first frame of each
+    run, asked for in order: copies of the simulations step on from where this process's
+    are (simulation only, :class:`core.animation.checkpoint.Shadow`). Without any there is
+    nothing to carry (None)."""
 
-    def __init__(self, animation, fps: float):
-        from core.animation.checkpoint import restore, snapshot
-        self.animation, self.fps = animation, fps
-        system = animation.particle_system
-        self.sim = None
-        if system is not None:
-            from core.animation.particles import ParticleSystem
-            self.sim = ParticleSystem([system.specs[i] for i in system.roots], system.fps,
-                                      system.seed, system.substeps)
-            restore(self.sim, snapshot(system))
+    def __init__(self, animation, fps: float, shutter=None):
+        from core.animation.checkpoint import Shadow
+        self.animation, self.fps, self.shutter = animation, fps, shutter
+        self.shadow = Shadow(animation)
 
     def at(self, k: int):
-        from core.animation.checkpoint import snapshot
-        if self.sim is None:
-            return None
-        self.sim.state_at(self.animation.local_time(k / self.fps))
-        return snapshot(self.sim)
+        """The state at frame k's first time (its shutter's first sample when blurred)."""
+        t = k / self.fps
+        return self.shadow.at(self.shutter.times(t, self.fps)[0] if self.shutter else t)
 
     def restore(self, k: int) -> None:
-        """Put this process's particles at frame ``k`` (the start of a run it renders)."""
-        from core.animation.checkpoint import restore
-        if self.sim is not None:
-            restore(self.animation.particle_system, self.at(k))
+        """Put this process's simulations at frame ``k`` (the start of a run it renders)."""
+        from core.animation.checkpoint import restore_animation
+        state = self.at(k)
+        if state is not None:
+            restore_animation(self.animation, state)
 
 
 def idle_mark() -> tuple[float, float] | None:

@@ -99,27 +99,30 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
     parser.add_argument("--renderer", type=_renderers, default="zbuffer",
                         help="zbuffer (default); raytrace: the ray tracer's rows beside Embree; "
                              "radiosity,pathtrace (either or both): the global illumination rows "
-                             "on the Cornell box, beside Mitsuba; a list with bsp or depth-sort "
-                             "(e.g. bsp,depth-sort,zbuffer): the painter's algorithms against the "
-                             "z-buffer")
+                             "on the Cornell box, beside Mitsuba; a list with bsp, depth-sort or "
+                             "scanline (e.g. bsp,depth-sort,scanline,zbuffer): the painter's "
+                             "algorithms and Watkins' scan line against the z-buffer; volume: the "
+                             "ray marcher and marching cubes on a 256³ phantom, beside scikit-image")
 
 
-GI_RENDERERS, PAINTERS = ("radiosity", "pathtrace"), ("bsp", "depth-sort")
+# the object-precision visible-surface algorithms timed against the z-buffer
+GI_RENDERERS, PAINTERS = ("radiosity", "pathtrace"), ("bsp", "depth-sort", "scanline")
 
 
 def _renderers(text: str) -> str:
     """``zbuffer``, ``raytrace``, a list of radiosity and pathtrace (checked by their bench,
-    which names an unknown one), or a list of bsp, depth-sort and zbuffer."""
+    which names an unknown one), or a list of bsp, depth-sort, scanline and zbuffer."""
     chosen = [part.strip() for part in text.split(",") if part.strip()]
-    if len(chosen) == 1 and chosen[0] in ("zbuffer", "raytrace", *GI_RENDERERS, *PAINTERS):
+    if len(chosen) == 1 and chosen[0] in ("zbuffer", "raytrace", "volume", *GI_RENDERERS,
+                                          *PAINTERS):
         return chosen[0]
     if any(name in GI_RENDERERS for name in chosen):
         return ",".join(chosen)
     for name in chosen:
         if name not in (*PAINTERS, "zbuffer"):
             raise argparse.ArgumentTypeError(
-                f"renderer must be zbuffer, raytrace, a list of radiosity and pathtrace, or a "
-                f"list of bsp, depth-sort and zbuffer; not {name!r}")
+                f"renderer must be zbuffer, raytrace, volume, a list of radiosity and "
+                f"pathtrace, or a list of bsp, depth-sort, scanline and zbuffer; not {name!r}")
     return ",".join(chosen)
 
 
@@ -620,6 +623,9 @@ def main(args) -> int:
         return 2
     if args.renderer == "raytrace":
         return raytrace_bench(args)
+    if args.renderer == "volume":
+        from app.tools.volume_bench import run as volume_run
+        return volume_run(args)
     chosen = args.renderer.split(",")
     if any(name in PAINTERS for name in chosen):
         from app.tools.painters_bench import run

@@ -95,6 +95,11 @@ def run(args, renderers: list[str]) -> int:
             if name == "depth-sort":
                 row["depth_sort"] = stats.get("depth sort")
                 row["memory_bytes"] = int(stats["painted"]) * (3 * 8 * 4 + 8 * 8)
+            if name == "scanline":
+                row["scan_line"] = stats.get("scan line")
+                counts = row["scan_line"] or {}       # PT: 9 ints, 4 floats; ET: 9 ints
+                row["memory_bytes"] = (counts.get("polygons", 0) * 13 * 8
+                                       + counts.get("edges", 0) * 9 * 8)
             if name == "bsp":
                 tree_stats = stats.get("BSP tree", {})
                 row["bsp"] = tree_stats
@@ -138,6 +143,11 @@ def format_tables(result: dict) -> str:
             notes = f"tree: {r['bsp'].get('rule')}, kept in the context"
         if r["renderer"] == "zbuffer":
             notes = "depth + triangle id + 2 barycentrics per pixel"
+        if r["renderer"] == "scanline" and r.get("scan_line"):
+            c = r["scan_line"]
+            notes = (f"tables (PT + ET); AET up to {c['largest AET']}, {c['spans']} spans "
+                     f"({c['one-polygon spans']} with one polygon), {c['depth evaluations']} "
+                     f"depth evaluations, {c['penetration splits']} cuts")
         memory = r.get("memory_bytes")
         lines.append(f"| {r['triangles']} | {r['renderer']} | {r['frame_ms']:.1f} | "
                      f"{r['frame_cpu_ms']:.1f} | "

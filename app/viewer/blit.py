@@ -31,6 +31,7 @@ class Blit:
         self.ctx = ctx
         self.program = load_program(ctx, "blit")
         self.program["frame"].value = 0
+        self.loupe(1, (0, 0), (0, 0))
         # No buffers: the vertex shader places the triangle from gl_VertexID.
         self.vao = ctx.vertex_array(self.program, [])
         self.texture: moderngl.Texture | None = None
@@ -61,6 +62,15 @@ class Blit:
             self.texture.repeat_x = self.texture.repeat_y = False
         # Image row 0 goes to texture row 0; the fragment shader flips rows when it fetches.
         self.texture.write(np.ascontiguousarray(color))
+
+    def loupe(self, magnify: int, screen_anchor: tuple[int, int],
+              texel_anchor: tuple[int, int]) -> None:
+        """Magnify the picture by a whole number, nearest neighbour: picture pixel q shows
+        framebuffer pixel ``texel_anchor + floor((q - screen_anchor) / magnify)`` (rows from
+        the top; app.viewer.loupe). 1 is the plain copy."""
+        self.program["magnify"].value = max(int(magnify), 1)
+        self.program["screen_anchor"].value = tuple(int(c) for c in screen_anchor)
+        self.program["texel_anchor"].value = tuple(int(c) for c in texel_anchor)
 
     def draw(self, origin: tuple[int, int] = (0, 0)) -> None:
         """Draw the last uploaded frame over the current viewport (does nothing before one),

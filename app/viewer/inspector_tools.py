@@ -41,9 +41,12 @@ class InspectorTools:
         self.convergence: deque = deque(maxlen=240)
         self._context = None
         self.changed = False                       # the picture to show changed: upload it
+        self.reference = None                      # app.viewer.reference.ReferenceView (--reference)
 
     # -- what the picture area shows ---------------------------------------------------------
     def picture(self, frame) -> np.ndarray:
+        if self.reference is not None and self.reference.shown is not None:
+            return self.reference.shown
         if self.showing_heat and self.heat is not None:
             return self.heat
         if self.overlay is not None:
@@ -55,6 +58,8 @@ class InspectorTools:
         comparison made for the old frame is dropped."""
         self.frame_ms.append(seconds * 1e3)
         self.note_convergence(getattr(frame, "stats", None))
+        if self.reference is not None:
+            self.reference.refresh(frame)
         if self.heat is not None:
             self.heat, self.showing_heat, self.verdict = None, False, ""
         if self.buffer != PICTURE and not self._show_buffer(self.buffer, "the new frame"):
@@ -173,6 +178,10 @@ class InspectorTools:
         log.info("action: %s -> compare with OpenGL: %s", how, result.verdict())
 
     def flip(self, how: str) -> None:
+        if self.reference is not None:             # --reference: picture, reference, difference
+            self.reference.cycle(self.state.frame, how)
+            self.changed = True
+            return
         if self.heat is None:
             self.compare_opengl(how)
             return
@@ -205,6 +214,10 @@ class InspectorTools:
         if self.buffer != PICTURE:
             imgui.text_colored((0.55, 0.8, 1.0, 1.0),
                                f"showing the {self.buffer} buffer (v: next)")
+        if self.reference is not None and self.reference.verdict:
+            imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(self.reference.verdict))
+            imgui.text_disabled(f"h: showing the {self.reference.mode}; next "
+                                "picture / reference / difference")
         if self.verdict:
             imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(self.verdict))
             if self.heat is not None:

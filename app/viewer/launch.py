@@ -87,15 +87,25 @@ def display_available() -> bool:
 
 
 def main(scene_source: str | None, size: tuple[int, int] | None = None,
-         out_dir: str | Path | None = None, options: dict | None = None) -> int:
+         out_dir: str | Path | None = None, options: dict | None = None,
+         reference: str | None = None) -> int:
     """Open the viewer on ``scene_source`` with a ``size`` framebuffer; 0 on success.
 
     ``size`` None means the scene's own size (500 x 500 unless it says otherwise).
     ``out_dir``: where screenshots go (default: ``./screenshots``) and, with no display,
     the per-view PNGs (default ``$FVD_OUT`` or ``./fvd-views``). ``options``: ``rasterizer``,
-    ``keep_aspect``, ``course_tri`` (None: the scene's own).
+    ``keep_aspect``, ``course_tri`` (None: the scene's own). ``reference``: a PNG that ``h``
+    holds the picture against (app.viewer.reference).
     """
     setup_logging()
+    reference_image = None
+    if reference is not None:
+        from app.viewer.reference import load_reference
+        try:
+            reference_image = load_reference(reference)
+        except ValueError as error:
+            print(f"error: {error}", file=sys.stderr)
+            return 2
     started = time.perf_counter() - process_age()
     from app.viewer.state import ViewerState, reader_errors
 
@@ -130,6 +140,9 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
         try:
             from app.viewer.window import ViewerWindow, WindowError
             window = ViewerWindow(state, out_dir=out_dir, started=started)
+            if reference_image is not None:
+                from app.viewer.reference import ReferenceView
+                window.tools.reference = ReferenceView(reference_image, Path(reference).name)
         except (WindowError, ImportError) as error:
             reason = str(error)
         except Exception as error:           # e.g. moderngl: no OpenGL 3.3 on this display

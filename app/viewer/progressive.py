@@ -102,3 +102,45 @@ def _copy(frame):
     """A snapshot of ``frame`` (the window uploads it while the tracer writes the next tiles)."""
     return type(frame)(rgbx=frame.rgbx.copy(), plan=frame.plan, message=frame.message,
                        stats=dict(frame.stats))
+
+
+# A progressive renderer (its registry entry says so) is drawn by a drawer of its own where it
+# has one: the ray tracer tile by tile, radiosity shot by shot, the path tracer pass by pass.
+# Any other is drawn coarse first, then whole (:func:`coarse_then_full`): a new renderer needs
+# no line here.
+DRAWERS = {"raytrace": "app.viewer.progressive:trace_progressively",
+           "radiosity": "app.viewer.progressive_gi:radiosity_progressively",
+           "pathtrace": "app.viewer.progressive_gi:pathtrace_progressively"}
+COARSE_FIRST = 4          # coarse_then_full's first picture: one pixel per 4 x 4
+
+
+def progressive_drawer(name: str):
+    """``f(scene, view, settings, context, render, control)`` that draws renderer ``name``'s
+    frame with pictures on the way."""
+    import importlib
+    module, _, function = DRAWERS.get(name, f"{__name__}:coarse_then_full").partition(":")
+    return getattr(importlib.import_module(module), function)
+
+
+def coarse_then_full(scene, view, settings, context=None, render=None, control=None):
+    """The frame at 1/``COARSE_FIRST`` of its size through the front door, handed over upscaled
+    by pixel repetition, then the full frame (exactly ``core.render``'s); between the two a
+    newer request may supersede it."""
+    if render is None:
+        from core.render import render
+    control = control or _Quiet()
+    width, height = settings.size
+    small = (max(1, math.ceil(width / COARSE_FIRST)), max(1, math.ceil(height / COARSE_FIRST)))
+    control.report(0.0, f"coarse pass (every {COARSE_FIRST}th pixel)")
+    coarse = render(scene, view, settings.replace(size=small, samples=1), context)
+    if coarse.message:                        # an invalid view: said once, nothing to refine
+        return coarse
+    shown = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
+                         stats={**coarse.stats, "pass": "coarse"})
+    shown.color[:] = upscale(coarse.color, COARSE_FIRST, width, height)
+    control.partial(shown)
+    control.check()
+    control.report(0.2, "full frame")
+    frame = render(scene, view, settings, context)
+    frame.stats["pass"] = "final"
+    return frame

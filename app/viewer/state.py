@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
+from core.registry import get_renderer
 from core.scene.model import Scene
 from core.scene import view_numbers
 from core.settings import PROJECTIONS, RASTERIZERS, SHADINGS
@@ -182,6 +183,9 @@ class ViewerState:
     # The window's kernel gate while the warm-up compiles in worker processes (issue 33,
     # app.viewer.kernels.gated): wraps each frame's job; None renders it as it is.
     gate: Callable | None = None
+    # A camera the user made with the mouse (app.viewer.hands): shown in place of the file's
+    # view until the view is stepped, reset or the scene changes; None shows the file's.
+    hand_view: object = None
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -254,7 +258,26 @@ class ViewerState:
     def view(self):
         if self.keyed_view:
             return self.playback.animation.view_at(self.playback.time)
+        if self.hand_view is not None:
+            return self.hand_view
         return self.scene.views[self.view_index] if self.view_count else None
+
+    @property
+    def file_view(self):
+        """The file's view at the current index (what Reset returns to), or None."""
+        return self.scene.views[self.view_index] if self.view_count else None
+
+    def set_hand_view(self, view) -> None:
+        """Show ``view`` (a moved camera, already checked) in place of the file's."""
+        if view != self.hand_view:
+            self.hand_view, self.dirty = view, True
+
+    def reset_view(self) -> bool:
+        """Back to the file's view, bit for bit; returns whether the camera had moved."""
+        if self.hand_view is None:
+            return False
+        self.hand_view, self.dirty = None, True
+        return True
 
     @property
     def animated(self) -> bool:
@@ -334,6 +357,7 @@ class ViewerState:
                 f"renderer={self.renderer_name} filter={self.texture_filter}{moment} "
                 f"rasterizer={self.rasterizer} aspect={'kept' if self.keep_aspect else 'stretched'} "
                 f"size={self.size[0]}x{self.size[1]} render={self.frame_seconds * 1e3:.1f}ms"
+                + (" camera=moved" if self.hand_view is not None else "")
                 + (f" message={message!r}" if message else ""))
 
     @property
@@ -360,13 +384,14 @@ class ViewerState:
         self.keyed_view = there < 0
         if there >= 0:
             self.view_index = there
+        self.hand_view = None
         self.dirty = True
 
     def set_view(self, index: int) -> None:
         if not 0 <= index < max(self.view_count, 1):
             raise ValueError(f"view index must be in 0..{self.view_count - 1}, not {index}")
-        if index != self.view_index or self.keyed_view:
-            self.view_index, self.keyed_view = index, False
+        if index != self.view_index or self.keyed_view or self.hand_view is not None:
+            self.view_index, self.keyed_view, self.hand_view = index, False, None
             self.dirty = True
 
     # -- issue 12: the renderer; issue 11: texture filter and the bump demo ------------------
@@ -531,7 +556,7 @@ class ViewerState:
             return False
         self.scene = scene
         self.scene_source = str(source)
-        self.view_index = 0
+        self.view_index, self.hand_view = 0, None
         self._scene_defaults()
         self.open_messages.clear()
         self.frame = None
@@ -578,21 +603,14 @@ class ViewerState:
                 frame = render_animated(playback.animation, t, settings, context, index, control)
                 frame.stats["time"] = t           # the moment drawn (the clock moves on)
                 return frame
-        elif settings.renderer in ("radiosity", "pathtrace") and view is not None:   # issue 19
-            from app.viewer import progressive_gi
-            progressively = getattr(progressive_gi, f"{settings.renderer}_progressively")
-            what = f"{what}, {settings.renderer}"
+        elif view is not None and get_renderer(settings.renderer).progressive:
+            from app.viewer.progressive import progressive_drawer
+            progressively = progressive_drawer(settings.renderer)
+            what = f"{what}, {get_renderer(settings.renderer).label.lower()}"
 
             def run(control=None):
                 prepare()
                 return progressively(scene, view, settings, context, renderer, control)
-        elif settings.renderer == "raytrace" and view is not None:
-            from app.viewer.progressive import trace_progressively
-            what = f"{what}, ray traced"
-
-            def run(control=None):
-                prepare()
-                return trace_progressively(scene, view, settings, context, renderer, control)
         else:
             def run(control=None):
                 prepare()

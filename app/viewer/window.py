@@ -30,6 +30,13 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
   advances the view when paused and pauses when playing;
 - the bump demo's scene (J3DPanel): a left click toggles bump / Phong, any other button
   cycles the four height maps, as in the demo.
+- the camera's hands (:mod:`app.viewer.hands`, docs/hands.md): a left drag past ImGui's drag
+  threshold orbits about the VRP (arcball), Shift or middle drag pans, the wheel dollies,
+  Ctrl+wheel changes the window, Enter returns to the file's view, ``f`` fits the scene,
+  Ctrl+S appends the view to ``saved.views``; a click without a drag keeps its meaning above;
+  Alt+wheel is the loupe (:mod:`app.viewer.loupe`); F1 the keys' help in the panel; a file
+  dropped on the window opens (:mod:`app.viewer.files`, with File > Recent and the native
+  dialog);
 - issue 22 (View menu too; :mod:`app.viewer.inspector_tools`): ``i`` inspect mode, where a
   left click shows the pixel's record in the panel; ``v`` the next buffer view (depth, normal,
   triangle id, ...) in place of the picture; ``h`` compares with OpenGL and flips between the
@@ -54,13 +61,17 @@ from pathlib import Path
 # Python subprocess to compare their versions (~40 ms at every start).
 from imgui_bundle import imgui  # noqa: E402,I001  (first: it names the library glfw loads)
 import glfw  # noqa: E402
+import numpy as np  # noqa: E402
 import moderngl  # noqa: E402
 
 from app import startup_gc
 from app.naming import picture_name, unused
 from app.viewer.blit import Blit
+from app.viewer.files import FileDialog, RecentFiles, check_drop
+from app.viewer.hands import KEYS_HELP, CameraHands, save_view, view_lines
 from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
+from app.viewer.loupe import Loupe, value_at
 from app.viewer.state import ViewerState, compile_count
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
@@ -70,10 +81,9 @@ log = logging.getLogger("fvd")
 PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel", "O"))
 SHADING_LABELS = (("wireframe", "Wireframe", "W"), ("flat", "Flat", "1"),
                   ("gouraud", "Gouraud", "2"), ("phong", "Phong", "3"))
-RENDERER_LABELS = (("zbuffer", "Z-buffer", "R"), ("raytrace", "Ray traced", "R"),
-                   ("radiosity", "Radiosity", ""), ("pathtrace", "Path traced", ""),
-                   ("bsp", "BSP tree (painter's)", ""),
-                   ("depth-sort", "Depth sort (Newell, painter's)", ""))
+# The Render menu lists the registry's renderers by their labels (core/registry.py): a renderer
+# registered there is in the menu with no line here. `r` flips between these two.
+RENDERER_KEYS = {"zbuffer": "R", "raytrace": "R"}
 TRANSPARENCY_LABELS = (("off", "Opaque (k_t ignored)"), ("interpolated", "Interpolated"),
                        ("screen-door", "Screen door"))
 FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),
@@ -90,6 +100,9 @@ PANEL_WIDTH = 340            # the side panel, in screen points
 NO_TRIANGLES = ("This scene has no triangles: it is drawn as lines whatever the shading, "
                 "so the shading modes change nothing.")
 SCREENSHOTS_DIR = "screenshots"
+# Within this many seconds of a wheel notch the wheel counts as spinning (see _hold_request).
+WHEEL_SPIN_S = 0.3
+SAVED_VIEWS = "saved.views"        # View > Save view appends here (in the current folder)
 # Files in scenes/ that are not scenes.
 NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
 # After an event, draw a few frames so that ImGui's hover and menu states settle; then sleep
@@ -205,7 +218,8 @@ class ViewerWindow:
             raise WindowError(f"could not set up the window: {error}") from error
         self.worker = RenderWorker(wake=glfw.post_empty_event)
         self._busy = FRAMES_AFTER_EVENT
-        self._clicks: list[tuple[int, float, float]] = []   # (button, x, y) since last frame
+        # (button, action, x, y, mods) since the last frame: presses and releases
+        self._clicks: list[tuple[int, int, float, float, int]] = []
         self._path = ""                   # File > Open: the path being typed
         self._notice = ""                 # the last screenshot, for the status line
         self._scenes = shipped_scenes()
@@ -216,6 +230,8 @@ class ViewerWindow:
         self._close_popups = False        # Esc: close them in the next frame
         self._compiles_at_request = 0
         self.tools = InspectorTools(state)    # issue 22: inspect mode, buffer views, compare
+        self._init_hands()
+        self._init_files()
         self._install_callbacks()
         self.warmup = None
         self._start_kernel_processes()
@@ -261,16 +277,17 @@ class ViewerWindow:
         glfw.set_framebuffer_size_callback(w, self._on_framebuffer_size)
         glfw.set_window_refresh_callback(w, lambda *_: self._wake())
         glfw.set_window_focus_callback(w, lambda *_: self._wake())
+        self._install_drop()
 
     def _wake(self) -> None:
         self._busy = FRAMES_AFTER_EVENT
 
     def _on_mouse_button(self, window, button, action, mods) -> None:
         self.input.on_mouse_button(button, action)
-        if action == glfw.PRESS and button in (glfw.MOUSE_BUTTON_LEFT, glfw.MOUSE_BUTTON_RIGHT,
-                                               glfw.MOUSE_BUTTON_MIDDLE):
+        if action in (glfw.PRESS, glfw.RELEASE) and button in (
+                glfw.MOUSE_BUTTON_LEFT, glfw.MOUSE_BUTTON_RIGHT, glfw.MOUSE_BUTTON_MIDDLE):
             # Decided in the next frame, once ImGui has seen this press at this position.
-            self._clicks.append((button, *glfw.get_cursor_pos(window)))
+            self._clicks.append((button, action, *glfw.get_cursor_pos(window), mods))
         self._wake()
 
     def _on_key(self, window, key, scancode, action, mods) -> None:
@@ -288,6 +305,8 @@ class ViewerWindow:
             return
         if imgui.get_io().want_capture_keyboard:
             return                        # typing in a text field
+        if self._hand_key(key, mods):
+            return
         if key == glfw.KEY_ESCAPE:
             self.quit("key Esc")
         elif key == glfw.KEY_SPACE and action == glfw.PRESS:
@@ -333,6 +352,8 @@ class ViewerWindow:
             self.tools.next_buffer("key v")
         elif char == "h":
             self.tools.flip("key h")
+        elif char == "f":
+            self.fit_view("key f")
 
     def _on_cursor(self, window, x, y) -> None:
         self.input.on_cursor(x, y)
@@ -345,6 +366,7 @@ class ViewerWindow:
     def _on_scroll(self, window, x_offset, y_offset) -> None:
         self.input.on_scroll(x_offset, y_offset)
         self._wake()
+        self._hand_wheel(y_offset)
 
     def _on_framebuffer_size(self, window, width, height) -> None:
         self._fit_picture()
@@ -386,6 +408,8 @@ class ViewerWindow:
                   "lighting_model": self.state.set_lighting_model}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
+        if what == "projection":
+            self.hands.projection_changed()     # a moved camera's F and B for the new one
         self._wake()
 
     # -- an animated scene's timeline ---------------------------------------------------------
@@ -418,6 +442,7 @@ class ViewerWindow:
         earlier = len(self.state.open_messages)
         if self.state.open_scene(source):
             log.info("action: %s -> opened %s (%s)", how, source, self.state.view_label)
+            self.recent.add(source)
             for message in self.state.scene.view_messages:
                 print(f"invalid view: {message}", file=sys.stderr)
             glfw.set_window_title(self.window, self._title())
@@ -494,8 +519,9 @@ class ViewerWindow:
         self._handle_clicks()
 
         self._note_kernels()
+        self._poll_dialog()
         self.state.tick(time.perf_counter(), busy=self.worker.waiting)
-        if self.state.request(self.worker):
+        if not self._hold_request() and self.state.request(self.worker):
             self._compiles_at_request = compile_count()
         result = self.worker.collect()
         if result is not None and self.state.accept(result):
@@ -591,32 +617,360 @@ class ViewerWindow:
                      time.perf_counter() - self.started, user + system)
 
     def _handle_clicks(self) -> None:
-        """Left click: next view; right click: the pop-up (or, with the course's rules, the
-        startup code's buttons) — only on the picture, and unless ImGui wants this click."""
+        """Presses and releases since the last frame, in order. A left or middle press on the
+        picture starts a gesture (app.viewer.hands): past ImGui's drag threshold it orbits or
+        pans, released before it is a click. Right press: the pop-up (or, with the course's
+        rules, the startup code's buttons) at once — only on the picture, and unless ImGui
+        wants this click."""
         clicks, self._clicks = self._clicks, []
-        if not clicks:
-            return
-        captured = imgui.get_io().want_capture_mouse or self._popup_open
-        for button, x, y in clicks:
+        captured = bool(clicks) and (imgui.get_io().want_capture_mouse or self._popup_open)
+        for button, action, x, y, mods in clicks:
+            if action == glfw.RELEASE:
+                self._hand_release(button, x, y)
+                continue
             name = {glfw.MOUSE_BUTTON_LEFT: "left", glfw.MOUSE_BUTTON_RIGHT: "right"}.get(
                 button, "middle") + " click"
             where = f"{name} at ({x:.0f}, {y:.0f})"
             if captured or not self._on_picture(x, y):
                 log.info("action: %s -> taken by the menu/panel, view unchanged", where)
-            elif (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
-                log.info("action: %s -> the bump demo: %s", where, demo)
-            elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
-                self.toggle_play(where)
-            elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:    # issue 22
-                scale = self._scale()
-                self.tools.inspect(int(x * scale), int(y * scale), where)
-            elif self.state.course_tri:
-                self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
-            elif button == glfw.MOUSE_BUTTON_LEFT:
-                self.step_view(+1, where)
             elif button == glfw.MOUSE_BUTTON_RIGHT:
-                log.info("action: %s -> pop-up menu", where)
-                imgui.open_popup("popup")
+                self._click(button, x, y, where)
+            else:
+                self._hand_press(button, x, y, mods, where)
+        self._hand_follow()
+
+    def _click(self, button: int, x: float, y: float, where: str) -> None:
+        """A click on the picture (a press released without a drag, or a right press)."""
+        if (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
+            log.info("action: %s -> the bump demo: %s", where, demo)
+        elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
+            self.toggle_play(where)
+        elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:    # issue 22
+            scale = self._scale()
+            self.tools.inspect(*self.loupe.texel_at(x * scale, y * scale), where)
+        elif self.state.course_tri:
+            self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
+        elif button == glfw.MOUSE_BUTTON_LEFT:
+            self.step_view(+1, where)
+        elif button == glfw.MOUSE_BUTTON_RIGHT:
+            log.info("action: %s -> pop-up menu", where)
+            imgui.open_popup("popup")
+
+    # -- the camera's hands (app.viewer.hands): drags, the wheel, Enter and F ----------------
+    def _init_hands(self) -> None:
+        self.hands = CameraHands(self.state)
+        self.loupe = Loupe()
+        self._loupe_drag: tuple[int, int] | None = None     # a drag moving the loupe's picture
+        self._wheel_at = -1e9                               # when the wheel last moved the camera
+        self._camera_owed = False         # a camera held back while a frame was drawn
+        self._pressed: tuple[int, float, float, str] | None = None   # button, x, y, where
+        self._view_file = Path.cwd() / SAVED_VIEWS
+
+    def _drag_threshold(self) -> float:
+        """ImGui's drag threshold, in framebuffer pixels."""
+        return float(imgui.get_io().mouse_drag_threshold) * self._scale()
+
+    def _hand_press(self, button: int, x: float, y: float, mods: int, where: str) -> None:
+        pan = button == glfw.MOUSE_BUTTON_MIDDLE or bool(mods & glfw.MOD_SHIFT)
+        scale = self._scale()
+        self.hands.press(x * scale, y * scale, pan)
+        self._pressed = (button, x, y, where)
+        # magnified, a drag moves the loupe's picture instead of the camera
+        self._loupe_drag = self.loupe.screen if self.loupe.magnification > 1 else None
+
+    def _hand_release(self, button: int, x: float, y: float) -> None:
+        if self._pressed is None or self._pressed[0] != button:
+            return
+        _, x0, y0, where = self._pressed
+        self._pressed = None
+        scale = self._scale()
+        pan = self.hands.drag is not None and self.hands.drag.pan
+        if self._loupe_drag is not None:
+            self.hands.drag, start, self._loupe_drag = None, self._loupe_drag, None
+            if np.hypot(x - x0, y - y0) * scale <= self._drag_threshold():
+                self._click(button, x0, y0, where)
+            else:
+                self._pan_loupe(start, x - x0, y - y0)
+                log.info("action: drag the loupe by (%.0f, %.0f)", x - x0, y - y0)
+            return
+        if not self.hands.release(x * scale, y * scale, self._drag_threshold()):
+            self._click(button, x0, y0, where)
+            return
+        what = "pan" if pan else "orbit"
+        self._log_camera(f"drag {what} from ({x0:.0f}, {y0:.0f}) to ({x:.0f}, {y:.0f})")
+
+    def _hand_follow(self) -> None:
+        """While a button is down: the gesture follows the pointer (the latest camera wins:
+        the worker renders only the newest request)."""
+        if self.hands.drag is None:
+            return
+        x, y = glfw.get_cursor_pos(self.window)
+        if (self._pressed is not None and not self._clicks
+                and glfw.get_mouse_button(self.window, self._pressed[0]) != glfw.PRESS):
+            self._hand_release(self._pressed[0], x, y)    # a release the window never saw
+            return
+        scale = self._scale()
+        if self._loupe_drag is not None:
+            d = self.hands.drag
+            if np.hypot(x * scale - d.x, y * scale - d.y) > self._drag_threshold():
+                self._pan_loupe(self._loupe_drag, x * scale - d.x, y * scale - d.y)
+            return
+        if self.hands.move(x * scale, y * scale, self._drag_threshold()):
+            self._wake()
+
+    def _hold_request(self) -> bool:
+        """While a drag moves the camera, ask for the next frame only once the last one is
+        in: the worker drops a finished frame that a newer request overtook, so asking at
+        every pointer move would show nothing until the drag stopped. The frame asked for
+        then is the newest camera (the ones in between are never drawn)."""
+        drag = self.hands.drag
+        moving = (drag is not None and drag.start is not None) or (
+            time.perf_counter() - self._wheel_at < WHEEL_SPIN_S)      # a wheel spun fast
+        if moving and self.worker.waiting:
+            if self.state.dirty:
+                self._camera_owed = True
+            return True
+        if self._camera_owed:             # accepting the last frame cleared the state's flag
+            self._camera_owed, self.state.dirty = False, True
+        return False
+
+    def _pan_loupe(self, start, dx: float, dy: float) -> None:
+        self.loupe.pan_from(start, dx, dy)
+        self.blit.loupe(**self.loupe.uniforms())
+        self._wake()
+
+    def set_loupe(self, m: int, how: str) -> None:
+        """View > Loupe: 1:1 or a magnification round the picture's centre."""
+        width, height = self.state.size
+        self.loupe.set(m, width / 2, height / 2)
+        self.blit.loupe(**self.loupe.uniforms())
+        log.info("action: %s -> loupe %dx", how, self.loupe.magnification)
+        self._wake()
+
+    def _hand_wheel(self, notches: float) -> None:
+        """The wheel on the picture: dolly; Ctrl: the window (field of view); Alt: the loupe."""
+        x, y = glfw.get_cursor_pos(self.window)
+        if imgui.get_io().want_capture_mouse or not self._on_picture(x, y) or not notches:
+            return
+        held = lambda *keys: any(glfw.get_key(self.window, k) == glfw.PRESS for k in keys)
+        if held(glfw.KEY_LEFT_ALT, glfw.KEY_RIGHT_ALT):
+            m = self.loupe.wheel(notches, x * self._scale(), y * self._scale())
+            self.blit.loupe(**self.loupe.uniforms())
+            log.info("action: Alt+wheel %+g at (%.0f, %.0f) -> loupe %dx", notches, x, y, m)
+            return
+        zoom = held(glfw.KEY_LEFT_CONTROL, glfw.KEY_RIGHT_CONTROL)
+        self._wheel_at = time.perf_counter()
+        if self.hands.wheel(notches, field_of_view=zoom):
+            self._log_camera(f"wheel {notches:+g}{' with Ctrl (window)' if zoom else ' (dolly)'}")
+        elif self.hands.message:
+            log.info("action: wheel -> %s", self.hands.message)
+
+    def _hand_key(self, key: int, mods: int) -> bool:
+        """Enter: the file's view; F1: the keys' help; Ctrl+S: save the view. Returns whether
+        the key was taken."""
+        if key == glfw.KEY_S and mods & glfw.MOD_CONTROL:
+            self.save_view("key Ctrl+S")
+            return True
+        if key in (glfw.KEY_ENTER, glfw.KEY_KP_ENTER):
+            self.reset_view("key Enter")
+            return True
+        if key == glfw.KEY_F1:
+            self.toggle_help("key F1")
+            return True
+        return False
+
+    def reset_view(self, how: str) -> None:
+        moved = self.hands.reset()
+        log.info("action: %s -> %s", how, "the file's view again" if moved
+                 else "already the file's view")
+        self._wake()
+
+    def fit_view(self, how: str) -> None:
+        if self.hands.fit():
+            self._log_camera(how + " (fit the scene's bounds)")
+        else:
+            log.info("action: %s -> %s", how, self.hands.message)
+        self._wake()
+
+    def toggle_help(self, how: str) -> None:
+        self._help = not getattr(self, "_help", False)
+        log.info("action: %s -> keys help %s", how, "shown" if self._help else "hidden")
+        self._wake()
+
+    def _log_camera(self, how: str) -> None:
+        v = self.state.view
+        numbers = lambda values: "(" + ", ".join(f"{float(c):.17g}" for c in values) + ")"
+        log.info("action: %s -> camera VRP %s VPN %s VUP %s window %s PRP %s F %.17g B %.17g",
+                 how, numbers(v.vrp), numbers(v.vpn), numbers(v.vup), numbers(v.window),
+                 numbers(v.prp), v.front, v.back)
+        self._wake()
+
+    def save_view(self, how: str, path: Path | None = None) -> int | None:
+        """Append the view shown to a view file (six lines); returns its number there."""
+        view = self.state.view
+        if view is None:
+            return None
+        path = Path(path) if path is not None else self._view_file
+        s = self.state
+        comment = (f"saved from the viewer: {s.scene.name}, {s.projection}, {s.shading}, "
+                   f"{s.size[0]}x{s.size[1]} ({view.label})")
+        try:
+            number = save_view(view, path, displayable(comment))
+        except (OSError, ValueError) as error:
+            self._notice = f"could not save the view to {path}: {error}"
+            log.info("action: %s -> %s", how, self._notice)
+            print(self._notice, file=sys.stderr)
+            return None
+        self._notice = f"view saved to {path.name} as view {number}"
+        log.info("action: %s -> view saved to %s as view %d", how, path, number)
+        return number
+
+    # -- files: dropped, recent, the native dialog (app.viewer.files) -----------------------
+    def _init_files(self) -> None:
+        self.recent = RecentFiles()
+        self.dialog = FileDialog()
+        if self.state.scene_source != "-" and Path(self.state.scene_source).is_file():
+            self.recent.add(self.state.scene_source)
+
+    def _install_drop(self) -> None:
+        """glfw's drop callback, given the raw bytes of each path: pyGLFW's own wrapper
+        decodes them as UTF-8 and a name that is not would raise inside the callback."""
+        dropfun = getattr(glfw, "_GLFWdropfun", None)
+        library = getattr(glfw, "_glfw", None)
+        if dropfun is None or not hasattr(library, "glfwSetDropCallback"):
+            glfw.set_drop_callback(self.window, lambda _w, paths: self.on_drop(paths))
+            return
+
+        def raw(_window, count, c_paths):
+            try:
+                self.on_drop([c_paths[i] for i in range(count)])
+            except Exception as error:        # never out of a C callback
+                log.error("drop: %s", error, exc_info=error)
+        self._drop_callback = dropfun(raw)    # kept: glfw holds only the C pointer
+        library.glfwSetDropCallback(self.window, self._drop_callback)
+
+    def on_drop(self, paths) -> bool:
+        """Files dropped on the window: open the one dropped, or say why not (one message)."""
+        path, why = check_drop(paths)
+        if path is None:
+            self.state.open_messages.append(why)
+            log.info("action: drop -> %s", why)
+            print(why, file=sys.stderr)
+            self._wake()
+            return False
+        self.open_scene(path, "drop")
+        return self.state.scene_source == path
+
+    def _file_items(self) -> None:
+        if imgui.menu_item_simple("Open with the file dialog...", None, False,
+                                  not self.dialog.open):
+            self._start_dialog("open", "Open a scene, mesh, .tri or view file")
+        if imgui.begin_menu("Recent", bool(self.recent.paths)):
+            for path, there in self.recent.items():
+                if not there:
+                    imgui.push_style_color(imgui.Col_.text,
+                                           imgui.get_style_color_vec4(imgui.Col_.text_disabled))
+                chosen = imgui.menu_item_simple(displayable(path), None,
+                                                path == self.state.scene_source)
+                if not there:
+                    imgui.pop_style_color()
+                if chosen:
+                    self.open_recent(path)
+            imgui.end_menu()
+        if imgui.menu_item_simple("Save view as...", None, False, not self.dialog.open):
+            self._start_dialog("save view", "Append the view to a view file", save=True)
+        if imgui.menu_item_simple("Save screenshot as...", None, False,
+                                  not self.dialog.open and self.state.frame is not None):
+            self._start_dialog("save screenshot", "Save the frame as a PNG", save=True)
+
+    def open_recent(self, path: str) -> None:
+        if not Path(path).is_file():
+            why = f"{path} is no longer there (moved or deleted since it was opened)"
+            self.state.open_messages.append(why)
+            log.info("action: menu File > Recent -> %s", why)
+            self._wake()
+            return
+        self.open_scene(path, "menu File > Recent")
+
+    def _start_dialog(self, purpose: str, title: str, save: bool = False) -> None:
+        why = self.dialog.start(purpose, title, save=save)
+        if why:
+            self._notice = why
+            log.info("action: file dialog (%s) -> %s", purpose, why)
+
+    def _poll_dialog(self) -> None:
+        done = self.dialog.poll()
+        if done is None:
+            return
+        purpose, path = done
+        if not path:
+            log.info("action: file dialog (%s) -> cancelled", purpose)
+        elif purpose == "open":
+            self.open_scene(path, "file dialog")
+        elif purpose == "save view":
+            self.save_view("file dialog Save view as", Path(path))
+        elif purpose == "save screenshot":
+            self._save_frame_to(Path(path), "file dialog Save screenshot as")
+        self._wake()
+
+    def _cursor_line(self) -> None:
+        """The status line's value under the cursor (through the loupe), and the loupe's m."""
+        x, y = glfw.get_cursor_pos(self.window)
+        if self.state.frame is None or not self._on_picture(x, y):
+            return
+        scale = self._scale()
+        column, row = self.loupe.texel_at(x * scale, y * scale)
+        zoom = f"loupe {self.loupe.magnification}x, " if self.loupe.magnification > 1 else ""
+        imgui.text_disabled(zoom + value_at(self.state.frame, column, row))
+
+    def _save_frame_to(self, path: Path, how: str) -> None:
+        """The CPU frame as a PNG at ``path`` (a dialog's choice; .png added when missing)."""
+        from PIL import Image
+        path = path if path.suffix.lower() == ".png" else path.with_name(path.name + ".png")
+        try:
+            Image.fromarray(self.state.frame.color).save(path)
+        except (OSError, ValueError) as error:
+            self._notice = f"could not save {path}: {error}"
+        else:
+            self._notice = f"saved {path.name}"
+        log.info("action: %s -> %s", how, self._notice)
+
+    def _help_strip(self) -> None:
+        """F1 / Help > Keys: every key and mouse action, in the panel (never on the picture)."""
+        if not getattr(self, "_help", False):
+            return
+        imgui.set_next_item_open(True, imgui.Cond_.always)
+        if not imgui.collapsing_header("Keys and mouse (F1 closes)###help"):
+            return
+        imgui.push_text_wrap_pos(0.0)
+        for key, what in KEYS_HELP:
+            if not what:
+                imgui.text_colored((0.55, 0.8, 1.0, 1.0), key)
+            else:
+                imgui.bullet()
+                imgui.text_wrapped(displayable(f"{key}: {what}"))
+        imgui.pop_text_wrap_pos()
+        imgui.separator()
+
+    def _camera_strip(self) -> None:
+        """The view's numbers, live: VRP ... B and each factor of N_per / N_par."""
+        view = self.state.view
+        if view is None:
+            return
+        moved = " (moved)" if self.state.hand_view is not None else ""
+        if not imgui.collapsing_header(f"Camera{moved}###camera",
+                                       imgui.TreeNodeFlags_.default_open):
+            if self.hands.message:
+                imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(self.hands.message))
+            return
+        imgui.push_text_wrap_pos(0.0)
+        if self.hands.message:
+            imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(self.hands.message))
+        for line in view_lines(view, self.state.projection):
+            imgui.text(displayable(line))
+        imgui.text_disabled("drag orbit, Shift/middle drag pan, wheel dolly, Ctrl+wheel window, "
+                            "F fit, Enter the file's view")
+        imgui.pop_text_wrap_pos()
 
     def _log_frame(self) -> None:
         log.info("%s", self.state.frame_summary())
@@ -668,10 +1022,12 @@ class ViewerWindow:
                                    imgui.Cond_.always)
         imgui.begin("panel", None, PANEL_FLAGS)
         self._menu_bar()
+        self._help_strip()
         self._status()
         self._timeline()
         self.tools.panel(imgui, displayable)
         self._draw_order()                    # issue 18
+        self._camera_strip()
         self._plan_strip()
         self._invalid_views_strip()
         self._messages_strip()
@@ -697,6 +1053,7 @@ class ViewerWindow:
                                               str(path) == self.state.scene_source):
                         self.open_scene(str(path), "menu File > Open")
                 imgui.end_menu()
+            self._file_items()
             if imgui.menu_item_simple("Save screenshot", "S"):
                 self.save_screenshot("menu File > Save screenshot")
             imgui.separator()
@@ -721,6 +1078,7 @@ class ViewerWindow:
                 self.step_view(+1, "menu View > Next")
             if imgui.menu_item_simple("Previous view", "Left"):
                 self.step_view(-1, "menu View > Previous")
+            self._camera_items()
             imgui.separator()
             self._inspector_items()
             imgui.separator()
@@ -731,7 +1089,28 @@ class ViewerWindow:
                 if imgui.menu_item_simple(label, None, i == self.state.view_index):
                     self.go_to_view(i, "menu View")
             imgui.end_menu()
+        if imgui.begin_menu("?###Help"):            # Help: short, the bar is full
+            self._closing()
+            if imgui.menu_item_simple("Keys and mouse", "F1", getattr(self, "_help", False)):
+                self.toggle_help("menu Help > Keys")
+            imgui.end_menu()
         imgui.end_menu_bar()
+
+    def _camera_items(self) -> None:
+        imgui.separator()
+        if imgui.menu_item_simple("Reset to the file's view", "Enter", False,
+                                  self.state.hand_view is not None):
+            self.reset_view("menu View > Reset")
+        if imgui.menu_item_simple("Fit the scene", "F"):
+            self.fit_view("menu View > Fit")
+        if imgui.menu_item_simple(f"Save view (append to {SAVED_VIEWS})", "Ctrl+S"):
+            self.save_view("menu View > Save view")
+        if imgui.begin_menu("Loupe (Alt+wheel)"):
+            for m in (1, 2, 4, 8, 16, 32):
+                if imgui.menu_item_simple("1:1" if m == 1 else f"{m}x", None,
+                                          self.loupe.magnification == m):
+                    self.set_loupe(m, "menu View > Loupe")
+            imgui.end_menu()
 
     def _inspector_items(self) -> None:
         """Issue 22: inspect mode, the buffer views, the comparison with OpenGL."""
@@ -756,12 +1135,13 @@ class ViewerWindow:
                 self.choose("lighting_model", value, "menu Render")
 
     def _render_items(self) -> None:
-        from core.renderers import renderer_names
+        from core.renderers import renderers
         imgui.text_disabled("Renderer")
-        for value, label, key in RENDERER_LABELS:
-            if value in renderer_names() and imgui.menu_item_simple(
-                    label, key, self.state.renderer_name == value):
-                self.choose("renderer", value, "menu Render")
+        for entry in renderers():
+            if entry.in_menu and imgui.menu_item_simple(
+                    entry.label, RENDERER_KEYS.get(entry.name, ""),
+                    self.state.renderer_name == entry.name):
+                self.choose("renderer", entry.name, "menu Render")
         imgui.separator()
         self._lighting_model_items()
         imgui.separator()
@@ -863,6 +1243,7 @@ class ViewerWindow:
         imgui.text_colored((0.55, 0.8, 1.0, 1.0), displayable(self._progress_text()))
         if self._notice:
             imgui.text_disabled(displayable(self._notice))
+        self._cursor_line()
         imgui.pop_text_wrap_pos()
         imgui.separator()
 

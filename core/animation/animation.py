@@ -103,6 +103,11 @@ class Animation:
     colors: dict[int, Track] = field(default_factory=dict)              # mesh index → O_d
     emitters: list = field(default_factory=list)                        # particles.Spec, one per [[emitter]]
     seed: int = 0
+    # Whatever else moves meshes each frame (rigid bodies, linkages, actors): objects with
+    # ``matrices_at(t) -> {mesh index: 4 x 4}``, applied after the keyed transform; those that
+    # simulate step by step also have ``snapshot()``, ``restore(state)`` and ``copy()``.
+    movers: list = field(default_factory=list)
+    shutter: object | None = None           # the file's motion blur (frames.Shutter); None: sharp
     _system: object = field(default=None, repr=False, compare=False)   # made on first use
 
     @property
@@ -134,10 +139,11 @@ class Animation:
         """A plain Scene for time t: moved meshes, lights and colours, the keyed view first."""
         t = self.local_time(t)
         base = self.scene
-        meshes = [self._mesh_at(i, m, t) for i, m in enumerate(base.meshes)]
         lights = [self._light_at(i, light, t) for i, light in enumerate(base.lights)]
         view = self.view_at(t)
         views = ([view] if view is not None else []) + list(base.views)
+        moving = self.moved_at(t)
+        meshes = [self._mesh_at(i, m, t, moving.get(i)) for i, m in enumerate(base.meshes)]
         # A keyed sphere or plane is moved and recoloured with its tessellation (issue 20:
         # the ray tracer intersects the primitive, so it must move too).
         moved = {}
@@ -145,22 +151,36 @@ class Animation:
             if old.tessellates is None or new is old:
                 continue
             if id(old.tessellates) not in moved:     # a checkered plane has two meshes
-                tracks = self.objects.get(i)
                 moved[id(old.tessellates)] = moved_primitive(
-                    old, tracks.matrix(t) if tracks is not None else None,
+                    old, self._matrix(i, t, moving.get(i)),
                     new.material if i in self.colors else None)
             meshes[i] = dataclasses.replace(new, tessellates=moved[id(old.tessellates)])
         primitives = [moved.get(id(p), p) for p in base.primitives]
         return dataclasses.replace(base, meshes=meshes, lights=lights, views=views,
                                    primitives=primitives)
 
-    def _mesh_at(self, i: int, mesh: Mesh, t: float) -> Mesh:
-        tracks, color = self.objects.get(i), self.colors.get(i)
-        if tracks is None and color is None:
+    def moved_at(self, t: float) -> dict[int, np.ndarray]:
+        """mesh index → the movers' 4 x 4 at (local) time t."""
+        out: dict[int, np.ndarray] = {}
+        for mover in self.movers:
+            out.update(mover.matrices_at(t))
+        return out
+
+    def _matrix(self, i: int, t: float, moved) -> np.ndarray | None:
+        """Mesh i's whole transform at t: the keyed one, then a mover's (None: unmoved)."""
+        tracks = self.objects.get(i)
+        m = tracks.matrix(t) if tracks is not None else None
+        if moved is not None:
+            m = moved if m is None else moved @ m
+        return m
+
+    def _mesh_at(self, i: int, mesh: Mesh, t: float, moved=None) -> Mesh:
+        color = self.colors.get(i)
+        m = self._matrix(i, t, moved)
+        if m is None and color is None:
             return mesh
         changes = {}
-        if tracks is not None:
-            m = tracks.matrix(t)
+        if m is not None:
             changes["positions"] = apply(m, mesh.positions)[:, :3]
             if mesh.normals is not None:
                 normals = mesh.normals @ np.linalg.inv(m[:3, :3])        # rows: n' = M^-T n

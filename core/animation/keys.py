@@ -13,6 +13,8 @@ that every message names the key's path and line the way the rest of the file's 
     constant_speed = false          # arc-length parametrisation of the position tracks
     level = [0, 1, 0]               # optional: the view's VUP held fixed (no roll between keys)
     seed = 1                        # particle systems
+    motion_blur = 16                # samples a frame over the shutter (default 1: sharp)
+    shutter = [-0.25, 0.25]         # when it opens and closes, in frames from the frame
     [animation.track."view.vrp"]    # ... or per track, by its channel name
     interpolation = "kochanek-bartels"
     tension = 0.5
@@ -45,7 +47,8 @@ from core.animation.tracks import METHODS, ORIENTATION_METHODS, OrientationTrack
 TOP_KEYS = ("animation", "key", "emitter")          # the scene file's top-level tables we read
 TABLE_ARRAYS = ("key", "emitter")                   # written [[key]], [[emitter]]
 ANIMATION_KEYS = ("duration", "fps", "loop", "interpolation", "orientation", "tension",
-                  "continuity", "bias", "constant_speed", "seed", "level", "track")
+                  "continuity", "bias", "constant_speed", "seed", "level", "track",
+                  "motion_blur", "shutter")
 TRACK_KEYS = ("interpolation", "orientation", "tension", "continuity", "bias", "constant_speed")
 KEY_KEYS = ("time", "view", "object", "light", "material")
 KEY_VIEW_KEYS = ("vrp", "vpn", "vup", "window", "prp", "front", "back")
@@ -90,6 +93,7 @@ def read_animation(reader, doc: dict, scene) -> None:
     if seed != int(seed):
         raise reader.fail(("animation", "seed"), "expected a whole number")
     anim.seed = int(seed)
+    anim.shutter = _shutter(reader, settings)
     for channel, keys in samples.items():
         options = dict(defaults)
         if channel in per_track:
@@ -110,6 +114,23 @@ def read_animation(reader, doc: dict, scene) -> None:
         anim.emitters = read_emitters(reader, doc["emitter"], scene)
         _check_simulation_length(reader, anim)
     attach(scene, anim)
+
+
+def _shutter(reader, settings):
+    """``motion_blur`` and ``shutter`` → a :class:`~core.animation.frames.Shutter` (None:
+    sharp frames)."""
+    from core.animation.frames import MAX_BLUR_SAMPLES, Shutter
+    samples = reader.number(settings.get("motion_blur", 1), ("animation", "motion_blur"), 1,
+                            MAX_BLUR_SAMPLES)
+    if samples != int(samples):
+        raise reader.fail(("animation", "motion_blur"), f"expected a whole number, got {samples!r}")
+    if "shutter" in settings and samples == 1:
+        raise reader.fail(("animation", "shutter"), "a shutter without motion_blur samples")
+    opening = reader.vector(settings.get("shutter", [Shutter.open, Shutter.close]),
+                            ("animation", "shutter"), 2, -1.0, 1.0)
+    if opening[0] > opening[1]:
+        raise reader.fail(("animation", "shutter"), "the shutter closes before it opens")
+    return Shutter(int(samples), *opening) if samples > 1 else None
 
 
 # The in-between views checked at load: this many between two keys, fewer (at least one) when

@@ -23,9 +23,27 @@ def describe(record: dict) -> list[str]:
     r, g, b = record["color"]
     lines = [f"pixel ({x}, {y})  {record['renderer']}  colour ({r}, {g}, {b})"]
     try:
-        return lines + _body(record)
+        lines += _body({k: v for k, v in record.items() if k != "scan line"})
     except (KeyError, TypeError, IndexError, ValueError):
-        return lines + _generic(record)
+        lines += _generic(record)
+    if isinstance(record.get("scan line"), dict):
+        lines += _scan_line(record["scan line"])
+    return lines
+
+
+def _scan_line(line: dict, limit: int = 24) -> list[str]:
+    """Watkins' active edge table on the pixel's scan line, and the spans it cut the line into."""
+    aet, spans = line.get("aet", []), line.get("spans", [])
+    out = [f"scan line {line['image row']} (device row {line['device row']}): AET of "
+           f"{len(aet)} edges, sorted in x"]
+    for e in aet[:limit]:
+        out.append(f"  x {e['x']:9.4f}  {e['edge']:5s} edge of triangle {e['triangle']}"
+                   f" ({'first' if e['edge'] == 'left' else 'last'} pixel {e['pixel']})")
+    out.append(f"  spans: {len(spans)}")
+    for s in spans[:limit]:
+        out.append(f"  pixels {s['pixels'][0]}-{s['pixels'][1]}: triangle "
+                   f"{s['visible triangle']}, {s['polygons in']} in, {s['decided']}")
+    return out
 
 
 def _generic(record: dict, limit: int = 40) -> list[str]:

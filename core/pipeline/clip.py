@@ -106,3 +106,85 @@ def clip_lines(p0: np.ndarray, p1: np.ndarray, projection: str, z_min: float = 0
         keep[work] = _cohen_sutherland(w0, w1, c0[work], c1[work], planes(projection, z_min))
         q0[work], q1[work] = w0, w1
     return q0[keep], q1[keep]
+
+
+# --------------------------------------------------------------------- the other clippers
+# Selectable with ``RenderSettings.clipper`` (``--clipper``): each keeps the same part of every
+# segment as Cohen–Sutherland (the same planes, a point on a plane inside), so the picture is
+# the same; they differ in how they find it.
+CLIPPERS = ("cohen-sutherland", "liang-barsky", "homogeneous")
+
+
+def _parametric(p0, p1, f0, f1):
+    """Liang–Barsky's interval: ``f0``, ``f1`` (N, 6) are the planes' values at the ends
+    (inside where <= 0). A plane the segment enters raises t_in to f0 / (f0 − f1), one it
+    leaves lowers t_out to the same (kept as s_out = 1 − t_out, from p1); a segment outside one
+    plane at both ends is rejected, and one whose t_in passes t_out misses the volume.
+    Returns ``(q0, q1, keep)``; an end inside every plane is kept bit for bit."""
+    # Each end's parameter is measured from that end (t from p0 for the entry, s = 1 - t from
+    # p1 for the exit): an end moves by its own plane's f / (f_out - f_in), as Cohen–Sutherland
+    # moves it, so a segment cut by one plane ends on the same floats.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = f0 / (f0 - f1)
+        s = f1 / (f1 - f0)
+    entering, leaving = (f0 > 0.0) & (f1 <= 0.0), (f1 > 0.0) & (f0 <= 0.0)
+    t_in = np.max(np.where(entering, t, 0.0), axis=1)
+    s_out = np.max(np.where(leaving, s, 0.0), axis=1)
+    keep = ~((f0 > 0.0) & (f1 > 0.0)).any(axis=1) & (t_in <= 1.0 - s_out)
+    q0 = np.where((t_in == 0.0)[:, None], p0, p0 + t_in[:, None] * (p1 - p0))
+    q1 = np.where((s_out == 0.0)[:, None], p1, p1 + s_out[:, None] * (p0 - p1))
+    return q0[keep], q1[keep], keep
+
+
+def liang_barsky(p0, p1, projection: str, z_min: float = 0.0):
+    """Liang–Barsky (the notes' Cyrus–Beck for the canonical volume; FvDFH 3.12.4): the
+    segment as p0 + t (p1 − p0), each plane cutting the interval [0, 1] at once, no endpoint
+    moved plane by plane. Returns ``(q0, q1)`` as :func:`clip_lines` does."""
+    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 3)
+    p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 3)
+    pl = planes(projection, z_min)
+    q0, q1, _ = _parametric(p0, p1, p0 @ pl[:, :3].T + pl[:, 3], p1 @ pl[:, :3].T + pl[:, 3])
+    return q0, q1
+
+
+def homogeneous_planes(projection: str, z_min: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """``(M, H)``: the matrix into homogeneous clip space (the perspective-to-parallel M of
+    FvDFH 6.5.4 for perspective, the identity for parallel) and the (6, 4) rows of the clip
+    volume ``−W ≤ X ≤ W, −W ≤ Y ≤ W, −W ≤ Z ≤ 0``, each as ``h · (X, Y, Z, W) <= 0``."""
+    if projection == "perspective":
+        m = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0],
+                      [0, 0, 1.0 / (1.0 + z_min), -z_min / (1.0 + z_min)], [0, 0, -1.0, 0]])
+    elif projection == "parallel":
+        m = np.eye(4)
+    else:
+        raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
+    h = np.array([[0, 1, 0, -1], [0, -1, 0, -1], [1, 0, 0, -1], [-1, 0, 0, -1],
+                  [0, 0, -1, -1], [0, 0, 1, 0]], dtype=np.float64)
+    return m, h
+
+
+def homogeneous(p0, p1, projection: str, z_min: float = 0.0):
+    """Clipping in homogeneous coordinates (FvDFH 6.5.4, the notes' alternative): both ends
+    taken by M into (X, Y, Z, W) before any divide and clipped there, parametrically, against
+    the planes through the origin of 4D; a linear M keeps t, so the visible part's ends are
+    the canonical points at the same t (returned as :func:`clip_lines` does). No point behind
+    the eye survives: inside the volume Z ≤ 0 and Z ≥ −W make W > 0."""
+    p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 3)
+    p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 3)
+    m, h = homogeneous_planes(projection, z_min)
+    clip_space = h @ m                       # each plane as a function of (x, y, z, 1)
+    f0 = p0 @ clip_space[:, :3].T + clip_space[:, 3]
+    f1 = p1 @ clip_space[:, :3].T + clip_space[:, 3]
+    q0, q1, _ = _parametric(p0, p1, f0, f1)
+    return q0, q1
+
+
+def clip_lines_with(clipper: str, p0, p1, projection: str, z_min: float = 0.0):
+    """The segments clipped by ``clipper`` (one of :data:`CLIPPERS`)."""
+    if clipper == "liang-barsky":
+        return liang_barsky(p0, p1, projection, z_min)
+    if clipper == "homogeneous":
+        return homogeneous(p0, p1, projection, z_min)
+    if clipper != "cohen-sutherland":
+        raise ValueError(f"clipper must be one of {', '.join(CLIPPERS)}, not {clipper!r}")
+    return clip_lines(p0, p1, projection, z_min)

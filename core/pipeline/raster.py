@@ -959,3 +959,10 @@ def count_fragments(xy_z, inv_w, triangles, width, height, parallel: bool = True
     fragments = np.zeros((int(height), int(width)), np.int32)
     _run(xy_z, inv_w, triangles, width, height, None, parallel, fragments)
     return fragments
+
+
+# The setup other visible-surface algorithms share with this one, so that they cover exactly
+# the same pixel centres and compute the same depths (core.visibility.scanline's Watkins).
+snap_vertices = _snap_vertices
+triangle_edges = _triangle_edges
+checked_inputs = _checked

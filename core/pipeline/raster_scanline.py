@@ -241,3 +241,12 @@ def rasterize(xy_z, inv_w, triangles, width, height, out: VisibilityBuffer | Non
     if bad:
         raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
     return out
+
+
+# The edge-table entry and its integer crossing, shared with the scan-line visible-surface
+# algorithm (core.visibility.scanline), whose spans must start and end on the same pixels.
+EDGE_FIELDS = 8             # an entry's fields; a table may carry more columns after them
+EDGE_FIRST, EDGE_LAST, EDGE_A = _FIRST, _LAST, _A
+edge_entry = _edge_entry
+step_edge = _step_edge
+edge_bound = _bound

@@ -11,7 +11,10 @@ kernels) only when it is first used.
 
 - ``zbuffer``: the FvDFH pipeline, lines and triangles (:mod:`core.renderers.zbuffer`);
 - ``bsp``, ``depth-sort``: the painter's algorithms (:mod:`core.renderers.painters`);
-- ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`).
+- ``scanline``: Watkins' scan-line visible-surface algorithm (:mod:`core.renderers.scanline`);
+- ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`);
+- ``volume``: the opaque geometry by the z-buffer, then the scene's volumes ray-marched
+  (emission–absorption, MIP), cut at the z-buffer's depth (:mod:`core.volume.renderer`).
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ register_renderer("zbuffer", "core.renderers.zbuffer:draw",
                   label="Z-buffer", transparency=True, shaders=True)
 register_renderer("raycast", "core.renderers.raycast:draw", samples_itself=True,
                   description="the analytic surfaces ray-cast exactly (the reference)",
-                  label="Ray cast (exact analytic surfaces)")
+                  label="Ray cast (exact analytic surfaces)", in_menu=False)
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
                   label="Ray traced", recursive=True, progressive=True)
@@ -41,6 +44,15 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
 register_renderer("bsp", "core.renderers.painters:draw_bsp",
                   description="a BSP tree built once in world space, painted back to front",
                   label="BSP tree (painter's)", transparency=True, shaders=True)
+register_renderer("scanline", "core.renderers.scanline:draw",
+                  description="Watkins' scan-line visible-surface algorithm (FvDFH 15.6): edge, "
+                              "polygon and active edge tables, depth only at span ends",
+                  label="Scan line (Watkins)", transparency=True, shaders=True)
 register_renderer("depth-sort", "core.renderers.painters:draw_depth_sort",
                   description="Newell, Newell and Sancha's depth sort, painted back to front",
                   label="Depth sort (Newell, painter's)", transparency=True, shaders=True)
+register_renderer("volume", "core.volume.renderer:draw",
+                  description="volumes ray-marched (emission-absorption with gradient "
+                              "shading, or MIP) over the z-buffer's opaque geometry "
+                              "(core.volume)",
+                  label="Volume (ray marching)", shaders=True, progressive=True)

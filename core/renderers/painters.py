@@ -63,7 +63,8 @@ def _draw(scene, view, settings, frame, context, timer, painting) -> None:
                    if settings.shading == "wireframe" or not len(m.triangles)]
     if line_meshes:
         draw_lines(frame.color, line_meshes, settings.projection, n, z_min, vp,
-                   scene.line_color, context, timer, frame.stats)
+                   scene.line_color, context, timer, frame.stats, settings.clipper,
+                   settings.antialias_lines)
 
 
 def _update_plan(frame, stats) -> None:

@@ -24,9 +24,11 @@ from core.pipeline import clip, project, raster_lines
 from core.transforms import apply
 
 
-def draw(scene, view, settings, frame, context, timer) -> None:
+def draw(scene, view, settings, frame, context, timer, rasterize=None) -> None:
     """The z-buffer renderer: every triangle with ``settings.shading``, then the line edges
-    (all edges in wireframe) with the midpoint line. Fills every pixel of ``frame``."""
+    (all edges in wireframe) with the midpoint line. Fills every pixel of ``frame``.
+    ``rasterize``: another visible-surface stage with the rasterizer's signature (the
+    scan-line renderer's Watkins), in place of the z-buffer's."""
     projection, shading = settings.projection, settings.shading
     height, width = frame.color.shape[:2]
     n, z_min = context.normalizing_transform(view, projection)
@@ -36,13 +38,13 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     solid = shading != "wireframe" and scene.triangle_count > 0
     if solid:
         draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context, timer,
-                       settings)
+                       settings, rasterize)
     else:
         fill(frame.color, scene.background)
     line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
     if line_meshes:
         draw_lines(frame.color, line_meshes, projection, n, z_min, vp, scene.line_color, context,
-                   timer, frame.stats)
+                   timer, frame.stats, settings.clipper, settings.antialias_lines)
 
 
 def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
@@ -68,8 +70,9 @@ COMPILED_LINES_FROM = 256
 
 
 def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, timer,
-               stats) -> None:
-    """Wireframe: transform, Cohen–Sutherland clip, M_per · M_vv3dv, divide, scan-convert."""
+               stats, clipper: str = "cohen-sutherland", antialias: bool = False) -> None:
+    """Wireframe: transform, clip (Cohen–Sutherland, or ``clipper``), M_per · M_vv3dv, divide,
+    scan-convert."""
     drawn = 0
     for mesh in meshes:
         cache = context.cache(mesh)
@@ -78,7 +81,7 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         edges = cache["edges"][1]
         if len(edges) == 0:
             continue
-        if len(edges) >= COMPILED_LINES_FROM:
+        if len(edges) >= COMPILED_LINES_FROM and clipper == "cohen-sutherland" and not antialias:
             from core.shading import stages  # noqa: F401 (one BLAS thread, see there)
             from core.pipeline.wireframe import draw_edges
             points = apply(n, mesh.positions)[:, :3]     # as the numpy path: the same pixels
@@ -89,12 +92,14 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
             continue
         points = apply(n, mesh.positions)[:, :3]
         timer.lap("normalize")
-        q0, q1 = clip.clip_lines(points[edges[:, 0]], points[edges[:, 1]], projection, z_min)
+        q0, q1 = clip.clip_lines_with(clipper, points[edges[:, 0]], points[edges[:, 1]],
+                                      projection, z_min)
         timer.lap("clip lines")
         d0 = project.project_lines(q0, projection, vp)
         d1 = project.project_lines(q1, projection, vp)
         timer.lap("project")
-        raster_lines.draw_lines(color, d0, d1, to_rgb8(line_color))
+        (raster_lines.draw_lines_wu if antialias else raster_lines.draw_lines)(
+            color, d0, d1, to_rgb8(line_color))
         timer.lap("scan-convert lines")
         drawn += len(q0)
     stats["segments drawn"] = drawn
@@ -102,10 +107,10 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
 
 
 def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context,
-                   timer, settings=None) -> None:
+                   timer, settings=None, visible_surface=None) -> None:
     """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``; with
     ``settings.rasterizer`` "scanline" the course's ET/AET algorithm scan-converts
-    (screen-linear weights)."""
+    (screen-linear weights); ``visible_surface`` (a rasterizer's signature) replaces both."""
     rasterizer = settings.rasterizer if settings is not None else "edge"
     from core.shading import stages      # the compiled stages, on first use
     from core.texture.shaders import shading_for        # issue 11: Phong of textured materials
@@ -149,6 +154,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     rasterize = stages.rasterize
     if rasterizer == "scanline":
         from core.pipeline.raster_scanline import rasterize
+    if visible_surface is not None:
+        rasterize, rasterizer = visible_surface, getattr(visible_surface, "name", "other")
     stats["rasterizer"] = rasterizer
     vis = rasterize(device, inv_w, clipped.triangles, width, height,
                     out=context.buffer("visibility", (width, height),
@@ -160,7 +167,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     if stages.shade.get_shader(shading).needs_derivatives:
         vis.planes = stages.barycentric_planes(device, inv_w, clipped.triangles)
         stats["computed"].append("barycentric derivatives")
-    timer.lap("z-buffer", depth=vis.depth, tri=vis.tri, b1=vis.b1, b2=vis.b2)
+    timer.lap(getattr(visible_surface, "stage", "z-buffer"), depth=vis.depth, tri=vis.tri,
+              b1=vis.b1, b2=vis.b2)
 
     inputs.settings = settings              # issue 11: the texture filter and the bump switch
     inputs.device = (device, inv_w)         # issue 11: exact (u, v) derivatives per triangle

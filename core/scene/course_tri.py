@@ -1,4 +1,4 @@
-"""The ``.tri`` startup code's back-face rule, as an option (``--course-tri``).
+"""The ``.tri`` startup code's back-face rule and vertex normals, as an option (``--course-tri``).
 
 The course's startup code (Assignments 2 and 3) skips triangle i when
 ``viewpoint.dot_product(T_normals[i]) < 0``: the viewpoint taken as a vector from the world
@@ -7,6 +7,13 @@ true back-face test only when the triangle's plane passes near the origin (the c
 ``(viewpoint - v0) . N < 0``, FvDFH 15.2.4), so it can drop visible triangles or keep hidden
 ones; ``--course-tri`` reproduces it so a student's picture can be held against ours.
 Our own rule culls only meshes declared closed, with the correct test.
+
+The startup code also averages, at each vertex (its ``AVERAGE_INCIDENT`` list: every triangle
+that names the vertex, vertices being equal coordinates), the normals of *all* the faces
+around it; our readers split vertices along creases first (faces meeting at more than the
+crease angle, 45 degrees, keep their own normals there). ``--course-tri`` welds the split
+vertices back (:func:`averaged_like_the_startup_code`), so the vertex normals are the average
+over every incident face again, as the startup code draws Gouraud and Phong.
 
 ``course_tri_scene(scene, view)`` returns a scene whose meshes keep only the triangles the
 startup code draws; the viewpoint is the view's PRP in world coordinates (for a ``.tri`` file,
@@ -33,8 +40,26 @@ def startup_code_keeps(positions: np.ndarray, triangles: np.ndarray,
     return normals @ np.asarray(viewpoint, dtype=np.float64) >= 0.0
 
 
+def averaged_like_the_startup_code(mesh):
+    """``mesh`` with its coincident vertices welded into one (the startup code's vertex table:
+    one entry per distinct coordinate triple) and each vertex normal the mean of every face
+    around it (kept in ``normals``, so the faces the back-face rule drops still count, as
+    they do in the startup code). A mesh with normals, texture coordinates or other
+    per-vertex data of its own is returned as it is (welding would merge what differs)."""
+    if (mesh.normals is not None or mesh.uv is not None or mesh.extra
+            or len(mesh.triangles) == 0):
+        return mesh
+    from core.scene.normals import vertex_normals
+    positions, inverse = np.unique(mesh.positions, axis=0, return_inverse=True)
+    welded = dataclasses.replace(mesh, positions=positions,
+                                 triangles=inverse.reshape(-1)[mesh.triangles].astype(np.int64))
+    welded.normals = vertex_normals(welded, "mean")       # the notes' unweighted average
+    return welded
+
+
 def course_tri_scene(scene: Scene, view) -> Scene:
-    """``scene`` with each mesh's triangles filtered by the startup code's rule."""
+    """``scene`` with each mesh's triangles filtered by the startup code's rule and its
+    vertex normals averaged over every incident face, as the startup code's are."""
     from core.camera.view import eye_from_view
     per_scene = _cache.setdefault(scene, {})
     if view not in per_scene:
@@ -43,6 +68,7 @@ def course_tri_scene(scene: Scene, view) -> Scene:
         for mesh in scene.meshes:
             if len(mesh.triangles):
                 keep = startup_code_keeps(mesh.positions, mesh.triangles, viewpoint)
+                mesh = averaged_like_the_startup_code(mesh)
                 mesh = dataclasses.replace(mesh, triangles=mesh.triangles[keep])
             meshes.append(mesh)
         per_scene[view] = dataclasses.replace(scene, meshes=meshes)

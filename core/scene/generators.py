@@ -390,6 +390,29 @@ def sphere_torus(triangles: int = 100_000) -> Scene:
 
 
 # -- issue 11: a textured floor needs a plane with (u, v)
+def cylinder(radius: float = 1.0, height: float = 2.0, segments: int = 12) -> Mesh:
+    """The side of a cylinder about the y axis (no caps): ``segments`` flat facets, each two
+    triangles, between the rings at y = ±height/2; facet edge k at angle 2πk/segments from +z
+    (x = r sin θ, z = r cos θ). Its normals are the exact radial ones, so Gouraud shading is
+    continuous across the facets while its slope jumps at every facet edge: the Mach bands
+    scene (``scenes/mach_bands.toml``)."""
+    r, h = _length("radius", radius), _length("height", height)
+    n = _whole("segments", segments, 3, 4096)
+    theta = 2.0 * np.pi * np.arange(n) / n
+    # sin and cos exactly 0 where they should be: cos(3π/2) = -1.8e-16 would turn the normal
+    # on the silhouette away from the viewer (two-sided lighting flips it)
+    sin, cos = (np.where(np.abs(f) < 1e-12, 0.0, f) for f in (np.sin(theta), np.cos(theta)))
+    ring = np.column_stack([r * sin, np.zeros(n), r * cos])
+    positions = np.concatenate([ring + (0.0, -h / 2, 0.0), ring + (0.0, h / 2, 0.0)])
+    k = np.arange(n)
+    k1 = (k + 1) % n
+    triangles = np.concatenate([np.column_stack([k, k1, n + k1]),
+                                np.column_stack([k, n + k1, n + k])])
+    radial = np.column_stack([sin, np.zeros(n), cos])
+    return Mesh(positions=positions, triangles=triangles, normals=np.concatenate([radial] * 2),
+                material=Material(od=(0.8, 0.8, 0.8)), name="cylinder")
+
+
 def plane(size: float = 2.0, subdivisions: int = 1) -> Mesh:
     """The square of side ``size`` in the xz-plane, centred at the origin, facing +y, split
     into n x n cells; (u, v) run from (0, 0) at (−size/2, 0, +size/2) to (1, 1) at
@@ -452,5 +475,6 @@ GENERATORS = {
     "bezier_surface": bezier_surface,
     "torus_knot": torus_knot,
     "plane": plane,             # issue 11
+    "cylinder": cylinder,       # the Mach bands scene
     "terrain": terrain,         # issue 18
 }

@@ -59,6 +59,8 @@ class Light:
     position: tuple[float, float, float] | None = None
     direction: tuple[float, float, float] | None = None
     attenuation: tuple[float, float, float] = (1.0, 0.0, 0.0)   # c1, c2, c3
+    # f_att = min(1, 1/(c1 + c2 d + c3 d²)) as FvDFH caps it; False: the notes' 1/(...) as is
+    attenuation_cap: bool = True
 
 
 @dataclass(eq=False)          # identity: meshes hold arrays and key the render caches
@@ -158,8 +160,10 @@ class Scene:
     tone: str = "linear"
     # The [depth_cue] table (core.effects.depth_cue.DepthCue), None when the file has none.
     depth_cue: object | None = None
-    # How the z-buffer family draws materials with k_t > 0 (settings.TRANSPARENCIES).
-    transparency: str = "off"
+    # How the z-buffer family draws materials with k_t > 0 (settings.TRANSPARENCIES); None:
+    # the file does not say, and the settings choose what the scene needs
+    # (core.settings.needed_transparency: interpolated where a material has k_t > 0).
+    transparency: str | None = None
 
     @property
     def triangle_count(self) -> int:

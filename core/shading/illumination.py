@@ -26,8 +26,9 @@ Both read the scene through small float arrays that numba can take:
 - ``surfaces`` ``(M, 16)`` from :func:`pack_surfaces`: one row per mesh: ``k_a, k_d, k_s, n,
   O_d (3), O_s (3), two_sided``, the lighting model's number and its parameters (4;
   :mod:`core.shading.models`: model 0 is this one); a triangle or vertex names its row.
-- ``lights`` ``(L, 10)`` from :func:`pack_lights`: ``kind`` (0 point, 1 directional), the
-  position or the unit direction towards the light (3), ``I_p`` (3), ``c1, c2, c3``.
+- ``lights`` ``(L, 11)`` from :func:`pack_lights`: ``kind`` (0 point, 1 directional), the
+  position or the unit direction towards the light (3), ``I_p`` (3), ``c1, c2, c3``, and the
+  cap (1: ``f_att`` at most 1, FvDFH's; 0: the notes' formula uncapped).
 - ``ambient`` ``(3,)``: ``I_a``.
 - ``eye`` ``(4,)`` from :func:`pack_eye`: ``kind`` (1 a point: perspective, V = (PRP − P)/|…|;
   0 a direction: parallel, V constant = −DOP/|DOP|) and the point or the direction.
@@ -44,8 +45,9 @@ Decisions that keep every output finite (the stability suite of issue 6 checks t
 - no specular term where ``N·L <= 0`` (the light is behind the surface);
 - the specular base is clamped to [0, 1] before ``^n``: exponents like 1e4 underflow to 0
   instead of overflowing, and rounding above 1 cannot blow up;
-- ``c1 + c2 d + c3 d² <= 1`` (including all-zero coefficients) gives ``f_att = 1``; no division
-  by zero;
+- ``c1 + c2 d + c3 d² <= 1`` (including all-zero coefficients) gives ``f_att = 1`` (FvDFH's
+  cap; a light with ``attenuation_cap = false`` keeps the notes' ``1 / den`` above 1, and a
+  zero denominator still gives 1); no division by zero;
 - a zero normal (a vertex that has no non-degenerate face) gets ambient only;
 - vectors are normalised after dividing by their largest component, so tiny or huge
   coordinates neither underflow nor overflow in the squares;
@@ -74,8 +76,8 @@ from core.transforms import unit_rows
 KA, KD, KS, EXPONENT, OD, OS, TWO_SIDED, MODEL, PARAMETERS = 0, 1, 2, 3, 4, 7, 10, 11, 12
 SURFACE_COLUMNS = PARAMETERS + PARAMETER_COLUMNS
 # Columns of a packed light row (pack_lights).
-LIGHT_KIND, LIGHT_XYZ, LIGHT_INTENSITY, LIGHT_ATTENUATION = 0, 1, 4, 7
-LIGHT_COLUMNS = 10
+LIGHT_KIND, LIGHT_XYZ, LIGHT_INTENSITY, LIGHT_ATTENUATION, LIGHT_CAP = 0, 1, 4, 7, 10
+LIGHT_COLUMNS = 11
 POINT_LIGHT, DIRECTIONAL_LIGHT = 0.0, 1.0
 # eye[0]: the viewer is a point (perspective) or a direction (parallel).
 EYE_DIRECTION, EYE_POINT = 0.0, 1.0
@@ -109,7 +111,8 @@ def pack_surfaces(materials, two_sided) -> np.ndarray:
 
 
 def pack_lights(lights) -> np.ndarray:
-    """``(L, 10)`` rows ``kind, position | unit direction, I_p (3), c1, c2, c3``.
+    """``(L, 11)`` rows ``kind, position | unit direction, I_p (3), c1, c2, c3, cap``
+    (cap 1: ``f_att`` at most 1, FvDFH's; 0: the notes' ``1 / (c1 + c2 d + c3 d²)`` uncapped).
 
     Raises ValueError for a light with neither position nor a non-zero direction.
     """
@@ -128,7 +131,17 @@ def pack_lights(lights) -> np.ndarray:
             rows[i, LIGHT_XYZ:LIGHT_XYZ + 3] = unit[0]
         rows[i, LIGHT_INTENSITY:LIGHT_INTENSITY + 3] = light.intensity
         rows[i, LIGHT_ATTENUATION:LIGHT_ATTENUATION + 3] = light.attenuation
+        rows[i, LIGHT_CAP] = 1.0 if getattr(light, "attenuation_cap", True) else 0.0
     return rows
+
+
+def attenuation(den: float, cap: float) -> float:
+    """f_att from its denominator c1 + c2 d + c3 d²: FvDFH's min(1, 1/den) when ``cap`` is
+    non-zero, the notes' 1/den as is when it is 0 (a zero denominator gives 1 either way);
+    :func:`phong_point` writes the same test inline."""
+    if den > 1 or (cap == 0 and den > 0):
+        return 1 / den
+    return 1
 
 
 def pack_ambient(ambient) -> np.ndarray:
@@ -197,7 +210,10 @@ def phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfw
             if d == 0.0:                # light on the surface point: L undefined, ambient only
                 continue
             den = lights[k, 7] + lights[k, 8] * d + lights[k, 9] * d * d
-            f_att = 1 if den <= 1 else 1 / den
+            if den > 1 or (lights[k, LIGHT_CAP] == 0 and den > 0):
+                f_att = 1 / den         # (FvDFH caps it at 1; an uncapped light is the notes')
+            else:
+                f_att = 1
         else:
             lx, ly, lz = lights[k, 1], lights[k, 2], lights[k, 3]
             f_att = 1
@@ -247,7 +263,9 @@ def toward_light(lights, k, px, py, pz):
         if d == 0.0:
             return 0.0, 0.0, 0.0, 1.0
         den = lights[k, 7] + lights[k, 8] * d + lights[k, 9] * d * d
-        return lx, ly, lz, 1.0 if den <= 1.0 else 1.0 / den
+        if den > 1 or (lights[k, LIGHT_CAP] == 0 and den > 0):
+            return lx, ly, lz, 1.0 / den
+        return lx, ly, lz, 1.0
     return lights[k, 1], lights[k, 2], lights[k, 3], 1.0
 
 

@@ -10,8 +10,9 @@ compiled kernels' pixels.
 
 from __future__ import annotations
 
-from core.shading.illumination import (EXPONENT, EYE_POINT, KA, KD, KS, OD, OS, POINT_LIGHT,
-                                       TWO_SIDED, specular_power, unit3)
+from core.shading.illumination import (EXPONENT, EYE_POINT, KA, KD, KS, LIGHT_CAP, OD, OS,
+                                       POINT_LIGHT, TWO_SIDED, attenuation, specular_power,
+                                       unit3)
 
 
 def phong_terms(p, n, s, surfaces, lights, ambient, eye, halfway, shadow=None) -> dict:
@@ -48,7 +49,7 @@ def phong_terms(p, n, s, surfaces, lights, ambient, eye, halfway, shadow=None) -
                 row["note"] = "the light is on the point: ambient only"
                 continue
             den = lights[k, 7] + lights[k, 8] * d + lights[k, 9] * d * d
-            f_att = 1.0 if den <= 1 else 1 / den
+            f_att = float(attenuation(den, lights[k, LIGHT_CAP]))
         else:
             lx, ly, lz = lights[k, 1], lights[k, 2], lights[k, 3]
             f_att = 1.0

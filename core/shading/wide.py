@@ -302,7 +302,8 @@ def _toward_point(light, p, flag, nx, ny, nz, lx, ly, lz, diff, att):
         inv = F(1.0) / d
         lx[j], ly[j], lz[j] = x * inv, y * inv, z * inv
         den = F(light[7]) + F(light[8]) * d + F(light[9]) * d * d
-        att[j] = F(1.0) if den <= F(1.0) else F(1.0) / den
+        # FvDFH's cap at 1 unless the light asks for the notes' uncapped 1/den (column 10)
+        att[j] = F(1.0) / den if den > F(1.0) or (light[10] == 0.0 and den > F(0.0)) else F(1.0)
         diff[j] = nx[j] * lx[j] + ny[j] * ly[j] + nz[j] * lz[j]
 
 

@@ -42,7 +42,8 @@ from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, d
 from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
                                    signed_volume)
 from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
-from core.transforms import apply, rotate_x, rotate_y, rotate_z, scale, translate
+from core.transforms import (apply, rotate_axis, rotate_x, rotate_y, rotate_z, scale, shear,
+                             translate)
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
 from core.registry import renderer_names
 from core.settings import RASTERIZERS, SPECULAR_FORMS
@@ -58,8 +59,8 @@ GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "
 PRIMITIVE_KEYS = ("primitive", "center", "radius", "point", "normal", "checker", "checker_color",
                   "extent", "segments")
 GEOMETRY_KEYS += PRIMITIVE_KEYS
-TRANSFORM_KEYS = ("scale", "rotate", "translate")
-LIGHT_KEYS = ("position", "direction", "intensity", "attenuation")
+TRANSFORM_KEYS = ("scale", "shear", "rotate", "rotate_axis", "translate")
+LIGHT_KEYS = ("position", "direction", "intensity", "attenuation", "attenuation_cap")
 VIEW_KEYS = ("name", "vrp", "vpn", "vup", "window", "prp", "front", "back")
 # The top-level and material keys: the reader's own and those the systems registered
 # (core/scene/formats/keys.py: animation, the depth cue, textures, the bump demo).
@@ -184,6 +185,22 @@ class _Reader:
             raise self.fail(path, f"expected a list of {length} numbers, got {_kind(value)}")
         return tuple(self.number(v, path + (i + 1,), low, high) for i, v in enumerate(value))
 
+    def colour(self, value, path: Path_) -> tuple[float, float, float]:
+        """An RGB list, or one colour-model table: ``{ hsv = [h, s, v] }`` (also ``rgb``,
+        ``cmy``, ``hls``; hues in degrees), converted to RGB (core.scene.colours)."""
+        from core.scene.colours import MODELS, to_rgb
+        if not isinstance(value, dict):
+            return self.vector(value, path, 3, 0.0, 1.0)
+        if len(value) != 1 or next(iter(value)) not in MODELS:
+            raise self.fail(path, f"a colour is [r, g, b] or one of {{ "
+                                  f"{' | '.join(m + ' = [...]' for m in MODELS)} }}")
+        model, numbers = next(iter(value.items()))
+        numbers = self.vector(numbers, path + (model,), 3)
+        try:
+            return to_rgb(model, numbers)
+        except ValueError as error:
+            raise self.fail(path + (model,), str(error)) from None
+
     def string(self, value, path: Path_) -> str:
         if not isinstance(value, str):
             raise self.fail(path, f"expected a string, got {_kind(value)}")
@@ -259,8 +276,8 @@ class _Reader:
         scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
                                  if isinstance(m.tessellates, Sphere)}.values())
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
-                          ("background", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
-                          ("line_color", lambda v, p: self.vector(v, p, 3, 0.0, 1.0)),
+                          ("background", self.colour),
+                          ("line_color", self.colour),
                           ("shading", lambda v, p: self.choice(v, p, SHADINGS)),
                           ("projection", lambda v, p: self.choice(v, p, PROJECTIONS)),
                           ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS)),
@@ -348,7 +365,8 @@ class _Reader:
             raise self.fail(path + ("params",), f"{name}: {error}") from None
 
     def transform(self, mesh: Mesh, value, path: Path_) -> Mesh:
-        """S, then R_x, R_y, R_z (degrees), then T; normals by the inverse transpose."""
+        """S, then the shears, R_x, R_y, R_z (degrees), the rotation about an axis, then T;
+        normals by the inverse transpose."""
         t = self.table(value, path, TRANSFORM_KEYS)
         factor = t.get("scale", 1.0)
         if isinstance(factor, list):
@@ -359,8 +377,9 @@ class _Reader:
             raise self.fail(path + ("scale",), "a scale factor is zero (or below 1e-6 in size)")
         rx, ry, rz = self.vector(t.get("rotate", [0, 0, 0]), path + ("rotate",), 3, -1e6, 1e6)
         tx, ty, tz = self.vector(t.get("translate", [0, 0, 0]), path + ("translate",), 3)
-        m = (translate(tx, ty, tz) @ rotate_z(np.radians(rz)) @ rotate_y(np.radians(ry))
-             @ rotate_x(np.radians(rx)) @ scale(*s))
+        m = (translate(tx, ty, tz) @ self.axis_rotation(t, path)
+             @ rotate_z(np.radians(rz)) @ rotate_y(np.radians(ry)) @ rotate_x(np.radians(rx))
+             @ self.shears(t, path) @ scale(*s))
         mesh.positions = apply(m, mesh.positions)[:, :3]
         if mesh.normals is not None:
             normals = mesh.normals @ np.linalg.inv(m[:3, :3])     # rows: n' = M^-T n
@@ -368,6 +387,33 @@ class _Reader:
         if np.linalg.det(m[:3, :3]) < 0:                          # a mirror turns winding over
             mesh.triangles = mesh.triangles[:, [0, 2, 1]]
         return mesh
+
+    def shears(self, t: dict, path: Path_) -> np.ndarray:
+        """``shear = { xy = [shx, shy], xz = [shx, shz], yz = [shy, shz] }`` (FvDFH's SH_xy:
+        x and y move by z; likewise by y and by x)."""
+        if "shear" not in t:
+            return np.eye(4)
+        sh = self.table(t["shear"], path + ("shear",), ("xy", "xz", "yz"))
+        pairs = {k: self.vector(sh[k], path + ("shear", k), 2, -1e6, 1e6) for k in sh}
+        return shear(**pairs)
+
+    def axis_rotation(self, t: dict, path: Path_) -> np.ndarray:
+        """``rotate_axis = { axis = [x, y, z], angle = degrees, point = [x, y, z] }``: about
+        the line through ``point`` (default the origin) along ``axis``."""
+        if "rotate_axis" not in t:
+            return np.eye(4)
+        where = path + ("rotate_axis",)
+        r = self.table(t["rotate_axis"], where, ("axis", "angle", "point"))
+        for key in ("axis", "angle"):
+            if key not in r:
+                raise self.fail(where, f"needs '{key}'")
+        axis = self.vector(r["axis"], where + ("axis",), 3, -1e6, 1e6)
+        angle = self.number(r["angle"], where + ("angle",), -1e6, 1e6)
+        point = self.vector(r.get("point", [0, 0, 0]), where + ("point",), 3)
+        try:
+            return rotate_axis(axis, np.radians(angle), point)
+        except ValueError as error:
+            raise self.fail(where + ("axis",), str(error)) from None
 
     def material(self, value, path: Path_, base: Material) -> Material:
         t = self.table(value, path, material_keys())
@@ -379,7 +425,7 @@ class _Reader:
             fields["n"] = self.number(t["n"], path + ("n",), 0.0, 1e4, above=0.0)
         for key in ("od", "os"):
             if key in t:
-                fields[key] = self.vector(t[key], path + (key,), 3, 0.0, 1.0)
+                fields[key] = self.colour(t[key], path + (key,))
         fields.update(self.whitted_terms(t, path))
         if "emission" in t:       # finite and >= 0 (NaN fails the range check)
             fields["emission"] = self.vector(t["emission"], path + ("emission",), 3, 0.0, 1e6)
@@ -468,6 +514,12 @@ class _Reader:
             light.attenuation = self.vector(t["attenuation"], path + ("attenuation",), 3, 0.0)
             if not any(light.attenuation):
                 raise self.fail(path + ("attenuation",), "c1, c2 and c3 are all zero")
+        if "attenuation_cap" in t:
+            if not isinstance(t["attenuation_cap"], bool):
+                raise self.fail(path + ("attenuation_cap",),
+                                "must be true (FvDFH's min(1, f_att)) or false (the notes' "
+                                f"f_att uncapped), not {t['attenuation_cap']!r}")
+            light.attenuation_cap = t["attenuation_cap"]
         return light
 
     def views(self, doc: dict, points: np.ndarray) -> list[View | str]:

@@ -1,0 +1,113 @@
+"""``--renderer volume``: the scene's opaque geometry by the z-buffer, then its volumes by
+ray marching, each ray stopped at the depth of the opaque surface in its pixel.
+
+``draw(scene, view, settings, frame, context, timer)`` (registered in :mod:`core.renderers`):
+
+1. the meshes — isosurfaces among them, which are ordinary meshes — go through
+   :func:`core.renderers.zbuffer.draw` with the settings' shading; its depth buffer is kept;
+2. the primary rays come from :func:`core.camera.rays.camera_rays` through the same sample
+   of each pixel (``settings.pixel_offset``), limited to the view's front and back planes;
+3. each pixel's z-buffer depth is carried back to the world point it came from (the inverse of
+   ``M_vv3dv · M · N`` at the pixel centre), and the ray's interval ends there;
+4. every emission–absorption or MIP volume is marched (:mod:`core.volume.raymarch`) and laid
+   over what is behind it: ``C + T · behind`` (MIP: its grey ``g`` as emission with opacity
+   ``g``). Several volumes are laid farthest first (by their centres' distance from the eye),
+   which is exact while no ray passes through two at once.
+
+``settings.volume_step`` is not a setting yet: the step is :data:`STEP` of the smallest voxel
+side (world units), the default the exact-integral tests hold to 1/255.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core.camera.film import fill, sample_viewport
+from core.camera.rays import camera_rays
+from core.camera.view import eye_from_view
+from core.pipeline import project
+from core.shading.illumination import pack_ambient, pack_eye, pack_lights, to_uint8
+from core.volume.data import volumes_of
+from core.volume.raymarch import march_volume
+
+STEP = 0.5                      # samples per voxel side: two
+
+
+def draw(scene, view, settings, frame, context, timer) -> None:
+    height, width = frame.color.shape[:2]
+    if scene.meshes:
+        from core.renderers.zbuffer import draw as zbuffer
+        zbuffer(scene, view, settings, frame, context, timer)
+    else:
+        fill(frame.color, scene.background)
+    marched = [v for v in volumes_of(scene) if v.mode != "isosurface"]
+    frame.stats["volumes marched"] = len(marched)
+    if not marched:
+        return
+    origins, directions, t_lo, t_hi = camera_rays(view, settings.projection, width, height,
+                                                  (settings.pixel_offset,),
+                                                  settings.keep_aspect)
+    if frame.depth is not None:
+        t_hi = np.minimum(t_hi, opaque_distance(frame.depth, view, settings, context,
+                                                origins, directions))
+    timer.lap("volume rays")
+    eye = eye_from_view(view, settings.projection)
+    behind = frame.color.reshape(-1, 3).astype(np.float64) / 255.0
+    for volume in farthest_first(marched, eye):
+        color, transmittance, largest = march_volume(
+            volume, origins, directions, t_lo, t_hi, step_of(volume),
+            pack_lights(scene.lights), pack_ambient(scene.ambient), pack_eye(eye),
+            scene.specular == "halfway")
+        if volume.mode == "mip":
+            lo, hi = volume.mip_window()
+            grey = np.where(np.isfinite(largest),
+                            np.clip((largest - lo) / max(hi - lo, 1e-30), 0.0, 1.0), 0.0)
+            behind = grey[:, None] + (1.0 - grey[:, None]) * behind
+        else:
+            behind = color + transmittance[:, None] * behind
+    frame.color[:] = to_uint8(behind).reshape(height, width, 3)
+    frame.stats["computed"].append("ray marching")
+    timer.lap("ray march")
+
+
+def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
+    """The record of image pixel (x, y) (:mod:`core.volume.inspect`): the opaque surface's
+    z-buffer record, the ray, and what each volume did along it."""
+    from core.context import DEFAULT_CONTEXT
+    from core.volume.inspect import pixel_record
+    return pixel_record(scene, view, settings, x, y, context or DEFAULT_CONTEXT, step_of,
+                        farthest_first)
+
+
+def step_of(volume) -> float:
+    """:data:`STEP` times the smallest world length of one sample step along an axis."""
+    m = volume.world_from_index()
+    return STEP * float(np.linalg.norm(m[:3, :3], axis=0).min())
+
+
+def farthest_first(volumes, eye) -> list:
+    def distance(volume):
+        centre = volume.world_from_index() @ np.array([*(np.array(volume.dims) - 1) / 2, 1.0])
+        if eye.point is not None:
+            return -float(np.linalg.norm(centre[:3] - np.asarray(eye.point)))
+        return float(np.dot(centre[:3], np.asarray(eye.direction)))   # towards the viewer
+    return sorted(volumes, key=distance)
+
+
+def opaque_distance(depth, view, settings, context, origins, directions) -> np.ndarray:
+    """``(H·W,)``: how far along each ray the z-buffer's surface lies (inf where none)."""
+    height, width = depth.shape
+    n, z_min = context.normalizing_transform(view, settings.projection)
+    vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
+                         settings.pixel_offset)
+    inverse = np.linalg.inv(project.triangle_matrix(settings.projection, z_min, vp) @ n)
+    flat = depth.reshape(-1)
+    covered = np.isfinite(flat)
+    rows, cols = np.divmod(np.nonzero(covered)[0], width)
+    device = np.stack([cols + 0.5, (height - 1 - rows) + 0.5, flat[covered],
+                       np.ones(len(rows))], axis=1)
+    world = device @ inverse.T
+    world = world[:, :3] / world[:, 3:4]
+    t = np.full(len(flat), np.inf)
+    t[covered] = ((world - origins[covered]) * directions[covered]).sum(1)
+    return t
