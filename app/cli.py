@@ -153,10 +153,11 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
                    help="where screenshots go, and the PNGs when there is no display "
                         "(default: ./screenshots, and ./fvd-views or $FVD_OUT without a display)")
     _course_options(v)
-    v.add_argument("--renderer", choices=("zbuffer", "raytrace", "radiosity", "pathtrace", "bsp",
-                                          "depth-sort", "scanline"), default=None,
-                   help="draw with the z-buffer (default), the ray tracer, radiosity, the path "
-                        "tracer (those three progressive), or a painter's algorithm")
+    from core.renderers import renderers
+    v.add_argument("--renderer", choices=[r.name for r in renderers()], default=None,
+                   help="draw with one of the registered renderers (default zbuffer): "
+                        + "; ".join(f"{r.name}: {r.label or r.description}"
+                                    for r in renderers()))
     _crease_argument(v)
     v.add_argument("--reference", default=None, metavar="PNG",
                    help="a picture to hold ours against: h cycles our picture, the reference "
@@ -427,6 +428,11 @@ def _course_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--course-tri", action="store_true",
                    help="the .tri startup code's rules: skip triangles with viewpoint . N < 0, "
                         "and mouse buttons left Phong, middle Gouraud, right flat")
+    from core.shading.models import lighting_models
+    p.add_argument("--lighting-model", choices=[m.name for m in lighting_models()], default=None,
+                   help="light every material with this model (default: each material's own "
+                        "model key, Phong where it has none): "
+                        + "; ".join(f"{m.name}: {m.label}" for m in lighting_models()))
 
 
 def main(argv: list[str] | None = None, prog: str | None = None) -> int:
@@ -512,6 +518,7 @@ def _dispatch(args) -> int:
                            options={"rasterizer": args.rasterizer,
                                     "keep_aspect": args.keep_aspect,
                                     "course_tri": args.course_tri,
+                                    "lighting_model": args.lighting_model,
                                     "renderer_name": args.renderer, "loader": loader})
     if args.command == "render":
         return _render(args)
@@ -609,6 +616,7 @@ def _render(args) -> int:
                                             antialias_lines=getattr(args, "antialias_lines",
                                                                     None),
                                             keep_aspect=args.keep_aspect, **texture_options,
+                                            lighting_model=args.lighting_model,
                                             **_renderer_overrides(args),
                                             **_gi_overrides(args))       # issue 19
     except ValueError as error:            # e.g. --samples 0 (issue 12's options)
@@ -831,6 +839,7 @@ def _inspector_command(args) -> int:
                                             antialias_lines=getattr(args, "antialias_lines",
                                                                     None),
                                             keep_aspect=args.keep_aspect, **texture_options,
+                                            lighting_model=args.lighting_model,
                                             **_renderer_overrides(args))
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)

@@ -69,6 +69,9 @@ __all__ = ["config", "njit", "prange", "quick_cache_loads", "serialised_cache_sa
 # defines kernels (imports this module) makes every cached kernel of theirs stale.
 JIT_FILE = Path(__file__).resolve()
 KERNEL_ROOTS = [JIT_FILE.parent, JIT_FILE.parent.parent / "app"]
+# A file that defines no kernel but shapes compiled code says so with these words (the
+# lighting models' registrations: the kernels' dispatch is generated from them).
+GENERATES_KERNELS = b"kernels are generated from this file"
 
 
 def njit(*args, **options):
@@ -131,7 +134,7 @@ def kernel_sources_digest(roots: tuple[Path, ...]) -> str:
     for root in roots:
         for path in _python_files(root):
             text = path.read_bytes()
-            if b"core.jit import" in text or path == JIT_FILE:
+            if b"core.jit import" in text or GENERATES_KERNELS in text or path == JIT_FILE:
                 digest.update(str(path.relative_to(root.parent)).encode() + b"\0" + text)
     return digest.hexdigest()
 

@@ -94,6 +94,7 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     """
     settings = settings or RenderSettings.for_scene(scene)
     context = context or DEFAULT_CONTEXT
+    scene = lit_as_asked(scene, settings, context)
     renderer = get_renderer(settings.renderer)
     width, height = settings.size
     frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8),
@@ -123,6 +124,19 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     _say_what_is_not_drawn(scene, renderer, frame.stats, settings.transparency,
                            settings.shading)
     return frame
+
+
+def lit_as_asked(scene: Scene, settings: RenderSettings, context: RenderContext) -> Scene:
+    """``scene``, or, when ``settings.lighting_model`` names a model, its copy with every
+    material lit by that model (kept with the scene, so its caches live as long)."""
+    if settings.lighting_model is None:
+        return scene
+    from core.shading.models import scene_lit_by
+    cache = context.cache(scene)
+    key = f"lit by {settings.lighting_model}"
+    if key not in cache:
+        cache[key] = scene_lit_by(scene, settings.lighting_model)
+    return cache[key]
 
 
 def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,

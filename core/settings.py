@@ -138,6 +138,10 @@ class RenderSettings:
     # 8-wide float32 passes (within 1/255 of float64; extreme inputs fall back per pixel), or
     # "float64", the textbook kernel, one pixel at a time.
     shading_precision: str = "float32"
+    # A lighting model (core.shading.models) for every material, over what each material's
+    # ``model`` key chose: the command line's --lighting-model, the window's menu. None: the
+    # materials' own (Phong unless a material names another).
+    lighting_model: str | None = None
 
     def __post_init__(self) -> None:
         if self.projection not in PROJECTIONS:

@@ -178,6 +178,8 @@ class ViewerState:
     depth_cue: bool | None = None
     transparency: str = ""
     paint_first: int | None = None
+    # A lighting model for every material (core.shading.models; "": each material's own).
+    lighting_model: str = ""
     # The window's kernel gate while the warm-up compiles in worker processes (issue 33,
     # app.viewer.kernels.gated): wraps each frame's job; None renders it as it is.
     gate: Callable | None = None
@@ -315,6 +317,7 @@ class ViewerState:
                                         texture_filter=self.texture_filter, bump=self.bump,
                                         depth_cue=self.depth_cue,
                                         transparency=self.transparency or None,
+                                        lighting_model=self.lighting_model or None,
                                         paint_first=(self.paint_first if self.renderer_name in
                                                      ("bsp", "depth-sort") else None))
 
@@ -480,6 +483,11 @@ class ViewerState:
         if value != getattr(self, name):
             setattr(self, name, value)
             self.dirty = True
+
+    def set_lighting_model(self, name: str) -> None:
+        """A registered lighting model for every material, or "" for each material's own."""
+        from core.shading.models import lighting_model_names
+        self._set("lighting_model", name, ("",) + lighting_model_names())
 
     def set_texture_filter(self, name: str) -> None:            # issue 11
         from core.texture.modes import FILTERS

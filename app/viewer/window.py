@@ -404,7 +404,8 @@ class ViewerWindow:
                   "bump": self.state.set_bump,
                   "depth_cue": self.state.set_depth_cue,                    # issue 18
                   "transparency": self.state.set_transparency,
-                  "paint_first": self.state.set_paint_first}[what]
+                  "paint_first": self.state.set_paint_first,
+                  "lighting_model": self.state.set_lighting_model}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
         if what == "projection":
@@ -1124,6 +1125,15 @@ class ViewerWindow:
         if imgui.menu_item_simple("Compare with OpenGL", "H", self.tools.showing_heat):
             self.tools.flip("menu View > Compare with OpenGL")
 
+    def _lighting_model_items(self) -> None:
+        """Every material lit by one registered lighting model, or each by its own."""
+        from core.shading.models import lighting_models
+        imgui.text_disabled("Lighting model")
+        for value, label in (("", "Each material's own"),) + tuple(
+                (m.name, m.label) for m in lighting_models()):
+            if imgui.menu_item_simple(label, None, self.state.lighting_model == value):
+                self.choose("lighting_model", value, "menu Render")
+
     def _render_items(self) -> None:
         from core.renderers import renderers
         imgui.text_disabled("Renderer")
@@ -1132,6 +1142,8 @@ class ViewerWindow:
                     entry.label, RENDERER_KEYS.get(entry.name, ""),
                     self.state.renderer_name == entry.name):
                 self.choose("renderer", entry.name, "menu Render")
+        imgui.separator()
+        self._lighting_model_items()
         imgui.separator()
         imgui.text_disabled("Texture filter")
         for value, label in FILTER_LABELS:

@@ -37,6 +37,7 @@ import numpy as np
 
 from core.camera.view import View
 from core.shading import illumination
+from core.shading.models import lighting_model
 
 SQRT_BITS = 320          # relative precision of an inexact square root (2**-320 ~ 5e-97)
 ONE, ZERO = Fraction(1), Fraction(0)
@@ -299,9 +300,10 @@ def _exact_specular_power(base, n):
 
 
 def _exact_model():
-    """:func:`core.shading.illumination.phong_point`'s own Python source, bound to exact
-    ``unit3`` and ``specular_power``: the model is written once, and run here in Fractions."""
-    model = illumination.phong_point.py_func
+    """The Phong lighting model's own Python source (the registered model's ``point``,
+    :func:`core.shading.illumination.phong_point`), bound to exact ``unit3`` and
+    ``specular_power``: the model is written once, and run here in Fractions."""
+    model = lighting_model("phong").kernels().point.py_func
     scope = dict(model.__globals__, unit3=_exact_unit3, specular_power=_exact_specular_power)
     return types.FunctionType(model.__code__, scope, "exact_phong_point")
 

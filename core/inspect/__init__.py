@@ -19,6 +19,7 @@ import importlib
 
 from core.camera.view import ViewError, problems
 from core.context import DEFAULT_CONTEXT
+from core.render import lit_as_asked
 from core.renderers import get_renderer
 
 # The inspectors that live here, for renderers whose module defines none: those that draw the
@@ -78,6 +79,8 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
         raise NotInspectable(f"{view.label}: invalid for {settings.projection} projection: "
                              + "; ".join(problems(view, settings.projection))) from None
     try:
-        return inspect(scene, view, settings, int(x), int(y), context or DEFAULT_CONTEXT)
+        context = context or DEFAULT_CONTEXT
+        return inspect(lit_as_asked(scene, settings, context), view, settings, int(x), int(y),
+                       context)
     except ValueError as error:            # what the renderer cannot inspect, in its words
         raise NotInspectable(f"{settings.renderer}: {error}") from None

@@ -4,7 +4,7 @@
 :func:`inspect_pixel` follows ``raycast._trace`` for one pixel, in its order: each sample of
 the regular grid, its ray (:func:`core.camera.rays.camera_ray`), the visible hit on the
 analytic surfaces (``_nearest_hit``), the normal, and the Phong terms
-(:func:`core.shading.terms.phong_terms`); the samples' mean, background for the misses, is
+(:func:`core.shading.models.dispatch.lighting_terms`); the samples' mean, background for the misses, is
 the pixel.
 """
 
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.shading.terms import phong_terms
+from core.shading.models.dispatch import lighting_terms
 
 
 def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
@@ -48,8 +48,8 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
                 nx, ny, nz, _ = unit3(p[0] - row[1], p[1] - row[2], p[2] - row[3])
             else:
                 nx, ny, nz = raycast._torus_normal(*p, row)
-            terms = phong_terms(p, (nx, ny, nz), int(row[6]), f.surfaces, f.lights, f.ambient,
-                                f.eye, f.halfway)
+            terms = lighting_terms(p, (nx, ny, nz), int(row[6]), f.surfaces, f.lights,
+                                   f.ambient, f.eye, f.halfway)
             sample.update({"hit": {"primitive": int(shape), "t": float(t), "point": list(p),
                                    "normal": [nx, ny, nz]}, "phong": terms})
             total = [total[k] + terms["clamped"][k] for k in range(3)]

@@ -4,8 +4,8 @@
 :func:`ray_tree` walks :func:`core.raytrace.whitted.trace`'s loop in Python, in its order
 (an explicit stack, depth first), calling the tracer's own compiled pieces for each step
 (``nearest``, ``surface_at``, ``checker_colour``, ``shadow_term``, ``refract``, ``reflect``,
-``schlick``) and :func:`core.shading.terms.phong_terms` for the local colour with each
-light's shadow factor. Every node keeps its kind, origin, direction, hit, material, local
+``schlick``) and :func:`core.shading.models.dispatch.lighting_terms` (the material's lighting
+model term by term) for the local colour with each light's shadow factor. Every node keeps its kind, origin, direction, hit, material, local
 colour, weight and contribution (weight x local colour); their sum is the sample's colour,
 and the samples' mean the pixel's, to the last bit.
 """
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.shading.illumination import EYE_DIRECTION, EYE_POINT, POINT_LIGHT, TWO_SIDED, to_uint8
-from core.shading.terms import phong_terms
+from core.shading.models.dispatch import lighting_terms
 
 KINDS = ("primary", "shadow", "reflected", "refracted")
 HITS = {0: "triangle", 1: "sphere", 2: "plane"}
@@ -188,8 +188,8 @@ def _local(setup, packed, kind, index, s, p, n, g, eye, shadows, offset, surface
                 continue
             factors[k] = whitted.shadow_term(packed, shadows, lights[k], sx, sy, sz,
                                              setup.background, offset, stack, counts)
-    return phong_terms(p, n, 0, surface_row, lights, setup.ambient, eye, setup.halfway,
-                       shadow=factors)
+    return lighting_terms(p, n, 0, surface_row, lights, setup.ambient, eye, setup.halfway,
+                          shadow=factors)
 
 
 def buffers(scene, view, settings, context, names) -> dict:

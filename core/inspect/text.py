@@ -115,7 +115,7 @@ def _sample(record: dict) -> list[str]:
 
 
 def _phong(terms: dict, where) -> list[str]:
-    lines = [f"Phong at {where or 'the pixel'}: N {_v(terms['N'])}"
+    lines = [f"{terms.get('model label', 'Phong')} at {where or 'the pixel'}: N {_v(terms['N'])}"
              + (" (turned to the viewer)" if terms.get("two-sided flip") else "")]
     lines.append(f"ambient {_rgb(terms['ambient'])}")
     for light in terms["lights"]:

@@ -4,8 +4,10 @@
 
 Units match :mod:`core.radiosity`: an emitter's ``emission`` is its radiance, a diffuse surface
 reflects with the BRDF ρ/π (ρ = k_d O_d), so a lit wall's pixel is its radiosity B. The
-Phong lobe is the normalised modified Phong BRDF k_s O_s (n + 2)/(2π) cos^n α (α between the
-mirror direction and ω_o); mirrors (k_r) and glass (k_t, index ``ior``) are delta lobes.
+glossy lobe is the material's lighting model's (:mod:`core.shading.models`, reached through
+its seam ``glossy`` / ``sample_glossy``): for Phong, the normalised modified Phong BRDF
+k_s O_s (n + 2)/(2π) cos^n α (α between the mirror direction and ω_o); mirrors (k_r) and
+glass (k_t, index ``ior``) are delta lobes.
 
 At each hit along a path (``throughput`` the product of f cos / pdf so far):
 
@@ -33,11 +35,16 @@ import numpy as np
 
 from core.jit import njit, prange
 from core.raytrace.bvh import closest, new_stack, occluded, spread
+from core.shading.illumination import SURFACE_COLUMNS
+from core.shading.models.dispatch import glossy, sample_glossy
+from core.vectors import around, reflect
 
 MAX_BOUNCES = 64
 # materials columns
-RHO, KS, SHINE, KR, KT, IOR, EMIT, TWO_SIDED, OS = 0, 3, 4, 5, 6, 7, 8, 11, 12
-MATERIAL_WIDTH = 15
+RHO, KS, SHINE, KR, KT, IOR, EMIT, TWO_SIDED, OS, SURFACE = 0, 3, 4, 5, 6, 7, 8, 11, 12, 15
+# SURFACE: the material's row of core.shading.illumination.pack_surfaces, which its lighting
+# model's glossy lobe reads (core.shading.models).
+MATERIAL_WIDTH = SURFACE + SURFACE_COLUMNS
 EPS = 1e-7          # ray offset, times the scene's size
 
 
@@ -50,22 +57,6 @@ def _next(state):
     z = ((z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)) & np.uint64(0xFFFFFFFFFFFFFFFF)
     z = z ^ (z >> np.uint64(31))
     return state, (z >> np.uint64(11)) * (1.0 / 9007199254740992.0)
-
-
-@njit(cache=True)
-def _frame(nx, ny, nz):
-    """Two unit vectors perpendicular to the unit n (Duff et al. 2017)."""
-    sign = 1.0 if nz >= 0.0 else -1.0
-    a = -1.0 / (sign + nz)
-    b = nx * ny * a
-    return (1.0 + sign * nx * nx * a, sign * b, -sign * nx), (b, sign + ny * ny * a, -ny)
-
-
-@njit(cache=True)
-def _around(nx, ny, nz, x, y, z):
-    t, b = _frame(nx, ny, nz)
-    return (x * t[0] + y * b[0] + z * nx, x * t[1] + y * b[1] + z * ny,
-            x * t[2] + y * b[2] + z * nz)
 
 
 @njit(cache=True)
@@ -86,14 +77,8 @@ def _lobe_weights(m):
 
 
 @njit(cache=True)
-def _reflect(dx, dy, dz, nx, ny, nz):
-    c = dx * nx + dy * ny + dz * nz
-    return dx - 2 * c * nx, dy - 2 * c * ny, dz - 2 * c * nz
-
-
-@njit(cache=True)
 def _bsdf(m, nx, ny, nz, wox, woy, woz, wix, wiy, wiz, pd, ps):
-    """f (r, g, b) of the diffuse and Phong lobes and the pdf of sampling ω_i (solid angle);
+    """f (r, g, b) of the diffuse and glossy lobes and the pdf of sampling ω_i (solid angle);
     ω_o points away from the surface, n on its side."""
     cos_i = nx * wix + ny * wiy + nz * wiz
     if cos_i <= 0.0:
@@ -102,17 +87,12 @@ def _bsdf(m, nx, ny, nz, wox, woy, woz, wix, wiy, wiz, pd, ps):
     fg = m[RHO + 1] / math.pi
     fb = m[RHO + 2] / math.pi
     pdf = pd * cos_i / math.pi
-    if ps > 0.0:
-        rx, ry, rz = _reflect(-wox, -woy, -woz, nx, ny, nz)
-        cos_a = rx * wix + ry * wiy + rz * wiz
-        if cos_a > 0.0:
-            n = m[SHINE]
-            lobe = math.pow(cos_a, n)
-            s = m[KS] * (n + 2.0) / (2.0 * math.pi) * lobe
-            fr += s * m[OS]
-            fg += s * m[OS + 1]
-            fb += s * m[OS + 2]
-            pdf += ps * (n + 1.0) / (2.0 * math.pi) * lobe
+    if ps > 0.0:                          # the material's lighting model's glossy lobe
+        gr, gg, gb, gp = glossy(m, SURFACE, nx, ny, nz, wox, woy, woz, wix, wiy, wiz, ps)
+        fr += gr
+        fg += gg
+        fb += gb
+        pdf += gp
     return fr, fg, fb, pdf
 
 
@@ -144,16 +124,12 @@ def _point_on(corners, e, u1, u2):
 
 @njit(cache=True)
 def _sample_lobe(m, nx, ny, nz, wox, woy, woz, pd, ps, u0, u1, u2):
-    """A direction from the diffuse or Phong lobe (chosen with pd : ps by ``u0``)."""
+    """A direction from the diffuse or glossy lobe (chosen with pd : ps by ``u0``)."""
     if u0 * (pd + ps) < pd:               # cosine-weighted hemisphere
         r = math.sqrt(u1)
         phi = 2.0 * math.pi * u2
-        return _around(nx, ny, nz, r * math.cos(phi), r * math.sin(phi), math.sqrt(1.0 - u1))
-    rx, ry, rz = _reflect(-wox, -woy, -woz, nx, ny, nz)
-    cos_a = math.pow(u1, 1.0 / (m[SHINE] + 1.0))
-    sin_a = math.sqrt(max(0.0, 1.0 - cos_a * cos_a))
-    phi = 2.0 * math.pi * u2
-    return _around(rx, ry, rz, sin_a * math.cos(phi), sin_a * math.sin(phi), cos_a)
+        return around(nx, ny, nz, r * math.cos(phi), r * math.sin(phi), math.sqrt(1.0 - u1))
+    return sample_glossy(m, SURFACE, nx, ny, nz, wox, woy, woz, u1, u2)
 
 
 # The kinds of ray a path is made of, and a recorded ray's columns.
@@ -282,7 +258,7 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
             last_pdf, delta, kind = bp, False, DIFFUSE
             ox, oy, oz = sx, sy, sz
         elif u0 < pd + ps + pr:                       # mirror: k_r, chosen with pr
-            wx, wy, wz = _reflect(dx, dy, dz, nx, ny, nz)
+            wx, wy, wz = reflect(dx, dy, dz, nx, ny, nz)
             scale = m[KR] / pr
             tr, tg, tb = tr * scale, tg * scale, tb * scale
             delta, kind = True, MIRROR
@@ -292,7 +268,7 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
             c = -(dx * nx + dy * ny + dz * nz)
             k2 = 1.0 - eta * eta * (1.0 - c * c)
             if k2 < 0.0:                              # total internal reflection
-                wx, wy, wz = _reflect(dx, dy, dz, nx, ny, nz)
+                wx, wy, wz = reflect(dx, dy, dz, nx, ny, nz)
                 ox, oy, oz = sx, sy, sz
             else:
                 a = eta * c - math.sqrt(k2)

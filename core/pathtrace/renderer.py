@@ -23,7 +23,7 @@ from core.camera.rays import camera_rays
 from core.pathtrace import kernel
 from core.radiosity.mesh import check_scene, has_light, reflectance
 from core.radiosity.tone import tone_map
-from core.shading.illumination import to_uint8
+from core.shading.illumination import pack_surfaces, to_uint8
 
 
 @dataclass
@@ -53,6 +53,7 @@ def _material_row(material) -> np.ndarray:
     row[kernel.EMIT:kernel.EMIT + 3] = material.emission
     row[kernel.TWO_SIDED] = 1.0 if material.two_sided else 0.0
     row[kernel.OS:kernel.OS + 3] = material.os
+    row[kernel.SURFACE:] = pack_surfaces([material], [False])[0]   # its lighting model's row
     return row
 
 

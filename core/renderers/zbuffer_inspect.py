@@ -6,7 +6,7 @@ visibility buffer, the flat colours), and then reads the pixel's story out of th
 the visible mesh and triangle, the barycentric weights the z-buffer stored
 (perspective-correct; screen-linear for the scan-line rasterizer) and the other kind
 recomputed from the device points, the depth (canonical and world), the normal, and the
-Phong terms (:func:`core.shading.terms.phong_terms`) — at the face centroid (flat), at the
+lighting model's terms (:func:`core.shading.models.dispatch.lighting_terms`) — at the face centroid (flat), at the
 three vertices (Gouraud, then the interpolation), or at the pixel (Phong, textured: with
 (u, v), the MIP level and the texels the filter read).
 
@@ -32,7 +32,7 @@ from core.camera.view import eye_from_view, n_par_factors, n_per_factors, vrc_ba
 from core.context import DEFAULT_CONTEXT, RenderContext
 from core.pipeline import project
 from core.shading.illumination import quantize
-from core.shading.terms import phong_terms
+from core.shading.models.dispatch import lighting_terms
 
 KEY = "pixel inspector: z-buffer"
 
@@ -263,8 +263,8 @@ def _matrices(cap: Capture) -> dict:
 
 
 def _terms(s, p, n, surface, surfaces=None) -> dict:
-    return phong_terms(p, n, surface, s.surfaces if surfaces is None else surfaces, s.lights,
-                       s.ambient, s.eye, s.halfway)
+    return lighting_terms(p, n, surface, s.surfaces if surfaces is None else surfaces,
+                          s.lights, s.ambient, s.eye, s.halfway)
 
 
 def _bytes(rgb) -> list:

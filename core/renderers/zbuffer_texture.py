@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from core.shading.illumination import OD, TWO_SIDED, quantize
-from core.shading.terms import phong_terms
+from core.shading.models.dispatch import lighting_terms
 from core.texture import sample as sampling
 from core.texture.surface import (BUMP_SCALE, COLOR, COLOR_SRGB, DPDU, DPDV, ENVIRONMENT, HEIGHT,
                                   NORMAL, NORMAL_MAP, POSITION, REFLECTIVITY, UV, lookup,
@@ -99,7 +99,7 @@ def _breakdown(cap, x, y, corners, weights, mesh, constants, filter_, bump) -> d
             r, g, b = encode_srgb(r), encode_srgb(g), encode_srgb(b)
         out["texture"]["O_d"] = [r, g, b]
         surf[mesh, OD], surf[mesh, OD + 1], surf[mesh, OD + 2] = r, g, b
-    terms = phong_terms(p, (nx, ny, nz), mesh, surf, s.lights, s.ambient, s.eye, s.halfway)
+    terms = lighting_terms(p, (nx, ny, nz), mesh, surf, s.lights, s.ambient, s.eye, s.halfway)
     out["phong"] = terms
     rgb = list(terms["clamped"])
     if maps[mesh, ENVIRONMENT] >= 0 and maps[mesh, REFLECTIVITY] > 0.0:

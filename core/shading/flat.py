@@ -11,7 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from core.jit import njit, prange
-from core.shading.illumination import phong_point, quantize
+from core.shading.illumination import quantize
+from core.shading.models.dispatch import light_point
 from core.shading.registry import Shader, register_shader
 from core.scene.normals import face_normals, planar_polygons
 from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_face_normals, cached,
@@ -39,7 +40,7 @@ def _phong_face(positions, triangles, f, normals, polygon, polygon_point, face_s
                 surfaces, lights, ambient, eye, halfway, out):
     """The model once for face ``f`` (FvDFH 16.2.3), at :func:`_face_point`."""
     cx, cy, cz, p = _face_point(positions, triangles, f, polygon, polygon_point)
-    r, g, b = phong_point(cx, cy, cz, normals[p, 0], normals[p, 1], normals[p, 2],
+    r, g, b = light_point(cx, cy, cz, normals[p, 0], normals[p, 1], normals[p, 2],
                           face_surface[f], surfaces, lights, ambient, eye, halfway)
     out[f, 0], out[f, 1], out[f, 2] = r, g, b
 

@@ -7,7 +7,8 @@ import numpy as np
 
 from core.arrays import read_only
 from core.jit import njit, prange
-from core.shading.illumination import phong_point, quantize
+from core.shading.illumination import quantize
+from core.shading.models.dispatch import light_point
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_vertex_normals, covered_spans,
                                  unlit, visible_items, wide_shading)
@@ -58,7 +59,7 @@ def _used_vertices(triangles, faces, vertex_count):
 def _phong_vertex(positions, normals, i, vertex_surface, surfaces, lights, ambient, eye, halfway,
                   out):
     """The model at vertex ``i`` with its vertex normal (FvDFH 16.2.4)."""
-    r, g, b = phong_point(positions[i, 0], positions[i, 1], positions[i, 2],
+    r, g, b = light_point(positions[i, 0], positions[i, 1], positions[i, 2],
                           normals[i, 0], normals[i, 1], normals[i, 2], vertex_surface[i],
                           surfaces, lights, ambient, eye, halfway)
     out[i, 0], out[i, 1], out[i, 2] = r, g, b

@@ -13,7 +13,9 @@ vector is used"). The result is clamped to [0, 1] per channel.
 The model is written once, as :func:`phong_point` (one point, numba), and reached three ways:
 
 - from the compiled kernels (per face for flat, per vertex for Gouraud, per pixel for Phong,
-  per hit for the ray casters), which call it directly;
+  per hit for the ray casters), through the lighting models' seam
+  (:func:`core.shading.models.dispatch.light_point`: a material chooses its model, this one
+  by default);
 - :func:`illuminate`, the numpy entry point: the same compiled function over N points;
 - :func:`core.analysis.exact.phong`: the same Python source run in exact rational arithmetic
   (its ``unit3`` and ``specular_power`` swapped for exact ones), the oracle the float64 result
@@ -21,8 +23,9 @@ The model is written once, as :func:`phong_point` (one point, numba), and reache
 
 Both read the scene through small float arrays that numba can take:
 
-- ``surfaces`` ``(M, 11)`` from :func:`pack_surfaces`: one row per mesh: ``k_a, k_d, k_s, n,
-  O_d (3), O_s (3), two_sided``; a triangle or vertex names its row (mixed materials).
+- ``surfaces`` ``(M, 16)`` from :func:`pack_surfaces`: one row per mesh: ``k_a, k_d, k_s, n,
+  O_d (3), O_s (3), two_sided``, the lighting model's number and its parameters (4;
+  :mod:`core.shading.models`: model 0 is this one); a triangle or vertex names its row.
 - ``lights`` ``(L, 11)`` from :func:`pack_lights`: ``kind`` (0 point, 1 directional), the
   position or the unit direction towards the light (3), ``I_p`` (3), ``c1, c2, c3``, and the
   cap (1: ``f_att`` at most 1, FvDFH's; 0: the notes' formula uncapped).
@@ -65,12 +68,13 @@ import numpy as np
 from core.camera.film import to_rgb8 as to_uint8  # noqa: F401  (one rounding rule)
 from core.camera.view import Eye, eye_from_view  # noqa: F401  (re-exported)
 from core.jit import njit
+from core.shading.models.registry import PARAMETER_COLUMNS, pack_model
 from core.vectors import unit3  # noqa: F401  (re-exported)
 from core.transforms import unit_rows
 
 # Columns of a packed surface row (pack_surfaces).
-KA, KD, KS, EXPONENT, OD, OS, TWO_SIDED = 0, 1, 2, 3, 4, 7, 10
-SURFACE_COLUMNS = 11
+KA, KD, KS, EXPONENT, OD, OS, TWO_SIDED, MODEL, PARAMETERS = 0, 1, 2, 3, 4, 7, 10, 11, 12
+SURFACE_COLUMNS = PARAMETERS + PARAMETER_COLUMNS
 # Columns of a packed light row (pack_lights).
 LIGHT_KIND, LIGHT_XYZ, LIGHT_INTENSITY, LIGHT_ATTENUATION, LIGHT_CAP = 0, 1, 4, 7, 10
 LIGHT_COLUMNS = 11
@@ -91,7 +95,8 @@ def pack_eye(eye: Eye) -> np.ndarray:
 
 
 def pack_surfaces(materials, two_sided) -> np.ndarray:
-    """``(M, 11)`` rows ``k_a, k_d, k_s, n, O_d, O_s, two_sided`` from ``M`` materials.
+    """``(M, 16)`` rows ``k_a, k_d, k_s, n, O_d, O_s, two_sided, model, parameters (4)``
+    from ``M`` materials.
 
     ``two_sided[i]`` is true for a mesh that is not closed (lit from both sides).
     """
@@ -101,6 +106,7 @@ def pack_surfaces(materials, two_sided) -> np.ndarray:
         rows[i, OD:OD + 3] = m.od
         rows[i, OS:OS + 3] = m.os
         rows[i, TWO_SIDED] = 1.0 if sided else 0.0
+        rows[i, MODEL], rows[i, PARAMETERS:] = pack_model(m)
     return rows
 
 
@@ -228,6 +234,41 @@ def phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfw
     return min(max(r, 0), 1), min(max(g, 0), 1), min(max(b, 0), 1)
 
 
+@njit(cache=True, inline="always")
+def toward_viewer(eye, px, py, pz, nx, ny, nz):
+    """V at P, as :func:`phong_point` finds it (for other lighting models; ``phong_point``
+    keeps its steps written out, the source the exact analysis runs in Fractions)."""
+    if eye[0] == EYE_POINT:
+        vx, vy, vz, dist = unit3(eye[1] - px, eye[2] - py, eye[3] - pz)
+        if dist == 0.0:                 # P at the eye: V undefined, look along the normal
+            return nx, ny, nz
+        return vx, vy, vz
+    return eye[1], eye[2], eye[3]
+
+
+@njit(cache=True, inline="always")
+def two_sided_normal(surfaces, s, nx, ny, nz, vx, vy, vz):
+    """N turned to the viewer on a two-sided surface (the side the viewer sees is lit)."""
+    if surfaces[s, TWO_SIDED] != 0.0 and nx * vx + ny * vy + nz * vz < 0.0:
+        return -nx, -ny, -nz
+    return nx, ny, nz
+
+
+@njit(cache=True, inline="always")
+def toward_light(lights, k, px, py, pz):
+    """``(L, f_att)`` of light ``k`` at P as :func:`phong_point` finds them; L = 0 for a point
+    light on P (no diffuse or specular term there)."""
+    if lights[k, LIGHT_KIND] == POINT_LIGHT:
+        lx, ly, lz, d = unit3(lights[k, 1] - px, lights[k, 2] - py, lights[k, 3] - pz)
+        if d == 0.0:
+            return 0.0, 0.0, 0.0, 1.0
+        den = lights[k, 7] + lights[k, 8] * d + lights[k, 9] * d * d
+        if den > 1 or (lights[k, LIGHT_CAP] == 0 and den > 0):
+            return lx, ly, lz, 1.0 / den
+        return lx, ly, lz, 1.0
+    return lights[k, 1], lights[k, 2], lights[k, 3], 1.0
+
+
 # --------------------------------------------------------------------------------------------
 # numpy: many points
 
@@ -247,7 +288,8 @@ def illuminate(points: np.ndarray, normals: np.ndarray, surface: np.ndarray,
     """The model at ``N`` world points with unit (or zero) normals: ``(N, 3)`` RGB in [0, 1].
 
     ``surface`` ``(N,)`` is each point's row of ``surfaces``. The numpy entry point: the same
-    compiled :func:`phong_point`, over every point.
+    compiled :func:`phong_point`, over every point (the Phong model whatever the rows' model
+    number: :func:`core.shading.models.dispatch.illuminate` lights each by its own).
     """
     p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
     nrm = np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 3)

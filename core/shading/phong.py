@@ -8,7 +8,8 @@ import numpy as np
 
 from core.arrays import read_only
 from core.jit import njit, prange
-from core.shading.illumination import phong_point, quantize, unit3
+from core.shading.illumination import quantize, unit3
+from core.shading.models.dispatch import light_point
 from core.shading.wide import resolve_phong_wide
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import (ShadeInput, all_vertex_normals, cached, covered_spans,
@@ -45,7 +46,7 @@ def _resolve_phong(tri, b1, b2, span, triangles, attrs, source, face_surface, su
             py = w0 * attrs[i0, 4] + w1 * attrs[i1, 4] + w2 * attrs[i2, 4]
             pz = w0 * attrs[i0, 5] + w1 * attrs[i1, 5] + w2 * attrs[i2, 5]
             nx, ny, nz, _ = unit3(nx, ny, nz)        # renormalise the interpolated normal
-            r, g, b = phong_point(px, py, pz, nx, ny, nz, face_surface[source[t]], surfaces,
+            r, g, b = light_point(px, py, pz, nx, ny, nz, face_surface[source[t]], surfaces,
                                   lights, ambient, eye, halfway)
             out[row, col, 0] = quantize(r)
             out[row, col, 1] = quantize(g)

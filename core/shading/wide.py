@@ -17,7 +17,8 @@ array (structure of arrays):
 Where float32 is not safe the pixel is flagged in pass 2 or 3 and evaluated by
 ``phong_point`` in float64 instead: a squared length outside [1e-30, 1e30] (a zero normal, a
 point light on the surface, huge or tiny scenes: the stability suite's extremes). Frames whose
-exponents are not whole numbers up to 2^16 go to the float64 kernel entirely
+exponents are not whole numbers up to 2^16, and frames with a surface lit by another
+lighting model (:mod:`core.shading.models`), go to the float64 kernel entirely
 (:func:`float32_is_exact_enough`), and so do frames whose light x material products pass
 1e30 (``core.shading.shade.float32_holds_the_terms``: float32 would overflow, and inf x 0 is
 NaN).
@@ -34,7 +35,7 @@ import numpy as np
 
 from core.arrays import read_only
 from core.jit import njit, prange
-from core.shading.illumination import SQUARING_LIMIT, phong_point, quantize, unit3
+from core.shading.illumination import MODEL, SQUARING_LIMIT, phong_point, quantize, unit3
 
 F = np.float32
 # Rows of the per-span scratch: one quantity per row, one pixel per column.
@@ -49,9 +50,11 @@ FLUSH = F(1e-19)                  # its square is still a normal float32
 
 
 def float32_is_exact_enough(surfaces: np.ndarray) -> bool:
-    """Every exponent a whole number in [0, 2^16]: the powers are the same products."""
+    """Every surface lit by the Phong model (these passes are that model's) and every
+    exponent a whole number in [0, 2^16]: the powers are the same products."""
     n = surfaces[:, 3]
-    return bool(np.all((n == np.floor(n)) & (n >= 0) & (n <= SQUARING_LIMIT)))
+    return bool(np.all((n == np.floor(n)) & (n >= 0) & (n <= SQUARING_LIMIT))
+                and np.all(surfaces[:, MODEL] == 0))
 
 
 BAND_PIXELS = 2048     # Phong's pixels per work item: a band of whole rows of about this many

@@ -30,7 +30,8 @@ import math
 import numpy as np
 
 from core.jit import njit, prange
-from core.shading.illumination import OD, TWO_SIDED, phong_point, quantize, unit3
+from core.shading.illumination import OD, TWO_SIDED, quantize, unit3
+from core.shading.models.dispatch import light_point
 from core.texture.sample import BILINEAR, sample
 from core.texture.tutorial import uv_at
 
@@ -226,7 +227,7 @@ def textured_at(attrs, i0, i1, i2, w0, w1, w2, u, v, dudx, dvdx, dudy, dvdy, s, 
         if maps[s, COLOR_SRGB] > 0.5:
             r, g, b = encode_srgb(r), encode_srgb(g), encode_srgb(b)
         surf[s, OD], surf[s, OD + 1], surf[s, OD + 2] = r, g, b
-    r, g, b = phong_point(px, py, pz, nx, ny, nz, s, surf, lights, ambient, eye, halfway)
+    r, g, b = light_point(px, py, pz, nx, ny, nz, s, surf, lights, ambient, eye, halfway)
     if maps[s, ENVIRONMENT] >= 0 and maps[s, REFLECTIVITY] > 0.0:
         vx, vy, vz = view_direction(eye, px, py, pz)
         d = nx * vx + ny * vy + nz * vz

@@ -1,0 +1,117 @@
+"""The one seam between the kernels and the lighting models: generated from the registry.
+
+Every kernel that lights a point calls :func:`light_point` (the signature of
+:func:`core.shading.illumination.phong_point`); the path tracer calls :func:`glossy` and
+:func:`sample_glossy`; the inspectors call :func:`lighting_terms`. Each reads the surface
+row's ``MODEL`` column and calls that model's function of the same role.
+
+numba compiles a call to a known function, not to a function chosen at run time, so the
+dispatch is written out when this module is imported, one branch per registered model
+(:func:`dispatch_source` prints it). With Phong and Cook–Torrance registered it reads::
+
+    def light_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfway):
+        model = surfaces[s, MODEL]
+        if model == 1:
+            return cook_torrance_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfway)
+        return phong_point(px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfway)
+
+Model 0 (Phong) is the last, unconditional branch: a row whose number names no model is lit
+by the course's model. The branches are inlined (``inline="always"``), as ``phong_point``
+always was, so a kernel's Phong pixels run the same instructions as before plus one compare
+per point. The compiled kernels carry this code; ``core.jit`` stamps them with the sources of
+the model modules and of the registrations, so a model added or removed recompiles them.
+"""
+
+from __future__ import annotations
+
+import linecache
+import re
+
+import numba
+import numpy as np
+
+from core.jit import njit
+from core.shading.illumination import LIGHT_COLUMNS, MODEL
+from core.shading.models import lighting_models
+
+# role: (the seam's name, its arguments, where a call finds the model's number)
+ROLES = {
+    "point": ("light_point", "px, py, pz, nx, ny, nz, s, surfaces, lights, ambient, eye, halfway",
+              "surfaces[s, MODEL]"),
+    "glossy": ("glossy", "m, at, nx, ny, nz, wox, woy, woz, wix, wiy, wiz, ps",
+               "m[at + MODEL]"),
+    "sample_glossy": ("sample_glossy", "m, at, nx, ny, nz, wox, woy, woz, u1, u2",
+                      "m[at + MODEL]"),
+}
+GENERATED = "<core.shading.models.dispatch: generated>"
+
+
+def _identifier(name: str) -> str:
+    return re.sub(r"\W", "_", name)
+
+
+def dispatch_source(names: tuple[str, ...]) -> str:
+    """The Python source of the seams for the models ``names`` (model i is ``names[i]``)."""
+    out = []
+    for role, (seam, args, number) in ROLES.items():
+        out += [f"def {seam}({args}):", f"    model = {number}"]
+        for i, name in enumerate(names[1:], 1):
+            out += [f"    if model == {i}:",
+                    f"        return {_identifier(name)}_{role}({args})"]
+        out += [f"    return {_identifier(names[0])}_{role}({args})", ""]
+    return "\n".join(out)
+
+
+def _build() -> dict:
+    models = lighting_models()
+    source = dispatch_source(tuple(m.name for m in models))
+    scope = {"MODEL": MODEL}
+    for m in models:
+        module = m.kernels()
+        for role in ROLES:
+            scope[f"{_identifier(m.name)}_{role}"] = getattr(module, role)
+    linecache.cache[GENERATED] = (len(source), None, source.splitlines(True), GENERATED)
+    exec(compile(source, GENERATED, "exec"), scope)
+    # Not cached on their own (no file behind them): they are inlined into cached kernels.
+    return {seam: numba.njit(inline="always")(scope[seam]) for seam, _, _ in ROLES.values()}
+
+
+_SEAMS = _build()
+light_point = _SEAMS["light_point"]
+glossy = _SEAMS["glossy"]
+sample_glossy = _SEAMS["sample_glossy"]
+
+
+def lighting_terms(p, n, s, surfaces, lights, ambient, eye, halfway, shadow=None) -> dict:
+    """The model of surface row ``s`` term by term (the model module's ``terms``), with its
+    name under ``"model"``."""
+    models = lighting_models()
+    number = int(surfaces[s, MODEL])
+    entry = models[number] if 0 <= number < len(models) else models[0]
+    terms = entry.kernels().terms(p, n, s, surfaces, lights, ambient, eye, halfway, shadow)
+    return {"model": entry.name, "model label": entry.label, **terms}
+
+
+def illuminate(points: np.ndarray, normals: np.ndarray, surface: np.ndarray,
+               surfaces: np.ndarray, lights: np.ndarray, ambient: np.ndarray,
+               eye: np.ndarray, halfway: bool) -> np.ndarray:
+    """:func:`core.shading.illumination.illuminate` with each point lit by its row's lighting
+    model: ``(N, 3)`` RGB in [0, 1]."""
+    p = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    out = np.empty((len(p), 3))
+    _illuminate_points(p, np.ascontiguousarray(normals, dtype=np.float64).reshape(-1, 3),
+                       np.ascontiguousarray(surface, dtype=np.int64).reshape(-1),
+                       np.ascontiguousarray(surfaces, dtype=np.float64),
+                       np.ascontiguousarray(lights, dtype=np.float64).reshape(-1, LIGHT_COLUMNS),
+                       np.ascontiguousarray(ambient, dtype=np.float64),
+                       np.ascontiguousarray(eye, dtype=np.float64), bool(halfway), out)
+    return out
+
+
+@njit(cache=True)
+def _illuminate_points(points, normals, surface, surfaces, lights, ambient, eye, halfway, out):
+    for i in range(points.shape[0]):
+        r, g, b = light_point(points[i, 0], points[i, 1], points[i, 2], normals[i, 0],
+                              normals[i, 1], normals[i, 2], surface[i], surfaces, lights,
+                              ambient, eye, halfway)
+        out[i, 0], out[i, 1], out[i, 2] = r, g, b
