@@ -211,12 +211,8 @@ def _supersample(draw, scene, view, settings, frame, context, inspect) -> None:
     frame.stats["samples per pixel"] = settings.samples
     if settings.pixel_filter != "box" or settings.filter_radius not in (None, 0.5):
         return _filtered(draw, scene, view, settings, frame, context, inspect)
-    if (settings.sample_pattern == "regular" and side * side == settings.samples
-            and width * height * settings.samples <= MAX_PASS_PIXELS):
-        big = Frame(rgbx=np.empty((height * side, width * side, 4), np.uint8), plan=frame.plan,
-                    stats=frame.stats)
-        draw(scene, view, settings.replace(samples=1, size=(width * side, height * side)), big,
-             context, Timer(frame.stats, inspect))
+    big = _one_pass(draw, scene, view, settings, frame, context, inspect)
+    if big is not None:
         frame.filtered = box_filter(big.color, side)
         frame.color[:] = np.floor(frame.filtered + 0.5).astype(np.uint8)
         frame.sample_color = big.color
@@ -230,6 +226,21 @@ def _supersample(draw, scene, view, settings, frame, context, inspect) -> None:
     frame.color[:] = film.resolve()
 
 
+def _one_pass(draw, scene, view, settings, frame, context, inspect):
+    """A regular grid of samples drawn as one frame ``side`` times larger each way, where the
+    pattern is a full grid and it fits the pass budget; else None (one frame per sample)."""
+    width, height = settings.size
+    side = grid_side(settings.samples)
+    if not (settings.sample_pattern == "regular" and side * side == settings.samples
+            and width * height * settings.samples <= MAX_PASS_PIXELS):
+        return None
+    big = Frame(rgbx=np.empty((height * side, width * side, 4), np.uint8), plan=frame.plan,
+                stats=frame.stats)
+    draw(scene, view, settings.replace(samples=1, size=(width * side, height * side)), big,
+         context, Timer(frame.stats, inspect))
+    return big
+
+
 def _filtered(draw, scene, view, settings, frame, context, inspect) -> None:
     """The film's samples (a regular grid in one pass where it fits, else one frame per
     sample) reconstructed with the settings' filter (core.camera.filters)."""
@@ -238,12 +249,8 @@ def _filtered(draw, scene, view, settings, frame, context, inspect) -> None:
     side = grid_side(settings.samples)
     radius = check(settings.pixel_filter, settings.filter_radius)
     frame.stats["pixel filter"] = f"{settings.pixel_filter}, radius {radius:g}"
-    if (settings.sample_pattern == "regular" and side * side == settings.samples
-            and width * height * settings.samples <= MAX_PASS_PIXELS):
-        big = Frame(rgbx=np.empty((height * side, width * side, 4), np.uint8), plan=frame.plan,
-                    stats=frame.stats)
-        draw(scene, view, settings.replace(samples=1, size=(width * side, height * side)), big,
-             context, Timer(frame.stats, inspect))
+    big = _one_pass(draw, scene, view, settings, frame, context, inspect)
+    if big is not None:
         images, offsets = regular_grid(big.color, side)
         frame.sample_color = big.color
     else:
