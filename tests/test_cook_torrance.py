@@ -105,19 +105,19 @@ def _hemisphere(k=160):
     return dirs, (1.0 / k) * (math.pi / k)
 
 
-@pytest.mark.parametrize("roughness", [0.15, 0.4, 0.8])
-@pytest.mark.parametrize("cos_o", [1.0, 0.6, 0.2])
+@pytest.mark.parametrize("roughness", [0.2, 0.6])
+@pytest.mark.parametrize("cos_o", [1.0, 0.3])
 def test_energy_the_albedo_is_at_most_one_and_sampling_agrees(roughness, cos_o):
     """With F = 1 and k_s = 1, ∫ f cos θ_i dω_i <= 1 (quadrature); the estimate from
     sample_glossy's directions weighted by f cos / pdf converges to the same integral."""
     row = _row(roughness)
     wo = np.array([math.sqrt(1 - cos_o * cos_o), 0.0, cos_o])
-    dirs, dw = _hemisphere()
+    dirs, dw = _hemisphere(96)
     albedo = sum(_brdf(row, wo, wi)[0] * wi[2] for wi in dirs) * dw
     assert albedo <= 1.0 + 1e-3
     assert albedo > 0.3                   # a rough mirror still reflects most of the light
     rng = np.random.default_rng(7)
-    n, total = 20000, 0.0
+    n, total = 8000, 0.0
     for u1, u2 in rng.random((n, 2)):
         wi = sample_glossy(row, 0, 0.0, 0.0, 1.0, *wo, u1, u2)
         fr, _, _, pdf = glossy(row, 0, 0.0, 0.0, 1.0, *wo, *wi, 1.0)
