@@ -310,3 +310,47 @@ def test_one_and_two_workers_give_the_same_frames_byte_for_byte(tmp_path, on_the
     assert len(one) == len(two) == 40
     assert all(a.read_bytes() == b.read_bytes() for a, b in zip(one, two))
     assert one[0].read_bytes() != one[-1].read_bytes()             # and the blocks did fall
+
+
+def test_a_box_dropped_on_a_box_comes_to_rest_on_its_top_face():
+    """Two convex hulls: the small box lands on the big one (turned 30° to it, so no corner
+    of either is inside the other: edge on edge) and rests with its bottom on the big top."""
+    text = TUMBLER.split("[[geometry]]")[0] + """
+[[geometry]]
+generator = "cube"
+name = "base"
+transform = { scale = [0.4, 0.2, 0.4], translate = [0, 0.2, 0] }
+[[geometry]]
+generator = "cube"
+name = "top"
+transform = { scale = [0.3, 0.1, 0.3], rotate = [0, 30, 0], translate = [0, 0.9, 0] }
+""" + VIEW + """
+[animation]
+duration = 3
+fps = 30
+[dynamics]
+planes = [{ point = [0, 0, 0], normal = [0, 1, 0] }]
+[[body]]
+mesh = "base"
+restitution = 0.1
+friction = 0.6
+[[body]]
+mesh = "top"
+restitution = 0.1
+friction = 0.6
+"""
+    w = world(text)
+    assert [len(b.faces) for b in w.bodies] == [6, 6]
+    w.state_at(2.0)
+    assert w.x[0, 1] == pytest.approx(0.2, abs=2e-3)
+    assert w.x[1, 1] == pytest.approx(0.5, abs=2e-3)             # 0.4 + its half height 0.1
+    assert np.linalg.norm(w.x[1, [0, 2]]) < 0.05
+
+
+def test_only_a_convex_mesh_gets_face_planes():
+    from core.animation.dynamics import face_planes
+    from core.scene.generators import torus
+    box = cube(2.0)
+    assert len(face_planes(box.positions, box.positions, box.triangles)) == 6
+    ring = torus(1.0, 0.3, 16, 8)
+    assert len(face_planes(ring.positions, ring.positions, ring.triangles)) == 0

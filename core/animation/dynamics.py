@@ -18,8 +18,9 @@ the frame rate; a frame at time t shows the state after ``floor(t / dt)`` steps.
   rotation group: second order; the energy test states the drift).
 - Sphere against plane: the time of impact inside the step is solved from the parabola and
   the bounce happens there (so a bounce's height falls by exactly e²); every other contact
-  (mesh vertices against planes, bounding spheres against static spheres and each other) is
-  found at the end of the step, resolved by impulses (restitution e for a closing speed
+  is found at the end of the step — a hull's vertices against the planes and against a
+  convex body's face planes, bounding spheres otherwise (static spheres, sphere bodies,
+  meshes that are not convex) — resolved by impulses (restitution e for a closing speed
   above REST_SPEED_STEPS · |g| dt, Coulomb friction μ on the tangential impulse) in
   ``iterations`` passes, and the bodies pushed apart along the contact normal.
 
@@ -43,6 +44,7 @@ MAX_BODIES = 1000                  # the pair test is N² / 2 a step
 MAX_HULL_VERTICES = 4096           # per body: the vertices tested against the planes
 MAX_DYNAMICS_WORK = 4_000_000_000  # steps x (pairs + vertices x planes) to reach the last frame
 MAX_SIMULATION_STEPS = 10_000_000
+MAX_CONTACTS = 65_536              # contacts a step that accumulate their impulses over the passes
 REST_SPEED_STEPS = 2.0             # closing speeds below this many steps of gravity do not bounce
 SPHERE, HULL = 0, 1
 SHAPES = ("sphere", "hull")
@@ -68,6 +70,27 @@ class Body:
     spin: np.ndarray = field(default_factory=lambda: np.zeros(3))       # ω at t = 0, rad/s
     restitution: float = 0.5
     friction: float = 0.3
+    # (F, 4) face planes n·p <= d of a convex hull body, about the centre (none: not convex,
+    # and it meets other bodies as its bounding sphere)
+    faces: np.ndarray = field(default_factory=lambda: np.zeros((0, 4)))
+
+
+def face_planes(points: np.ndarray, positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(F, 4) rows (n, d) of the distinct face planes n·p = d of a closed mesh (positions
+    about the centre), when every point lies behind every plane (the mesh is convex);
+    else no rows."""
+    a, b, c = (positions[triangles[:, k]] for k in range(3))
+    n = np.cross(b - a, c - a)
+    length = np.linalg.norm(n, axis=1)
+    keep = length > 1e-12 * max(1.0, float(length.max(initial=0.0)))
+    n = n[keep] / length[keep, None]
+    d = np.einsum("ij,ij->i", n, a[keep])
+    size = float(np.max(np.linalg.norm(points, axis=1), initial=1.0))
+    planes = np.unique(np.round(np.column_stack([n, d / size]), 9), axis=0)
+    planes[:, 3] *= size
+    if len(planes) == 0 or np.max(points @ planes[:, :3].T - planes[:, 3]) > 1e-9 * size:
+        return np.zeros((0, 4))
+    return planes
 
 
 def mass_properties(positions: np.ndarray, triangles: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
@@ -168,10 +191,17 @@ def _k(b, arm, direction, q, inv_body, inv_mass):
 
 
 @njit(cache=True)
-def _resolve(a, b, point, normal, e, mu, x, vel, q, L, inv_mass, inv_body, v_rest):
+def _resolve(a, b, point, normal, e, mu, x, vel, q, L, inv_mass, inv_body, v_rest, cache,
+             counter):
     """The impulses of one contact between body a and body b (-1: the static world) at
     ``point``, ``normal`` pointing from b into a: restitution e on a closing speed above
-    ``v_rest`` (none below: a resting contact), then Coulomb friction capped at μ · jn."""
+    ``v_rest`` (none below: a resting contact), then Coulomb friction capped at μ · jn.
+
+    Within a step the passes meet the same contacts in the same order; contact k's row of
+    ``cache`` keeps its accumulated normal impulse, the separating speed it aims at (set on
+    the first pass) and its accumulated friction, so that a later pass can take back what
+    an earlier one gave too much (the total clamped at 0: Catto's sequential impulses).
+    Without a row (``counter`` past the cache) each pass's impulse stands alone."""
     ra = point - x[a]
     rel = _point_velocity(a, ra, vel, q, L, inv_body)
     rb = np.zeros(3)
@@ -179,24 +209,38 @@ def _resolve(a, b, point, normal, e, mu, x, vel, q, L, inv_mass, inv_body, v_res
         rb = point - x[b]
         rel = rel - _point_velocity(b, rb, vel, q, L, inv_body)
     vn = np.dot(rel, normal)
-    if vn >= 0.0:
-        return
-    bounce = e if vn < -v_rest else 0.0
+    c = counter[0]
+    counter[0] += 1
     kn = _k(a, ra, normal, q, inv_body, inv_mass) + (_k(b, rb, normal, q, inv_body, inv_mass) if b >= 0 else 0.0)
-    jn = -(1.0 + bounce) * vn / kn
-    _apply(a, ra, jn * normal, vel, L, inv_mass)
-    if b >= 0:
-        _apply(b, rb, -jn * normal, vel, L, inv_mass)
+    if c < len(cache):
+        if cache[c, 2] == 0.0:
+            cache[c, 2] = 1.0
+            cache[c, 1] = -e * vn if vn < -v_rest else 0.0
+        total = max(cache[c, 0] + (cache[c, 1] - vn) / kn, 0.0)
+        jn = total - cache[c, 0]
+        cache[c, 0] = total
+        cap = mu * total - cache[c, 3]
+    else:
+        if vn >= 0.0:
+            return
+        jn = -(1.0 + (e if vn < -v_rest else 0.0)) * vn / kn
+        cap = mu * jn
+    if jn != 0.0:
+        _apply(a, ra, jn * normal, vel, L, inv_mass)
+        if b >= 0:
+            _apply(b, rb, -jn * normal, vel, L, inv_mass)
     rel = _point_velocity(a, ra, vel, q, L, inv_body)
     if b >= 0:
         rel = rel - _point_velocity(b, rb, vel, q, L, inv_body)
     slip = rel - np.dot(rel, normal) * normal
     speed = math.sqrt(np.dot(slip, slip))
-    if speed == 0.0 or mu == 0.0:
+    if speed == 0.0 or cap <= 0.0:
         return
     t = slip / speed
     kt = _k(a, ra, t, q, inv_body, inv_mass) + (_k(b, rb, t, q, inv_body, inv_mass) if b >= 0 else 0.0)
-    jt = min(speed / kt, mu * jn)
+    jt = min(speed / kt, cap)
+    if c < len(cache):
+        cache[c, 3] += jt
     _apply(a, ra, -jt * t, vel, L, inv_mass)
     if b >= 0:
         _apply(b, rb, jt * t, vel, L, inv_mass)
@@ -231,14 +275,14 @@ def _sphere_flight(b, x, vel, q, L, inv_mass, inv_body, radius, rest, fric, plan
         _flight(b, x, vel, q, L, inv_body, g, first)
         n = plane_n[which]
         _resolve(b, -1, x[b] - radius[b] * n, n, rest[b], fric[b], x, vel, q, L, inv_mass,
-                 inv_body, v_rest)
+                 inv_body, v_rest, np.zeros((0, 4)), np.zeros(1, np.int64))
         left -= first
     _flight(b, x, vel, q, L, inv_body, g, left)
 
 
 @njit(cache=True)
 def _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start, rest,
-                fric, plane_p, plane_n, v_rest, push):
+                fric, plane_p, plane_n, v_rest, push, cache, counter):
     """Body b against every plane: the velocity impulses at each point below it, or (with
     ``push``) the body moved out by the deepest point's depth."""
     for p in range(len(plane_p)):
@@ -250,7 +294,7 @@ def _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_s
                 deepest = depth
                 if not push:
                     _resolve(b, -1, x[b] - radius[b] * n, n, rest[b], fric[b], x, vel, q, L,
-                             inv_mass, inv_body, v_rest)
+                             inv_mass, inv_body, v_rest, cache, counter)
         else:
             r = _matrix(q[b])
             for k in range(hull_start[b], hull_start[b + 1]):
@@ -260,14 +304,14 @@ def _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_s
                     deepest = max(deepest, depth)
                     if not push:
                         _resolve(b, -1, point, n, rest[b], fric[b], x, vel, q, L, inv_mass,
-                                 inv_body, v_rest)
+                                 inv_body, v_rest, cache, counter)
         if push and deepest > 0.0:
             x[b] += deepest * n
 
 
 @njit(cache=True)
 def _sphere_pass(a, b, c, rc, x, vel, q, L, inv_mass, inv_body, radius, rest, fric, v_rest,
-                 push):
+                 push, cache, counter):
     """Body a against body b's bounding sphere, or (b = -1) the static sphere (c, rc)."""
     other = c if b < 0 else x[b]
     reach = radius[a] + (rc if b < 0 else radius[b])
@@ -285,12 +329,88 @@ def _sphere_pass(a, b, c, rc, x, vel, q, L, inv_mass, inv_body, radius, rest, fr
         return
     e = rest[a] if b < 0 else math.sqrt(rest[a] * rest[b])
     mu = fric[a] if b < 0 else math.sqrt(fric[a] * fric[b])
-    _resolve(a, b, x[a] - radius[a] * n, n, e, mu, x, vel, q, L, inv_mass, inv_body, v_rest)
+    _resolve(a, b, x[a] - radius[a] * n, n, e, mu, x, vel, q, L, inv_mass, inv_body, v_rest, cache, counter)
 
 
 @njit(cache=True)
-def step_world(x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start, rest, fric,
-               plane_p, plane_n, sphere_c, sphere_r, g, dt, iterations, v_rest):
+def _separation(a, b, x, q, hull, hull_start, faces, face_start):
+    """Over b's face planes, the one that a's points are least far behind (the separating
+    axis test over one body's face normals): ``(separation, face)``; a separation above 0
+    is a gap."""
+    ra, rb = _matrix(q[a]), _matrix(q[b])
+    best, which = -1e300, -1
+    for f in range(face_start[b], face_start[b + 1]):
+        n = rb @ faces[f, :3]
+        d = faces[f, 3] + np.dot(n, x[b])
+        low = 1e300
+        for k in range(hull_start[a], hull_start[a + 1]):
+            low = min(low, np.dot(n, x[a] + ra @ hull[k]) - d)
+        if low > best:
+            best, which = low, f
+    return best, which
+
+
+@njit(cache=True)
+def _hull_pass(a, b, x, vel, q, L, inv_mass, inv_body, hull, hull_start, faces, face_start,
+               rest, fric, v_rest, push, cache, counter):
+    """Two convex bodies: the axis of least overlap among both bodies' face normals (none
+    with a gap: they touch), then every point of the other body inside the face's body gets
+    an impulse along that one normal; or (with ``push``) the two are moved apart by the
+    overlap. One normal for the whole contact keeps a resting stack from being pushed
+    sideways by the nearest side face of a corner."""
+    sep_ab, face_ab = _separation(a, b, x, q, hull, hull_start, faces, face_start)
+    if sep_ab >= 0.0:
+        return
+    sep_ba, face_ba = _separation(b, a, x, q, hull, hull_start, faces, face_start)
+    if sep_ba >= 0.0:
+        return
+    if sep_ab >= sep_ba:                    # b's face: a's points go in
+        ref, inc, face, depth, sign = b, a, face_ab, -sep_ab, 1.0
+    else:
+        ref, inc, face, depth, sign = a, b, face_ba, -sep_ba, -1.0
+    rr, ri = _matrix(q[ref]), _matrix(q[inc])
+    n = rr @ faces[face, :3]                # out of ref, into inc
+    if push:
+        share = inv_mass[inc] / (inv_mass[inc] + inv_mass[ref])
+        x[inc] += depth * share * n
+        x[ref] -= depth * (1.0 - share) * n
+        return
+    e = math.sqrt(rest[a] * rest[b])
+    mu = math.sqrt(fric[a] * fric[b])
+    for k in range(hull_start[inc], hull_start[inc + 1]):
+        point = x[inc] + ri @ hull[k]
+        local = rr.T @ (point - x[ref])
+        inside = True
+        for f in range(face_start[ref], face_start[ref + 1]):
+            if faces[f, 0] * local[0] + faces[f, 1] * local[1] + faces[f, 2] * local[2] > faces[f, 3]:
+                inside = False
+                break
+        if inside:
+            _resolve(inc, ref, point, n, e, mu, x, vel, q, L, inv_mass, inv_body, v_rest,
+                     cache, counter)
+
+
+@njit(cache=True)
+def _pair(a, b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start, faces,
+          face_start, rest, fric, v_rest, push, cache, counter):
+    """Two bodies: convex hulls by their vertices against each other's faces (once their
+    bounding spheres meet), anything else by the bounding spheres."""
+    convex = face_start[a + 1] > face_start[a] and face_start[b + 1] > face_start[b]
+    if not convex:
+        _sphere_pass(a, b, x[a], 0.0, x, vel, q, L, inv_mass, inv_body, radius, rest, fric,
+                     v_rest, push, cache, counter)
+        return
+    d = x[a] - x[b]
+    if np.dot(d, d) >= (radius[a] + radius[b]) ** 2:
+        return
+    _hull_pass(a, b, x, vel, q, L, inv_mass, inv_body, hull, hull_start, faces, face_start,
+               rest, fric, v_rest, push, cache, counter)
+
+
+@njit(cache=True)
+def step_world(x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start, faces,
+               face_start, rest, fric, plane_p, plane_n, sphere_c, sphere_r, g, dt, iterations,
+               v_rest):
     """One fixed step of every body: flight, ``iterations`` passes of contact impulses, then
     ``iterations`` passes pushing the bodies out of what they entered."""
     n = len(x)
@@ -300,19 +420,24 @@ def step_world(x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start
                            plane_n, g, dt, v_rest)
         else:
             _flight(b, x, vel, q, L, inv_body, g, dt)
+    cache = np.zeros((MAX_CONTACTS, 4))
+    counter = np.zeros(1, np.int64)
     for stage in range(2):
         push = stage == 1
-        for _ in range(iterations):
+        for it in range(iterations):
+            counter[0] = 0
+            # (a contact's bounce is set on its first pass; a later pass bounces nothing)
+            bounce = v_rest if it == 0 else np.inf
             for b in range(n):
                 _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull,
-                            hull_start, rest, fric, plane_p, plane_n, v_rest, push)
+                            hull_start, rest, fric, plane_p, plane_n, bounce, push, cache, counter)
                 for s in range(len(sphere_c)):
                     _sphere_pass(b, -1, sphere_c[s], sphere_r[s], x, vel, q, L, inv_mass,
-                                 inv_body, radius, rest, fric, v_rest, push)
+                                 inv_body, radius, rest, fric, bounce, push, cache, counter)
             for a in range(n):
                 for b in range(a + 1, n):
-                    _sphere_pass(a, b, x[a], 0.0, x, vel, q, L, inv_mass, inv_body, radius,
-                                 rest, fric, v_rest, push)
+                    _pair(a, b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull,
+                          hull_start, faces, face_start, rest, fric, bounce, push, cache, counter)
 
 
 # ---------------------------------------------------------------------- the world
@@ -349,6 +474,8 @@ class World:
         self.shape = np.array([body.shape for body in b], np.int64)
         self.hull = np.concatenate([body.hull for body in b] + [np.zeros((0, 3))])
         self.hull_start = np.concatenate([[0], np.cumsum([len(body.hull) for body in b])]).astype(np.int64)
+        self.faces = np.concatenate([body.faces for body in b] + [np.zeros((0, 4))])
+        self.face_start = np.concatenate([[0], np.cumsum([len(body.faces) for body in b])]).astype(np.int64)
         self.rest = np.array([body.restitution for body in b], np.float64)
         self.fric = np.array([body.friction for body in b], np.float64)
         self.plane_p = np.array([p for p, _ in self.planes], np.float64).reshape(-1, 3)
@@ -372,7 +499,8 @@ class World:
 
     def step(self) -> None:
         step_world(self.x, self.v, self.q, self.L, self.inv_mass, self.inv_body, self.radius,
-                   self.shape, self.hull, self.hull_start, self.rest, self.fric, self.plane_p,
+                   self.shape, self.hull, self.hull_start, self.faces, self.face_start,
+                   self.rest, self.fric, self.plane_p,
                    self.plane_n, self.sphere_c, self.sphere_r, self.gravity, self.dt,
                    self.iterations, self.v_rest)
         self.step_index += 1

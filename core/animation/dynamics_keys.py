@@ -30,7 +30,8 @@ import numpy as np
 
 from core.animation.dynamics import (DEFAULT_STEP, HULL, MAX_BODIES, MAX_DYNAMICS_WORK,
                                      MAX_HULL_VERTICES, MAX_SIMULATION_STEPS, MIN_STEP, SHAPES,
-                                     SPHERE, Body, World, mass_properties)
+                                     SPHERE, Body, World, face_planes,
+                                     mass_properties)
 from core.scene.formats.keys import register_scene_keys
 
 TOP_KEYS = ("dynamics", "body")
@@ -142,13 +143,14 @@ def _body(reader, table, path, scene, anim, tables) -> Body:
     if primitive is not None:
         center, radius = np.array(primitive.center, np.float64), float(primitive.radius)
         inertia = 0.4 * mass * radius ** 2 * np.eye(3)
-        hull = np.zeros((0, 3))
+        hull, faces = np.zeros((0, 3)), np.zeros((0, 4))
     else:
-        center, inertia, hull = _solid(reader, meshes, mass, path + ("mesh",), name)
+        center, inertia, hull, faces = _solid(reader, meshes, mass, path + ("mesh",), name)
         radius = float(np.max(np.linalg.norm(hull, axis=1)))
     body = Body(name=name, meshes=list(indices), mass=mass, center=center, inertia=inertia,
                 radius=radius, hull=hull if shape == "hull" else np.zeros((0, 3)),
                 shape=HULL if shape == "hull" else SPHERE,
+                faces=faces if shape == "hull" else np.zeros((0, 4)),
                 velocity=np.array(reader.vector(t.get("velocity", [0, 0, 0]), path + ("velocity",),
                                                 3, -1e6, 1e6)),
                 spin=np.radians(reader.vector(t.get("spin", [0, 0, 0]), path + ("spin",), 3,
@@ -173,12 +175,27 @@ def _solid(reader, meshes, mass, path, name):
     if not volume > 0.0:
         raise reader.fail(path, f"{name!r} encloses no volume ({volume:.3g}: flat, or wound "
                                 "inside out) and so has no inertia")
-    points = np.unique(positions, axis=0) - centroid
+    points = _contact_points(positions, triangles) - centroid
     if len(points) > MAX_HULL_VERTICES:
-        raise reader.fail(path, f"{name!r} has {len(points):,} vertices; a hull body tests at "
-                                f"most {MAX_HULL_VERTICES:,} against the planes (use a coarser "
-                                "mesh or shape = \"sphere\")")
-    return centroid, unit * (mass / volume), points
+        raise reader.fail(path, f"{name!r} has {len(points):,} contact points (vertices and "
+                                f"points along the edges); a hull body has at most "
+                                f"{MAX_HULL_VERTICES:,} (use a coarser mesh or shape = "
+                                "\"sphere\")")
+    return centroid, unit * (mass / volume), points, face_planes(points, positions - centroid,
+                                                                 triangles)
+
+
+EDGE_POINTS = (0.25, 0.5, 0.75)   # along each edge too: where two boxes meet edge on edge,
+                                  # no corner of either is inside the other
+
+
+def _contact_points(positions: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """The points a hull body collides by: its vertices and points along its edges."""
+    edges = np.unique(np.sort(np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]],
+                                              triangles[:, [2, 0]]]), axis=1), axis=0)
+    a, b = positions[edges[:, 0]], positions[edges[:, 1]]
+    along = [a + f * (b - a) for f in EDGE_POINTS]
+    return np.unique(np.concatenate([positions] + along), axis=0)
 
 
 def _check_budget(reader, world: World, anim) -> None:
@@ -213,12 +230,24 @@ def _check_apart(reader, world: World) -> None:
     if len(x) > 1:
         gap = np.linalg.norm(x[:, None] - x[None], axis=2) - (r[:, None] + r[None])
         gap[np.tril_indices(len(x))] = np.inf
-        i, j = np.unravel_index(int(np.argmin(gap)), gap.shape)
-        if gap[i, j] < -START_GAP * max(1.0, r[i], r[j]):
-            raise reader.fail(("body", int(j) + 1), f"{world.bodies[j].name!r} starts inside "
-                                                    f"{world.bodies[i].name!r} (their bounding "
-                                                    f"spheres overlap by {-gap[i, j]:.3g}); "
-                                                    "move them apart")
+        for i, j in zip(*np.nonzero(gap < -START_GAP * np.maximum(1.0, np.maximum(r[:, None], r[None])))):
+            a, b = world.bodies[i], world.bodies[j]
+            if len(a.faces) and len(b.faces):          # convex: by vertices against faces
+                depth = max(_inside(a.hull + x[i] - x[j], b.faces),
+                            _inside(b.hull + x[j] - x[i], a.faces))
+                if depth <= START_GAP * max(1.0, r[i], r[j]):
+                    continue
+                what = f"a corner of one is {depth:.3g} inside the other"
+            else:
+                what = f"their bounding spheres overlap by {-gap[i, j]:.3g}"
+            raise reader.fail(("body", int(j) + 1), f"{b.name!r} starts inside {a.name!r} "
+                                                    f"({what}); move them apart")
+
+
+def _inside(points: np.ndarray, faces: np.ndarray) -> float:
+    """How deep the deepest of ``points`` is inside the convex solid of ``faces`` (0: none)."""
+    gaps = np.max(points @ faces[:, :3].T - faces[:, 3], axis=1)
+    return float(max(0.0, -gaps.min()))
 
 
 register_scene_keys("dynamics", TOP_KEYS, read_dynamics, arrays=("body",))
