@@ -247,13 +247,28 @@ def test_recent_files_survive_a_restart_and_a_bad_list_is_ignored(tmp_path, caps
 
 
 @pytest.mark.xvfb
-def test_a_dropped_file_opens_in_the_window_and_enters_recent(tmp_path, monkeypatch):
-    # The window in this process on Xvfb: its drop handler called as glfw would call it.
+def test_a_dropped_file_opens_in_the_window_and_enters_recent(tmp_path):
+    # The window on Xvfb, its drop handler called as glfw would call it. It runs in a fresh
+    # process: after the EGL contexts of other tests in this one, libglvnd's GLX refuses
+    # glfw's window with an X error, and Xlib's default handler ends the whole process.
     need_programs("Xvfb", install="apt-get install xvfb")
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
     xvfb, display = start_xvfb()
-    monkeypatch.setenv("DISPLAY", display)
-    monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)
-    monkeypatch.setenv("FVD_CONFIG_DIR", str(tmp_path / "config"))
+    try:
+        with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+            pool.submit(_drop_session, tmp_path, display).result(timeout=300)
+    finally:
+        xvfb.kill()
+        xvfb.wait(timeout=10)
+
+
+def _drop_session(tmp_path, display) -> None:
+    import ctypes
+    import os
+    os.environ.update(DISPLAY=display, FVD_CONFIG_DIR=str(tmp_path / "config"))
+    os.environ.pop("WAYLAND_DISPLAY", None)
+    from app.viewer.files import RecentFiles
     from app.viewer.state import ViewerState
     from app.viewer.window import ViewerWindow
     state = ViewerState.open(ROOT_SCENES / "house.toml", size=(160, 120))
@@ -266,8 +281,6 @@ def test_a_dropped_file_opens_in_the_window_and_enters_recent(tmp_path, monkeypa
             window.draw_frame()                      # the window goes on
         assert state.scene.name.lower().startswith("fvdfh house")
         # glfw's own call: C strings, one of them not UTF-8
-        import ctypes
-        import os
         names = [os.fsencode(tmp_path) + b"/caf\xe9.tri"]
         window._drop_callback(None, 1, (ctypes.c_char_p * 1)(*names))
         assert "not UTF-8" in state.open_messages[-1]
@@ -278,12 +291,9 @@ def test_a_dropped_file_opens_in_the_window_and_enters_recent(tmp_path, monkeypa
         assert window.on_drop([str(tri)]) is True
         assert state.scene_source == str(tri) and state.open_messages == []
         window.draw_frame()
-        from app.viewer.files import RecentFiles
         assert RecentFiles().paths[:2] == [str(tri), str((ROOT_SCENES / "house.toml"))]
     finally:
         window.close()
-        xvfb.kill()
-        xvfb.wait(timeout=10)
 
 
 # -- the hands on a ViewerState, and --reference (no window) --------------------------------

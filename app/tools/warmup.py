@@ -335,7 +335,7 @@ def compile_bytecode() -> bool:
 
 
 # Seconds each step took from an empty kernel cache, all of them one after another in one
-# process (the warm-up before issue 33, a 2-core machine; docs/bench/warmup-before.txt): the
+# process (the one-process warm-up of before, a 2-core machine; docs/bench/warmup-before.txt): the
 # scheduler starts the longest first, so that no long step is left for the end while the
 # other cores idle. A step's cost includes the kernels it was the first to need; a step not
 # listed counts as DEFAULT_COST. Refresh it from a cold run's lines when the steps change.
@@ -413,6 +413,16 @@ COSTS: dict[str, float] = {
     "depth, parallel, edge rasterizer": 0.0,
     "depth, parallel, scanline rasterizer": 0.0,
     "depth, parallel, open mesh and lines": 0.0,
+    # Steps added since, from the cold warm-up of a CI run (2 workers, 2 cores):
+    "rigid bodies and linkages (both IK solvers)": 33.56,
+    "cook_torrance.toml, every renderer, shading and filter": 28.65,
+    "fast_wheel.toml, every renderer, shading and filter": 15.61,
+    "blocks_falling.toml, every renderer, shading and filter": 12.41,
+    "scan-line visible surface (Watkins)": 7.70,
+    "flock.toml, every renderer, shading and filter": 1.71,
+    "robot_arm.toml, every renderer, shading and filter": 0.75,
+    "mach_bands.toml, every renderer, shading and filter": 0.07,
+    "house_projections.toml, every renderer, shading and filter": 0.03,
 }
 DEFAULT_COST = 5.0
 
