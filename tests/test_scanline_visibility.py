@@ -103,6 +103,8 @@ def _triangle_scenes():
     for path in shipped_scenes():
         if path.name == "glass_bunny.toml":
             continue                      # the bunny has its own test (it may be absent)
+        if load_scene(path).triangle_count == 0:
+            continue                      # lines only: no surface to find
         out.append(path)
     return out
 
@@ -110,8 +112,6 @@ def _triangle_scenes():
 @pytest.mark.parametrize("path", _triangle_scenes(), ids=lambda p: p.name)
 def test_every_shipped_scene_as_the_zbuffer_draws_it(path):
     scene = load_scene(path)
-    if scene.triangle_count == 0:
-        pytest.skip(f"{path.name} has no triangles (lines only)")
     shading = SHADINGS[sum(map(ord, path.name)) % 3]       # each scene in one of the three
     settings = RenderSettings.for_scene(scene, shading=shading, size=(64, 48), samples=1)
     _check_against_zbuffer(scene, settings)
