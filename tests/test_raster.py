@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from core.pipeline import raster
-from core.pipeline.raster import (SUBPIXEL_ONE, VisibilityBuffer, count_fragments, default_bands,
+from core.pipeline.raster import (SUBPIXEL_ONE, VisibilityBuffer, count_fragments,
                          rasterize)
 
 
@@ -370,7 +370,6 @@ def test_parallel_bands_are_bit_identical_to_serial(n_bands, monkeypatch):
             assert np.array_equal(getattr(serial, name), getattr(banded, name)), name
         assert np.array_equal(count_fragments(xy_z, inv_w, tris, w, h, parallel=False),
                               count_fragments(xy_z, inv_w, tris, w, h, n_bands=n_bands))
-    assert 1 <= default_bands(500) <= 16
 
 
 # --- an independent reference for the fill rule ----------------------------------------------

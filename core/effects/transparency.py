@@ -33,10 +33,6 @@ MODES = ("off", "interpolated", "screen-door")
 BAYER = np.array([[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]])
 
 
-def has_transparency(scene) -> bool:
-    return any(m.material.kt > 0 and len(m.triangles) for m in scene.meshes)
-
-
 def split_scene(scene, context):
     """``(opaque scene, transparent scene)``, kept in the context while ``scene`` lives; the
     transparent meshes are open (both faces drawn: one sees the back of a glass through it)."""

@@ -77,7 +77,6 @@ PIXEL_CENTRE = SUBPIXEL_ONE // 2  # a pixel centre sits half a pixel in
 COORD_LIMIT = float(1 << 20)
 INVALID = np.int32(np.iinfo(np.int32).min)  # fixed x of a vertex no triangle may use
 MAX_SIZE = 1 << 15  # framebuffer width and height limit
-MAX_BANDS = 16  # what default_bands() promises its callers (the banded rasterizer's limit)
 TILE_BITS = 6
 TILE = 1 << TILE_BITS  # 64 x 64 pixel tiles: the unit of parallel work, and its z-buffer fits in L2
 BLOCK_BITS = 3
@@ -815,12 +814,6 @@ def _rast_serial(n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, t
 
 _NO_FRAGMENTS = np.zeros((1, 1), np.int32)
 _NO_PARALLEL_CHUNKS = 1
-
-
-def default_bands(height: int) -> int:
-    """Kept for callers of the banded rasterizer: the tile rows of a frame this high (the
-    tiles, not bands, are now what the cores share), at most ``MAX_BANDS``."""
-    return max(1, min(MAX_BANDS, -(-int(height) // TILE)))
 
 
 def _checked(xy_z, inv_w, triangles, width, height):

@@ -29,7 +29,7 @@ import math
 
 import numpy as np
 
-from core.jit import njit, prange
+from core.jit import njit
 from core.shading.illumination import OD, TWO_SIDED, quantize, unit3
 from core.shading.models.dispatch import light_point
 from core.texture.sample import BILINEAR, sample
@@ -240,30 +240,3 @@ def textured_at(attrs, i0, i1, i2, w0, w1, w2, u, v, dudx, dvdx, dudy, dvdy, s, 
         g = (1 - k) * g + k * encode_srgb(eg)
         b = (1 - k) * b + k * encode_srgb(eb)
     return r, g, b
-
-
-@njit(cache=True, parallel=True, nogil=True)
-def resolve_textured(tri, b1, b2, triangles, attrs, constants, source, face_surface, surfaces,
-                     maps, texels, levels, textures, filter_, bump, lights, ambient, eye,
-                     halfway, background8, out):
-    """Every pixel of the visibility buffer: the textured Phong colour, or the background."""
-    height, width = tri.shape
-    for row in prange(height):
-        surf = surfaces.copy()                  # per row: the pixel writes its texture's O_d
-        for col in range(width):
-            t = tri[row, col]
-            if t < 0:
-                for c in range(3):
-                    out[row, col, c] = background8[c]
-                continue
-            i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
-            w1, w2 = b1[row, col], b2[row, col]
-            s = face_surface[source[t]]
-            r, g, b = textured_pixel(attrs, i0, i1, i2, 1.0 - w1 - w2, w1, w2, t, col, row,
-                                     constants, s, maps, texels, levels, textures, filter_,
-                                     bump, surf, lights, ambient, eye, halfway)
-            for c in range(3):
-                surf[s, OD + c] = surfaces[s, OD + c]
-            out[row, col, 0] = quantize(r)
-            out[row, col, 1] = quantize(g)
-            out[row, col, 2] = quantize(b)
