@@ -97,3 +97,17 @@ def test_the_time_plan_is_stratified():
     for k in range(16):
         assert np.all(picks[k] // m == k)
         assert np.all((fractions[picks[k]] >= k / 16) & (fractions[picks[k]] < (k + 1) / 16))
+
+
+def test_the_blur_method_is_refused_where_it_cannot_be(tmp_path, capsys):
+    from app.cli import main
+    path = tmp_path / "square.toml"
+    path.write_text(moving(0.0))
+    assert main(["animate", str(path), "--out", str(tmp_path / "f"), "--motion-blur", "4",
+                 "--blur-method", "per-ray"]) == 2
+    assert "--blur-method per-ray is the ray tracer's: give --renderer raytrace" \
+        in capsys.readouterr().err
+    assert main(["animate", str(path), "--out", str(tmp_path / "f"),
+                 "--blur-method", "accumulate"]) == 2
+    assert "--blur-method is the motion blur's: give --motion-blur SAMPLES too" \
+        in capsys.readouterr().err

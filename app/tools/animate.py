@@ -90,6 +90,10 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
                    metavar=("OPEN", "CLOSE"),
                    help="when the shutter opens and closes, in frames from the frame's time "
                         "(default -0.25 0.25: a 180-degree shutter centred on it)")
+    p.add_argument("--blur-method", choices=("auto", "accumulate", "per-ray"), default=None,
+                   help="how the motion blur is sampled: accumulate whole frames, or (the ray "
+                        "tracer's) a time per ray; auto (default): per-ray for the ray tracer, "
+                        "accumulate for the others")
     p.add_argument("--projection", choices=PROJECTIONS, default=None)
     p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
     p.add_argument("--view", type=_number(int, 1, 10 ** 6), default=None, metavar="K",
@@ -151,10 +155,15 @@ def job_of(args, animation, bundle, view_index: int) -> dict:
                 "shading": args.shading or scene.shading,
                 "renderer": args.renderer or "zbuffer", "view": view_index, "paths": args.paths}
     shutter = _shutter(args, animation)
+    if shutter.method == "per-ray" and settings["renderer"] != "raytrace":
+        raise JobError("--blur-method per-ray is the ray tracer's: give --renderer raytrace "
+                       "(the other renderers accumulate whole frames)")
     if shutter.samples > 1 or getattr(animation, "shutter", None) is not None:
         # (recorded only where frames are blurred, or kept sharp against the scene's
         # blur: the sharp jobs of sharp scenes keep the hash they had)
         settings["motion_blur"] = [shutter.samples, shutter.open, shutter.close]
+        if shutter.method != "auto":          # (auto keeps the hash jobs had before)
+            settings["motion_blur"].append(shutter.method)
     return {"scene": Path(args.scene).name, "bundle": bundle.digest, "fps": fps,
             "frames": int(count), "settings": settings,
             "load_size": list(args.size) if args.size else None}
@@ -173,8 +182,11 @@ def _shutter(args, animation):
         raise JobError("--shutter is the motion blur's: give --motion-blur SAMPLES too")
     if opening is None and scene is not None:
         opening = (scene.open, scene.close)
+    method = getattr(args, "blur_method", None)
+    if method not in (None, "auto") and samples == 1:
+        raise JobError("--blur-method is the motion blur's: give --motion-blur SAMPLES too")
     try:
-        return Shutter(samples, *(opening or (Shutter.open, Shutter.close)))
+        return Shutter(samples, *(opening or (Shutter.open, Shutter.close)), method or "auto")
     except ValueError as error:
         raise JobError(f"--shutter: {error}") from None
 
