@@ -111,3 +111,38 @@ def test_the_blur_method_is_refused_where_it_cannot_be(tmp_path, capsys):
                  "--blur-method", "accumulate"]) == 2
     assert "--blur-method is the motion blur's: give --motion-blur SAMPLES too" \
         in capsys.readouterr().err
+
+
+def panning(left0: float) -> str:
+    """The square still, left edge at ``left0``, and the keyed camera moving the other way at
+    64 px/s: the picture of :func:`moving` (``left0``), seen by a moving eye."""
+    still = SQUARE.split("[animation]")[0]
+    view = 'vpn = [0, 0, 1], vup = [0, 1, 0], prp = [32, 0, 10], window = [0, 64, -4, 4]'
+    return (still + '[animation]\nduration = 1\nfps = 1\n'
+            'interpolation = "linear"\n'
+            f'[[key]]\ntime = 0\nview = {{ vrp = [0, 0, 0], {view} }}\n'
+            f'object.square = {{ translate = [{4 + left0}, 0, 0] }}\n'
+            f'[[key]]\ntime = 1\nview = {{ vrp = [-64, 0, 0], {view} }}\n'
+            f'object.square = {{ translate = [{4 + left0}, 0, 0] }}\n')
+
+
+def test_a_moving_camera_blurs_per_ray_as_the_moving_square_does():
+    """Each ray's primary ray comes from the keyed view at its time: the still square seen
+    by a panning eye gets the same box-filtered coverage, within the same 2/64."""
+    got = frame(panning(0.3), 0.5, Shutter(64))
+    assert got.stats["motion blur"].startswith("per ray")
+    assert np.array_equal(row(frame(panning(0.3), 0.5)),
+                          (np.abs(np.arange(64) + 0.5 - 36.3) < 4).astype(float))
+    error = np.abs(row(got) - coverage(0.3))
+    assert error.max() <= 2 / 64 + 0.5 / 255, error.max()
+    assert error.mean() < 1 / 128, error.mean()
+
+
+def test_a_restored_simulation_starts_at_the_shutters_opening():
+    """A ray's time may lie anywhere in its part of the shutter, before the accumulation's
+    first midpoint: the state handed to a worker is the one at the opening."""
+    assert Shutter(4).opens(1.0, 30.0) == pytest.approx(1.0 - 0.25 / 30.0)
+    assert Shutter(4, 0.0, 0.5).opens(1.0, 30.0) == 1.0
+    assert Shutter(1).opens(1.0, 30.0) == 1.0
+    fractions, _ = ray_blur.time_plan((1, 2, 2), 4, 0, 1.0)
+    assert fractions.min() < 0.5 / 4                   # before the first midpoint, here

@@ -470,9 +470,9 @@ class _Checkpoints:
         self.shadow = Shadow(animation)
 
     def at(self, k: int):
-        """The state at frame k's first time (its shutter's first sample when blurred)."""
+        """The state at frame k's first time (its shutter's opening when blurred)."""
         t = k / self.fps
-        return self.shadow.at(self.shutter.times(t, self.fps)[0] if self.shutter else t)
+        return self.shadow.at(self.shutter.opens(t, self.fps) if self.shutter else t)
 
     def restore(self, k: int) -> None:
         """Put this process's simulations at frame ``k`` (the start of a run it renders)."""

@@ -58,6 +58,12 @@ class Shutter:
         return [t + (self.open + (i + 0.5) / self.samples * span) / fps
                 for i in range(self.samples)]
 
+    def opens(self, t: float, fps: float) -> float:
+        """The earliest time a sample of the frame at t takes: the shutter's opening (a ray's
+        time may lie anywhere in its part; the accumulated samples start later, at the
+        first part's midpoint). What a simulation restored for the frame starts from."""
+        return t if self.samples == 1 else t + self.open / fps
+
 
 MAX_BLUR_SAMPLES = 1024
 BLUR_METHODS = ("auto", "accumulate", "per-ray")
