@@ -146,3 +146,16 @@ def test_a_restored_simulation_starts_at_the_shutters_opening():
     assert Shutter(1).opens(1.0, 30.0) == 1.0
     fractions, _ = ray_blur.time_plan((1, 2, 2), 4, 0, 1.0)
     assert fractions.min() < 0.5 / 4                   # before the first midpoint, here
+
+
+def test_what_the_tracer_cannot_take_per_ray_is_accumulated_and_says_why():
+    from core.paths import ROOT
+    from core.scene.formats import load_scene
+    scene = load_scene(str(ROOT / "scenes" / "fountain.toml"))
+    anim = animation_of(scene)
+    settings = RenderSettings.for_scene(scene, size=(40, 30), renderer="raytrace")
+    got = render_at(anim, 0.5, settings, shutter=Shutter(2))
+    assert got.stats["motion blur"] == ("accumulated (particles are drawn over the picture, "
+                                        "not traced)")
+    square = frame(moving(0.0), 0.5, Shutter(4), samples=4, pixel_filter="gaussian")
+    assert square.stats["motion blur"] == "accumulated (per-ray blur box-filters its samples)"
