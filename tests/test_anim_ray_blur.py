@@ -159,3 +159,17 @@ def test_what_the_tracer_cannot_take_per_ray_is_accumulated_and_says_why():
                                         "not traced)")
     square = frame(moving(0.0), 0.5, Shutter(4), samples=4, pixel_filter="gaussian")
     assert square.stats["motion blur"] == "accumulated (per-ray blur box-filters its samples)"
+
+
+def test_a_frame_traced_in_bands_keeps_the_bound(monkeypatch):
+    """Past MAX_BAND_RAYS the plan is drawn band by band (here one row a band: 8 bands),
+    each bucket's scene still made once: the same bound, the same bytes run to run, and a
+    still scene still its sharp frame."""
+    monkeypatch.setattr(ray_blur, "MAX_BAND_RAYS", 64 * 64)
+    got = frame(moving(0.3), 0.5, Shutter(64)).color
+    assert np.array_equal(got, frame(moving(0.3), 0.5, Shutter(64)).color)
+    error = np.abs(got[..., 0] / 255 - coverage(0.3))
+    assert error.max() <= 2 / 64 + 0.5 / 255 and error.mean() < 1 / 128
+    assert not np.all(got == got[0])                        # each row its own draws
+    still = SQUARE.split("[animation]")[0] + "[animation]\nduration = 1\nfps = 1\n"
+    assert np.array_equal(frame(still, 0.5, Shutter(16)).color, frame(still, 0.5).color)

@@ -86,11 +86,11 @@ def render_at(animation, t: float, settings, context=None, view_index: int = 0,
             frame = _blurred(animation, t, settings, context, view_index, paths, shutter)
             frame.stats["motion blur"] = f"accumulated ({why})" if why else "accumulated"
             return frame
-        if paths:
+        if paths:          # the view at t alone: scene_at(t) would step simulations back
             from core.animation.paths import draw_paths, paths_of
-            scene = animation.scene_at(t)
-            draw_paths(frame, paths_of(animation), scene.views[view_index % len(scene.views)],
-                       settings)
+            keyed = animation.view_at(animation.local_time(t))
+            views = ([keyed] if keyed is not None else []) + list(animation.scene.views)
+            draw_paths(frame, paths_of(animation), views[view_index % len(views)], settings)
         return frame
     scene = animation.scene_at(t)
     if not scene.views:

@@ -39,14 +39,29 @@ def buckets_per_stratum(samples: int) -> int:
 def time_plan(shape: tuple, samples: int, seed: int, t: float):
     """``(fractions (B,), picks (S, J, H, W))``: the buckets' times as fractions of the
     shutter in [0, 1), and each ray's bucket (stratum k's rays pick within stratum k)."""
+    fractions, bands = _plan(shape, samples, seed, t, shape[1])
+    return fractions, next(bands)[1]
+
+
+def _plan(shape: tuple, samples: int, seed: int, t: float, rows: int):
+    """The buckets' fractions, and an iterator of ``(row0, picks)`` for bands of ``rows``
+    rows (drawn band after band from one generator: the same plan for the same size)."""
     m = buckets_per_stratum(samples)
     frame_key = int(round(abs(t) * 1e6)) % (1 << 32)
     rng = np.random.default_rng([int(seed) % (1 << 32), frame_key])
     count = samples * m
     fractions = (np.arange(count) + rng.random(count)) / count
-    picks = rng.integers(0, m, size=(samples, *shape)) + (np.arange(samples) * m).reshape(
-        (samples,) + (1,) * len(shape))
-    return fractions, picks
+    films, height, width = shape
+    first = (np.arange(samples, dtype=np.uint16) * m).reshape(samples, 1, 1, 1)
+
+    def bands():
+        for row0 in range(0, height, rows):
+            band = (samples, films, min(rows, height - row0), width)
+            yield row0, rng.integers(0, m, size=band, dtype=np.uint16) + first
+    return fractions, bands()
+
+
+MAX_BAND_RAYS = 1 << 23     # rays a band: its picks sorted at a time (int64 indices, 64 MB)
 
 
 def usable(animation, t: float, settings) -> str | None:
@@ -66,35 +81,44 @@ def usable(animation, t: float, settings) -> str | None:
 
 def render_per_ray(animation, t: float, settings, view_index: int, shutter, context=None):
     """The frame at ``t`` blurred per ray (the module's text), or None when a bucket's scene
-    cannot be ray traced (the caller's accumulated path then says why)."""
+    cannot be ray traced (the caller's accumulated path then says why). The buckets go in
+    time order, each scene made once (a simulation only steps on)."""
     from core.camera.film import sample_offsets
     from core.raytrace.renderer import TraceOptions
     from core.shading.illumination import to_uint8
     width, height = settings.size
     offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
                if settings.samples > 1 else np.array([settings.pixel_offset], np.float64))
-    fractions, picks = time_plan((len(offsets), height, width), shutter.samples,
-                                 settings.seed, t)
+    per_pixel = len(offsets) * shutter.samples
+    rows = max(1, MAX_BAND_RAYS // (per_pixel * max(1, width)))
+    fractions, bands = _plan((len(offsets), height, width), shutter.samples, settings.seed,
+                             t, rows)
     times = t + (shutter.open + fractions * (shutter.close - shutter.open)) / animation.fps
+    plans = [_sorted(row0, picks, len(times)) for row0, picks in bands]
     total = np.zeros((height, width, 3))
-    counts, rays = None, 0
     options = TraceOptions.from_settings(settings)
-    order = np.argsort(picks.ravel(), kind="stable")      # the rays bucket by bucket
-    bounds = np.searchsorted(picks.ravel()[order], np.arange(len(times) + 1))
+    counts, scene = None, None
     for b, when in enumerate(times):
-        if bounds[b] == bounds[b + 1]:
+        if all(bounds[b] == bounds[b + 1] for _, _, _, bounds in plans):
             continue
-        k, j, y, x = np.unravel_index(order[bounds[b]:bounds[b + 1]], picks.shape)
-        setup = _setup_at(animation, when, settings, view_index, options, context)
+        setup, scene = _setup_at(animation, when, settings, view_index, options, context)
         if setup is None:
             return None
-        points = np.stack([x + offsets[j, 0], y + offsets[j, 1]], axis=1)
-        _trace_into(total, setup, points, y, x)
+        for row0, shape, order, bounds in plans:
+            _, j, y, x = np.unravel_index(order[bounds[b]:bounds[b + 1]], shape)
+            y = y + row0
+            points = np.stack([x + offsets[j, 0], y + offsets[j, 1]], axis=1)
+            _trace_into(total, setup, points, y, x)
         counts = setup.counts if counts is None else counts + setup.counts
-        rays += len(x)
-    mean = total / (len(offsets) * shutter.samples)
-    return _frame(animation, t, settings, to_uint8(mean), counts, len(times),
-                  len(offsets) * shutter.samples)
+    return _frame(scene, settings, to_uint8(total / per_pixel), counts, len(times), per_pixel)
+
+
+def _sorted(row0, picks, buckets):
+    """A band's rays bucket by bucket: ``(row0, shape, order, bounds)``, bucket b's rays
+    being ``order[bounds[b]:bounds[b + 1]]`` (flat indices into ``shape``; 4 bytes a ray)."""
+    flat = picks.ravel()
+    order = np.argsort(flat, kind="stable").astype(np.int32)
+    return row0, picks.shape, order, np.searchsorted(flat[order], np.arange(buckets + 1))
 
 
 def _trace_into(total, setup, points, y, x) -> None:
@@ -111,21 +135,26 @@ def _setup_at(animation, when, settings, view_index, options, context):
     from core.render import DEFAULT_CONTEXT, lit_as_asked
     scene = animation.scene_at(when)
     if not scene.views:
-        return None
+        return None, scene
     scene = lit_as_asked(scene, settings, context or DEFAULT_CONTEXT)
     view = scene.views[view_index % len(scene.views)]
     try:
         return prepare(scene, view, settings.projection, settings.size, options, None,
-                       settings.keep_aspect)
+                       settings.keep_aspect), scene
     except ValueError:                           # the accumulated path words the message
-        return None
+        return None, scene
 
 
-def _frame(animation, t, settings, color, counts, buckets, per_pixel):
+def _frame(scene, settings, color, counts, buckets, per_pixel):
+    """The frame of the mean colours (its plan from the last bucket's scene: the same
+    meshes and materials at every time, and no simulation stepped back to re-ask)."""
     from core.raytrace import whitted
-    from core.render import Frame
+    from core.render import Frame, plan
     height, width = color.shape[:2]
-    frame = Frame(rgbx=np.empty((height, width, 4), np.uint8), plan=[],
+    stages = plan(scene, settings.projection, settings.shading,
+                  settings.keep_aspect, settings.rasterizer, settings.texture_filter,
+                  settings.renderer, settings.transparency)    # what the window lists
+    frame = Frame(rgbx=np.empty((height, width, 4), np.uint8), plan=stages,
                   stats={"allocated": ["color"], "computed": ["ray tracing"],
                          "renderer": "raytrace", "projection": settings.projection,
                          "shading": settings.shading})
