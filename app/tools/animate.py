@@ -83,9 +83,10 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     p.add_argument("--renderer", default=None, help="a registered renderer (default: zbuffer)")
     p.add_argument("--samples", type=_number(int, 1, 1024), default=None, help="samples per pixel")
     p.add_argument("--motion-blur", type=_number(int, 1, 1024), default=None, metavar="SAMPLES",
-                   help="motion blur: each frame the mean of SAMPLES frames over the shutter "
-                        "interval (the accumulation buffer; 1: sharp; default: the scene's "
-                        "[animation] motion_blur, else 1)")
+                   help="motion blur: SAMPLES times a frame over the shutter interval (the "
+                        "ray tracer: a time per ray, SAMPLES rays a film sample; the others: "
+                        "the mean of SAMPLES frames, the accumulation buffer; 1: sharp; "
+                        "default: the scene's [animation] motion_blur, else 1)")
     p.add_argument("--shutter", type=_number(float, -1.0, 1.0), nargs=2, default=None,
                    metavar=("OPEN", "CLOSE"),
                    help="when the shutter opens and closes, in frames from the frame's time "
