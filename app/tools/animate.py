@@ -83,13 +83,18 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     p.add_argument("--renderer", default=None, help="a registered renderer (default: zbuffer)")
     p.add_argument("--samples", type=_number(int, 1, 1024), default=None, help="samples per pixel")
     p.add_argument("--motion-blur", type=_number(int, 1, 1024), default=None, metavar="SAMPLES",
-                   help="motion blur: each frame the mean of SAMPLES frames over the shutter "
-                        "interval (the accumulation buffer; 1: sharp; default: the scene's "
-                        "[animation] motion_blur, else 1)")
+                   help="motion blur: SAMPLES times a frame over the shutter interval (the "
+                        "ray tracer: a time per ray, SAMPLES rays a film sample; the others: "
+                        "the mean of SAMPLES frames, the accumulation buffer; 1: sharp; "
+                        "default: the scene's [animation] motion_blur, else 1)")
     p.add_argument("--shutter", type=_number(float, -1.0, 1.0), nargs=2, default=None,
                    metavar=("OPEN", "CLOSE"),
                    help="when the shutter opens and closes, in frames from the frame's time "
                         "(default -0.25 0.25: a 180-degree shutter centred on it)")
+    p.add_argument("--blur-method", choices=("auto", "accumulate", "per-ray"), default=None,
+                   help="how the motion blur is sampled: accumulate whole frames, or (the ray "
+                        "tracer's) a time per ray; auto (default): per-ray for the ray tracer, "
+                        "accumulate for the others")
     p.add_argument("--projection", choices=PROJECTIONS, default=None)
     p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
     p.add_argument("--view", type=_number(int, 1, 10 ** 6), default=None, metavar="K",
@@ -151,10 +156,15 @@ def job_of(args, animation, bundle, view_index: int) -> dict:
                 "shading": args.shading or scene.shading,
                 "renderer": args.renderer or "zbuffer", "view": view_index, "paths": args.paths}
     shutter = _shutter(args, animation)
+    if shutter.method == "per-ray" and settings["renderer"] != "raytrace":
+        raise JobError("--blur-method per-ray is the ray tracer's: give --renderer raytrace "
+                       "(the other renderers accumulate whole frames)")
     if shutter.samples > 1 or getattr(animation, "shutter", None) is not None:
         # (recorded only where frames are blurred, or kept sharp against the scene's
         # blur: the sharp jobs of sharp scenes keep the hash they had)
         settings["motion_blur"] = [shutter.samples, shutter.open, shutter.close]
+        if shutter.method != "auto":          # (auto keeps the hash jobs had before)
+            settings["motion_blur"].append(shutter.method)
     return {"scene": Path(args.scene).name, "bundle": bundle.digest, "fps": fps,
             "frames": int(count), "settings": settings,
             "load_size": list(args.size) if args.size else None}
@@ -173,8 +183,11 @@ def _shutter(args, animation):
         raise JobError("--shutter is the motion blur's: give --motion-blur SAMPLES too")
     if opening is None and scene is not None:
         opening = (scene.open, scene.close)
+    method = getattr(args, "blur_method", None)
+    if method not in (None, "auto") and samples == 1:
+        raise JobError("--blur-method is the motion blur's: give --motion-blur SAMPLES too")
     try:
-        return Shutter(samples, *(opening or (Shutter.open, Shutter.close)))
+        return Shutter(samples, *(opening or (Shutter.open, Shutter.close)), method or "auto")
     except ValueError as error:
         raise JobError(f"--shutter: {error}") from None
 
@@ -458,9 +471,9 @@ class _Checkpoints:
         self.shadow = Shadow(animation)
 
     def at(self, k: int):
-        """The state at frame k's first time (its shutter's first sample when blurred)."""
+        """The state at frame k's first time (its shutter's opening when blurred)."""
         t = k / self.fps
-        return self.shadow.at(self.shutter.times(t, self.fps)[0] if self.shutter else t)
+        return self.shadow.at(self.shutter.opens(t, self.fps) if self.shutter else t)
 
     def restore(self, k: int) -> None:
         """Put this process's simulations at frame ``k`` (the start of a run it renders)."""

@@ -9,8 +9,12 @@ Motion blur (temporal antialiasing): with a :class:`Shutter` of S samples the fr
 box filter over the shutter interval, estimated as the accumulation buffer does it — S whole
 frames at the midpoints of S equal parts of ``[t + open/fps, t + close/fps]``, averaged in
 floating point and rounded once. Keyed objects, the keyed camera, rigid bodies, linkages
-and particles are all taken at each sample's time. Every renderer is blurred the same way:
-a time per picture (S pictures), not Cook's time per ray.
+and particles are all taken at each sample's time. That is every renderer's way with
+``method = "accumulate"``, and the z-buffer's by default.
+
+The ray tracer by default (``method = "auto"`` or ``"per-ray"``) blurs as distributed ray
+tracing, a time per primary ray (:mod:`core.animation.ray_blur`): S rays a film sample, at
+stratified times with a per-pixel jitter, each seeing the scene at its own time.
 """
 
 from __future__ import annotations
@@ -32,8 +36,12 @@ class Shutter:
     samples: int = 1
     open: float = -0.25
     close: float = 0.25
+    method: str = "auto"        # BLUR_METHODS: auto is per-ray for the ray tracer, else accumulate
 
     def __post_init__(self) -> None:
+        if self.method not in BLUR_METHODS:
+            raise ValueError(f"the motion blur's method is one of {', '.join(BLUR_METHODS)}, "
+                             f"not {self.method!r}")
         if not 1 <= self.samples <= MAX_BLUR_SAMPLES:
             raise ValueError(f"motion blur takes 1 to {MAX_BLUR_SAMPLES} samples, not {self.samples}")
         if not (math.isfinite(self.open) and math.isfinite(self.close)
@@ -50,8 +58,15 @@ class Shutter:
         return [t + (self.open + (i + 0.5) / self.samples * span) / fps
                 for i in range(self.samples)]
 
+    def opens(self, t: float, fps: float) -> float:
+        """The earliest time a sample of the frame at t takes: the shutter's opening (a ray's
+        time may lie anywhere in its part; the accumulated samples start later, at the
+        first part's midpoint). What a simulation restored for the frame starts from."""
+        return t if self.samples == 1 else t + self.open / fps
+
 
 MAX_BLUR_SAMPLES = 1024
+BLUR_METHODS = ("auto", "accumulate", "per-ray")
 SHARP = Shutter(1)
 
 
@@ -66,7 +81,17 @@ def render_at(animation, t: float, settings, context=None, view_index: int = 0,
     if shutter is None:
         shutter = getattr(animation, "shutter", None)
     if shutter is not None and shutter.samples > 1:
-        return _blurred(animation, t, settings, context, view_index, paths, shutter)
+        frame, why = _per_ray(animation, t, settings, context, view_index, shutter)
+        if frame is None:
+            frame = _blurred(animation, t, settings, context, view_index, paths, shutter)
+            frame.stats["motion blur"] = f"accumulated ({why})" if why else "accumulated"
+            return frame
+        if paths:          # the view at t alone: scene_at(t) would step simulations back
+            from core.animation.paths import draw_paths, paths_of
+            keyed = animation.view_at(animation.local_time(t))
+            views = ([keyed] if keyed is not None else []) + list(animation.scene.views)
+            draw_paths(frame, paths_of(animation), views[view_index % len(views)], settings)
+        return frame
     scene = animation.scene_at(t)
     if not scene.views:
         raise ValueError(f"{scene.name}: no view to render")
@@ -76,6 +101,21 @@ def render_at(animation, t: float, settings, context=None, view_index: int = 0,
         from core.animation.paths import draw_paths, paths_of
         draw_paths(frame, paths_of(animation), view, settings)
     return frame
+
+
+def _per_ray(animation, t, settings, context, view_index, shutter):
+    """``(frame, why not)``: the frame blurred a time per ray, or None where it is
+    accumulated instead — the z-buffer's renderers, ``method = "accumulate"``, or what the
+    per-ray path cannot take (``ray_blur.usable``: the reason goes in the frame's stats)."""
+    if shutter.method == "accumulate" or (shutter.method == "auto"
+                                          and settings.renderer != "raytrace"):
+        return None, None
+    from core.animation import ray_blur
+    why = ray_blur.usable(animation, t, settings)
+    if why:
+        return None, why
+    frame = ray_blur.render_per_ray(animation, t, settings, view_index, shutter, context)
+    return frame, (None if frame is not None else "a time's scene cannot be ray traced")
 
 
 def _blurred(animation, t, settings, context, view_index, paths, shutter):
