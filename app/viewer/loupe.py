@@ -66,8 +66,11 @@ class Loupe:
                 "texel_anchor": self.texel}
 
 
-def value_at(frame, column: int, row: int) -> str:
-    """The status line's words for frame pixel (column, row): its RGB and depth."""
+def value_at(frame, column: int, row: int, triangles=None, meshes=()) -> str:
+    """The status line's words for frame pixel (column, row): its RGB and depth, and, where
+    ``triangles`` (the frame's ``(H, W)`` visible-triangle ids in scene order, -1 empty) is
+    given, the triangle there and the mesh it belongs to (``meshes``: each mesh's name and
+    triangle count, in scene order)."""
     if frame is None:
         return ""
     height, width = frame.color.shape[:2]
@@ -79,4 +82,18 @@ def value_at(frame, column: int, row: int) -> str:
     if isinstance(depth, np.ndarray) and depth.shape[:2] == (height, width):
         z = float(depth[row, column])
         text += f", depth {z:.6g}" if math.isfinite(z) else ", depth empty"
+    if isinstance(triangles, np.ndarray) and triangles.shape[:2] == (height, width):
+        text += ", " + triangle_words(int(triangles[row, column]), meshes)
     return text
+
+
+def triangle_words(face: int, meshes) -> str:
+    """``"triangle 5 of 'roof' (scene triangle 17)"`` for scene triangle ``face``."""
+    if face < 0:
+        return "background"
+    first = 0
+    for name, count in meshes:
+        if face < first + count:
+            return f"triangle {face - first} of {name or 'a mesh'!r} (scene triangle {face})"
+        first += count
+    return f"scene triangle {face}"

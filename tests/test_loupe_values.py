@@ -1,0 +1,54 @@
+"""The status line's value under the cursor (app.viewer.loupe.value_at): RGB, depth and the
+visible triangle with its mesh.
+
+The triangle words are checked against hand counts (a triangle's place in its mesh from the
+meshes' sizes) and, on a rendered frame, against the pixel inspector's record for the same
+pixel (a consistency check: both read the z-buffer's visibility, in our code).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from app.viewer.loupe import triangle_words, value_at
+from core.context import RenderContext
+from core.inspect import inspect_pixel
+from core.inspect.buffers import buffer
+from core.paths import SCENES_DIR
+from core.render import render
+from core.scene.formats import load_scene
+from core.settings import RenderSettings
+
+
+def test_triangle_words_place_a_scene_triangle_in_its_mesh():
+    meshes = [("floor", 2), ("roof", 12), (None, 4)]
+    assert triangle_words(-1, meshes) == "background"
+    assert triangle_words(0, meshes) == "triangle 0 of 'floor' (scene triangle 0)"
+    assert triangle_words(2, meshes) == "triangle 0 of 'roof' (scene triangle 2)"
+    assert triangle_words(13, meshes) == "triangle 11 of 'roof' (scene triangle 13)"
+    assert triangle_words(14, meshes) == "triangle 0 of 'a mesh' (scene triangle 14)"
+    assert triangle_words(99, meshes) == "scene triangle 99"     # a mesh list out of date
+
+
+def test_the_status_line_names_the_triangle_the_inspector_names():
+    scene = load_scene(SCENES_DIR / "three_bars.toml")
+    view = scene.views[0]
+    settings = RenderSettings.for_scene(scene, size=(80, 60))
+    context = RenderContext()
+    frame = render(scene, view, settings, context)
+    ids, _ = buffer(scene, view, settings, "triangle", context)
+    meshes = [(m.name, len(m.triangles)) for m in scene.meshes]
+    rows, columns = np.nonzero(ids >= 0)
+    assert len(rows) > 100 and (ids < 0).any()
+    for k in np.linspace(0, len(rows) - 1, 12).astype(int):
+        x, y = int(columns[k]), int(rows[k])
+        record = inspect_pixel(scene, view, settings, x, y)
+        words = value_at(frame, x, y, ids, meshes)
+        r, g, b = (int(c) for c in frame.color[y, x])
+        assert words.startswith(f"pixel ({x}, {y}): RGB ({r}, {g}, {b}), depth ")
+        assert words.endswith(f"triangle {record['triangle']} of {record['mesh name']!r} "
+                              f"(scene triangle {record['scene triangle']})")
+    y, x = (int(v[0]) for v in np.nonzero(ids < 0))
+    assert value_at(frame, x, y, ids, meshes).endswith("depth empty, background")
+    assert "triangle" not in value_at(frame, x, y)            # no buffer: RGB and depth only
+    assert value_at(frame, 80, 0, ids, meshes) == "pixel (80, 0): outside the frame"
