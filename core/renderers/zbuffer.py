@@ -138,7 +138,9 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("normalize", canonical_points=points)
 
     clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min,
-                                    before_clip=inputs.before_clip)
+                                    before_clip=inputs.before_clip,
+                                    clipper=settings.clipper if settings is not None
+                                    else "cohen-sutherland")
     source = clipped.source if kept is None else kept[clipped.source]
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))
