@@ -18,6 +18,10 @@ Returns :class:`ClippedTriangles`: points (V', 3), triangles (T', 3), attrs (V',
   parameter t as the position, and the convex result fanned back into triangles. New vertices
   are appended after the input ones; vertices of the input that survive keep their index.
 * Output order: the accepted triangles in input order, then the clipped ones in input order.
+* ``clipper`` (``--clipper``) swaps the kernel for the triangles that are cut: this module's
+  Sutherland–Hodgman ("cohen-sutherland", the default), Sutherland–Hodgman with Liang–Barsky's
+  parametric tests (:mod:`core.pipeline.clip_liang_barsky`) or in homogeneous clip space
+  before the divide (:mod:`core.pipeline.clip_homogeneous`). Same outputs, within 1e-12.
 
 Robustness: the clip happens in the canonical volume, so a triangle crossing the eye plane
 never reaches a divide; an intersection is always computed from the inside end of an edge

@@ -10,7 +10,8 @@ threads arrays from one to the next and records what ran in ``frame.stats``:
 2. ``shade.prepare``: the mode's per-face or per-vertex work in world coordinates, for the
    faces that survived culling only.
 3. ``N_per`` / ``N_par`` on every vertex.
-4. ``clip_triangles``: trivial accept/reject by outcode, Sutherland–Hodgman for the rest.
+4. ``clip_triangles``: trivial accept/reject by outcode, Sutherland–Hodgman for the rest (or
+   the kernel ``settings.clipper`` names).
 5. ``transform_projective``: perspective-to-parallel M, M_vv3dv (``project.triangle_matrix``),
    divide by W.
 6. ``rasterize``: the scan-line z-buffer into a visibility buffer (reused between frames).
