@@ -111,6 +111,25 @@ def test_the_polygon_clippers_keep_the_same_polygons_to_1e12_in_npc(projection, 
         assert np.all(np.isfinite(other.points[other.triangles]))
 
 
+@pytest.mark.parametrize("projection, z_min", [("parallel", 0.0), ("perspective", -0.1)])
+def test_the_line_clippers_agree_on_segments_with_ends_on_planes(projection, z_min):
+    # tests/test_clippers.py draws its 100,000 segments uniformly (no end lands on a plane):
+    # here one edge of each random triangle above, a quarter of them with ends on planes.
+    from core.pipeline import clip
+    from core.pipeline.project import project_lines
+    points, triangles = random_triangles(100_000, projection, z_min)
+    p0, p1 = points[triangles[:, 0]], points[triangles[:, 1]]
+    assert len(p0) == 100_000
+    cs = clip.clip_lines(p0, p1, projection, z_min)
+    assert 40_000 < len(cs[0]) < 90_000
+    for clipper in CLIPPERS[1:]:
+        q = clip.clip_lines_with(clipper, p0, p1, projection, z_min)
+        assert len(q[0]) == len(cs[0]), clipper
+        for a, b in zip(cs, q):
+            assert np.abs(project_lines(a, projection, UNIT)
+                          - project_lines(b, projection, UNIT)).max() <= 1e-12, clipper
+
+
 def test_a_triangle_clipped_by_hand():
     # parallel, z = -0.5: (-3, 0) (3, 0) (0, 3) cut by x = +-1 is the pentagon (-1, 0) (1, 0)
     # (1, 2) (0, 3) (-1, 2); y = 1 then leaves the square (-1, 0) (1, 0) (1, 1) (-1, 1), area 2
