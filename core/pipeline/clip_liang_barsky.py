@@ -97,7 +97,7 @@ def _clip_against_plane(k, in_p, in_a, in_q, in_id, n_in, out_p, out_a, out_q, o
     for p in range(n_in):
         q_k = in_q[s, k]                 # the edge s -> p is inside where t p_k <= q_k
         p_k = in_q[s, k] - in_q[p, k]    # < 0 entering, > 0 leaving, 0 parallel
-        p_inside = in_q[p, k] >= 0.0     # t = 1 satisfies the test
+        p_inside = in_q[p, k] >= 0.0     # p itself (t = 1) passes the test
         if p_k < 0.0 and q_k < 0.0 and p_inside:    # enters at t = q_k / p_k, in (0, 1]
             # computed from p, the inside end: 1 - t = -q_p / p_k
             _crossing(k, -in_q[p, k] / p_k, p, s, in_p, in_a, in_q, out_p, out_a, out_q,
