@@ -261,9 +261,10 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
                         help="draw the wireframe with Wu's antialiased lines instead of the "
                              "midpoint line")
     parser.add_argument("--clipper", choices=("cohen-sutherland", "liang-barsky", "homogeneous"),
-                        default=None, help="the line clipper: cohen-sutherland (the course's "
-                        "outcodes, default), liang-barsky (parametric) or homogeneous (in clip "
-                        "space before the divide); the same picture")
+                        default=None, help="the line and polygon clipper: cohen-sutherland (the "
+                        "course's outcodes and Sutherland-Hodgman, default), liang-barsky "
+                        "(parametric tests) or homogeneous (in clip space before the divide); "
+                        "the same picture")
     parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
                         help="raytrace: what an object between a point and a light does "
                              "(default transmit: attenuate by k_t)")

@@ -122,9 +122,10 @@ class RenderSettings:
     # Transparency of materials with k_t > 0 in the z-buffer family (core.effects.transparency):
     # "off" (drawn opaque, as before) | "interpolated" | "screen-door".
     transparency: str = "off"
-    # The line clipper (core.pipeline.clip): "cohen-sutherland" (the course's outcodes, in the
-    # canonical volume) | "liang-barsky" (parametric) | "homogeneous" (in clip space, before
-    # the divide). The same picture; triangles are clipped by Sutherland–Hodgman either way.
+    # The clipper of lines (core.pipeline.clip) and polygons (core.pipeline.clip_polygon):
+    # "cohen-sutherland" (the course's outcodes and Sutherland–Hodgman, in the canonical
+    # volume) | "liang-barsky" (parametric tests) | "homogeneous" (in clip space, before the
+    # divide). The same picture.
     clipper: str = "cohen-sutherland"
     # The reconstruction filter of a supersampled frame (core.camera.filters): "box" (the
     # mean of each pixel's samples, as before) | "tent" | "gaussian" | "mitchell", and its

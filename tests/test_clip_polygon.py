@@ -169,7 +169,8 @@ def test_vertex_index_out_of_range_raises():
         clip_triangles(pts, [[0, 1, 3]], None, "parallel")
 
 
-def test_shared_edge_gets_identical_crossing_points():
+@pytest.mark.parametrize("clipper", ["cohen-sutherland", "liang-barsky", "homogeneous"])
+def test_shared_edge_gets_identical_crossing_points(clipper):
     # Pairs of triangles sharing an edge that crosses a plane, walked in opposite directions
     # (a-b in one, b-a in the other): the crossing point and its attributes must be
     # bit-identical in both, or the mesh would crack along the clip plane.
@@ -182,7 +183,8 @@ def test_shared_edge_gets_identical_crossing_points():
             d = a + [0.1, -0.3, 0.0]
             pts = np.array([a, b, c, d])
             attrs = rng.normal(size=(4, 2))
-            out = clip_triangles(pts, [[0, 1, 2], [1, 0, 3]], attrs, projection, Z_MIN)
+            out = clip_triangles(pts, [[0, 1, 2], [1, 0, 3]], attrs, projection, Z_MIN,
+                                 clipper=clipper)
             first, second = ({tuple(out.points[v]) + tuple(out.attrs[v])
                               for v in out.triangles[out.source == k].ravel()} for k in (0, 1))
             shared = first & second
@@ -204,9 +206,10 @@ def _barycentric_2d(q, a, b, c):
 _point = st.tuples(st.floats(-2.5, 2.5), st.floats(-2.5, 2.5), st.floats(-2.0, 1.0))
 
 
-@settings(max_examples=60, deadline=None)
-@given(st.lists(_point, min_size=3, max_size=3), st.sampled_from(["parallel", "perspective"]))
-def test_clipped_region_matches_brute_force(corners, projection):
+@settings(max_examples=150, deadline=None)
+@given(st.lists(_point, min_size=3, max_size=3), st.sampled_from(["parallel", "perspective"]),
+       st.sampled_from(["cohen-sutherland", "liang-barsky", "homogeneous"]))
+def test_clipped_region_matches_brute_force(corners, projection, clipper):
     pts = np.array(corners, dtype=float)
     normal = np.cross(pts[1] - pts[0], pts[2] - pts[0])
     if np.linalg.norm(normal) < 1e-3:
@@ -214,7 +217,7 @@ def test_clipped_region_matches_brute_force(corners, projection):
     # Carry each vertex's parameter-space position (s, t) as its attributes: the output
     # vertices then say where they are in the triangle, and positions must agree with them.
     st_attrs = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-    c = clip_triangles(pts, [[0, 1, 2]], st_attrs, projection, Z_MIN)
+    c = clip_triangles(pts, [[0, 1, 2]], st_attrs, projection, Z_MIN, clipper=clipper)
     assert np.all(np.isfinite(c.points)) and np.all(np.isfinite(c.attrs))
     used = np.unique(c.triangles)
     assert np.all(_inside(c.points[used], projection, tol=1e-9))

@@ -147,20 +147,23 @@ def liang_barsky(p0, p1, projection: str, z_min: float = 0.0):
     return q0, q1
 
 
-def homogeneous_planes(projection: str, z_min: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """``(M, H)``: the matrix into homogeneous clip space (the perspective-to-parallel M of
-    FvDFH 6.5.4 for perspective, the identity for parallel) and the (6, 4) rows of the clip
-    volume ``−W ≤ X ≤ W, −W ≤ Y ≤ W, −W ≤ Z ≤ 0``, each as ``h · (X, Y, Z, W) <= 0``."""
+# The clip volume ``−W ≤ X ≤ W, −W ≤ Y ≤ W, −W ≤ Z ≤ 0``: (6, 4) rows, each plane outside
+# where ``h · (X, Y, Z, W) > 0``, in the outcodes' order.
+HOMOGENEOUS_PLANES = np.array([[0, 1, 0, -1], [0, -1, 0, -1], [1, 0, 0, -1], [-1, 0, 0, -1],
+                               [0, 0, -1, -1], [0, 0, 1, 0]], dtype=np.float64)
+
+
+def clip_space(points, projection: str, z_min: float = 0.0) -> np.ndarray:
+    """``(N, 4)`` (X, Y, Z, W) = M (x, y, z, 1): FvDFH 6.5.4's perspective-to-parallel M for
+    perspective, the identity for parallel. M's rows written out, ``Z = (z − z_min) /
+    (1 + z_min)``, ``W = −z``, rather than a matrix product: a point on the front or back plane
+    then lands exactly on Z = 0 or Z = −W (the product's rounding put some just outside)."""
+    x, y, z = np.asarray(points, dtype=np.float64).reshape(-1, 3).T
     if projection == "perspective":
-        m = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0],
-                      [0, 0, 1.0 / (1.0 + z_min), -z_min / (1.0 + z_min)], [0, 0, -1.0, 0]])
-    elif projection == "parallel":
-        m = np.eye(4)
-    else:
-        raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
-    h = np.array([[0, 1, 0, -1], [0, -1, 0, -1], [1, 0, 0, -1], [-1, 0, 0, -1],
-                  [0, 0, -1, -1], [0, 0, 1, 0]], dtype=np.float64)
-    return m, h
+        return np.stack([x, y, (z - z_min) / (1.0 + z_min), -z], axis=1)
+    if projection == "parallel":
+        return np.stack([x, y, z, np.ones_like(z)], axis=1)
+    raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
 
 
 def homogeneous(p0, p1, projection: str, z_min: float = 0.0):
@@ -171,10 +174,8 @@ def homogeneous(p0, p1, projection: str, z_min: float = 0.0):
     the eye survives: inside the volume Z ≤ 0 and Z ≥ −W make W > 0."""
     p0 = np.asarray(p0, dtype=np.float64).reshape(-1, 3)
     p1 = np.asarray(p1, dtype=np.float64).reshape(-1, 3)
-    m, h = homogeneous_planes(projection, z_min)
-    clip_space = h @ m                       # each plane as a function of (x, y, z, 1)
-    f0 = p0 @ clip_space[:, :3].T + clip_space[:, 3]
-    f1 = p1 @ clip_space[:, :3].T + clip_space[:, 3]
+    f0 = clip_space(p0, projection, z_min) @ HOMOGENEOUS_PLANES.T
+    f1 = clip_space(p1, projection, z_min) @ HOMOGENEOUS_PLANES.T
     q0, q1, _ = _parametric(p0, p1, f0, f1)
     return q0, q1
 

@@ -18,6 +18,10 @@ Returns :class:`ClippedTriangles`: points (V', 3), triangles (T', 3), attrs (V',
   parameter t as the position, and the convex result fanned back into triangles. New vertices
   are appended after the input ones; vertices of the input that survive keep their index.
 * Output order: the accepted triangles in input order, then the clipped ones in input order.
+* ``clipper`` (``--clipper``) swaps the kernel for the triangles that are cut: this module's
+  Sutherland–Hodgman ("cohen-sutherland", the default), Sutherland–Hodgman with Liang–Barsky's
+  parametric tests (:mod:`core.pipeline.clip_liang_barsky`) or in homogeneous clip space
+  before the divide (:mod:`core.pipeline.clip_homogeneous`). Same outputs, within 1e-12.
 
 Robustness: the clip happens in the canonical volume, so a triangle crossing the eye plane
 never reaches a divide; an intersection is always computed from the inside end of an edge
@@ -35,7 +39,9 @@ import numpy as np
 
 from core.arrays import read_only
 from core.jit import njit, prange
-from core.settings import PROJECTIONS
+from core.pipeline.clip_homogeneous import homogeneous_polygons
+from core.pipeline.clip_liang_barsky import liang_barsky_polygons
+from core.settings import CLIPPERS, PROJECTIONS
 
 # Outcode bits, in FvDFH's order (parallel volume | perspective volume).
 ABOVE = 1  # y > 1        | y > -z
@@ -323,6 +329,9 @@ def _sutherland_hodgman(points, triangles, attrs, codes, todo, perspective, z_mi
 
 # --------------------------------------------------------------------------------------------
 
+_KERNELS = {"cohen-sutherland": _sutherland_hodgman, "liang-barsky": liang_barsky_polygons,
+            "homogeneous": homogeneous_polygons}
+
 _identity = np.arange(0, dtype=np.int64)
 
 
@@ -336,7 +345,8 @@ def _arange(n: int) -> np.ndarray:
 
 
 def clip_triangles(points, triangles, attrs, projection: str,
-                   z_min: float = 0.0, before_clip=None) -> ClippedTriangles:
+                   z_min: float = 0.0, before_clip=None,
+                   clipper: str = "cohen-sutherland") -> ClippedTriangles:
     """Clip triangles to the canonical view volume (see the module docstring).
 
     ``attrs`` may be None (no attributes: (V, 0)). ``z_min`` is the front plane of the
@@ -346,8 +356,15 @@ def clip_triangles(points, triangles, attrs, projection: str,
     Otherwise a vertex index out of range raises ValueError. ``before_clip(vertices)``, when
     given, is called with the vertex indices of the triangles about to be clipped, before
     their attributes are read (a shader that computes attributes lazily fills those rows).
+    ``clipper`` (``RenderSettings.clipper``) picks the kernel for the triangles that are cut:
+    "cohen-sutherland" this module's Sutherland–Hodgman, "liang-barsky"
+    (:mod:`core.pipeline.clip_liang_barsky`) or "homogeneous"
+    (:mod:`core.pipeline.clip_homogeneous`); the outcodes' accept and reject are shared.
     """
     perspective = _check_projection(projection)
+    kernel = _KERNELS.get(clipper)
+    if kernel is None:
+        raise ValueError(f"clipper must be one of {', '.join(CLIPPERS)}, not {clipper!r}")
     points = np.asarray(points, dtype=np.float64)       # a strided view is fine: no copy
     triangles = np.ascontiguousarray(triangles, dtype=np.int64)
     if attrs is None:
@@ -371,7 +388,7 @@ def clip_triangles(points, triangles, attrs, projection: str,
 
     if before_clip is not None:
         before_clip(triangles[todo].reshape(-1))
-    new_points, new_attrs, new_triangles, new_source = _sutherland_hodgman(
+    new_points, new_attrs, new_triangles, new_source = kernel(
         points, read_only(triangles), read_only(attrs), codes, todo, perspective, float(z_min))
     return ClippedTriangles(
         points=np.concatenate([points, new_points]),

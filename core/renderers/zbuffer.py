@@ -10,7 +10,8 @@ threads arrays from one to the next and records what ran in ``frame.stats``:
 2. ``shade.prepare``: the mode's per-face or per-vertex work in world coordinates, for the
    faces that survived culling only.
 3. ``N_per`` / ``N_par`` on every vertex.
-4. ``clip_triangles``: trivial accept/reject by outcode, Sutherland–Hodgman for the rest.
+4. ``clip_triangles``: trivial accept/reject by outcode, Sutherland–Hodgman for the rest (or
+   the kernel ``settings.clipper`` names).
 5. ``transform_projective``: perspective-to-parallel M, M_vv3dv (``project.triangle_matrix``),
    divide by W.
 6. ``rasterize``: the scan-line z-buffer into a visibility buffer (reused between frames).
@@ -138,7 +139,9 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("normalize", canonical_points=points)
 
     clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min,
-                                    before_clip=inputs.before_clip)
+                                    before_clip=inputs.before_clip,
+                                    clipper=settings.clipper if settings is not None
+                                    else "cohen-sutherland")
     source = clipped.source if kept is None else kept[clipped.source]
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))

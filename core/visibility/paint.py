@@ -92,7 +92,7 @@ def bsp_painting(scene, view, settings, context, timer, n, z_min, vp) -> Paintin
     timer.lap("shade: vertex step")
     points = stages.transform_affine(n, tree.points)
     clipped = stages.clip_triangles(points, tree.fragments[order], attrs, settings.projection,
-                                    z_min)
+                                    z_min, clipper=settings.clipper)
     keep_order = np.argsort(clipped.source, kind="stable")     # the clipper puts cut ones last
     source = tree.source[order][clipped.source[keep_order]]
     timer.lap("clip triangles")
@@ -113,7 +113,8 @@ def depth_sorted_painting(scene, view, settings, context, timer, n, z_min, vp) -
     inputs = _inputs(stages, scene, settings, eye, kept, context)
     timer.lap("shade: vertex step")
     points = stages.transform_affine(n, positions)
-    clipped = stages.clip_triangles(points, faces, inputs.vertex_attrs, settings.projection, z_min)
+    clipped = stages.clip_triangles(points, faces, inputs.vertex_attrs, settings.projection, z_min,
+                                    clipper=settings.clipper)
     timer.lap("clip triangles")
     device, inv_w = stages.transform_projective(
         project.triangle_matrix(settings.projection, z_min, vp), clipped.points)
