@@ -107,9 +107,14 @@ class InspectorTools:
         return self._context
 
     # -- buffer views ------------------------------------------------------------------------
-    def next_buffer(self, how: str) -> None:
+    def buffer_names(self) -> tuple[str, ...]:
+        """The buffer views to choose from: the renderer's, then a volume scene's slices."""
+        from app.viewer.volume_controls import SLICES
         from core.inspect.buffers import BUFFERS
-        cycle = (PICTURE, *BUFFERS)
+        return (*BUFFERS, *(SLICES if self.state.volumes else ()))
+
+    def next_buffer(self, how: str) -> None:
+        cycle = (PICTURE, *self.buffer_names())
         start = cycle.index(self.buffer)
         for step in range(1, len(cycle) + 1):
             name = cycle[(start + step) % len(cycle)]
@@ -129,11 +134,14 @@ class InspectorTools:
         self.changed = True
 
     def _show_buffer(self, name: str, how: str) -> bool:
+        from app.viewer.volume_controls import SLICES
         from core.inspect import NotInspectable
         from core.inspect.buffers import buffer
         s = self.state
         if s.view is None or s.frame is None:
             return False
+        if name in SLICES:
+            return self._show_slice(name, how)
         try:
             _, picture = buffer(*self._drawn(), name, self.context())
         except NotInspectable:
@@ -146,6 +154,27 @@ class InspectorTools:
         self.buffer, self.overlay = name, rgbx
         log.info("action: %s -> buffer view: %s", how, name)
         return True
+
+    def _show_slice(self, name: str, how: str) -> bool:
+        """A slice through the volume the controls act on, in place of the picture."""
+        from app.viewer.volume_controls import slice_picture
+        s = self.state
+        if s.volume is None:
+            return False
+        if name != s.slice_name:
+            s.set_slice(name)
+        height, width = s.frame.color.shape[:2]
+        self.overlay = slice_picture(s.volume, name, s.slice_shown(), (width, height))
+        self.buffer = name
+        log.info("action: %s -> buffer view: %s slice %d of %s", how, name, s.slice_shown(),
+                 s.volume.name)
+        return True
+
+    def show_slice(self, name: str, index: int | None, how: str) -> None:
+        """The slice slider or its axis: show that slice now."""
+        self.state.set_slice(name, index)
+        if self._show_buffer(name, how):
+            self.changed = True
 
     # -- the OpenGL comparison ---------------------------------------------------------------
     def compare_opengl(self, how: str) -> None:
