@@ -14,9 +14,12 @@ The plot's mapping between values and pixels (:func:`plot_scale`, :func:`to_plot
 
 from __future__ import annotations
 
+import logging
 import math
 
 import numpy as np
+
+log = logging.getLogger("fvd")
 
 PLOT_HEIGHT = 110            # points
 PICK_RADIUS = 8.0            # points: how near a press must be to take a transfer point
@@ -64,7 +67,8 @@ class VolumePanel:
     def __init__(self, state, tools):
         self.state, self.tools = state, tools
         self.dragging: int | None = None
-        self._scale = None                  # the plot's scale, held still while dragging
+        self._scale = None                  # (volume, the plot's scale), held still
+        self._pressed = None                # (box, scale) when the drag began
 
     def draw(self, imgui, displayable) -> None:
         s = self.state
@@ -75,7 +79,10 @@ class VolumePanel:
         self._choose_volume(imgui)
         v = s.volume
         lo, hi = v.value_range
-        imgui.text_disabled(f"{v.mode}, {' x '.join(map(str, v.dims))}, values {lo:.3g} .. {hi:.3g}")
+        imgui.push_text_wrap_pos(0.0)
+        imgui.text_disabled(f"{v.mode}, {' x '.join(map(str, v.dims))}, values {lo:.3g} .. "
+                            f"{hi:.3g}")
+        imgui.pop_text_wrap_pos()
         if v.mode == "isosurface":
             self._iso(imgui)
         if v.transfer is not None:
@@ -107,7 +114,8 @@ class VolumePanel:
         changed, iso = imgui.slider_float("##iso", float(s.iso_shown(v)), lo, hi, "iso %.4g")
         imgui.pop_item_width()
         if changed:
-            s.set_iso(iso)
+            ok = s.set_iso(iso)
+            log.info("action: slider iso -> %s", f"iso {iso:g} asked" if ok else s.volume_message)
         k = _mesh_of(s.scene, v)
         triangles = "" if k is None else f", {len(s.scene.meshes[k].triangles)} triangles"
         if s.extracting:
@@ -121,18 +129,39 @@ class VolumePanel:
         origin = imgui.get_cursor_screen_pos()
         box = (origin.x, origin.y, width, float(PLOT_HEIGHT))
         imgui.invisible_button("##transfer", (width, PLOT_HEIGHT))
-        scale = self._scale if self.dragging is not None else plot_scale(v)
+        scale = self._plot_scale(v)
         mouse = imgui.get_io().mouse_pos
         if imgui.is_item_activated():
             self.dragging = nearest_point(v.transfer, mouse.x, mouse.y, box, scale)
-            self._scale = scale
-        elif not imgui.is_item_active():
-            self.dragging = None
-        if self.dragging is not None:
-            value, alpha = from_plot(mouse.x, mouse.y, box, scale)
-            s.move_transfer_point(self.dragging, value, alpha)
+            self._pressed = (box, scale)
+        if self.dragging is not None:       # the release's frame moves it to the last place too
+            # the press's box and scale: the panel's lines above may move the plot meanwhile
+            s.move_transfer_point(self.dragging, *from_plot(mouse.x, mouse.y, *self._pressed))
+            if not imgui.is_item_active():
+                row = v.transfer[self.dragging]
+                log.info("action: drag transfer point %d -> value %.4g, alpha %.4g%s",
+                         self.dragging, row[0], row[4],
+                         f" ({s.volume_message})" if s.volume_message else "")
+                self.dragging = None
         _draw_plot(imgui, v, box, scale)
-        imgui.text_disabled("transfer: value across, alpha up; drag a point")
+        imgui.push_text_wrap_pos(0.0)
+        imgui.text_disabled("transfer: value across, alpha up (histogram: log counts); "
+                            "drag a point")
+        imgui.pop_text_wrap_pos()
+
+    def _plot_scale(self, volume):
+        """The plot's scale, kept while every point fits in it (a dropped point stays where
+        it was dropped); made anew for another volume or a point beyond it."""
+        held = self._scale
+        if self.dragging is not None:
+            return self._pressed[1]
+        if held is not None and held[0] is volume:
+            lo, hi, top = held[1]
+            t = volume.transfer
+            if lo <= t[0, 0] and t[-1, 0] <= hi and t[:, 4].max() <= top:
+                return held[1]
+        self._scale = (volume, plot_scale(volume))
+        return self._scale[1]
 
     def _slice(self, imgui) -> None:
         from app.viewer.volume_controls import SLICE_AXIS, SLICES
@@ -178,7 +207,7 @@ def _draw_plot(imgui, volume, box, scale) -> None:
     values = [lo, *t[:, 0], hi]
     alphas = [t[0, 4], *t[:, 4], t[-1, 4]]         # constant beyond the ends
     points = [imgui.ImVec2(*to_plot(a, b, box, scale)) for a, b in zip(values, alphas)]
-    draw.add_polyline(points, imgui.IM_COL32(240, 240, 240, 255), 0, 1.5)
+    draw.add_polyline(points, imgui.IM_COL32(240, 240, 240, 255), 1.5, 0)
     for row in t:
         x, y = to_plot(row[0], row[4], box, scale)
         r, g, b = (int(round(255 * c)) for c in row[1:4])
