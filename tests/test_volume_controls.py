@@ -212,3 +212,25 @@ def test_the_plot_maps_points_to_pixels_and_back():
     assert from_plot(210.0, 40.0, box, scale) == pytest.approx((1.0, 1.0))
     assert nearest_point(volume.transfer, 206.0, 43.0, box, scale) == 1
     assert nearest_point(volume.transfer, 100.0, 60.0, box, scale) is None
+
+
+def test_the_slice_buffer_view_follows_the_slider_and_the_frame():
+    from app.viewer.inspector_tools import PICTURE, InspectorTools
+    state = volume_state(sphere_volume(), renderer=stub_frame)
+    state.update()
+    tools = InspectorTools(state)
+    assert tools.buffer_names()[-3:] == ("axial", "coronal", "sagittal")
+    tools.choose_buffer("axial", "test")
+    assert tools.buffer == "axial" and tools.changed
+    expected = volume_controls.slice_picture(state.volume, "axial", 20, (40, 40))
+    assert np.array_equal(tools.picture(state.frame), expected)
+    tools.show_slice("sagittal", 3, "test")
+    assert state.slice_name == "sagittal" and state.slice_shown() == 3
+    expected = volume_controls.slice_picture(state.volume, "sagittal", 3, (40, 40))
+    assert np.array_equal(tools.overlay, expected)
+    state.dirty = True
+    state.update()
+    tools.frame_changed(state.frame, state.frame_seconds)      # a new frame keeps the slice
+    assert tools.buffer == "sagittal" and np.array_equal(tools.overlay, expected)
+    tools.choose_buffer(PICTURE, "test")
+    assert tools.buffer == PICTURE and tools.overlay is None

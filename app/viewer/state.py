@@ -757,7 +757,7 @@ class ViewerState:
                 control.check()
                 control.report(0.0, f"extracting {volume.name} at iso {iso:g}…")
             count = reextract(scene, volume, iso)
-            log.info("volume: %s re-extracted at iso %g: %d triangles", volume.name, iso, count)
+            log.info("volume: %s re-extracted at iso %r: %d triangles", volume.name, iso, count)
         self.context.forget(scene)
 
     def move_transfer_point(self, index: int, value: float, alpha: float) -> bool:

@@ -115,7 +115,7 @@ class VolumePanel:
         imgui.pop_item_width()
         if changed:
             ok = s.set_iso(iso)
-            log.info("action: slider iso -> %s", f"iso {iso:g} asked" if ok else s.volume_message)
+            log.info("action: slider iso -> %s", f"iso {float(iso)!r} asked" if ok else s.volume_message)
         k = _mesh_of(s.scene, v)
         triangles = "" if k is None else f", {len(s.scene.meshes[k].triangles)} triangles"
         if s.extracting:
