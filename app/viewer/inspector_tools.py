@@ -6,8 +6,9 @@ imports nothing more (the inspector's modules load on first use).
   in the panel (:func:`core.inspect.inspect_pixel`, the same record ``python -m app inspect``
   prints) instead of advancing the view; the record is logged as one JSON line.
 - ``v`` (View > Buffer view): the picture, then each buffer view the frame has (depth,
-  normal, triangle id, barycentrics, (u, v), MIP level, overdraw, ray-tree depth), in place
-  of the picture; the panel says which.
+  normal, triangle id, barycentrics, (u, v), MIP level, overdraw, ray-tree depth), then in a
+  scene with volumes its axial, coronal and sagittal slices
+  (:mod:`app.viewer.volume_controls`), in place of the picture; the panel says which.
 - View > Compare with OpenGL: the same view drawn by real OpenGL (the GLSL oracle), held
   against the frame; the heat map takes the picture's place and ``h`` flips between the two.
 - Plots: the last frames' times, and a progressive frame's progress, in the panel.

@@ -19,6 +19,11 @@ whether bump maps are used (issue 11; in the bump demo's scene also the demo's m
 clicks change), and for an animated scene its :class:`app.viewer.playback.Playback` (issue 13:
 the moment shown, playing or paused, the speed) and whether the keyed camera is the view.
 
+For a scene with volumes it holds the volume controls' state (:mod:`app.viewer.volume_controls`):
+which volume, the iso values asked for (re-extracted by the next frame's job, on the worker's
+thread), the transfer edits (checked; a bad one keeps the last good function with a message)
+and the slice shown among the buffer views.
+
 No GL and no window library here, so everything about it is testable without a display.
 """
 
