@@ -53,13 +53,23 @@ def test_iso_slider_and_slice_view_under_xvfb(tmp_path):
         whole = grab(app, tmp_path / "first.png")
         assert np.array_equal(whole[:h, :w], core_frame())          # nothing over the picture
 
-        # the iso slider: the first slider grab in the panel
-        rows = np.nonzero((whole[:, w:] == GRAB).all(axis=2).any(axis=1))[0]
-        assert len(rows)
-        mark = len(app.log())
-        app.click(w + 250, int(rows[0]) + 7)
-        asked = float(app.wait_for(r"action: slider iso -> iso ([-\d.e]+) asked", 30,
-                                   mark)[1])
+        # the iso slider: the first slider grab in the panel (the status lines above it
+        # change height while the kernels compile: look again before each try)
+        asked = None
+        for attempt in range(6):
+            panel = grab(app, tmp_path / "panel.png")[:, w:]
+            rows = np.nonzero((panel == GRAB).all(axis=2).any(axis=1))[0]
+            assert len(rows)
+            mark = len(app.log())
+            app.click(w + 250, int(rows[0]) + 7)
+            app.wait_for(r"left click at", 10, mark)
+            time.sleep(0.5)
+            found = re.compile(r"action: slider iso -> iso ([-\d.e]+) asked").search(
+                app.log(), mark)
+            if found:
+                asked = float(found[1])
+                break
+        assert asked is not None, "no click reached the iso slider"
         line = app.wait_for(r"volume: metaballs re-extracted at iso ([-\d.e]+): (\d+) "
                             r"triangles", 120, mark)
         iso, count = float(line[1]), int(line[2])
