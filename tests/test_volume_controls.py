@@ -234,3 +234,9 @@ def test_the_slice_buffer_view_follows_the_slider_and_the_frame():
     assert tools.buffer == "sagittal" and np.array_equal(tools.overlay, expected)
     tools.choose_buffer(PICTURE, "test")
     assert tools.buffer == PICTURE and tools.overlay is None
+    # a re-extracted surface: the inspector's own caches of the scene are dropped
+    tools.context().cache(state.scene)["held"] = "the old mesh's"
+    state.set_iso(0.3)
+    state.update()
+    tools.frame_changed(state.frame, state.frame_seconds)
+    assert "held" not in tools.context().cache(state.scene)

@@ -41,6 +41,7 @@ class InspectorTools:
         self.progress: deque = deque(maxlen=240)
         self.convergence: deque = deque(maxlen=240)
         self._context = None
+        self._edits = state.scene_edits            # the scene's in-place edits seen so far
         self.changed = False                       # the picture to show changed: upload it
         self.reference = None                      # app.viewer.reference.ReferenceView (--reference)
 
@@ -58,6 +59,10 @@ class InspectorTools:
         """A new final frame: the plots take its time; a buffer view follows it; a
         comparison made for the old frame is dropped."""
         self.frame_ms.append(seconds * 1e3)
+        if self._edits != self.state.scene_edits:        # a mesh replaced: stale caches
+            self._edits = self.state.scene_edits
+            if self._context is not None:
+                self._context.forget(self.state.scene)
         self.note_convergence(getattr(frame, "stats", None))
         if self.reference is not None:
             self.reference.refresh(frame)

@@ -199,6 +199,7 @@ class ViewerState:
     iso_wanted: dict = field(default_factory=dict, repr=False)
     slice_name: str = "axial"
     slice_index: int | None = None            # None: the middle slice
+    scene_edits: int = 0                      # isosurfaces replaced in place so far
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -764,6 +765,7 @@ class ViewerState:
             count = reextract(scene, volume, iso)
             log.info("volume: %s re-extracted at iso %r: %d triangles", volume.name, iso, count)
         self.context.forget(scene)
+        self.scene_edits += 1              # other contexts (the inspector's) drop theirs too
 
     def move_transfer_point(self, index: int, value: float, alpha: float) -> bool:
         """Move the current volume's transfer point ``index`` to ``value`` with extinction

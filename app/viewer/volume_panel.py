@@ -104,8 +104,11 @@ class VolumePanel:
         changed, k = imgui.combo("##volume", s.volume_index, names)
         imgui.pop_item_width()
         if changed:
+            from app.viewer.volume_controls import SLICES
             s.select_volume(k)
             self.dragging = None
+            if self.tools.buffer in SLICES:          # the slice shown is the new volume's
+                self.tools.show_slice(s.slice_name, None, "panel volume")
 
     def _iso(self, imgui) -> None:
         s, v = self.state, self.state.volume
