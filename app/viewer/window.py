@@ -39,8 +39,10 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
   dialog);
 - issue 22 (View menu too; :mod:`app.viewer.inspector_tools`): ``i`` inspect mode, where a
   left click shows the pixel's record in the panel; ``v`` the next buffer view (depth, normal,
-  triangle id, ...) in place of the picture; ``h`` compares with OpenGL and flips between the
-  picture and the heat map.
+  triangle id, ..., and a volume's axial, coronal and sagittal slices) in place of the
+  picture; ``h`` compares with OpenGL and flips between the picture and the heat map;
+- a scene with volumes: the panel's Volume section (:mod:`app.viewer.volume_panel`): the
+  transfer function's plot over the histogram, the iso slider, the slice and its index.
 
 Every user action and every new frame is logged (logger ``fvd``; ``app.viewer`` sends it to
 stderr and to ``$FVD_LOG``). On HiDPI screens sizes in points are scaled so that the picture
