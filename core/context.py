@@ -58,6 +58,10 @@ class RenderContext:
             view.fill(0)
         return view
 
+    def forget(self, owner) -> None:
+        """Drop what is kept for ``owner`` (a scene whose meshes were replaced in place)."""
+        self._caches.pop(owner, None)
+
     def cache(self, owner) -> dict:
         entry = self._caches.get(owner)
         if entry is None:

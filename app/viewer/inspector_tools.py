@@ -6,8 +6,9 @@ imports nothing more (the inspector's modules load on first use).
   in the panel (:func:`core.inspect.inspect_pixel`, the same record ``python -m app inspect``
   prints) instead of advancing the view; the record is logged as one JSON line.
 - ``v`` (View > Buffer view): the picture, then each buffer view the frame has (depth,
-  normal, triangle id, barycentrics, (u, v), MIP level, overdraw, ray-tree depth), in place
-  of the picture; the panel says which.
+  normal, triangle id, barycentrics, (u, v), MIP level, overdraw, ray-tree depth), then in a
+  scene with volumes its axial, coronal and sagittal slices
+  (:mod:`app.viewer.volume_controls`), in place of the picture; the panel says which.
 - View > Compare with OpenGL: the same view drawn by real OpenGL (the GLSL oracle), held
   against the frame; the heat map takes the picture's place and ``h`` flips between the two.
 - Plots: the last frames' times, and a progressive frame's progress, in the panel.
@@ -40,6 +41,7 @@ class InspectorTools:
         self.progress: deque = deque(maxlen=240)
         self.convergence: deque = deque(maxlen=240)
         self._context = None
+        self._edits = state.scene_edits            # the scene's in-place edits seen so far
         self.changed = False                       # the picture to show changed: upload it
         self.reference = None                      # app.viewer.reference.ReferenceView (--reference)
 
@@ -57,6 +59,10 @@ class InspectorTools:
         """A new final frame: the plots take its time; a buffer view follows it; a
         comparison made for the old frame is dropped."""
         self.frame_ms.append(seconds * 1e3)
+        if self._edits != self.state.scene_edits:        # a mesh replaced: stale caches
+            self._edits = self.state.scene_edits
+            if self._context is not None:
+                self._context.forget(self.state.scene)
         self.note_convergence(getattr(frame, "stats", None))
         if self.reference is not None:
             self.reference.refresh(frame)
@@ -107,9 +113,14 @@ class InspectorTools:
         return self._context
 
     # -- buffer views ------------------------------------------------------------------------
-    def next_buffer(self, how: str) -> None:
+    def buffer_names(self) -> tuple[str, ...]:
+        """The buffer views to choose from: the renderer's, then a volume scene's slices."""
+        from app.viewer.volume_controls import SLICES
         from core.inspect.buffers import BUFFERS
-        cycle = (PICTURE, *BUFFERS)
+        return (*BUFFERS, *(SLICES if self.state.volumes else ()))
+
+    def next_buffer(self, how: str) -> None:
+        cycle = (PICTURE, *self.buffer_names())
         start = cycle.index(self.buffer)
         for step in range(1, len(cycle) + 1):
             name = cycle[(start + step) % len(cycle)]
@@ -129,11 +140,14 @@ class InspectorTools:
         self.changed = True
 
     def _show_buffer(self, name: str, how: str) -> bool:
+        from app.viewer.volume_controls import SLICES
         from core.inspect import NotInspectable
         from core.inspect.buffers import buffer
         s = self.state
         if s.view is None or s.frame is None:
             return False
+        if name in SLICES:
+            return self._show_slice(name, how)
         try:
             _, picture = buffer(*self._drawn(), name, self.context())
         except NotInspectable:
@@ -146,6 +160,27 @@ class InspectorTools:
         self.buffer, self.overlay = name, rgbx
         log.info("action: %s -> buffer view: %s", how, name)
         return True
+
+    def _show_slice(self, name: str, how: str) -> bool:
+        """A slice through the volume the controls act on, in place of the picture."""
+        from app.viewer.volume_controls import slice_picture
+        s = self.state
+        if s.volume is None:
+            return False
+        if name != s.slice_name:
+            s.set_slice(name)
+        height, width = s.frame.color.shape[:2]
+        self.overlay = slice_picture(s.volume, name, s.slice_shown(), (width, height))
+        self.buffer = name
+        log.info("action: %s -> buffer view: %s slice %d of %s", how, name, s.slice_shown(),
+                 s.volume.name)
+        return True
+
+    def show_slice(self, name: str, index: int | None, how: str) -> None:
+        """The slice slider or its axis: show that slice now."""
+        self.state.set_slice(name, index)
+        if self._show_buffer(name, how):
+            self.changed = True
 
     # -- the OpenGL comparison ---------------------------------------------------------------
     def compare_opengl(self, how: str) -> None:

@@ -19,6 +19,11 @@ whether bump maps are used (issue 11; in the bump demo's scene also the demo's m
 clicks change), and for an animated scene its :class:`app.viewer.playback.Playback` (issue 13:
 the moment shown, playing or paused, the speed) and whether the keyed camera is the view.
 
+For a scene with volumes it holds the volume controls' state (:mod:`app.viewer.volume_controls`):
+which volume, the iso values asked for (re-extracted by the next frame's job, on the worker's
+thread), the transfer edits (checked; a bad one keeps the last good function with a message)
+and the slice shown among the buffer views.
+
 No GL and no window library here, so everything about it is testable without a display.
 """
 
@@ -186,6 +191,15 @@ class ViewerState:
     # A camera the user made with the mouse (app.viewer.hands): shown in place of the file's
     # view until the view is stepped, reset or the scene changes; None shows the file's.
     hand_view: object = None
+    # The volume controls (app.viewer.volume_controls): the volume they act on, the last
+    # refused edit's message, the iso values asked for (each re-extracted by the next frame's
+    # job, on the worker's thread), and the slice shown among the buffer views.
+    volume_index: int = 0
+    volume_message: str = ""
+    iso_wanted: dict = field(default_factory=dict, repr=False)
+    slice_name: str = "axial"
+    slice_index: int | None = None            # None: the middle slice
+    scene_edits: int = 0                      # isosurfaces replaced in place so far
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -210,6 +224,8 @@ class ViewerState:
             self.keep_aspect = bool(getattr(s, "keep_aspect", False))
         if not keep_settings or not self.renderer_name:
             self.renderer_name = getattr(s, "renderer", None) or "zbuffer"
+        self.volume_index, self.volume_message, self.slice_index = 0, "", None
+        self.iso_wanted = {}
         demo = bump_demos(s)
         if demo:
             self.bump_map, self.bump = int(demo[0].bump_map), bool(demo[0].bump)
@@ -584,8 +600,11 @@ class ViewerState:
         context = self.context
         demo = (self.bump_map, self.bump) if self.is_bump_demo else None
         playback = self.playback
+        isos = {v: iso for v, iso in self.iso_wanted.items() if v.iso != iso}
 
-        def prepare():
+        def prepare(control=None):
+            if isos:
+                self._extract(scene, isos, control)
             if demo is not None:
                 from core.texture.demo_scene import apply_demo_options
                 apply_demo_options(scene, *demo)
@@ -599,7 +618,7 @@ class ViewerState:
             what = f"t = {t:.2f} s, {what}"
 
             def run(control=None):
-                prepare()
+                prepare(control)
                 frame = render_animated(playback.animation, t, settings, context, index, control)
                 frame.stats["time"] = t           # the moment drawn (the clock moves on)
                 return frame
@@ -609,11 +628,11 @@ class ViewerState:
             what = f"{what}, {get_renderer(settings.renderer).label.lower()}"
 
             def run(control=None):
-                prepare()
+                prepare(control)
                 return progressively(scene, view, settings, context, renderer, control)
         else:
             def run(control=None):
-                prepare()
+                prepare(control)
                 return renderer(scene, view, settings, context)
         return run, what
 
@@ -667,6 +686,14 @@ class ViewerState:
         return True
 
     def _failed(self, error: BaseException) -> None:
+        from core.volume.data import VolumeError
+        if isinstance(error, VolumeError) and self.extracting:
+            # the surface could not be re-extracted: the last good one stays, and is asked for
+            self.volume_message = f"{error}; the surface stays at the last good iso"
+            self.iso_wanted = {v: v.iso for v in self.iso_wanted}
+            log.info("volume: %s", self.volume_message)
+            self.dirty = False
+            return
         self.render_error = (f"could not render {self.view_label} "
                              f"({self.projection}, {self.shading}): "
                              f"{type(error).__name__}: {error}")
@@ -679,3 +706,103 @@ class ViewerState:
         self._modes_rendered.add(self.shading)
         self.frame_count += 1
         self.dirty = False
+
+    # -- the volume controls ---------------------------------------------------------------
+    @property
+    def volumes(self) -> list:
+        """The scene's volumes (``[[volume]]`` tables), in file order."""
+        from app.viewer.volume_controls import scene_volumes
+        return scene_volumes(self.scene)
+
+    @property
+    def volume(self):
+        """The volume the controls act on, or None."""
+        found = self.volumes
+        return found[min(self.volume_index, len(found) - 1)] if found else None
+
+    def select_volume(self, index: int) -> None:
+        if not 0 <= index < max(len(self.volumes), 1):
+            raise ValueError(f"volume index must be in 0..{len(self.volumes) - 1}, not {index}")
+        self.volume_index, self.slice_index = int(index), None
+
+    @property
+    def extracting(self) -> bool:
+        """Is an isosurface asked for that the worker has not extracted yet?"""
+        return any(v.iso != iso for v, iso in self.iso_wanted.items())
+
+    def iso_shown(self, volume) -> float | None:
+        """The iso value the slider shows: the one asked for, else the volume's."""
+        return self.iso_wanted.get(volume, volume.iso)
+
+    def set_iso(self, iso: float) -> bool:
+        """Ask for the current volume's isosurface at ``iso`` (marching cubes runs in the next
+        frame's job). Outside the data's range: a message, and the last good surface stays."""
+        from app.viewer.volume_controls import checked_iso
+        from core.volume.data import VolumeError
+        volume = self.volume
+        if volume is None or volume.mode != "isosurface":
+            self.volume_message = "iso: this volume is not drawn as an isosurface"
+            return False
+        try:
+            iso = checked_iso(volume, iso)
+        except VolumeError as error:
+            self.volume_message = f"{error}; the surface stays at iso {self.iso_shown(volume):g}"
+            return False
+        self.volume_message = ""
+        if iso != self.iso_shown(volume):
+            self.iso_wanted[volume] = iso
+            self.dirty = True
+        return True
+
+    def _extract(self, scene, isos: dict, control=None) -> None:
+        """On the worker's thread: marching cubes for each iso asked for, then the scene's
+        caches are dropped (its meshes changed in place)."""
+        from app.viewer.volume_controls import reextract
+        for volume, iso in isos.items():
+            if control is not None:
+                control.check()
+                control.report(0.0, f"extracting {volume.name} at iso {iso:g}…")
+            count = reextract(scene, volume, iso)
+            log.info("volume: %s re-extracted at iso %r: %d triangles", volume.name, iso, count)
+        self.context.forget(scene)
+        self.scene_edits += 1              # other contexts (the inspector's) drop theirs too
+
+    def move_transfer_point(self, index: int, value: float, alpha: float) -> bool:
+        """Move the current volume's transfer point ``index`` to ``value`` with extinction
+        ``alpha``; a bad point (alpha < 0, values out of order) gets a message and the last
+        good transfer function stays."""
+        import numpy as np
+        from app.viewer.volume_controls import moved_transfer
+        from core.volume.data import VolumeError
+        volume = self.volume
+        if volume is None or volume.transfer is None:
+            self.volume_message = "transfer: this volume has no transfer function"
+            return False
+        try:
+            transfer = moved_transfer(volume.transfer, index, value, alpha)
+        except VolumeError as error:
+            self.volume_message = f"{error}; the last good transfer function stays"
+            return False
+        self.volume_message = ""
+        if not np.array_equal(transfer, volume.transfer):
+            volume.transfer = transfer       # a new array: a frame being drawn keeps the old
+            self.dirty = True
+        return True
+
+    def set_slice(self, name: str, index: int | None = None) -> None:
+        """The slice the buffer view shows: ``name`` (axial, coronal, sagittal) and its index
+        (None: the middle); an index past the end is refused."""
+        from app.viewer.volume_controls import SLICE_AXIS, SLICES
+        if name not in SLICE_AXIS:
+            raise ValueError(f"slice must be one of {', '.join(SLICES)}, not {name!r}")
+        if index is not None and self.volume is not None:
+            n = self.volume.values.shape[SLICE_AXIS[name]]
+            if not 0 <= index < n:
+                raise ValueError(f"{name} slice index must be in 0..{n - 1}, not {index}")
+        self.slice_name, self.slice_index = name, index
+
+    def slice_shown(self) -> int:
+        """The index of the slice shown (the middle one when none was chosen)."""
+        from app.viewer.volume_controls import SLICE_AXIS
+        n = self.volume.values.shape[SLICE_AXIS[self.slice_name]]
+        return n // 2 if self.slice_index is None else min(self.slice_index, n - 1)

@@ -39,8 +39,10 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
   dialog);
 - issue 22 (View menu too; :mod:`app.viewer.inspector_tools`): ``i`` inspect mode, where a
   left click shows the pixel's record in the panel; ``v`` the next buffer view (depth, normal,
-  triangle id, ...) in place of the picture; ``h`` compares with OpenGL and flips between the
-  picture and the heat map.
+  triangle id, ..., and a volume's axial, coronal and sagittal slices) in place of the
+  picture; ``h`` compares with OpenGL and flips between the picture and the heat map;
+- a scene with volumes: the panel's Volume section (:mod:`app.viewer.volume_panel`): the
+  transfer function's plot over the histogram, the iso slider, the slice and its index.
 
 Every user action and every new frame is logged (logger ``fvd``; ``app.viewer`` sends it to
 stderr and to ``$FVD_LOG``). On HiDPI screens sizes in points are scaled so that the picture
@@ -73,6 +75,7 @@ from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
 from app.viewer.loupe import Loupe, value_at
 from app.viewer.state import ViewerState, compile_count
+from app.viewer.volume_panel import VolumePanel
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
 
@@ -230,6 +233,7 @@ class ViewerWindow:
         self._close_popups = False        # Esc: close them in the next frame
         self._compiles_at_request = 0
         self.tools = InspectorTools(state)    # issue 22: inspect mode, buffer views, compare
+        self.volume_panel = VolumePanel(state, self.tools)   # transfer, iso, slices
         self._init_hands()
         self._init_files()
         self._install_callbacks()
@@ -1025,6 +1029,7 @@ class ViewerWindow:
         self._help_strip()
         self._status()
         self._timeline()
+        self.volume_panel.draw(imgui, displayable)
         self.tools.panel(imgui, displayable)
         self._draw_order()                    # issue 18
         self._camera_strip()
@@ -1117,8 +1122,7 @@ class ViewerWindow:
         if imgui.menu_item_simple("Inspect mode (click a pixel)", "I", self.tools.inspecting):
             self.tools.toggle_inspect("menu View > Inspect mode")
         if imgui.begin_menu("Buffer view"):
-            from core.inspect.buffers import BUFFERS
-            for name in ("picture", *BUFFERS):
+            for name in ("picture", *self.tools.buffer_names()):
                 if imgui.menu_item_simple(name, None, self.tools.buffer == name):
                     self.tools.choose_buffer(name, "menu View > Buffer view")
             imgui.end_menu()
