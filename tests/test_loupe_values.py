@@ -52,3 +52,24 @@ def test_the_status_line_names_the_triangle_the_inspector_names():
     assert value_at(frame, x, y, ids, meshes).endswith("depth empty, background")
     assert "triangle" not in value_at(frame, x, y)            # no buffer: RGB and depth only
     assert value_at(frame, 80, 0, ids, meshes) == "pixel (80, 0): outside the frame"
+
+
+def test_the_window_s_tools_draw_the_ids_off_the_ui_thread_once_per_frame():
+    import time
+    from app.viewer.inspector_tools import InspectorTools
+    from app.viewer.state import ViewerState
+    state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(80, 60))
+    assert state.update()
+    tools = InspectorTools(state)
+    assert tools.triangle_ids(state.frame) == (None, ())      # asked: drawn on a thread
+    deadline = time.monotonic() + 120
+    while tools._picking is not None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    ids, meshes = tools.triangle_ids(state.frame)
+    expected, _ = buffer(state.scene, state.view, state.settings(), "triangle")
+    assert np.array_equal(ids, expected)
+    assert meshes == [(m.name, len(m.triangles)) for m in state.scene.meshes]
+    assert tools.triangle_ids(state.frame)[0] is ids           # once per frame
+    state.set_renderer("raytrace")                             # keeps no triangle buffer
+    assert state.update()
+    assert tools.triangle_ids(state.frame) == (None, ()) and tools._picking is None

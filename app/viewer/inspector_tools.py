@@ -17,6 +17,7 @@ imports nothing more (the inspector's modules load on first use).
 from __future__ import annotations
 
 import logging
+import threading
 from collections import deque
 
 import numpy as np
@@ -24,6 +25,10 @@ import numpy as np
 log = logging.getLogger("fvd")
 
 PICTURE = "picture"
+# The status line names the triangle under the cursor for scenes up to this size: its buffer
+# is one more z-buffer pass a frame, in a fresh context (116 ms at 500 x 500 for the
+# 74k-triangle bunny, median of 7, beside its 16 ms frame), on the picker's thread.
+MAX_PICKED = 100_000
 
 
 class InspectorTools:
@@ -44,6 +49,8 @@ class InspectorTools:
         self._edits = state.scene_edits            # the scene's in-place edits seen so far
         self.changed = False                       # the picture to show changed: upload it
         self.reference = None                      # app.viewer.reference.ReferenceView (--reference)
+        self._picked = (None, (None, ()))          # (frame, its triangle ids) for the status line
+        self._picking = None                       # the thread drawing them
 
     # -- what the picture area shows ---------------------------------------------------------
     def picture(self, frame) -> np.ndarray:
@@ -111,6 +118,42 @@ class InspectorTools:
             from core.context import RenderContext
             self._context = RenderContext()
         return self._context
+
+    # -- the triangle under the cursor -------------------------------------------------------
+    def triangle_ids(self, frame):
+        """``(ids, meshes)`` for the status line: the frame's visible-triangle ids in scene
+        order and each mesh's (name, triangle count); ``(None, ())`` until they are drawn, and
+        where the renderer keeps no triangle buffer. They are drawn once per frame on a thread
+        of their own with a context of their own (the first pass loads the inspector's
+        kernels: seconds for a large mesh; a fresh context, so that no cache is shared with
+        the UI thread), for scenes up to ``MAX_PICKED`` triangles."""
+        done_for, found = self._picked
+        if done_for is frame:
+            return found
+        s = self.state
+        if (self._picking is None and s.view is not None and s.scene is not None
+                and s.playback is None and s.scene.triangle_count <= MAX_PICKED
+                and s.renderer_name in ("zbuffer", "scanline")):
+            drawn = self._drawn()
+            self._picking = threading.Thread(target=self._pick, args=(frame, drawn),
+                                             name="triangle ids", daemon=True)
+            self._picking.start()
+        return None, ()
+
+    def _pick(self, frame, drawn) -> None:
+        from core.context import RenderContext
+        from core.inspect import NotInspectable
+        from core.inspect.buffers import buffer
+        found = None, ()
+        try:
+            ids, _ = buffer(*drawn, "triangle", RenderContext())
+            height, width = frame.color.shape[:2]
+            side = max(1, ids.shape[0] // height)
+            found = ids[::side, ::side][:height, :width], \
+                [(m.name, len(m.triangles)) for m in drawn[0].meshes]
+        except (NotInspectable, ValueError, MemoryError) as error:
+            log.info("triangle ids: %s", error)
+        self._picked, self._picking = (frame, found), None
 
     # -- buffer views ------------------------------------------------------------------------
     def buffer_names(self) -> tuple[str, ...]:

@@ -925,7 +925,9 @@ class ViewerWindow:
         scale = self._scale()
         column, row = self.loupe.texel_at(x * scale, y * scale)
         zoom = f"loupe {self.loupe.magnification}x, " if self.loupe.magnification > 1 else ""
-        imgui.text_disabled(zoom + value_at(self.state.frame, column, row))
+        ids, meshes = (None, ()) if imgui.is_any_mouse_down() else \
+            self.tools.triangle_ids(self.state.frame)        # not while a drag moves the view
+        imgui.text_disabled(zoom + value_at(self.state.frame, column, row, ids, meshes))
 
     def _save_frame_to(self, path: Path, how: str) -> None:
         """The CPU frame as a PNG at ``path`` (a dialog's choice; .png added when missing)."""
