@@ -9,6 +9,7 @@ pixel (a consistency check: both read the z-buffer's visibility, in our code).
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from app.viewer.loupe import triangle_words, value_at
 from core.context import RenderContext
@@ -73,3 +74,32 @@ def test_the_window_s_tools_draw_the_ids_off_the_ui_thread_once_per_frame():
     state.set_renderer("raytrace")                             # keeps no triangle buffer
     assert state.update()
     assert tools.triangle_ids(state.frame) == (None, ()) and tools._picking is None
+
+
+def test_the_aliasing_view_is_the_aliased_frame_left_and_the_antialiased_right():
+    import dataclasses
+    from app.viewer.inspector_tools import ALIASED, ANTIALIASED, InspectorTools
+    from app.viewer.state import ViewerState
+    state = ViewerState.open(SCENES_DIR / "house.toml", size=(90, 60))     # the wireframe
+    assert state.update()
+    tools = InspectorTools(state)
+    tools.choose_buffer("aliasing", "test")
+    assert tools.buffer == "aliasing"
+    view, settings = state.view, state.settings()
+    aliased = render(state.scene, view, dataclasses.replace(settings, **ALIASED)).color
+    smooth = render(state.scene, view, dataclasses.replace(settings, **ANTIALIASED)).color
+    shown = tools.picture(state.frame)[:, :, :3]
+    assert np.array_equal(shown[:, :45], aliased[:, :45])
+    assert np.array_equal(shown[:, 45:], smooth[:, 45:])
+    # midpoint lines are one colour on the background; Wu's weigh each pixel by coverage
+    assert len(np.unique(aliased.reshape(-1, 3), axis=0)) <= 3
+    assert len(np.unique(smooth.reshape(-1, 3), axis=0)) > 20
+
+
+def test_the_row_profile_is_the_luma_of_each_pixel_of_the_row():
+    from app.viewer.inspector_tools import row_profile
+    color = np.zeros((2, 3, 3), np.uint8)
+    color[1] = [[255, 0, 0], [0, 255, 0], [10, 20, 30]]
+    assert row_profile(color, 1) == pytest.approx([76.245, 149.685, 0.299 * 10 + 0.587 * 20
+                                                   + 0.114 * 30], abs=1e-3)
+    assert row_profile(color, 0).tolist() == [0.0, 0.0, 0.0]

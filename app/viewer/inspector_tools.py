@@ -16,6 +16,7 @@ imports nothing more (the inspector's modules load on first use).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import threading
 from collections import deque
@@ -29,6 +30,12 @@ PICTURE = "picture"
 # is one more z-buffer pass a frame, in a fresh context (116 ms at 500 x 500 for the
 # 74k-triangle bunny, median of 7, beside its 16 ms frame), on the picker's thread.
 MAX_PICKED = 100_000
+# The aliasing buffer view: the same frame aliased (left) and antialiased (right): 16
+# samples a pixel through the Mitchell-Netravali filter, Wu's lines for a wireframe.
+ALIASING = "aliasing"
+ALIASED = {"samples": 1, "pixel_filter": "box", "filter_radius": None, "antialias_lines": False}
+ANTIALIASED = {"samples": 16, "pixel_filter": "mitchell", "filter_radius": None,
+               "antialias_lines": True}
 
 
 class InspectorTools:
@@ -51,6 +58,7 @@ class InspectorTools:
         self.reference = None                      # app.viewer.reference.ReferenceView (--reference)
         self._picked = (None, (None, ()))          # (frame, its triangle ids) for the status line
         self._picking = None                       # the thread drawing them
+        self.profile_row: int | None = None        # the row whose intensity is plotted
 
     # -- what the picture area shows ---------------------------------------------------------
     def picture(self, frame) -> np.ndarray:
@@ -96,6 +104,7 @@ class InspectorTools:
             log.info("action: %s -> inspect pixel (%d, %d): %s", where, x, y, error)
             return
         self.record, self.lines = record, describe(record)
+        self.profile_row = y
         log.info("action: %s -> inspect pixel (%d, %d)", where, x, y)
         log.info("inspect record: %s", json.dumps(record, default=_jsonable))
 
@@ -160,7 +169,7 @@ class InspectorTools:
         """The buffer views to choose from: the renderer's, then a volume scene's slices."""
         from app.viewer.volume_controls import SLICES
         from core.inspect.buffers import BUFFERS
-        return (*BUFFERS, *(SLICES if self.state.volumes else ()))
+        return (*BUFFERS, ALIASING, *(SLICES if self.state.volumes else ()))
 
     def next_buffer(self, how: str) -> None:
         cycle = (PICTURE, *self.buffer_names())
@@ -191,6 +200,8 @@ class InspectorTools:
             return False
         if name in SLICES:
             return self._show_slice(name, how)
+        if name == ALIASING:
+            return self._show_aliasing(how)
         try:
             _, picture = buffer(*self._drawn(), name, self.context())
         except NotInspectable:
@@ -202,6 +213,22 @@ class InspectorTools:
         rgbx[:picture.shape[0], :picture.shape[1], :3] = picture
         self.buffer, self.overlay = name, rgbx
         log.info("action: %s -> buffer view: %s", how, name)
+        return True
+
+    def _show_aliasing(self, how: str) -> bool:
+        """The split view: the picture's left half drawn with one sample a pixel (midpoint
+        lines), its right half antialiased (:data:`ANTIALIASED`), the same edges meeting at
+        the middle column, for the loupe to show both."""
+        from core.render import render
+        scene, view, settings = self._drawn()
+        try:
+            halves = [render(scene, view, dataclasses.replace(settings, **how_drawn),
+                             self.context()).rgbx for how_drawn in (ALIASED, ANTIALIASED)]
+        except ValueError as error:
+            log.info("action: %s -> buffer view %s: %s", how, ALIASING, error)
+            return False
+        self.buffer, self.overlay = ALIASING, split_view(*halves)
+        log.info("action: %s -> buffer view: %s", how, ALIASING)
         return True
 
     def _show_slice(self, name: str, how: str) -> bool:
@@ -310,7 +337,16 @@ class InspectorTools:
         imgui.pop_text_wrap_pos()
 
     def _plots(self, imgui) -> None:
-        """The last frames' times, and the progress of a frame still refining."""
+        """The last frames' times, the progress of a frame still refining, and the intensity
+        along the row of the last pixel inspected (Mach bands: Gouraud's is continuous,
+        its slope is not)."""
+        frame = self.state.frame
+        if self.profile_row is not None and frame is not None \
+                and 0 <= self.profile_row < frame.color.shape[0]:
+            values = row_profile(frame.color, self.profile_row)
+            imgui.plot_lines("##profile", values, scale_min=0.0, scale_max=255.0,
+                             overlay_text=f"intensity along row {self.profile_row}",
+                             graph_size=(0, 60))
         if self.frame_ms:
             values = np.array(self.frame_ms, np.float32)
             imgui.plot_lines("##frame ms", values, overlay_text=f"frame {values[-1]:.1f} ms",
@@ -323,6 +359,19 @@ class InspectorTools:
             imgui.plot_lines("##progress", np.array(self.progress, np.float32), scale_min=0.0,
                              scale_max=1.0, overlay_text="progressive frame",
                              graph_size=(0, 40))
+
+
+def row_profile(color: np.ndarray, row: int) -> np.ndarray:
+    """The intensity (Rec. 601 luma, 0-255) of each pixel of ``row`` of an RGB picture."""
+    return (color[row, :, :3].astype(np.float32) @ np.float32([0.299, 0.587, 0.114]))
+
+
+def split_view(left: np.ndarray, right: np.ndarray) -> np.ndarray:
+    """``left``'s columns up to the middle, ``right``'s from it (both ``(H, W, 4)``)."""
+    out = left.copy()
+    middle = out.shape[1] // 2
+    out[:, middle:] = right[:, middle:]
+    return out
 
 
 def _jsonable(value):
