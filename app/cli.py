@@ -134,7 +134,6 @@ def default_prog() -> str:
 
 
 def _parser(command: str | None = None, prog: str = "python -m app") -> argparse.ArgumentParser:
-    from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
     p = argparse.ArgumentParser(
         prog=prog,
         description="A CPU reference renderer: the Foley-van Dam viewing pipeline, scan-line "
@@ -144,7 +143,18 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
     sub = p.add_subparsers(dest="command", parser_class=_CommandParser)
     scene_help = ("a scene file (.toml), a .tri file, a mesh (.obj/.ply/.off/.stl), a bare view "
                   "file (shown with the house), or - for a view file on standard input")
+    _view_parser(sub, scene_help)
+    _render_parser(sub, scene_help)
+    _radiosity_parser(sub, command)
+    _matrices_parser(sub, scene_help)
+    _plan_parser(sub, scene_help)
+    _tool_parsers(sub, command)
+    _inspector_parsers(sub, scene_help)
+    return p
 
+
+def _view_parser(sub, scene_help: str) -> None:
+    """``view``: the window, or PNGs when there is no display."""
     v = sub.add_parser("view", help="open the viewer window (renders PNGs when there is no display)")
     v.add_argument("scene", nargs="?", help=scene_help + "; default: the house")
     v.add_argument("--size", type=parse_size, default=None,
@@ -163,6 +173,10 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
                    help="a picture to hold ours against: h cycles our picture, the reference "
                         "and their difference heat map (with the numbers compare prints)")
 
+
+def _render_parser(sub, scene_help: str) -> None:
+    """``render``: one view to a PNG, with every renderer's options."""
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
     r.add_argument("--view", type=int, default=1,
@@ -184,20 +198,25 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
     r.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
-    _renderer_arguments(r)                    # issue 12
+    _renderer_arguments(r)                    # the ray tracer's and the clipper's choices
     _buffer_argument(r)
     _cluster_arguments(r)                     # scale-out
-    _crease_argument(r)                       # issue 20
-    # -- issue 19: global illumination (radiosity, path tracing)
+    _crease_argument(r)
     from app.tools.radiosity import add_options as gi_options
-    gi_options(r)
+    gi_options(r)                             # global illumination (radiosity, path tracing)
+    _painter_arguments(r)                     # painter's renderers
+
+
+def _radiosity_parser(sub, command: str | None) -> None:
+    """``radiosity``: its options are only built when it is the command (they import more)."""
     rad = sub.add_parser("radiosity", help="solve a scene's radiosity once and save it (.npz)")
     if command in (None, "radiosity"):
         from app.tools.radiosity import add_arguments as radiosity_arguments
         radiosity_arguments(rad)
-    # --
-    _painter_arguments(r)                     # painter's renderers
 
+
+def _matrices_parser(sub, scene_help: str) -> None:
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES
     m = sub.add_parser("matrices", help="print every factor of N_per / N_par as JSON")
     m.add_argument("scene", help=scene_help)
     m.add_argument("--view", type=int, default=1,
@@ -207,14 +226,21 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
     m.add_argument("--keep-aspect", action="store_true", default=None,
                    help="letterbox the window in the viewport instead of stretching it")
 
+
+def _plan_parser(sub, scene_help: str) -> None:
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
     pl = sub.add_parser("plan", help="print, as JSON, the stages that will run and those left out")
     pl.add_argument("scene", help=scene_help)
     pl.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
     pl.add_argument("--shading", choices=SHADING_CHOICES, default=None)
     pl.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None)
     pl.add_argument("--keep-aspect", action="store_true", default=None)
-    _painter_arguments(pl, plan=True)         # issue 18
+    _painter_arguments(pl, plan=True)         # the painter's renderers report their order
 
+
+def _tool_parsers(sub, command: str | None) -> None:
+    """The tools' commands; bench, animate and warmup keep their options with their bodies
+    and build them only when they are the command."""
     b = sub.add_parser("bench", help="time the CPU pipeline against llvmpipe (OpenGL in software)")
     if command == "bench":                    # its options live with its body (app/tools/bench.py)
         from app.tools.bench import add_arguments
@@ -236,8 +262,6 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
     if command == "warmup":                   # its options live with its body (app/tools/warmup.py)
         from app.tools.warmup import add_arguments as warmup_arguments
         warmup_arguments(wu)
-    _inspector_parsers(sub, scene_help)       # issue 22
-    return p
 
 
 def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
@@ -274,7 +298,7 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
                         choices=("schlick", "exact"),
                         help="raytrace: Fresnel weighting of k_r and k_t, Schlick's "
                              "approximation (the default form) or the exact equations")
-    # issue 20
+    # adaptive supersampling's limits
     parser.add_argument("--samples-max", type=int, default=None, metavar="N",
                         help="raytrace, --samples adaptive: the most samples a pixel gets "
                              "(4, 16, 64 or 256; default 16)")
@@ -350,18 +374,18 @@ def _renderer_overrides(args) -> dict:
 
 
 def _crease_argument(parser: argparse.ArgumentParser) -> None:
-    """--crease-angle (issue 20): where meshes without normals of their own keep sharp edges."""
+    """--crease-angle: where meshes without normals of their own keep sharp edges."""
     parser.add_argument("--crease-angle", type=float, default=None, metavar="DEGREES",
                         help="faces meeting at more than this keep their own normals along "
                              "the edge (default: the scene's crease_angle, else 45)")
 
 
 def _gi_overrides(args) -> dict:
-    from app.tools.radiosity import overrides          # issue 19
+    from app.tools.radiosity import overrides          # radiosity and path tracing
     return overrides(args)
 
 
-# -- issue 18: the painter's renderers (bsp, depth-sort) ----------------------------------------
+# -- the painter's renderers (bsp, depth-sort) -------------------------------------------------
 def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> None:
     """--bsp-root and --paint-first (and for ``plan``, --renderer)."""
     from core.settings import BSP_ROOTS
@@ -415,7 +439,7 @@ def _painter_plan(args, scene) -> dict | None:
     return {args.renderer: {k: v for k, v in frame.stats.items()
                             if k in ("BSP tree", "depth sort", "painted", "culled")},
             "runs": [{"stage": s.name, "why": s.reason} for s in frame.plan if s.runs]}
-# -- end of issue 18 ------------------------------------------------------------------------------
+# -- end of the painter's renderers -------------------------------------------------------------
 
 
 def _course_options(p: argparse.ArgumentParser) -> None:
@@ -539,9 +563,9 @@ def _dispatch(args) -> int:
     if args.command == "warmup":
         from app.tools.warmup import main as warmup_main
         return warmup_main(args)
-    if args.command in ("inspect", "compare"):      # issue 22
+    if args.command in ("inspect", "compare"):      # the pixel inspector
         return _inspector_command(args)
-    if args.command == "radiosity":           # issue 19
+    if args.command == "radiosity":           # solve once, save for --solution
         from app.tools.radiosity import main as radiosity_main
         return radiosity_main(args)
     if args.command == "stability":
@@ -590,7 +614,6 @@ def _drawn_by(settings) -> str:
 
 
 def _render(args) -> int:
-    from app.viewer.state import announce_compiles
     if args.time is not None and not math.isfinite(args.time):
         print(f"error: --time {args.time}: expected a finite number of seconds", file=sys.stderr)
         return 2
@@ -602,62 +625,95 @@ def _render(args) -> int:
     index = _pick_view(scene, args.view)
     if index is None:
         return 2
-    from core.settings import RenderSettings
-    try:
-        texture_options = _texture_options(scene, args)   # issue 11
-    except ValueError as error:                           # --bump-map 99 (issue 23)
-        print(f"error: --bump-map: {error}", file=sys.stderr)
+    settings = _render_settings(scene, args)
+    if settings is None:
         return 2
     view = scene.views[index]
-    try:
-        settings = RenderSettings.for_scene(scene, projection=args.projection,
-                                            shading=args.shading, size=args.size,
-                                            rasterizer=args.rasterizer,
-                                            clipper=getattr(args, "clipper", None),
-                                            antialias_lines=getattr(args, "antialias_lines",
-                                                                    None),
-                                            keep_aspect=args.keep_aspect, **texture_options,
-                                            lighting_model=args.lighting_model,
-                                            **_renderer_overrides(args),
-                                            **_gi_overrides(args))       # issue 19
-    except ValueError as error:            # e.g. --samples 0 (issue 12's options)
-        print(f"error: {error}", file=sys.stderr)
+    if args.out is None and _name_out(args, scene, index, settings):
         return 2
-    if args.out is None:                 # named by the rule every output follows
-        from app.naming import picture_name
-        from core.scene.view_numbers import file_number
-        args.out = picture_name(scene.name, file_number(scene, index), settings.projection,
-                                settings.shading, settings.renderer)
-        if _refused(args.out, args):
-            return 2
+    scene = _scene_to_draw(scene, view, args)
+    if scene is None:
+        return 2
+    if args.buffer:                      # a buffer view instead of the picture
+        from app.tools.inspector import render_buffer
+        return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
+    frame, status = _render_frame(scene, view, settings, args)
+    if frame is None:
+        return status
+    status = _frame_problems(frame)
+    if status is not None:
+        return status
+    return _write_frame(frame, args, scene, index, settings)
+
+
+def _render_settings(scene, args):
+    """The settings of ``render`` from the scene and the command line, or None (said why)."""
+    from core.settings import RenderSettings
+    try:
+        texture_options = _texture_options(scene, args)   # the texture filter and bump demo
+    except ValueError as error:                           # e.g. --bump-map 99
+        print(f"error: --bump-map: {error}", file=sys.stderr)
+        return None
+    try:
+        return RenderSettings.for_scene(scene, projection=args.projection,
+                                        shading=args.shading, size=args.size,
+                                        rasterizer=args.rasterizer,
+                                        clipper=getattr(args, "clipper", None),
+                                        antialias_lines=getattr(args, "antialias_lines", None),
+                                        keep_aspect=args.keep_aspect, **texture_options,
+                                        lighting_model=args.lighting_model,
+                                        **_renderer_overrides(args),
+                                        **_gi_overrides(args))
+    except ValueError as error:            # e.g. --samples 0 (the ray tracer's options)
+        print(f"error: {error}", file=sys.stderr)
+        return None
+
+
+def _name_out(args, scene, index, settings) -> bool:
+    """Name --out by the rule every output follows; True when that file must not be written."""
+    from app.naming import picture_name
+    from core.scene.view_numbers import file_number
+    args.out = picture_name(scene.name, file_number(scene, index), settings.projection,
+                            settings.shading, settings.renderer)
+    return _refused(args.out, args)
+
+
+def _scene_to_draw(scene, view, args):
+    """The scene as --course-tri and --solution make it, or None when --solution is refused."""
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
-    if args.solution:                     # issue 19: a saved radiosity solution
+    if args.solution:                     # a saved radiosity solution instead of solving
         from app.tools.radiosity import load_solution
         from core.context import DEFAULT_CONTEXT
         refusal = load_solution(scene, args.solution, DEFAULT_CONTEXT)
         if refusal:
             print(f"error: --solution: {refusal}", file=sys.stderr)
-            return 2
-    if args.buffer:                      # a buffer view instead of the picture
-        from app.tools.inspector import render_buffer
-        return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
+            return None
+    return scene
+
+
+def _render_frame(scene, view, settings, args):
+    """(the frame, None), drawn here or split over the cluster; or (None, exit status)."""
+    from app.viewer.state import announce_compiles
     split, said = _split(args, settings)
     if said is None:
-        return 1
+        return None, 1
     if said:
         print(said, file=sys.stderr if split is None else sys.stdout)
     from core.animation.particles import ParticleBudgetError
     try:
         if split is not None:
-            frame = SimpleNamespace(color=split, message=None, stats={})
-        else:
-            with announce_compiles():    # the first run compiles the kernels: say so
-                frame = _draw_still(scene, view, settings, args.time)
+            return SimpleNamespace(color=split, message=None, stats={}), None
+        with announce_compiles():    # the first run compiles the kernels: say so
+            return _draw_still(scene, view, settings, args.time), None
     except ParticleBudgetError as error:
         print(f"error: {error}", file=sys.stderr)
-        return 1
+        return None, 1
+
+
+def _frame_problems(frame) -> int | None:
+    """Print the frame's warnings; the exit status when it has no picture to write, else None."""
     for warning in frame.stats.get("warnings", ()):       # e.g. nothing emits light
         print(f"warning: {warning}", file=sys.stderr)
     if frame.stats.get("particles not born"):
@@ -666,8 +722,13 @@ def _render(args) -> int:
     if frame.message:                    # a view only the other projection can draw: 2, as
         print(f"error: {frame.message}", file=sys.stderr)          # --help says; else 1
         return 2 if frame.stats.get("refused") == "view" else 1
-    for note in frame.stats.get("not drawn", []):           # issue 20: said, never dropped
+    for note in frame.stats.get("not drawn", []):   # what was left out is said, never dropped
         print(f"warning: not drawn: {note}", file=sys.stderr)
+    return None
+
+
+def _write_frame(frame, args, scene, index, settings) -> int:
+    """Write the picture to --out and say what it is."""
     out = Path(args.out)
     try:
         write_png(frame.color, out)
@@ -770,7 +831,7 @@ def _plan(args) -> int:
     rasterizer = args.rasterizer or scene.rasterizer
     renderer = args.renderer or scene.renderer
     try:
-        painter = _painter_plan(args, scene)               # issue 18
+        painter = _painter_plan(args, scene)               # the tree's or sort's numbers
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
@@ -785,7 +846,7 @@ def _plan(args) -> int:
     return 0
 
 
-# -- issue 22: the pixel inspector, buffer views and compare
+# -- the pixel inspector, buffer views and compare
 def _buffer_argument(parser) -> None:
     from core.inspect.buffers import BUFFERS
     parser.add_argument("--buffer", choices=BUFFERS, default=None,

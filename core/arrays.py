@@ -5,7 +5,7 @@ a writable one (``Array(int64, 2, 'C', readonly=True)``). The renderer hands its
 cached arrays are read-only (``core/shading/shade.py``, the clipper's ``0..T-1``), freshly
 computed ones are not, and which a frame gets depends on the scene (whether anything was
 clipped, whether normals were cached). Each such kernel compiled twice or four times
-(issue 33: ``python -m app warmup`` found 41 kernels with more than one signature). A kernel
+(``python -m app warmup`` once found 41 kernels with more than one signature). A kernel
 that only reads an argument gets it through :func:`read_only`, so it compiles once; a
 read-only view costs no copy (about 0.3 µs) and the compiled code is the same.
 """

@@ -30,22 +30,43 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
     (``transparency`` None: what the scene asks for, else what it needs)."""
     if shading not in SHADINGS:
         raise ValueError(f"shading must be one of {', '.join(SHADINGS)}, not {shading!r}")
-    has_tris = scene.triangle_count > 0
-    solid = shading != "wireframe" and has_tris
-    draws_lines = shading == "wireframe" or any(len(m.edges) for m in scene.meshes)
+    solid = shading != "wireframe" and scene.triangle_count > 0
+    triangle_stage = _triangle_stage_for(scene, solid)
+    stages = (_normal_and_lighting_stages(scene, shading, solid, triangle_stage)
+              + _drawing_stages(scene, projection, shading, keep_aspect, rasterizer,
+                                texture_filter, solid, triangle_stage))
+    if renderer in PAINTERS:
+        _painter_stages(stages, renderer, triangle_stage)
+    if renderer == "scanline":
+        _scanline_stages(stages, triangle_stage)
+    if shading == "depth":
+        _depth_shading_stages(stages, solid)
+    stages.append(_transparency_stage(scene, solid, renderer, transparency))
+    return stages
+
+
+def _stage(name: str, runs: bool, why: str, why_not: str) -> Stage:
+    return Stage(name, runs, why if runs else why_not)
+
+
+def _triangle_stage_for(scene: Scene, solid: bool):
+    """A stage of the triangles: when the scene draws none, why not says so instead."""
+    # Why a triangle stage does not run when the scene draws no triangles at all.
+    no_triangles = ("the scene has no triangles" if scene.triangle_count == 0
+                    else "wireframe draws edges only")
+
+    def triangle_stage(name: str, runs: bool, why: str, why_not: str = "") -> Stage:
+        return _stage(name, runs, why, why_not if solid else no_triangles)
+    return triangle_stage
+
+
+def _normal_and_lighting_stages(scene: Scene, shading: str, solid: bool,
+                                triangle_stage) -> list[Stage]:
+    """Culling, the normals and the lighting before the projection, in the renderer's order."""
     closed = any(m.closed and len(m.triangles) for m in scene.meshes)
     smooth = solid and shading in ("gouraud", "phong")
     given_normals = all(m.normals is not None for m in scene.meshes if len(m.triangles))
-    # Why a triangle stage does not run when the scene draws no triangles at all.
-    no_triangles = "the scene has no triangles" if not has_tris else "wireframe draws edges only"
-
-    def stage(name: str, runs: bool, why: str, why_not: str) -> Stage:
-        return Stage(name, runs, why if runs else why_not)
-
-    def triangle_stage(name: str, runs: bool, why: str, why_not: str = "") -> Stage:
-        return stage(name, runs, why, why_not if solid else no_triangles)
-
-    stages = [
+    return [
         triangle_stage("cull back faces", solid and closed,
                        "closed, consistently wound meshes: faces turned away are never visible",
                        "no mesh is declared closed, so every face may be seen"),
@@ -63,20 +84,29 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
         triangle_stage("illuminate vertices", solid and shading == "gouraud",
                        "the model at each vertex; intensities are interpolated",
                        "not Gouraud shading"),
-        stage("normalize", True,
-              f"{'N_per' if projection == 'perspective' else 'N_par'} carries world coordinates "
-              "into the canonical volume", ""),
-        stage("clip lines", draws_lines,
-              "Cohen–Sutherland: trivial accept/reject by outcode, the rest clipped plane by "
-              "plane", "no edges are drawn"),
+    ]
+
+
+def _drawing_stages(scene: Scene, projection: str, shading: str, keep_aspect: bool,
+                    rasterizer: str, texture_filter: str, solid: bool,
+                    triangle_stage) -> list[Stage]:
+    """Normalizing, clipping, projecting and scan-converting, in the renderer's order."""
+    draws_lines = shading == "wireframe" or any(len(m.edges) for m in scene.meshes)
+    return [
+        _stage("normalize", True,
+               f"{'N_per' if projection == 'perspective' else 'N_par'} carries world coordinates "
+               "into the canonical volume", ""),
+        _stage("clip lines", draws_lines,
+               "Cohen–Sutherland: trivial accept/reject by outcode, the rest clipped plane by "
+               "plane", "no edges are drawn"),
         triangle_stage("clip triangles", solid,
                        "outcodes first; only triangles that cross the volume go through "
                        "Sutherland–Hodgman"),
-        stage("project", True, _projection_reason(projection, solid, draws_lines) + "; "
-              + ("the window letterboxed in the viewport (aspect kept)" if keep_aspect else
-                 "the window stretched over the whole viewport (the course's M_vv3dv)"), ""),
-        stage("scan-convert lines", draws_lines, "midpoint line into the frame buffer",
-              "no edges are drawn"),
+        _stage("project", True, _projection_reason(projection, solid, draws_lines) + "; "
+               + ("the window letterboxed in the viewport (aspect kept)" if keep_aspect else
+                  "the window stretched over the whole viewport (the course's M_vv3dv)"), ""),
+        _stage("scan-convert lines", draws_lines, "midpoint line into the frame buffer",
+               "no edges are drawn"),
         triangle_stage("depth buffer", solid, "the z-buffer needs a depth per pixel"),
         triangle_stage("z-buffer scan conversion", solid,
                        "the course's scan-line algorithm (edge table, active edge table, spans; "
@@ -89,14 +119,6 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
                        "pixel", "not Phong shading"),
         triangle_stage("texture lookups", *_texture_stage(scene, shading, texture_filter)),
     ]
-    if renderer in PAINTERS:
-        _painter_stages(stages, renderer, triangle_stage)
-    if renderer == "scanline":
-        _scanline_stages(stages, triangle_stage)
-    if shading == "depth":
-        _depth_shading_stages(stages, solid)
-    stages.append(_transparency_stage(scene, solid, renderer, transparency))
-    return stages
 
 
 def _transparency_stage(scene, solid, renderer, transparency) -> Stage:
@@ -131,7 +153,7 @@ def _transparency_stage(scene, solid, renderer, transparency) -> Stage:
 
 
 def _depth_shading_stages(stages: list, solid: bool) -> None:
-    """Depth shading (issue 18) needs no normals and no light: a colour map per pixel."""
+    """Depth shading needs no normals and no light: a colour map per pixel."""
     unlit = ("face normals", "vertex normals", "illuminate faces", "illuminate vertices",
              "illuminate pixels")
     for i, s in enumerate(stages):
@@ -144,7 +166,7 @@ def _depth_shading_stages(stages: list, solid: bool) -> None:
                             if solid else "no triangles are drawn"))
 
 
-# issue 18: the painter's renderers find an order instead of testing depth per pixel
+# The painter's renderers find an order instead of testing depth per pixel.
 PAINTERS = {
     "bsp": ("BSP tree", "clip triangles",
             "built once per scene in world space (spanning triangles split), walked back to "
@@ -183,7 +205,7 @@ def _scanline_stages(stages: list, triangle_stage) -> None:
                 "span where their depths cross; the z-buffer's fill rule")
 
 
-def _texture_stage(scene, shading, texture_filter):        # issue 11
+def _texture_stage(scene, shading, texture_filter):   # the texture system's own reasons
     from core.texture.material import plan_stage
     return plan_stage(scene, shading, texture_filter)
 

@@ -30,7 +30,7 @@ class Shading(str, Enum):
     FLAT = "flat"
     GOURAUD = "gouraud"
     PHONG = "phong"
-    DEPTH = "depth"          # issue 18: colour from height or view depth alone (core.shading.depth)
+    DEPTH = "depth"          # colour from height or view depth alone (core.shading.depth)
 
     def __str__(self) -> str:
         return self.value
@@ -38,7 +38,7 @@ class Shading(str, Enum):
 
 PROJECTIONS = tuple(p.value for p in Projection)
 SHADINGS = tuple(s.value for s in Shading)
-# The lit modes that fill triangles (depth shading, issue 18, fills them unlit: it is left out
+# The lit modes that fill triangles (depth shading fills them unlit: it is left out
 # of the sweeps that compare lighting against the exact images).
 SOLID_SHADINGS = SHADINGS[1:4]
 SAMPLE_PATTERNS = ("regular", "jittered", "adaptive")   # adaptive: the ray tracer's
@@ -92,7 +92,7 @@ class RenderSettings:
     adaptive_epsilon: float = 1e-3
     shadows: str = "transmit"
     fresnel: bool = False
-    # Issue 20 (the ray tracer's): which Fresnel weighting ``fresnel`` turns on (Schlick's
+    # The ray tracer's: which Fresnel weighting ``fresnel`` turns on (Schlick's
     # approximation or the exact equations); the notes' attenuation 1 / (1 + C1 R + C2 R²) of
     # a secondary ray's light over its length R, (C1, C2), off at (0, 0); and adaptive
     # supersampling's colour threshold (Whitted 1980: a pixel whose corner samples differ by
@@ -100,7 +100,7 @@ class RenderSettings:
     fresnel_form: str = "schlick"
     secondary_attenuation: tuple[float, float] = (0.0, 0.0)
     adaptive_threshold: float = 0.1
-    # Global illumination (issue 19; core.radiosity, core.pathtrace): how form factors are
+    # Global illumination (core.radiosity, core.pathtrace): how form factors are
     # found ("hemicube" | "raycast") and the hemicube's resolution, the solver ("progressive" |
     # "gauss-seidel"), its stopping point (fraction of the energy still unshot) and the element
     # budget of adaptive subdivision.
@@ -109,12 +109,12 @@ class RenderSettings:
     solver: str = "progressive"
     converge: float = 0.01
     max_elements: int = 2000
-    # The painter's renderers (issue 18; core.renderers.painters): the BSP tree's root rule
+    # The painter's renderers (core.renderers.painters): the BSP tree's root rule
     # (core.visibility.bsp.ROOT_RULES) and, for the draw-order slider, how many triangles of
     # the painting order to paint (None: all).
     bsp_root: str = "fewest-splits"
     paint_first: int | None = None
-    # Depth cueing (issue 18; core.effects.depth_cue) on any renderer, with the scene's
+    # Depth cueing (core.effects.depth_cue) on any renderer, with the scene's
     # [depth_cue] parameters (on by default for a scene that has the table).
     depth_cue: bool = False
     # Depth shading's scalar (core.shading.depth.MODES): "height" (world y) | "view" (eye distance).

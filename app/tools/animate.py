@@ -553,14 +553,7 @@ def render_frames(args, job, bundle, animation, todo, writer, progress,
     failed: list = []
     on_frame = writer.put
     if args.scheduler:
-        client = cluster.connect(args.scheduler)
-        try:
-            workers = max(1, len(client.scheduler_info().get("workers", {})))
-            render_on_cluster(client, job, bundle, todo, on_frame, args.retries, animation,
-                              failed, workers)
-        finally:
-            client.close()
-        return failed, f"on the cluster at {args.scheduler} ({workers} workers)"
+        return failed, _render_on_scheduler(args, job, bundle, todo, on_frame, animation, failed)
     workers = args.workers
     if workers > 1 and todo:
         workers, why = cluster.worker_cap(workers)
@@ -569,18 +562,7 @@ def render_frames(args, job, bundle, animation, todo, writer, progress,
     if workers == 1 or not todo:
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, None
-    # A few frames here first: the first may load kernels; the next HEAD - 1, written too,
-    # time a frame and the cores this process keeps busy, to predict whether a cluster can
-    # win at all.
-    head = render_here(job, todo[:1], on_frame, args.retries, animation, failed)
-    writer.wait()
-    t0, cpu0 = time.perf_counter(), time.process_time()
-    timed = render_here(job, todo[1:HEAD], on_frame, args.retries, animation, failed)
-    writer.wait()
-    wall = max(time.perf_counter() - t0, 1e-9)
-    seconds = wall / max(timed, 1)
-    used = max(1.0, (time.process_time() - cpu0) / wall)
-    head += timed
+    head, seconds, used = _time_first_frames(job, todo, writer, args.retries, animation, failed)
     todo = todo[head:]
     if not todo:
         progress.say(f"note: --workers {workers}: not starting a local cluster: all {head} "
@@ -592,29 +574,71 @@ def render_frames(args, job, bundle, animation, todo, writer, progress,
         progress.say(f"note: --workers {workers}: not starting a local cluster: {why}")
         render_here(job, todo, on_frame, args.retries, animation, failed)
         return failed, "in this process (a cluster could not win)"
+    return failed, _render_beside_local_cluster(job, bundle, animation, todo, writer, args.retries,
+                                                failed, progress, workers, head,
+                                                (seconds, idle, used))
+
+
+def _render_on_scheduler(args, job, bundle, todo, on_frame, animation, failed) -> str:
+    """All of ``todo`` on the cluster at --scheduler; says where it ran."""
+    from app.tools import cluster
+    client = cluster.connect(args.scheduler)
+    try:
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        render_on_cluster(client, job, bundle, todo, on_frame, args.retries, animation,
+                          failed, workers)
+    finally:
+        client.close()
+    return f"on the cluster at {args.scheduler} ({workers} workers)"
+
+
+def _time_first_frames(job, todo, writer, retries, animation, failed) -> tuple[int, float, float]:
+    """A few frames here first: the first may load kernels; the next HEAD - 1, written too,
+    time a frame and the cores this process keeps busy, to predict whether a cluster can
+    win at all. Returns (frames rendered, seconds a frame, cores used)."""
+    on_frame = writer.put
+    head = render_here(job, todo[:1], on_frame, retries, animation, failed)
+    writer.wait()
+    t0, cpu0 = time.perf_counter(), time.process_time()
+    timed = render_here(job, todo[1:HEAD], on_frame, retries, animation, failed)
+    writer.wait()
+    wall = max(time.perf_counter() - t0, 1e-9)
+    seconds = wall / max(timed, 1)
+    used = max(1.0, (time.process_time() - cpu0) / wall)
+    return head + timed, seconds, used
+
+
+def _render_beside_local_cluster(job, bundle, animation, todo, writer, retries, failed, progress,
+                                 workers, head, measured) -> str | None:
+    """Start a local cluster of ``workers - 1`` and render here while it starts, then hand it
+    what is left; says where the frames ran. ``measured``: (seconds a frame, idle cores,
+    cores this process uses)."""
+    from app.tools import cluster
+    seconds, idle, used = measured
+    on_frame = writer.put
     here_s, there_s = predict(len(todo), seconds, workers, idle, used)
     start = cluster.LocalStart(workers - 1, preload=(__name__,))   # this process: the N-th
     threads = _one_numba_thread()                    # a core for the start, then the worker
     try:
         if not RENDER_WHILE_STARTING:
             start.ready.wait()
-        here = render_here(job, todo, on_frame, args.retries, animation, failed,
+        here = render_here(job, todo, on_frame, retries, animation, failed,
                            stop=start.ready.is_set)
         if here == len(todo):
-            return failed, (f"in this process: it finished before the local cluster started "
-                            f"(this process rendered {head + here} frames)")
+            return (f"in this process: it finished before the local cluster started "
+                    f"(this process rendered {head + here} frames)")
         if start.error is not None:
             progress.say(f"note: the local cluster did not start ({_one_line(start.error)}): "
                          "rendering here")
-            render_here(job, todo[here:], on_frame, args.retries, animation, failed)
-            return failed, None
-        render_on_cluster(start.client, job, bundle, todo[here:], on_frame, args.retries,
+            render_here(job, todo[here:], on_frame, retries, animation, failed)
+            return None
+        render_on_cluster(start.client, job, bundle, todo[here:], on_frame, retries,
                           animation, failed, workers - 1, here=True)
-        return failed, (f"this process and {workers - 1} local worker"
-                        f"{'s' if workers > 2 else ''}, started once in {start.seconds:.1f} s "
-                        f"while this process rendered {head + here} frames (predicted "
-                        f"x{here_s / there_s:.2f} with {idle:.1f} idle cores measured, "
-                        f"this process alone on {used:.1f})")
+        return (f"this process and {workers - 1} local worker"
+                f"{'s' if workers > 2 else ''}, started once in {start.seconds:.1f} s "
+                f"while this process rendered {head + here} frames (predicted "
+                f"x{here_s / there_s:.2f} with {idle:.1f} idle cores measured, "
+                f"this process alone on {used:.1f})")
     finally:
         import numba
         numba.set_num_threads(threads)
@@ -646,13 +670,37 @@ def _error(message: str, code: int) -> int:
 
 
 def main(args) -> int:
-    from app.tools import cluster
-    from app.tools.bundle import load_recorded
-    from core.animation.animation import Animation
-    from core.animation.keys import animation_of
-    from core.scene.view_numbers import ViewNumberError
     since = idle_mark()                                  # the idle cores are measured from here
     out = Path(args.out)
+    status = _refused(args, out)
+    if status:
+        return status
+    loaded = _job_to_run(args, out)
+    if isinstance(loaded, int):
+        return loaded
+    job, bundle, animation = loaded
+    folder = frames_folder(out)
+    todo = _frames_to_render(job, folder, args.force)
+    if isinstance(todo, int):
+        return todo
+    total = job["frames"]
+    progress = Progress(total, total - len(todo))
+    movie = None
+    if out.suffix.lower() in MOVIE_SUFFIXES:             # encoded as the frames come
+        movie = Movie(out, folder, total, job["fps"], args.crf, done=set(range(total)) - set(todo))
+    ran = _render_and_write(args, job, bundle, animation, todo, folder, movie, progress, since)
+    if isinstance(ran, int):
+        return ran
+    failed, where, seconds = ran
+    if failed:
+        return _report_failures(failed, total, args.retries, movie)
+    return _finish(args, out, job, folder, movie, f"{len(todo)} rendered in {seconds:.1f} s"
+                   + (f", {where}" if where else ""))
+
+
+def _refused(args, out: Path) -> int:
+    """The exit status when --out or --scheduler cannot be used (said why), else 0."""
+    from app.tools import cluster
     refusal = out_problem(out, args.scene, args.force)
     if refusal:
         return _error(f"--out {args.out}: {refusal}", 2)
@@ -661,6 +709,15 @@ def main(args) -> int:
             cluster.scheduler_address(args.scheduler)
         except cluster.ClusterError as error:
             return _error(str(error), 2)
+    return 0
+
+
+def _job_to_run(args, out: Path):
+    """(job, bundle, animation) for the scene and the options, or an exit status (said why)."""
+    from app.tools.bundle import load_recorded
+    from core.animation.animation import Animation
+    from core.animation.keys import animation_of
+    from core.scene.view_numbers import ViewNumberError
     scene, bundle = load_recorded(args.scene, lambda path: _load(path, size=args.size))
     if scene is None:
         return 2
@@ -679,10 +736,14 @@ def main(args) -> int:
     if note:
         print(note, file=sys.stderr)
     job["path"] = str(Path(args.scene).resolve())        # where this process reads it
-    folder = frames_folder(out)
+    return job, bundle, animation
+
+
+def _frames_to_render(job, folder: Path, force: bool):
+    """The frames the folder does not hold yet for this job, or an exit status (said why)."""
     try:
         todo, notes = prepare_folder(folder, {k: v for k, v in job.items() if k != "path"},
-                                     job_hash(job), args.force)
+                                     job_hash(job), force)
     except (OSError, ValueError) as error:
         return _error(str(error) if isinstance(error, FolderError)
                       else f"{folder}: {getattr(error, 'strerror', None) or error}", 2)
@@ -691,11 +752,13 @@ def main(args) -> int:
     total = job["frames"]
     if len(todo) < total:
         print(f"{total - len(todo)} of {total} frames already in {folder}: skipped", file=sys.stderr)
-    progress = Progress(total, total - len(todo))
-    movie = None
-    if out.suffix.lower() in MOVIE_SUFFIXES:             # encoded as the frames come
-        movie = Movie(out, folder, total, job["fps"], args.crf, done=set(range(total)) - set(todo))
+    return todo
 
+
+def _render_and_write(args, job, bundle, animation, todo, folder, movie, progress, since):
+    """Render ``todo``, each frame written to the folder (and the movie) as it comes; returns
+    (failures, where they ran, seconds), or an exit status (said why)."""
+    from app.tools import cluster
     signature = job_hash(job)
 
     def write(k: int, data: bytes | None, rgb: np.ndarray) -> None:
@@ -723,20 +786,27 @@ def main(args) -> int:
             movie.abandon()                              # (interrupted: nothing left beside)
         raise
     progress.finish()
-    if failed and movie is not None:
+    return failed, where, time.perf_counter() - t0
+
+
+def _report_failures(failed, total: int, retries: int, movie) -> int:
+    """Say which frames failed and why; the same command renders only those again."""
+    if movie is not None:
         movie.abandon()
-    if failed:
-        frames = sorted(k for run, _ in failed for k in run)
-        first = min(failed, key=lambda f: f[0][0])[1]
-        others = len({why for _, why in failed}) - 1
-        print(f"error: {_frames_text(frames)} of {total} failed after {args.retries + 1} tries"
-              f"{'' if len(frames) == 1 else ', the first'}: {first}"
-              f"{f' (and {others} other reasons)' if others else ''}; the same command renders "
-              "only the missing frames", file=sys.stderr)
-        return 1
-    seconds = time.perf_counter() - t0
+    frames = sorted(k for run, _ in failed for k in run)
+    first = min(failed, key=lambda f: f[0][0])[1]
+    others = len({why for _, why in failed}) - 1
+    print(f"error: {_frames_text(frames)} of {total} failed after {retries + 1} tries"
+          f"{'' if len(frames) == 1 else ', the first'}: {first}"
+          f"{f' (and {others} other reasons)' if others else ''}; the same command renders "
+          "only the missing frames", file=sys.stderr)
+    return 1
+
+
+def _finish(args, out: Path, job, folder: Path, movie, rendered: str) -> int:
+    """Finish the movie (if any), say what was written, and tidy the frames folder."""
+    total = job["frames"]
     w, h = job["settings"]["size"]
-    rendered = (f"{len(todo)} rendered in {seconds:.1f} s" + (f", {where}" if where else ""))
     if out.suffix.lower() not in MOVIE_SUFFIXES:
         print(f"wrote {out} ({total} frames, {w}x{h}, {job['fps']:g} fps; {rendered})")
         return 0

@@ -367,48 +367,73 @@ def first_frame_time(timeout: float = 60.0, cold: bool = False, scene: str | Non
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     viewer = None
     try:
-        deadline = time.monotonic() + 10
-        while not Path(f"/tmp/.X11-unix/X{display}").exists():
-            if server.poll() is not None or time.monotonic() > deadline:
-                return {"measured": False, "reason": "Xvfb did not start"}
-            time.sleep(0.05)
-        env = dict(os.environ, DISPLAY=f":{display}", FVD_LOG=str(log))
-        if cold:
-            env["NUMBA_CACHE_DIR"] = str(tmp / "numba-cache")
+        if not _display_started(server, display):
+            return {"measured": False, "reason": "Xvfb did not start"}
         start = time.perf_counter()
-        # stderr to a file: a pipe nobody reads while the viewer runs could fill and stall it
-        errors = (tmp / "viewer.stderr").open("w")
-        viewer = subprocess.Popen([sys.executable, "-m", "app", "view", *([scene] if scene else [])],
-                                  cwd=ROOT, env=env,
-                                  stdout=subprocess.DEVNULL, stderr=errors)
-        errors.close()
-        deadline = time.monotonic() + timeout
-        while time.monotonic() < deadline:
-            text = log.read_text(errors="replace") if log.exists() else ""
-            match = _FIRST_FRAME.search(text)
-            if match:
-                wall = time.perf_counter() - start
-                value = float(match.group(1)) * (1e-3 if match.group(2).lower() == "ms" else 1.0)
-                return {"measured": True, "logged_s": value, "wall_s": wall,
-                        "cpu_s": float(match.group(3)) if match.group(3) else None,
-                        "line": match.group(0), "cache": "empty" if cold else "normal",
-                        "log": text.splitlines()[:60]}
-            if viewer.poll() is not None:
-                err = (tmp / "viewer.stderr").read_text(errors="replace").strip().splitlines()
-                return {"measured": False, "reason": "the viewer exited before logging a first frame"
-                        + (f": {err[-1]}" if err else f" (status {viewer.returncode})")}
-            time.sleep(0.02)
-        return {"measured": False, "reason": f"no 'first frame' line in FVD_LOG within {timeout:g} s"}
+        viewer = _start_viewer(tmp, display, log, cold, scene)
+        return _first_frame_logged(viewer, tmp, log, start, timeout, cold)
     finally:
-        for proc in (viewer, server):
-            if proc is not None and proc.poll() is None:
-                proc.send_signal(signal.SIGTERM)
-                try:
-                    proc.wait(timeout=5)
-                except subprocess.TimeoutExpired:
-                    proc.kill()
-                    proc.wait()
+        _stop_processes(viewer, server)
         shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _display_started(server, display: int) -> bool:
+    """Wait (up to 10 s) for the Xvfb ``server`` to open its socket."""
+    deadline = time.monotonic() + 10
+    while not Path(f"/tmp/.X11-unix/X{display}").exists():
+        if server.poll() is not None or time.monotonic() > deadline:
+            return False
+        time.sleep(0.05)
+    return True
+
+
+def _start_viewer(tmp: Path, display: int, log: Path, cold: bool, scene: str | None):
+    """``python -m app view [scene]`` on the display, logging to ``log`` (with ``cold``, from
+    an empty kernel cache)."""
+    env = dict(os.environ, DISPLAY=f":{display}", FVD_LOG=str(log))
+    if cold:
+        env["NUMBA_CACHE_DIR"] = str(tmp / "numba-cache")
+    # stderr to a file: a pipe nobody reads while the viewer runs could fill and stall it
+    errors = (tmp / "viewer.stderr").open("w")
+    viewer = subprocess.Popen([sys.executable, "-m", "app", "view", *([scene] if scene else [])],
+                              cwd=ROOT, env=env,
+                              stdout=subprocess.DEVNULL, stderr=errors)
+    errors.close()
+    return viewer
+
+
+def _first_frame_logged(viewer, tmp: Path, log: Path, start: float, timeout: float,
+                        cold: bool) -> dict:
+    """Watch the log for the viewer's "first frame" line: the measurement, or why there is none."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        text = log.read_text(errors="replace") if log.exists() else ""
+        match = _FIRST_FRAME.search(text)
+        if match:
+            wall = time.perf_counter() - start
+            value = float(match.group(1)) * (1e-3 if match.group(2).lower() == "ms" else 1.0)
+            return {"measured": True, "logged_s": value, "wall_s": wall,
+                    "cpu_s": float(match.group(3)) if match.group(3) else None,
+                    "line": match.group(0), "cache": "empty" if cold else "normal",
+                    "log": text.splitlines()[:60]}
+        if viewer.poll() is not None:
+            err = (tmp / "viewer.stderr").read_text(errors="replace").strip().splitlines()
+            return {"measured": False, "reason": "the viewer exited before logging a first frame"
+                    + (f": {err[-1]}" if err else f" (status {viewer.returncode})")}
+        time.sleep(0.02)
+    return {"measured": False, "reason": f"no 'first frame' line in FVD_LOG within {timeout:g} s"}
+
+
+def _stop_processes(*procs) -> None:
+    """SIGTERM each process still running, then kill it if it has not ended in 5 s."""
+    for proc in procs:
+        if proc is not None and proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+            try:
+                proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
 
 
 def first_frame_scenes() -> dict:
@@ -419,7 +444,7 @@ def first_frame_scenes() -> dict:
 
 
 def depth_complexity(size, frames: int, warmup: int) -> dict:
-    """The rasterizer on 1 and 100 full-screen layers of 10k triangles each (issue 21), front
+    """The rasterizer on 1 and 100 full-screen layers of 10k triangles each (the cost of overdraw), front
     to back and back to front: median ms of ``rasterize`` and the ratio to one layer."""
     from app.tools.depth_bench import time_layers
     width, height = size
@@ -621,6 +646,40 @@ def main(args) -> int:
     if args.frames < 1 or args.warmup < 0:
         print("error: --frames must be at least 1 and --warmup at least 0", file=sys.stderr)
         return 2
+    status = _other_bench(args)
+    if status is not None:
+        return status
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    t_start = time.perf_counter()
+    load_before = os.getloadavg()
+    _progress("building scenes ...")
+    scenes = _scenes(args)
+    rows = run_cases(scenes, args.shading, args.projection, args.size, args.frames, args.warmup,
+                     threads=not getattr(args, "no_threads", False))
+
+    _progress("lighting: float32 passes against the float64 kernels ...")
+    precision = precision_rows(scenes, args.projection, args.size, args.frames, args.warmup)
+    startup = _startup_times(args)
+    depth = _depth_rows(args)
+    animation = _animation_rows(args)
+    info = _machine_info(load_before)
+
+    report = {"frames": args.frames, "warmup": args.warmup, "cases": rows,
+              "precision": precision, "startup": startup,
+              "depth_complexity": depth,
+              "animation": animation, "machine": info, "bench_seconds": time.perf_counter() - t_start}
+    (out / "bench.json").write_text(json.dumps(report, indent=2))
+    write_chart(rows, out / "bench.png")
+    _print_bench(args, report, load_before)
+    print()
+    print(f"wrote {out / 'bench.json'} and {out / 'bench.png'} "
+          f"({time.perf_counter() - t_start:.0f} s in all)")
+    return 0
+
+
+def _other_bench(args) -> int | None:
+    """The exit status of the bench of another renderer family, or None for the rasterizer's."""
     if args.renderer == "raytrace":
         return raytrace_bench(args)
     if args.renderer == "volume":
@@ -633,18 +692,11 @@ def main(args) -> int:
     if any(name in GI_RENDERERS for name in chosen):
         from app.tools.gi_bench import main as gi_main
         return gi_main(args)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    t_start = time.perf_counter()
-    load_before = os.getloadavg()
-    _progress("building scenes ...")
-    scenes = _scenes(args)
-    rows = run_cases(scenes, args.shading, args.projection, args.size, args.frames, args.warmup,
-                     threads=not getattr(args, "no_threads", False))
+    return None
 
-    _progress("lighting: float32 passes against the float64 kernels ...")
-    precision = precision_rows(scenes, args.projection, args.size, args.frames, args.warmup)
 
+def _startup_times(args) -> dict:
+    """The JIT's cold and warm starts and the viewer's first frames (none with --no-startup)."""
     startup = {}
     if not args.no_startup:
         _progress("JIT cold and warm start (fresh processes) ...")
@@ -656,19 +708,27 @@ def main(args) -> int:
         startup["first_frame_cold"] = first_frame_time(cold=True)
         _progress("first picture of every shipped scene (warm cache) ...")
         startup["first_frame_scenes"] = first_frame_scenes()
+    return startup
 
-    depth = None
-    if not getattr(args, "no_depth", False):
-        _progress("depth complexity: 100 layers of 10k triangles ...")
-        depth = depth_complexity(args.size, min(args.frames, 7), min(args.warmup, 1))
 
-    animation = None
-    if not args.no_animation:        # the fountain and the fly-around, 1 process and 2 workers
-        _progress("animation: the fountain and the fly-around at 500 x 500 on 1 process and "
-                  "--workers 2 ...")
-        from app.tools.animate import bench_animation
-        animation = bench_animation(size=args.size)
+def _depth_rows(args):
+    if getattr(args, "no_depth", False):
+        return None
+    _progress("depth complexity: 100 layers of 10k triangles ...")
+    return depth_complexity(args.size, min(args.frames, 7), min(args.warmup, 1))
 
+
+def _animation_rows(args):
+    if args.no_animation:            # the fountain and the fly-around, 1 process and 2 workers
+        return None
+    _progress("animation: the fountain and the fly-around at 500 x 500 on 1 process and "
+              "--workers 2 ...")
+    from app.tools.animate import bench_animation
+    return bench_animation(size=args.size)
+
+
+def _machine_info(load_before) -> dict:
+    """What the numbers were measured on, the load before and after included."""
     from app.tools.reference_gl import GLRenderer
     info = {"machine": platform.machine(), "cpus": os.cpu_count(), "python": platform.python_version(),
             "host": socket.gethostname(), "numpy": np.__version__,
@@ -682,14 +742,13 @@ def main(args) -> int:
     probe = GLRenderer((1, 1))
     info["gl_renderer"] = probe.renderer_name
     probe.release()
+    return info
 
-    report = {"frames": args.frames, "warmup": args.warmup, "cases": rows,
-              "precision": precision, "startup": startup,
-              "depth_complexity": depth,
-              "animation": animation, "machine": info, "bench_seconds": time.perf_counter() - t_start}
-    (out / "bench.json").write_text(json.dumps(report, indent=2))
-    write_chart(rows, out / "bench.png")
 
+def _print_bench(args, report: dict, load_before) -> None:
+    """The bench's tables, as bench.json holds them."""
+    rows, info, startup = report["cases"], report["machine"], report["startup"]
+    depth, animation = report["depth_complexity"], report["animation"]
     print(f"{args.frames} frames after {args.warmup} warm-up, {args.size[0]} x {args.size[1]}, "
           f"{args.projection}; llvmpipe: {info['gl_renderer']}, {info['cpus']} CPUs; load average "
           f"{load_before[0]:.1f} before, {info['loadavg_after'][0]:.1f} after")
@@ -698,7 +757,7 @@ def main(args) -> int:
     print("where our time goes (median ms per stage):")
     print(format_stages(rows))
     print()
-    print(format_precision(precision))
+    print(format_precision(report["precision"]))
     if any("threads" in r for r in rows):
         print()
         print("thread scaling (median ms per stage, one thread → all):")
@@ -713,10 +772,6 @@ def main(args) -> int:
         from app.tools.animate import format_animation
         print()
         print(format_animation(animation))
-    print()
-    print(f"wrote {out / 'bench.json'} and {out / 'bench.png'} "
-          f"({time.perf_counter() - t_start:.0f} s in all)")
-    return 0
 
 
 # ------------------------------------------------------------------------------------ the ray tracer
@@ -801,71 +856,91 @@ def _alternating_medians(runs: dict, frames: int, warmup: int) -> dict:
 def raytrace_bench(args) -> int:
     """Primary visibility rays/s (ours and Embree's, same rays, same run) and full Whitted
     frames/s at ``--size``, for the classic Whitted scene and the glass bunny."""
-    import numba
-
-    from core.raytrace import bvh, geometry, whitted
-    from core.raytrace.renderer import TraceOptions, prepare, primary, render_raw
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     load_before = os.getloadavg()
     frames, warmup = max(1, min(args.frames, 5)), max(1, args.warmup)
-    rows = []
-    for label, scene, view in _raytrace_scenes(args):
-        _progress(f"{label}: build, primary rays, Whitted frames ...")
-        bvh.build(np.eye(3), [[0, 1, 2]])                 # load the compiled build first
-        geometry._cache.pop(scene, None)                  # time the build from nothing
-        setup = prepare(scene, view, args.projection, args.size, TraceOptions())
-        build = setup.packing.build
-        origins, directions, t_min, t_max = primary(setup, 0, args.size[1], 0, args.size[0])
-        live = np.isfinite(t_min)
-        o, d = np.ascontiguousarray(origins[live]), np.ascontiguousarray(directions[live])
-        lo, hi = np.ascontiguousarray(t_min[live]), np.ascontiguousarray(t_max[live])
-        kind, index, t_hit = np.empty(len(o), np.int64), np.empty(len(o), np.int64), np.empty(len(o))
-
-        def ours():
-            whitted.visible_many(setup.packing.packed, o, d, lo, hi, kind, index, t_hit)
-
-        def ours_one_thread():
-            threads = numba.get_num_threads()
-            numba.set_num_threads(1)
-            try:
-                ours()
-            finally:
-                numba.set_num_threads(threads)
-
-        runs = {"ours": ours, "ours, one thread": ours_one_thread}
-        embree_run = _embree_run(scene, o, d)
-        if embree_run is not None:
-            runs["embree"] = embree_run
-        timed = _alternating_medians(runs, 2 * frames, warmup)   # ours, Embree, ours, ...
-        primary_s, primary_cpu = timed["ours"]
-        one_thread_cpu = timed["ours, one thread"][1]
-        embree = None
-        if embree_run is not None:
-            embree = len(o) / timed["embree"][0], len(o) / timed["embree"][1]
-        frame_s, frame_cpu = _median_seconds(lambda: render_raw(prepare(scene, view, args.projection,
-                                                             args.size, TraceOptions())),
-                                  frames, warmup)
-        counted = prepare(scene, view, args.projection, args.size, TraceOptions())
-        render_raw(counted)
-        rows.append({"scene": label, "triangles": build.triangles,
-                     "bvh_build_ms": build.seconds * 1e3, "bvh_bytes": build.bytes,
-                     "primary_rays": int(live.sum()),
-                     "primary_rays_per_s": len(o) / primary_s,
-                     "primary_rays_per_cpu_s": len(o) / primary_cpu,
-                     "primary_rays_per_cpu_s_one_thread": len(o) / one_thread_cpu,
-                     "embree_rays_per_s": embree[0] if embree else None,
-                     "embree_rays_per_cpu_s": embree[1] if embree else None,
-                     "whitted_frame_ms": frame_s * 1e3, "whitted_fps": 1.0 / frame_s,
-                     "whitted_frame_cpu_ms": frame_cpu * 1e3,
-                     "rays_per_frame": {k: int(v) for k, v in zip(
-                         ("primary", "shadow", "reflected", "refracted", "TIR", "cut by depth",
-                          "cut adaptive"), counted.counts)}})
+    rows = [_raytrace_row(args, label, scene, view, frames, warmup)
+            for label, scene, view in _raytrace_scenes(args)]
     spheres = None if args.scene else _many_spheres_row(frames, warmup)
     report = {"size": list(args.size), "projection": args.projection, "frames": frames,
               "rows": rows, "spheres": spheres, "loadavg_before": list(load_before),
               "loadavg_after": list(os.getloadavg()), "cpus": os.cpu_count()}
     (out / "bench_raytrace.json").write_text(json.dumps(report, indent=2))
+    _print_raytrace(args, report, load_before)
+    print(f"wrote {out / 'bench_raytrace.json'}")
+    return 0
+
+
+def _raytrace_row(args, label: str, scene, view, frames: int, warmup: int) -> dict:
+    """One scene's row: the BVH build, primary rays/s (ours and Embree's), Whitted frames."""
+    from core.raytrace import bvh, geometry
+    from core.raytrace.renderer import TraceOptions, prepare, primary, render_raw
+    _progress(f"{label}: build, primary rays, Whitted frames ...")
+    bvh.build(np.eye(3), [[0, 1, 2]])                 # load the compiled build first
+    geometry._cache.pop(scene, None)                  # time the build from nothing
+    setup = prepare(scene, view, args.projection, args.size, TraceOptions())
+    build = setup.packing.build
+    origins, directions, t_min, t_max = primary(setup, 0, args.size[1], 0, args.size[0])
+    live = np.isfinite(t_min)
+    rays = (np.ascontiguousarray(origins[live]), np.ascontiguousarray(directions[live]),
+            np.ascontiguousarray(t_min[live]), np.ascontiguousarray(t_max[live]))
+    rates = _primary_ray_rates(setup, scene, rays, frames, warmup)
+    frame_s, frame_cpu = _median_seconds(lambda: render_raw(prepare(scene, view, args.projection,
+                                                         args.size, TraceOptions())),
+                              frames, warmup)
+    counted = prepare(scene, view, args.projection, args.size, TraceOptions())
+    render_raw(counted)
+    return {"scene": label, "triangles": build.triangles,
+            "bvh_build_ms": build.seconds * 1e3, "bvh_bytes": build.bytes,
+            "primary_rays": int(live.sum()), **rates,
+            "whitted_frame_ms": frame_s * 1e3, "whitted_fps": 1.0 / frame_s,
+            "whitted_frame_cpu_ms": frame_cpu * 1e3,
+            "rays_per_frame": {k: int(v) for k, v in zip(
+                ("primary", "shadow", "reflected", "refracted", "TIR", "cut by depth",
+                 "cut adaptive"), counted.counts)}}
+
+
+def _primary_ray_rates(setup, scene, rays, frames: int, warmup: int) -> dict:
+    """Primary visibility rays per second and per CPU second: ours (all threads and one) and
+    Embree's where it is installed, timed in turns on the same rays."""
+    import numba
+
+    from core.raytrace import whitted
+    o, d, lo, hi = rays
+    kind, index, t_hit = np.empty(len(o), np.int64), np.empty(len(o), np.int64), np.empty(len(o))
+
+    def ours():
+        whitted.visible_many(setup.packing.packed, o, d, lo, hi, kind, index, t_hit)
+
+    def ours_one_thread():
+        threads = numba.get_num_threads()
+        numba.set_num_threads(1)
+        try:
+            ours()
+        finally:
+            numba.set_num_threads(threads)
+
+    runs = {"ours": ours, "ours, one thread": ours_one_thread}
+    embree_run = _embree_run(scene, o, d)
+    if embree_run is not None:
+        runs["embree"] = embree_run
+    timed = _alternating_medians(runs, 2 * frames, warmup)   # ours, Embree, ours, ...
+    primary_s, primary_cpu = timed["ours"]
+    one_thread_cpu = timed["ours, one thread"][1]
+    embree = None
+    if embree_run is not None:
+        embree = len(o) / timed["embree"][0], len(o) / timed["embree"][1]
+    return {"primary_rays_per_s": len(o) / primary_s,
+            "primary_rays_per_cpu_s": len(o) / primary_cpu,
+            "primary_rays_per_cpu_s_one_thread": len(o) / one_thread_cpu,
+            "embree_rays_per_s": embree[0] if embree else None,
+            "embree_rays_per_cpu_s": embree[1] if embree else None}
+
+
+def _print_raytrace(args, report: dict, load_before) -> None:
+    """The ray tracer's table, as bench_raytrace.json holds it."""
+    frames, rows, spheres = report["frames"], report["rows"], report["spheres"]
     print(f"ray tracer, {args.size[0]} x {args.size[1]} {args.projection}, median of {frames} "
           f"(primary rays: of {2 * frames}, ours and Embree's in turns); "
           f"{os.cpu_count()} CPUs, load average {load_before[0]:.1f} before, "
@@ -896,8 +971,6 @@ def raytrace_bench(args) -> int:
               f"{spheres['large']}² pixels) cost {spheres['more_cpu_s']:.3f} CPU-s, "
               f"{spheres['more_wall_s']:.3f} s wall; the spheres' BVH builds in "
               f"{spheres['build_ms']:.0f} ms")
-    print(f"wrote {out / 'bench_raytrace.json'}")
-    return 0
 
 
 SPHERES, SPHERE_RADIUS = 10_000, 0.03

@@ -1,4 +1,4 @@
-"""The bench's depth-complexity case (issue 21): stacks of full-screen layers.
+"""The bench's depth-complexity case (what overdraw costs): stacks of full-screen layers.
 
 Each layer is a grid of about ``per_layer`` distinct triangles covering the whole frame, at
 its own depth; ``n_layers`` of them are stacked front to back (the nearest layer drawn first)

@@ -1,4 +1,4 @@
-"""``python -m app bench --renderer radiosity,pathtrace``: the global-illumination rows (issue 19)
+"""``python -m app bench --renderer radiosity,pathtrace``: the global-illumination rows
 on the Cornell box (``scenes/cornell_box.toml``):
 
 - radiosity: seconds from the scene to 1 % unshot energy (meshing, BVH, form factors, progressive

@@ -1,4 +1,4 @@
-"""The global-illumination report (issue 19): ``python -m app.tools.gi_report --out docs/report``.
+"""The global-illumination report: ``python -m app.tools.gi_report --out docs/report``.
 
 Writes ``global_illumination.md``, ``.csv`` and ``.png`` into the folder:
 

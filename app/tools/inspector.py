@@ -1,4 +1,4 @@
-"""The bodies of ``inspect``, ``compare`` and ``render --buffer`` (issue 22)."""
+"""The pixel inspector's commands: the bodies of ``inspect``, ``compare``, ``render --buffer``."""
 
 from __future__ import annotations
 

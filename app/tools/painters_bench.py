@@ -1,4 +1,4 @@
-"""``python -m app bench --renderer bsp,depth-sort,zbuffer`` (issue 18): the painter's
+"""``python -m app bench --renderer bsp,depth-sort,zbuffer``: the painter's
 algorithms against the z-buffer, the costs the notes weigh ("time & memory drawbacks of Z
 buffer").
 
@@ -55,58 +55,23 @@ def _frame_ms(scene, settings, context, frames, warmup) -> tuple[float, dict]:
 def run(args, renderers: list[str]) -> int:
     from core.context import RenderContext
     from core.scene.generators import sphere_torus as bench_scene      # the bench's scene
-    from core.settings import RenderSettings
     from core.shading.shade import geometry
-    from core.visibility import bsp
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     width, height = args.size
     shading = args.shading[0]
     rows, trees = [], []
     if "bsp" in renderers:                       # load the compiled build before timing it
-        warm = bench_scene(triangles=1000)
-        for rule in RULES:
-            bsp.build(*geometry(warm, RenderContext()), rule)
+        _build_trees(*geometry(bench_scene(triangles=1000), RenderContext()))
     for count in args.sizes:
         scene = bench_scene(triangles=count)
         triangles = scene.triangle_count
         context = RenderContext()
         positions, tris = geometry(scene, context)
         if "bsp" in renderers:
-            for rule in RULES:
-                _progress(f"{triangles} triangles: BSP tree, root rule {rule} ...")
-                tree = bsp.build(positions, tris, rule)
-                trees.append({"triangles": triangles, **tree.stats(),
-                              "tree_bytes": _tree_bytes(tree)})
+            trees += _tree_rows(positions, tris, triangles)
         for name in renderers:
-            _progress(f"{triangles} triangles: {name} frames ...")
-            settings = RenderSettings.for_scene(scene, renderer=name, shading=shading,
-                                                projection=args.projection, size=args.size)
-            first = time.perf_counter()
-            from core.render import render
-            render(scene, scene.views[0], settings, context)        # builds the tree, compiles
-            first_ms = (time.perf_counter() - first) * 1e3
-            ms, cpu_ms, stats = _frame_ms(scene, settings, context, args.frames, args.warmup)
-            row = {"triangles": triangles, "renderer": name, "shading": shading,
-                   "first_frame_ms": first_ms, "frame_ms": ms, "frame_cpu_ms": cpu_ms,
-                   "painted": stats.get("painted"), "stage_ms": stats.get("ms", {})}
-            if name == "zbuffer":
-                row["memory_bytes"] = width * height * (8 + 4 + 8 + 8)   # depth, tri, b1, b2
-            if name == "depth-sort":
-                row["depth_sort"] = stats.get("depth sort")
-                row["memory_bytes"] = int(stats["painted"]) * (3 * 8 * 4 + 8 * 8)
-            if name == "scanline":
-                row["scan_line"] = stats.get("scan line")
-                counts = row["scan_line"] or {}       # PT: 9 ints, 4 floats; ET: 9 ints
-                row["memory_bytes"] = (counts.get("polygons", 0) * 13 * 8
-                                       + counts.get("edges", 0) * 9 * 8)
-            if name == "bsp":
-                tree_stats = stats.get("BSP tree", {})
-                row["bsp"] = tree_stats
-                row["memory_bytes"] = next((t["tree_bytes"] for t in trees
-                                            if t["triangles"] == triangles
-                                            and t["rule"] == tree_stats.get("rule")), None)
-            rows.append(row)
+            rows.append(_frame_row(args, scene, name, shading, context, trees))
     result = {"size": [width, height], "projection": args.projection, "shading": shading,
               "trees": trees, "frames": rows}
     (out / "painters.json").write_text(json.dumps(result, indent=2))
@@ -114,6 +79,59 @@ def run(args, renderers: list[str]) -> int:
     (out / "painters.md").write_text(text)
     print(text)
     return 0
+
+
+def _build_trees(positions, tris) -> None:
+    from core.visibility import bsp
+    for rule in RULES:
+        bsp.build(positions, tris, rule)
+
+
+def _tree_rows(positions, tris, triangles: int) -> list[dict]:
+    """The BSP tree of each root rule: its build's numbers and its memory."""
+    from core.visibility import bsp
+    trees = []
+    for rule in RULES:
+        _progress(f"{triangles} triangles: BSP tree, root rule {rule} ...")
+        tree = bsp.build(positions, tris, rule)
+        trees.append({"triangles": triangles, **tree.stats(), "tree_bytes": _tree_bytes(tree)})
+    return trees
+
+
+def _frame_row(args, scene, name: str, shading: str, context, trees: list[dict]) -> dict:
+    """One renderer's frames of the scene: the first (tree built, kernels loaded), the median
+    after it, and what it keeps in memory."""
+    from core.render import render
+    from core.settings import RenderSettings
+    triangles = scene.triangle_count
+    _progress(f"{triangles} triangles: {name} frames ...")
+    settings = RenderSettings.for_scene(scene, renderer=name, shading=shading,
+                                        projection=args.projection, size=args.size)
+    first = time.perf_counter()
+    render(scene, scene.views[0], settings, context)        # builds the tree, compiles
+    first_ms = (time.perf_counter() - first) * 1e3
+    ms, cpu_ms, stats = _frame_ms(scene, settings, context, args.frames, args.warmup)
+    row = {"triangles": triangles, "renderer": name, "shading": shading,
+           "first_frame_ms": first_ms, "frame_ms": ms, "frame_cpu_ms": cpu_ms,
+           "painted": stats.get("painted"), "stage_ms": stats.get("ms", {})}
+    width, height = args.size
+    if name == "zbuffer":
+        row["memory_bytes"] = width * height * (8 + 4 + 8 + 8)   # depth, tri, b1, b2
+    if name == "depth-sort":
+        row["depth_sort"] = stats.get("depth sort")
+        row["memory_bytes"] = int(stats["painted"]) * (3 * 8 * 4 + 8 * 8)
+    if name == "scanline":
+        row["scan_line"] = stats.get("scan line")
+        counts = row["scan_line"] or {}       # PT: 9 ints, 4 floats; ET: 9 ints
+        row["memory_bytes"] = (counts.get("polygons", 0) * 13 * 8
+                               + counts.get("edges", 0) * 9 * 8)
+    if name == "bsp":
+        tree_stats = stats.get("BSP tree", {})
+        row["bsp"] = tree_stats
+        row["memory_bytes"] = next((t["tree_bytes"] for t in trees
+                                    if t["triangles"] == triangles
+                                    and t["rule"] == tree_stats.get("rule")), None)
+    return row
 
 
 def format_tables(result: dict) -> str:

@@ -9,7 +9,7 @@ import time
 
 
 def add_options(parser) -> None:
-    """The radiosity and path-tracing settings (issue 19); None keeps the defaults."""
+    """The radiosity and path-tracing settings; None keeps the defaults."""
     from core.settings import FORM_FACTOR_METHODS, SOLVERS
     g = parser.add_argument_group("global illumination (radiosity, pathtrace)")
     g.add_argument("--form-factors", choices=FORM_FACTOR_METHODS, default=None,

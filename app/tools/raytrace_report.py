@@ -78,7 +78,7 @@ def write(out_dir: Path, size: int, cache=None, progress=print) -> list[Path]:
                         "RMSE against the exact image")
 
 
-# -- issue 20: adaptive supersampling (Whitted 1980) beside the regular and jittered grids
+# -- adaptive supersampling (Whitted 1980) beside the regular and jittered grids
 
 ADAPTIVE_SIZE = 96                  # the smallest size measured where the comparison is about
                                     # the picture, not sub-lattice aliasing at the horizon

@@ -24,7 +24,7 @@ from core.analysis import accuracy
 from core.analysis.accuracy import Point
 
 COLOURS = {"flat": "tab:orange", "gouraud": "tab:green", "phong": "tab:blue",
-           "gouraud scanline": "tab:red", "gouraud bsp": "tab:purple",       # issue 18
+           "gouraud scanline": "tab:red", "gouraud bsp": "tab:purple",       # the painters
            "gouraud depth-sort": "tab:brown"}
 MARKERS = {1: "o", 4: "s", 16: "^"}
 LINES = {1: "-", 4: "--", 16: ":"}
@@ -191,7 +191,7 @@ def main(args) -> int:
         say = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
         paths += tuple(texture_rows(out, progress=say))
         paths += tuple(raytrace_rows(out, config.size, cache=config.cache, progress=say))
-        from app.tools.raytrace_report import write_adaptive          # issue 20
+        from app.tools.raytrace_report import write_adaptive          # adaptive supersampling
         paths += tuple(write_adaptive(out, progress=say))
         from app.tools.volume_report import write as volume_rows
         paths += tuple(volume_rows(out, progress=say))

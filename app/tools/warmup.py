@@ -12,13 +12,14 @@ culling, ≥ 10 000 triangles), an open one (two-sided lighting), lines, and sev
 pixel. :func:`scene_steps` then opens every shipped scene (``scenes/``) the way the window
 does (:class:`app.viewer.state.ViewerState`), in every renderer and shading, and in every
 texture filter when it has textures, so that no first picture the user asks for compiles
-(issue 21; ``tests/test_warmup_complete.py`` checks it from an empty kernel cache).
+(``tests/test_warmup_complete.py`` checks it from an empty kernel cache).
 
 The steps run in worker processes, one a core (``--jobs``), each taking the next step from
 one queue, the longest first by :data:`COSTS` (``app/tools/warmup_pool.py``). When every step
 has succeeded a stamp says the cache is warm (``app/tools/warm_stamp.py``: :func:`is_warm`).
 ``--progress-json`` prints one JSON object a line instead of the table, and
-:class:`BackgroundWarmup` runs the whole thing as a subprocess for the window (issue 33).
+:class:`BackgroundWarmup` runs the whole thing as a subprocess for the window, so that the
+window opens at once and its kernels compile beside it.
 """
 
 from __future__ import annotations
@@ -499,34 +500,89 @@ def _on_sigterm(signum, frame):
     raise _Interrupted()
 
 
-def main(args=None) -> int:
-    """``python -m app warmup``: every step on ``--jobs`` workers; the stamp when all succeed.
-    Exit status 0 when every step succeeded, 1 when one failed, 130 when interrupted."""
-    from app.tools import warm_stamp, warmup_pool
+class _Report:
+    """What a warm-up run says: JSON events (``--progress-json``, for the window) or lines."""
 
-    options = _options(args)
-    as_json = options.progress_json
+    def __init__(self, as_json: bool):
+        self.as_json = as_json
+        self.out = sys.stdout                   # where the lines go, as when the run began
+        self.finished: list = []
+        self.total, self.scenes, self.first = 0, {}, None
 
-    def emit(event: dict) -> None:
+    def emit(self, event: dict) -> None:
         try:
             print(json.dumps(event), flush=True)
         except BrokenPipeError:               # the reader (a window) has gone: no one to tell
             sys.stdout = open(os.devnull, "w")
 
-    def say(text: str, to=sys.stdout) -> None:
-        if not as_json:
-            print(text, file=to, flush=True)
+    def say(self, text: str) -> None:
+        if not self.as_json:
+            print(text, file=self.out, flush=True)
 
+    def start(self, total: int, jobs: int, scenes: dict, first: str | None) -> None:
+        self.total, self.scenes, self.first = total, scenes, first
+        if self.as_json:
+            self.emit({"event": "start", "total": total, "jobs": jobs})
+        else:
+            self.say(f"  {total} steps on {jobs} worker process{'es' if jobs > 1 else ''}")
+
+    def on_begin(self, label) -> None:
+        if self.as_json:
+            self.emit({"event": "begin", "label": label, "scenes": self.scenes.get(label, [])})
+
+    def on_outcome(self, outcome) -> None:
+        self.finished.append(outcome)
+        k, n = len(self.finished), self.total
+        common = {"k": k, "total": n, "label": outcome.label,
+                  "seconds": round(outcome.seconds, 3),
+                  "scenes": self.scenes.get(outcome.label, [])}
+        if self.first is not None and outcome.label == opening_label(self.first):
+            common["opens"] = self.first        # the window's first picture will load now
+        if outcome.error is None:
+            if self.as_json:
+                self.emit({"event": "done", **common})
+            self.say(f"  [{k:2d}/{n}] {outcome.label}: {outcome.seconds:.2f} s")
+        elif self.as_json:
+            self.emit({"event": "failed", **common, "error": outcome.error})
+        else:
+            print(f"  [{k:2d}/{n}] FAILED {outcome.label}: {outcome.error}",
+                  file=sys.stderr, flush=True)
+
+
+def main(args=None) -> int:
+    """``python -m app warmup``: every step on ``--jobs`` workers; the stamp when all succeed.
+    Exit status 0 when every step succeeded, 1 when one failed, 130 when interrupted."""
+    options = _options(args)
+    report = _Report(options.progress_json)
+    stamp = _stamp_to_write(options)
+    report.say("warming up: compiling the kernels once (numba keeps them on disk)")
+    if not compile_bytecode():
+        report.say("  (some Python bytecode could not be written: starts will compile it)")
+    todo, scenes, first = _steps_to_run(options)
+    jobs = _job_count(options, todo)
+    report.start(len(todo), jobs, scenes, first)
+    ran = _run_steps(options, todo, jobs, first, report)
+    if ran is None:
+        return 130
+    outcomes, seconds = ran
+    return _finish(outcomes, seconds, stamp, jobs, report)
+
+
+def _stamp_to_write(options) -> Path | None:
+    """The stamp this run writes when all its steps succeed (another version's is removed)."""
+    from app.tools import warm_stamp
     # A run of some steps (--only) says nothing about the whole cache: it writes a stamp only
     # where it is told to (the tests), never the real one.
     partial = bool(options.only or options.extra_steps)
     stamp = Path(options.stamp) if options.stamp else None if partial else warm_stamp.stamp_path()
     if stamp is not None and not warm_stamp.is_warm(stamp):
         warm_stamp.remove(stamp)                # another version's stamp: not ours to keep
-    say("warming up: compiling the kernels once (numba keeps them on disk)")
-    if not compile_bytecode():
-        say("  (some Python bytecode could not be written: starts will compile it)")
+    return stamp
 
+
+def _steps_to_run(options) -> tuple[list, dict, str | None]:
+    """(the steps in the order they run, the scenes each warms, the file the window opens)."""
+    from app.tools import warmup_pool
     listed = [label for label, _ in warmup_pool.load_steps(options.extra_steps)]
     if options.only:
         listed = [label for label in listed if any(text in label for text in options.only)]
@@ -540,72 +596,62 @@ def main(args=None) -> int:
                              first=lambda label: first is not None
                              and label == opening_label(first),
                              later=lambda label: label in scenes)
+    return todo, scenes, first
+
+
+def _job_count(options, todo) -> int:
+    """--jobs (by default the pool's), never more than there are steps."""
+    from app.tools import warmup_pool
     jobs = options.jobs if options.jobs and options.jobs > 0 else warmup_pool.default_jobs()
-    jobs = max(1, min(jobs, len(todo) or 1))
-    n = len(todo)
-    if as_json:
-        emit({"event": "start", "total": n, "jobs": jobs})
-    else:
-        say(f"  {n} steps on {jobs} worker process{'es' if jobs > 1 else ''}")
-    finished = []
+    return max(1, min(jobs, len(todo) or 1))
 
-    def on_begin(label):
-        if as_json:
-            emit({"event": "begin", "label": label, "scenes": scenes.get(label, [])})
 
-    def on_outcome(outcome):
-        finished.append(outcome)
-        k = len(finished)
-        common = {"k": k, "total": n, "label": outcome.label,
-                  "seconds": round(outcome.seconds, 3), "scenes": scenes.get(outcome.label, [])}
-        if first is not None and outcome.label == opening_label(first):
-            common["opens"] = first             # the window's first picture will load now
-        if outcome.error is None:
-            if as_json:
-                emit({"event": "done", **common})
-            say(f"  [{k:2d}/{n}] {outcome.label}: {outcome.seconds:.2f} s")
-        else:
-            if as_json:
-                emit({"event": "failed", **common, "error": outcome.error})
-            else:
-                print(f"  [{k:2d}/{n}] FAILED {outcome.label}: {outcome.error}",
-                      file=sys.stderr, flush=True)
-
+def _run_steps(options, todo, jobs, first, report):
+    """Run the steps on the workers: (outcomes, seconds), or None when interrupted (said)."""
+    from app.tools import warmup_pool
     start = time.perf_counter()
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     if options.until_stdin_closes:
         _end_when_stdin_closes()
     try:
         outcomes = warmup_pool.run_parallel(todo, jobs, extra=options.extra_steps, first=first,
-                                            on_begin=on_begin, on_outcome=on_outcome)
+                                            on_begin=report.on_begin,
+                                            on_outcome=report.on_outcome)
     except KeyboardInterrupt:
         seconds = time.perf_counter() - start
-        if as_json:
-            emit({"event": "finished", "seconds": round(seconds, 3), "ok": False,
-                  "interrupted": True, "failed": []})
+        if report.as_json:
+            report.emit({"event": "finished", "seconds": round(seconds, 3), "ok": False,
+                         "interrupted": True, "failed": []})
         else:
-            print(f"warm-up interrupted after {seconds:.1f} s ({len(finished)} of {n} steps "
-                  "done; run it again for the rest)", file=sys.stderr, flush=True)
-        return 130
+            print(f"warm-up interrupted after {seconds:.1f} s ({len(report.finished)} of "
+                  f"{len(todo)} steps done; run it again for the rest)", file=sys.stderr,
+                  flush=True)
+        return None
     finally:
         signal.signal(signal.SIGTERM, previous)
-    seconds = time.perf_counter() - start
+    return outcomes, time.perf_counter() - start
+
+
+def _finish(outcomes, seconds: float, stamp, jobs: int, report) -> int:
+    """Write or remove the stamp, and say how the run went: 0 when every step succeeded."""
+    from app.tools import warm_stamp
+    n = report.total
     failed = [outcome for outcome in outcomes if outcome.error is not None]
     if stamp is not None:
         if failed:
             warm_stamp.remove(stamp)
         else:
             warm_stamp.write(seconds, n, stamp)
-    if as_json:
-        emit({"event": "finished", "seconds": round(seconds, 3), "ok": not failed,
-              "failed": [outcome.label for outcome in failed]})
+    if report.as_json:
+        report.emit({"event": "finished", "seconds": round(seconds, 3), "ok": not failed,
+                     "failed": [outcome.label for outcome in failed]})
     elif failed:
         print(f"warm-up: {len(failed)} of {n} steps failed ("
               + "; ".join(outcome.label for outcome in failed) + "); the cache is not marked "
               "warm", file=sys.stderr, flush=True)
     else:
-        say(f"warm: {seconds:.1f} s in all on {jobs} worker process{'es' if jobs > 1 else ''}; "
-            "later starts load the compiled kernels")
+        report.say(f"warm: {seconds:.1f} s in all on {jobs} worker process"
+                   f"{'es' if jobs > 1 else ''}; later starts load the compiled kernels")
     return 1 if failed else 0
 
 

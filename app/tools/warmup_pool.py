@@ -139,76 +139,95 @@ def run_parallel(labels: list[str], jobs: int, *, extra: str | None = None,
     ``on_begin(label)`` when a worker takes one, ``on_outcome(outcome)`` when it ends. On
     KeyboardInterrupt (SIGINT, or SIGTERM turned into it by the caller) the workers are
     terminated before it propagates."""
-    context = multiprocessing.get_context("spawn")
-    tasks, results = context.Queue(), context.Queue()
-    jobs = max(1, min(jobs, len(labels)))
-    for label in labels:
-        tasks.put(label)
-    for _ in range(jobs):
-        tasks.put(None)
-
-    def start():
-        worker = context.Process(target=_worker, args=(tasks, results, extra, first),
-                                 name="warm-up worker", daemon=True)
-        worker.start()
-        return worker
-
-    workers = [start() for _ in range(jobs)] if labels else []
-    running: dict[int, str] = {}                       # pid → the label it is on
-    outcomes: dict[str, Outcome] = {}
-
-    def finish(outcome: Outcome) -> None:
-        outcomes[outcome.label] = outcome
-        on_outcome(outcome)
-
-    def handle(message) -> None:
-        kind, pid, payload = message
-        if kind == "begin":
-            running[pid] = payload
-            on_begin(payload)
-        elif kind == "done":
-            running.pop(pid, None)
-            finish(Outcome(*payload))
-        elif kind == "broken":                         # it could not even list the steps
-            for label in labels:
-                if label not in outcomes:
-                    finish(Outcome(label, 0.0, f"the worker could not start: {payload}"))
-
+    pool = _Pool(labels, jobs, extra, first, on_begin, on_outcome)
     try:
-        while len(outcomes) < len(labels):
+        while not pool.done():
             try:
-                handle(results.get(timeout=0.5))
+                pool.handle(pool.results.get(timeout=0.5))
                 continue
             except queue.Empty:
                 pass
-            for k, worker in enumerate(workers):
-                if worker.is_alive() or worker.exitcode == 0:
-                    continue
-                while True:                            # what it said before it died
-                    try:
-                        handle(results.get_nowait())
-                    except queue.Empty:
-                        break
-                label = running.pop(worker.pid, None)
-                if label is not None and label not in outcomes:
-                    finish(Outcome(label, 0.0, f"the worker process died (exit code "
-                                               f"{worker.exitcode})"))
-                if len(outcomes) < len(labels):
-                    workers[k] = start()       # for the steps still queued
-            if len(outcomes) < len(labels) and not any(w.is_alive() for w in workers):
-                for label in labels:                   # no one left to run them
-                    if label not in outcomes:
-                        finish(Outcome(label, 0.0, "no worker process is left to run it"))
+            pool.replace_dead_workers()
+            if not pool.done() and not any(w.is_alive() for w in pool.workers):
+                pool.fail_the_rest("no worker process is left to run it")
     finally:
-        for worker in workers:
+        pool.close()
+    return [pool.outcomes[label] for label in labels]
+
+
+class _Pool:
+    """The queue of steps, its worker processes, and what each step came to."""
+
+    def __init__(self, labels, jobs, extra, first, on_begin, on_outcome):
+        self.context = multiprocessing.get_context("spawn")
+        self.tasks, self.results = self.context.Queue(), self.context.Queue()
+        self.labels, self.extra, self.first = labels, extra, first
+        self.on_begin, self.on_outcome = on_begin, on_outcome
+        jobs = max(1, min(jobs, len(labels)))
+        for label in labels:
+            self.tasks.put(label)
+        for _ in range(jobs):
+            self.tasks.put(None)
+        self.workers = [self.start() for _ in range(jobs)] if labels else []
+        self.running: dict[int, str] = {}              # pid → the label it is on
+        self.outcomes: dict[str, Outcome] = {}
+
+    def start(self):
+        worker = self.context.Process(target=_worker,
+                                      args=(self.tasks, self.results, self.extra, self.first),
+                                      name="warm-up worker", daemon=True)
+        worker.start()
+        return worker
+
+    def done(self) -> bool:
+        return len(self.outcomes) >= len(self.labels)
+
+    def finish(self, outcome: Outcome) -> None:
+        self.outcomes[outcome.label] = outcome
+        self.on_outcome(outcome)
+
+    def fail_the_rest(self, why: str) -> None:
+        for label in self.labels:
+            if label not in self.outcomes:
+                self.finish(Outcome(label, 0.0, why))
+
+    def handle(self, message) -> None:
+        kind, pid, payload = message
+        if kind == "begin":
+            self.running[pid] = payload
+            self.on_begin(payload)
+        elif kind == "done":
+            self.running.pop(pid, None)
+            self.finish(Outcome(*payload))
+        elif kind == "broken":                         # it could not even list the steps
+            self.fail_the_rest(f"the worker could not start: {payload}")
+
+    def replace_dead_workers(self) -> None:
+        """A worker that died: its step failed, and a new worker takes the steps still queued."""
+        for k, worker in enumerate(self.workers):
+            if worker.is_alive() or worker.exitcode == 0:
+                continue
+            while True:                                # what it said before it died
+                try:
+                    self.handle(self.results.get_nowait())
+                except queue.Empty:
+                    break
+            label = self.running.pop(worker.pid, None)
+            if label is not None and label not in self.outcomes:
+                self.finish(Outcome(label, 0.0, f"the worker process died (exit code "
+                                                f"{worker.exitcode})"))
+            if not self.done():
+                self.workers[k] = self.start()         # for the steps still queued
+
+    def close(self) -> None:
+        for worker in self.workers:
             if worker.is_alive():
                 worker.terminate()
-        for worker in workers:
+        for worker in self.workers:
             worker.join(timeout=5)
             if worker.is_alive():
                 worker.kill()
                 worker.join(timeout=5)
-        for q in (tasks, results):
+        for q in (self.tasks, self.results):
             q.close()
             q.cancel_join_thread()
-    return [outcomes[label] for label in labels]

@@ -1,4 +1,4 @@
-"""The window's inspector tools (issue 22): inspect mode, buffer views, the OpenGL comparison
+"""The window's inspector tools: inspect mode, buffer views, the OpenGL comparison
 and the plots. Nothing here runs while it is off: a frame costs what it cost before, and start-up
 imports nothing more (the inspector's modules load on first use).
 

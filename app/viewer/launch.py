@@ -107,23 +107,41 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
             print(f"error: {error}", file=sys.stderr)
             return 2
     started = time.perf_counter() - process_age()
-    from app.viewer.state import ViewerState, reader_errors
+    state = _open_state(scene_source, size, options, started)
+    if state is None:
+        return 2
+    window, reason, what = _open_window(state, out_dir, started, reference_image, reference)
+    if reason is not None:
+        return render_all_views(state, out_dir, reason, what)
+    log.info("window open, %dx%d framebuffer (%.3f s after process start)",
+             state.size[0], state.size[1], time.perf_counter() - started)
+    return window.run()
 
+
+def _default_scene_source() -> str:
+    """The default scene's path, shown in every view's label: relative to the working
+    directory when that is shorter."""
+    from core.paths import DEFAULT_SCENE
+    try:
+        relative = os.path.relpath(DEFAULT_SCENE)
+    except ValueError:                    # another drive (Windows): no relative path
+        relative = ".."
+    return relative if not relative.startswith("..") else str(DEFAULT_SCENE)
+
+
+def _open_state(scene_source, size, options, started):
+    """The viewer's state on the scene (its messages printed), or None when it cannot be read
+    (said why)."""
+    from app.viewer.state import ViewerState, reader_errors
     if scene_source is None:
-        from core.paths import DEFAULT_SCENE
-        # Shown in every view's label: relative to the working directory when that is shorter.
-        try:
-            relative = os.path.relpath(DEFAULT_SCENE)
-        except ValueError:                    # another drive (Windows): no relative path
-            relative = ".."
-        scene_source = relative if not relative.startswith("..") else str(DEFAULT_SCENE)
+        scene_source = _default_scene_source()
     prime_while_loading(scene_source, (options or {}).get("renderer_name"))
     try:
         chosen = {k: v for k, v in (options or {}).items() if v is not None}
         state = ViewerState.open(scene_source, size=tuple(size) if size else None, **chosen)
     except reader_errors() as error:
         print(f"error: cannot open {scene_source}: {error}", file=sys.stderr)
-        return 2
+        return None
     for message in state.scene.view_messages:
         print(f"invalid view: {message}", file=sys.stderr)
     for message in state.scene.messages:
@@ -131,9 +149,15 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
     log.info("scene %s: %d valid views, %d invalid (%.3f s after process start)",
              scene_source, state.view_count, len(state.scene.view_messages),
              time.perf_counter() - started)
+    return state
 
+
+def _open_window(state, out_dir, started, reference_image, reference):
+    """(the window, None, _) once it is open; else (None, why not, what was missing), for
+    the PNGs rendered instead."""
     reason = None if display_available() else "DISPLAY and WAYLAND_DISPLAY are not set"
     what = "no display found"
+    window = None
     if reason is None:
         what = "no window could be opened on this display"
         prime_kernels(state)
@@ -147,11 +171,7 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
             reason = str(error)
         except Exception as error:           # e.g. moderngl: no OpenGL 3.3 on this display
             reason = f"{type(error).__name__}: {error}"
-    if reason is not None:
-        return render_all_views(state, out_dir, reason, what)
-    log.info("window open, %dx%d framebuffer (%.3f s after process start)",
-             state.size[0], state.size[1], time.perf_counter() - started)
-    return window.run()
+    return window, reason, what
 
 
 def prime_kernels(state) -> threading.Thread | None:

@@ -1,4 +1,4 @@
-"""The window's radiosity and path-traced frames, progressive (issue 19), off the UI thread.
+"""The window's radiosity and path-traced frames, progressive, off the UI thread.
 
 - :func:`radiosity_progressively`: unless the scene's solution for these settings is already
   in the render context (then every view is one z-buffer frame), progressive refinement runs

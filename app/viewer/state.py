@@ -15,9 +15,9 @@ steps over invalid ones and says "view 7 of 20 (6 invalid)".
 
 Beyond the course's settings it holds the renderer (``"zbuffer"`` or ``"raytrace"``: a
 ray-traced still is drawn progressively, :mod:`app.viewer.progressive`), the texture filter and
-whether bump maps are used (issue 11; in the bump demo's scene also the demo's map, which its
-clicks change), and for an animated scene its :class:`app.viewer.playback.Playback` (issue 13:
-the moment shown, playing or paused, the speed) and whether the keyed camera is the view.
+whether bump maps are used (in the bump demo's scene also the demo's map, which its clicks
+change), and for an animated scene its :class:`app.viewer.playback.Playback` (the moment shown,
+playing or paused, the speed) and whether the keyed camera is the view.
 
 For a scene with volumes it holds the volume controls' state (:mod:`app.viewer.volume_controls`):
 which volume, the iso values asked for (re-extracted by the next frame's job, on the worker's
@@ -157,7 +157,7 @@ class ViewerState:
     rasterizer: str = ""
     keep_aspect: bool | None = None
     course_tri: bool = False          # the .tri startup code's back-face rule and mouse buttons
-    texture_filter: str = "trilinear"   # issue 11: nearest | bilinear | trilinear | anisotropic
+    texture_filter: str = "trilinear"   # nearest | bilinear | trilinear | anisotropic
     view_index: int = 0                                      # into scene.views (valid views)
     open_messages: list[str] = field(default_factory=list)   # scenes that failed to open
     frame: object | None = None                              # the last core.render.Frame
@@ -178,15 +178,16 @@ class ViewerState:
     playback: object = None         # app.viewer.playback.Playback of an animated scene, or None
     keyed_view: bool = False        # an animated scene: show the keyed camera (not a file view)
     frame_partial: bool = False     # the frame shown is a ray-traced one still being refined
-    # issue 18: depth cueing (None: the scene's), transparency ("": the scene's), and the
+    # Depth cueing (None: the scene's), transparency ("": the scene's), and the
     # draw-order slider of the painter's renderers (None: paint everything)
     depth_cue: bool | None = None
     transparency: str = ""
     paint_first: int | None = None
     # A lighting model for every material (core.shading.models; "": each material's own).
     lighting_model: str = ""
-    # The window's kernel gate while the warm-up compiles in worker processes (issue 33,
-    # app.viewer.kernels.gated): wraps each frame's job; None renders it as it is.
+    # The window's kernel gate while the warm-up compiles in worker processes (a frame waits
+    # for its kernels rather than compiling them a second time; app.viewer.kernels.gated):
+    # wraps each frame's job; None renders it as it is.
     gate: Callable | None = None
     # A camera the user made with the mouse (app.viewer.hands): shown in place of the file's
     # view until the view is stepped, reset or the scene changes; None shows the file's.
@@ -410,7 +411,7 @@ class ViewerState:
             self.view_index, self.keyed_view, self.hand_view = index, False, None
             self.dirty = True
 
-    # -- issue 12: the renderer; issue 11: texture filter and the bump demo ------------------
+    # -- the renderer, the texture filter and the bump demo ------------------------------------
     def set_renderer(self, name: str) -> None:
         """``"zbuffer"`` or ``"raytrace"`` (any registered renderer)."""
         from core.renderers import renderer_names
@@ -433,7 +434,7 @@ class ViewerState:
         self.bump_map, self.dirty = (self.bump_map + 1) % MAPS, True
         return self.bump_map
 
-    # -- issue 18: depth cueing, transparency, the painter's draw order ---------------------
+    # -- depth cueing, transparency, the painter's draw order ---------------------------------
     def set_depth_cue(self, on: bool) -> None:
         if bool(on) != bool(self.settings().depth_cue):
             self.depth_cue, self.dirty = bool(on), True
@@ -454,7 +455,7 @@ class ViewerState:
         stats = getattr(self.frame, "stats", None) or {}
         return stats.get("painted total", stats.get("painted"))
 
-    # -- issue 13: playing an animated scene -------------------------------------------------
+    # -- playing an animated scene ---------------------------------------------------------
     def toggle_play(self, now: float) -> None:
         if self.playback is not None:
             self.playback.toggle(now)
@@ -505,11 +506,11 @@ class ViewerState:
         from core.shading.models import lighting_model_names
         self._set("lighting_model", name, ("",) + lighting_model_names())
 
-    def set_texture_filter(self, name: str) -> None:            # issue 11
+    def set_texture_filter(self, name: str) -> None:
         from core.texture.modes import FILTERS
         self._set("texture_filter", name, tuple(FILTERS))
 
-    # -- issue 11: the bump demo's mouse (J3DPanel): left click toggles bump/Phong, any other
+    # -- the bump demo's mouse (J3DPanel): left click toggles bump/Phong, any other
     # button cycles the height maps. Only in a scene with the demo's material.
     def demo_click(self, left: bool) -> str | None:
         """The demo's click; returns its label, or None (the click keeps its usual meaning).

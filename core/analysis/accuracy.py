@@ -1,4 +1,4 @@
-"""Error against run time (issue 6): how wrong each image is, and what accuracy time buys.
+"""Error against run time: how wrong each image is, and what accuracy time buys.
 
 Takes a :class:`SweepConfig` (image size, tessellation levels, shading modes, samples per pixel,
 repeats) and returns one :class:`Point` per setting of the sweep
@@ -56,7 +56,7 @@ from core.camera.view import View
 
 # A series is a shading mode, drawn by the default edge rasterizer (perspective-correct), or
 # "MODE scanline": the course's scan-line rasterizer, whose interpolation is screen-linear, or
-# "MODE bsp" / "MODE depth-sort": the painter's renderers (issue 18), same shading.
+# "MODE bsp" / "MODE depth-sort": the painter's renderers, same shading.
 SCANLINE = " scanline"
 PAINTERS = (" bsp", " depth-sort")
 SHADINGS = SOLID_SHADINGS + ("gouraud" + SCANLINE,) + tuple("gouraud" + p for p in PAINTERS)

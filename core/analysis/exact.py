@@ -6,7 +6,7 @@ values: every factor of ``N_per = S_per · SH_par · T(-PRP) · R · T(-VRP)`` a
 ``N_par = S_par · T_par · SH_par · R · T(-VRP)`` (FvDFH 6.5; pipeline.md's formulas, term for
 term), the canonical coordinates of points, and their device coordinates after FvDFH's
 perspective-to-parallel matrix ``M``, ``M_vv3dv`` and the divide by W (FvDFH 6.5.4, 6.5.6).
-Issue 6 holds the float64 pipeline to these numbers.
+The stability suite holds the float64 pipeline to these numbers.
 
 Every float64 input is a dyadic rational, so it converts to a Fraction without error; after
 that, additions, products and quotients are exact. The one irrational operation of the chain is

@@ -1,4 +1,4 @@
-"""Stiff and extreme cases for the whole pipeline (issue 6), each with its expected behaviour.
+"""Stiff and extreme cases for the whole pipeline, each with its expected behaviour.
 
 Takes nothing; :func:`run_suite` returns one :class:`Result` per case: its name, what is
 expected, what was measured, the relative error of the float64 pipeline against exact rational

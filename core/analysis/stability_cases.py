@@ -1,4 +1,4 @@
-"""The stiff and extreme cases of issue 6, one function each, registered with ``@case``.
+"""The pipeline's stiff and extreme cases, one function each, registered with ``@case``.
 
 The framework (how a case is run and judged, and the tools the cases share) is
 :mod:`core.analysis.stability`; this module only states each case: the scene, what is expected, and
@@ -748,7 +748,7 @@ def non_finite_files() -> Outcome:
 
 
 # --------------------------------------------------------------------------------------------
-# Loader and renderer agree (issue 15): what loads, renders
+# Loader and renderer agree: what loads, renders
 
 # Numbers an attacker would write into a view: huge, subnormal, one ulp apart, signed zeros.
 _EXTREMES = (0.0, -0.0, 1.0, -1.0, 5.0, 0.9999999999999999, 1.0000000000000002, 1e-300,

@@ -23,7 +23,7 @@ from core.transforms import apply
 from core.camera.view import View, normalizing_transform
 
 U = 2.0 ** -53                # unit round-off of float64
-TOLERANCE = 1e-9              # issue 6: well-conditioned cases agree with exact to this
+TOLERANCE = 1e-9              # well-conditioned cases agree with exact to this
 GROWTH = 100.0                # allowed error growth over κ·u (ill-conditioned cases)
 SIZE = (64, 64)
 MAX_EXACT_POINTS = 48         # points pushed through the exact chain per case

@@ -144,8 +144,8 @@ class Animation:
         views = ([view] if view is not None else []) + list(base.views)
         moving = self.moved_at(t)
         meshes = [self._mesh_at(i, m, t, moving.get(i)) for i, m in enumerate(base.meshes)]
-        # A keyed sphere or plane is moved and recoloured with its tessellation (issue 20:
-        # the ray tracer intersects the primitive, so it must move too).
+        # A keyed sphere or plane is moved and recoloured with its tessellation (the
+        # ray tracer intersects the primitive, so it must move too).
         moved = {}
         for i, (old, new) in enumerate(zip(base.meshes, meshes)):
             if old.tessellates is None or new is old:

@@ -1,4 +1,4 @@
-"""See inside every pixel (issue 22): the pixel inspector's front door, above :mod:`core.render`.
+"""See inside every pixel: the pixel inspector's front door, above :mod:`core.render`.
 
 - :func:`inspect_pixel` asks the renderer that draws ``settings.renderer`` for the record of
   one pixel: its module's ``inspect_pixel(scene, view, settings, x, y, context) -> dict`` (the

@@ -1,4 +1,4 @@
-"""Buffer views (render passes, AOVs; issue 22): what the renderer kept at every pixel, shown
+"""Buffer views (render passes, AOVs): what the renderer kept at every pixel, shown
 as a picture with a colour map, and the raw values for whoever wants the numbers.
 
 A renderer's module may define ``buffers(scene, view, settings, context, names) -> {name:

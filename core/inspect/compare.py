@@ -1,4 +1,5 @@
-"""A picture held against the reference, pixel by pixel (issue 22: the grading use).
+"""A picture held against the reference, pixel by pixel (for grading: is ours the
+expected picture, and where not).
 
 :func:`compare` measures, per pixel, the largest channel difference (in levels of 1/255)
 between a picture and the reference of the same size, and counts the pixels beyond the

@@ -1,4 +1,4 @@
-"""The exact ray caster's pixel record (issue 22), a stand-in until
+"""The exact ray caster's pixel record, for the pixel inspector: a stand-in until
 :mod:`core.renderers.raycast` defines its own ``inspect_pixel``.
 
 :func:`inspect_pixel` follows ``raycast._trace`` for one pixel, in its order: each sample of

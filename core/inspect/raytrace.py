@@ -1,4 +1,4 @@
-"""The ray tracer's pixel record (issue 22): the ray tree, node by node — a stand-in until
+"""The ray tracer's pixel record, for the pixel inspector: the ray tree, node by node — a stand-in until
 :mod:`core.raytrace.renderer` defines its own ``inspect_pixel`` (the dispatch prefers it).
 
 :func:`ray_tree` walks :func:`core.raytrace.whitted.trace`'s loop in Python, in its order
@@ -77,85 +77,107 @@ def _depth(sample) -> int:
 
 def ray_tree(setup, origin, direction, t_min, t_max) -> tuple[list, list]:
     """The nodes of one primary ray's tree and their summed colour (unclamped RGB)."""
-    from core.raytrace import bvh, optics, whitted
-    packed, o = setup.packing.packed, setup.options
-    shadows = whitted.SHADOW_MODES.index(o.shadows)
-    offset = 1e-9 * setup.packing.scale
-    stack = bvh.new_stack()
-    counts = np.zeros(len(whitted.COUNTERS), dtype=np.int64)
-    surface_row = np.empty((1, packed.surfaces.shape[1]))
-    eye = np.empty(4)
+    from core.raytrace import bvh, whitted
+    packed = setup.packing.packed
+    # What every node's trace reuses: the shadow mode, the offset off a surface, the BVH's
+    # stack, the ray counters, a surface row and the eye (point or direction).
+    work = (whitted.SHADOW_MODES.index(setup.options.shadows), 1e-9 * setup.packing.scale,
+            bvh.new_stack(), np.zeros(len(whitted.COUNTERS), dtype=np.int64),
+            np.empty((1, packed.surfaces.shape[1])), np.empty(4))
     total = [0.0, 0.0, 0.0]
     nodes = []
     pending = [(*origin, *direction, float(t_min), float(t_max), 1.0, 1, whitted.PRIMARY, -1)]
     while pending:
-        ox, oy, oz, dx, dy, dz, t0, t1, weight, depth, ray_kind, parent = pending.pop()
+        ray = pending.pop()
+        ox, oy, oz, dx, dy, dz, t0, t1, weight, depth, ray_kind, parent = ray
         node = {"id": len(nodes), "parent": parent, "kind": KINDS[ray_kind], "depth": depth,
                 "origin": [ox, oy, oz], "direction": [dx, dy, dz], "weight": weight}
         nodes.append(node)
-        kind, index, t, u, v = whitted.nearest(packed, ox, oy, oz, dx, dy, dz, t0, t1, stack)
-        if kind == whitted.NOTHING:
-            node.update({"hit": None, "local colour": [float(c) for c in setup.background]})
-            contribution = [weight * float(setup.background[c]) for c in range(3)]
-            node["contribution"] = contribution
-            total = [total[c] + contribution[c] for c in range(3)]
-            continue
-        px, py, pz, nx, ny, nz, gx, gy, gz, s = whitted.surface_at(packed, kind, index, u, v,
-                                                                   ox, oy, oz, dx, dy, dz, t)
-        if ray_kind == whitted.PRIMARY:
-            eye[:] = setup.eye
-        else:
-            eye[0], eye[1], eye[2], eye[3] = EYE_DIRECTION, -dx, -dy, -dz
-        entering = gx * dx + gy * dy + gz * dz < 0.0
-        lnx, lny, lnz = nx, ny, nz
-        if not entering and packed.surfaces[s, TWO_SIDED] == 0.0:
-            lnx, lny, lnz = -nx, -ny, -nz
-        terms = _local(setup, packed, kind, index, s, (px, py, pz), (lnx, lny, lnz),
-                       (gx, gy, gz), eye, shadows, offset, surface_row, stack, counts)
-        local = terms["clamped"]
-        contribution = [weight * local[c] for c in range(3)]
+        contribution = _trace_node(setup, node, ray, work, pending)
         total = [total[c] + contribution[c] for c in range(3)]
-        k_r, k_t, ior = (float(c) for c in packed.optics[s])
-        node.update({"hit": {"kind": HITS.get(int(kind), str(kind)), "index": int(index),
-                             "t": float(t), "point": [px, py, pz], "normal": [nx, ny, nz],
-                             "entering": bool(entering)},
-                     "material": {"surface": int(s), "k_r": k_r, "k_t": k_t, "ior": ior},
-                     "phong": terms, "local colour": local, "contribution": contribution})
-        if k_r == 0.0 and k_t == 0.0:
-            continue
-        if depth >= o.max_depth:
-            node["children"] = "cut: the depth limit"
-            continue
-        fx, fy, fz, gx, gy, gz = optics.facing_normals(dx, dy, dz, nx, ny, nz, gx, gy, gz,
-                                                       entering)
-        me = node["id"]
-        if k_t > 0.0:
-            n_i, n_t = (o.medium, ior) if entering else (ior, o.medium)
-            ok, tx, ty, tz = optics.refract(dx, dy, dz, fx, fy, fz, n_i, n_t)
-            if not ok:
-                node["total internal reflection"] = True
-                k_r, k_t = k_r + k_t, 0.0
-            elif o.fresnel:
-                cos_i = -(fx * dx + fy * dy + fz * dz)
-                cos_t = -(fx * tx + fy * ty + fz * tz)
-                share = optics.schlick(cos_i, cos_t, n_i, n_t)
-                k_r, k_t = k_r + share * k_t, (1.0 - share) * k_t
-            if k_t > 0.0:
-                if weight * k_t >= o.adaptive_epsilon:
-                    pending.append((px - offset * gx, py - offset * gy, pz - offset * gz,
-                                    tx, ty, tz, 0.0, np.inf, weight * k_t, depth + 1,
-                                    whitted.REFRACTED, me))
-                else:
-                    node["refracted"] = "cut by adaptive control"
-        if k_r > 0.0:
-            if weight * k_r >= o.adaptive_epsilon:
-                rx, ry, rz = optics.reflect(dx, dy, dz, fx, fy, fz)
-                pending.append((px + offset * gx, py + offset * gy, pz + offset * gz,
-                                rx, ry, rz, 0.0, np.inf, weight * k_r, depth + 1,
-                                whitted.REFLECTED, me))
-            else:
-                node["reflected"] = "cut by adaptive control"
     return nodes, total
+
+
+def _trace_node(setup, node: dict, ray: tuple, work: tuple, pending: list) -> list:
+    """Fill in ``node`` for ``ray`` (what it hit, the local terms), queue its reflected and
+    refracted rays on ``pending``; returns its weighted contribution to the pixel."""
+    from core.raytrace import whitted
+    packed = setup.packing.packed
+    shadows, offset, stack, counts, surface_row, eye = work
+    ox, oy, oz, dx, dy, dz, t0, t1, weight, depth, ray_kind, parent = ray
+    kind, index, t, u, v = whitted.nearest(packed, ox, oy, oz, dx, dy, dz, t0, t1, stack)
+    if kind == whitted.NOTHING:
+        node.update({"hit": None, "local colour": [float(c) for c in setup.background]})
+        contribution = [weight * float(setup.background[c]) for c in range(3)]
+        node["contribution"] = contribution
+        return contribution
+    px, py, pz, nx, ny, nz, gx, gy, gz, s = whitted.surface_at(packed, kind, index, u, v,
+                                                               ox, oy, oz, dx, dy, dz, t)
+    if ray_kind == whitted.PRIMARY:
+        eye[:] = setup.eye
+    else:
+        eye[0], eye[1], eye[2], eye[3] = EYE_DIRECTION, -dx, -dy, -dz
+    entering = gx * dx + gy * dy + gz * dz < 0.0
+    lnx, lny, lnz = nx, ny, nz
+    if not entering and packed.surfaces[s, TWO_SIDED] == 0.0:
+        lnx, lny, lnz = -nx, -ny, -nz
+    terms = _local(setup, packed, kind, index, s, (px, py, pz), (lnx, lny, lnz),
+                   (gx, gy, gz), eye, shadows, offset, surface_row, stack, counts)
+    local = terms["clamped"]
+    contribution = [weight * local[c] for c in range(3)]
+    k_r, k_t, ior = (float(c) for c in packed.optics[s])
+    node.update({"hit": {"kind": HITS.get(int(kind), str(kind)), "index": int(index),
+                         "t": float(t), "point": [px, py, pz], "normal": [nx, ny, nz],
+                         "entering": bool(entering)},
+                 "material": {"surface": int(s), "k_r": k_r, "k_t": k_t, "ior": ior},
+                 "phong": terms, "local colour": local, "contribution": contribution})
+    if k_r == 0.0 and k_t == 0.0:
+        return contribution
+    if depth >= setup.options.max_depth:
+        node["children"] = "cut: the depth limit"
+        return contribution
+    _queue_children(setup.options, node, ray, ((px, py, pz), (nx, ny, nz), (gx, gy, gz)),
+                    entering, (k_r, k_t, ior), offset, pending)
+    return contribution
+
+
+def _queue_children(o, node: dict, ray: tuple, hit: tuple, entering: bool, optics_of: tuple,
+                    offset: float, pending: list) -> None:
+    """The refracted ray (or total internal reflection) and the reflected ray of a hit, each
+    queued unless adaptive depth control cuts it; Fresnel moves weight between the two."""
+    from core.raytrace import optics, whitted
+    dx, dy, dz, weight, depth = ray[3], ray[4], ray[5], ray[8], ray[9]
+    (px, py, pz), (nx, ny, nz), (gx, gy, gz) = hit
+    k_r, k_t, ior = optics_of
+    fx, fy, fz, gx, gy, gz = optics.facing_normals(dx, dy, dz, nx, ny, nz, gx, gy, gz,
+                                                   entering)
+    me = node["id"]
+    if k_t > 0.0:
+        n_i, n_t = (o.medium, ior) if entering else (ior, o.medium)
+        ok, tx, ty, tz = optics.refract(dx, dy, dz, fx, fy, fz, n_i, n_t)
+        if not ok:
+            node["total internal reflection"] = True
+            k_r, k_t = k_r + k_t, 0.0
+        elif o.fresnel:
+            cos_i = -(fx * dx + fy * dy + fz * dz)
+            cos_t = -(fx * tx + fy * ty + fz * tz)
+            share = optics.schlick(cos_i, cos_t, n_i, n_t)
+            k_r, k_t = k_r + share * k_t, (1.0 - share) * k_t
+        if k_t > 0.0:
+            if weight * k_t >= o.adaptive_epsilon:
+                pending.append((px - offset * gx, py - offset * gy, pz - offset * gz,
+                                tx, ty, tz, 0.0, np.inf, weight * k_t, depth + 1,
+                                whitted.REFRACTED, me))
+            else:
+                node["refracted"] = "cut by adaptive control"
+    if k_r > 0.0:
+        if weight * k_r >= o.adaptive_epsilon:
+            rx, ry, rz = optics.reflect(dx, dy, dz, fx, fy, fz)
+            pending.append((px + offset * gx, py + offset * gy, pz + offset * gz,
+                            rx, ry, rz, 0.0, np.inf, weight * k_r, depth + 1,
+                            whitted.REFLECTED, me))
+        else:
+            node["reflected"] = "cut by adaptive control"
 
 
 def _local(setup, packed, kind, index, s, p, n, g, eye, shadows, offset, surface_row, stack,

@@ -26,10 +26,10 @@ halfway or the reflection form of the specular term as the scene says)::
 - The ray tree: a primary ray is depth 1; a ray of depth ``max_depth`` spawns no children
   (the notes' "N ≤ 7"). A total internal reflection does not split the ray, so it does not
   deepen the tree (up to :data:`MAX_INTERNAL` in a row): light trapped in glass is followed
-  instead of being cut to black (the glass bunny's speckles, issue 20). Adaptive depth control
-  (the notes' "k_1 · k_2 · … · k_n ≤ ε"): a child whose weight, the product of the k's on its
-  path, is below ``epsilon`` is not cast; with ``attenuation`` (C1, C2) a secondary ray's
-  weight is also divided by ``1 + C1 R + C2 R²`` over its length R.
+  instead of being cut to black (cutting it left black speckles in the glass bunny).
+  Adaptive depth control (the notes' "k_1 · k_2 · … · k_n ≤ ε"): a child whose weight, the
+  product of the k's on its path, is below ``epsilon`` is not cast; with ``attenuation``
+  (C1, C2) a secondary ray's weight is also divided by ``1 + C1 R + C2 R²`` over its length R.
 - Textures: a textured triangle is shaded by the z-buffer's pixel step
   (:func:`core.texture.surface.textured_at`), its footprint from the ray's differentials
   (:func:`transfer`, :func:`uv_derivatives`), which every child ray carries on.

@@ -1,7 +1,7 @@
 """The exact reference: the Phong illumination model on the TRUE analytic surface, per sample.
 
 What the tessellated pipeline approximates, computed without tessellation, to measure its error
-(the sphere test of issue 4, the error-against-time report of issue 6). Takes analytic shapes
+(the tessellated sphere's error, and the error-against-time report). Takes analytic shapes
 (:class:`Sphere`, :class:`Torus`), the scene's lights, ambient light, specular form and
 background, and a :class:`core.camera.view.View` with its projection; returns float64 colours in
 [0, 1] and the fraction of each pixel the shapes cover (:class:`Reference`).

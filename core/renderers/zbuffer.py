@@ -49,15 +49,15 @@ def draw(scene, view, settings, frame, context, timer, rasterize=None) -> None:
 
 
 def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
-    """The record of image pixel (x, y): what the stages above made of it (issue 22;
-    :mod:`core.renderers.zbuffer_inspect`)."""
+    """The record of image pixel (x, y): what the stages above made of it, for the
+    pixel inspector (:mod:`core.renderers.zbuffer_inspect`)."""
     from core.renderers.zbuffer_inspect import Stages, inspect_pixel as record
     return record(scene, view, settings, x, y, context,
                   Stages(draw, draw_lines, sample_viewport))
 
 
 def buffers(scene, view, settings, context=None, names=()) -> dict:
-    """The buffer views of this frame (issue 22): depth, normal, triangle id, barycentrics,
+    """The buffer views of this frame (render passes): depth, normal, triangle id, barycentrics,
     (u, v), MIP level, overdraw, as named in ``names``."""
     from core.renderers.zbuffer_inspect import Stages, buffers as views
     return views(scene, view, settings, context, Stages(draw, draw_lines, sample_viewport),
@@ -66,7 +66,7 @@ def buffers(scene, view, settings, context=None, names=()) -> dict:
 
 # From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,
 # the same pixels): below it the numpy stages need no numba at start-up (the house: 15 edges).
-# speed (issue 14): at 5,000 a 1k-triangle wireframe took 4.4 ms CPU in numpy, 0.85 compiled.
+# Measured: at 5,000 a 1k-triangle wireframe took 4.4 ms CPU in numpy, 0.85 compiled.
 COMPILED_LINES_FROM = 256
 
 
@@ -114,7 +114,7 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     (screen-linear weights); ``visible_surface`` (a rasterizer's signature) replaces both."""
     rasterizer = settings.rasterizer if settings is not None else "edge"
     from core.shading import stages      # the compiled stages, on first use
-    from core.texture.shaders import shading_for        # issue 11: Phong of textured materials
+    from core.texture.shaders import shading_for        # textured materials: Phong of their own
     shading = shading_for(scene, shading)
     stats = frame.stats
     height, width = frame.color.shape[:2]
@@ -134,6 +134,25 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
 
+    clipped, source, device, inv_w = _clip_and_project(positions, triangles, kept, inputs, n,
+                                                       projection, z_min, vp, context, stats,
+                                                       timer)
+    vis = _visible_surfaces(device, inv_w, clipped.triangles, width, height, rasterizer,
+                            visible_surface, shading, context, stats,
+                            timer)
+    inputs.settings = settings              # the texture filter and the bump switch
+    inputs.device = (device, inv_w)         # exact (u, v) derivatives per triangle
+    stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
+                         out=frame.color, trusted=True)     # our clipper's and rasterizer's
+    frame.depth = vis.depth
+    timer.lap("shade: pixel step")
+
+
+def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, vp, context,
+                      stats, timer):
+    """Normalize, clip and project the kept triangles: (the clipped triangles, the scene
+    triangle each came from, their device points, 1/W)."""
+    from core.shading import stages
     points = stages.transform_affine(n, positions,
                                      out=context.scratch("canonical points", (len(positions), 3)))
     timer.lap("normalize", canonical_points=points)
@@ -153,14 +172,21 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
         project.triangle_matrix(projection, z_min, vp), clipped.points,
         out=context.scratch("device points", (count, 3)), inv_w=context.scratch("1/W", (count,)))
     timer.lap("project", device_points=device, inv_w=inv_w)
+    return clipped, source, device, inv_w
 
+
+def _visible_surfaces(device, inv_w, triangles, width, height, rasterizer, visible_surface,
+                      shading, context, stats, timer):
+    """Scan-convert into the visibility buffer (depth, triangle, barycentrics) with the edge
+    or scan-line rasterizer, or ``visible_surface`` when given."""
+    from core.shading import stages
     rasterize = stages.rasterize
     if rasterizer == "scanline":
         from core.pipeline.raster_scanline import rasterize
     if visible_surface is not None:
         rasterize, rasterizer = visible_surface, getattr(visible_surface, "name", "other")
     stats["rasterizer"] = rasterizer
-    vis = rasterize(device, inv_w, clipped.triangles, width, height,
+    vis = rasterize(device, inv_w, triangles, width, height,
                     out=context.buffer("visibility", (width, height),
                                        lambda: stages.VisibilityBuffer.allocate(width, height)))
     if rasterize is not stages.rasterize:
@@ -168,14 +194,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     stats["allocated"].append("depth")
     vis.planes = None
     if stages.shade.get_shader(shading).needs_derivatives:
-        vis.planes = stages.barycentric_planes(device, inv_w, clipped.triangles)
+        vis.planes = stages.barycentric_planes(device, inv_w, triangles)
         stats["computed"].append("barycentric derivatives")
     timer.lap(getattr(visible_surface, "stage", "z-buffer"), depth=vis.depth, tri=vis.tri,
               b1=vis.b1, b2=vis.b2)
-
-    inputs.settings = settings              # issue 11: the texture filter and the bump switch
-    inputs.device = (device, inv_w)         # issue 11: exact (u, v) derivatives per triangle
-    stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
-                         out=frame.color, trusted=True)     # our clipper's and rasterizer's
-    frame.depth = vis.depth
-    timer.lap("shade: pixel step")
+    return vis

@@ -1,4 +1,4 @@
-"""The z-buffer's pixel record (issue 22): why one pixel has its colour.
+"""The z-buffer's pixel record, for the pixel inspector: why one pixel has its colour.
 
 :func:`inspect_pixel` draws the frame once with :func:`core.renderers.zbuffer.draw`, keeping
 what each stage produced (the clipped triangles and their attributes, the device points, the

@@ -1,5 +1,5 @@
-"""The textured pixel's record (issue 22): (u, v), its derivatives, the MIP level, the texels
-the filter read, the normal after the bump or normal map, and the Phong terms with the
+"""The textured pixel's record, for the pixel inspector: (u, v), its derivatives, the MIP level,
+the texels the filter read, the normal after the bump or normal map, and the Phong terms with the
 texture's colour as O_d.
 
 The colour is :func:`core.texture.surface.textured_pixel` itself, called on the pixel's

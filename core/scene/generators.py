@@ -389,7 +389,7 @@ def sphere_torus(triangles: int = 100_000) -> Scene:
                  source=f"generators.sphere_torus(triangles={n})")
 
 
-# -- issue 11: a textured floor needs a plane with (u, v)
+# -- a textured floor needs a plane with (u, v)
 def cylinder(radius: float = 1.0, height: float = 2.0, segments: int = 12) -> Mesh:
     """The side of a cylinder about the y axis (no caps): ``segments`` flat facets, each two
     triangles, between the rings at y = ±height/2; facet edge k at angle 2πk/segments from +z
@@ -433,7 +433,7 @@ def plane(size: float = 2.0, subdivisions: int = 1) -> Mesh:
 
 def terrain(size: float = 10.0, resolution: int = 96, height: float = 2.0, octaves: int = 5,
             seed: int = 1) -> Mesh:
-    """A generated height field (issue 18: depth shading's terrain): ``resolution`` x
+    """A generated height field (depth shading's terrain): ``resolution`` x
     ``resolution`` cells over the square of side ``size`` in the xz-plane, heights y in
     [0, ``height``] from ``octaves`` of smooth value noise (each octave twice the frequency
     and half the amplitude of the last; seeded). Open, facing +y."""
@@ -474,7 +474,7 @@ GENERATORS = {
     "torus": torus,
     "bezier_surface": bezier_surface,
     "torus_knot": torus_knot,
-    "plane": plane,             # issue 11
+    "plane": plane,             # a textured floor
     "cylinder": cylinder,       # the Mach bands scene
-    "terrain": terrain,         # issue 18
+    "terrain": terrain,         # depth shading's height field
 }

@@ -34,16 +34,16 @@ class Material:
     od: tuple[float, float, float] = (0.8, 0.8, 0.8)
     # Specular colour O_s; FvDFH 16.1.5 uses the light's colour (O_s = 1) for plastics.
     os: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    # Whitted's global terms (issue 12; the ray tracer's): the mirror coefficient k_r, the
+    # Whitted's global terms (the ray tracer's): the mirror coefficient k_r, the
     # transmission coefficient k_t and the index of refraction. The z-buffer family uses k_t
-    # too when settings.transparency is on (issue 18, core.effects.transparency).
+    # too when settings.transparency is on (core.effects.transparency).
     kr: float = 0.0
     kt: float = 0.0
     ior: float = 1.52                      # glass (the notes); only used where kt > 0
-    # What a system keeps on a material beyond the Phong terms (issue 11: "maps", the
+    # What a system keeps on a material beyond the Phong terms ("maps", the
     # colour/bump/normal/environment maps of core.texture.material).
     extra: dict = field(default_factory=dict)
-    # Global illumination (issue 19; radiosity and the path tracer read them): the radiosity
+    # Global illumination (radiosity and the path tracer read them): the radiosity
     # an area light emits, and on which sides it glows and reflects. ``two_sided`` None: both
     # sides for an open mesh that emits nothing (as the Phong model lights an open soup), else
     # the side its normal (counter-clockwise winding) faces.
@@ -152,9 +152,9 @@ class Scene:
     # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
     primitives: list = field(default_factory=list)
     # The crease angle (degrees) the reader split vertices at (core.scene.normals.with_creases):
-    # faces meeting at more than this keep their own normals along the edge (issue 20).
+    # faces meeting at more than this keep their own normals along the edge.
     crease_angle: float = CREASE_ANGLE
-    # How the global-illumination renderers (issue 19: radiosity, pathtrace) turn radiosity
+    # How the global-illumination renderers (radiosity, pathtrace) turn radiosity
     # into pixels: "linear" (clamped, as the Phong model's intensities) or "srgb" (the sRGB
     # transfer curve, for scenes in physical units such as the Cornell box).
     tone: str = "linear"

@@ -36,7 +36,7 @@ class Torus:
     two_sided: bool = False
 
 
-# ----------------------------------------------------------------------------- planes (issue 12)
+# ----------------------------------------------------------------------------- planes (ray traced)
 
 @dataclass(frozen=True)
 class Plane:

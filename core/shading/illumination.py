@@ -34,7 +34,7 @@ Both read the scene through small float arrays that numba can take:
   0 a direction: parallel, V constant = −DOP/|DOP|) and the point or the direction.
   :func:`eye_from_view` finds both from a :class:`core.camera.view.View`.
 
-Decisions that keep every output finite (the stability suite of issue 6 checks them):
+Decisions that keep every output finite (the stability suite, core.analysis.stability, checks them):
 
 - two-sided lighting (meshes that are not closed): ``N`` is flipped when ``N·V < 0``, so the
   side the viewer sees is the lit one whatever the winding;

@@ -40,7 +40,7 @@ def register_shader(shader: Shader) -> None:
 
 
 BUILT_IN = ("core.shading.flat", "core.shading.gouraud", "core.shading.phong",
-            "core.shading.depth")                 # issue 18: depth shading
+            "core.shading.depth")                 # depth shading: unlit, a colour map
 
 
 def _load_built_in() -> None:

@@ -102,7 +102,7 @@ class ShadeInput:
     float32_safe: bool | None = None     # wide_shading's answer on the materials and lights
     normals: np.ndarray | None = None
     before_clip: Callable | None = None
-    # Set by the renderer before the pixel step, for shaders that read them (issue 11's
+    # Set by the renderer before the pixel step, for shaders that read them (the
     # textured one): the frame's RenderSettings, and (device points, 1/W) of the clipped vertices.
     settings: object = None
     device: tuple | None = None

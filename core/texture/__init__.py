@@ -1,4 +1,4 @@
-"""Texture mapping and bump mapping (issue 11): textures, samplers, the course's two systems.
+"""Texture mapping and bump mapping: textures, samplers, the course's two systems.
 
 - :mod:`core.texture.sample`: numba samplers (nearest, bilinear, trilinear, anisotropic) and
   GL's wrap modes, callable from any compiled kernel;

@@ -293,6 +293,19 @@ def _check_ply(data: bytes, file: str, budget: int) -> _AsciiRows | None:
     newline = data.find(b"\n", end)
     body = len(data) - (newline + 1 if newline >= 0 else len(data))
     header = decode_text(data[:end], file)
+    fmt, elements = _ply_header(header, file)
+    _check_ply_counts(elements, body, budget, file)
+    if fmt != "ascii":
+        return None
+    first_line = header.count("\n") + 2               # the line after end_header
+    return _check_ply_ascii_rows(decode_text(data[newline + 1:], file) if newline >= 0 else "",
+                                 elements, first_line, file)
+
+
+def _ply_header(header: str, file: str) -> tuple[str, list[list]]:
+    """The header's format and its elements, each ``[name, count, line, min_row, lists]``:
+    the smallest row in bytes (binary; ASCII: two characters a value) and, per property,
+    whether it is a list."""
     fmt = None
     elements: list[list] = []                 # [name, count, line, min_row_bytes_or_values]
     for number, line in enumerate(header.split("\n"), start=1):
@@ -323,6 +336,11 @@ def _check_ply(data: bytes, file: str, budget: int) -> _AsciiRows | None:
             raise ReaderError(file, f"unknown PLY header keyword {short(fields[0])}", number)
     if fmt is None:
         raise ReaderError(file, "the PLY header has no 'format' line", 1)
+    return fmt, elements
+
+
+def _check_ply_counts(elements: list, body: int, budget: int, file: str) -> None:
+    """Refuse more faces than the budget, or more rows than ``body`` bytes can hold."""
     needed = 0
     for name, count, number, row, _ in elements:
         if name == "face" and count > budget:
@@ -333,11 +351,6 @@ def _check_ply(data: bytes, file: str, budget: int) -> _AsciiRows | None:
             raise ReaderError(file, f"the header says element '{name}' has {count} rows, but "
                                     f"only {body} bytes of data follow the header (at least "
                                     f"{needed} needed)", number)
-    if fmt != "ascii":
-        return None
-    first_line = header.count("\n") + 2               # the line after end_header
-    return _check_ply_ascii_rows(decode_text(data[newline + 1:], file) if newline >= 0 else "",
-                                 elements, first_line, file)
 
 
 def _check_ply_ascii_rows(body: str, elements: list, first_line: int,
@@ -703,6 +716,37 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
         raise ReaderError(file, f"not a mesh file type we read ({', '.join(MESH_EXTENSIONS)})")
     if not data.strip():
         raise ReaderError(file, "the file is empty")
+    data, fast = _checked(data, file, ext, budget)
+    parts = [fast] if fast is not None else _library_parts(data, ext, file)
+    positions, triangles, normals, uvs = _gathered(parts, file)
+    if not triangles:
+        raise ReaderError(file, "the file holds no triangles")
+    positions = np.concatenate(positions)
+    triangles = np.concatenate(triangles)
+    _check_vertices(positions, triangles, file, budget)
+    vertex_normals = _unit_normals(normals)
+    # Closed or not is a property of the surface, so it is decided on merged positions even
+    # where the file's per-corner normals keep its vertices apart (a flat-shaded OBJ).
+    uv = np.concatenate(uvs) if all(u is not None for u in uvs) else None
+    merged, inverse = merge_vertices(positions)
+    if vertex_normals is None and uv is None:
+        # the file's vertices may repeat (STL always does): one mesh vertex per position
+        positions, triangles = merged, inverse[triangles]
+    elif vertex_normals is None:
+        # ... but a texture seam keeps its copies apart: merge equal (position, uv) pairs
+        rows, seams = merge_vertices(np.concatenate([positions, uv], axis=1))
+        positions, uv, triangles = rows[:, :3], rows[:, 3:], seams[triangles]
+    triangles = drop_repeated_triangles(triangles)
+    surface = (triangles if vertex_normals is None and uv is None
+               else drop_repeated_triangles(inverse_of(positions, merged, inverse, triangles)))
+    closed = is_closed(merged, surface)
+    return Mesh(positions=positions, triangles=triangles, normals=vertex_normals, uv=uv,
+                closed=closed, name=file_stem(file))
+
+
+def _checked(data: bytes, file: str, ext: str, budget: int):
+    """The format's pre-check (refusing bad files and too many triangles before the mesh
+    library reads them): ``(data to read, the mesh read without the library or None)``."""
     fast = None                   # what the mesh library would read, read without it
     if ext == ".obj":
         text = decode_text(data, file)
@@ -718,9 +762,15 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
         _check_off(decode_text(data, file), file, budget)
     else:
         _stl_kind(data, file, budget)
+    return data, fast
+
+
+def _gathered(parts, file: str) -> tuple[list, list, list, list]:
+    """Each part's positions, triangles (fanned, indexed into the parts joined), normals and
+    (u, v), or None for normals or (u, v) a part lacks."""
     positions, triangles, normals, uvs = [], [], [], []
     offset = 0
-    for part in [fast] if fast is not None else _library_parts(data, ext, file):
+    for part in parts:
         try:
             v = np.asarray(part.get("vertices", np.zeros((0, 3))), dtype=np.float64)
             f = np.asarray(part.get("faces", np.zeros((0, 3))))
@@ -741,10 +791,11 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
         normals.append(n if n is not None and n.shape == v.shape else None)
         uvs.append(_texture_coordinates(part, len(v)))
         offset += len(v)
-    if not triangles:
-        raise ReaderError(file, "the file holds no triangles")
-    positions = np.concatenate(positions)
-    triangles = np.concatenate(triangles)
+    return positions, triangles, normals, uvs
+
+
+def _check_vertices(positions, triangles, file: str, budget: int) -> None:
+    """Refuse too many triangles, vertices not finite or too far out, and indices out of range."""
     if len(triangles) > budget:                # polygons fanned into more than the header said
         raise _over_budget(file, "the faces make", len(triangles), budget)
     bad = ~np.all(np.isfinite(positions), axis=1)
@@ -758,31 +809,20 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
         k = int(np.argmax((triangles < 0).any(axis=1) | (triangles >= len(positions)).any(axis=1)))
         raise ReaderError(file, f"triangle {k} refers to vertex {triangles[k].tolist()}, but "
                                 f"there are {len(positions)} vertices")
-    vertex_normals = None
-    if all(n is not None for n in normals):
-        vertex_normals = np.concatenate(normals)
-        if np.all(np.isfinite(vertex_normals)):
-            # scaled first, so that a normal of length 1e200 neither overflows nor underflows
-            vertex_normals, lengths = unit_rows(vertex_normals)
-        if not np.all(np.isfinite(vertex_normals)) or np.any(lengths == 0.0):
-            vertex_normals = None                  # unusable: computed from the faces instead
-    # Closed or not is a property of the surface, so it is decided on merged positions even
-    # where the file's per-corner normals keep its vertices apart (a flat-shaded OBJ).
-    uv = np.concatenate(uvs) if all(u is not None for u in uvs) else None
-    merged, inverse = merge_vertices(positions)
-    if vertex_normals is None and uv is None:
-        # the file's vertices may repeat (STL always does): one mesh vertex per position
-        positions, triangles = merged, inverse[triangles]
-    elif vertex_normals is None:
-        # ... but a texture seam keeps its copies apart: merge equal (position, uv) pairs
-        rows, seams = merge_vertices(np.concatenate([positions, uv], axis=1))
-        positions, uv, triangles = rows[:, :3], rows[:, 3:], seams[triangles]
-    triangles = drop_repeated_triangles(triangles)
-    surface = (triangles if vertex_normals is None and uv is None
-               else drop_repeated_triangles(inverse_of(positions, merged, inverse, triangles)))
-    closed = is_closed(merged, surface)
-    return Mesh(positions=positions, triangles=triangles, normals=vertex_normals, uv=uv,
-                closed=closed, name=file_stem(file))
+
+
+def _unit_normals(normals: list):
+    """The file's normals joined and of unit length, or None when a part has none or one is
+    unusable (they are computed from the faces instead)."""
+    if not all(n is not None for n in normals):
+        return None
+    vertex_normals = np.concatenate(normals)
+    if np.all(np.isfinite(vertex_normals)):
+        # scaled first, so that a normal of length 1e200 neither overflows nor underflows
+        vertex_normals, lengths = unit_rows(vertex_normals)
+    if not np.all(np.isfinite(vertex_normals)) or np.any(lengths == 0.0):
+        return None                                # unusable: computed from the faces instead
+    return vertex_normals
 
 
 def inverse_of(positions, merged, inverse, triangles):

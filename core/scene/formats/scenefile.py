@@ -225,39 +225,14 @@ class _Reader:
     # ------------------------------------------------------------------ the scene
 
     def scene(self, size: tuple[int, int] | None) -> Scene:
-        prescan(self.text, self.file)
-        try:
-            doc = tomllib.loads(self.text)
-        except tomllib.TOMLDecodeError as error:
-            last = max(1, self.text.count("\n") + (not self.text.endswith("\n")))
-            raise _toml_error(error, self.file, last) from None
-        except RecursionError:
-            raise ReaderError(self.file, "TOML nesting too deep") from None
-        except ValueError as error:        # int() inside tomllib: more than 4300 digits
-            raise ReaderError(self.file, f"TOML: a number cannot be read: "
-                                         f"{str(error).split(':')[0]}",
-                              _long_number_line(self.text)) from None
+        doc = self.parsed_document()
         self.table(doc, (), top_keys())
         if "geometry" not in doc:
             raise self.fail((), "a scene needs at least one [[geometry]] table")
         if self.crease_angle is None:
             self.crease_angle = (self.number(doc["crease_angle"], ("crease_angle",), 0.0, 180.0)
                                  if "crease_angle" in doc else CREASE_ANGLE)
-        meshes, total = [], 0
-        for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
-            self.budget = generators.MAX_TRIANGLES - total     # what a mesh file may still add
-            if "primitive" in g:             # a sphere or plane: its tessellation, 1-2 meshes
-                meshes.extend(self.primitive(g, ("geometry", i + 1)))
-            else:
-                meshes.append(self.geometry(g, ("geometry", i + 1)))
-            # Each generator keeps to the limit; the scene as a whole must too, or a short
-            # file listing many big generators could take all the memory.
-            total += len(meshes[-1].triangles)
-            if total > generators.MAX_TRIANGLES:
-                raise self.fail(("geometry", i + 1), f"the scene would have {total} triangles "
-                                f"by here; the limit is {generators.MAX_TRIANGLES}")
-        if not meshes:
-            raise self.fail(("geometry",), "a scene needs at least one [[geometry]] table")
+        meshes = self.scene_meshes(doc)
         points = np.concatenate([m.positions for m in meshes])
         order = self.views(doc, points)
         views = [v for v in order if isinstance(v, View)]
@@ -275,6 +250,49 @@ class _Reader:
         from core.scene.primitives import Sphere
         scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
                                  if isinstance(m.tessellates, Sphere)}.values())
+        self.scene_options(doc, scene, size)
+        for entry in scene_readers():                         # the systems' keys
+            entry.read(self, doc, scene)
+        scene.messages += self.notes
+        return scene
+
+    def parsed_document(self) -> dict:
+        """The file as TOML, or a ReaderError that names the line."""
+        prescan(self.text, self.file)
+        try:
+            return tomllib.loads(self.text)
+        except tomllib.TOMLDecodeError as error:
+            last = max(1, self.text.count("\n") + (not self.text.endswith("\n")))
+            raise _toml_error(error, self.file, last) from None
+        except RecursionError:
+            raise ReaderError(self.file, "TOML nesting too deep") from None
+        except ValueError as error:        # int() inside tomllib: more than 4300 digits
+            raise ReaderError(self.file, f"TOML: a number cannot be read: "
+                                         f"{str(error).split(':')[0]}",
+                              _long_number_line(self.text)) from None
+
+    def scene_meshes(self, doc: dict) -> list[Mesh]:
+        """Every [[geometry]] table's meshes, the scene's triangles kept to the limit."""
+        meshes, total = [], 0
+        for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
+            self.budget = generators.MAX_TRIANGLES - total     # what a mesh file may still add
+            if "primitive" in g:             # a sphere or plane: its tessellation, 1-2 meshes
+                meshes.extend(self.primitive(g, ("geometry", i + 1)))
+            else:
+                meshes.append(self.geometry(g, ("geometry", i + 1)))
+            # Each generator keeps to the limit; the scene as a whole must too, or a short
+            # file listing many big generators could take all the memory.
+            total += len(meshes[-1].triangles)
+            if total > generators.MAX_TRIANGLES:
+                raise self.fail(("geometry", i + 1), f"the scene would have {total} triangles "
+                                f"by here; the limit is {generators.MAX_TRIANGLES}")
+        if not meshes:
+            raise self.fail(("geometry",), "a scene needs at least one [[geometry]] table")
+        return meshes
+
+    def scene_options(self, doc: dict, scene: Scene, size: tuple[int, int] | None) -> None:
+        """The scene-wide keys (ambient, background, modes, size, transparency) onto ``scene``;
+        ``size``, when given, wins over the file's."""
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
                           ("background", self.colour),
                           ("line_color", self.colour),
@@ -298,10 +316,6 @@ class _Reader:
             from core.settings import TRANSPARENCIES
             scene.transparency = self.choice(doc["transparency"], ("transparency",),
                                              TRANSPARENCIES)
-        for entry in scene_readers():                         # the systems' keys
-            entry.read(self, doc, scene)
-        scene.messages += self.notes
-        return scene
 
     def geometry(self, g, path: Path_) -> Mesh:
         self.table(g, path, GEOMETRY_KEYS)
