@@ -504,7 +504,6 @@ def _out_of_memory() -> int:
 def views_on_stdin() -> bool:
     """Is standard input a file or a pipe (``prog < grade.data``, ``cat x | prog``) rather than
     a terminal or /dev/null? Then the views come from it, as the course's grader ran programs."""
-    import os
     import stat
     try:
         if sys.stdin is None or sys.stdin.isatty():
@@ -750,7 +749,6 @@ def _refused(out: str, args) -> bool:
     return bool(refusal)
 
 
-from app.output_files import PNG_SIGNATURE  # noqa: E402  (tests read it here)
 
 
 def out_problem(out: Path, source: str, force: bool) -> str | None:

@@ -37,7 +37,7 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
   Alt+wheel is the loupe (:mod:`app.viewer.loupe`); F1 the keys' help in the panel; a file
   dropped on the window opens (:mod:`app.viewer.files`, with File > Recent and the native
   dialog);
-- issue 22 (View menu too; :mod:`app.viewer.inspector_tools`): ``i`` inspect mode, where a
+- the inspector (View menu too; :mod:`app.viewer.inspector_tools`): ``i`` inspect mode, where a
   left click shows the pixel's record in the panel; ``v`` the next buffer view (depth, normal,
   triangle id, ..., and a volume's axial, coronal and sagittal slices) in place of the
   picture; ``h`` compares with OpenGL and flips between the picture and the heat map;
@@ -232,7 +232,7 @@ class ViewerWindow:
         self._popup_open = False          # a menu or the pop-up was open in the last frame
         self._close_popups = False        # Esc: close them in the next frame
         self._compiles_at_request = 0
-        self.tools = InspectorTools(state)    # issue 22: inspect mode, buffer views, compare
+        self.tools = InspectorTools(state)    # inspect mode, buffer views, compare
         self.volume_panel = VolumePanel(state, self.tools)   # transfer, iso, slices
         self._init_hands()
         self._init_files()
@@ -350,7 +350,7 @@ class ViewerWindow:
             self.change_speed(0.5 if char == "[" else 2.0, f"key {char}")
         elif char == "q":
             self.quit("key q")
-        elif char == "i":                 # issue 22: inspect mode, buffer views, compare
+        elif char == "i":                 # inspect mode, buffer views, compare
             self.tools.toggle_inspect("key i")
         elif char == "v":
             self.tools.next_buffer("key v")
@@ -406,7 +406,7 @@ class ViewerWindow:
                   "renderer": self.state.set_renderer,
                   "texture_filter": self.state.set_texture_filter,
                   "bump": self.state.set_bump,
-                  "depth_cue": self.state.set_depth_cue,                    # issue 18
+                  "depth_cue": self.state.set_depth_cue,
                   "transparency": self.state.set_transparency,
                   "paint_first": self.state.set_paint_first,
                   "lighting_model": self.state.set_lighting_model}[what]
@@ -522,6 +522,28 @@ class ViewerWindow:
         imgui.new_frame()
         self._handle_clicks()
 
+        self._frames_in()
+        if self.worker.waiting:
+            self.tools.note_progress(self.worker.progress().fraction)
+        self._build_gui()
+        imgui.render()
+
+        self._draw_picture(fb_w, fb_h)
+        self.gui.render(imgui.get_draw_data())
+        glfw.swap_buffers(self.window)
+        if not self._first_frame_logged and self.state.frame is not None:
+            self._first_frame_logged = True
+            self._log_since_start("first frame shown")
+            startup_gc.resume()
+        elif self.started is not None and time.perf_counter() - self.started > startup_gc.LATEST_S:
+            startup_gc.resume()
+        if self._warm_up_due:
+            self._warm_up_due = False
+            self._start_warm_up()
+        return True
+
+    def _frames_in(self) -> None:
+        """Ask the worker for the next frame and take the one it finished, if any."""
         self._note_kernels()
         self._poll_dialog()
         self.state.tick(time.perf_counter(), busy=self.worker.waiting)
@@ -543,11 +565,9 @@ class ViewerWindow:
         if self.tools.changed and self.state.frame is not None:
             self.blit.upload(self.tools.picture(self.state.frame))
             self.tools.changed = False
-        if self.worker.waiting:
-            self.tools.note_progress(self.worker.progress().fraction)
-        self._build_gui()
-        imgui.render()
 
+    def _draw_picture(self, fb_w: int, fb_h: int) -> None:
+        """Clear, then blit the picture inside its own area."""
         self.ctx.viewport = (0, 0, fb_w, fb_h)
         self.ctx.clear(0.11, 0.11, 0.13, 1.0)
         if self.state.frame is not None and self.state.renderable:
@@ -560,18 +580,6 @@ class ViewerWindow:
             self.blit.draw(origin)
             self.ctx.scissor = None
             self.ctx.viewport = (0, 0, fb_w, fb_h)
-        self.gui.render(imgui.get_draw_data())
-        glfw.swap_buffers(self.window)
-        if not self._first_frame_logged and self.state.frame is not None:
-            self._first_frame_logged = True
-            self._log_since_start("first frame shown")
-            startup_gc.resume()
-        elif self.started is not None and time.perf_counter() - self.started > startup_gc.LATEST_S:
-            startup_gc.resume()
-        if self._warm_up_due:
-            self._warm_up_due = False
-            self._start_warm_up()
-        return True
 
     def _start_kernel_processes(self) -> None:
         """A cold kernel cache: compile it in worker processes, and gate the frames on it
@@ -606,7 +614,7 @@ class ViewerWindow:
     def _start_warm_up(self) -> None:
         """After the first frame: load (or compile) every other kernel in the background."""
         if self._warming or self.warmup is not None:
-            return                        # worker processes compile them (issue 33)
+            return                        # worker processes compile them, not this one
         self._warming = True
         from app.tools.warmup import steps
         self.worker.add_background(steps())
@@ -649,7 +657,7 @@ class ViewerWindow:
             log.info("action: %s -> the bump demo: %s", where, demo)
         elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
             self.toggle_play(where)
-        elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:    # issue 22
+        elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:
             scale = self._scale()
             self.tools.inspect(*self.loupe.texel_at(x * scale, y * scale), where)
         elif self.state.course_tri:
@@ -1033,7 +1041,7 @@ class ViewerWindow:
         self._timeline()
         self.volume_panel.draw(imgui, displayable)
         self.tools.panel(imgui, displayable)
-        self._draw_order()                    # issue 18
+        self._draw_order()                    # the painter's draw-order slider
         self._camera_strip()
         self._plan_strip()
         self._invalid_views_strip()
@@ -1043,65 +1051,62 @@ class ViewerWindow:
     def _menu_bar(self) -> None:
         if not imgui.begin_menu_bar():
             return
-        if imgui.begin_menu("File"):
-            self._closing()
-            if imgui.begin_menu("Open scene"):
+        for title, items, enabled in (("File", self._file_menu, True),
+                                      ("Projection", lambda: self._projection_items(
+                                          "menu Projection"), True),
+                                      ("Shading", lambda: self._shading_items("menu Shading"),
+                                       True),
+                                      ("Render", self._render_items, True),
+                                      ("View", self._view_menu, self.state.view_count > 0),
+                                      ("?###Help", self._help_menu, True)):  # the bar is full
+            if imgui.begin_menu(title, enabled):
                 self._closing()
-                imgui.text("Path:")               # first: on screen however long the list
-                entered, self._path = imgui.input_text(
-                    "##path", self._path, flags=imgui.InputTextFlags_.enter_returns_true)
-                imgui.same_line()
-                if (imgui.button("Open") or entered) and self._path.strip():
-                    self.open_scene(self._path, "menu File > Open path")
-                    imgui.close_current_popup()
-                imgui.separator()
-                for path in self._scenes:
-                    if imgui.menu_item_simple(path.name, None,
-                                              str(path) == self.state.scene_source):
-                        self.open_scene(str(path), "menu File > Open")
+                items()
                 imgui.end_menu()
-            self._file_items()
-            if imgui.menu_item_simple("Save screenshot", "S"):
-                self.save_screenshot("menu File > Save screenshot")
-            imgui.separator()
-            if imgui.menu_item_simple("Quit", "Q"):
-                self.quit("menu File > Quit")
-            imgui.end_menu()
-        if imgui.begin_menu("Projection"):
-            self._closing()
-            self._projection_items("menu Projection")
-            imgui.end_menu()
-        if imgui.begin_menu("Shading"):
-            self._closing()
-            self._shading_items("menu Shading")
-            imgui.end_menu()
-        if imgui.begin_menu("Render"):
-            self._closing()
-            self._render_items()
-            imgui.end_menu()
-        if imgui.begin_menu("View", self.state.view_count > 0):
-            self._closing()
-            if imgui.menu_item_simple("Next view", "Right"):
-                self.step_view(+1, "menu View > Next")
-            if imgui.menu_item_simple("Previous view", "Left"):
-                self.step_view(-1, "menu View > Previous")
-            self._camera_items()
-            imgui.separator()
-            self._inspector_items()
-            imgui.separator()
-            from core.scene.view_numbers import file_number
-            for i, view in enumerate(self.state.scene.views):
-                number = file_number(self.state.scene, i)
-                label = displayable(f"{number}: {view.label}###view{i}")
-                if imgui.menu_item_simple(label, None, i == self.state.view_index):
-                    self.go_to_view(i, "menu View")
-            imgui.end_menu()
-        if imgui.begin_menu("?###Help"):            # Help: short, the bar is full
-            self._closing()
-            if imgui.menu_item_simple("Keys and mouse", "F1", getattr(self, "_help", False)):
-                self.toggle_help("menu Help > Keys")
-            imgui.end_menu()
         imgui.end_menu_bar()
+
+    def _file_menu(self) -> None:
+        if imgui.begin_menu("Open scene"):
+            self._closing()
+            imgui.text("Path:")               # first: on screen however long the list
+            entered, self._path = imgui.input_text(
+                "##path", self._path, flags=imgui.InputTextFlags_.enter_returns_true)
+            imgui.same_line()
+            if (imgui.button("Open") or entered) and self._path.strip():
+                self.open_scene(self._path, "menu File > Open path")
+                imgui.close_current_popup()
+            imgui.separator()
+            for path in self._scenes:
+                if imgui.menu_item_simple(path.name, None,
+                                          str(path) == self.state.scene_source):
+                    self.open_scene(str(path), "menu File > Open")
+            imgui.end_menu()
+        self._file_items()
+        if imgui.menu_item_simple("Save screenshot", "S"):
+            self.save_screenshot("menu File > Save screenshot")
+        imgui.separator()
+        if imgui.menu_item_simple("Quit", "Q"):
+            self.quit("menu File > Quit")
+
+    def _view_menu(self) -> None:
+        if imgui.menu_item_simple("Next view", "Right"):
+            self.step_view(+1, "menu View > Next")
+        if imgui.menu_item_simple("Previous view", "Left"):
+            self.step_view(-1, "menu View > Previous")
+        self._camera_items()
+        imgui.separator()
+        self._inspector_items()
+        imgui.separator()
+        from core.scene.view_numbers import file_number
+        for i, view in enumerate(self.state.scene.views):
+            number = file_number(self.state.scene, i)
+            label = displayable(f"{number}: {view.label}###view{i}")
+            if imgui.menu_item_simple(label, None, i == self.state.view_index):
+                self.go_to_view(i, "menu View")
+
+    def _help_menu(self) -> None:
+        if imgui.menu_item_simple("Keys and mouse", "F1", getattr(self, "_help", False)):
+            self.toggle_help("menu Help > Keys")
 
     def _camera_items(self) -> None:
         imgui.separator()
@@ -1170,10 +1175,10 @@ class ViewerWindow:
         if imgui.menu_item_simple("Course .tri rules (back faces, mouse)", None,
                            self.state.course_tri):
             self.choose("course_tri", not self.state.course_tri, "menu Render")
-        self._issue18_items()
+        self._painter_items()
 
-    # -- issue 18: depth cueing, transparency, the painter's draw-order slider -------------------
-    def _issue18_items(self) -> None:
+    # -- depth cueing, transparency, the painter's draw-order slider ---------------------------
+    def _painter_items(self) -> None:
         imgui.separator()
         cued = bool(self.state.settings().depth_cue)
         if imgui.menu_item_simple("Depth cueing", None, cued):

@@ -22,7 +22,6 @@ def overdraw(scene, view, settings, context=None) -> np.ndarray:
     painted fragment covering the pixel centre is a write; for the z-buffer (any other
     renderer name) it is the number of fragments scan-converted there, each of which is
     depth-tested (an upper bound on its writes: FvDFH's cost of the z-buffer)."""
-    from core.shading import stages
     width, height = settings.size
     if settings.renderer in ("bsp", "depth-sort"):
         p = painting(scene, view, settings, context)

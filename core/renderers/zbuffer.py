@@ -134,9 +134,10 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
 
+    clipper = settings.clipper if settings is not None else "cohen-sutherland"
     clipped, source, device, inv_w = _clip_and_project(positions, triangles, kept, inputs, n,
                                                        projection, z_min, vp, context, stats,
-                                                       timer)
+                                                       timer, clipper)
     vis = _visible_surfaces(device, inv_w, clipped.triangles, width, height, rasterizer,
                             visible_surface, shading, context, stats,
                             timer)
@@ -149,7 +150,7 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
 
 
 def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, vp, context,
-                      stats, timer):
+                      stats, timer, clipper):
     """Normalize, clip and project the kept triangles: (the clipped triangles, the scene
     triangle each came from, their device points, 1/W)."""
     from core.shading import stages
@@ -158,9 +159,7 @@ def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, 
     timer.lap("normalize", canonical_points=points)
 
     clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min,
-                                    before_clip=inputs.before_clip,
-                                    clipper=settings.clipper if settings is not None
-                                    else "cohen-sutherland")
+                                    before_clip=inputs.before_clip, clipper=clipper)
     source = clipped.source if kept is None else kept[clipped.source]
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))

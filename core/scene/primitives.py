@@ -74,7 +74,6 @@ def tessellate(primitive, segments: int = 96) -> list:
     plane: its ``extent`` square, as one mesh per checker colour (two-sided, open).
     """
     from core.scene import generators
-    from core.scene.model import Mesh
     if isinstance(primitive, Sphere):
         mesh = generators.uv_sphere(primitive.radius, segments, max(2, segments // 2))
         mesh.positions = mesh.positions + np.asarray(primitive.center, dtype=np.float64)

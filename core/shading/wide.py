@@ -29,7 +29,6 @@ byte), held by ``tests/test_shading_wide.py`` on every shipped scene and golden.
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 

@@ -10,7 +10,6 @@ not the 2 x 2-quad differences a GPU takes.
 
 from __future__ import annotations
 
-import numpy as np
 
 from core.jit import njit, prange
 from core.texture.sample import sample

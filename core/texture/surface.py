@@ -30,7 +30,7 @@ import math
 import numpy as np
 
 from core.jit import njit
-from core.shading.illumination import OD, TWO_SIDED, quantize, unit3
+from core.shading.illumination import OD, TWO_SIDED, unit3
 from core.shading.models.dispatch import light_point
 from core.texture.sample import BILINEAR, sample
 from core.texture.tutorial import uv_at
