@@ -749,6 +749,7 @@ def _refused(out: str, args) -> bool:
     return bool(refusal)
 
 
+from app.output_files import PNG_SIGNATURE  # noqa: E402,F401  (tests read it here)
 
 
 def out_problem(out: Path, source: str, force: bool) -> str | None:
