@@ -21,10 +21,10 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 # The warm-up compiles on one worker process a core (JOBS=N for another number); when its
-# stamp says this code's kernels are all cached already (app/tools/warm_stamp.py) it is
+# stamp says this code's kernels are all cached already (app/distribution/warm_stamp.py) it is
 # skipped, e.g. after a checkout that touched the kernel files but left them as they were.
-WARMUP := $(PY) -m app.tools.warmup $(if $(JOBS),--jobs $(JOBS))
-IS_WARM := $(PY) -c "import sys; from app.tools.warm_stamp import is_warm; sys.exit(not is_warm())"
+WARMUP := $(PY) -m app.distribution.warmup $(if $(JOBS),--jobs $(JOBS))
+IS_WARM := $(PY) -c "import sys; from app.distribution.warm_stamp import is_warm; sys.exit(not is_warm())"
 
 $(WARM): $(STAMP) $(KERNELS)
 	$(IS_WARM) || $(WARMUP)    # compile every kernel once now, not in front of the user

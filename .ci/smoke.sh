@@ -12,7 +12,7 @@
 #   cli      the installed `fvd-viewer --help` and `--version`, and `python -m app --version`
 #   warmup   the installed program's `warmup`: every kernel compiled from nothing on this
 #            Python, one worker process a core, the stamp written
-#   render   every shipped scene (app.tools.warmup.shipped_scenes) at 64x48 by the installed
+#   render   every shipped scene (app.distribution.warmup.shipped_scenes) at 64x48 by the installed
 #            program, each PNG checked to exist, be 64x48 and not be one flat colour
 #   window   the real-window smoke tests under Xvfb (first frame, clicks, menus, keys,
 #            screenshots), from the clone, with the test extras installed on this Python
@@ -79,7 +79,7 @@ if [[ " $phases " == *" render "* ]]; then
   begin render
   # the scene list from the installed package; the files from the clone (a scene may read
   # ../../shared beside the repository, as the bunny does)
-  mapfile -t scenes < <("$py" -c 'from app.tools.warmup import shipped_scenes
+  mapfile -t scenes < <("$py" -c 'from app.distribution.warmup import shipped_scenes
 print(*(p.name for p in shipped_scenes()), sep="\n")')
   [ ${#scenes[@]} -gt 0 ] || fail "no shipped scenes in the installed package"
   mkdir -p png
@@ -112,7 +112,7 @@ if [[ " $phases " == *" window "* ]]; then
   cd "$clone"
   # the tests run the clone's code, whose kernel cache is its own: compile what their two
   # scenes draw first (the window would wait for its worker processes otherwise)
-  "$py" -m app.tools.warmup --only whitted.toml --only house.toml > warmup-window.txt \
+  "$py" -m app.distribution.warmup --only whitted.toml --only house.toml > warmup-window.txt \
     || { tail -20 warmup-window.txt; fail "the window tests' warm-up"; }
   CI=true "$py" -m pytest -q -p no:cacheprovider tests/test_window.py tests/test_window_newcomer.py \
     -k "click_menu_and_keys_under_xvfb or screenshots_follow_the_naming_rule" \

@@ -202,7 +202,7 @@ def _render_parser(sub, scene_help: str) -> None:
     _buffer_argument(r)
     _cluster_arguments(r)                     # scale-out
     _crease_argument(r)
-    from app.tools.radiosity import add_options as gi_options
+    from app.commands.radiosity import add_options as gi_options
     gi_options(r)                             # global illumination (radiosity, path tracing)
     _painter_arguments(r)                     # painter's renderers
 
@@ -211,7 +211,7 @@ def _radiosity_parser(sub, command: str | None) -> None:
     """``radiosity``: its options are only built when it is the command (they import more)."""
     rad = sub.add_parser("radiosity", help="solve a scene's radiosity once and save it (.npz)")
     if command in (None, "radiosity"):
-        from app.tools.radiosity import add_arguments as radiosity_arguments
+        from app.commands.radiosity import add_arguments as radiosity_arguments
         radiosity_arguments(rad)
 
 
@@ -242,8 +242,8 @@ def _tool_parsers(sub, command: str | None) -> None:
     """The tools' commands; bench, animate and warmup keep their options with their bodies
     and build them only when they are the command."""
     b = sub.add_parser("bench", help="time the CPU pipeline against llvmpipe (OpenGL in software)")
-    if command == "bench":                    # its options live with its body (app/tools/bench.py)
-        from app.tools.bench import add_arguments
+    if command == "bench":                    # its options live with its body (app/bench/bench.py)
+        from app.bench.bench import add_arguments
         add_arguments(b, parse_size)
 
     rep = sub.add_parser("report", help="error against run time: sweep, CSV, Markdown and plot")
@@ -251,16 +251,16 @@ def _tool_parsers(sub, command: str | None) -> None:
     rep.add_argument("--quick", action="store_true", help="a reduced sweep (for tests)")
 
     an = sub.add_parser("animate", help="render an animation to MP4, GIF or PNGs (on many workers)")
-    if command == "animate":                  # its options live with its body (app/tools/animate.py)
-        from app.tools.animate import add_arguments as animate_arguments
+    if command == "animate":                  # options live with the body (app/commands/animate.py)
+        from app.commands.animate import add_arguments as animate_arguments
         animate_arguments(an, parse_size)
 
     st = sub.add_parser("stability", help="the stiff and extreme cases, PASS/FAIL")
     st.add_argument("--json", action="store_true", help="print JSON instead of a table")
 
     wu = sub.add_parser("warmup", help="compile every kernel once, on every core, with progress")
-    if command == "warmup":                   # its options live with its body (app/tools/warmup.py)
-        from app.tools.warmup import add_arguments as warmup_arguments
+    if command == "warmup":                   # options: app/distribution/warmup.py
+        from app.distribution.warmup import add_arguments as warmup_arguments
         warmup_arguments(wu)
 
 
@@ -344,8 +344,8 @@ def _split(args, settings):
     and possible; None when this process draws it (or an error was printed: then say is None)."""
     if args.workers == 1 and not args.scheduler:
         return None, ""
-    from app.tools.cluster import ClusterError
-    from app.tools.split_render import split_frame
+    from app.commands.cluster import ClusterError
+    from app.commands.split_render import split_frame
     try:
         return split_frame(args, settings)
     except ClusterError as error:
@@ -381,7 +381,7 @@ def _crease_argument(parser: argparse.ArgumentParser) -> None:
 
 
 def _gi_overrides(args) -> dict:
-    from app.tools.radiosity import overrides          # radiosity and path tracing
+    from app.commands.radiosity import overrides          # radiosity and path tracing
     return overrides(args)
 
 
@@ -551,24 +551,24 @@ def _dispatch(args) -> int:
     if args.command == "plan":
         return _plan(args)
     if args.command == "bench":
-        from app.tools.bench import main as bench_main
+        from app.bench.bench import main as bench_main
         return bench_main(args)
     if args.command == "report":
-        from app.tools.report import main as report_main
+        from app.reports.report import main as report_main
         return report_main(args)
     if args.command == "animate":
-        from app.tools.animate import main as animate_main
+        from app.commands.animate import main as animate_main
         return animate_main(args)
     if args.command == "warmup":
-        from app.tools.warmup import main as warmup_main
+        from app.distribution.warmup import main as warmup_main
         return warmup_main(args)
     if args.command in ("inspect", "compare"):      # the pixel inspector
         return _inspector_command(args)
     if args.command == "radiosity":           # solve once, save for --solution
-        from app.tools.radiosity import main as radiosity_main
+        from app.commands.radiosity import main as radiosity_main
         return radiosity_main(args)
     if args.command == "stability":
-        from app.tools.stability import main as stability_main
+        from app.commands.stability import main as stability_main
         return stability_main(args)
     raise AssertionError(args.command)
 
@@ -634,7 +634,7 @@ def _render(args) -> int:
     if scene is None:
         return 2
     if args.buffer:                      # a buffer view instead of the picture
-        from app.tools.inspector import render_buffer
+        from app.commands.inspector import render_buffer
         return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
     frame, status = _render_frame(scene, view, settings, args)
     if frame is None:
@@ -683,7 +683,7 @@ def _scene_to_draw(scene, view, args):
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
     if args.solution:                     # a saved radiosity solution instead of solving
-        from app.tools.radiosity import load_solution
+        from app.commands.radiosity import load_solution
         from core.context import DEFAULT_CONTEXT
         refusal = load_solution(scene, args.solution, DEFAULT_CONTEXT)
         if refusal:
@@ -908,7 +908,7 @@ def _inspector_command(args) -> int:
     if args.course_tri:
         from core.scene.course_tri import course_tri_scene
         scene = course_tri_scene(scene, view)
-    from app.tools import inspector
+    from app.commands import inspector
     if args.command == "inspect":
         return inspector.inspect_main(scene, view, settings, args.pixel, args.json)
     return inspector.compare_main(scene, view, settings, args, write_png)

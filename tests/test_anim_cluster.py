@@ -128,7 +128,7 @@ def fail_once(marker: str):
     def run(job, bundle, frames_, checkpoint=None):
         import os
 
-        from app.tools.animate import render_run
+        from app.commands.animate import render_run
         try:
             os.unlink(marker)
         except FileNotFoundError:
@@ -138,7 +138,7 @@ def fail_once(marker: str):
 
 
 def test_a_worker_in_an_empty_folder_renders_shipped_files(cluster, tmp_path, monkeypatch, capsys):
-    import app.tools.animate as animate
+    import app.commands.animate as animate
     address, worker_tmp, empty = cluster
     user = user_folder(tmp_path)
     here = tmp_path / "here"
@@ -165,7 +165,7 @@ def test_a_worker_in_an_empty_folder_renders_shipped_files(cluster, tmp_path, mo
 
 
 def test_dask_retries_a_run_that_failed_on_the_worker(cluster, tmp_path, monkeypatch, capsys):
-    import app.tools.animate as animate
+    import app.commands.animate as animate
     address, _, _ = cluster
     user = user_folder(tmp_path)
     marker = tmp_path / "fail-once"

@@ -86,7 +86,7 @@ def decoded(movie: Path) -> list[np.ndarray]:
 def on_the_cluster(monkeypatch):
     """A short job on --workers 2 (or any on a busy machine) would be kept in this process
     (a cluster cannot win); these tests want frames rendered by the local cluster's worker."""
-    import app.tools.animate as animate
+    import app.commands.animate as animate
     monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
     monkeypatch.setattr(animate, "idle_cores", lambda since: 8.0)
     monkeypatch.setattr(animate, "RENDER_WHILE_STARTING", False)
@@ -145,7 +145,7 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
 
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):
-    import app.tools.animate as animate
+    import app.commands.animate as animate
     real, calls = animate.render_pixels, []
 
     def flaky(job, k, *rest):
@@ -186,7 +186,7 @@ def test_frames_are_written_beside_the_rendering_and_a_failed_write_stops_the_co
     that fails (a full disk) is the command's error, said once, not a frame to retry."""
     import threading
 
-    import app.tools.animate as animate
+    import app.commands.animate as animate
     real, written = animate.write_frame, []
 
     def recording(folder, k, data):

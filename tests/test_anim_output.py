@@ -121,7 +121,7 @@ def test_a_movie_never_replaces_what_it_did_not_write(scene_file, tmp_path, caps
 @pytest.mark.parametrize("kind", ["gif", "mp4"])
 def test_a_failed_encode_leaves_the_old_movie_and_nothing_else(scene_file, tmp_path, capsys,
                                                                 monkeypatch, kind):
-    import app.tools.movie_files as movie_files
+    import app.commands.movie_files as movie_files
     out = tmp_path / f"old.{kind}"
     assert run(scene_file, "--out", out, "--size", "24x24") == 0
     before = out.read_bytes()
@@ -297,7 +297,7 @@ def _huge(conn):
     (_huge, "is not a Dask scheduler: its first message claims 18446744073709551615 bytes"),
 ])
 def test_a_scheduler_that_is_not_one(scene_file, tmp_path, capsys, monkeypatch, answer, says):
-    import app.tools.cluster as cluster
+    import app.commands.cluster as cluster
     monkeypatch.setattr(cluster, "HANDSHAKE_TIMEOUT", 1.0)
     server, address = _serve(answer)
     with server:
@@ -333,7 +333,7 @@ view = { front = 4, back = -4 }
 time = 0.5
 view = { front = -4, back = 4 }
 """)
-    code = ("import app.tools.animate as a; a.CLUSTER_START_SECONDS = 0; "
+    code = ("import app.commands.animate as a; a.CLUSTER_START_SECONDS = 0; "
             "a.idle_cores = lambda since: 8.0; "
             "a.RENDER_WHILE_STARTING = False; from app.cli import main; import sys; "
             f"sys.exit(main(['animate', {str(scene)!r}, '--out', {str(tmp_path / 'm.mp4')!r}, "
@@ -354,14 +354,14 @@ def test_the_mp4_bytes_do_not_depend_on_the_cores(tmp_path):
     follows the thread count (measured: 24 busy 320 x 240 frames give other bytes on one core
     than on two). The encoder runs one thread with fixed options: the same frames give the
     same bytes on one core and on all of them, run after run."""
-    from app.tools.movie_files import frame_png, write_frame
+    from app.commands.movie_files import frame_png, write_frame
     if len(os.sched_getaffinity(0)) < 2:
         pytest.skip("needs two cores to compare with one")
     rng = np.random.default_rng(7)
     base = rng.integers(0, 256, (240, 320, 3), dtype=np.uint8)
     for k in range(24):
         write_frame(tmp_path, k, frame_png(np.roll(base, 7 * k, axis=1), "h", k))
-    code = ("import sys; from pathlib import Path; from app.tools.movie_files import encode; "
+    code = ("import sys; from pathlib import Path; from app.commands.movie_files import encode; "
             "encode(Path(sys.argv[1]), 24, Path(sys.argv[2]), 24.0)")
     for name, cores in (("one.mp4", {min(os.sched_getaffinity(0))}),
                         ("all.mp4", os.sched_getaffinity(0)), ("again.mp4", None)):
@@ -376,7 +376,7 @@ def test_the_mp4_bytes_do_not_depend_on_the_cores(tmp_path):
 def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, capsys, monkeypatch):
     """The decision is a prediction from two measurements: a frame's time here, and the cores
     the other processes left idle since the command started."""
-    import app.tools.animate as animate
+    import app.commands.animate as animate
     monkeypatch.setattr(animate, "idle_cores", lambda since: 1.0)
     assert run(scene_file, "--out", tmp_path / "short", "--size", "24x24", "--workers", "2",
                "--frames", "6") == 0
@@ -398,7 +398,7 @@ def test_the_prediction_behind_the_decision():
     """Hand-derived: 100 frames of 0.1 s are 10 s here; with a 1 s start and one idle core
     the worker joins for the last 9 s of work, adding 0.35 of a core (measured: what a
     second process adds beside this one and its frame writer): 1 + 9 / 1.35 = 7.67 s."""
-    from app.tools import animate
+    from app.commands import animate
     assert animate.WORKER_SHARE == 0.35 and animate.CLUSTER_START_SECONDS == 1.0
     assert animate.predict(100, 0.1, 2, 1.0) == pytest.approx((10.0, 1 + 9 / 1.35))
     assert animate.predict(100, 0.1, 2, 0.5) == pytest.approx((10.0, 1 + 9 / 1.175))
@@ -420,7 +420,7 @@ def test_the_prediction_behind_the_decision():
 
 def test_runs_are_long_first_and_short_at_the_end():
     """Guided runs: each at most 1/(2 x renderers) of what is left (and MAX_RUN), cut at gaps."""
-    from app.tools.animate import Runs
+    from app.commands.animate import Runs
     runs = Runs(list(range(100)), 2)
     lengths = []
     while runs:
@@ -432,7 +432,7 @@ def test_runs_are_long_first_and_short_at_the_end():
 
 def test_the_idle_cores_are_measured(monkeypatch):
     """Idle seconds of every core over wall seconds: 3 s idle in 2 s is 1.5 idle cores."""
-    from app.tools import animate
+    from app.commands import animate
     monkeypatch.setattr(animate, "idle_mark", lambda: (12.0, 103.0))
     assert animate.idle_cores((10.0, 100.0)) == pytest.approx(1.5)
 
@@ -441,8 +441,8 @@ def test_the_idle_cores_are_measured(monkeypatch):
 def test_frames_encoded_as_they_come_make_the_movie_of_the_folder(tmp_path, monkeypatch, hold):
     """The MP4 encoded while frames arrive out of order (held in memory, or read back from
     the folder when not held) is byte for byte the MP4 encoded from the finished folder."""
-    from app.tools import movie_files
-    from app.tools.movie_files import Movie, encode, frame_png, write_frame
+    from app.commands import movie_files
+    from app.commands.movie_files import Movie, encode, frame_png, write_frame
     monkeypatch.setattr(movie_files, "HOLD_BYTES", hold)
     rng = np.random.default_rng(3)
     pictures = [rng.integers(0, 256, (30, 41, 3), dtype=np.uint8) for _ in range(9)]
@@ -463,7 +463,7 @@ def test_frames_encoded_as_they_come_make_the_movie_of_the_folder(tmp_path, monk
 
 
 def test_an_abandoned_movie_leaves_nothing(tmp_path):
-    from app.tools.movie_files import Movie
+    from app.commands.movie_files import Movie
     (tmp_path / "old.mp4").write_bytes(b"....ftyp old")
     movie = Movie(tmp_path / "old.mp4", tmp_path, 3, 12.0)
     movie.put(0, np.zeros((8, 8, 3), np.uint8))

@@ -18,7 +18,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pytest
 
-from app.tools.bench import bench_scene
+from app.bench.bench import bench_scene
 from core.pipeline import project
 from core.shading import shade
 from core.pipeline.clip_polygon import clip_triangles

@@ -8,7 +8,7 @@
   not the core's). What is shared with the product: the scene, its views and N_per/N_par
   (``normalizing_transform``), whose factors test_course_views.py holds to hand values.
 - Shading: flat, Gouraud and Phong against GLSL shaders implementing the same Phong
-  illumination model (``app/tools/reference_gl.py``): on pixels away from triangle edges and
+  illumination model (``app/oracles/reference_gl.py``): on pixels away from triangle edges and
   silhouettes, at most 2/255 per channel.
 
 A failing comparison writes the two images and the difference to ``tests/_failures/``.
@@ -33,10 +33,10 @@ from core.transforms import apply                                # noqa: E402
 from core.scene.formats import load_scene                              # noqa: E402
 from core.paths import SCENES_DIR                                # noqa: E402
 from core.camera.view import View, normalizing_transform, problems      # noqa: E402
-from app.tools.bench import bench_scene                                # noqa: E402
-from app.tools.reference_gl import GLRenderer, eye_of                  # noqa: E402
+from app.bench.bench import bench_scene                                # noqa: E402
+from app.oracles.reference_gl import GLRenderer, eye_of                  # noqa: E402
 from core.scene.normals import face_normals                             # noqa: E402
-from app.tools.reference_gl import clip_from_world                      # noqa: E402
+from app.oracles.reference_gl import clip_from_world                      # noqa: E402
 
 FAILURES = Path(__file__).parent / "_failures"
 SIZE = (500, 500)

@@ -2,7 +2,7 @@
 
 Layers, from the bottom: ``core`` (numbers, scene, camera, pipeline, shading, renderers, the
 front door) → ``core.analysis`` (accuracy, stability, exact arithmetic) → ``app`` (viewer,
-tools, command line). A module may import only from its own layer or below; imports inside
+commands, benches, oracles, reports, distribution, command line). A module may import only from its own layer or below; imports inside
 functions count too (they are still dependencies).
 """
 
@@ -149,3 +149,45 @@ def private_imports() -> list[tuple[str, str, str]]:
 
 def test_no_private_name_is_imported_across_packages():
     assert private_imports() == []
+
+
+# -- the packages of app -------------------------------------------------------------------
+# Which package of app may import which (imports in functions too). The oracles are outside
+# references and import nothing of app; the rest is the graph as it stands, so a new edge
+# between them is a decision made here. Modules never import each other in a loop (above).
+# ``app`` is app's own modules (cli, loading, naming, output_files, startup_gc, versions).
+APP_PACKAGES = ("commands", "bench", "oracles", "reports", "distribution", "viewer")
+APP_IMPORTS = {
+    "app.oracles": set(),
+    "app.reports": {"app.bench", "app.oracles"},
+    "app.bench": {"app.oracles", "app.commands", "app.distribution", "app.viewer"},
+    "app.commands": {"app", "app.oracles", "app.distribution", "app.viewer"},
+    "app.distribution": {"app.bench", "app.viewer"},   # the warm-up compiles their kernels
+    "app.viewer": {"app", "app.distribution", "app.commands"},   # warm-up; the OpenGL compare
+}
+
+
+def app_package(module: str) -> str:
+    parts = module.split(".")
+    return f"app.{parts[1]}" if len(parts) > 1 and parts[1] in APP_PACKAGES else "app"
+
+
+def app_imports_out_of_order(allowed: dict[str, set[str]]) -> list[tuple[str, str]]:
+    wrong = []
+    for a, targets in import_graph().items():
+        pa = app_package(a) if a.startswith("app") else None
+        if pa not in allowed:
+            continue
+        wrong += [(a, b) for b in targets if b.startswith("app")
+                  and app_package(b) != pa and app_package(b) not in allowed[pa]]
+    return sorted(wrong)
+
+
+def test_app_packages_import_only_what_they_may():
+    assert app_imports_out_of_order(APP_IMPORTS) == []
+
+
+def test_the_order_of_app_packages_is_checked():
+    """An import the table does not allow is found (the check can fail)."""
+    found = app_imports_out_of_order({**APP_IMPORTS, "app.viewer": set()})
+    assert ("app.viewer.launch", "app.distribution.warm_stamp") in found

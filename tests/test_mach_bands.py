@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from app.tools.mach_report import facet_slopes, profiles, write, SIZE
+from app.reports.mach_report import facet_slopes, profiles, write, SIZE
 
 L = np.array([-0.6, 0.2, 1.0]) / np.linalg.norm([-0.6, 0.2, 1.0])
 

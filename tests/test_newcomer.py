@@ -78,7 +78,7 @@ def test_render_without_out_names_its_file_by_the_rule(tmp_path):
 def test_animate_frames_follow_the_rule(tmp_path):
     """The frames folder names each frame by the one rule (app.naming.frame_name)."""
     from app.naming import SAFE_NAME, frame_name
-    from app.tools.movie_files import write_frame
+    from app.commands.movie_files import write_frame
     write_frame(tmp_path, 42, b"a frame")
     assert [p.name for p in tmp_path.iterdir()] == [frame_name(42)] == ["frame_00042.png"]
     assert SAFE_NAME.match(frame_name(42))

@@ -283,7 +283,7 @@ def test_bench_rows_for_the_painters(tmp_path):
     import argparse
     import json
     from app.cli import main
-    from app.tools.bench import _renderers
+    from app.bench.bench import _renderers
     with pytest.raises(argparse.ArgumentTypeError, match="not 'raytrace'"):
         _renderers("bsp,raytrace")
     assert main(["bench", "--renderer", "bsp,depth-sort,zbuffer", "--sizes", "300",

@@ -10,7 +10,7 @@ import pytest
 
 from tools import unavailable
 
-from app.tools import mitsuba_oracle
+from app.oracles import mitsuba_oracle
 from core.context import RenderContext
 from core.pathtrace.compare import block_relative_error, interior_mask, surface_ids
 from core.pathtrace.renderer import render_passes

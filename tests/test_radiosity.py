@@ -323,7 +323,7 @@ def test_bench_refuses_an_unknown_renderer(capsys):
 
 
 def test_bench_table_reads_its_rows():
-    from app.tools.gi_bench import table
+    from app.bench.gi_bench import table
     report = {"cpus": 2, "loadavg_before": [1.0], "loadavg_after": [1.5],
               "radiosity": [{"form_factors": "hemicube", "resolution": 128, "elements": 848,
                              "patches": 212, "seconds_to_1pct": 2.07, "steps": 590,

@@ -1,4 +1,4 @@
-"""The report's ray-traced rows (app/tools/raytrace_report.py), on a small frame."""
+"""The report's ray-traced rows (app/reports/raytrace_report.py), on a small frame."""
 
 from __future__ import annotations
 
@@ -6,7 +6,7 @@ import csv
 
 
 def test_raytrace_rows_converge_with_samples_and_are_written(tmp_path):
-    from app.tools import raytrace_report
+    from app.reports import raytrace_report
     paths = raytrace_report.write(tmp_path, size=48, cache=tmp_path / "cache",
                                   progress=lambda line: None)
     assert [p.name for p in paths] == ["raytrace.csv", "raytrace.md", "raytrace.png"]

@@ -24,7 +24,7 @@ def png(path):
 def test_a_frame_traced_by_bands_on_a_cluster_is_the_one_process_picture(tmp_path, capsys):
     from dask.distributed import LocalCluster
 
-    from app.tools.cluster import quiet_dask
+    from app.commands.cluster import quiet_dask
     quiet_dask()
     scene = str(ROOT / "scenes" / "whitted.toml")
     common = ["render", scene, "--renderer", "raytrace", "--samples", "4", "--size", "60x44"]
@@ -80,7 +80,7 @@ def test_local_workers_trace_the_one_process_picture_when_they_have_more_cores(t
 def test_the_local_rule_compares_cores_with_kernel_threads(monkeypatch):
     import numba
 
-    from app.tools import split_render
+    from app.commands import split_render
     monkeypatch.setattr(split_render.os, "sched_getaffinity", lambda pid: {0, 1}, raising=False)
     before = numba.get_num_threads()
     try:

@@ -1,5 +1,5 @@
-"""The error-against-time sweep (core/analysis/accuracy.py) and ``python -m app report`` (app/tools/report.py):
-the reduced sweep runs once and must show the expected order of errors."""
+"""The error-against-time sweep (core/analysis/accuracy.py) and ``python -m app report``
+(app/reports/report.py): the reduced sweep runs once and must show the expected order of errors."""
 
 from __future__ import annotations
 
@@ -109,7 +109,7 @@ def test_error_falls_with_tessellation_and_samples(quick_points):
 def test_report_command_writes_csv_markdown_and_plot(quick_points, tmp_path, monkeypatch, capsys):
     from PIL import Image
 
-    from app.tools import report
+    from app.reports import report
     monkeypatch.setattr(accuracy, "sweep", lambda config, progress=None: quick_points)
     assert report.main(SimpleNamespace(out=str(tmp_path / "out"), quick=True)) == 0
     folder = tmp_path / "out"
@@ -127,7 +127,7 @@ def test_report_command_writes_csv_markdown_and_plot(quick_points, tmp_path, mon
 
 
 def test_report_refuses_an_unwritable_folder(tmp_path, capsys):
-    from app.tools import report
+    from app.reports import report
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
     assert report.main(SimpleNamespace(out=str(blocker / "sub"), quick=True)) == 2

@@ -1,4 +1,4 @@
-"""The bench's scale-out rows (``python -m app bench``, ``python -m app.tools.scaleout``): the
+"""The bench's scale-out rows (``python -m app bench``, ``python -m app.commands.scaleout``): the
 same movie made by the real command in one process and with ``--workers 2``, in fresh
 processes; the rows say both times, their CPU, the ratio, what ``--workers`` did, and whether
 the frames are identical."""
@@ -16,7 +16,7 @@ pytestmark = pytest.mark.slow
 
 
 def test_the_rows_compare_one_process_with_workers_on_both_scenes():
-    from app.tools.animate import bench_animation, format_animation
+    from app.commands.animate import bench_animation, format_animation
     result = bench_animation(size=(40, 32), frames=3, repeats=2)
     rows = result["rows"]
     assert [row["scene"] for row in rows] == ["fountain.toml", "house_flyaround.toml"]
@@ -32,5 +32,5 @@ def test_the_rows_compare_one_process_with_workers_on_both_scenes():
 
 
 def test_the_scenes_are_the_shipped_ones():
-    from app.tools.scaleout import SCENES
+    from app.commands.scaleout import SCENES
     assert all((ROOT / scene).is_file() for scene in SCENES)

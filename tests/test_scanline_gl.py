@@ -2,7 +2,7 @@
 
 The course's scan-line algorithm interpolates intensities linearly in screen space; OpenGL
 does the same when the varying is declared ``noperspective`` (``gouraud_linear`` in
-``app/tools/reference_gl.py``). Away from triangle edges the two must agree to 2/255; and,
+``app/oracles/reference_gl.py``). Away from triangle edges the two must agree to 2/255; and,
 as a control, the perspective-correct Gouraud of the edge rasterizer must not agree with it
 everywhere on a perspective view (nor the scan line's with GL's perspective-correct one).
 """

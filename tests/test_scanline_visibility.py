@@ -18,7 +18,7 @@ from core.inspect.text import describe
 from core.pipeline.raster import rasterize as zbuffer_rasterize
 from core.scene.formats import load_scene
 from core.visibility.scanline import watkins
-from app.tools.warmup import shipped_scenes
+from app.distribution.warmup import shipped_scenes
 
 SHADINGS = ("flat", "gouraud", "phong")
 

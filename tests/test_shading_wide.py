@@ -13,7 +13,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from app.tools.warmup import shipped_scenes
+from app.distribution.warmup import shipped_scenes
 from core.context import RenderContext
 from core.paths import SCENES_DIR
 from core.render import render
@@ -137,7 +137,7 @@ def test_the_setting_is_checked():
 
 
 def test_the_bench_times_both_precisions():
-    from app.tools.bench import bench_scene, format_precision, precision_rows
+    from app.bench.bench import bench_scene, format_precision, precision_rows
     rows = precision_rows([bench_scene(1000)], "perspective", (64, 48), frames=2, warmup=1)
     assert [r["shading"] for r in rows] == ["flat", "gouraud", "phong"]
     for r in rows:

@@ -112,7 +112,7 @@ def test_fill_bytes_fills_a_frame_view_and_a_plain_image():
 
 
 def test_the_floor_draws_the_pixels_we_draw(scene):
-    from app.tools.floor import Floor
+    from app.bench.floor import Floor
     floor = Floor(scene, (200, 200))
     words = floor.frame(scene.views[0])
     ours = render(scene, scene.views[0],
@@ -125,7 +125,7 @@ def test_the_floor_draws_the_pixels_we_draw(scene):
 
 
 def test_the_lean_gl_row_draws_the_pixels_we_draw(scene):
-    from app.tools.lean_gl import LeanGL
+    from app.oracles.lean_gl import LeanGL
     gl = LeanGL((200, 200), ctx=llvmpipe_context())      # only the context may be missing
     try:
         gl.load(scene)

@@ -165,7 +165,7 @@ def test_one_pixel_mismatches():
 
 @pytest.mark.slow
 def test_command_prints_the_table_and_json(results, capsys, monkeypatch):
-    from app.tools import stability as command
+    from app.commands import stability as command
     monkeypatch.setattr(stability, "run_suite", lambda progress=None: results)
     assert command.main(SimpleNamespace(json=False)) == 0
     table = capsys.readouterr().out
@@ -176,7 +176,7 @@ def test_command_prints_the_table_and_json(results, capsys, monkeypatch):
 
 
 def test_command_exit_status_is_one_when_a_case_fails(capsys, monkeypatch):
-    from app.tools import stability as command
+    from app.commands import stability as command
     failing = [stability.Result(name="x", expected="y", measured="z", passed=False)]
     monkeypatch.setattr(stability, "run_suite", lambda progress=None: failing)
     assert command.main(SimpleNamespace(json=False)) == 1

@@ -44,7 +44,7 @@ GRAZING = View(vrp=(0, 0, 0), vpn=(0, 0.25, 1), vup=(0, 1, 0), window=(-1, 1, -1
 
 @pytest.fixture(scope="module")
 def gl():
-    from app.tools.texture_gl import TextureGL
+    from app.oracles.texture_gl import TextureGL
     oracle = TextureGL((SIZE, SIZE), ctx=llvmpipe_context())   # only the context may be missing
     assert "llvmpipe" in oracle.renderer_name
     yield oracle

@@ -3,7 +3,7 @@
 A frame whose kernels are cached is drawn at once; one that would compile waits, saying so,
 until the warm-up has done its scene, then is drawn; a newer request ends the wait; once the
 warm-up has finished nothing is refused. The warm-up here is a stand-in with the same
-attributes as app.tools.warmup.BackgroundWarmup, driven by the test (a consistency check of
+attributes as app.distribution.warmup.BackgroundWarmup, driven by the test (a consistency check of
 the gate's logic, not of the processes: tests/test_warmup_*.py hold those).
 """
 

@@ -1,6 +1,6 @@
 """``python -m app warmup`` on worker processes (issue 33): the order and spread of its steps,
 the stamp that says the cache is warm, what an interrupted or failing warm-up leaves, the
-JSON progress lines, :class:`app.tools.warmup.BackgroundWarmup`, and numba's cache when two
+JSON progress lines, :class:`app.distribution.warmup.BackgroundWarmup`, and numba's cache when two
 processes save one kernel at once.
 
 The runs here take only the tests' own cheap steps (``tests/warmup_steps.py``, chosen with
@@ -21,14 +21,14 @@ from pathlib import Path
 
 import pytest
 
-from app.tools import warm_stamp, warmup, warmup_pool
+from app.distribution import warm_stamp, warmup, warmup_pool
 from tests.conftest import ROOT
 
 EXTRA = ["--extra-steps", "tests.warmup_steps:steps"]
 
 
 def _command(stamp: Path, *only: str, jobs: int = 2, as_json: bool = True) -> list[str]:
-    command = [sys.executable, "-m", "app.tools.warmup", *EXTRA, "--stamp", str(stamp),
+    command = [sys.executable, "-m", "app.distribution.warmup", *EXTRA, "--stamp", str(stamp),
                "--jobs", str(jobs)]
     for text in only:
         command += ["--only", text]
@@ -243,7 +243,7 @@ def test_the_warm_up_ends_when_the_window_that_started_it_is_killed(tmp_path):
     stamp = tmp_path / "warm.json"
     starter = textwrap.dedent(f"""
         import sys, time
-        from app.tools import warmup
+        from app.distribution import warmup
         run = warmup.BackgroundWarmup(jobs=1, log_path={str(tmp_path / "warmup.log")!r},
             extra_args={[*EXTRA, "--stamp", str(stamp), "--only", "test: waits"]!r})
         print(run._process.pid, flush=True)

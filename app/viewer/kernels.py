@@ -2,8 +2,8 @@
 
 On a fresh clone (or after a pull that changed a kernel) numba's disk cache is cold. The window
 does not compile in its own process then: it starts the warm-up (``python -m app warmup``) in
-worker processes, one per core (:class:`app.tools.warmup.BackgroundWarmup`), shows its progress
-in the panel, and renders each frame under :func:`gated`:
+worker processes, one per core (:class:`app.distribution.warmup.BackgroundWarmup`), shows its
+progress in the panel, and renders each frame under :func:`gated`:
 
 - the frame is first tried with compiling refused on the render thread: numba announces each
   compile (a cache miss) with a ``numba:compile`` event before it starts, and the listener
@@ -75,7 +75,7 @@ STAGES = ("its first picture", "every setting of its file", "the whole warm-up")
 
 def gated(run, warmup, scene_source: str | None, poll: float = 0.25):
     """``run(control)`` that draws at once when its kernels are cached and otherwise waits for
-    ``warmup`` (a :class:`app.tools.warmup.BackgroundWarmup`) as the module says."""
+    ``warmup`` (a :class:`app.distribution.warmup.BackgroundWarmup`) as the module says."""
 
     def run_gated(control=None):
         stage = 0

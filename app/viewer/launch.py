@@ -188,12 +188,12 @@ def prime_kernels(state) -> threading.Thread | None:
     settings = state.settings()
     if settings.shading == "wireframe" or not state.scene.triangle_count or not state.renderable:
         return None
-    from app.tools.warm_stamp import is_warm
+    from app.distribution.warm_stamp import is_warm
     if not is_warm():
         return None
 
     def prime():
-        from app.tools.warmup import quick
+        from app.distribution.warmup import quick
         from app.viewer.state import render
         from core.context import RenderContext
         try:
@@ -220,7 +220,7 @@ def prime_while_loading(source: str, renderer: str | None) -> threading.Thread |
     settings = _peeked_settings(source, renderer)
     if settings is None:
         return None
-    from app.tools.warm_stamp import is_warm
+    from app.distribution.warm_stamp import is_warm
     if not is_warm():
         return None                       # a cold cache: the window's worker processes fill it
     # numba's modules import one another: imported on two threads at once (this one and the
@@ -228,7 +228,7 @@ def prime_while_loading(source: str, renderer: str | None) -> threading.Thread |
     # viewer exits ("partially initialized module 'numba.core.event'", seen once in CI). So
     # numba, and what the thread imports, come in here before it starts.
     import core.jit  # noqa: F401
-    from app.tools.warmup import quick
+    from app.distribution.warmup import quick
     from app.viewer.state import render
     from core.context import RenderContext
     from core.scene.generators import sphere_torus

@@ -9,7 +9,7 @@ the window the picture takes what the panel leaves. Frames are rendered off the 
 (:class:`app.viewer.worker.RenderWorker`): the window keeps drawing, says what is being
 rendered and for how long (and whether kernels are being compiled), and a newer request
 supersedes a stale one. After the first frame the worker loads every other kernel in the
-background (``app/tools/warmup.py``), so a later change of mode does not stall.
+background (``app/distribution/warmup.py``), so a later change of mode does not stall.
 
 Input (the course's Assignment #1 controls, plus shading from Assignment #3):
 
@@ -584,7 +584,7 @@ class ViewerWindow:
     def _start_kernel_processes(self) -> None:
         """A cold kernel cache: compile it in worker processes, and gate the frames on it
         (app/viewer/kernels.py); a warm one needs nothing."""
-        from app.tools.warmup import BackgroundWarmup, is_warm
+        from app.distribution.warmup import BackgroundWarmup, is_warm
         if is_warm():
             return
         from app.viewer.kernels import gated
@@ -616,7 +616,7 @@ class ViewerWindow:
         if self._warming or self.warmup is not None:
             return                        # worker processes compile them, not this one
         self._warming = True
-        from app.tools.warmup import steps
+        from app.distribution.warmup import steps
         self.worker.add_background(steps())
 
     def _log_since_start(self, what: str) -> None:

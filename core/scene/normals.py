@@ -23,7 +23,7 @@ Takes a mesh's world positions ``(V, 3)`` and triangles ``(T, 3)``; returns unit
 - :func:`vertex_normals`: what Gouraud and Phong shading use for a :class:`core.scene.Mesh`:
   the file's normals when it has them (normalised; a zero one is replaced by the computed
   normal), else the faces' average, after :func:`orient_consistently` for meshes that are not
-  closed. The GL oracle (``app/tools/reference_gl.py``) calls it too, so both draw with the same
+  closed. The GL oracle (``app/oracles/reference_gl.py``) calls it too, so both draw with the same
   normals.
 """
 

@@ -1,6 +1,6 @@
 """The bench's lean llvmpipe row: the cheapest honest OpenGL path to the same picture.
 
-The GLSL oracle (:mod:`app.tools.reference_gl`) is written to match our model exactly: every
+The GLSL oracle (:mod:`app.oracles.reference_gl`) is written to match our model exactly: every
 light of the scene in a loop, attenuation, two-sided lighting, the letterbox discard, flat
 shading through un-indexed corners. That costs llvmpipe time our pipeline does not spend,
 so a ratio against it flatters us. This row is what a GL programmer would write for speed:
@@ -126,7 +126,7 @@ class LeanGL:
                     program[name].value = value
 
     def draw(self, view, projection: str, shading: str) -> None:
-        from app.tools.reference_gl import clip_from_world, eye_of
+        from app.oracles.reference_gl import clip_from_world, eye_of
         program = self.programs[shading]
         ctx = self.ctx
         self.fbo.use()

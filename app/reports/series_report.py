@@ -1,8 +1,8 @@
 """Extra series of the error-against-time report, written alike: CSV, a Markdown table and a
 plot of RMSE against frame time (one colour per series, one marker per sample count).
 
-Used by the texture rows (:mod:`app.tools.texture_report`) and the ray-traced rows
-(:mod:`app.tools.raytrace_report`); each row is a dict with at least ``series``,
+Used by the texture rows (:mod:`app.reports.texture_report`) and the ray-traced rows
+(:mod:`app.reports.raytrace_report`); each row is a dict with at least ``series``,
 ``samples``, ``time_ms`` and ``rmse``.
 """
 

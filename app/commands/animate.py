@@ -4,24 +4,24 @@ Frames are rendered
 
 - in this process (the default; the particles step on from frame to frame),
 - with ``--workers N``, in this process and N - 1 local single-thread worker processes
-  (:class:`app.tools.cluster.LocalPool`, started once per job while this process renders
+  (:class:`app.commands.cluster.LocalPool`, started once per job while this process renders
   the first frames), or not at all when a prediction from two measurements (a frame's time
   here, the cores other processes left idle since the command started) says it would not
   win (:func:`predict`; the output says why), or
 - on a running Dask cluster (``--scheduler tcp://host:8786``; the workers need only this
   package: the scene file and every file it names travel with the job, content-addressed,
-  :mod:`app.tools.bundle`).
+  :mod:`app.distribution.bundle`).
 
 On a cluster the frames go out in contiguous runs, long first and short at the end
 (:class:`Runs`), each with the particle state at its first frame
 (:mod:`core.animation.checkpoint`, from a simulation-only pass here), so no worker simulates
 from t = 0; a run that fails is retried by Dask (``--retries``). Frames come back as PNG bytes
 and pixels: the PNG is written, as it completes, into the frames folder, which makes a killed
-run resumable, and the pixels go to the MP4 encoder in order (:class:`~app.tools.movie_files.Movie`),
-so the movie is encoded while the frames are rendered (a GIF at the end): all on a writer
-thread beside the rendering (:class:`FrameWriter`; a frame rendered here is made into its PNG
-there too). The folder is
-removed after the movie (``--keep-frames`` keeps it). Progress and an ETA go to stderr.
+run resumable, and the pixels go to the MP4 encoder in order
+(:class:`~app.commands.movie_files.Movie`), so the movie is encoded while the frames are
+rendered (a GIF at the end): all on a writer thread beside the rendering (:class:`FrameWriter`;
+a frame rendered here is made into its PNG there too). The folder is removed after the movie
+(``--keep-frames`` keeps it). Progress and an ETA go to stderr.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
-from app.tools.movie_files import (MOVIE_SUFFIXES, FolderError, Movie, clean_folder,
+from app.commands.movie_files import (MOVIE_SUFFIXES, FolderError, Movie, clean_folder,
                                    frame_png, frames_folder, movie_rate, out_problem,
                                    prepare_folder, write_frame)
 
@@ -278,7 +278,7 @@ def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tu
     """A worker's task: the contiguous ``frames`` of the job, the scene read from the bundle
     (unpacked once per worker), the simulations restored from ``checkpoint`` (their state at
     the first frame), so that nothing is simulated from t = 0."""
-    from app.tools.bundle import unpack
+    from app.distribution.bundle import unpack
     animation = _animation(str(unpack(bundle)), job.get("load_size"))
     if checkpoint is not None:
         from core.animation.checkpoint import restore_animation
@@ -419,7 +419,7 @@ def render_on_cluster(client, job, bundle, frames, on_frame, retries: int, anima
     picture drawn), two runs in flight a worker; hand each run's frames to ``on_frame`` as
     it completes. With ``here`` this process takes runs from the same queue too, looking at
     what came back between its frames."""
-    from app.tools.cluster import completed
+    from app.commands.cluster import completed
     shipped = client.scatter(bundle, broadcast=True, hash=False)
     runs = Runs(frames, workers + here)
     checkpoints = _Checkpoints(animation, job["fps"], job_shutter(job))
@@ -549,7 +549,7 @@ def render_frames(args, job, bundle, animation, todo, writer, progress,
     failure ``(frames, why)``. ``writer`` (:class:`FrameWriter`) takes the frames. ``since``
     (:func:`idle_mark`, taken when the command started) is where the idle cores are measured
     from."""
-    from app.tools import cluster
+    from app.commands import cluster
     failed: list = []
     on_frame = writer.put
     if args.scheduler:
@@ -581,7 +581,7 @@ def render_frames(args, job, bundle, animation, todo, writer, progress,
 
 def _render_on_scheduler(args, job, bundle, todo, on_frame, animation, failed) -> str:
     """All of ``todo`` on the cluster at --scheduler; says where it ran."""
-    from app.tools import cluster
+    from app.commands import cluster
     client = cluster.connect(args.scheduler)
     try:
         workers = max(1, len(client.scheduler_info().get("workers", {})))
@@ -613,7 +613,7 @@ def _render_beside_local_cluster(job, bundle, animation, todo, writer, retries, 
     """Start a local cluster of ``workers - 1`` and render here while it starts, then hand it
     what is left; says where the frames ran. ``measured``: (seconds a frame, idle cores,
     cores this process uses)."""
-    from app.tools import cluster
+    from app.commands import cluster
     seconds, idle, used = measured
     on_frame = writer.put
     here_s, there_s = predict(len(todo), seconds, workers, idle, used)
@@ -700,7 +700,7 @@ def main(args) -> int:
 
 def _refused(args, out: Path) -> int:
     """The exit status when --out or --scheduler cannot be used (said why), else 0."""
-    from app.tools import cluster
+    from app.commands import cluster
     refusal = out_problem(out, args.scene, args.force)
     if refusal:
         return _error(f"--out {args.out}: {refusal}", 2)
@@ -714,7 +714,7 @@ def _refused(args, out: Path) -> int:
 
 def _job_to_run(args, out: Path):
     """(job, bundle, animation) for the scene and the options, or an exit status (said why)."""
-    from app.tools.bundle import load_recorded
+    from app.distribution.bundle import load_recorded
     from core.animation.animation import Animation
     from core.animation.keys import animation_of
     from core.scene.view_numbers import ViewNumberError
@@ -758,7 +758,7 @@ def _frames_to_render(job, folder: Path, force: bool):
 def _render_and_write(args, job, bundle, animation, todo, folder, movie, progress, since):
     """Render ``todo``, each frame written to the folder (and the movie) as it comes; returns
     (failures, where they ran, seconds), or an exit status (said why)."""
-    from app.tools import cluster
+    from app.commands import cluster
     signature = job_hash(job)
 
     def write(k: int, data: bytes | None, rgb: np.ndarray) -> None:
@@ -834,13 +834,13 @@ def bench_animation(scenes=None, size=(500, 500), frames: int = 240, workers: in
                     repeats: int = 1) -> dict:
     """The whole command, timed as a user meets it: ``animate`` of ``frames`` frames of the
     fountain and the fly-around in one process and with ``--workers`` (cluster start
-    included), each in a fresh process (:mod:`app.tools.scaleout`)."""
-    from app.tools.scaleout import SCENES, compare
+    included), each in a fresh process (:mod:`app.commands.scaleout`)."""
+    from app.commands.scaleout import SCENES, compare
     from core.paths import ROOT
     return {"rows": [compare(ROOT / scene, frames, size, workers, repeats)
                      for scene in (scenes or SCENES)]}
 
 
 def format_animation(result: dict) -> str:
-    from app.tools.scaleout import format_row
+    from app.commands.scaleout import format_row
     return "\n".join(format_row(row) for row in result["rows"])

@@ -3,12 +3,12 @@
 The bench's scene (a UV sphere inside a tilted torus, ``core.scene.generators.sphere_torus``)
 at 100k and 1M triangles, each mesh with a procedural checker texture on its generator (u, v),
 500 x 500, Phong shading with trilinear filtering: ours through ``core.render.render`` (the
-``textured`` shader), llvmpipe through :class:`app.tools.texture_gl.TexturedPhongGL` (the same
+``textured`` shader), llvmpipe through :class:`app.oracles.texture_gl.TexturedPhongGL` (the same
 lighting GLSL as the bench's Phong, O_d from the same MIP chain). Median and min of the timed
 frames after warm-up; the mean difference of the two pictures says they drew the same thing.
 
 ``python -m app bench`` does not run it by default (it adds a minute); run
-``python -m app.tools.texture_bench [--sizes 100k,1M] [--frames 10]``.
+``python -m app.bench.texture_bench [--sizes 100k,1M] [--frames 10]``.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ def _times(draw, frames: int, warmup: int) -> list[float]:
 
 
 def run(sizes=(100_000, 1_000_000), frames: int = 10, warmup: int = 4, size=(500, 500)):
-    from app.tools.texture_gl import TexturedPhongGL
+    from app.oracles.texture_gl import TexturedPhongGL
     from core import render
     from core.settings import RenderSettings
     rows = []
@@ -75,7 +75,7 @@ def run(sizes=(100_000, 1_000_000), frames: int = 10, warmup: int = 4, size=(500
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m app.tools.texture_bench")
+    p = argparse.ArgumentParser(prog="python -m app.bench.texture_bench")
     p.add_argument("--sizes", default="100k,1M")
     p.add_argument("--frames", type=int, default=10)
     args = p.parse_args(argv)

@@ -57,7 +57,7 @@ def rows(size: int = 256, repeats: int = 3, progress=print) -> list[dict]:
 
 
 def write(out_dir: Path, size: int = 256, progress=print) -> list[Path]:
-    from app.tools.series_report import write as write_series
+    from app.reports.series_report import write as write_series
     data = [{"series": r["filter"], **r} for r in rows(size, progress=progress)]
     intro = (f"Texture filters on `scenes/texture_floor.toml` at {size} x {size}, against "
              f"{REFERENCE_SAMPLES} samples a pixel (bilinear); RMSE in 8-bit units.")

@@ -179,21 +179,21 @@ def main(args) -> int:
         print(f"error: cannot write the report into {out}: {error}", file=sys.stderr)
         return 2
     try:
-        from app.tools.mach_report import write as mach_bands
+        from app.reports.mach_report import write as mach_bands
         paths += tuple(mach_bands(out, progress=lambda line: print(line, file=sys.stderr,
                                                                      flush=True)))
     except OSError as error:
         print(f"error: cannot write the report into {out}: {error}", file=sys.stderr)
         return 2
     if config != accuracy.QUICK:     # the texture and ray-traced rows (the quick sweep has none)
-        from app.tools.raytrace_report import write as raytrace_rows
-        from app.tools.texture_report import write as texture_rows
+        from app.reports.raytrace_report import write as raytrace_rows
+        from app.reports.texture_report import write as texture_rows
         say = lambda line: print(line, file=sys.stderr, flush=True)  # noqa: E731
         paths += tuple(texture_rows(out, progress=say))
         paths += tuple(raytrace_rows(out, config.size, cache=config.cache, progress=say))
-        from app.tools.raytrace_report import write_adaptive          # adaptive supersampling
+        from app.reports.raytrace_report import write_adaptive          # adaptive supersampling
         paths += tuple(write_adaptive(out, progress=say))
-        from app.tools.volume_report import write as volume_rows
+        from app.reports.volume_report import write as volume_rows
         paths += tuple(volume_rows(out, progress=say))
     for line in accuracy.reading(points):
         print(line)

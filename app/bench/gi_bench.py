@@ -69,7 +69,7 @@ def pathtrace_rows(scene, size, spp: int) -> list:
     rows = [{"renderer": "ours (core.pathtrace)", "samples": width * height * spp,
              "seconds": ours, "samples_per_second": width * height * spp / ours,
              "bounces_per_path": stats["bounces"] / stats["paths"]}]
-    from app.tools import mitsuba_oracle
+    from app.oracles import mitsuba_oracle
     if mitsuba_oracle.available():
         _progress(f"pathtrace: Mitsuba 3 scalar_rgb, {width} x {height} at {spp} spp ...")
         mitsuba_oracle.render(scene, view, 16, 16, 1)                        # load, JIT

@@ -1,4 +1,4 @@
-"""The global-illumination report: ``python -m app.tools.gi_report --out docs/report``.
+"""The global-illumination report: ``python -m app.reports.gi_report --out docs/report``.
 
 Writes ``global_illumination.md``, ``.csv`` and ``.png`` into the folder:
 
@@ -102,7 +102,7 @@ def pathtrace_rows(scene, view, reference, mask) -> list[dict]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m app.tools.gi_report")
+    parser = argparse.ArgumentParser(prog="python -m app.reports.gi_report")
     parser.add_argument("--out", default="docs/report")
     args = parser.parse_args(argv)
     from core.pathtrace.compare import interior_mask, surface_ids
@@ -134,7 +134,7 @@ def _write(out: Path, ff, rad, pt) -> None:
             for r in rows:
                 w.writerow([name, json.dumps(r)])
     lines = ["# Global illumination: form factors, radiosity and the path tracer", "",
-             "Made by `python -m app.tools.gi_report` (issue 19). Times are wall seconds on "
+             "Made by `python -m app.reports.gi_report` (issue 19). Times are wall seconds on "
              "this 2-core machine, shared with other jobs.", "",
              "## Form factors against closed forms (Howell C-11, C-14, C-41)", "",
              "F from the source to the target, averaged over the source cut into small "

@@ -6,7 +6,7 @@ flat, Gouraud and Phong) two ways in the same run:
 - ours: the full CPU pipeline (``core.render.render``: normalize, cull, clip, project, scan-line
   z-buffer, shade) plus the upload the viewer does each frame (``app.viewer.blit.Blit.upload``, a
   ``texture.write`` into a moderngl texture; no readback);
-- llvmpipe: :class:`app.tools.reference_gl.GLRenderer` with the equivalent GLSL shaders, geometry
+- llvmpipe: :class:`app.oracles.reference_gl.GLRenderer` with the equivalent GLSL shaders, geometry
   uploaded once, each frame timed as draw + ``ctx.finish()`` (the readback is timed apart).
 
 Each case runs ``--warmup`` frames and then ``--frames`` timed ones (at least 20 by default);
@@ -242,7 +242,7 @@ def time_llvmpipe(renderer, projection: str, shading: str, frames: int, warmup: 
 
 
 def time_floor(floor, view, frames: int, warmup: int) -> dict:
-    """The bare numba Gouraud rasterizer (app.tools.floor): whole frames."""
+    """The bare numba Gouraud rasterizer (app.bench.floor): whole frames."""
     totals, cpu = [], []
     for k in range(warmup + frames):
         c0 = time.process_time()
@@ -284,7 +284,7 @@ t0 = time.perf_counter()
 from core.render import render
 from core.settings import RenderSettings
 t_import = time.perf_counter()
-from app.tools.bench import bench_scene
+from app.bench.bench import bench_scene
 scene = bench_scene(1000)
 t_scene = time.perf_counter()
 first = {}
@@ -438,7 +438,7 @@ def _stop_processes(*procs) -> None:
 
 def first_frame_scenes() -> dict:
     """``first_frame_time`` (warm cache) for every shipped scene file, by file name."""
-    from app.tools.warmup import shipped_scenes
+    from app.distribution.warmup import shipped_scenes
     return {path.name: first_frame_time(scene=str(path.relative_to(ROOT)))
             for path in shipped_scenes()}
 
@@ -446,7 +446,7 @@ def first_frame_scenes() -> dict:
 def depth_complexity(size, frames: int, warmup: int) -> dict:
     """The rasterizer on 1 and 100 full-screen layers of 10k triangles each (the cost of overdraw), front
     to back and back to front: median ms of ``rasterize`` and the ratio to one layer."""
-    from app.tools.depth_bench import time_layers
+    from app.bench.depth_bench import time_layers
     width, height = size
     one = time_layers(1, 10_000, width, height, True, frames, warmup)
     rows = {"1 layer": one}
@@ -588,12 +588,12 @@ def write_chart(rows: list[dict], path: Path) -> None:
 def run_cases(scenes: list, shadings: list[str], projection: str, size, frames: int, warmup: int,
               threads: bool = False) -> list[dict]:
     """Every (scene, shading) case: ours, the GLSL oracle on llvmpipe, the lean llvmpipe row
-    (one light, indexed, culled: app.tools.lean_gl) and, for a scene with lights and closed
-    meshes, the bare numba floor (app.tools.floor, Gouraud, one light), all in this run."""
+    (one light, indexed, culled: app.oracles.lean_gl) and, for a scene with lights and closed
+    meshes, the bare numba floor (app.bench.floor, Gouraud, one light), all in this run."""
     from app.viewer.blit import Blit
-    from app.tools.floor import Floor
-    from app.tools.lean_gl import MODES as LEAN_MODES, LeanGL
-    from app.tools.reference_gl import GLRenderer
+    from app.bench.floor import Floor
+    from app.oracles.lean_gl import MODES as LEAN_MODES, LeanGL
+    from app.oracles.reference_gl import GLRenderer
 
     gl = GLRenderer(size)
     lean = LeanGL(size)
@@ -683,14 +683,14 @@ def _other_bench(args) -> int | None:
     if args.renderer == "raytrace":
         return raytrace_bench(args)
     if args.renderer == "volume":
-        from app.tools.volume_bench import run as volume_run
+        from app.bench.volume_bench import run as volume_run
         return volume_run(args)
     chosen = args.renderer.split(",")
     if any(name in PAINTERS for name in chosen):
-        from app.tools.painters_bench import run
+        from app.bench.painters_bench import run
         return run(args, chosen)
     if any(name in GI_RENDERERS for name in chosen):
-        from app.tools.gi_bench import main as gi_main
+        from app.bench.gi_bench import main as gi_main
         return gi_main(args)
     return None
 
@@ -723,13 +723,13 @@ def _animation_rows(args):
         return None
     _progress("animation: the fountain and the fly-around at 500 x 500 on 1 process and "
               "--workers 2 ...")
-    from app.tools.animate import bench_animation
+    from app.commands.animate import bench_animation
     return bench_animation(size=args.size)
 
 
 def _machine_info(load_before) -> dict:
     """What the numbers were measured on, the load before and after included."""
-    from app.tools.reference_gl import GLRenderer
+    from app.oracles.reference_gl import GLRenderer
     info = {"machine": platform.machine(), "cpus": os.cpu_count(), "python": platform.python_version(),
             "host": socket.gethostname(), "numpy": np.__version__,
             # Other processes on a 2-core machine change every number here: keep the load.
@@ -769,7 +769,7 @@ def _print_bench(args, report: dict, load_before) -> None:
         print()
         print(format_startup(startup))
     if animation:
-        from app.tools.animate import format_animation
+        from app.commands.animate import format_animation
         print()
         print(format_animation(animation))
 

@@ -15,8 +15,8 @@ texture filter when it has textures, so that no first picture the user asks for 
 (``tests/test_warmup_complete.py`` checks it from an empty kernel cache).
 
 The steps run in worker processes, one a core (``--jobs``), each taking the next step from
-one queue, the longest first by :data:`COSTS` (``app/tools/warmup_pool.py``). When every step
-has succeeded a stamp says the cache is warm (``app/tools/warm_stamp.py``: :func:`is_warm`).
+one queue, the longest first by :data:`COSTS` (``app/distribution/warmup_pool.py``). When every step
+has succeeded a stamp says the cache is warm (``app/distribution/warm_stamp.py``: :func:`is_warm`).
 ``--progress-json`` prints one JSON object a line instead of the table, and
 :class:`BackgroundWarmup` runs the whole thing as a subprocess for the window, so that the
 window opens at once and its kernels compile beside it.
@@ -35,7 +35,7 @@ import time
 from pathlib import Path
 from typing import Callable
 
-from app.tools.warm_stamp import is_warm  # noqa: F401  (the viewer's import)
+from app.distribution.warm_stamp import is_warm  # noqa: F401  (the viewer's import)
 
 SIZE = (64, 48)
 
@@ -67,7 +67,7 @@ def _batched_frame():
     classification on all cores."""
     import numpy as np
 
-    from app.tools.depth_bench import depth_layers
+    from app.bench.depth_bench import depth_layers
     from core.pipeline import clip_polygon, raster
     xy_z, inv_w, triangles = depth_layers(21, 10_000, *SIZE)   # (either order: same code)
     assert len(triangles) >= raster.BATCH_FROM
@@ -570,7 +570,7 @@ def main(args=None) -> int:
 
 def _stamp_to_write(options) -> Path | None:
     """The stamp this run writes when all its steps succeed (another version's is removed)."""
-    from app.tools import warm_stamp
+    from app.distribution import warm_stamp
     # A run of some steps (--only) says nothing about the whole cache: it writes a stamp only
     # where it is told to (the tests), never the real one.
     partial = bool(options.only or options.extra_steps)
@@ -582,7 +582,7 @@ def _stamp_to_write(options) -> Path | None:
 
 def _steps_to_run(options) -> tuple[list, dict, str | None]:
     """(the steps in the order they run, the scenes each warms, the file the window opens)."""
-    from app.tools import warmup_pool
+    from app.distribution import warmup_pool
     listed = [label for label, _ in warmup_pool.load_steps(options.extra_steps)]
     if options.only:
         listed = [label for label in listed if any(text in label for text in options.only)]
@@ -601,14 +601,14 @@ def _steps_to_run(options) -> tuple[list, dict, str | None]:
 
 def _job_count(options, todo) -> int:
     """--jobs (by default the pool's), never more than there are steps."""
-    from app.tools import warmup_pool
+    from app.distribution import warmup_pool
     jobs = options.jobs if options.jobs and options.jobs > 0 else warmup_pool.default_jobs()
     return max(1, min(jobs, len(todo) or 1))
 
 
 def _run_steps(options, todo, jobs, first, report):
     """Run the steps on the workers: (outcomes, seconds), or None when interrupted (said)."""
-    from app.tools import warmup_pool
+    from app.distribution import warmup_pool
     start = time.perf_counter()
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     if options.until_stdin_closes:
@@ -634,7 +634,7 @@ def _run_steps(options, todo, jobs, first, report):
 
 def _finish(outcomes, seconds: float, stamp, jobs: int, report) -> int:
     """Write or remove the stamp, and say how the run went: 0 when every step succeeded."""
-    from app.tools import warm_stamp
+    from app.distribution import warm_stamp
     n = report.total
     failed = [outcome for outcome in outcomes if outcome.error is not None]
     if stamp is not None:
@@ -668,7 +668,7 @@ class BackgroundWarmup:
     def __init__(self, first_scene=None, jobs: int | None = None,
                  on_event: Callable[[], object] | None = None, log_path=None,
                  extra_args=()):
-        from app.tools.warm_stamp import stamp_path
+        from app.distribution.warm_stamp import stamp_path
         from core.paths import ROOT
         self._lock = threading.Condition()
         self._total: int | None = None
@@ -681,7 +681,7 @@ class BackgroundWarmup:
         self._ok: bool | None = None
         self._on_event = on_event
         self._scenes_dir = (ROOT / "scenes").resolve()
-        command = [sys.executable, "-m", "app.tools.warmup", "--progress-json",
+        command = [sys.executable, "-m", "app.distribution.warmup", "--progress-json",
                    "--until-stdin-closes"]
         if first_scene is not None:
             command += ["--first", str(first_scene)]

@@ -64,7 +64,7 @@ def rows(size: int, repeats: int = 3, cache=None, progress=print) -> list[dict]:
 
 
 def write(out_dir: Path, size: int, cache=None, progress=print) -> list[Path]:
-    from app.tools.series_report import write as write_series
+    from app.reports.series_report import write as write_series
     data = rows(size, cache=cache, progress=progress)
     intro = (f"The Whitted ray tracer (shadows off) on the level-{LEVEL} sphere and torus at "
              f"{size} x {size}, against the exact images (16 samples a pixel); RMSE and max in "
@@ -128,7 +128,7 @@ def adaptive_rows(size: int = ADAPTIVE_SIZE, progress=print) -> list[dict]:
 
 
 def write_adaptive(out_dir: Path, size: int = ADAPTIVE_SIZE, progress=print) -> list[Path]:
-    from app.tools.series_report import write as write_series
+    from app.reports.series_report import write as write_series
     data = adaptive_rows(size, progress)
     intro = (f"Adaptive supersampling (Whitted 1980: rays at the pixels' corners, a square split "
              f"in four where its corners differ by more than the threshold on 0-1) against the "

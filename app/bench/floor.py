@@ -6,7 +6,7 @@ bench scene lies inside the view volume), no visibility buffer, no deferred shad
 buffers. Per frame:
 
 1. one compiled pass over every vertex (all cores): world → device with the single matrix
-   ``L · M · N`` of the GL oracle (:func:`app.tools.reference_gl.clip_from_world`), the divide
+   ``L · M · N`` of the GL oracle (:func:`app.oracles.reference_gl.clip_from_world`), the divide
    by W, and the one-light model (diffuse + (R·V)^n by repeated squaring) → an RGB per vertex;
 2. clear colour and depth;
 3. the triangles in order on one core (a bare loop: no setup pass, no binning), back faces
@@ -158,7 +158,7 @@ class Floor:
 
     def frame(self, view) -> np.ndarray:
         """One frame of ``view``: ``(H, W)`` uint32 RGBA words, row 0 at the top."""
-        from app.tools.reference_gl import clip_from_world
+        from app.oracles.reference_gl import clip_from_world
         from core.camera.view import eye_from_view
         width, height = self.size
         # GL clip space → device pixels with depth larger = nearer, as the z-buffer keeps it

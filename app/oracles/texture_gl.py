@@ -1,7 +1,7 @@
 """The texture oracle: a textured mesh drawn by real OpenGL (Mesa llvmpipe through EGL).
 
 Used only by the tests: the same triangles, the same (u, v) per vertex, the same
-world-to-clip matrix as the CPU core (:func:`app.tools.reference_gl.clip_from_world`) and the
+world-to-clip matrix as the CPU core (:func:`app.oracles.reference_gl.clip_from_world`) and the
 same texels — every MIP level of :class:`core.texture.Texture` uploaded as it is (RGBA32F, so
 neither side rounds texels to 8 bits) — with ``GL_NEAREST``, ``GL_LINEAR`` or
 ``GL_LINEAR_MIPMAP_LINEAR`` and the texture's wrap mode. The fragment shader writes the
@@ -13,7 +13,7 @@ from __future__ import annotations
 import moderngl
 import numpy as np
 
-from app.tools.reference_gl import clip_from_world
+from app.oracles.reference_gl import clip_from_world
 from core.texture import Texture
 
 _VERTEX = """
@@ -111,11 +111,11 @@ class TextureGL:
 
 
 # --------------------------------------------------------------------------------------------
-# Textured Phong in GLSL, for the bench: the project's lighting GLSL (app/tools/reference_gl.py)
+# Textured Phong in GLSL, for the bench: the project's lighting GLSL (app/oracles/reference_gl.py)
 # with O_d from the texture (trilinear, our MIP chain, sRGB encoded back as our shader does).
 
 def _textured_phong_program(ctx):
-    from app.tools.reference_gl import _DISCARD_GLSL, _LIGHTING_GLSL
+    from app.oracles.reference_gl import _DISCARD_GLSL, _LIGHTING_GLSL
     lighting = _LIGHTING_GLSL.replace("uniform vec3 od;", "vec3 od;     // from the texture")
     vertex = """
 #version 330
@@ -160,7 +160,7 @@ class TexturedPhongGL:
     with GL_LINEAR_MIPMAP_LINEAR; geometry and textures uploaded once (:meth:`load`)."""
 
     def __init__(self, size: tuple[int, int]) -> None:
-        from app.tools.reference_gl import GLRenderer
+        from app.oracles.reference_gl import GLRenderer
         self.gl = GLRenderer(size)            # its context, framebuffer and uniform setters
         self.program = _textured_phong_program(self.gl.ctx)
         self._objects: list = []
@@ -192,7 +192,7 @@ class TexturedPhongGL:
             self._draws.append((mesh, vao, tex))
 
     def draw(self, view, projection: str) -> None:
-        from app.tools.reference_gl import clip_from_world, viewport_rect
+        from app.oracles.reference_gl import clip_from_world, viewport_rect
         gl, ctx, program = self.gl, self.gl.ctx, self.program
         gl.fbo.use()
         ctx.viewport = (0, 0, *gl.size)

@@ -4,7 +4,7 @@ CPU time the runs used, the load average before each (other processes on a small
 change every number here), what ``--workers`` decided, and whether the frames are identical.
 The two commands alternate, ``--repeats`` times each; the row shows the medians.
 
-``python -m app.tools.scaleout [SCENE ...] [--frames 240] [--size 500x500] [--workers 2]
+``python -m app.commands.scaleout [SCENE ...] [--frames 240] [--size 500x500] [--workers 2]
 [--repeats 3]``
 """
 
@@ -93,7 +93,7 @@ def main(argv=None) -> int:
     import argparse
     import json
 
-    p = argparse.ArgumentParser(prog="python -m app.tools.scaleout")
+    p = argparse.ArgumentParser(prog="python -m app.commands.scaleout")
     p.add_argument("scenes", nargs="*", default=list(SCENES))
     p.add_argument("--frames", type=int, default=240)
     p.add_argument("--size", type=lambda t: tuple(int(x) for x in t.lower().split("x")),

@@ -61,7 +61,7 @@ def _cases():
     chord = 2 * np.sqrt(np.clip(r * r - miss2, 0.0, None))
     inside = np.sqrt(miss2) < r - 3 * spacing[0]
     exact = 255.0 * c * (1 - np.exp(-sigma * chord))
-    from app.tools.volume_bench import TRANSFER
+    from app.bench.volume_bench import TRANSFER
     head, head_spacing = generators.shepp_logan(96)
     phantom = Volume(values=head, spacing=head_spacing, transfer=TRANSFER)
     return [("sphere, exact", sphere, rays, lambda: (exact, inside)),
@@ -84,7 +84,7 @@ def rows(progress=print) -> list[dict]:
 
 
 def write(out_dir: Path, progress=print) -> list[Path]:
-    from app.tools.series_report import write as write_series
+    from app.reports.series_report import write as write_series
     data = rows(progress)
     intro = (f"The ray marcher's error against its step (in samples) at {SIZE} x {SIZE}: a "
              f"homogeneous sphere against its closed form, the lit phantom against a step of "

@@ -1,0 +1,1 @@
+"""The bodies of ``python -m app`` commands: animate, inspect, radiosity, stability, scale-out."""

@@ -1,0 +1,1 @@
+"""What ships and readies the program: the kernel warm-up, its stamp, and the job bundle."""

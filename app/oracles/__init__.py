@@ -1,0 +1,1 @@
+"""Outside references the tests and benches check us against: OpenGL (llvmpipe) and Mitsuba 3."""

@@ -1,0 +1,1 @@
+"""The reports: error against run time, written as CSV, Markdown tables and plots."""

@@ -1,1 +1,0 @@
-"""Command-line tools beside the viewer: bench, report, stability, and the GL oracle they use."""
