@@ -163,7 +163,7 @@ APP_IMPORTS = {
     "app.bench": {"app.oracles", "app.commands", "app.distribution", "app.viewer"},
     "app.commands": {"app", "app.oracles", "app.distribution", "app.viewer"},
     "app.distribution": {"app.bench", "app.viewer"},   # the warm-up compiles their kernels
-    "app.viewer": {"app", "app.distribution", "app.commands"},   # warm-up; the OpenGL compare
+    "app.viewer": {"app", "app.distribution", "app.oracles"},    # warm-up; the OpenGL compare
 }
 
 

@@ -149,31 +149,8 @@ def cpu_reference(scene, view, settings):
     return frame.color.copy(), None
 
 
-GL_SHADINGS = ("flat", "gouraud", "phong")
-
-
 def opengl_reference(scene, view, settings):
-    """The same view drawn by real OpenGL (app/oracles/reference_gl.py), or (None, why)."""
-    if settings.shading not in GL_SHADINGS:
-        return None, (f"the OpenGL oracle draws {', '.join(GL_SHADINGS)} shading, not "
-                      f"{settings.shading}")
-    from core.texture.shaders import shading_for
-    if shading_for(scene, settings.shading) != settings.shading:
-        return None, ("the OpenGL oracle (app/oracles/reference_gl.py) draws no textures, and "
-                      f"{scene.name} has textured materials")
-    if settings.renderer != "zbuffer":
-        return None, (f"the OpenGL oracle draws what the z-buffer draws; this frame is "
-                      f"{settings.renderer}")
-    mode = settings.shading
-    if mode == "gouraud" and settings.rasterizer == "scanline":
-        mode = "gouraud_linear"
-    try:
-        from app.oracles.reference_gl import GLRenderer
-        gl = GLRenderer(settings.size)
-    except Exception as error:                      # no EGL, no llvmpipe: say so
-        return None, f"OpenGL is not available here ({type(error).__name__}: {error})"
-    try:
-        gl.load(scene)
-        return gl.render(view, settings.projection, mode), None
-    finally:
-        gl.release()
+    """The same view drawn by real OpenGL, or (None, why): app.oracles.reference_gl's,
+    imported when asked (moderngl is not loaded for the other commands)."""
+    from app.oracles.reference_gl import opengl_reference as reference
+    return reference(scene, view, settings)

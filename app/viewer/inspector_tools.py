@@ -254,7 +254,7 @@ class InspectorTools:
 
     # -- the OpenGL comparison ---------------------------------------------------------------
     def compare_opengl(self, how: str) -> None:
-        from app.commands.inspector import opengl_reference
+        from app.oracles.reference_gl import opengl_reference
         from core.inspect import NotInspectable
         from core.inspect.compare import compare, heat_map
         s = self.state
