@@ -19,3 +19,11 @@ def load_or_say(source: str, size=None, crease_angle=None):
     for message in scene.messages:
         print(f"warning: {message}", file=sys.stderr)
     return scene
+
+
+def shipped_scenes() -> list:
+    """The scene files in ``scenes/`` that the window opens (not the ``.views`` lists)."""
+    from core.paths import ROOT
+    from core.scene.formats import MESH_EXTENSIONS
+    kinds = {".toml", ".tri", *MESH_EXTENSIONS}
+    return sorted(p for p in (ROOT / "scenes").iterdir() if p.suffix.lower() in kinds)

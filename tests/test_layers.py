@@ -160,9 +160,9 @@ APP_PACKAGES = ("commands", "bench", "oracles", "reports", "distribution", "view
 APP_IMPORTS = {
     "app.oracles": set(),
     "app.reports": {"app.bench", "app.oracles"},
-    "app.bench": {"app.oracles", "app.commands", "app.distribution", "app.viewer"},
+    "app.bench": {"app", "app.oracles", "app.commands", "app.viewer"},
     "app.commands": {"app", "app.oracles", "app.distribution", "app.viewer"},
-    "app.distribution": {"app.bench", "app.viewer"},   # the warm-up compiles their kernels
+    "app.distribution": {"app", "app.bench", "app.viewer"},   # the warm-up compiles their kernels
     "app.viewer": {"app", "app.distribution", "app.oracles"},    # warm-up; the OpenGL compare
 }
 

@@ -438,7 +438,7 @@ def _stop_processes(*procs) -> None:
 
 def first_frame_scenes() -> dict:
     """``first_frame_time`` (warm cache) for every shipped scene file, by file name."""
-    from app.distribution.warmup import shipped_scenes
+    from app.loading import shipped_scenes
     return {path.name: first_frame_time(scene=str(path.relative_to(ROOT)))
             for path in shipped_scenes()}
 

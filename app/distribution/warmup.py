@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Callable
 
 from app.distribution.warm_stamp import is_warm  # noqa: F401  (the viewer's import)
+from app.loading import shipped_scenes  # noqa: F401  (tests and the smoke set read it here)
 
 SIZE = (64, 48)
 
@@ -226,14 +227,6 @@ def _other_clippers() -> None:
             settings = RenderSettings.for_scene(scene, size=SIZE, shading=shading,
                                                 clipper=clipper)
             render(scene, scene.views[0], settings)
-
-
-def shipped_scenes() -> list:
-    """The scene files in ``scenes/`` that the window opens (not the ``.views`` lists)."""
-    from core.paths import ROOT
-    from core.scene.formats import MESH_EXTENSIONS
-    kinds = {".toml", ".tri", *MESH_EXTENSIONS}
-    return sorted(p for p in (ROOT / "scenes").iterdir() if p.suffix.lower() in kinds)
 
 
 def scene_jobs(path, size=SIZE):
