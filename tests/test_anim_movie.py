@@ -141,7 +141,10 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
                  "--duration", "5"]) == 0
     resumed, clean_movie = decoded(out), decoded(again)
     assert len(resumed) == len(clean_movie) == len(frames(clean)) == 60
-    assert all(np.array_equal(x, y) for x, y in zip(resumed, clean_movie))
+    differ = [(k, int(np.abs(x.astype(int) - y).max()), int(np.count_nonzero(x != y)))
+              for k, (x, y) in enumerate(zip(resumed, clean_movie)) if not np.array_equal(x, y)]
+    # (frame, largest difference, values different): which frames a failure is about
+    assert differ == [], (f"killed after {done_before} frames", differ)
 
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):
