@@ -103,3 +103,14 @@ def test_the_row_profile_is_the_luma_of_each_pixel_of_the_row():
     assert row_profile(color, 1) == pytest.approx([76.245, 149.685, 0.299 * 10 + 0.587 * 20
                                                    + 0.114 * 30], abs=1e-3)
     assert row_profile(color, 0).tolist() == [0.0, 0.0, 0.0]
+
+
+def test_the_aliasing_view_is_not_drawn_for_a_ray_tracer_on_the_ui_thread():
+    from app.viewer.inspector_tools import InspectorTools
+    from app.viewer.state import ViewerState
+    state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(40, 30))
+    state.set_renderer("raytrace")
+    assert state.update()
+    tools = InspectorTools(state)
+    tools.choose_buffer("aliasing", "test")
+    assert tools.buffer == "picture" and tools.overlay is None

@@ -36,6 +36,8 @@ ALIASING = "aliasing"
 ALIASED = {"samples": 1, "pixel_filter": "box", "filter_radius": None, "antialias_lines": False}
 ANTIALIASED = {"samples": 16, "pixel_filter": "mitchell", "filter_radius": None,
                "antialias_lines": True}
+# Those whose 16-sample frame costs about 16 of their frames (the others trace rays per sample).
+RASTERIZING = ("zbuffer", "scanline", "bsp", "depth-sort")
 
 
 class InspectorTools:
@@ -221,6 +223,10 @@ class InspectorTools:
         the middle column, for the loupe to show both."""
         from core.render import render
         scene, view, settings = self._drawn()
+        if settings.renderer not in RASTERIZING:     # 16 rays a pixel: seconds on this thread
+            log.info("action: %s -> buffer view %s: drawn for the rasterizing renderers only "
+                     "(%s), not %s", how, ALIASING, ", ".join(RASTERIZING), settings.renderer)
+            return False
         try:
             halves = [render(scene, view, dataclasses.replace(settings, **how_drawn),
                              self.context()).rgbx for how_drawn in (ALIASED, ANTIALIASED)]
