@@ -78,7 +78,7 @@ def test_the_window_s_tools_draw_the_ids_off_the_ui_thread_once_per_frame():
 
 def test_the_aliasing_view_is_the_aliased_frame_left_and_the_antialiased_right():
     import dataclasses
-    from app.viewer.inspector_tools import ALIASED, ANTIALIASED, InspectorTools
+    from app.viewer.inspector_tools import ALIASED, ANTIALIASED_LINES, InspectorTools
     from app.viewer.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "house.toml", size=(90, 60))     # the wireframe
     assert state.update()
@@ -87,13 +87,15 @@ def test_the_aliasing_view_is_the_aliased_frame_left_and_the_antialiased_right()
     assert tools.buffer == "aliasing"
     view, settings = state.view, state.settings()
     aliased = render(state.scene, view, dataclasses.replace(settings, **ALIASED)).color
-    smooth = render(state.scene, view, dataclasses.replace(settings, **ANTIALIASED)).color
+    smooth = render(state.scene, view, dataclasses.replace(settings, **ANTIALIASED_LINES)).color
     shown = tools.picture(state.frame)[:, :, :3]
     assert np.array_equal(shown[:, :45], aliased[:, :45])
     assert np.array_equal(shown[:, 45:], smooth[:, 45:])
     # midpoint lines are one colour on the background; Wu's weigh each pixel by coverage
     assert len(np.unique(aliased.reshape(-1, 3), axis=0)) <= 3
     assert len(np.unique(smooth.reshape(-1, 3), axis=0)) > 20
+    # the same ink: Wu's line spreads each column's one pixel over two (within 3 %)
+    assert smooth[:, 45:].sum() == pytest.approx(aliased[:, 45:].sum(), rel=0.03)
 
 
 def test_the_row_profile_is_the_luma_of_each_pixel_of_the_row():
@@ -114,3 +116,18 @@ def test_the_aliasing_view_is_not_drawn_for_a_ray_tracer_on_the_ui_thread():
     tools = InspectorTools(state)
     tools.choose_buffer("aliasing", "test")
     assert tools.buffer == "picture" and tools.overlay is None
+
+
+def test_a_filled_scene_s_antialiased_half_is_16_samples_through_mitchell():
+    import dataclasses
+    from app.viewer.inspector_tools import ANTIALIASED, InspectorTools
+    from app.viewer.state import ViewerState
+    state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(60, 40))
+    assert state.update()
+    tools = InspectorTools(state)
+    tools.choose_buffer("aliasing", "test")
+    smooth = render(state.scene, state.view,
+                    dataclasses.replace(state.settings(), **ANTIALIASED)).color
+    shown = tools.picture(state.frame)[:, :, :3]
+    assert np.array_equal(shown[:, 30:], smooth[:, 30:])
+    assert np.array_equal(shown[:, :30], state.frame.color[:, :30])   # the frame: 1 sample

@@ -31,11 +31,14 @@ PICTURE = "picture"
 # 74k-triangle bunny, median of 7, beside its 16 ms frame), on the picker's thread.
 MAX_PICKED = 100_000
 # The aliasing buffer view: the same frame aliased (left) and antialiased (right): 16
-# samples a pixel through the Mitchell-Netravali filter, Wu's lines for a wireframe.
+# samples a pixel through the Mitchell-Netravali filter, or Wu's lines for a wireframe.
 ALIASING = "aliasing"
 ALIASED = {"samples": 1, "pixel_filter": "box", "filter_radius": None, "antialias_lines": False}
 ANTIALIASED = {"samples": 16, "pixel_filter": "mitchell", "filter_radius": None,
                "antialias_lines": True}
+# A wireframe's lines are antialiased by Wu's coverage at one sample a pixel: supersampled,
+# the renderer draws them one sample wide, a quarter of their ink at 16 samples.
+ANTIALIASED_LINES = {**ALIASED, "antialias_lines": True}
 # Those whose 16-sample frame costs about 16 of their frames (the others trace rays per sample).
 RASTERIZING = ("zbuffer", "scanline", "bsp", "depth-sort")
 
@@ -228,8 +231,9 @@ class InspectorTools:
                      "(%s), not %s", how, ALIASING, ", ".join(RASTERIZING), settings.renderer)
             return False
         try:
+            smooth = ANTIALIASED_LINES if settings.shading == "wireframe" else ANTIALIASED
             halves = [render(scene, view, dataclasses.replace(settings, **how_drawn),
-                             self.context()).rgbx for how_drawn in (ALIASED, ANTIALIASED)]
+                             self.context()).rgbx for how_drawn in (ALIASED, smooth)]
         except ValueError as error:
             log.info("action: %s -> buffer view %s: %s", how, ALIASING, error)
             return False
