@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from core.registry import Renderer, get_renderer, load
 from core.scene.model import Scene
 from core.settings import SHADINGS
 
@@ -25,7 +26,7 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
          rasterizer: str = "edge", texture_filter: str = "trilinear",
          renderer: str = "zbuffer", transparency: str | None = None) -> list[Stage]:
     """The stages for ``scene`` drawn with ``projection`` and ``shading``, in the order the
-    renderer runs them (``core/render.py``, ``core/renderers/zbuffer.py``); ``keep_aspect``,
+    renderer runs them (``core/render.py``, ``core/renderers/zbuffer/draw.py``); ``keep_aspect``,
     ``rasterizer`` and ``transparency`` as in :class:`core.settings.RenderSettings`
     (``transparency`` None: what the scene asks for, else what it needs)."""
     if shading not in SHADINGS:
@@ -35,14 +36,22 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
     stages = (_normal_and_lighting_stages(scene, shading, solid, triangle_stage)
               + _drawing_stages(scene, projection, shading, keep_aspect, rasterizer,
                                 texture_filter, solid, triangle_stage))
-    if renderer in PAINTERS:
-        _painter_stages(stages, renderer, triangle_stage)
-    if renderer == "scanline":
-        _scanline_stages(stages, triangle_stage)
+    entry = _entry(renderer)
+    if entry is not None and entry.plan_stages:      # the renderer's own stages, in place
+        load(entry.plan_stages)(stages, triangle_stage)
     if shading == "depth":
         _depth_shading_stages(stages, solid)
     stages.append(_transparency_stage(scene, solid, renderer, transparency))
     return stages
+
+
+def _entry(renderer: str) -> Renderer | None:
+    """The registry's entry of ``renderer`` (None for a name not registered: the plan of
+    the z-buffer's stages alone)."""
+    try:
+        return get_renderer(renderer)
+    except ValueError:
+        return None
 
 
 def _stage(name: str, runs: bool, why: str, why_not: str) -> Stage:
@@ -123,7 +132,6 @@ def _drawing_stages(scene: Scene, projection: str, shading: str, keep_aspect: bo
 
 def _transparency_stage(scene, solid, renderer, transparency) -> Stage:
     """Whether k_t > 0 is laid over the opaque picture, and why (core.effects.transparency)."""
-    from core.registry import get_renderer
     from core.settings import needed_transparency
     clear = [m.name or "a mesh" for m in scene.meshes if m.material.kt > 0]
     if transparency is None:
@@ -133,10 +141,7 @@ def _transparency_stage(scene, solid, renderer, transparency) -> Stage:
         return Stage(name, False, "no material has k_t > 0")
     if not solid:
         return Stage(name, False, "no triangles are drawn")
-    try:
-        entry = get_renderer(renderer)
-    except ValueError:
-        entry = None
+    entry = _entry(renderer)
     if entry is not None and entry.recursive:
         return Stage(name, False, f"{renderer} refracts through k_t > 0 itself")
     if entry is not None and not entry.transparency:
@@ -164,45 +169,6 @@ def _depth_shading_stages(stages: list, solid: bool) -> None:
     stages.insert(at, Stage("depth shading", solid,
                             "each pixel's height (or eye distance) through a colour map"
                             if solid else "no triangles are drawn"))
-
-
-# The painter's renderers find an order instead of testing depth per pixel.
-PAINTERS = {
-    "bsp": ("BSP tree", "clip triangles",
-            "built once per scene in world space (spanning triangles split), walked back to "
-            "front from the eye"),
-    "depth-sort": ("depth sort", "project",
-                   "Newell, Newell and Sancha: sorted by farthest z, overlap tests in order, "
-                   "moves and splits until no polygon hides one painted before it"),
-}
-
-
-def _painter_stages(stages: list, renderer: str, triangle_stage) -> None:
-    """Put the painter's ordering stage in place and say how it paints."""
-    name, after, why = PAINTERS[renderer]
-    at = next(i for i, s in enumerate(stages) if s.name == after)
-    at += 1 if renderer == "depth-sort" else 0         # the BSP order is known before clipping
-    stages.insert(at, triangle_stage(name, True, why))
-    for i, s in enumerate(stages):
-        if s.name == "depth buffer" and s.runs:
-            stages[i] = Stage(s.name, True, "the rasterizer's depth holds each triangle's paint "
-                                            "rank: the later painted covers the earlier")
-
-
-def _scanline_stages(stages: list, triangle_stage) -> None:
-    """Watkins' algorithm decides visibility span by span: no depth test per pixel."""
-    for i, s in enumerate(stages):
-        if s.name == "depth buffer":
-            stages[i] = triangle_stage(s.name, s.runs, "not read to decide visibility: each "
-                                       "pixel gets its visible polygon's depth, for what is "
-                                       "drawn after (transparency, depth cueing)")
-        if s.name == "z-buffer scan conversion":
-            stages[i] = triangle_stage(
-                "scan-line visible surface", s.runs,
-                "Watkins (FvDFH 15.6): edge table by first scan line, polygon table with "
-                "in/out flags, active edge table sorted in x; one polygon in a span needs no "
-                "depth, several are compared at the span's ends, and penetrating ones cut the "
-                "span where their depths cross; the z-buffer's fill rule")
 
 
 def _texture_stage(scene, shading, texture_filter):   # the texture system's own reasons

@@ -1,9 +1,19 @@
 """The registered renderers by name, and what each can do (read by everything that chooses one).
 
-A renderer is one module with a ``draw(scene, view, settings, frame, context, timer)`` and one
+A renderer is one package (its drawing, its pixel inspector, its plan stages) and one
 :func:`register_renderer` call (in :mod:`core.renderers`, or in the module that brings it).
-Its entry says what it can do, so that the front door, the plan, the scene reader, the
-command line, the window's menus and the warm-up read the registry instead of lists of names:
+Its entry names its functions and says what it can do, so that the front door, the plan, the
+pixel inspector, the scene reader, the command line, the window's menus and the warm-up read
+the registry instead of lists of names. The functions, each ``"package.module:function"``:
+
+- ``target``: ``draw(scene, view, settings, frame, context, timer)``, the renderer;
+- ``inspector``: ``inspect_pixel(scene, view, settings, x, y, context)``, the record of one
+  pixel (:mod:`core.inspect`); its module may define ``buffers(scene, view, settings,
+  context, names)``, the buffer views (:mod:`core.inspect.buffers`); None: not inspectable;
+- ``plan_stages``: ``add_stages(stages, triangle_stage)``, which puts the renderer's own
+  stages in place in the z-buffer's list (:func:`core.plan.plan`); None: the z-buffer's.
+
+What it can do:
 
 - ``samples_itself``: it places the film's samples (the front door does not run it per sample);
 - ``emitters``: it takes light from area emitters (global illumination);
@@ -19,8 +29,9 @@ command line, the window's menus and the warm-up read the registry instead of li
   primitives, so it is chosen from the command line, not offered for every scene).
 
 The entries are data and the targets strings (``"package.module:function"``), imported when
-first drawn, so this module sits at the bottom of the core: the scene reader checks a file's
-``renderer`` key against :func:`renderer_names` without importing a renderer.
+first drawn, inspected or planned (:func:`load`), so this module sits at the bottom of the
+core: the scene reader checks a file's ``renderer`` key against :func:`renderer_names`
+without importing a renderer, and the plan (below the renderers) reaches their stages.
 """
 
 from __future__ import annotations
@@ -45,17 +56,20 @@ class Renderer:
     progressive: bool = False
     volumes: bool = False
     in_menu: bool = True
+    inspector: str | None = None    # "package.module:function": inspect_pixel
+    plan_stages: str | None = None  # "package.module:function": add_stages
 
     def function(self) -> Callable:
-        if callable(self.target):
-            return self.target
-        module, _, name = self.target.partition(":")
-        return getattr(importlib.import_module(module), name)
+        return load(self.target)
 
-    @property
-    def module(self) -> str:
-        """The module that defines it (for its inspector and its buffers)."""
-        return self.target.__module__ if callable(self.target) else self.target.partition(":")[0]
+
+def load(target: str | Callable) -> Callable:
+    """The function ``"package.module:function"`` names, its module imported now (a function
+    is its own target)."""
+    if callable(target):
+        return target
+    module, _, name = target.partition(":")
+    return getattr(importlib.import_module(module), name)
 
 
 _RENDERERS: dict[str, Renderer] = {}

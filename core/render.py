@@ -90,7 +90,7 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
 
     ``view`` ``None`` means the scene has none to show (the frame says so). ``inspect(stage,
     arrays)``, when given, is called after each stage of the triangle path with the arrays it
-    produced (named as in :mod:`core.renderers.zbuffer`).
+    produced (named as in :mod:`core.renderers.zbuffer.draw`).
     """
     settings = settings or RenderSettings.for_scene(scene)
     context = context or DEFAULT_CONTEXT

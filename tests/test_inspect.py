@@ -164,7 +164,7 @@ def test_the_worked_example_depth_and_matrices_are_the_hand_values():
 
 
 def _plain(scene, view, settings, frame, context, timer):
-    """A renderer of this module, which defines no inspect_pixel."""
+    """A renderer registered without an inspector."""
     frame.color[...] = 0
 
 

@@ -210,7 +210,8 @@ def test_no_order_of_whole_polygons_exists(name, monkeypatch):
 # ------------------------------------------------------------- looking at the painting
 
 def test_paint_first_overdraw_and_pixel_history():
-    from core.inspect.painters import inspect_pixel, overdraw
+    from core.inspect.buffers import buffer
+    from core.renderers.painters.inspect import inspect_pixel, overdraw
     scene = _scene("interpenetrating.tri")
     view = scene.views[0]
     context = RenderContext()
@@ -227,13 +228,13 @@ def test_paint_first_overdraw_and_pixel_history():
     assert counts.shape == (500, 500) and counts.dtype == np.int32
     covered = (full.color != none.color).any(axis=2)
     assert (counts[covered] >= 1).all() and counts.max() >= 2
-    zcounts = overdraw(scene, view, settings.replace(renderer="zbuffer"), context)
+    zcounts, _ = buffer(scene, view, settings.replace(renderer="zbuffer"), "overdraw", context)
     zbuffer = render(scene, view, settings.replace(renderer="zbuffer"), context)
     assert (zcounts[(zbuffer.color != none.color).any(axis=2)] >= 1).all()
     y, x = np.argwhere(counts == counts.max())[0]
     for renderer in ("depth-sort", "bsp"):
         s = settings.replace(renderer=renderer)
-        record = inspect_pixel(scene, view, s, int(x), int(y), context)
+        record = inspect_pixel(scene, view, s, int(x), int(y), context, render=render)
         frame = render(scene, view, s, context)
         assert record["renderer"] == renderer and record["pixel"] == [int(x), int(y)]
         assert record["color"] == [int(c) for c in frame.color[y, x]]

@@ -63,7 +63,7 @@ def test_radiosity_walls_match_the_path_tracer(cornell):
 
 
 def test_inspect_pixel_retraces_the_pixel():
-    from core.pathtrace.renderer import inspect_pixel
+    from core.pathtrace.inspect import inspect_pixel
     from core.render import render
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
     settings = RenderSettings.for_scene(scene, renderer="pathtrace", size=(24, 24), samples=4)

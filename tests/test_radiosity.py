@@ -253,13 +253,14 @@ def test_every_view_draws_from_one_solution():
 
 def test_inspect_pixel_matches_the_picture():
     from core.context import RenderContext
-    from core.inspect.radiosity import inspect_pixel
+    from core.radiosity.inspect import inspect_pixel
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
     settings = RenderSettings.for_scene(scene, renderer="radiosity", size=(48, 48),
                                         max_elements=100, hemicube_resolution=16)
     context = RenderContext()
     frame = render(scene, scene.views[0], settings, context)
-    record = inspect_pixel(scene, scene.views[0], settings, 10, 40, context)   # the floor
+    record = inspect_pixel(scene, scene.views[0], settings, 10, 40, context,    # the floor
+                           render=render)
     assert record["color"] == frame.color[40, 10].tolist()
     assert record["mesh"].startswith("white") and record["reflectance"][0] == 0.725
     assert record["emission"] == [0, 0, 0] and record["radiosity"][0] > 0

@@ -14,8 +14,9 @@ import pytest
 
 from core.camera.view import View
 from core.raytrace import bvh
+from core.raytrace.inspect import inspect_pixel
 from core.raytrace.optics import AIR, fresnel_exact, schlick
-from core.raytrace.renderer import TraceOptions, inspect_pixel, render_image
+from core.raytrace.renderer import TraceOptions, render_image
 from core.render import render
 from core.scene.formats import load_scene
 from core.scene.model import Light, Material, Scene

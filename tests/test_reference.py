@@ -1,4 +1,4 @@
-"""The exact analytic reference (core/renderers/raycast.py), and the sphere test of issue 4: the
+"""The exact analytic reference (core/renderers/raycast/draw.py), and the sphere test of issue 4: the
 pipeline's flat, Gouraud and Phong shading against it."""
 
 from __future__ import annotations
@@ -11,8 +11,8 @@ import pytest
 from core.settings import RenderSettings
 from core.scene import generators
 from core.shading import illumination as il
-from core.renderers.raycast import (Sphere, Torus, _quartic_roots, _torus_roots, pack_shapes,
-                            render_reference)
+from core.renderers.raycast.draw import (Sphere, Torus, _quartic_roots, _torus_roots,
+                                        pack_shapes, render_reference)
 from core.scene.model import Light, Material, Scene
 from core.camera.view import View, ViewError
 

@@ -13,7 +13,7 @@ from core.camera.film import Film, sample_offsets
 from core.camera.rays import primary_rays
 from core.paths import SCENES_DIR
 from core.renderers import get_renderer, register_renderer, renderer_names
-from core.renderers.raycast import render_reference
+from core.renderers.raycast.draw import render_reference
 from core.scene.formats import load_scene
 from core.scene.model import Light, Material, Scene
 from core.scene.primitives import Sphere

@@ -16,9 +16,9 @@ measured as follows.
   allocates the z-buffer). The timed frames go round-robin over the settings of one size, so
   that load from other programs spreads evenly. Fewer repeats at the bigger sizes keep the
   sweep short.
-- The reference: :func:`core.renderers.raycast.render_reference` on the true sphere or torus, the same
-  view, lights and materials, float64, 16 samples a pixel (4 x 4), computed once and cached on
-  disk (:func:`cached_reference`).
+- The reference: :func:`core.renderers.raycast.draw.render_reference` on the true sphere or
+  torus, the same view, lights and materials, float64, 16 samples a pixel (4 x 4), computed
+  once and cached on disk (:func:`cached_reference`).
 - Errors on the 0–255 scale: RMSE and the maximum absolute difference over every pixel and
   channel of the image; the RMSE over the pixels that both cover fully (``rmse_inside``, the
   shading error without the silhouette); and the fraction of pixels whose coverage differs —
@@ -46,11 +46,11 @@ from typing import Callable
 import numpy as np
 
 from core.settings import RenderSettings
-from core.renderers import raycast as reference_module
+from core.renderers.raycast import draw as reference_module
 from core.camera import film
 from core.settings import SOLID_SHADINGS
 from core.scene.generators import torus, uv_sphere
-from core.renderers.raycast import Reference, Sphere, Torus, render_reference
+from core.renderers.raycast.draw import Reference, Sphere, Torus, render_reference
 from core.scene.model import Light, Material, Mesh, Scene
 from core.camera.view import View
 
@@ -181,7 +181,7 @@ def cached_reference(name: str, size: int, samples: int, cache: Path | None = CA
     """The exact image of scene ``name`` at ``samples`` x ``samples`` samples a pixel.
 
     Kept in ``cache`` (a temp folder) under a key made of everything it depends on, the source
-    of :mod:`core.renderers.raycast` included, so a change anywhere recomputes it.
+    of :mod:`core.renderers.raycast.draw` included, so a change anywhere recomputes it.
     """
     path = None
     if cache is not None:

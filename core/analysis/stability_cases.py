@@ -172,7 +172,7 @@ def prp_near_view_plane() -> Outcome:
       "PRP = (1, 0, 1e-9): a shear of 1e9; the sphere's coverage matches the analytic ray "
       "tracer's (core.renderers.raycast) within one pixel")
 def dop_near_view_plane() -> Outcome:
-    from core.renderers.raycast import Sphere, render_reference
+    from core.renderers.raycast.draw import Sphere, render_reference
     out = Outcome()
     view = View(vrp=(0, 0, 0), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-1.5, 1.5, -1.5, 1.5),
                 prp=(1.0, 0.0, 1e-9), front=1.5, back=-1.5, label="oblique")

@@ -1,11 +1,12 @@
 """See inside every pixel: the pixel inspector's front door, above :mod:`core.render`.
 
 - :func:`inspect_pixel` asks the renderer that draws ``settings.renderer`` for the record of
-  one pixel: its module's ``inspect_pixel(scene, view, settings, x, y, context) -> dict`` (the
-  contract every renderer may meet; the record carries at least ``renderer``, ``pixel`` and
-  ``color``, the pixel on 0–255 as ``render`` writes it). Where a renderer's module has none
-  yet, a fallback of this package stands in (:data:`FALLBACKS`); where there is neither,
-  :class:`NotInspectable` says so.
+  one pixel: the ``inspect_pixel(scene, view, settings, x, y, context) -> dict`` its registry
+  entry names (``inspector``, in the renderer's package; the record carries at least
+  ``renderer``, ``pixel`` and ``color``, the pixel on 0–255 as ``render`` writes it). An
+  inspector that shows the frame as the front door draws it (effects laid over) takes the
+  front door as its keyword ``render``: the renderers sit below :mod:`core.render` and do not
+  import it. Where the entry names none, :class:`NotInspectable` says so.
 - :mod:`core.inspect.buffers`: the buffer views (render passes): depth, normal, triangle id,
   barycentrics, (u, v), MIP level, overdraw, ray-tree depth.
 - :mod:`core.inspect.compare`: a picture held against the reference, pixel by pixel.
@@ -15,22 +16,13 @@ Nothing here runs unless asked: a frame drawn without the inspector pays nothing
 
 from __future__ import annotations
 
-import importlib
+from inspect import Parameter, signature
 
 from core.camera.view import ViewError, problems
 from core.context import DEFAULT_CONTEXT
-from core.render import lit_as_asked
+from core.registry import load
+from core.render import lit_as_asked, render
 from core.renderers import get_renderer
-
-# The inspectors that live here, for renderers whose module defines none: those that draw the
-# frame through the front door (the painters', radiosity's) sit above core.render, and the
-# records that follow a renderer's kernels from outside (raytrace, raycast). A renderer's
-# own inspect_pixel wins.
-FALLBACKS = {"raytrace": "core.inspect.raytrace:inspect_pixel",
-             "raycast": "core.inspect.raycast:inspect_pixel",
-             "bsp": "core.inspect.painters:inspect_pixel",
-             "depth-sort": "core.inspect.painters:inspect_pixel",
-             "radiosity": "core.inspect.radiosity:inspect_pixel"}
 
 
 class NotInspectable(ValueError):
@@ -38,23 +30,17 @@ class NotInspectable(ValueError):
     frame, the view is invalid. The message says which."""
 
 
-def renderer_module(name: str):
-    """The module of the registered renderer ``name`` (None for a bare function)."""
-    target = get_renderer(name).target
-    if callable(target):
-        return importlib.import_module(target.__module__)
-    return importlib.import_module(target.partition(":")[0])
-
-
 def inspector_of(name: str):
-    """The ``inspect_pixel`` of renderer ``name``: its module's, else a fallback, else None."""
-    found = getattr(renderer_module(name), "inspect_pixel", None)
-    if found is inspect_pixel:               # a module that imported this front door's
-        found = None
-    if found is None and name in FALLBACKS:
-        module, _, function = FALLBACKS[name].partition(":")
-        found = getattr(importlib.import_module(module), function)
-    return found
+    """The ``inspect_pixel`` that renderer ``name``'s entry names, imported now (None: it
+    names none)."""
+    entry = get_renderer(name)
+    return None if entry.inspector is None else load(entry.inspector)
+
+
+def takes_render(inspect) -> bool:
+    """Whether the inspector asks for the front door (a keyword-only ``render``)."""
+    found = signature(inspect).parameters.get("render")
+    return found is not None and found.kind is Parameter.KEYWORD_ONLY
 
 
 def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
@@ -66,7 +52,7 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
         raise NotInspectable(str(error)) from None
     if inspect is None:
         raise NotInspectable(f"the {settings.renderer} renderer has no pixel inspector "
-                             f"(its module defines no inspect_pixel)")
+                             f"(its registry entry names none)")
     width, height = settings.size
     if not (0 <= x < width and 0 <= y < height):
         raise NotInspectable(f"pixel ({x}, {y}) is outside the {width} x {height} frame "
@@ -80,7 +66,8 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
                              + "; ".join(problems(view, settings.projection))) from None
     try:
         context = context or DEFAULT_CONTEXT
+        front_door = {"render": render} if takes_render(inspect) else {}
         return inspect(lit_as_asked(scene, settings, context), view, settings, int(x), int(y),
-                       context)
+                       context, **front_door)
     except ValueError as error:            # what the renderer cannot inspect, in its words
         raise NotInspectable(f"{settings.renderer}: {error}") from None

@@ -1,10 +1,11 @@
 """Buffer views (render passes, AOVs): what the renderer kept at every pixel, shown
 as a picture with a colour map, and the raw values for whoever wants the numbers.
 
-A renderer's module may define ``buffers(scene, view, settings, context, names) -> {name:
-array}`` (the z-buffer does: :func:`core.renderers.zbuffer.buffers`) and, for painter's
-renderers, ``overdraw(scene, view, settings, context) -> (H, W) int32``. The ray tracer's
-stand-in is :func:`core.inspect.raytrace.buffers` until its module has its own.
+The module of a renderer's inspector (its registry entry's ``inspector``) may define
+``buffers(scene, view, settings, context, names) -> {name: array}``: the z-buffer's
+(:func:`core.renderers.zbuffer.inspect.buffers`, the scan-line renderer's the same), the
+painters' overdraw (:func:`core.renderers.painters.inspect.buffers`) and the ray tracer's
+(:func:`core.raytrace.inspect.buffers`) do.
 
 =============  =====================================  ===========================================
 name           values                                 colour map
@@ -27,10 +28,10 @@ import importlib
 
 import numpy as np
 
-from core.inspect import NotInspectable, renderer_module
+from core.inspect import NotInspectable
+from core.renderers import get_renderer
 
 BUFFERS = ("depth", "normal", "triangle", "barycentrics", "uv", "mip", "overdraw", "ray-depth")
-FALLBACK_BUFFERS = {"raytrace": "core.inspect.raytrace:buffers"}
 
 # A palette from cold to hot (blue, cyan, green, yellow, red) for counts and levels.
 _PALETTE = np.array([[0, 0, 160], [0, 170, 255], [0, 200, 60], [255, 230, 0], [230, 0, 0]],
@@ -38,11 +39,11 @@ _PALETTE = np.array([[0, 0, 160], [0, 170, 255], [0, 200, 60], [255, 230, 0], [2
 
 
 def _provider(renderer: str):
-    found = getattr(renderer_module(renderer), "buffers", None)
-    if found is None and renderer in FALLBACK_BUFFERS:
-        module, _, name = FALLBACK_BUFFERS[renderer].partition(":")
-        found = getattr(importlib.import_module(module), name)
-    return found
+    """The ``buffers`` of the module of ``renderer``'s inspector (None: it has none)."""
+    inspector = get_renderer(renderer).inspector
+    if inspector is None:
+        return None
+    return getattr(importlib.import_module(inspector.partition(":")[0]), "buffers", None)
 
 
 def buffer(scene, view, settings, name: str, context=None) -> tuple[np.ndarray, np.ndarray]:
@@ -51,16 +52,15 @@ def buffer(scene, view, settings, name: str, context=None) -> tuple[np.ndarray, 
     if name not in BUFFERS:
         raise NotInspectable(f"buffer must be one of {', '.join(BUFFERS)}, not {name!r}")
     values = None
-    if name == "overdraw" and settings.renderer in ("bsp", "depth-sort"):   # the painters
-        from core.inspect.painters import overdraw
-        values = overdraw(scene, view, settings, context)
-    else:
+    try:
         provider = _provider(settings.renderer)
-        if provider is not None:
-            try:
-                values = provider(scene, view, settings, context, (name,)).get(name)
-            except ValueError as error:
-                raise NotInspectable(f"{settings.renderer}: {error}") from None
+    except ValueError as error:                  # not a registered renderer
+        raise NotInspectable(str(error)) from None
+    if provider is not None:
+        try:
+            values = provider(scene, view, settings, context, (name,)).get(name)
+        except ValueError as error:
+            raise NotInspectable(f"{settings.renderer}: {error}") from None
     if values is None:
         raise NotInspectable(f"the {settings.renderer} renderer keeps no {name} buffer for "
                              f"this frame ({settings.shading} shading)")

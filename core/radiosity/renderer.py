@@ -4,7 +4,7 @@ The solution (:func:`core.radiosity.solution.solve`) does not depend on the view
 in the :class:`core.context.RenderContext` with the scene, keyed by the settings it depends
 on, so moving the camera costs one Gouraud frame. Element radiosities go to the vertices
 (area-weighted within each surface, :func:`core.radiosity.mesh.vertex_values`) and are drawn by
-the z-buffer (:func:`core.renderers.zbuffer.draw_triangles`) with the ``"radiosity"`` shader
+the z-buffer (:func:`core.renderers.zbuffer.draw.draw_triangles`) with the ``"radiosity"`` shader
 of the registry: the vertex values are the colours, interpolated as Gouraud's are. Pixel values
 are radiosities clamped to [0, 1] (``scene.tone`` "srgb": through the sRGB curve first).
 
@@ -12,7 +12,7 @@ Display meshes: the two-sided pairs are one mesh marked closed, so back-face cul
 each side's own copy; the one-sided elements another, drawn from both sides.
 
 What one pixel shows (its element, emission, reflectance, radiosity and the vertex values
-interpolated there) is told by :mod:`core.inspect.radiosity`.
+interpolated there) is told by :mod:`core.radiosity.inspect`.
 """
 
 from __future__ import annotations
@@ -108,7 +108,7 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     """Fill ``frame`` with the radiosity solution of ``scene`` seen through ``view``."""
     from core.pipeline import project
     from core.camera.film import sample_viewport
-    from core.renderers.zbuffer import draw_triangles
+    from core.renderers.zbuffer.draw import draw_triangles
     if not has_light(scene):
         fill(frame.color, (0.0, 0.0, 0.0))
         frame.stats.setdefault("warnings", []).append(

@@ -23,7 +23,7 @@ import numpy as np
 
 from core.camera.rays import camera_rays, primary_rays
 from core.camera.view import View, check
-from core.raytrace import adaptive, bvh, geometry, whitted
+from core.raytrace import adaptive, geometry, whitted
 from core.raytrace.optics import AIR, index_of_refraction
 from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
@@ -318,102 +318,8 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
         timer.lap("ray trace")
 
 
-# ------------------------------------------------------------------ the pixel inspector
-
-RAY_KINDS = ("primary", "shadow", "reflected", "refracted")
-HIT_KINDS = {whitted.NOTHING: "nothing", whitted.TRIANGLE: "triangle", whitted.SPHERE: "sphere",
-             whitted.PLANE: "plane"}
-MAX_TREE = 4096            # rays recorded per sample at most
-
-
 def frame_offsets(settings) -> np.ndarray:
     """The sample offsets ``draw`` uses for ``settings``."""
     if settings.samples > 1:
         return sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
     return np.array([settings.pixel_offset], dtype=np.float64)
-
-
-def inspect_pixel(scene, view: View, settings, x: int, y: int, context=None) -> dict:
-    """The ray tree of pixel ``(x, y)`` (x right, y down, row 0 at the top), sample by sample:
-    each ray's kind, origin, direction, what it hit, the material, ``I_local``, its weight and
-    its contribution ``weight · I_local``; the contributions of a sample's tree sum to that
-    sample's colour, and the samples' mean is the pixel (``color``, 0–255, as ``draw`` writes
-    it). Raises ValueError for a pixel outside the picture."""
-    width, height = settings.size
-    if not (0 <= x < width and 0 <= y < height):
-        raise ValueError(f"pixel ({x}, {y}) is outside the {width} x {height} picture")
-    options = TraceOptions.from_settings(settings)
-    setup = prepare(scene, view, settings.projection, settings.size, options,
-                    frame_offsets(settings), settings.keep_aspect)
-    origins, directions, t_min, t_max = primary(setup, y, y + 1, x, x + 1)
-    diffs = differentials(setup, y, y + 1, x, x + 1)
-    samples, total = [], np.zeros(3)
-    for k in range(len(origins)):
-        tree = np.zeros((MAX_TREE, whitted.TREE_COLUMNS))
-        colour, recorded = _trace_one(setup, origins[k], directions[k], t_min[k], t_max[k],
-                                      diffs[k], tree)
-        total += colour
-        samples.append({"offset": [float(c) for c in setup.offsets[k]],
-                        "color": [float(c) for c in colour],
-                        "rays": [_ray_record(scene, setup, row) for row in tree[:recorded]]})
-    mean = total / len(origins)
-    return {"renderer": "raytrace", "pixel": [int(x), int(y)],
-            "color": [int(c) for c in to_uint8(mean)], "raw": [float(c) for c in mean],
-            "samples": samples, "counts": {n: int(c) for n, c in zip(whitted.COUNTERS,
-                                                                      setup.counts)}}
-
-
-def _trace_one(setup: Setup, origin, direction, t_min, t_max, diff, tree):
-    """One primary ray through the kernel's own :func:`whitted.trace`, recording its tree."""
-    from core.texture.sample import FILTERS
-    o, packed = setup.options, setup.packing.packed
-    if not t_min < t_max:
-        return np.array(setup.background), 0
-    rays = np.empty((2 * o.max_depth + 2, whitted.STACK_COLUMNS))
-    counts = np.zeros(len(whitted.COUNTERS), dtype=np.int64)
-    raw = np.empty((1, 3))
-    recorded = whitted.trace(
-        packed, np.array([origin], dtype=np.float64), np.array([direction], dtype=np.float64),
-        np.array([t_min], dtype=np.float64), np.array([t_max], dtype=np.float64), 0, 1,
-        setup.eye, setup.lights, setup.ambient, setup.halfway, setup.background,
-        whitted.SHADOW_MODES.index(o.shadows), o.max_depth, float(o.adaptive_epsilon),
-        o.fresnel_code, o.medium, 1e-9 * setup.packing.scale, rays, np.empty(setup.lights.shape),
-        np.empty((1, packed.surfaces.shape[1])), np.empty(4), bvh.new_stack(),
-        counts, setup.packing.texturing, setup.packing.textured, FILTERS[o.texture_filter],
-        bool(o.bump), np.array([diff], dtype=np.float64),
-        whitted.scratch(packed, setup.packing.textured), tree, np.array(o.secondary_attenuation, dtype=np.float64), raw)
-    r, g, b = raw[0]
-    setup.counts += counts
-    return np.array([r, g, b]), recorded
-
-
-def _ray_record(scene, setup: Setup, row) -> dict:
-    w = whitted
-    hit = int(row[w.TREE_HIT])
-    local = row[w.TREE_LOCAL:w.TREE_LOCAL + 3]
-    weight = float(row[w.TREE_WEIGHT])
-    record = {"kind": RAY_KINDS[int(row[w.TREE_KIND])], "depth": int(row[w.TREE_DEPTH]),
-              "parent": int(row[w.TREE_PARENT]),
-              "origin": row[w.TREE_ORIGIN:w.TREE_ORIGIN + 3].tolist(),
-              "direction": row[w.TREE_DIRECTION:w.TREE_DIRECTION + 3].tolist(),
-              "hit": HIT_KINDS[hit], "weight": weight, "local": local.tolist(),
-              "contribution": (weight * local).tolist()}
-    if hit != w.NOTHING:
-        s = int(row[w.TREE_SURFACE])
-        record.update({"t": float(row[w.TREE_T]), "material": _material_name(scene, s),
-                       "point": row[w.TREE_POINT:w.TREE_POINT + 3].tolist(),
-                       "normal": row[w.TREE_NORMAL:w.TREE_NORMAL + 3].tolist(),
-                       "geometric normal": row[w.TREE_GEOMETRIC:w.TREE_GEOMETRIC + 3].tolist(),
-                       "kr kt ior": setup.packing.packed.optics[s].tolist()})
-    return record
-
-
-def _material_name(scene, s: int) -> str:
-    """The name of surface row ``s`` (meshes, then spheres, then planes, as packed)."""
-    meshes = geometry.traced_meshes(scene)
-    if s < len(meshes):
-        return f"mesh {meshes[s].name!r}"
-    spheres, planes = geometry._primitives(scene)
-    if s < len(meshes) + len(spheres):
-        return f"sphere {s - len(meshes) + 1}"
-    return f"plane {s - len(meshes) - len(spheres) + 1}"

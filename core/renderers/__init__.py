@@ -1,20 +1,24 @@
 """Renderers behind :func:`core.render.render`, found by name (``RenderSettings.renderer``).
 
-A renderer is a function ``draw(scene, view, settings, frame, context)`` that fills
+A renderer is a function ``draw(scene, view, settings, frame, context, timer)`` that fills
 ``frame.color`` (every pixel) for a view already checked to be valid, and records what it did
 in ``frame.stats``. It may draw one sample per pixel only: the front door runs it once per film
 sample when ``settings.samples > 1`` unless it says it samples pixels itself
 (``samples_itself=True``, as a ray caster does).
 
-Registered here by module path, so that choosing a renderer imports it (and its compiled
-kernels) only when it is first used.
+Each renderer is one package, its drawing beside its pixel inspector and its plan stages, and
+one :func:`register_renderer` line below that names them by module path, so that choosing a
+renderer imports it (and its compiled kernels) only when it is first used, and planning a
+frame imports only its stages:
 
 - ``zbuffer``: the FvDFH pipeline, lines and triangles (:mod:`core.renderers.zbuffer`);
 - ``bsp``, ``depth-sort``: the painter's algorithms (:mod:`core.renderers.painters`);
 - ``scanline``: Watkins' scan-line visible-surface algorithm (:mod:`core.renderers.scanline`);
 - ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`);
+- ``raytrace``, ``radiosity``, ``pathtrace``: the Whitted ray tracer, radiosity and the path
+  tracer (:mod:`core.raytrace`, :mod:`core.radiosity`, :mod:`core.pathtrace`);
 - ``volume``: the opaque geometry by the z-buffer, then the scene's volumes ray-marched
-  (emission–absorption, MIP), cut at the z-buffer's depth (:mod:`core.volume.renderer`).
+  (emission–absorption, MIP), cut at the z-buffer's depth (:mod:`core.volume`).
 """
 
 from __future__ import annotations
@@ -22,36 +26,49 @@ from __future__ import annotations
 from core.registry import (Renderer, get_renderer, names_that, register_renderer,  # noqa: F401
                            renderer_names, renderers, unregister_renderer)
 
-# The built-in renderers and what each can do (core/registry.py names the capabilities).
-register_renderer("zbuffer", "core.renderers.zbuffer:draw",
+# The built-in renderers: their functions, and what each can do (core/registry.py names
+# the fields).
+register_renderer("zbuffer", "core.renderers.zbuffer.draw:draw",
+                  inspector="core.renderers.zbuffer.inspect:inspect_pixel",
                   description="the FvDFH viewing pipeline: clip, project, scan-line z-buffer",
                   label="Z-buffer", transparency=True, shaders=True)
-register_renderer("raycast", "core.renderers.raycast:draw", samples_itself=True,
+register_renderer("raycast", "core.renderers.raycast.draw:draw", samples_itself=True,
+                  inspector="core.renderers.raycast.inspect:inspect_pixel",
                   description="the analytic surfaces ray-cast exactly (the reference)",
                   label="Ray cast (exact analytic surfaces)", in_menu=False)
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
+                  inspector="core.raytrace.inspect:inspect_pixel",
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
                   label="Ray traced", recursive=True, progressive=True)
 register_renderer("radiosity", "core.radiosity.renderer:draw",
+                  inspector="core.radiosity.inspect:inspect_pixel",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
                               "refinement), drawn Gouraud by the z-buffer (core.radiosity)",
                   label="Radiosity", emitters=True, textures=False, progressive=True)
 register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
+                  inspector="core.pathtrace.inspect:inspect_pixel",
                   description="Kajiya's rendering equation by path tracing on the BVH "
                               "(core.pathtrace)",
                   label="Path traced", emitters=True, recursive=True, textures=False,
                   progressive=True)
-register_renderer("bsp", "core.renderers.painters:draw_bsp",
+register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
+                  inspector="core.renderers.painters.inspect:inspect_pixel",
+                  plan_stages="core.renderers.painters.plan:bsp_stages",
                   description="a BSP tree built once in world space, painted back to front",
                   label="BSP tree (painter's)", transparency=True, shaders=True)
-register_renderer("scanline", "core.renderers.scanline:draw",
+register_renderer("scanline", "core.renderers.scanline.draw:draw",
+                  inspector="core.renderers.scanline.draw:inspect_pixel",
+                  plan_stages="core.renderers.scanline.plan:add_stages",
                   description="Watkins' scan-line visible-surface algorithm (FvDFH 15.6): edge, "
                               "polygon and active edge tables, depth only at span ends",
                   label="Scan line (Watkins)", transparency=True, shaders=True)
-register_renderer("depth-sort", "core.renderers.painters:draw_depth_sort",
+register_renderer("depth-sort", "core.renderers.painters.draw:draw_depth_sort",
+                  inspector="core.renderers.painters.inspect:inspect_pixel",
+                  plan_stages="core.renderers.painters.plan:depth_sort_stages",
                   description="Newell, Newell and Sancha's depth sort, painted back to front",
                   label="Depth sort (Newell, painter's)", transparency=True, shaders=True)
 register_renderer("volume", "core.volume.renderer:draw",
+                  inspector="core.volume.inspect:inspect_pixel",
                   description="volumes ray-marched (emission-absorption with gradient "
                               "shading, or MIP) over the z-buffer's opaque geometry "
                               "(core.volume)",

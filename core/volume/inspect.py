@@ -21,9 +21,11 @@ import numpy as np
 
 from core.camera.rays import camera_rays
 from core.camera.view import eye_from_view
+from core.context import DEFAULT_CONTEXT
 from core.shading.illumination import pack_ambient, pack_eye, pack_lights, to_uint8
 from core.volume.data import volumes_of
 from core.volume.raymarch import march_volume
+from core.volume.renderer import farthest_first, step_of
 
 
 def cell_of(volume, world) -> dict:
@@ -59,10 +61,11 @@ def ray_samples(volume, origin, direction, t_lo, t_hi, step) -> np.ndarray:
     return starts + 0.5 * np.minimum(step, t1 - starts)
 
 
-def pixel_record(scene, view, settings, x: int, y: int, context, step_of,
-                 farthest_first) -> dict:
-    """The record (see the module); ``step_of`` and ``farthest_first`` are the renderer's."""
-    from core.renderers.zbuffer import inspect_pixel as zbuffer_inspect
+def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
+    """The record of image pixel (x, y) (see the module): the opaque surface's z-buffer
+    record, the ray, and what each volume did along it."""
+    from core.renderers.zbuffer.inspect import inspect_pixel as zbuffer_inspect
+    context = context or DEFAULT_CONTEXT
     if settings.samples > 1:
         raise ValueError("the volume renderer's inspector reads one sample a pixel; "
                          "inspect the frame drawn with 1 sample a pixel")

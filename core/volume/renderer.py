@@ -4,7 +4,7 @@ ray marching, each ray stopped at the depth of the opaque surface in its pixel.
 ``draw(scene, view, settings, frame, context, timer)`` (registered in :mod:`core.renderers`):
 
 1. the meshes — isosurfaces among them, which are ordinary meshes — go through
-   :func:`core.renderers.zbuffer.draw` with the settings' shading; its depth buffer is kept;
+   :func:`core.renderers.zbuffer.draw.draw` with the settings' shading; its depth buffer is kept;
 2. the primary rays come from :func:`core.camera.rays.camera_rays` through the same sample
    of each pixel (``settings.pixel_offset``), limited to the view's front and back planes;
 3. each pixel's z-buffer depth is carried back to the world point it came from (the inverse of
@@ -36,7 +36,7 @@ STEP = 0.5                      # samples per voxel side: two
 def draw(scene, view, settings, frame, context, timer) -> None:
     height, width = frame.color.shape[:2]
     if scene.meshes:
-        from core.renderers.zbuffer import draw as zbuffer
+        from core.renderers.zbuffer.draw import draw as zbuffer
         zbuffer(scene, view, settings, frame, context, timer)
     else:
         fill(frame.color, scene.background)
@@ -68,15 +68,6 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     frame.color[:] = to_uint8(behind).reshape(height, width, 3)
     frame.stats["computed"].append("ray marching")
     timer.lap("ray march")
-
-
-def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
-    """The record of image pixel (x, y) (:mod:`core.volume.inspect`): the opaque surface's
-    z-buffer record, the ray, and what each volume did along it."""
-    from core.context import DEFAULT_CONTEXT
-    from core.volume.inspect import pixel_record
-    return pixel_record(scene, view, settings, x, y, context or DEFAULT_CONTEXT, step_of,
-                        farthest_first)
 
 
 def step_of(volume) -> float:

@@ -19,10 +19,9 @@ AET of the pixel's scan line and the spans it produced.
 from __future__ import annotations
 
 from core.camera.film import sample_viewport
-from core.renderers import zbuffer
+from core.renderers.scanline.plan import STAGE
+from core.renderers.zbuffer import draw as zbuffer
 from core.visibility.scanline import watkins
-
-STAGE = "scan-line visible surface"
 
 
 class _Watkins:
@@ -63,7 +62,7 @@ def scan_line(scene, view, settings, y: int, context=None) -> dict:
     """The AET of image row ``y`` (row 0 at the top) and the spans it produced, for the
     frame ``settings`` draws (one sample per pixel): the scene triangle each entry is of."""
     from core.context import DEFAULT_CONTEXT
-    from core.renderers.zbuffer_inspect import Stages, capture
+    from core.renderers.zbuffer.inspect import Stages, capture
     context = context or DEFAULT_CONTEXT
     cap = capture(scene, view, settings, context, Stages(draw, zbuffer.draw_lines,
                                                          sample_viewport))
@@ -95,7 +94,7 @@ def scan_line(scene, view, settings, y: int, context=None) -> dict:
 def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
     """The z-buffer's record of pixel (x, y), drawn by this renderer, with its scan line's
     AET and spans (``record["scan line"]``)."""
-    from core.renderers.zbuffer_inspect import Stages, inspect_pixel as record
+    from core.renderers.zbuffer.inspect import Stages, pixel_record as record
     settings = settings.replace(rasterizer="edge")     # its weights: perspective-correct
     out = record(scene, view, settings, x, y, context,
                  Stages(draw, zbuffer.draw_lines, sample_viewport))
@@ -106,6 +105,6 @@ def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
 
 def buffers(scene, view, settings, context=None, names=()) -> dict:
     """The buffer views of this frame, as the z-buffer's (depth, normal, triangle id, ...)."""
-    from core.renderers.zbuffer_inspect import Stages, buffers as views
+    from core.renderers.zbuffer.inspect import Stages, buffer_views as views
     return views(scene, view, settings, context,
                  Stages(draw, zbuffer.draw_lines, sample_viewport), names)

@@ -1,11 +1,13 @@
 """Looking at the painter's renderers' work: writes per pixel, and one pixel's history.
 
-- :func:`overdraw`: ``(H, W)`` int32, how many times each pixel is written (the buffer view);
+- :func:`overdraw`: ``(H, W)`` int32, how many times each pixel is written (the buffer view,
+  through :func:`buffers`);
 - :func:`inspect_pixel`: RenderDoc's pixel history for ``bsp`` and ``depth-sort``: every
   triangle painted over the pixel, in painting order, with its colour and depth.
 
-Both draw through the front door (:func:`core.render.render`), so they live here, above it,
-rather than with the renderers in :mod:`core.renderers.painters`.
+The pixel's history shows the frame as the front door draws it (effects laid over): the
+front door hands itself over as ``render`` (:func:`core.inspect.inspect_pixel`), which this
+package, below it, does not import.
 """
 
 from __future__ import annotations
@@ -18,40 +20,27 @@ from core.visibility.paint import (Painting, SimpleFrame, paint, paint_ranks, pa
 
 
 def overdraw(scene, view, settings, context=None) -> np.ndarray:
-    """``(H, W)`` int32: how many times each pixel is written. For bsp and depth-sort every
-    painted fragment covering the pixel centre is a write; for the z-buffer (any other
-    renderer name) it is the number of fragments scan-converted there, each of which is
-    depth-tested (an upper bound on its writes: FvDFH's cost of the z-buffer)."""
+    """``(H, W)`` int32: how many times each pixel is written: every painted fragment
+    covering the pixel centre is a write (``settings.renderer``: bsp or depth-sort)."""
     width, height = settings.size
-    if settings.renderer in ("bsp", "depth-sort"):
-        p = painting(scene, view, settings, context)
-        if p is None:
-            return np.zeros((height, width), np.int32)
-        xy_z, inv_w, triangles = paint_ranks(p)
-        return count_fragments(xy_z, inv_w, triangles, width, height)
-    kept = {}
-
-    def grab(stage, arrays):
-        if stage == "project":
-            kept["device"] = arrays["device_points"].copy()
-            kept["inv_w"] = arrays["inv_w"].copy()
-        if stage == "clip triangles":
-            kept["triangles"] = arrays["clipped_triangles"].copy()
-
-    from core.render import render
-    render(scene, view, settings.replace(renderer="zbuffer", samples=1), context, inspect=grab)
-    if "triangles" not in kept:
+    p = painting(scene, view, settings, context)
+    if p is None:
         return np.zeros((height, width), np.int32)
-    return count_fragments(kept["device"], kept["inv_w"], kept["triangles"], width,
-                                  height)
+    xy_z, inv_w, triangles = paint_ranks(p)
+    return count_fragments(xy_z, inv_w, triangles, width, height)
 
 
-def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
+def buffers(scene, view, settings, context=None, names=()) -> dict:
+    """The painters' buffer view: ``overdraw`` (the others are the z-buffer's)."""
+    return {"overdraw": overdraw(scene, view, settings, context)} if "overdraw" in names else {}
+
+
+def inspect_pixel(scene, view, settings, x: int, y: int, context=None, *, render) -> dict:
     """The pixel's history (RenderDoc's pixel history): every triangle painted over pixel
     ``(x, y)`` (x right, y down, row 0 at the top), in painting order, with its colour; the
-    last one is what the frame shows."""
+    last one is what the frame shows (drawn by ``render``: the front door, handed over by
+    :func:`core.inspect.inspect_pixel`)."""
     from core.context import DEFAULT_CONTEXT
-    from core.render import render
     context = context or DEFAULT_CONTEXT
     width, height = settings.size
     frame = render(scene, view, settings.replace(samples=1), context)

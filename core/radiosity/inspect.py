@@ -1,8 +1,9 @@
 """What one pixel of a radiosity frame shows: its element, patch, emission, reflectance, radiosity
 and the vertex values interpolated there (the pixel's colour).
 
-It draws the frame through the front door (:func:`core.render.render`) and reads the solution
-the renderer (:mod:`core.radiosity.renderer`) kept in the context, so it lives here, above both.
+It reads the frame the front door draws (``render``, handed over by
+:func:`core.inspect.inspect_pixel`: this package, below it, does not import it) and the
+solution the renderer (:mod:`core.radiosity.renderer`) kept in the context.
 """
 
 from __future__ import annotations
@@ -12,10 +13,9 @@ import numpy as np
 from core.radiosity.renderer import display
 
 
-def inspect_pixel(scene, view, settings, x, y, context) -> dict:
+def inspect_pixel(scene, view, settings, x, y, context, *, render) -> dict:
     """The element seen at image pixel (x, y): its emission, reflectance, radiosity, and the
-    vertex values interpolated there (the pixel's colour)."""
-    from core.render import render
+    vertex values interpolated there (the pixel's colour); ``render`` is the front door."""
     frame = render(scene, view, settings, context)
     record = {"renderer": "radiosity", "pixel": [int(x), int(y)],
               "color": [int(c) for c in frame.color[y, x]]}

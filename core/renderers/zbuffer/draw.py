@@ -1,4 +1,4 @@
-"""The z-buffer renderer: FvDFH's viewing pipeline for triangles and lines.
+"""The z-buffer renderer's drawing: FvDFH's viewing pipeline for triangles and lines.
 
 ``draw(scene, view, settings, frame, context, timer)``, called by :func:`core.render.render`.
 Lines (every edge in wireframe; line-only meshes always): N, Cohen–Sutherland, M_per ·
@@ -46,22 +46,6 @@ def draw(scene, view, settings, frame, context, timer, rasterize=None) -> None:
     if line_meshes:
         draw_lines(frame.color, line_meshes, projection, n, z_min, vp, scene.line_color, context,
                    timer, frame.stats, settings.clipper, settings.antialias_lines)
-
-
-def inspect_pixel(scene, view, settings, x, y, context=None) -> dict:
-    """The record of image pixel (x, y): what the stages above made of it, for the
-    pixel inspector (:mod:`core.renderers.zbuffer_inspect`)."""
-    from core.renderers.zbuffer_inspect import Stages, inspect_pixel as record
-    return record(scene, view, settings, x, y, context,
-                  Stages(draw, draw_lines, sample_viewport))
-
-
-def buffers(scene, view, settings, context=None, names=()) -> dict:
-    """The buffer views of this frame (render passes): depth, normal, triangle id, barycentrics,
-    (u, v), MIP level, overdraw, as named in ``names``."""
-    from core.renderers.zbuffer_inspect import Stages, buffers as views
-    return views(scene, view, settings, context, Stages(draw, draw_lines, sample_viewport),
-                 names)
 
 
 # From this many edges a mesh's lines go through the compiled loop (core/pipeline/wireframe.py,

@@ -1,11 +1,10 @@
-"""The exact ray caster's pixel record, for the pixel inspector: a stand-in until
-:mod:`core.renderers.raycast` defines its own ``inspect_pixel``.
+"""The exact ray caster's pixel record, for the pixel inspector.
 
-:func:`inspect_pixel` follows ``raycast._trace`` for one pixel, in its order: each sample of
-the regular grid, its ray (:func:`core.camera.rays.camera_ray`), the visible hit on the
-analytic surfaces (``_nearest_hit``), the normal, and the Phong terms
-(:func:`core.shading.models.dispatch.lighting_terms`); the samples' mean, background for the misses, is
-the pixel.
+:func:`inspect_pixel` follows ``_trace`` (:mod:`core.renderers.raycast.draw`) for one pixel,
+in its order: each sample of the regular grid, its ray (:func:`core.camera.rays.camera_ray`),
+the visible hit on the analytic surfaces (``_nearest_hit``), the normal, and the Phong terms
+(:func:`core.shading.models.dispatch.lighting_terms`); the samples' mean, background for the
+misses, is the pixel.
 """
 
 from __future__ import annotations
@@ -18,7 +17,7 @@ from core.shading.models.dispatch import lighting_terms
 def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
     from core.camera.film import to_rgb8
     from core.camera.rays import CAMERA_BACK, CAMERA_FRONT, camera_ray
-    from core.renderers import raycast
+    from core.renderers.raycast import draw as raycast
     from core.shading.illumination import unit3
     if not scene.primitives:
         raise ValueError(f"{scene.name} has no analytic primitives: the ray caster draws none")
@@ -69,7 +68,7 @@ def _frame(scene, view, settings, context):
     from core.camera.film import grid_side
     from core.camera.rays import CAMERA_BASIS, CAMERA_VRP, pack_camera
     from core.context import DEFAULT_CONTEXT
-    from core.renderers import raycast
+    from core.renderers.raycast import draw as raycast
     from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
                                            pack_surfaces)
     cache = (context or DEFAULT_CONTEXT).cache(scene)

@@ -1,4 +1,5 @@
-"""The painter's renderers: the BSP tree and the depth sort (the notes' approaches 4 and 3).
+"""The painter's renderers' drawing: the BSP tree and the depth sort (the notes' approaches 4
+and 3).
 
 ``draw_bsp`` and ``draw_depth_sort`` have the z-buffer's signature
 (``draw(scene, view, settings, frame, context, timer)``) and share its stages: cull, shade
@@ -17,14 +18,14 @@ wins" is exactly "the later painted wins", the painter's overwrite. The true dep
 computed afterwards from the barycentrics (``frame.depth``, for depth cueing and transparency).
 
 ``settings.paint_first`` K paints only the first K triangles of the order (the draw-order
-slider). :mod:`core.inspect.painters` counts the writes per pixel and lists them.
+slider). :mod:`core.renderers.painters.inspect` counts the writes per pixel and lists them.
 """
 
 from __future__ import annotations
 
 from core.camera.film import fill, sample_viewport
 from core.pipeline import project
-from core.renderers.zbuffer import draw_lines
+from core.renderers.zbuffer.draw import draw_lines
 from core.visibility.paint import bsp_painting, depth_sorted_painting, paint, resolve, true_depth
 
 

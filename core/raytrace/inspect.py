@@ -1,6 +1,10 @@
-"""The ray tracer's pixel record, for the pixel inspector: the ray tree, node by node — a stand-in until
-:mod:`core.raytrace.renderer` defines its own ``inspect_pixel`` (the dispatch prefers it).
+"""The ray tracer's pixel records, for the pixel inspector: the ray tree, ray by ray.
 
+:func:`inspect_pixel` (the registered inspector) traces the pixel's samples again through the
+kernel's own :func:`core.raytrace.whitted.trace`, which records each sample's tree: every
+ray's kind, origin, direction, hit, material, ``I_local``, weight and contribution.
+
+:func:`ray_tree_record` is the same tree told independently, node by node:
 :func:`ray_tree` walks :func:`core.raytrace.whitted.trace`'s loop in Python, in its order
 (an explicit stack, depth first), calling the tracer's own compiled pieces for each step
 (``nearest``, ``surface_at``, ``checker_colour``, ``shadow_term``, ``refract``, ``reflect``,
@@ -14,6 +18,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.camera.view import View
+from core.raytrace import bvh, geometry, whitted
+from core.raytrace.renderer import (Setup, TraceOptions, differentials, frame_offsets, prepare,
+                                    primary)
 from core.shading.illumination import EYE_DIRECTION, EYE_POINT, POINT_LIGHT, TWO_SIDED, to_uint8
 from core.shading.models.dispatch import lighting_terms
 
@@ -21,7 +29,8 @@ KINDS = ("primary", "shadow", "reflected", "refracted")
 HITS = {0: "triangle", 1: "sphere", 2: "plane"}
 
 
-def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
+def ray_tree_record(scene, view, settings, x: int, y: int, context=None) -> dict:
+    """The pixel's ray tree walked in Python, node by node (see the module)."""
     from core.camera.film import sample_offsets
     from core.raytrace import renderer
     options = renderer.TraceOptions.from_settings(settings)
@@ -77,7 +86,6 @@ def _depth(sample) -> int:
 
 def ray_tree(setup, origin, direction, t_min, t_max) -> tuple[list, list]:
     """The nodes of one primary ray's tree and their summed colour (unclamped RGB)."""
-    from core.raytrace import bvh, whitted
     packed = setup.packing.packed
     # What every node's trace reuses: the shadow mode, the offset off a surface, the BVH's
     # stack, the ray counters, a surface row and the eye (point or direction).
@@ -101,7 +109,6 @@ def ray_tree(setup, origin, direction, t_min, t_max) -> tuple[list, list]:
 def _trace_node(setup, node: dict, ray: tuple, work: tuple, pending: list) -> list:
     """Fill in ``node`` for ``ray`` (what it hit, the local terms), queue its reflected and
     refracted rays on ``pending``; returns its weighted contribution to the pixel."""
-    from core.raytrace import whitted
     packed = setup.packing.packed
     shadows, offset, stack, counts, surface_row, eye = work
     ox, oy, oz, dx, dy, dz, t0, t1, weight, depth, ray_kind, parent = ray
@@ -145,7 +152,7 @@ def _queue_children(o, node: dict, ray: tuple, hit: tuple, entering: bool, optic
                     offset: float, pending: list) -> None:
     """The refracted ray (or total internal reflection) and the reflected ray of a hit, each
     queued unless adaptive depth control cuts it; Fresnel moves weight between the two."""
-    from core.raytrace import optics, whitted
+    from core.raytrace import optics
     dx, dy, dz, weight, depth = ray[3], ray[4], ray[5], ray[8], ray[9]
     (px, py, pz), (nx, ny, nz), (gx, gy, gz) = hit
     k_r, k_t, ior = optics_of
@@ -183,7 +190,6 @@ def _queue_children(o, node: dict, ray: tuple, hit: tuple, entering: bool, optic
 def _local(setup, packed, kind, index, s, p, n, g, eye, shadows, offset, surface_row, stack,
            counts) -> dict:
     """local_colour's terms: the checker's O_d, each light's shadow factor, Phong."""
-    from core.raytrace import whitted
     from core.shading.illumination import unit3
     px, py, pz = p
     nx, ny, nz = n
@@ -215,12 +221,11 @@ def _local(setup, packed, kind, index, s, p, n, g, eye, shadows, offset, surface
 
 
 def buffers(scene, view, settings, context, names) -> dict:
-    """The ray tracer's buffer views (stand-in): ``depth`` (−t of the primary hit, so larger
+    """The ray tracer's buffer views: ``depth`` (−t of the primary hit, so larger
     is nearer, as the z-buffer's), ``triangle`` (the scene triangle a primary ray hits first;
     -1 for spheres, planes and nothing) and ``ray-depth`` (per pixel, the smallest depth
     limit from which the traced colour no longer changes: the depth of the tree that
     matters). One sample per pixel, at the pixel centre."""
-    from core.raytrace import whitted
     from core.raytrace.renderer import render_raw
     options_settings = settings.replace(samples=1)
     setup, (origins, directions, t_min, t_max) = _setup(
@@ -254,3 +259,97 @@ def buffers(scene, view, settings, context, names) -> dict:
 def _options(settings):
     from core.raytrace import renderer
     return renderer.TraceOptions.from_settings(settings)
+
+
+# ------------------------------------------------------ the tree the kernel records
+
+RAY_KINDS = ("primary", "shadow", "reflected", "refracted")
+HIT_KINDS = {whitted.NOTHING: "nothing", whitted.TRIANGLE: "triangle", whitted.SPHERE: "sphere",
+             whitted.PLANE: "plane"}
+MAX_TREE = 4096            # rays recorded per sample at most
+
+
+def inspect_pixel(scene, view: View, settings, x: int, y: int, context=None) -> dict:
+    """The ray tree of pixel ``(x, y)`` (x right, y down, row 0 at the top), sample by sample:
+    each ray's kind, origin, direction, what it hit, the material, ``I_local``, its weight and
+    its contribution ``weight · I_local``; the contributions of a sample's tree sum to that
+    sample's colour, and the samples' mean is the pixel (``color``, 0–255, as ``draw`` writes
+    it). Raises ValueError for a pixel outside the picture."""
+    width, height = settings.size
+    if not (0 <= x < width and 0 <= y < height):
+        raise ValueError(f"pixel ({x}, {y}) is outside the {width} x {height} picture")
+    options = TraceOptions.from_settings(settings)
+    setup = prepare(scene, view, settings.projection, settings.size, options,
+                    frame_offsets(settings), settings.keep_aspect)
+    origins, directions, t_min, t_max = primary(setup, y, y + 1, x, x + 1)
+    diffs = differentials(setup, y, y + 1, x, x + 1)
+    samples, total = [], np.zeros(3)
+    for k in range(len(origins)):
+        tree = np.zeros((MAX_TREE, whitted.TREE_COLUMNS))
+        colour, recorded = _trace_one(setup, origins[k], directions[k], t_min[k], t_max[k],
+                                      diffs[k], tree)
+        total += colour
+        samples.append({"offset": [float(c) for c in setup.offsets[k]],
+                        "color": [float(c) for c in colour],
+                        "rays": [_ray_record(scene, setup, row) for row in tree[:recorded]]})
+    mean = total / len(origins)
+    return {"renderer": "raytrace", "pixel": [int(x), int(y)],
+            "color": [int(c) for c in to_uint8(mean)], "raw": [float(c) for c in mean],
+            "samples": samples, "counts": {n: int(c) for n, c in zip(whitted.COUNTERS,
+                                                                      setup.counts)}}
+
+
+def _trace_one(setup: Setup, origin, direction, t_min, t_max, diff, tree):
+    """One primary ray through the kernel's own :func:`whitted.trace`, recording its tree."""
+    from core.texture.sample import FILTERS
+    o, packed = setup.options, setup.packing.packed
+    if not t_min < t_max:
+        return np.array(setup.background), 0
+    rays = np.empty((2 * o.max_depth + 2, whitted.STACK_COLUMNS))
+    counts = np.zeros(len(whitted.COUNTERS), dtype=np.int64)
+    raw = np.empty((1, 3))
+    recorded = whitted.trace(
+        packed, np.array([origin], dtype=np.float64), np.array([direction], dtype=np.float64),
+        np.array([t_min], dtype=np.float64), np.array([t_max], dtype=np.float64), 0, 1,
+        setup.eye, setup.lights, setup.ambient, setup.halfway, setup.background,
+        whitted.SHADOW_MODES.index(o.shadows), o.max_depth, float(o.adaptive_epsilon),
+        o.fresnel_code, o.medium, 1e-9 * setup.packing.scale, rays, np.empty(setup.lights.shape),
+        np.empty((1, packed.surfaces.shape[1])), np.empty(4), bvh.new_stack(),
+        counts, setup.packing.texturing, setup.packing.textured, FILTERS[o.texture_filter],
+        bool(o.bump), np.array([diff], dtype=np.float64),
+        whitted.scratch(packed, setup.packing.textured), tree, np.array(o.secondary_attenuation, dtype=np.float64), raw)
+    r, g, b = raw[0]
+    setup.counts += counts
+    return np.array([r, g, b]), recorded
+
+
+def _ray_record(scene, setup: Setup, row) -> dict:
+    w = whitted
+    hit = int(row[w.TREE_HIT])
+    local = row[w.TREE_LOCAL:w.TREE_LOCAL + 3]
+    weight = float(row[w.TREE_WEIGHT])
+    record = {"kind": RAY_KINDS[int(row[w.TREE_KIND])], "depth": int(row[w.TREE_DEPTH]),
+              "parent": int(row[w.TREE_PARENT]),
+              "origin": row[w.TREE_ORIGIN:w.TREE_ORIGIN + 3].tolist(),
+              "direction": row[w.TREE_DIRECTION:w.TREE_DIRECTION + 3].tolist(),
+              "hit": HIT_KINDS[hit], "weight": weight, "local": local.tolist(),
+              "contribution": (weight * local).tolist()}
+    if hit != w.NOTHING:
+        s = int(row[w.TREE_SURFACE])
+        record.update({"t": float(row[w.TREE_T]), "material": _material_name(scene, s),
+                       "point": row[w.TREE_POINT:w.TREE_POINT + 3].tolist(),
+                       "normal": row[w.TREE_NORMAL:w.TREE_NORMAL + 3].tolist(),
+                       "geometric normal": row[w.TREE_GEOMETRIC:w.TREE_GEOMETRIC + 3].tolist(),
+                       "kr kt ior": setup.packing.packed.optics[s].tolist()})
+    return record
+
+
+def _material_name(scene, s: int) -> str:
+    """The name of surface row ``s`` (meshes, then spheres, then planes, as packed)."""
+    meshes = geometry.traced_meshes(scene)
+    if s < len(meshes):
+        return f"mesh {meshes[s].name!r}"
+    spheres, planes = geometry._primitives(scene)
+    if s < len(meshes) + len(spheres):
+        return f"sphere {s - len(meshes) + 1}"
+    return f"plane {s - len(meshes) - len(spheres) + 1}"

@@ -1,6 +1,6 @@
 """The z-buffer's pixel record, for the pixel inspector: why one pixel has its colour.
 
-:func:`inspect_pixel` draws the frame once with :func:`core.renderers.zbuffer.draw`, keeping
+:func:`inspect_pixel` draws the frame once with :func:`core.renderers.zbuffer.draw.draw`, keeping
 what each stage produced (the clipped triangles and their attributes, the device points, the
 visibility buffer, the flat colours), and then reads the pixel's story out of those arrays:
 the visible mesh and triangle, the barycentric weights the z-buffer stored
@@ -27,10 +27,11 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
-from core.camera.film import grid_side, to_rgb8
+from core.camera.film import grid_side, sample_viewport, to_rgb8
 from core.camera.view import eye_from_view, n_par_factors, n_per_factors, vrc_basis
 from core.context import DEFAULT_CONTEXT, RenderContext
 from core.pipeline import project
+from core.renderers.zbuffer.draw import draw, draw_lines
 from core.shading.illumination import quantize
 from core.shading.models.dispatch import lighting_terms
 
@@ -38,12 +39,15 @@ KEY = "pixel inspector: z-buffer"
 
 
 class Stages(NamedTuple):
-    """The z-buffer's own functions, handed over by :mod:`core.renderers.zbuffer` (which
-    imports this module: it is not imported back)."""
+    """The drawing a record follows: the z-buffer's own (:data:`ZBUFFER`), or a renderer that
+    runs the z-buffer's pipeline with a stage of its own (the scan-line renderer's)."""
 
     draw: Callable
     draw_lines: Callable
     sample_viewport: Callable
+
+
+ZBUFFER = Stages(draw, draw_lines, sample_viewport)
 
 
 class _Recorder:
@@ -82,8 +86,21 @@ class Capture:
     vrc: tuple = ()                 # u, v, n of the view, and the eye point (or None)
 
 
-def inspect_pixel(scene, view, settings, x: int, y: int, context, stages: Stages) -> dict:
-    """The record of image pixel ``(x, y)`` (x right, y down, row 0 at the top)."""
+def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
+    """The record of image pixel ``(x, y)``: what the z-buffer's stages made of it (the
+    registered inspector of ``zbuffer``)."""
+    return pixel_record(scene, view, settings, x, y, context, ZBUFFER)
+
+
+def buffers(scene, view, settings, context=None, names=()) -> dict:
+    """The buffer views of this frame (render passes): depth, normal, triangle id, barycentrics,
+    (u, v), MIP level, overdraw, as named in ``names``."""
+    return buffer_views(scene, view, settings, context, ZBUFFER, names)
+
+
+def pixel_record(scene, view, settings, x: int, y: int, context, stages: Stages) -> dict:
+    """The record of image pixel ``(x, y)`` (x right, y down, row 0 at the top) of the frame
+    ``stages`` draw."""
     cap = capture(scene, view, settings, context, stages)
     side = cap.side
     if side == 1:
@@ -331,7 +348,7 @@ def _phong(cap, x, y, corners, weights, face, mesh) -> dict:
 
 
 def _textured(cap, x, y, corners, weights, face, mesh) -> dict:
-    from core.renderers.zbuffer_texture import textured_record
+    from core.renderers.zbuffer.texture import textured_record
     return textured_record(cap, x, y, corners, weights, face, mesh)
 
 
@@ -339,7 +356,7 @@ def _textured(cap, x, y, corners, weights, face, mesh) -> dict:
 # Buffer views: the same capture, every pixel at once
 
 
-def buffers(scene, view, settings, context, stages: Stages, names) -> dict:
+def buffer_views(scene, view, settings, context, stages: Stages, names) -> dict:
     """``{name: array}`` for the buffer views in ``names`` this frame has (see
     :data:`core.inspect.buffers.BUFFERS`), at the drawn size (``side`` x the frame's when
     supersampled). Empty pixels are NaN (-1 for the triangle id, 0 for overdraw)."""
