@@ -57,7 +57,7 @@ register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   description="a BSP tree built once in world space, painted back to front",
                   label="BSP tree (painter's)", transparency=True, shaders=True)
 register_renderer("scanline", "core.renderers.scanline.draw:draw",
-                  inspector="core.renderers.scanline.draw:inspect_pixel",
+                  inspector="core.renderers.scanline.inspect:inspect_pixel",
                   plan_stages="core.renderers.scanline.plan:add_stages",
                   description="Watkins' scan-line visible-surface algorithm (FvDFH 15.6): edge, "
                               "polygon and active edge tables, depth only at span ends",
