@@ -183,6 +183,51 @@ def test_a_renderer_without_an_inspector_is_refused_in_words():
         inspect_pixel(scene, bad, settings, 3, 3)
 
 
+def test_a_renderer_is_planned_and_inspected_through_its_registry_entry():
+    """A new name with the scan-line renderer's functions gets its plan stage and its record:
+    nothing but the entry knows which renderer has which."""
+    from core.plan import plan
+    from core.renderers import register_renderer, unregister_renderer
+    scene = load_scene(SCENES_DIR / "interpenetrating.tri")
+    register_renderer("watkins-again", "core.renderers.scanline.draw:draw",
+                      inspector="core.renderers.scanline.inspect:inspect_pixel",
+                      plan_stages="core.renderers.scanline.plan:add_stages", shaders=True)
+    try:
+        settings = RenderSettings.for_scene(scene, renderer="watkins-again", size=(40, 30),
+                                            shading="gouraud")
+        names = [s.name for s in plan(scene, settings.projection, settings.shading,
+                                      renderer="watkins-again")]
+        assert "scan-line visible surface" in names and "z-buffer scan conversion" not in names
+        assert "scan-line visible surface" not in [
+            s.name for s in plan(scene, settings.projection, settings.shading)]
+        frame = render(scene, scene.views[0], settings, RenderContext())
+        covered = np.argwhere((frame.color != frame.color[0, 0]).any(axis=2))
+        y, x = (int(c) for c in covered[len(covered) // 2])
+        record = inspect_pixel(scene, scene.views[0], settings, x, y, RenderContext())
+        assert record["color"] == frame.color[y, x].tolist()
+        assert record["layer"] == "triangle" and record["scan line"]["spans"]
+    finally:
+        unregister_renderer("watkins-again")
+
+
+@pytest.mark.parametrize("name, extra", [
+    ("bsp", {}), ("depth-sort", {}),
+    ("radiosity", {"max_elements": 100, "hemicube_resolution": 16})])
+def test_the_front_door_hands_itself_to_the_inspectors_that_show_its_frame(name, extra):
+    """The painters' and radiosity's records read the frame the front door draws (effects laid
+    over): their packages sit below core.render, so it is handed to them as ``render``."""
+    from core.inspect import inspector_of, takes_render
+    assert takes_render(inspector_of(name)) and not takes_render(inspector_of("zbuffer"))
+    scene = load_scene(SCENES_DIR / ("cornell_box.toml" if name == "radiosity"
+                                     else "interpenetrating.tri"))
+    settings = RenderSettings.for_scene(scene, renderer=name, size=(48, 48), **extra)
+    context = RenderContext()
+    frame = render(scene, scene.views[0], settings, context)
+    for x, y in ((24, 24), (10, 40)):
+        record = inspect_pixel(scene, scene.views[0], settings, x, y, context)
+        assert record["renderer"] == name and record["color"] == frame.color[y, x].tolist()
+
+
 def test_a_frame_drawn_without_the_inspector_loads_none_of_it():
     """Off costs nothing: rendering (and the window's module) import no inspector code."""
     import subprocess
