@@ -536,7 +536,7 @@ def _dispatch(args) -> int:
         loader = None
         if args.crease_angle is not None:        # every scene the window opens, File > Open too
             import functools
-            from app.viewer.state import load_scene
+            from app.session.state import load_scene
             loader = functools.partial(load_scene, crease_angle=args.crease_angle)
         return viewer_main(args.scene, args.size, out_dir=args.out, reference=args.reference,
                            options={"rasterizer": args.rasterizer,
@@ -576,7 +576,7 @@ def _dispatch(args) -> int:
 def _draw_still(scene, view, settings, time):
     """The frame of ``view``, or with ``time`` an animated scene's frame at that moment
     (core.animation.frames.render_at: keyed view, particles and all)."""
-    from app.viewer.state import render          # listens for compiles, to announce them
+    from app.session.state import render          # listens for compiles, to announce them
     from core.animation.keys import animation_of
     animation = animation_of(scene) if time is not None else None
     if animation is None:
@@ -694,7 +694,7 @@ def _scene_to_draw(scene, view, args):
 
 def _render_frame(scene, view, settings, args):
     """(the frame, None), drawn here or split over the cluster; or (None, exit status)."""
-    from app.viewer.state import announce_compiles
+    from app.session.state import announce_compiles
     split, said = _split(args, settings)
     if said is None:
         return None, 1

@@ -261,7 +261,7 @@ def test_cli_painter_options(tmp_path, capsys):
 
 
 def test_viewer_state_draw_order_and_toggles():
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     state = ViewerState.open(SCENES / "three_bars.toml")
     state.set_renderer("depth-sort")
     state.set_paint_first(7)
