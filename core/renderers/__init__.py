@@ -31,11 +31,13 @@ register_renderer("raycast", "core.renderers.raycast:draw", samples_itself=True,
                   label="Ray cast (exact analytic surfaces)", in_menu=False)
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
-                  label="Ray traced", recursive=True, progressive=True)
+                  label="Ray traced", recursive=True, progressive=True,
+                  options="core.raytrace.options:RaytraceOptions")
 register_renderer("radiosity", "core.radiosity.renderer:draw",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
                               "refinement), drawn Gouraud by the z-buffer (core.radiosity)",
-                  label="Radiosity", emitters=True, textures=False, progressive=True)
+                  label="Radiosity", emitters=True, textures=False, progressive=True,
+                  options="core.radiosity.options:RadiosityOptions")
 register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
                   description="Kajiya's rendering equation by path tracing on the BVH "
                               "(core.pathtrace)",
@@ -43,14 +45,16 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
                   progressive=True)
 register_renderer("bsp", "core.renderers.painters:draw_bsp",
                   description="a BSP tree built once in world space, painted back to front",
-                  label="BSP tree (painter's)", transparency=True, shaders=True)
+                  label="BSP tree (painter's)", transparency=True, shaders=True,
+                  options="core.visibility.options:PainterOptions")
 register_renderer("scanline", "core.renderers.scanline:draw",
                   description="Watkins' scan-line visible-surface algorithm (FvDFH 15.6): edge, "
                               "polygon and active edge tables, depth only at span ends",
                   label="Scan line (Watkins)", transparency=True, shaders=True)
 register_renderer("depth-sort", "core.renderers.painters:draw_depth_sort",
                   description="Newell, Newell and Sancha's depth sort, painted back to front",
-                  label="Depth sort (Newell, painter's)", transparency=True, shaders=True)
+                  label="Depth sort (Newell, painter's)", transparency=True, shaders=True,
+                  options="core.visibility.options:PainterOptions")
 register_renderer("volume", "core.volume.renderer:draw",
                   description="volumes ray-marched (emission-absorption with gradient "
                               "shading, or MIP) over the z-buffer's opaque geometry "
