@@ -202,8 +202,8 @@ def _render_parser(sub, scene_help: str) -> None:
     _buffer_argument(r)
     _cluster_arguments(r)                     # scale-out
     _crease_argument(r)
-    from app.commands.radiosity import add_options as gi_options
-    gi_options(r)                             # global illumination (radiosity, path tracing)
+    from app.commands.radiosity import add_solution_argument
+    add_solution_argument(r)                  # radiosity drawn from a saved solution
     _painter_arguments(r)                     # painter's renderers
 
 
@@ -265,8 +265,8 @@ def _tool_parsers(sub, command: str | None) -> None:
 
 
 def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
-    """--renderer and the ray tracer's settings; None keeps the defaults."""
-    from core.settings import SHADOW_MODES
+    """--renderer, the film's and the clipper's choices, and every renderer's own flags;
+    None keeps the defaults."""
     from core.renderers import renderer_names
     parser.add_argument("--renderer", choices=renderer_names(), default=None,
                         help="zbuffer (default), raycast, or raytrace (Whitted: shadows, "
@@ -289,26 +289,24 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
                         "course's outcodes and Sutherland-Hodgman, default), liang-barsky "
                         "(parametric tests) or homogeneous (in clip space before the divide); "
                         "the same picture")
-    parser.add_argument("--shadows", choices=SHADOW_MODES, default=None,
-                        help="raytrace: what an object between a point and a light does "
-                             "(default transmit: attenuate by k_t)")
-    parser.add_argument("--max-depth", type=int, default=None,
-                        help="raytrace: the ray tree's depth limit (default 7)")
-    parser.add_argument("--fresnel", nargs="?", const="schlick", default=None,
-                        choices=("schlick", "exact"),
-                        help="raytrace: Fresnel weighting of k_r and k_t, Schlick's "
-                             "approximation (the default form) or the exact equations")
     # adaptive supersampling's limits
     parser.add_argument("--samples-max", type=int, default=None, metavar="N",
                         help="raytrace, --samples adaptive: the most samples a pixel gets "
                              "(4, 16, 64 or 256; default 16)")
-    parser.add_argument("--adaptive-threshold", type=float, default=None, metavar="T",
-                        help="raytrace, --samples adaptive: split a pixel whose corners differ "
-                             "by more than T (0-1, any channel; default 0.1)")
-    parser.add_argument("--attenuation", type=float, nargs=2, default=None,
-                        metavar=("C1", "C2"),
-                        help="raytrace: attenuate a secondary ray's light by "
-                             "1 / (1 + C1 R + C2 R^2) over its length R (default off)")
+    _options_arguments(parser)
+
+
+def _options_arguments(parser: argparse.ArgumentParser) -> None:
+    """Each registered renderer's own flags (its options class's ``add_arguments``)."""
+    from core.registry import option_classes
+    for options in option_classes():
+        options.add_arguments(parser)
+
+
+def _option_overrides(args) -> dict:
+    """What the renderers' own flags set (None: not given)."""
+    from core.registry import option_classes
+    return {k: v for options in option_classes() for k, v in options.overrides(args).items()}
 
 
 def _samples(text: str):
@@ -360,17 +358,11 @@ def _split(args, settings):
 def _renderer_overrides(args) -> dict:
     adaptive = args.samples == "adaptive"
     samples = (args.samples_max or 16) if adaptive else args.samples
-    return {"renderer": args.renderer, "samples": samples, "shadows": args.shadows,
-            "max_depth": args.max_depth,
-            "fresnel": None if args.fresnel is None else True,
-            "fresnel_form": args.fresnel,
+    return {"renderer": args.renderer, "samples": samples,
             "sample_pattern": "adaptive" if adaptive else None,
-            "adaptive_threshold": args.adaptive_threshold,
-            "secondary_attenuation": (tuple(args.attenuation) if args.attenuation is not None
-                                      else None),
             "pixel_filter": getattr(args, "pixel_filter", None),
             "filter_radius": getattr(args, "filter_radius", None),
-            **_painter_overrides(args)}
+            **_painter_overrides(args), **_option_overrides(args)}
 
 
 def _crease_argument(parser: argparse.ArgumentParser) -> None:
@@ -380,27 +372,17 @@ def _crease_argument(parser: argparse.ArgumentParser) -> None:
                              "the edge (default: the scene's crease_angle, else 45)")
 
 
-def _gi_overrides(args) -> dict:
-    from app.commands.radiosity import overrides          # radiosity and path tracing
-    return overrides(args)
-
-
 # -- the painter's renderers (bsp, depth-sort) -------------------------------------------------
 def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> None:
-    """--bsp-root and --paint-first (and for ``plan``, --renderer)."""
-    from core.settings import BSP_ROOTS
+    """Transparency, Phong's precision and the depth cue (and for ``plan``, --renderer, --view
+    and every renderer's own flags: the painters' report their order)."""
     if plan:
         from core.renderers import renderer_names
         parser.add_argument("--renderer", choices=renderer_names(), default=None,
                             help="bsp and depth-sort also report their tree or sort "
                                  "(nodes, splits, depth, build time; tests run)")
         parser.add_argument("--view", type=int, default=1, help="the view whose order to report")
-    parser.add_argument("--bsp-root", choices=BSP_ROOTS, default=None,
-                        help="bsp: how each node's root triangle is chosen (default "
-                             "fewest-splits: the notes' 'fewest branches'; first: the list's "
-                             "head; random: seeded)")
-    parser.add_argument("--paint-first", type=int, default=None, metavar="K",
-                        help="bsp, depth-sort: paint only the first K triangles of the order")
+        _options_arguments(parser)
     parser.add_argument("--transparency", choices=("off", "interpolated", "screen-door"),
                         default=None, help="z-buffer, bsp, depth-sort: materials with k_t > 0 "
                         "laid over the opaque picture (default: the scene's, else "
@@ -415,11 +397,7 @@ def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> N
 
 
 def _painter_overrides(args) -> dict:
-    if getattr(args, "paint_first", None) is not None and args.paint_first < 0:
-        raise ValueError(f"--paint-first must be 0 or more, not {args.paint_first}")
-    return {"bsp_root": getattr(args, "bsp_root", None),
-            "paint_first": getattr(args, "paint_first", None),
-            "depth_cue": getattr(args, "depth_cue", None),
+    return {"depth_cue": getattr(args, "depth_cue", None),
             "transparency": getattr(args, "transparency", None),
             "shading_precision": getattr(args, "shading_precision", None)}
 
@@ -434,7 +412,8 @@ def _painter_plan(args, scene) -> dict | None:
     if index is None:
         return None                                  # _pick_view said why
     settings = RenderSettings.for_scene(scene, projection=args.projection, shading=args.shading,
-                                        renderer=args.renderer, **_painter_overrides(args))
+                                        renderer=args.renderer, **_painter_overrides(args),
+                                        **_option_overrides(args))
     frame = render(scene, scene.views[index], settings)
     return {args.renderer: {k: v for k, v in frame.stats.items()
                             if k in ("BSP tree", "depth sort", "painted", "culled")},
@@ -536,7 +515,7 @@ def _dispatch(args) -> int:
         loader = None
         if args.crease_angle is not None:        # every scene the window opens, File > Open too
             import functools
-            from app.viewer.state import load_scene
+            from app.session.state import load_scene
             loader = functools.partial(load_scene, crease_angle=args.crease_angle)
         return viewer_main(args.scene, args.size, out_dir=args.out, reference=args.reference,
                            options={"rasterizer": args.rasterizer,
@@ -576,7 +555,7 @@ def _dispatch(args) -> int:
 def _draw_still(scene, view, settings, time):
     """The frame of ``view``, or with ``time`` an animated scene's frame at that moment
     (core.animation.frames.render_at: keyed view, particles and all)."""
-    from app.viewer.state import render          # listens for compiles, to announce them
+    from app.session.state import render          # listens for compiles, to announce them
     from core.animation.keys import animation_of
     animation = animation_of(scene) if time is not None else None
     if animation is None:
@@ -607,7 +586,8 @@ def _drawn_by(settings) -> str:
     if settings.renderer == "zbuffer":
         return f"z-buffer, {settings.rasterizer} rasterizer"
     return {"raytrace": "ray traced", "raycast": "ray cast (exact)",
-            "radiosity": f"radiosity ({settings.form_factors} form factors, {settings.solver})",
+            "radiosity": "radiosity ({0.form_factors} form factors, {0.solver})".format(
+                settings.options_of("radiosity")),
             "pathtrace": f"path traced, {settings.samples} paths per pixel"}.get(settings.renderer,
                                                                       settings.renderer)
 
@@ -661,8 +641,7 @@ def _render_settings(scene, args):
                                         antialias_lines=getattr(args, "antialias_lines", None),
                                         keep_aspect=args.keep_aspect, **texture_options,
                                         lighting_model=args.lighting_model,
-                                        **_renderer_overrides(args),
-                                        **_gi_overrides(args))
+                                        **_renderer_overrides(args))
     except ValueError as error:            # e.g. --samples 0 (the ray tracer's options)
         print(f"error: {error}", file=sys.stderr)
         return None
@@ -694,7 +673,7 @@ def _scene_to_draw(scene, view, args):
 
 def _render_frame(scene, view, settings, args):
     """(the frame, None), drawn here or split over the cluster; or (None, exit status)."""
-    from app.viewer.state import announce_compiles
+    from app.session.state import announce_compiles
     split, said = _split(args, settings)
     if said is None:
         return None, 1

@@ -26,7 +26,12 @@ What it can do:
   isosurface, which is a mesh);
 - ``label``: its name in the window's Render menu;
 - ``in_menu``: whether the Render menu lists it (the exact ray caster draws only analytic
-  primitives, so it is chosen from the command line, not offered for every scene).
+  primitives, so it is chosen from the command line, not offered for every scene);
+- ``options``: its own settings, a frozen dataclass (``"package.module:Class"``) whose
+  ``__post_init__`` validates them and whose ``add_arguments(parser)`` / ``overrides(args)``
+  are its command-line flags; :class:`core.settings.RenderSettings` carries one per class
+  (``settings.options_of(name)``), and ``settings.replace(field=...)`` reaches it by the
+  field's name (:func:`option_owner`). Two renderers may share one class (the painters').
 
 The entries are data and the targets strings (``"package.module:function"``), imported when
 first drawn, inspected or planned (:func:`load`), so this module sits at the bottom of the
@@ -58,9 +63,14 @@ class Renderer:
     in_menu: bool = True
     inspector: str | None = None    # "package.module:function": inspect_pixel
     plan_stages: str | None = None  # "package.module:function": add_stages
+    options: str | type | None = None
 
     def function(self) -> Callable:
         return load(self.target)
+
+    def options_class(self) -> type | None:
+        """Its options' dataclass (imported on first use), or None."""
+        return load(self.options) if self.options is not None else None
 
 
 def load(target: str | Callable) -> Callable:
@@ -110,3 +120,21 @@ def renderers() -> tuple[Renderer, ...]:
 def names_that(capability: str) -> tuple[str, ...]:
     """The renderers that can do ``capability`` (a field of :class:`Renderer`), in order."""
     return tuple(r.name for r in _RENDERERS.values() if getattr(r, capability))
+
+
+def option_classes() -> tuple[type, ...]:
+    """The renderers' options classes, each once, in registration order."""
+    found = []
+    for entry in _RENDERERS.values():
+        cls = entry.options_class()
+        if cls is not None and cls not in found:
+            found.append(cls)
+    return tuple(found)
+
+
+def option_owner(field: str) -> type | None:
+    """The options class that has a field named ``field`` (None: no renderer's)."""
+    for cls in option_classes():
+        if field in cls.__dataclass_fields__:
+            return cls
+    return None

@@ -4,7 +4,8 @@ The names of the projections and shading modes are listed here once (:class:`Pro
 :class:`Shading`); everything else — the reader, the plan, the CLI, the window — takes them from
 here. Both are ``str`` enums, so ``Shading.PHONG == "phong"`` and scene files keep their words.
 
-:class:`RenderSettings` is a frozen value: a variant is ``dataclasses.replace(settings, …)``.
+:class:`RenderSettings` is a frozen value: a variant is ``settings.replace(…)``. Each
+renderer's own settings are its registered options class's (``settings.options_of(name)``).
 A system that needs a setting of its own adds a field here with a default that keeps every
 existing picture unchanged.
 """
@@ -15,6 +16,8 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from enum import Enum
+
+from core.registry import get_renderer, option_owner
 
 
 class Projection(str, Enum):
@@ -85,35 +88,11 @@ class RenderSettings:
     texture_filter: str = "trilinear"
     # Bump and normal maps perturb the normal (False: the demo's "Phong" mode, maps ignored).
     bump: bool = True
-    # The ray tracer's (core.raytrace; the z-buffer ignores them): the ray tree's depth limit
-    # (the notes' 7), the adaptive cut-off ε on the product of the k's, the notes' shadow
-    # option ("off" | "background" | "object" | "transmit") and Schlick's Fresnel weighting.
-    max_depth: int = 7
-    adaptive_epsilon: float = 1e-3
-    shadows: str = "transmit"
-    fresnel: bool = False
-    # The ray tracer's: which Fresnel weighting ``fresnel`` turns on (Schlick's
-    # approximation or the exact equations); the notes' attenuation 1 / (1 + C1 R + C2 R²) of
-    # a secondary ray's light over its length R, (C1, C2), off at (0, 0); and adaptive
-    # supersampling's colour threshold (Whitted 1980: a pixel whose corner samples differ by
-    # more, in any channel on 0-1, is split, down to ``samples`` samples a pixel).
-    fresnel_form: str = "schlick"
-    secondary_attenuation: tuple[float, float] = (0.0, 0.0)
-    adaptive_threshold: float = 0.1
-    # Global illumination (core.radiosity, core.pathtrace): how form factors are
-    # found ("hemicube" | "raycast") and the hemicube's resolution, the solver ("progressive" |
-    # "gauss-seidel"), its stopping point (fraction of the energy still unshot) and the element
-    # budget of adaptive subdivision.
-    form_factors: str = "hemicube"
-    hemicube_resolution: int = 128
-    solver: str = "progressive"
-    converge: float = 0.01
-    max_elements: int = 2000
-    # The painter's renderers (core.renderers.painters): the BSP tree's root rule
-    # (core.visibility.bsp.ROOT_RULES) and, for the draw-order slider, how many triangles of
-    # the painting order to paint (None: all).
-    bsp_root: str = "fewest-splits"
-    paint_first: int | None = None
+    # Each renderer's own settings (the ray tracer's depth limit and shadows, radiosity's
+    # solver, the painters' BSP root, …): one frozen options object per class a renderer
+    # registered (core.registry), read with options_of(name); those left at their defaults
+    # are not stored, so two settings that draw alike compare equal.
+    options: tuple = ()
     # Depth cueing (core.effects.depth_cue) on any renderer, with the scene's
     # [depth_cue] parameters (on by default for a scene that has the table).
     depth_cue: bool = False
@@ -169,17 +148,6 @@ class RenderSettings:
         if self.sample_pattern == "adaptive" and self.samples not in (1, 4, 16, 64, 256):
             raise ValueError(f"adaptive supersampling splits a pixel in four at each level: "
                              f"its most samples must be 4, 16, 64 or 256, not {self.samples}")
-        if self.fresnel_form not in FRESNEL_FORMS:
-            raise ValueError(f"fresnel must be one of {', '.join(FRESNEL_FORMS)}, "
-                             f"not {self.fresnel_form!r}")
-        c1, c2 = (float(c) for c in self.secondary_attenuation)
-        if not (0.0 <= c1 < float("inf") and 0.0 <= c2 < float("inf")):
-            raise ValueError(f"the secondary rays' attenuation C1, C2 must be finite and >= 0, "
-                             f"not {self.secondary_attenuation!r}")
-        if not (0.0 <= float(self.adaptive_threshold) <= 1.0):
-            raise ValueError(f"the adaptive threshold must be from 0 to 1, "
-                             f"not {self.adaptive_threshold!r}")
-        object.__setattr__(self, "secondary_attenuation", (c1, c2))
         check_filter(self.pixel_filter, self.filter_radius)
         if self.clipper not in CLIPPERS:
             raise ValueError(f"clipper must be one of {', '.join(CLIPPERS)}, "
@@ -187,9 +155,6 @@ class RenderSettings:
         if self.transparency not in TRANSPARENCIES:
             raise ValueError(f"transparency must be one of {', '.join(TRANSPARENCIES)}, "
                              f"not {self.transparency!r}")
-        if self.bsp_root not in BSP_ROOTS:
-            raise ValueError(f"BSP root rule must be one of {', '.join(BSP_ROOTS)}, "
-                             f"not {self.bsp_root!r}")
         object.__setattr__(self, "projection", str(self.projection))
         object.__setattr__(self, "shading", str(self.shading))
         object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))
@@ -207,10 +172,32 @@ class RenderSettings:
                   "transparency": getattr(scene, "transparency", None)
                   or needed_transparency(scene)}
         values.update({k: v for k, v in overrides.items() if v is not None})
-        return cls(**values)
+        return cls().replace(**values)
 
     def replace(self, **changes) -> "RenderSettings":
-        return dataclasses.replace(self, **changes)
+        """A variant; a change to a field of a renderer's options (``max_depth=3``) goes to
+        that renderer's options object (TypeError for a name that is neither)."""
+        own = {k: v for k, v in changes.items() if k in RenderSettings.__dataclass_fields__}
+        options = {type(o): o for o in self.options}
+        for name, value in changes.items():
+            if name in own:
+                continue
+            cls = option_owner(name)
+            if cls is None:
+                raise TypeError(f"RenderSettings has no setting {name!r}, and no renderer's "
+                                f"options have one")
+            options[cls] = dataclasses.replace(options.get(cls) or cls(), **{name: value})
+        kept = tuple(sorted((o for cls, o in options.items() if o != cls()),
+                            key=lambda o: type(o).__name__))
+        return dataclasses.replace(self, **own, options=kept)
+
+    def options_of(self, renderer: str):
+        """Renderer ``renderer``'s options object (its defaults when none was set), or None
+        for a renderer that registered none."""
+        cls = get_renderer(renderer).options_class()
+        if cls is None:
+            return None
+        return next((o for o in self.options if type(o) is cls), None) or cls()
 
 
 def needed_transparency(scene) -> str:

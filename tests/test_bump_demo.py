@@ -159,7 +159,7 @@ def test_map_past_the_last_is_the_default_case():
 
 def test_window_clicks_toggle_bump_and_cycle_maps():
     """J3DPanel's mouse: button 1 toggles bump/Phong, any other button the next map (wraps)."""
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     from core.texture.demo_scene import demo_materials
     state = ViewerState.open("scenes/bump_demo.toml", size=(40, 40))
     demo = demo_materials(state.scene)[0]

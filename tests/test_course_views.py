@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from app.viewer.state import ViewerState
+from app.session.state import ViewerState
 from core.paths import SCENES_DIR
 from core.render import render
 from core.scene import view_numbers

@@ -21,7 +21,7 @@ from core.settings import RenderSettings
 from core.scene import generators
 from core.pipeline import project
 from core.scene.formats import ReaderError, load_scene, read_mesh, read_scene_file, read_tri
-from core.scene.formats.meshfile import edge_problem, merge_vertices, signed_volume
+from core.scene.formats.mesh import edge_problem, merge_vertices, signed_volume
 from core.paths import SCENES_DIR
 from core.render import render
 from core.transforms import apply

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.scene.formats.meshfile import read_mesh
+from core.scene.formats.mesh import read_mesh
 
 QUAD_OBJ = b"""v 0 0 0
 v 1 0 0

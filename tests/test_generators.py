@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from core.scene import generators as g
-from core.scene.formats.meshfile import edge_problem, signed_volume
+from core.scene.formats.mesh import edge_problem, signed_volume
 
 
 def directed_edges_pair_up(triangles: np.ndarray) -> bool:

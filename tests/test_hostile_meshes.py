@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from core.render import render
 from core.scene.formats import ReaderError, load_scene, read_mesh, read_tri
-from core.scene.formats.meshfile import drop_repeated_triangles, merge_vertices
+from core.scene.formats.mesh import drop_repeated_triangles, merge_vertices
 from core.settings import RenderSettings
 
 PLY_HEAD = (b"ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
@@ -55,8 +55,7 @@ def test_the_quick_ply_row_check_agrees_with_the_row_by_row_one(pairs, vertices,
     """Consistency check between our two checks (the row-by-row one, which names the bad
     row, is the reference): whatever the numpy check accepts, the row-by-row one accepts too,
     and on ASCII text they agree."""
-    from core.scene.formats.meshfile import (_check_ply_ascii_rows_one_by_one,
-                                             _ply_ascii_layout)
+    from core.scene.formats.mesh.ply import _check_ply_ascii_rows_one_by_one, _ply_ascii_layout
     body = "".join(token + gap for token, gap in pairs)
     elements = [["vertex", vertices, 3, 0, [False] * 3], ["face", faces, 7, 0, [True]]]
     try:

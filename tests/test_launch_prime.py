@@ -35,7 +35,7 @@ def test_nothing_is_primed_for_wireframe_other_files_or_unreadable_ones(tmp_path
 
 def test_a_stand_in_frame_is_drawn_on_a_thread(caplog, monkeypatch):
     """The stand-in is drawn with the peeked settings; a failure is logged, not raised."""
-    import app.viewer.state as state
+    import app.session.state as state
     drawn = []
     real = state.render
     monkeypatch.setattr(state, "render", lambda scene, view, settings, context:

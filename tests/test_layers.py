@@ -156,14 +156,15 @@ def test_no_private_name_is_imported_across_packages():
 # references and import nothing of app; the rest is the graph as it stands, so a new edge
 # between them is a decision made here. Modules never import each other in a loop (above).
 # ``app`` is app's own modules (cli, loading, naming, output_files, startup_gc, versions).
-APP_PACKAGES = ("commands", "bench", "oracles", "reports", "distribution", "viewer")
-APP_IMPORTS = {
+APP_PACKAGES = ("commands", "bench", "oracles", "reports", "distribution", "session", "viewer")
+APP_IMPORTS = {                    # lowest first; no package imports one above it
     "app.oracles": set(),
+    "app.session": set(),          # what the window holds and the frames it asks for: no window
+    "app.distribution": {"app", "app.session"},     # the warm-up makes the window's frames
+    "app.commands": {"app", "app.oracles", "app.distribution", "app.session"},
+    "app.viewer": {"app", "app.distribution", "app.oracles", "app.session"},   # warm-up; OpenGL compare
+    "app.bench": {"app", "app.oracles", "app.commands", "app.session", "app.viewer"},  # the blit's cost
     "app.reports": {"app.bench", "app.oracles"},
-    "app.bench": {"app", "app.oracles", "app.commands", "app.viewer"},
-    "app.commands": {"app", "app.oracles", "app.distribution", "app.viewer"},
-    "app.distribution": {"app", "app.bench", "app.viewer"},   # the warm-up compiles their kernels
-    "app.viewer": {"app", "app.distribution", "app.oracles"},    # warm-up; the OpenGL compare
 }
 
 
@@ -191,3 +192,27 @@ def test_the_order_of_app_packages_is_checked():
     """An import the table does not allow is found (the check can fail)."""
     found = app_imports_out_of_order({**APP_IMPORTS, "app.viewer": set()})
     assert ("app.viewer.launch", "app.distribution.warm_stamp") in found
+
+
+def package_cycles(allowed: dict[str, set[str]]) -> list[tuple[str, ...]]:
+    """Each pair of app packages that the table lets import each other, directly or round a
+    longer loop (a depth-first search from every package)."""
+    cycles = set()
+
+    def walk(start, at, path):
+        for nxt in allowed.get(at, ()):
+            if nxt == start:
+                cycles.add(tuple(sorted(path)))
+            elif nxt not in path and nxt in allowed:
+                walk(start, nxt, path + [nxt])
+    for package in allowed:
+        walk(package, package, [package])
+    return sorted(cycles)
+
+
+def test_no_two_app_packages_import_each_other():
+    """The table is a partial order: the window imports the warm-up and the session, the
+    warm-up the session, never back."""
+    assert package_cycles(APP_IMPORTS) == []
+    assert ("app.session", "app.viewer") in package_cycles(
+        {**APP_IMPORTS, "app.session": {"app.viewer"}})

@@ -58,7 +58,7 @@ def test_the_status_line_names_the_triangle_the_inspector_names():
 def test_the_window_s_tools_draw_the_ids_off_the_ui_thread_once_per_frame():
     import time
     from app.viewer.inspector_tools import InspectorTools
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(80, 60))
     assert state.update()
     tools = InspectorTools(state)
@@ -79,7 +79,7 @@ def test_the_window_s_tools_draw_the_ids_off_the_ui_thread_once_per_frame():
 def test_the_aliasing_view_is_the_aliased_frame_left_and_the_antialiased_right():
     import dataclasses
     from app.viewer.inspector_tools import ALIASED, ANTIALIASED_LINES, InspectorTools
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "house.toml", size=(90, 60))     # the wireframe
     assert state.update()
     tools = InspectorTools(state)
@@ -109,7 +109,7 @@ def test_the_row_profile_is_the_luma_of_each_pixel_of_the_row():
 
 def test_the_aliasing_view_is_not_drawn_for_a_ray_tracer_on_the_ui_thread():
     from app.viewer.inspector_tools import InspectorTools
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(40, 30))
     state.set_renderer("raytrace")
     assert state.update()
@@ -121,7 +121,7 @@ def test_the_aliasing_view_is_not_drawn_for_a_ray_tracer_on_the_ui_thread():
 def test_a_filled_scene_s_antialiased_half_is_16_samples_through_mitchell():
     import dataclasses
     from app.viewer.inspector_tools import ANTIALIASED, InspectorTools
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(60, 40))
     assert state.update()
     tools = InspectorTools(state)

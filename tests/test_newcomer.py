@@ -141,7 +141,7 @@ def test_a_scene_made_for_the_ray_tracer_says_so_in_its_file(name):
 
 
 def test_whitted_opens_in_the_ray_tracer():
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     from core.scene.formats import load_scene
     assert load_scene(SCENES / "whitted.toml").renderer == "raytrace"
     assert ViewerState.open(SCENES / "whitted.toml", size=(40, 30)).renderer_name == "raytrace"

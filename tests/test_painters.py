@@ -262,13 +262,13 @@ def test_cli_painter_options(tmp_path, capsys):
 
 
 def test_viewer_state_draw_order_and_toggles():
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     state = ViewerState.open(SCENES / "three_bars.toml")
     state.set_renderer("depth-sort")
     state.set_paint_first(7)
-    assert state.settings().paint_first == 7
+    assert state.settings().options_of("depth-sort").paint_first == 7
     state.set_renderer("zbuffer")
-    assert state.settings().paint_first is None          # only the painters paint in order
+    assert state.settings().options_of("depth-sort").paint_first is None          # only the painters paint in order
     assert not state.settings().depth_cue
     state.set_depth_cue(True)
     assert state.settings().depth_cue and state.dirty

@@ -15,25 +15,25 @@ from hypothesis import strategies as st
 
 from conftest import ROOT
 from core.scene.formats import ReaderError, read_mesh
-from core.scene.formats import meshfile
+from core.scene.formats.mesh import ply, read
 
 
 def _read(data: bytes, fast: bool):
     """read_mesh's Mesh, or its ReaderError's text, with the fast path on or off."""
-    was = meshfile._FAST_ASCII_PLY
-    meshfile._FAST_ASCII_PLY = fast
+    was = ply.FAST_ASCII_PLY
+    ply.FAST_ASCII_PLY = fast
     try:
         return read_mesh(data, "g.ply", ".ply")
     except ReaderError as error:
         return str(error)
     finally:
-        meshfile._FAST_ASCII_PLY = was
+        ply.FAST_ASCII_PLY = was
 
 
 def _fast_part(data: bytes):
     """What the fast path makes of ``data`` (None: it leaves the file to trimesh)."""
-    rows = meshfile._check_ply(data, "g.ply", 10 ** 9)
-    return None if rows is None else meshfile._fast_ascii_ply(data, rows)
+    rows = ply.check_ply(data, "g.ply", 10 ** 9)
+    return None if rows is None else ply.fast_ascii_ply(data, rows)
 
 
 def _same(a, b) -> bool:
@@ -94,8 +94,8 @@ _DECIMAL = re.compile(r"[+-]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][+-]?[0-9]+)?")
 
 def _numbers(tokens: list[str]):
     body = " ".join(tokens) + "\n"
-    rows = meshfile._ply_ascii_layout(body, [["vertex", 1, 0, 0, [False] * len(tokens)]])
-    numbers = meshfile._ply_numbers(rows, 1)
+    rows = ply._ply_ascii_layout(body, [["vertex", 1, 0, 0, [False] * len(tokens)]])
+    numbers = ply._ply_numbers(rows, 1)
     return None if numbers is None else numbers[0].reshape(-1)
 
 
@@ -134,7 +134,7 @@ def test_the_row_check_finds_every_token_and_row_line(rows, gaps, breaks):
     the lines of body.split("\n") that hold any."""
     body = breaks[-1] + "".join(gaps[2 * i] + a + gaps[2 * i + 1] + b + breaks[i]
                                 for i, (a, b) in enumerate(rows))
-    layout = meshfile._ply_ascii_layout(body, [["vertex", len(rows), 0, 0, [False] * 2]])
+    layout = ply._ply_ascii_layout(body, [["vertex", len(rows), 0, 0, [False] * 2]])
     assert layout is not None
     assert [body[a:].split(maxsplit=1)[0] for a in layout.starts] == body.split()
     filled = [k for k, line in enumerate(body.split("\n")) if line.split()]
@@ -179,7 +179,7 @@ def _ply_file(draw):
     names = ["x", "y", "z"]
     if draw(st.booleans()):
         names += ["nx", "ny", "nz"]
-    texture = draw(st.sampled_from([None, *meshfile._PLY_TEXTURE_NAMES]))
+    texture = draw(st.sampled_from([None, *ply._PLY_TEXTURE_NAMES]))
     names += list(texture or [])
     extras = draw(st.lists(st.sampled_from(["confidence", "intensity", "red", "w"]),
                            unique=True, max_size=3))
@@ -191,7 +191,7 @@ def _ply_file(draw):
              for _ in range(draw(st.integers(1, 8)))]
     gap = draw(st.sampled_from([" ", "  ", "\t", " \t "]))
     end = draw(st.sampled_from(["\n", "\r\n", " \n", "\t\r\n"]))
-    corners = draw(st.sampled_from(meshfile._PLY_CORNER_NAMES))
+    corners = draw(st.sampled_from(ply._PLY_CORNER_NAMES))
     return _ply(properties, rows, faces, gap=gap, end=end, corners=corners), texture is None
 
 
@@ -254,7 +254,7 @@ _LEFT_TO_TRIMESH = {
     # texture coordinates: trimesh cuts the mesh along its seams
     **{f"texture {u} {v}": _ply(_XYZ + [(u, "float"), (v, "double")],
                                 [r + ["0.5", "-.25"] for r in _SQUARE], _QUADS)
-       for u, v in meshfile._PLY_TEXTURE_NAMES},
+       for u, v in ply._PLY_TEXTURE_NAMES},
     # numbers that do not fit their declared type (numpy set to raise, as the tests set it)
     "a float32 overflow": _with_token("1e300"),
     "an int32 overflow": _ply(_XYZ, _SQUARE, [[0, 1, 2, 3000000000], [1, 2, 3, 0]]),
@@ -303,6 +303,6 @@ def test_odd_files_the_fast_path_takes_read_as_trimesh_reads_them(data):
 
 def _assert_same_parts(part: dict, data: bytes) -> None:
     """The fast path's kwargs are trimesh's, bit for bit and type for type."""
-    library = meshfile._library_parts(data, ".ply", "g.ply")[0]
+    library = read._library_parts(data, ".ply", "g.ply")[0]
     for key in ("vertices", "faces", "vertex_normals"):
         assert _same(part.get(key), library.get(key)), key

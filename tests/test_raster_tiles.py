@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.bench.depth_bench import depth_layers
+from core.pipeline.layers import depth_layers
 from core.pipeline import raster, raster_scanline
 
 

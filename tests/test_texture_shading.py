@@ -179,7 +179,7 @@ def test_flat_and_gouraud_draw_textured_materials_with_their_colour(tmp_path, sh
 
 
 def test_viewer_texture_filter_reaches_the_settings():
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     state = ViewerState.open("scenes/texture_floor.toml", size=(40, 40))
     assert state.settings().texture_filter == "trilinear"
     state.set_texture_filter("anisotropic")

@@ -10,9 +10,9 @@ import time
 import numpy as np
 import pytest
 
-from app.viewer.playback import Playback, render_animated
-from app.viewer.progressive import COARSE, trace_progressively, upscale
-from app.viewer.state import ViewerState
+from app.session.playback import Playback, render_animated
+from app.session.progressive import COARSE, trace_progressively, upscale
+from app.session.state import ViewerState
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
 from core.render import render

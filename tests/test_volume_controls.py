@@ -1,4 +1,4 @@
-"""The window's volume controls without a window (app.viewer.volume_controls and the
+"""The window's volume controls without a window (app.session.volume_controls and the
 ViewerState methods the panel calls): the iso value re-extracts the sphere's surface where
 its ramp puts it, on the render worker's thread; a transfer point's drag changes the rendered
 picture by the exact integral; a slice is the array's slice; bad values keep the last good
@@ -13,8 +13,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from app.viewer import volume_controls
-from app.viewer.state import ViewerState
+from app.session import volume_controls
+from app.session.state import ViewerState
 from app.viewer.volume_panel import from_plot, nearest_point, plot_scale, to_plot
 from app.viewer.worker import RenderWorker
 from core.camera.view import View

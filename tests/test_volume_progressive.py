@@ -1,4 +1,4 @@
-"""The window's progressive volume frames (``coarse_then_full`` in app.viewer.progressive, the
+"""The window's progressive volume frames (``coarse_then_full`` in app.session.progressive, the
 drawer of a progressive renderer without one of its own): a coarse picture first, then exactly
 the front door's frame."""
 
@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.viewer.progressive import COARSE_FIRST as COARSE, coarse_then_full, progressive_drawer
+from app.session.progressive import COARSE_FIRST as COARSE, coarse_then_full, progressive_drawer
 from core.render import render
 from core.settings import RenderSettings
 from core.volume import generators
@@ -47,6 +47,6 @@ def test_coarse_first_then_the_front_doors_frame():
 
 
 def test_a_progressive_renderer_without_a_drawer_of_its_own_is_drawn_coarse_then_full():
-    from app.viewer.progressive import trace_progressively
+    from app.session.progressive import trace_progressively
     assert progressive_drawer("volume") is coarse_then_full
     assert progressive_drawer("raytrace") is trace_progressively

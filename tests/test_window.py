@@ -23,7 +23,7 @@ import pytest
 from tools import need_module, need_programs, unavailable
 
 from core.settings import RenderSettings
-from app.viewer.state import ViewerState
+from app.session.state import ViewerState
 from core.scene.generators import house
 from core.paths import SCENES_DIR
 from core.scene.model import Scene
@@ -177,7 +177,7 @@ def test_messages_show_invalid_views_and_the_frame_message(state):
 
 
 def test_compile_notice_only_when_numba_compiles(capsys):
-    from app.viewer import state as state_module
+    from app.session import state as state_module
 
     state_module._compiling.clear()
     state_module.compile_notice()                 # slow, but loading cached kernels: silent

@@ -269,7 +269,7 @@ def _drop_session(tmp_path, display) -> None:
     os.environ.update(DISPLAY=display, FVD_CONFIG_DIR=str(tmp_path / "config"))
     os.environ.pop("WAYLAND_DISPLAY", None)
     from app.viewer.files import RecentFiles
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     from app.viewer.window import ViewerWindow
     state = ViewerState.open(ROOT_SCENES / "house.toml", size=(160, 120))
     window = ViewerWindow(state, out_dir=tmp_path)
@@ -299,7 +299,7 @@ def _drop_session(tmp_path, display) -> None:
 # -- the hands on a ViewerState, and --reference (no window) --------------------------------
 
 def house_state(size=(160, 120)):
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     return ViewerState.open(ROOT_SCENES / "house.toml", size=size)
 
 

@@ -119,7 +119,7 @@ def test_the_tools_follow_the_frame_without_a_window():
     """InspectorTools on a ViewerState: a click's record is the CLI's; a buffer view follows
     a new frame, and falls back to the picture when the new frame has no such buffer."""
     from app.viewer.inspector_tools import PICTURE, InspectorTools
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     from core.paths import SCENES_DIR
 
     state = ViewerState.open(SCENES_DIR / "cube.toml", size=SIZE)

@@ -23,7 +23,7 @@ GRAB = (61, 133, 224)          # the dark style's slider grab
 
 def core_frame(iso: float | None = None) -> np.ndarray:
     """The scene's first view by core.render at SIZE, the metaballs at ``iso`` if given."""
-    from app.viewer.volume_controls import reextract
+    from app.session.volume_controls import reextract
     from core.render import render
     from core.scene.formats import load_scene
     from core.settings import RenderSettings
@@ -37,7 +37,7 @@ def core_frame(iso: float | None = None) -> np.ndarray:
 @pytest.mark.xvfb
 @pytest.mark.slow
 def test_iso_slider_and_slice_view_under_xvfb(tmp_path):
-    from app.viewer.volume_controls import slice_picture
+    from app.session.volume_controls import slice_picture
     from core.scene.formats import load_scene
     from core.volume.data import volumes_of
     from core.volume.marching import marching_cubes

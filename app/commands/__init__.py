@@ -1,1 +1,2 @@
-"""The bodies of ``python -m app`` commands: animate, inspect, radiosity, stability, scale-out."""
+"""The bodies of ``python -m app`` commands: animate (and the bundle of files its cluster jobs
+ship), inspect, radiosity, stability, scale-out."""

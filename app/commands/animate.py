@@ -10,7 +10,7 @@ Frames are rendered
   win (:func:`predict`; the output says why), or
 - on a running Dask cluster (``--scheduler tcp://host:8786``; the workers need only this
   package: the scene file and every file it names travel with the job, content-addressed,
-  :mod:`app.distribution.bundle`).
+  :mod:`app.commands.bundle`).
 
 On a cluster the frames go out in contiguous runs, long first and short at the end
 (:class:`Runs`), each with the particle state at its first frame
@@ -278,7 +278,7 @@ def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tu
     """A worker's task: the contiguous ``frames`` of the job, the scene read from the bundle
     (unpacked once per worker), the simulations restored from ``checkpoint`` (their state at
     the first frame), so that nothing is simulated from t = 0."""
-    from app.distribution.bundle import unpack
+    from app.commands.bundle import unpack
     animation = _animation(str(unpack(bundle)), job.get("load_size"))
     if checkpoint is not None:
         from core.animation.checkpoint import restore_animation
@@ -714,7 +714,7 @@ def _refused(args, out: Path) -> int:
 
 def _job_to_run(args, out: Path):
     """(job, bundle, animation) for the scene and the options, or an exit status (said why)."""
-    from app.distribution.bundle import load_recorded
+    from app.commands.bundle import load_recorded
     from core.animation.animation import Animation
     from core.animation.keys import animation_of
     from core.scene.view_numbers import ViewNumberError

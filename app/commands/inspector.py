@@ -18,7 +18,7 @@ def parse_pixel(text: str) -> tuple[int, int] | None:
 
 
 def inspect_main(scene, view, settings, pixel: str, as_json: bool) -> int:
-    from app.viewer.state import announce_compiles
+    from app.session.state import announce_compiles
     from core.inspect import NotInspectable, inspect_pixel
     from core.inspect.text import describe
     xy = parse_pixel(pixel)
@@ -50,7 +50,7 @@ def _jsonable(value):
 def render_buffer(scene, view, settings, name: str, out: Path, write_png) -> int:
     """``render --buffer NAME --out X.png``: the colour-mapped picture, and X.npy beside it
     (``write_png(color, path)``: the command line's atomic writer)."""
-    from app.viewer.state import announce_compiles
+    from app.session.state import announce_compiles
     from core.inspect import NotInspectable
     from core.inspect.buffers import buffer
     try:
@@ -76,7 +76,7 @@ def render_buffer(scene, view, settings, name: str, out: Path, write_png) -> int
 def compare_main(scene, view, settings, args, write_png) -> int:
     """``compare``: 0 when no pixel is beyond the tolerance, 1 when some are, 2 for bad
     input."""
-    from app.viewer.state import announce_compiles
+    from app.session.state import announce_compiles
     from core.inspect.compare import compare, heat_map
     picture = _read_picture(args.image)
     if picture is None:
@@ -142,7 +142,7 @@ def _read_picture(path: str):
 
 
 def cpu_reference(scene, view, settings):
-    from app.viewer.state import render
+    from app.session.state import render
     frame = render(scene, view, settings)
     if frame.message:
         return None, frame.message

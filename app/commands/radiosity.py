@@ -1,6 +1,7 @@
 """``python -m app radiosity SCENE --out solution.npz``: solve once, save the solution keyed to
 the scene's hash (``render --renderer radiosity --solution FILE`` draws from it; a file of
-another scene is refused). Also the global-illumination options shared by ``render``."""
+another scene is refused). Radiosity's options and their flags are
+:class:`core.radiosity.options.RadiosityOptions`'s."""
 
 from __future__ import annotations
 
@@ -8,30 +9,10 @@ import sys
 import time
 
 
-def add_options(parser) -> None:
-    """The radiosity and path-tracing settings; None keeps the defaults."""
-    from core.settings import FORM_FACTOR_METHODS, SOLVERS
-    g = parser.add_argument_group("global illumination (radiosity, pathtrace)")
-    g.add_argument("--form-factors", choices=FORM_FACTOR_METHODS, default=None,
-                   help="radiosity: the hemicube drawn by our z-buffer (default) or ray casting "
-                        "through the BVH")
-    g.add_argument("--hemicube-resolution", type=int, default=None, metavar="N",
-                   help="radiosity: hemicube pixels per side (even; default 128)")
-    g.add_argument("--solver", choices=SOLVERS, default=None,
-                   help="radiosity: progressive refinement (default) or Gauss-Seidel")
-    g.add_argument("--converge", type=float, default=None, metavar="FRACTION",
-                   help="radiosity: stop when the unshot energy is below this fraction of the "
-                        "emitted (default 0.01)")
-    g.add_argument("--max-elements", type=int, default=None, metavar="N",
-                   help="radiosity: element budget, adaptive subdivision included (default 2000)")
-    if parser.prog.endswith("render"):
-        g.add_argument("--solution", default=None, metavar="FILE.npz",
-                       help="radiosity: draw from this saved solution (python -m app radiosity)")
-
-
-def overrides(args) -> dict:
-    return {"form_factors": args.form_factors, "hemicube_resolution": args.hemicube_resolution,
-            "solver": args.solver, "converge": args.converge, "max_elements": args.max_elements}
+def add_solution_argument(parser) -> None:
+    """``render --solution FILE``: draw radiosity from a saved solution."""
+    parser.add_argument("--solution", default=None, metavar="FILE.npz",
+                        help="radiosity: draw from this saved solution (python -m app radiosity)")
 
 
 def load_solution(scene, path, context) -> str | None:
@@ -51,7 +32,8 @@ def load_solution(scene, path, context) -> str | None:
 def add_arguments(parser) -> None:
     parser.add_argument("scene", help="a scene file (.toml)")
     parser.add_argument("--out", required=True, help="the solution file to write (.npz)")
-    add_options(parser)
+    from core.radiosity.options import RadiosityOptions
+    RadiosityOptions.add_arguments(parser)
 
 
 def main(args) -> int:
@@ -68,7 +50,8 @@ def main(args) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     try:
-        settings = RenderSettings.for_scene(scene, **overrides(args))
+        from core.radiosity.options import RadiosityOptions
+        settings = RenderSettings.for_scene(scene, **RadiosityOptions.overrides(args))
         options = Options.from_settings(settings)
     except ValueError as error:
         print(f"error: {error}", file=sys.stderr)

@@ -2,7 +2,7 @@
 
 The frame is cut into bands of rows; each band is a task that traces its rows at every
 sample of the pixel (:func:`core.raytrace.renderer.trace_tile`) on a worker, which reads the
-scene from the job's bundle (:mod:`app.distribution.bundle`: the scene file and every file it names,
+scene from the job's bundle (:mod:`app.commands.bundle`: the scene file and every file it names,
 so the worker needs only the package) and prepares it once (BVH and all) for every band it
 traces. A pixel's colour depends on its own rays only, so the assembled bands are exactly the
 picture one process traces (the test compares them byte for byte).
@@ -67,7 +67,7 @@ def _setup(bundle, view_number, settings, demo):
     """The traced frame's Setup, made once per worker for the same job."""
     key = (bundle.digest, view_number, settings, demo)
     if _prepared.get("key") != key:
-        from app.distribution.bundle import unpack
+        from app.commands.bundle import unpack
         from core.camera.film import sample_offsets
         from core.raytrace.renderer import TraceOptions, prepare
         from core.scene.formats import load_scene
@@ -108,7 +108,7 @@ def split_frame(args, settings):
     when this process renders the frame itself (the note says why); ClusterError when the
     cluster cannot be used."""
     from app.commands import cluster
-    from app.distribution.bundle import load_recorded
+    from app.commands.bundle import load_recorded
     from core.scene.formats import load_scene
     why = can_split(settings)
     if why is None and args.time is not None:

@@ -1,1 +1,1 @@
-"""What ships and readies the program: the kernel warm-up, its stamp, and the job bundle."""
+"""What readies the program where it is installed: the kernel warm-up and its stamp."""

@@ -10,7 +10,7 @@ after its first frame, so that switching modes later loads cached kernels off th
 projections and both rasterizers, a closed mesh large enough for the parallel set-up (back-face
 culling, ≥ 10 000 triangles), an open one (two-sided lighting), lines, and several samples a
 pixel. :func:`scene_steps` then opens every shipped scene (``scenes/``) the way the window
-does (:class:`app.viewer.state.ViewerState`), in every renderer and shading, and in every
+does (:class:`app.session.state.ViewerState`), in every renderer and shading, and in every
 texture filter when it has textures, so that no first picture the user asks for compiles
 (``tests/test_warmup_complete.py`` checks it from an empty kernel cache).
 
@@ -68,7 +68,7 @@ def _batched_frame():
     classification on all cores."""
     import numpy as np
 
-    from app.bench.depth_bench import depth_layers
+    from core.pipeline.layers import depth_layers
     from core.pipeline import clip_polygon, raster
     xy_z, inv_w, triangles = depth_layers(21, 10_000, *SIZE)   # (either order: same code)
     assert len(triangles) >= raster.BATCH_FROM
@@ -232,7 +232,7 @@ def _other_clippers() -> None:
 def scene_jobs(path, size=SIZE):
     """(label, run) for the first picture of scene file ``path`` in every renderer, shading
     and (when it has textures) texture filter, each made as the window makes it."""
-    from app.viewer.state import ViewerState
+    from app.session.state import ViewerState
     from core.renderers import renderer_names
     from core.settings import SHADINGS
     from core.texture.modes import FILTERS
@@ -306,7 +306,7 @@ def opening_steps(path) -> list[tuple[str, Callable[[], object]]]:
     Far fewer kernels than the scene's every-renderer step, so the window that asked for it
     (``--first``) draws after this one step, not after the whole warm-up."""
     def run():
-        from app.viewer.state import ViewerState
+        from app.session.state import ViewerState
         state = ViewerState.open(path, size=SIZE)
         state._job()[0]()
     return [(opening_label(path), run)]

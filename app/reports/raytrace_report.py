@@ -50,7 +50,7 @@ def rows(size: int, repeats: int = 3, cache=None, progress=print) -> list[dict]:
                     continue                 # one sample is the pixel centre, whatever the pattern
                 settings = RenderSettings(shading="phong", size=(size, size), samples=samples,
                                           sample_pattern=pattern, renderer="raytrace",
-                                          shadows="off", seed=1)
+                                          seed=1).replace(shadows="off")
                 image, seconds = _frame(scene, settings, repeats)
                 error = image - 255.0 * reference.rgb
                 row = {"series": f"{name} {pattern}", "scene": name, "pattern": pattern,

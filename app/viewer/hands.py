@@ -1,6 +1,6 @@
 """The window's camera hands: mouse gestures turned into course views, and the view's numbers.
 
-Takes the :class:`app.viewer.state.ViewerState` and gestures in picture pixels (from the
+Takes the :class:`app.session.state.ViewerState` and gestures in picture pixels (from the
 picture's top-left, y down) and gives the state a new :class:`core.camera.view.View` made by
 :mod:`core.camera.orbit`: a drag orbits about the VRP with Shoemake's arcball, Shift+drag or
 the middle button pans, the wheel dollies, Ctrl+wheel changes the window (the field of view);

@@ -8,7 +8,7 @@ imports nothing more (the inspector's modules load on first use).
 - ``v`` (View > Buffer view): the picture, then each buffer view the frame has (depth,
   normal, triangle id, barycentrics, (u, v), MIP level, overdraw, ray-tree depth), then in a
   scene with volumes its axial, coronal and sagittal slices
-  (:mod:`app.viewer.volume_controls`), in place of the picture; the panel says which.
+  (:mod:`app.session.volume_controls`), in place of the picture; the panel says which.
 - View > Compare with OpenGL: the same view drawn by real OpenGL (the GLSL oracle), held
   against the frame; the heat map takes the picture's place and ``h`` flips between the two.
 - Plots: the last frames' times, and a progressive frame's progress, in the panel.
@@ -172,7 +172,7 @@ class InspectorTools:
     # -- buffer views ------------------------------------------------------------------------
     def buffer_names(self) -> tuple[str, ...]:
         """The buffer views to choose from: the renderer's, then a volume scene's slices."""
-        from app.viewer.volume_controls import SLICES
+        from app.session.volume_controls import SLICES
         from core.inspect.buffers import BUFFERS
         return (*BUFFERS, ALIASING, *(SLICES if self.state.volumes else ()))
 
@@ -197,7 +197,7 @@ class InspectorTools:
         self.changed = True
 
     def _show_buffer(self, name: str, how: str) -> bool:
-        from app.viewer.volume_controls import SLICES
+        from app.session.volume_controls import SLICES
         from core.inspect import NotInspectable
         from core.inspect.buffers import buffer
         s = self.state
@@ -243,7 +243,7 @@ class InspectorTools:
 
     def _show_slice(self, name: str, how: str) -> bool:
         """A slice through the volume the controls act on, in place of the picture."""
-        from app.viewer.volume_controls import slice_picture
+        from app.session.volume_controls import slice_picture
         s = self.state
         if s.volume is None:
             return False

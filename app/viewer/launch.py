@@ -132,7 +132,7 @@ def _default_scene_source() -> str:
 def _open_state(scene_source, size, options, started):
     """The viewer's state on the scene (its messages printed), or None when it cannot be read
     (said why)."""
-    from app.viewer.state import ViewerState, reader_errors
+    from app.session.state import ViewerState, reader_errors
     if scene_source is None:
         scene_source = _default_scene_source()
     prime_while_loading(scene_source, (options or {}).get("renderer_name"))
@@ -194,7 +194,7 @@ def prime_kernels(state) -> threading.Thread | None:
 
     def prime():
         from app.distribution.warmup import quick
-        from app.viewer.state import render
+        from app.session.state import render
         from core.context import RenderContext
         try:
             render(state.scene, state.view, quick(settings.replace(size=(16, 16))),
@@ -229,7 +229,7 @@ def prime_while_loading(source: str, renderer: str | None) -> threading.Thread |
     # numba, and what the thread imports, come in here before it starts.
     import core.jit  # noqa: F401
     from app.distribution.warmup import quick
-    from app.viewer.state import render
+    from app.session.state import render
     from core.context import RenderContext
     from core.scene.generators import sphere_torus
 

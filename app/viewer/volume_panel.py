@@ -104,7 +104,7 @@ class VolumePanel:
         changed, k = imgui.combo("##volume", s.volume_index, names)
         imgui.pop_item_width()
         if changed:
-            from app.viewer.volume_controls import SLICES
+            from app.session.volume_controls import SLICES
             s.select_volume(k)
             self.dragging = None
             if self.tools.buffer in SLICES:          # the slice shown is the new volume's
@@ -167,7 +167,7 @@ class VolumePanel:
         return self._scale[1]
 
     def _slice(self, imgui) -> None:
-        from app.viewer.volume_controls import SLICE_AXIS, SLICES
+        from app.session.volume_controls import SLICE_AXIS, SLICES
         s, tools = self.state, self.tools
         showing = tools.buffer in SLICES
         for name in SLICES:
@@ -187,14 +187,14 @@ class VolumePanel:
 
 
 def _mesh_of(scene, volume):
-    from app.viewer.volume_controls import isosurface_index
+    from app.session.volume_controls import isosurface_index
     return isosurface_index(scene, volume)
 
 
 def _draw_plot(imgui, volume, box, scale) -> None:
     """Histogram bars (log counts) under the transfer function's alpha, its points in their
     colours; all inside ``box``."""
-    from app.viewer.volume_controls import histogram
+    from app.session.volume_controls import histogram
     x0, y0, w, h = box
     draw = imgui.get_window_draw_list()
     draw.add_rect_filled((x0, y0), (x0 + w, y0 + h), imgui.IM_COL32(30, 30, 36, 255))

@@ -1,6 +1,6 @@
 """The window: the CPU frame beside a side panel of menus, status, plan and messages.
 
-Takes a :class:`app.viewer.state.ViewerState` and shows it. The picture is exactly the frame
+Takes a :class:`app.session.state.ViewerState` and shows it. The picture is exactly the frame
 the core rendered, ``W x H`` pixels at the window's top-left corner, and nothing lies on it:
 the side panel to its right holds the menu bar (File, Projection, Shading, Render, View), the
 status lines, and collapsed strips for the plan of the frame, the invalid views of the file and
@@ -74,7 +74,7 @@ from app.viewer.hands import KEYS_HELP, CameraHands, save_view, view_lines
 from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
 from app.viewer.loupe import Loupe, value_at
-from app.viewer.state import ViewerState, compile_count
+from app.session.state import ViewerState, compile_count
 from app.viewer.volume_panel import VolumePanel
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
@@ -433,7 +433,7 @@ class ViewerWindow:
         self._wake()
 
     def change_speed(self, factor: float, how: str) -> None:
-        from app.viewer.playback import SPEEDS
+        from app.session.playback import SPEEDS
         speed = min(max(self.state.playback.speed * factor, SPEEDS[0]), SPEEDS[-1])
         self.state.set_speed(speed)
         log.info("action: %s -> speed %gx", how, speed)
@@ -1283,7 +1283,7 @@ class ViewerWindow:
         playback = self.state.playback
         if playback is None:
             return
-        from app.viewer.playback import SPEEDS
+        from app.session.playback import SPEEDS
         if imgui.button("Pause" if playback.playing else "Play"):
             self.toggle_play("button Play")
         imgui.same_line()

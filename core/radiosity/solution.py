@@ -24,8 +24,8 @@ import numpy as np
 
 from core.radiosity import mesh as meshing
 from core.radiosity.mesh import Elements, RadiosityError
-from core.radiosity.solve import (FORM_FACTOR_METHODS, SOLVERS, Progressive, Shooter,
-                                  direct_light, gauss_seidel, scene_bvh)
+from core.radiosity.options import RadiosityOptions
+from core.radiosity.solve import Progressive, Shooter, direct_light, gauss_seidel, scene_bvh
 
 FORMAT = 1
 
@@ -41,26 +41,16 @@ class Options:
     adaptive: bool = True                # subdivide where the gradient is large, solve again
 
     def __post_init__(self) -> None:
-        if self.form_factors not in FORM_FACTOR_METHODS:
-            raise ValueError(f"form factors must be one of {', '.join(FORM_FACTOR_METHODS)}, "
-                             f"not {self.form_factors!r}")
-        if self.solver not in SOLVERS:
-            raise ValueError(f"solver must be one of {', '.join(SOLVERS)}, not {self.solver!r}")
-        if not (isinstance(self.resolution, int) and 8 <= self.resolution <= 4096
-                and self.resolution % 2 == 0):
-            raise ValueError(f"hemicube resolution must be an even whole number from 8 to 4096, "
-                             f"not {self.resolution!r}")
-        if not 0.0 <= float(self.converge) < 1.0:
-            raise ValueError(f"converge must be a fraction in [0, 1), not {self.converge!r}")
-        if not (isinstance(self.max_elements, int) and 1 <= self.max_elements <= 1_000_000):
-            raise ValueError(f"max elements must be a whole number from 1 to 1000000, "
-                             f"not {self.max_elements!r}")
+        # The user-facing options check themselves (the same messages wherever they come from).
+        RadiosityOptions(form_factors=self.form_factors, hemicube_resolution=self.resolution,
+                         solver=self.solver, converge=self.converge,
+                         max_elements=self.max_elements)
 
     @classmethod
     def from_settings(cls, settings) -> "Options":
-        return cls(form_factors=settings.form_factors, resolution=settings.hemicube_resolution,
-                   solver=settings.solver, converge=settings.converge,
-                   max_elements=settings.max_elements)
+        own = settings.options_of("radiosity")
+        return cls(form_factors=own.form_factors, resolution=own.hemicube_resolution,
+                   solver=own.solver, converge=own.converge, max_elements=own.max_elements)
 
 
 @dataclass

@@ -25,11 +25,11 @@ from core.camera.rays import camera_rays, primary_rays
 from core.camera.view import View, check
 from core.raytrace import adaptive, geometry, whitted
 from core.raytrace.optics import AIR, index_of_refraction
+from core.raytrace.options import MAX_DEPTH_LIMIT, RaytraceOptions  # noqa: F401  (its limit)
 from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
                                        to_uint8)
 
-MAX_DEPTH_LIMIT = 64
 
 
 @dataclass(frozen=True)
@@ -52,23 +52,19 @@ class TraceOptions:
                 else whitted.FRESNEL_SCHLICK)
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.max_depth, int) and 1 <= self.max_depth <= MAX_DEPTH_LIMIT):
-            raise ValueError(f"max_depth must be a whole number from 1 to {MAX_DEPTH_LIMIT}, "
-                             f"not {self.max_depth!r}")
-        if not (isinstance(self.adaptive_epsilon, (int, float))
-                and 0.0 <= self.adaptive_epsilon <= 1.0):
-            raise ValueError(f"adaptive_epsilon must be a number in [0, 1], "
-                             f"not {self.adaptive_epsilon!r}")
-        if self.shadows not in whitted.SHADOW_MODES:
-            raise ValueError(f"shadows must be one of {', '.join(whitted.SHADOW_MODES)}, "
-                             f"not {self.shadows!r}")
+        # The user-facing options check themselves (the same messages wherever they come from).
+        RaytraceOptions(max_depth=self.max_depth, adaptive_epsilon=self.adaptive_epsilon,
+                        shadows=self.shadows, fresnel_form=self.fresnel_form,
+                        secondary_attenuation=self.secondary_attenuation)
         object.__setattr__(self, "medium", index_of_refraction(self.medium, "medium"))
 
     @classmethod
     def from_settings(cls, settings) -> "TraceOptions":
-        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel", "texture_filter", "bump",
-                 "fresnel_form", "secondary_attenuation")
-        return cls(**{n: getattr(settings, n) for n in names if hasattr(settings, n)})
+        own = settings.options_of("raytrace")
+        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel", "fresnel_form",
+                 "secondary_attenuation")
+        return cls(**{n: getattr(own, n) for n in names}, texture_filter=settings.texture_filter,
+                   bump=settings.bump)
 
 
 @dataclass
@@ -288,7 +284,7 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
         setup = prepare(scene, view, settings.projection, settings.size, options, offsets,
                         settings.keep_aspect)
         if settings.sample_pattern == "adaptive":
-            setup.adaptive = (adaptive.levels_for(settings.samples), settings.adaptive_threshold,
+            setup.adaptive = (adaptive.levels_for(settings.samples), settings.options_of("raytrace").adaptive_threshold,
                               adaptive.MIN_LEVELS)
     except ValueError as error:              # a setting or a material the tracer cannot use
         frame.color[...] = to_uint8(scene.background)

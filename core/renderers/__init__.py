@@ -39,12 +39,14 @@ register_renderer("raycast", "core.renderers.raycast.draw:draw", samples_itself=
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
                   inspector="core.raytrace.inspect:inspect_pixel",
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
-                  label="Ray traced", recursive=True, progressive=True)
+                  label="Ray traced", recursive=True, progressive=True,
+                  options="core.raytrace.options:RaytraceOptions")
 register_renderer("radiosity", "core.radiosity.renderer:draw",
                   inspector="core.radiosity.inspect:inspect_pixel",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
                               "refinement), drawn Gouraud by the z-buffer (core.radiosity)",
-                  label="Radiosity", emitters=True, textures=False, progressive=True)
+                  label="Radiosity", emitters=True, textures=False, progressive=True,
+                  options="core.radiosity.options:RadiosityOptions")
 register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
                   inspector="core.pathtrace.inspect:inspect_pixel",
                   description="Kajiya's rendering equation by path tracing on the BVH "
@@ -55,7 +57,8 @@ register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
                   plan_stages="core.renderers.painters.plan:bsp_stages",
                   description="a BSP tree built once in world space, painted back to front",
-                  label="BSP tree (painter's)", transparency=True, shaders=True)
+                  label="BSP tree (painter's)", transparency=True, shaders=True,
+                  options="core.renderers.painters.options:PainterOptions")
 register_renderer("scanline", "core.renderers.scanline.draw:draw",
                   inspector="core.renderers.scanline.inspect:inspect_pixel",
                   plan_stages="core.renderers.scanline.plan:add_stages",
@@ -66,7 +69,8 @@ register_renderer("depth-sort", "core.renderers.painters.draw:draw_depth_sort",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
                   plan_stages="core.renderers.painters.plan:depth_sort_stages",
                   description="Newell, Newell and Sancha's depth sort, painted back to front",
-                  label="Depth sort (Newell, painter's)", transparency=True, shaders=True)
+                  label="Depth sort (Newell, painter's)", transparency=True, shaders=True,
+                  options="core.renderers.painters.options:PainterOptions")
 register_renderer("volume", "core.volume.renderer:draw",
                   inspector="core.volume.inspect:inspect_pixel",
                   description="volumes ray-marched (emission-absorption with gradient "

@@ -39,18 +39,19 @@ class Painting:
 # ------------------------------------------------------------------------- the two orders
 
 def scene_tree(scene, settings, context) -> bsp_tree.BSPTree:
-    """The scene's BSP tree for ``settings.bsp_root``, built on first use and kept in the
-    render context while the scene (and its arrays) live."""
+    """The scene's BSP tree for the painters' ``bsp_root``, built on first use and kept in
+    the render context while the scene (and its arrays) live."""
     from core.shading.shade import geometry
     positions, triangles = geometry(scene, context)
     cache = context.cache(scene)
-    key = (settings.bsp_root, settings.seed)
+    root_rule = settings.options_of("bsp").bsp_root
+    key = (root_rule, settings.seed)
     held = cache.get("bsp")
     if held is None or held[0] is not triangles or held[1] is not positions:
         held = (triangles, positions, {})
         cache["bsp"] = held
     if key not in held[2]:
-        held[2][key] = bsp_tree.build(positions, triangles, settings.bsp_root, settings.seed)
+        held[2][key] = bsp_tree.build(positions, triangles, root_rule, settings.seed)
     return held[2][key]
 
 
@@ -84,8 +85,9 @@ def bsp_painting(scene, view, settings, context, timer, n, z_min, vp) -> Paintin
         order = order[mask[tree.source[order]]]
         stats["culled"] = int(len(triangles) - len(kept))
     stats["painted total"] = int(len(order))      # before the draw-order slider's cut
-    if settings.paint_first is not None:
-        order = order[:max(settings.paint_first, 0)]
+    first = settings.options_of("bsp").paint_first        # the draw-order slider
+    if first is not None:
+        order = order[:max(first, 0)]
     timer.lap("BSP traversal")
     inputs = _inputs(stages, scene, settings, eye, kept, context)
     attrs = split_attributes(inputs.vertex_attrs, tree.recipe)
@@ -126,8 +128,9 @@ def depth_sorted_painting(scene, view, settings, context, timer, n, z_min, vp) -
         source = kept[source]
     triangles_out = ordered.triangles
     total = int(len(triangles_out))
-    if settings.paint_first is not None:
-        triangles_out = triangles_out[:max(settings.paint_first, 0)]
+    first = settings.options_of("depth-sort").paint_first  # the draw-order slider
+    if first is not None:
+        triangles_out = triangles_out[:max(first, 0)]
         source = source[:len(triangles_out)]
     attrs = split_attributes(clipped.attrs, ordered.recipe)
     stats = {"depth sort": dict(ordered.counts), "painted total": total}

@@ -17,8 +17,9 @@ every triangle is given a constant depth equal to its rank in the painting order
 wins" is exactly "the later painted wins", the painter's overwrite. The true depth of each pixel is
 computed afterwards from the barycentrics (``frame.depth``, for depth cueing and transparency).
 
-``settings.paint_first`` K paints only the first K triangles of the order (the draw-order
-slider). :mod:`core.renderers.painters.inspect` counts the writes per pixel and lists them.
+``paint_first`` K (the painters' options, :mod:`core.renderers.painters.options`) paints only
+the first K triangles of the order (the draw-order slider). :mod:`core.renderers.painters.inspect`
+counts the writes per pixel and lists them.
 """
 
 from __future__ import annotations

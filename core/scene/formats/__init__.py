@@ -4,7 +4,7 @@
 
 - ``.toml``: a scene file (:mod:`core.scene.formats.scenefile`);
 - ``.tri``: the course's triangle file with its pixel-grid camera (:mod:`core.scene.formats.tri`);
-- ``.obj`` ``.ply`` ``.off`` ``.stl``: a mesh file (:mod:`core.scene.formats.meshfile`), shown from
+- ``.obj`` ``.ply`` ``.off`` ``.stl``: a mesh file (:mod:`core.scene.formats.mesh`), shown from
   three views that frame its bounding box (:mod:`core.scene.formats.camera`);
 - anything else: a bare view file (Assignment #1's input), shown with the FvDFH house;
 - ``-``: a view file on standard input (the course's ``prog < grade.data``).
@@ -22,7 +22,7 @@ from pathlib import Path
 
 from core.scene.formats.errors import (MAX_INPUT_BYTES, ReaderError, decode_text, read_file,
                                       read_stream, tolerant_of_underflow)
-from core.scene.formats.meshfile import MESH_EXTENSIONS, read_mesh
+from core.scene.formats.mesh import MESH_EXTENSIONS, read_mesh
 from core.scene.formats.scenefile import read_scene_file
 from core.scene.formats.tri import read_tri
 from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, Scene

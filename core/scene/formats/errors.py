@@ -98,6 +98,14 @@ def decode_text(data: bytes, file: str) -> str:
     return text
 
 
+def over_budget(file: str, what: str, count: int, budget: int,
+                line: int | None = None) -> ReaderError:
+    """``{what} {count} triangles; the limit is {budget} (the triangle budget of a scene)``:
+    what every mesh format says when a file holds more triangles than a scene may."""
+    return ReaderError(file, f"{what} {count} triangles; the limit is {budget} (the triangle "
+                             f"budget of a scene)", line)
+
+
 def short(token: str, limit: int = 40) -> str:
     """``repr`` of a token from a file, cut to ``limit`` characters so that messages stay short."""
     return repr(token if len(token) <= limit else token[:limit] + "...")

@@ -39,8 +39,8 @@ from core.scene.formats.camera import default_lights, framing_views
 from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, decode_text, file_stem, printable,
                                  read_file,
                                  tolerant_of_underflow)
-from core.scene.formats.meshfile import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
-                                   signed_volume)
+from core.scene.formats.mesh import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
+                                    signed_volume)
 from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
 from core.transforms import (apply, rotate_axis, rotate_x, rotate_y, rotate_z, scale, shear,
                              translate)

@@ -25,7 +25,7 @@ import numpy as np
 from core.scene.formats.camera import default_lights, framing_views, tri_light, tri_view
 from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, decode_text, file_stem, short,
                                  tolerant_of_underflow, whole_number)
-from core.scene.formats.meshfile import drop_repeated_triangles, merge_vertices
+from core.scene.formats.mesh import drop_repeated_triangles, merge_vertices
 from core.scene.formats.numbers import Numbers
 from core.camera.view import problems
 from core.scene.model import Light, Material, Mesh, Scene

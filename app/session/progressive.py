@@ -108,9 +108,9 @@ def _copy(frame):
 # has one: the ray tracer tile by tile, radiosity shot by shot, the path tracer pass by pass.
 # Any other is drawn coarse first, then whole (:func:`coarse_then_full`): a new renderer needs
 # no line here.
-DRAWERS = {"raytrace": "app.viewer.progressive:trace_progressively",
-           "radiosity": "app.viewer.progressive_gi:radiosity_progressively",
-           "pathtrace": "app.viewer.progressive_gi:pathtrace_progressively"}
+DRAWERS = {"raytrace": "app.session.progressive:trace_progressively",
+           "radiosity": "app.session.progressive_gi:radiosity_progressively",
+           "pathtrace": "app.session.progressive_gi:pathtrace_progressively"}
 COARSE_FIRST = 4          # coarse_then_full's first picture: one pixel per 4 x 4
 
 

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import time
 
-from app.viewer.progressive import PARTIAL_EVERY, _Quiet
+from app.session.progressive import PARTIAL_EVERY, _Quiet
 
 
 def radiosity_progressively(scene, view, settings, context, render, control=None):

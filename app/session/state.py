@@ -14,12 +14,12 @@ Views are numbered by their position in the file (``core.scene.view_numbers``): 
 steps over invalid ones and says "view 7 of 20 (6 invalid)".
 
 Beyond the course's settings it holds the renderer (``"zbuffer"`` or ``"raytrace"``: a
-ray-traced still is drawn progressively, :mod:`app.viewer.progressive`), the texture filter and
+ray-traced still is drawn progressively, :mod:`app.session.progressive`), the texture filter and
 whether bump maps are used (in the bump demo's scene also the demo's map, which its clicks
-change), and for an animated scene its :class:`app.viewer.playback.Playback` (the moment shown,
+change), and for an animated scene its :class:`app.session.playback.Playback` (the moment shown,
 playing or paused, the speed) and whether the keyed camera is the view.
 
-For a scene with volumes it holds the volume controls' state (:mod:`app.viewer.volume_controls`):
+For a scene with volumes it holds the volume controls' state (:mod:`app.session.volume_controls`):
 which volume, the iso values asked for (re-extracted by the next frame's job, on the worker's
 thread), the transfer edits (checked; a bad one keeps the last good function with a message)
 and the slice shown among the buffer views.
@@ -175,7 +175,7 @@ class ViewerState:
     renderer_name: str = ""         # RenderSettings.renderer: "zbuffer" | "raytrace" (the menu's)
     bump: bool = True               # bump and normal maps perturb the normal (the demo: Phong)
     bump_map: int = 0               # the bump demo's height map B(x, y), 0..3
-    playback: object = None         # app.viewer.playback.Playback of an animated scene, or None
+    playback: object = None         # app.session.playback.Playback of an animated scene, or None
     keyed_view: bool = False        # an animated scene: show the keyed camera (not a file view)
     frame_partial: bool = False     # the frame shown is a ray-traced one still being refined
     # Depth cueing (None: the scene's), transparency ("": the scene's), and the
@@ -192,7 +192,7 @@ class ViewerState:
     # A camera the user made with the mouse (app.viewer.hands): shown in place of the file's
     # view until the view is stepped, reset or the scene changes; None shows the file's.
     hand_view: object = None
-    # The volume controls (app.viewer.volume_controls): the volume they act on, the last
+    # The volume controls (app.session.volume_controls): the volume they act on, the last
     # refused edit's message, the iso values asked for (each re-extracted by the next frame's
     # job, on the worker's thread), and the slice shown among the buffer views.
     volume_index: int = 0
@@ -237,7 +237,7 @@ class ViewerState:
         if animation is None:
             self.playback, self.keyed_view = None, False
         else:
-            from app.viewer.playback import Playback
+            from app.session.playback import Playback
             self.playback = Playback(animation)
             self.keyed_view = animation.view is not None
 
@@ -611,7 +611,7 @@ class ViewerState:
                 apply_demo_options(scene, *demo)
 
         if playback is not None:
-            from app.viewer.playback import render_animated
+            from app.session.playback import render_animated
             t = playback.time
             # render_at numbers the keyed camera (when there is one) before the file's views
             keyed = 1 if playback.animation.view is not None else 0
@@ -624,7 +624,7 @@ class ViewerState:
                 frame.stats["time"] = t           # the moment drawn (the clock moves on)
                 return frame
         elif view is not None and get_renderer(settings.renderer).progressive:
-            from app.viewer.progressive import progressive_drawer
+            from app.session.progressive import progressive_drawer
             progressively = progressive_drawer(settings.renderer)
             what = f"{what}, {get_renderer(settings.renderer).label.lower()}"
 
@@ -712,7 +712,7 @@ class ViewerState:
     @property
     def volumes(self) -> list:
         """The scene's volumes (``[[volume]]`` tables), in file order."""
-        from app.viewer.volume_controls import scene_volumes
+        from app.session.volume_controls import scene_volumes
         return scene_volumes(self.scene)
 
     @property
@@ -738,7 +738,7 @@ class ViewerState:
     def set_iso(self, iso: float) -> bool:
         """Ask for the current volume's isosurface at ``iso`` (marching cubes runs in the next
         frame's job). Outside the data's range: a message, and the last good surface stays."""
-        from app.viewer.volume_controls import checked_iso
+        from app.session.volume_controls import checked_iso
         from core.volume.data import VolumeError
         volume = self.volume
         if volume is None or volume.mode != "isosurface":
@@ -758,7 +758,7 @@ class ViewerState:
     def _extract(self, scene, isos: dict, control=None) -> None:
         """On the worker's thread: marching cubes for each iso asked for, then the scene's
         caches are dropped (its meshes changed in place)."""
-        from app.viewer.volume_controls import reextract
+        from app.session.volume_controls import reextract
         for volume, iso in isos.items():
             if control is not None:
                 control.check()
@@ -773,7 +773,7 @@ class ViewerState:
         ``alpha``; a bad point (alpha < 0, values out of order) gets a message and the last
         good transfer function stays."""
         import numpy as np
-        from app.viewer.volume_controls import moved_transfer
+        from app.session.volume_controls import moved_transfer
         from core.volume.data import VolumeError
         volume = self.volume
         if volume is None or volume.transfer is None:
@@ -793,7 +793,7 @@ class ViewerState:
     def set_slice(self, name: str, index: int | None = None) -> None:
         """The slice the buffer view shows: ``name`` (axial, coronal, sagittal) and its index
         (None: the middle); an index past the end is refused."""
-        from app.viewer.volume_controls import SLICE_AXIS, SLICES
+        from app.session.volume_controls import SLICE_AXIS, SLICES
         if name not in SLICE_AXIS:
             raise ValueError(f"slice must be one of {', '.join(SLICES)}, not {name!r}")
         if index is not None and self.volume is not None:
@@ -804,6 +804,6 @@ class ViewerState:
 
     def slice_shown(self) -> int:
         """The index of the slice shown (the middle one when none was chosen)."""
-        from app.viewer.volume_controls import SLICE_AXIS
+        from app.session.volume_controls import SLICE_AXIS
         n = self.volume.values.shape[SLICE_AXIS[self.slice_name]]
         return n // 2 if self.slice_index is None else min(self.slice_index, n - 1)

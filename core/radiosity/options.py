@@ -1,0 +1,62 @@
+"""Radiosity's options: how form factors are found, the hemicube's resolution, the solver,
+its stopping point and the element budget of adaptive subdivision.
+
+Registered with the ``radiosity`` renderer: ``settings.options_of("radiosity")``,
+``settings.replace(max_elements=500)``, and the command line's flags
+(:meth:`RadiosityOptions.add_arguments`, shared by ``render`` and ``radiosity``).
+:class:`core.radiosity.solution.Options` is the solver's own form of them.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from core.settings import FORM_FACTOR_METHODS, SOLVERS
+
+
+@dataclass(frozen=True)
+class RadiosityOptions:
+    form_factors: str = "hemicube"       # "hemicube" | "raycast"
+    hemicube_resolution: int = 128       # hemicube pixels per side
+    solver: str = "progressive"          # "progressive" | "gauss-seidel"
+    converge: float = 0.01               # stop at this fraction of unshot energy
+    max_elements: int = 2000
+
+    def __post_init__(self) -> None:
+        if self.form_factors not in FORM_FACTOR_METHODS:
+            raise ValueError(f"form factors must be one of {', '.join(FORM_FACTOR_METHODS)}, "
+                             f"not {self.form_factors!r}")
+        if self.solver not in SOLVERS:
+            raise ValueError(f"solver must be one of {', '.join(SOLVERS)}, not {self.solver!r}")
+        r = self.hemicube_resolution
+        if not (isinstance(r, int) and 8 <= r <= 4096 and r % 2 == 0):
+            raise ValueError(f"hemicube resolution must be an even whole number from 8 to 4096, "
+                             f"not {r!r}")
+        if not 0.0 <= float(self.converge) < 1.0:
+            raise ValueError(f"converge must be a fraction in [0, 1), not {self.converge!r}")
+        if not (isinstance(self.max_elements, int) and 1 <= self.max_elements <= 1_000_000):
+            raise ValueError(f"max elements must be a whole number from 1 to 1000000, "
+                             f"not {self.max_elements!r}")
+
+    @staticmethod
+    def add_arguments(parser) -> None:
+        """The command line's flags; None keeps the default."""
+        g = parser.add_argument_group("radiosity")
+        g.add_argument("--form-factors", choices=FORM_FACTOR_METHODS, default=None,
+                       help="radiosity: the hemicube drawn by our z-buffer (default) or ray "
+                            "casting through the BVH")
+        g.add_argument("--hemicube-resolution", type=int, default=None, metavar="N",
+                       help="radiosity: hemicube pixels per side (even; default 128)")
+        g.add_argument("--solver", choices=SOLVERS, default=None,
+                       help="radiosity: progressive refinement (default) or Gauss-Seidel")
+        g.add_argument("--converge", type=float, default=None, metavar="FRACTION",
+                       help="radiosity: stop when the unshot energy is below this fraction of "
+                            "the emitted (default 0.01)")
+        g.add_argument("--max-elements", type=int, default=None, metavar="N",
+                       help="radiosity: element budget, adaptive subdivision included "
+                            "(default 2000)")
+
+    @staticmethod
+    def overrides(args) -> dict:
+        names = ("form_factors", "hemicube_resolution", "solver", "converge", "max_elements")
+        return {name: getattr(args, name, None) for name in names}

@@ -1,0 +1,45 @@
+"""The painter's renderers' options (``bsp``, ``depth-sort``): the BSP tree's root rule and,
+for the draw-order slider, how many triangles of the painting order to paint.
+
+Registered with both painters (``core/renderers/__init__.py``): ``settings.options_of("bsp")``,
+``settings.replace(paint_first=10)``, and the command line's flags
+(:meth:`PainterOptions.add_arguments`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from core.settings import BSP_ROOTS
+
+
+@dataclass(frozen=True)
+class PainterOptions:
+    bsp_root: str = "fewest-splits"      # core.visibility.bsp.ROOT_RULES
+    paint_first: int | None = None       # None: every triangle of the order
+
+    def __post_init__(self) -> None:
+        if self.bsp_root not in BSP_ROOTS:
+            raise ValueError(f"BSP root rule must be one of {', '.join(BSP_ROOTS)}, "
+                             f"not {self.bsp_root!r}")
+        if self.paint_first is not None and not isinstance(self.paint_first, int):
+            raise ValueError(f"paint_first must be a whole number or None, "
+                             f"not {self.paint_first!r}")
+
+    @staticmethod
+    def add_arguments(parser) -> None:
+        """The command line's flags; None keeps the default."""
+        g = parser.add_argument_group("the painter's renderers (bsp, depth-sort)")
+        g.add_argument("--bsp-root", choices=BSP_ROOTS, default=None,
+                       help="bsp: how each node's root triangle is chosen (default "
+                            "fewest-splits: the notes' 'fewest branches'; first: the list's "
+                            "head; random: seeded)")
+        g.add_argument("--paint-first", type=int, default=None, metavar="K",
+                       help="bsp, depth-sort: paint only the first K triangles of the order")
+
+    @staticmethod
+    def overrides(args) -> dict:
+        paint_first = getattr(args, "paint_first", None)
+        if paint_first is not None and paint_first < 0:
+            raise ValueError(f"--paint-first must be 0 or more, not {paint_first}")
+        return {"bsp_root": getattr(args, "bsp_root", None), "paint_first": paint_first}
