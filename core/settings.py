@@ -63,6 +63,12 @@ TRANSPARENCIES = ("off", "interpolated", "screen-door")   # core.effects.transpa
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
+def require_one_of(what: str, value, choices) -> None:
+    """ValueError "<what> must be one of a, b, c, not 'x'" unless ``value`` is a choice."""
+    if value not in choices:
+        raise ValueError(f"{what} must be one of {', '.join(choices)}, not {value!r}")
+
+
 @dataclass(frozen=True)
 class RenderSettings:
     """Everything about a frame that is not the scene or the view.
@@ -124,21 +130,13 @@ class RenderSettings:
     lighting_model: str | None = None
 
     def __post_init__(self) -> None:
-        if self.projection not in PROJECTIONS:
-            raise ValueError(f"projection must be one of {', '.join(PROJECTIONS)}, "
-                             f"not {self.projection!r}")
+        require_one_of("projection", self.projection, PROJECTIONS)
         if not (isinstance(self.samples, int) and 1 <= self.samples <= MAX_SAMPLES):
             raise ValueError(f"samples per pixel must be a whole number from 1 to {MAX_SAMPLES}, "
                              f"not {self.samples!r}")
-        if self.shading_precision not in SHADING_PRECISIONS:
-            raise ValueError(f"shading_precision must be one of {', '.join(SHADING_PRECISIONS)}, "
-                             f"not {self.shading_precision!r}")
-        if self.rasterizer not in RASTERIZERS:
-            raise ValueError(f"rasterizer must be one of {', '.join(RASTERIZERS)}, "
-                             f"not {self.rasterizer!r}")
-        if self.sample_pattern not in SAMPLE_PATTERNS:
-            raise ValueError(f"sample pattern must be one of {', '.join(SAMPLE_PATTERNS)}, "
-                             f"not {self.sample_pattern!r}")
+        require_one_of("shading_precision", self.shading_precision, SHADING_PRECISIONS)
+        require_one_of("rasterizer", self.rasterizer, RASTERIZERS)
+        require_one_of("sample pattern", self.sample_pattern, SAMPLE_PATTERNS)
         side = math.isqrt(self.samples)
         if self.sample_pattern == "regular" and side * side != self.samples:
             # the film's regular grid is s x s; refused here, not as a traceback in the film
@@ -149,12 +147,8 @@ class RenderSettings:
             raise ValueError(f"adaptive supersampling splits a pixel in four at each level: "
                              f"its most samples must be 4, 16, 64 or 256, not {self.samples}")
         check_filter(self.pixel_filter, self.filter_radius)
-        if self.clipper not in CLIPPERS:
-            raise ValueError(f"clipper must be one of {', '.join(CLIPPERS)}, "
-                             f"not {self.clipper!r}")
-        if self.transparency not in TRANSPARENCIES:
-            raise ValueError(f"transparency must be one of {', '.join(TRANSPARENCIES)}, "
-                             f"not {self.transparency!r}")
+        require_one_of("clipper", self.clipper, CLIPPERS)
+        require_one_of("transparency", self.transparency, TRANSPARENCIES)
         object.__setattr__(self, "projection", str(self.projection))
         object.__setattr__(self, "shading", str(self.shading))
         object.__setattr__(self, "size", (int(self.size[0]), int(self.size[1])))

@@ -76,7 +76,7 @@ def _closed_box(rho=0.5, emission=1.0):
 
 def test_hemicube_rows_sum_to_one_in_a_closed_box():
     e, shooter, _ = start(_closed_box(), Options(max_elements=120, adaptive=False,
-                                                  resolution=64))
+                                                  hemicube_resolution=64))
     sums = np.array([shooter.row(p).sum() for p in range(e.patches)])
     assert np.abs(sums - 1).max() < 1e-3
 
@@ -98,7 +98,7 @@ def test_furnace_closed_box(method):
     # Every wall emits E = 1 and reflects rho = 0.6: B = E / (1 - rho) = 2.5 everywhere.
     solution = solve(_closed_box(0.6, 1.0), Options(form_factors=method, max_elements=120,
                                                      converge=1e-6, adaptive=False,
-                                                     resolution=64))
+                                                     hemicube_resolution=64))
     e = solution.elements
     total = (solution.radiosity * e.area[:, None]).sum(axis=0)
     assert total == pytest.approx(np.full(3, 2.5 * e.area.sum()), rel=0.005)
@@ -106,7 +106,8 @@ def test_furnace_closed_box(method):
 
 def test_progressive_and_gauss_seidel_agree():
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
-    e, shooter, source = start(scene, Options(max_elements=120, adaptive=False, resolution=32))
+    e, shooter, source = start(scene, Options(max_elements=120, adaptive=False,
+                                              hemicube_resolution=32))
     progressive = Progressive(e, shooter, source)
     progressive.run(converge=1e-12, max_steps=100_000)
     exact, sweeps = gauss_seidel(e, shooter, source, tolerance=1e-12)
@@ -116,7 +117,8 @@ def test_progressive_and_gauss_seidel_agree():
 
 def test_progressive_stops_at_the_residual():
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
-    e, shooter, source = start(scene, Options(max_elements=120, adaptive=False, resolution=32))
+    e, shooter, source = start(scene, Options(max_elements=120, adaptive=False,
+                                              hemicube_resolution=32))
     solver = Progressive(e, shooter, source)
     solver.run(converge=0.05)
     assert solver.unshot_fraction() <= 0.05
@@ -125,7 +127,7 @@ def test_progressive_stops_at_the_residual():
 
 def test_adaptive_subdivision_keeps_the_budget_and_splits_where_it_changes():
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
-    solution = solve(scene, Options(max_elements=400, resolution=32))
+    solution = solve(scene, Options(max_elements=400, hemicube_resolution=32))
     rounds = solution.stats["rounds"]
     assert len(rounds) == 2 and rounds[0]["elements"] < rounds[1]["elements"] <= 400
     assert (rounds[1]["elements"] - rounds[0]["elements"]) % 3 == 0     # each split: 1 -> 4
@@ -210,7 +212,7 @@ def test_point_lights_shoot_first():
 
 def test_saved_solution_reloads_and_refuses_another_scene(tmp_path):
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
-    solution = solve(scene, Options(max_elements=100, resolution=16, adaptive=False))
+    solution = solve(scene, Options(max_elements=100, hemicube_resolution=16, adaptive=False))
     path = tmp_path / "solution.npz"
     save(solution, path)
     again = load(path, load_scene(ROOT / "scenes" / "cornell_box.toml"))

@@ -31,14 +31,15 @@ def _progress(text: str) -> None:
 
 def radiosity_rows(scene, resolution: int, sizes=(1000, 10000), raycast_sizes=(1000,)) -> list:
     from core.radiosity.solution import Options, solve
-    solve(scene, Options(max_elements=200, resolution=resolution, adaptive=False))   # compile
+    solve(scene, Options(max_elements=200, hemicube_resolution=resolution,
+                         adaptive=False))                              # compile
     solve(scene, Options(max_elements=200, form_factors="raycast", adaptive=False))
     rows = []
     for method, counts in (("hemicube", sizes), ("raycast", raycast_sizes)):
         for count in counts:
             _progress(f"radiosity: {method}, about {count} elements ...")
-            options = Options(form_factors=method, resolution=resolution, max_elements=count,
-                              converge=0.01, adaptive=False)
+            options = Options(form_factors=method, hemicube_resolution=resolution,
+                              max_elements=count, converge=0.01, adaptive=False)
             began = time.perf_counter()
             solution = solve(scene, options)
             seconds = time.perf_counter() - began

@@ -69,7 +69,7 @@ def radiosity_rows(scene, view, reference, ids, mask, on_walls) -> list[dict]:
     for elements in (250, 1000, 4000):
         for resolution in (32, 128):
             for converge in (0.1, 0.01, 0.001):
-                options = Options(max_elements=elements, resolution=resolution,
+                options = Options(max_elements=elements, hemicube_resolution=resolution,
                                   converge=converge, adaptive=False)
                 began = time.perf_counter()
                 solution = solve(scene, options)

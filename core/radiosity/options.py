@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from core.settings import FORM_FACTOR_METHODS, SOLVERS
+from core.settings import FORM_FACTOR_METHODS, SOLVERS, require_one_of
 
 
 @dataclass(frozen=True)
@@ -23,11 +23,8 @@ class RadiosityOptions:
     max_elements: int = 2000
 
     def __post_init__(self) -> None:
-        if self.form_factors not in FORM_FACTOR_METHODS:
-            raise ValueError(f"form factors must be one of {', '.join(FORM_FACTOR_METHODS)}, "
-                             f"not {self.form_factors!r}")
-        if self.solver not in SOLVERS:
-            raise ValueError(f"solver must be one of {', '.join(SOLVERS)}, not {self.solver!r}")
+        require_one_of("form factors", self.form_factors, FORM_FACTOR_METHODS)
+        require_one_of("solver", self.solver, SOLVERS)
         r = self.hemicube_resolution
         if not (isinstance(r, int) and 8 <= r <= 4096 and r % 2 == 0):
             raise ValueError(f"hemicube resolution must be an even whole number from 8 to 4096, "

@@ -31,26 +31,18 @@ FORMAT = 1
 
 
 @dataclass(frozen=True)
-class Options:
-    form_factors: str = "hemicube"       # "hemicube" | "raycast"
-    resolution: int = 128                # hemicube pixels per side
-    solver: str = "progressive"          # "progressive" | "gauss-seidel"
-    converge: float = 0.01               # stop at this fraction of unshot energy
-    max_elements: int = 2000
-    max_steps: int = 100_000
-    adaptive: bool = True                # subdivide where the gradient is large, solve again
+class Options(RadiosityOptions):
+    """The user's radiosity options (checked by :class:`RadiosityOptions`) and the solver's
+    own limits: its most shooting steps, and whether to subdivide where the gradient is large
+    and solve again."""
 
-    def __post_init__(self) -> None:
-        # The user-facing options check themselves (the same messages wherever they come from).
-        RadiosityOptions(form_factors=self.form_factors, hemicube_resolution=self.resolution,
-                         solver=self.solver, converge=self.converge,
-                         max_elements=self.max_elements)
+    max_steps: int = 100_000
+    adaptive: bool = True
 
     @classmethod
     def from_settings(cls, settings) -> "Options":
         own = settings.options_of("radiosity")
-        return cls(form_factors=own.form_factors, resolution=own.hemicube_resolution,
-                   solver=own.solver, converge=own.converge, max_elements=own.max_elements)
+        return cls(**{name: getattr(own, name) for name in RadiosityOptions.__dataclass_fields__})
 
 
 @dataclass
@@ -92,7 +84,7 @@ def start(scene, options: Options, elements: Elements | None = None):
     budget = options.max_elements // 2 if options.adaptive else options.max_elements
     e = elements if elements is not None else meshing.mesh_scene(scene, max(1, budget))
     bvh = scene_bvh(scene)
-    shooter = Shooter(e, options.form_factors, options.resolution, bvh)
+    shooter = Shooter(e, options.form_factors, options.hemicube_resolution, bvh)
     source = e.emission + direct_light(e, scene.lights, bvh)
     return e, shooter, source
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from core.settings import FRESNEL_FORMS, SHADOW_MODES
+from core.settings import FRESNEL_FORMS, SHADOW_MODES, require_one_of
 
 MAX_DEPTH_LIMIT = 64
 
@@ -41,12 +41,8 @@ class RaytraceOptions:
                 and 0.0 <= self.adaptive_epsilon <= 1.0):
             raise ValueError(f"adaptive_epsilon must be a number in [0, 1], "
                              f"not {self.adaptive_epsilon!r}")
-        if self.shadows not in SHADOW_MODES:
-            raise ValueError(f"shadows must be one of {', '.join(SHADOW_MODES)}, "
-                             f"not {self.shadows!r}")
-        if self.fresnel_form not in FRESNEL_FORMS:
-            raise ValueError(f"fresnel must be one of {', '.join(FRESNEL_FORMS)}, "
-                             f"not {self.fresnel_form!r}")
+        require_one_of("shadows", self.shadows, SHADOW_MODES)
+        require_one_of("fresnel", self.fresnel_form, FRESNEL_FORMS)
         c1, c2 = (float(c) for c in self.secondary_attenuation)
         if not (0.0 <= c1 < math.inf and 0.0 <= c2 < math.inf):
             raise ValueError(f"the secondary rays' attenuation C1, C2 must be finite and >= 0, "

@@ -33,16 +33,13 @@ from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pa
 
 
 @dataclass(frozen=True)
-class TraceOptions:
-    max_depth: int = 7
-    adaptive_epsilon: float = 1e-3
-    shadows: str = "transmit"
-    fresnel: bool = False
+class TraceOptions(RaytraceOptions):
+    """The user's ray-tracing options (checked by :class:`RaytraceOptions`) and what else the
+    kernel takes: the medium the eye is in and the frame's texture filter and bump switch."""
+
     medium: float = AIR
     texture_filter: str = "trilinear"      # the z-buffer's filters (core.texture.sample)
     bump: bool = True
-    fresnel_form: str = "schlick"          # with fresnel: "schlick" | "exact"
-    secondary_attenuation: tuple = (0.0, 0.0)   # C1, C2 of 1 / (1 + C1 R + C2 R²); off
 
     @property
     def fresnel_code(self) -> int:
@@ -52,19 +49,14 @@ class TraceOptions:
                 else whitted.FRESNEL_SCHLICK)
 
     def __post_init__(self) -> None:
-        # The user-facing options check themselves (the same messages wherever they come from).
-        RaytraceOptions(max_depth=self.max_depth, adaptive_epsilon=self.adaptive_epsilon,
-                        shadows=self.shadows, fresnel_form=self.fresnel_form,
-                        secondary_attenuation=self.secondary_attenuation)
+        super().__post_init__()
         object.__setattr__(self, "medium", index_of_refraction(self.medium, "medium"))
 
     @classmethod
     def from_settings(cls, settings) -> "TraceOptions":
         own = settings.options_of("raytrace")
-        names = ("max_depth", "adaptive_epsilon", "shadows", "fresnel", "fresnel_form",
-                 "secondary_attenuation")
-        return cls(**{n: getattr(own, n) for n in names}, texture_filter=settings.texture_filter,
-                   bump=settings.bump)
+        return cls(**{name: getattr(own, name) for name in RaytraceOptions.__dataclass_fields__},
+                   texture_filter=settings.texture_filter, bump=settings.bump)
 
 
 @dataclass

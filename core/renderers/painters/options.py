@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from core.settings import BSP_ROOTS
+from core.settings import BSP_ROOTS, require_one_of
 
 
 @dataclass(frozen=True)
@@ -19,9 +19,7 @@ class PainterOptions:
     paint_first: int | None = None       # None: every triangle of the order
 
     def __post_init__(self) -> None:
-        if self.bsp_root not in BSP_ROOTS:
-            raise ValueError(f"BSP root rule must be one of {', '.join(BSP_ROOTS)}, "
-                             f"not {self.bsp_root!r}")
+        require_one_of("BSP root rule", self.bsp_root, BSP_ROOTS)
         if self.paint_first is not None and not isinstance(self.paint_first, int):
             raise ValueError(f"paint_first must be a whole number or None, "
                              f"not {self.paint_first!r}")
