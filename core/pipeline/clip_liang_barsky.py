@@ -32,8 +32,6 @@ A triangle with a NaN or infinite coordinate is dropped, as the default clipper 
 
 from __future__ import annotations
 
-import numpy as np
-
 from core.jit import njit
 
 # The planes k, in the outcode bits' order (core.pipeline.clip_polygon, bit 1 << k): above,
