@@ -128,14 +128,20 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
 
 def lit_as_asked(scene: Scene, settings: RenderSettings, context: RenderContext) -> Scene:
     """``scene``, or, when ``settings.lighting_model`` names a model, its copy with every
-    material lit by that model (kept with the scene, so its caches live as long)."""
+    material lit by that model (kept with the scene, so its caches live as long). The copy
+    carries the scene's volumes as they are: the ray marcher applies the settings' model."""
     if settings.lighting_model is None:
         return scene
     from core.shading.models import scene_lit_by
     cache = context.cache(scene)
     key = f"lit by {settings.lighting_model}"
     if key not in cache:
-        cache[key] = scene_lit_by(scene, settings.lighting_model)
+        from core.volume.data import attach_volumes, volumes_of
+        lit = scene_lit_by(scene, settings.lighting_model)
+        # the same volumes (the window edits them in place): the marcher takes the model
+        # from the settings
+        attach_volumes(lit, volumes_of(scene))
+        cache[key] = lit
     return cache[key]
 
 

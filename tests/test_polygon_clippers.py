@@ -195,3 +195,18 @@ def test_every_polygon_clipper_draws_the_same_solid(name, frames, monkeypatch):
                 assert np.array_equal(other, today), (view.label, projection, clipper)
     assert cut["cohen-sutherland"] > 0 and cut["liang-barsky"] == cut["homogeneous"] == \
         cut["cohen-sutherland"]
+
+
+def test_each_clippers_kernel_can_be_cached():
+    """The shared loop (clip_polygon.clip_and_fan) takes each clipper's steps as functions; a
+    kernel that passed them on as values would hold Python objects' addresses, which numba
+    will not cache (every process would compile the clippers again)."""
+    from core.pipeline import clip_polygon
+    rng = np.random.default_rng(3)
+    points = rng.uniform(-1.5, 0.5, (30, 3))
+    for clipper, kernel in clip_polygon._KERNELS.items():
+        c = clip_triangles(points, np.arange(30).reshape(10, 3), None, "perspective", -0.1,
+                           clipper=clipper)
+        assert len(c.triangles) > 0
+        compiled = kernel.overloads.values()
+        assert compiled and not any(o.library.has_dynamic_globals for o in compiled), clipper

@@ -134,8 +134,10 @@ def _write(out: Path, ff, rad, pt) -> None:
             for r in rows:
                 w.writerow([name, json.dumps(r)])
     lines = ["# Global illumination: form factors, radiosity and the path tracer", "",
-             "Made by `python -m app.reports.gi_report` (issue 19). Times are wall seconds on "
-             "this 2-core machine, shared with other jobs.", "",
+             "Made by `python -m app.reports.gi_report`: the error of form factors, "
+             "radiosity and the path tracer against exact values and a converged reference, "
+             "against the time each takes (summarised in docs/global-illumination.md). Times "
+             "are wall seconds on this 2-core machine, shared with other jobs.", "",
              "## Form factors against closed forms (Howell C-11, C-14, C-41)", "",
              "F from the source to the target, averaged over the source cut into small "
              "pieces (the same points for both methods). Error % is against the closed form "

@@ -1125,7 +1125,8 @@ class ViewerWindow:
             imgui.end_menu()
 
     def _inspector_items(self) -> None:
-        """Issue 22: inspect mode, the buffer views, the comparison with OpenGL."""
+        """The View menu's inspection tools: inspect mode, the buffer views, the comparison
+        with OpenGL."""
         if imgui.menu_item_simple("Inspect mode (click a pixel)", "I", self.tools.inspecting):
             self.tools.toggle_inspect("menu View > Inspect mode")
         if imgui.begin_menu("Buffer view"):

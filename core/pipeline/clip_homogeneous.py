@@ -2,7 +2,11 @@
 
 FvDFH 6.5.4, the course notes' alternative to clipping in the canonical volume. Called by
 :func:`core.pipeline.clip_polygon.clip_triangles` for the triangles its outcodes neither
-accept nor reject; same inputs and outputs as its Sutherland–Hodgman kernel.
+accept nor reject; same inputs and outputs as its Sutherland–Hodgman kernel. This module is
+the clipper's own steps (a corner into clip space, one plane's stage, back to the canonical
+point); the loop over the triangles and the fan they are emitted as are
+``clip_polygon.clip_and_fan``'s, which clips here against every plane: the outcodes are
+found in the canonical volume, not in clip space.
 
 Each corner (x, y, z) of the canonical volume is taken into clip space by the matrix the
 pipeline projects with anyway, FvDFH's perspective-to-parallel M (pipeline.md; the identity
@@ -37,20 +41,16 @@ A triangle with a NaN or infinite coordinate is dropped, as the default clipper 
 
 from __future__ import annotations
 
-import numpy as np
-
 from core.jit import njit
 
-# The planes, in the outcode bits' order (core.pipeline.clip_polygon): above, below, right,
-# left, behind, front. Visited front and back first, as Sutherland–Hodgman visits them.
-_ORDER = np.array([5, 4, 0, 1, 2, 3], dtype=np.int64)
-MAX_POLYGON = 9  # a triangle clipped by six planes has at most 3 + 6 vertices
-MAX_FAN = MAX_POLYGON - 2
+# The planes k, in the outcode bits' order (core.pipeline.clip_polygon, bit 1 << k): above,
+# below, right, left, behind, front. A polygon row is the point in clip space.
+WIDTH = 4
 
 
 @njit(cache=True)
-def _to_clip_space(x, y, z, perspective, z_min, h):
-    """h = M (x, y, z, 1): the point in homogeneous clip space."""
+def corner(x, y, z, perspective, z_min, h):
+    """h = M (x, y, z, 1): the corner in homogeneous clip space."""
     h[0] = x
     h[1] = y
     if perspective:
@@ -62,7 +62,7 @@ def _to_clip_space(x, y, z, perspective, z_min, h):
 
 
 @njit(cache=True)
-def _from_clip_space(h, perspective, p):
+def position(h, perspective, p):
     """p = the canonical point of clip-space h (the inverse of M, no division for perspective)."""
     if perspective:
         p[0] = h[0]
@@ -119,8 +119,9 @@ def _intersect(k, inside_h, inside_a, e_in, outside_h, outside_a, e_out, out_h, 
 
 
 @njit(cache=True)
-def _clip_against_plane(k, in_h, in_a, in_id, n_in, out_h, out_a, out_id):
-    """Sutherland–Hodgman's stage in clip space: the polygon in_* against plane k."""
+def clip_against_plane(k, in_h, in_a, in_id, n_in, out_h, out_a, out_id, perspective, z_min):
+    """Sutherland–Hodgman's stage in clip space: the polygon in_* against plane k (the planes
+    are through 4D's origin: ``perspective`` and ``z_min`` are already in M)."""
     n_out = 0
     s = n_in - 1
     e_s = _edge_value(k, in_h[s])
@@ -144,60 +145,3 @@ def _clip_against_plane(k, in_h, in_a, in_id, n_in, out_h, out_a, out_id):
         s = p
         e_s = e_p
     return n_out
-
-
-@njit(cache=True)
-def homogeneous_polygons(points, triangles, attrs, codes, todo, perspective, z_min):
-    """Clip the triangles listed in ``todo``; returns new points, attrs, triangles, sources
-    (new vertices numbered from len(points) on; a surviving input vertex keeps its index)."""
-    n_attrs = attrs.shape[1]
-    n_points = points.shape[0]
-    m = todo.shape[0]
-    new_points = np.empty((m * MAX_POLYGON, 3))
-    new_attrs = np.empty((m * MAX_POLYGON, n_attrs))
-    new_triangles = np.empty((m * MAX_FAN, 3), np.int64)
-    new_source = np.empty(m * MAX_FAN, np.int64)
-    poly_h = np.empty((2, MAX_POLYGON, 4))             # two polygons, swapped after each plane
-    poly_a = np.empty((2, MAX_POLYGON, n_attrs))
-    poly_id = np.empty((2, MAX_POLYGON), np.int64)
-    index = np.empty(MAX_POLYGON, np.int64)
-    n_new_points = 0
-    n_new_triangles = 0
-    for i in range(m):
-        t = todo[i]
-        finite = True
-        for c in range(3):
-            v = triangles[t, c]
-            _to_clip_space(points[v, 0], points[v, 1], points[v, 2], perspective, z_min,
-                           poly_h[0, c])
-            poly_a[0, c] = attrs[v]
-            poly_id[0, c] = v
-            for d in range(3):
-                finite &= np.isfinite(points[v, d])
-        if not finite:
-            continue                                   # nothing sensible to draw
-        n = 3
-        cur = 0
-        for k in _ORDER:                               # every plane: the outcodes are canonical
-            if n > 0:
-                n = _clip_against_plane(k, poly_h[cur], poly_a[cur], poly_id[cur], n,
-                                        poly_h[1 - cur], poly_a[1 - cur], poly_id[1 - cur])
-                cur = 1 - cur
-        if n < 3:
-            continue                                   # gone, or only an edge or a point left
-        for j in range(n):
-            if poly_id[cur, j] >= 0:
-                index[j] = poly_id[cur, j]
-            else:
-                _from_clip_space(poly_h[cur, j], perspective, new_points[n_new_points])
-                new_attrs[n_new_points] = poly_a[cur, j]
-                index[j] = n_points + n_new_points
-                n_new_points += 1
-        for j in range(1, n - 1):                      # fan the convex polygon from vertex 0
-            new_triangles[n_new_triangles, 0] = index[0]
-            new_triangles[n_new_triangles, 1] = index[j]
-            new_triangles[n_new_triangles, 2] = index[j + 1]
-            new_source[n_new_triangles] = t
-            n_new_triangles += 1
-    return (new_points[:n_new_points], new_attrs[:n_new_points],
-            new_triangles[:n_new_triangles], new_source[:n_new_triangles])

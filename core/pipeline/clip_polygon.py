@@ -18,10 +18,13 @@ Returns :class:`ClippedTriangles`: points (V', 3), triangles (T', 3), attrs (V',
   parameter t as the position, and the convex result fanned back into triangles. New vertices
   are appended after the input ones; vertices of the input that survive keep their index.
 * Output order: the accepted triangles in input order, then the clipped ones in input order.
-* ``clipper`` (``--clipper``) swaps the kernel for the triangles that are cut: this module's
+* ``clipper`` (``--clipper``) swaps the steps for the triangles that are cut: this module's
   Sutherland–Hodgman ("cohen-sutherland", the default), Sutherland–Hodgman with Liang–Barsky's
   parametric tests (:mod:`core.pipeline.clip_liang_barsky`) or in homogeneous clip space
   before the divide (:mod:`core.pipeline.clip_homogeneous`). Same outputs, within 1e-12.
+  The loop over the triangles and the fans they come out as are one function for all three,
+  :func:`clip_and_fan`, given each clipper's steps (a corner's row, one plane's stage, a
+  row's canonical point).
 
 Robustness: the clip happens in the canonical volume, so a triangle crossing the eye plane
 never reaches a divide; an intersection is always computed from the inside end of an edge
@@ -39,8 +42,8 @@ import numpy as np
 
 from core.arrays import read_only
 from core.jit import njit, prange
-from core.pipeline.clip_homogeneous import homogeneous_polygons
-from core.pipeline.clip_liang_barsky import liang_barsky_polygons
+from core.pipeline import clip_homogeneous as homogeneous
+from core.pipeline import clip_liang_barsky as liang_barsky
 from core.settings import CLIPPERS, PROJECTIONS
 
 # Outcode bits, in FvDFH's order (parallel volume | perspective volume).
@@ -52,9 +55,10 @@ BEHIND = 16  # z < -1     | z < -1   (beyond the back plane)
 FRONT = 32  # z > 0       | z > z_min (in front of the front plane)
 ALL_PLANES = 63
 
-# The order Sutherland–Hodgman visits the planes: front and back first, so that the part of a
-# triangle behind the eye is gone before the side planes (which meet at the eye) are used.
-_PLANE_ORDER = np.array([FRONT, BEHIND, ABOVE, BELOW, RIGHT, LEFT], dtype=np.int64)
+# The order Sutherland–Hodgman visits the planes (k, the outcode bit 1 << k): front and back
+# first, so that the part of a triangle behind the eye is gone before the side planes (which
+# meet at the eye) are used.
+_PLANE_ORDER = np.array([5, 4, 0, 1, 2, 3], dtype=np.int64)   # FRONT, BEHIND, ABOVE, ...
 
 MAX_POLYGON = 9  # a triangle clipped by six planes has at most 3 + 6 vertices
 MAX_FAN = MAX_POLYGON - 2
@@ -231,14 +235,32 @@ def _intersect(plane, inside_p, inside_a, d_in, outside_p, outside_a, d_out, out
 
 
 @njit(cache=True)
-def _clip_against_plane(plane, in_p, in_a, in_id, n_in, out_p, out_a, out_id, perspective,
-                        z_min):
-    """SutherlandHodgmanPolygonClip: the polygon in_* (n_in vertices) against one plane.
+def _corner(x, y, z, perspective, z_min, row):
+    """A corner's polygon row: its position (this clipper carries nothing else)."""
+    row[0] = x
+    row[1] = y
+    row[2] = z
+
+
+@njit(cache=True)
+def _position(row, perspective, p):
+    """The canonical point of a polygon row: its first three columns (Liang–Barsky's row
+    carries its boundary values after them)."""
+    p[0] = row[0]
+    p[1] = row[1]
+    p[2] = row[2]
+
+
+@njit(cache=True)
+def _clip_against_plane(k, in_p, in_a, in_id, n_in, out_p, out_a, out_id, perspective, z_min):
+    """SutherlandHodgmanPolygonClip: the polygon in_* (n_in vertices) against plane k (its
+    outcode bit is ``1 << k``).
 
     Walks the edges s->p: p inside -> output p (preceded by the crossing if s was outside);
     p outside and s inside -> output the crossing. Returns the output vertex count. A vertex
     keeps its id (index of the input vertex) or gets -1 when it is a new crossing point.
     """
+    plane = 1 << k
     n_out = 0
     s = n_in - 1
     d_s = _distance(plane, in_p[s, 0], in_p[s, 1], in_p[s, 2], perspective, z_min)
@@ -264,9 +286,24 @@ def _clip_against_plane(plane, in_p, in_a, in_id, n_in, out_p, out_a, out_id, pe
     return n_out
 
 
-@njit(cache=True)
-def _sutherland_hodgman(points, triangles, attrs, codes, todo, perspective, z_min):
+# --------------------------------------------------------------------------------------------
+# The loop every clipper shares: each triangle to a polygon, plane by plane, fanned out
+
+
+# Inlined into each clipper's kernel (numba's IR inlining): its function arguments become
+# static calls there, so each kernel is cached and compiled as its own loop was. (Called, not
+# inlined, a function argument is a pointer to a Python object: the kernel could not be cached.)
+@njit(inline="always")
+def clip_and_fan(points, triangles, attrs, codes, todo, perspective, z_min, width,
+                 every_plane, corner, clip_against_plane, position):
     """Clip the triangles listed in ``todo``; returns new points, attrs, triangles, sources.
+
+    A clipper is three steps over polygon rows of ``width`` floats: ``corner(x, y, z,
+    perspective, z_min, row)`` fills a corner's row, ``clip_against_plane(k, in_rows, in_a,
+    in_id, n_in, out_rows, out_a, out_id, perspective, z_min)`` is one Sutherland–Hodgman
+    stage against plane k (outcode bit ``1 << k``; returns the vertex count, a crossing gets
+    id -1) and ``position(row, perspective, p)`` writes a row's canonical point. The planes
+    are those some corner's outcode is outside of, or all six with ``every_plane``.
 
     New vertices are numbered from len(points) on; a vertex of the input that survives the
     clip keeps its index.
@@ -279,19 +316,19 @@ def _sutherland_hodgman(points, triangles, attrs, codes, todo, perspective, z_mi
     new_triangles = np.empty((m * MAX_FAN, 3), np.int64)
     new_source = np.empty(m * MAX_FAN, np.int64)
     # two polygon buffers, swapped after each plane
-    poly_p = np.empty((2, MAX_POLYGON, 3))
+    poly = np.empty((2, MAX_POLYGON, width))
     poly_a = np.empty((2, MAX_POLYGON, n_attrs))
     poly_id = np.empty((2, MAX_POLYGON), np.int64)
     index = np.empty(MAX_POLYGON, np.int64)
     n_new_points = 0
     n_new_triangles = 0
-    for k in range(m):
-        t = todo[k]
+    for i in range(m):
+        t = todo[i]
         finite = True
-        crossed = 0  # the planes some vertex is outside of
+        crossed = ALL_PLANES if every_plane else 0  # the planes some vertex is outside of
         for c in range(3):
             v = triangles[t, c]
-            poly_p[0, c] = points[v]
+            corner(points[v, 0], points[v, 1], points[v, 2], perspective, z_min, poly[0, c])
             poly_a[0, c] = attrs[v]
             poly_id[0, c] = v
             crossed |= codes[v]
@@ -301,36 +338,56 @@ def _sutherland_hodgman(points, triangles, attrs, codes, todo, perspective, z_mi
             continue  # a NaN or infinite vertex: nothing sensible to draw
         n = 3
         cur = 0
-        for plane in _PLANE_ORDER:
-            if crossed & plane and n > 0:
-                n = _clip_against_plane(plane, poly_p[cur], poly_a[cur], poly_id[cur], n,
-                                        poly_p[1 - cur], poly_a[1 - cur], poly_id[1 - cur],
-                                        perspective, z_min)
+        for k in _PLANE_ORDER:
+            if crossed & (1 << k) and n > 0:
+                n = clip_against_plane(k, poly[cur], poly_a[cur], poly_id[cur], n, poly[1 - cur],
+                                       poly_a[1 - cur], poly_id[1 - cur], perspective, z_min)
                 cur = 1 - cur
         if n < 3:
             continue  # clipped away, or only an edge or a point on the volume's boundary
-        for i in range(n):
-            if poly_id[cur, i] >= 0:
-                index[i] = poly_id[cur, i]
+        for j in range(n):
+            if poly_id[cur, j] >= 0:
+                index[j] = poly_id[cur, j]
             else:
-                new_points[n_new_points] = poly_p[cur, i]
-                new_attrs[n_new_points] = poly_a[cur, i]
-                index[i] = n_points + n_new_points
+                position(poly[cur, j], perspective, new_points[n_new_points])
+                new_attrs[n_new_points] = poly_a[cur, j]
+                index[j] = n_points + n_new_points
                 n_new_points += 1
-        for i in range(1, n - 1):  # fan the convex polygon from its first vertex
+        for j in range(1, n - 1):  # fan the convex polygon from its first vertex
             new_triangles[n_new_triangles, 0] = index[0]
-            new_triangles[n_new_triangles, 1] = index[i]
-            new_triangles[n_new_triangles, 2] = index[i + 1]
+            new_triangles[n_new_triangles, 1] = index[j]
+            new_triangles[n_new_triangles, 2] = index[j + 1]
             new_source[n_new_triangles] = t
             n_new_triangles += 1
     return (new_points[:n_new_points], new_attrs[:n_new_points],
             new_triangles[:n_new_triangles], new_source[:n_new_triangles])
 
 
+@njit(cache=True)
+def _sutherland_hodgman(points, triangles, attrs, codes, todo, perspective, z_min):
+    return clip_and_fan(points, triangles, attrs, codes, todo, perspective, z_min, 3, False,
+                        _corner, _clip_against_plane, _position)
+
+
+@njit(cache=True)
+def _liang_barsky(points, triangles, attrs, codes, todo, perspective, z_min):
+    return clip_and_fan(points, triangles, attrs, codes, todo, perspective, z_min,
+                        liang_barsky.WIDTH, False, liang_barsky.corner,
+                        liang_barsky.clip_against_plane, _position)   # a row starts with it
+
+
+@njit(cache=True)
+def _homogeneous(points, triangles, attrs, codes, todo, perspective, z_min):
+    # every plane: the outcodes are canonical, the clip is in clip space
+    return clip_and_fan(points, triangles, attrs, codes, todo, perspective, z_min,
+                        homogeneous.WIDTH, True, homogeneous.corner,
+                        homogeneous.clip_against_plane, homogeneous.position)
+
+
 # --------------------------------------------------------------------------------------------
 
-_KERNELS = {"cohen-sutherland": _sutherland_hodgman, "liang-barsky": liang_barsky_polygons,
-            "homogeneous": homogeneous_polygons}
+_KERNELS = {"cohen-sutherland": _sutherland_hodgman, "liang-barsky": _liang_barsky,
+            "homogeneous": _homogeneous}
 
 _identity = np.arange(0, dtype=np.int64)
 

@@ -22,7 +22,7 @@ from core.camera.view import View
 from core.raytrace import bvh, geometry, whitted
 from core.raytrace.renderer import (Setup, TraceOptions, differentials, frame_offsets, prepare,
                                     primary)
-from core.shading.illumination import EYE_DIRECTION, EYE_POINT, POINT_LIGHT, TWO_SIDED, to_uint8
+from core.shading.illumination import EYE_POINT, POINT_LIGHT, TWO_SIDED, to_uint8
 from core.shading.models.dispatch import lighting_terms
 
 KINDS = ("primary", "shadow", "reflected", "refracted")
@@ -120,14 +120,9 @@ def _trace_node(setup, node: dict, ray: tuple, work: tuple, pending: list) -> li
         return contribution
     px, py, pz, nx, ny, nz, gx, gy, gz, s = whitted.surface_at(packed, kind, index, u, v,
                                                                ox, oy, oz, dx, dy, dz, t)
-    if ray_kind == whitted.PRIMARY:
-        eye[:] = setup.eye
-    else:
-        eye[0], eye[1], eye[2], eye[3] = EYE_DIRECTION, -dx, -dy, -dz
-    entering = gx * dx + gy * dy + gz * dz < 0.0
-    lnx, lny, lnz = nx, ny, nz
-    if not entering and packed.surfaces[s, TWO_SIDED] == 0.0:
-        lnx, lny, lnz = -nx, -ny, -nz
+    whitted.hit_viewer(ray_kind, setup.eye, dx, dy, dz, eye)
+    entering, lnx, lny, lnz = whitted.lit_normal(packed.surfaces, s, nx, ny, nz, gx, gy, gz,
+                                                 dx, dy, dz)
     terms = _local(setup, packed, kind, index, s, (px, py, pz), (lnx, lny, lnz),
                    (gx, gy, gz), eye, shadows, offset, surface_row, stack, counts)
     local = terms["clamped"]

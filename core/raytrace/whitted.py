@@ -199,6 +199,28 @@ def shadow_term(packed, mode, light, px, py, pz, background, offset, stack, coun
 
 
 @njit(cache=True, inline="always")
+def hit_viewer(ray_kind, primary_eye, dx, dy, dz, eye):
+    """``eye`` := the viewer of a hit: the primary eye (the PRP or the parallel DOP) for a
+    primary ray, exactly as the z-buffer's shading sees it; the ray's origin for the others."""
+    if ray_kind == PRIMARY:
+        for c in range(4):
+            eye[c] = primary_eye[c]
+    else:
+        eye[0], eye[1], eye[2], eye[3] = EYE_DIRECTION, -dx, -dy, -dz
+
+
+@njit(cache=True, inline="always")
+def lit_normal(surfaces, s, nx, ny, nz, gx, gy, gz, dx, dy, dz):
+    """``(entering, N to light)``: whether the ray enters the surface (against its geometric
+    normal), and a closed surface seen from inside (camera in a mesh, a ray in glass) lit on
+    its inner side. Two-sided surfaces are turned to the viewer by the lighting model itself."""
+    entering = gx * dx + gy * dy + gz * dz < 0.0
+    if not entering and surfaces[s, TWO_SIDED] == 0.0:
+        return entering, -nx, -ny, -nz
+    return entering, nx, ny, nz
+
+
+@njit(cache=True, inline="always")
 def has_maps(tex, kind, s):
     """Does the hit surface carry a colour, bump, normal or environment map?"""
     if kind != TRIANGLE:
@@ -422,19 +444,9 @@ def trace(packed, origins, directions, t_lo, t_hi, begin, end, primary_eye, ligh
                 mapped = has_maps(tex, kind, s)
                 if mapped:
                     uv_derivatives(packed, tex, index, dp, duv)
-            # The viewer of this hit: the primary eye (the PRP or the parallel DOP) for primary
-            # rays, exactly as the z-buffer's shading sees it; the ray's origin for the others.
-            if ray_kind == PRIMARY:
-                for c in range(4):
-                    eye[c] = primary_eye[c]
-            else:
-                eye[0], eye[1], eye[2], eye[3] = EYE_DIRECTION, -dx, -dy, -dz
-            entering = gx * dx + gy * dy + gz * dz < 0.0
-            # A closed surface seen from inside (camera in a mesh, a ray in glass): light its
-            # inner side. Two-sided surfaces are turned to the viewer by phong_point itself.
-            lnx, lny, lnz = nx, ny, nz
-            if not entering and packed.surfaces[s, TWO_SIDED] == 0.0:
-                lnx, lny, lnz = -nx, -ny, -nz
+            hit_viewer(ray_kind, primary_eye, dx, dy, dz, eye)
+            entering, lnx, lny, lnz = lit_normal(packed.surfaces, s, nx, ny, nz, gx, gy, gz,
+                                                 dx, dy, dz)
             if mapped:
                 r, g, b = textured_colour(packed, index, s, px, py, pz, lnx, lny, lnz, gx, gy, gz,
                                           lights, ambient, eye, halfway, shadows, background,

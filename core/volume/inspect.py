@@ -94,7 +94,8 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None) -> dict:
         color, through, largest = march_volume(volume, o, d, t_lo, hi, step,
                                                pack_lights(scene.lights),
                                                pack_ambient(scene.ambient), pack_eye(eye),
-                                               scene.specular == "halfway")
+                                               scene.specular == "halfway",
+                                               settings.lighting_model)
         ts = ray_samples(volume, o[0], d[0], float(t_lo[0]), float(hi[0]), step)
         entry = {"volume": volume.name, "mode": volume.mode, "samples": int(len(ts)),
                  "enters at t": float(ts[0] - 0.5 * step) if len(ts) else None,

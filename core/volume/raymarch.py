@@ -13,9 +13,11 @@ sampled at its midpoint by trilinear interpolation.
   and ``C += T·α·c``, ``T *= 1 − α``; the march ends early once ``T < EARLY_TERMINATION``.
   For a homogeneous medium this is the exact integral ``c (1 − e^{−σ L})``.
 - **Gradient shading** (Levoy): where the data's gradient is not negligible, ``c`` is lit by
-  the course's Phong model (:func:`core.shading.illumination.phong_point`, the scene's lights,
-  the volume's material with ``O_d = c``, two-sided) with the normal ``−∇f / |∇f|``; the
-  gradient is the trilinear field's, by central differences half a sample either side.
+  the volume material's lighting model through the seam every renderer lights by
+  (:func:`core.shading.models.dispatch.light_point`: Phong unless the material names another,
+  the scene's lights, the material with ``O_d = c``, two-sided) with the normal
+  ``−∇f / |∇f|``; the gradient is the trilinear field's, by central differences half a
+  sample either side.
 - **MIP**: the largest sample along the ray.
 
 The caller composites ``C + T · (what lies behind)``.
@@ -28,7 +30,9 @@ import math
 import numpy as np
 
 from core.jit import njit, prange
-from core.shading.illumination import LIGHT_COLUMNS, OD, SURFACE_COLUMNS, phong_point
+from core.shading.illumination import LIGHT_COLUMNS, OD, pack_surfaces
+from core.shading.models import with_model
+from core.shading.models.dispatch import light_point
 
 EMISSION_ABSORPTION, MIP = 0, 1
 # The march stops when less than this of the light behind can still come through: what it
@@ -94,8 +98,8 @@ def box_interval(v, ox, oy, oz, dx, dy, dz):
 @njit(cache=True, inline="always")
 def shade_sample(v, x, y, z, r, g, b, px, py, pz, m_inv, surface, lights, ambient, eye,
                  halfway, flat):
-    """The sample's colour lit by the Phong model with the normal −∇f (world), or as it is
-    where the gradient is below ``flat``."""
+    """The sample's colour lit by the material's lighting model with the normal −∇f (world), or
+    as it is where the gradient is below ``flat``."""
     gx = trilinear(v, x + 0.5, y, z) - trilinear(v, x - 0.5, y, z)
     gy = trilinear(v, x, y + 0.5, z) - trilinear(v, x, y - 0.5, z)
     gz = trilinear(v, x, y, z + 0.5) - trilinear(v, x, y, z - 0.5)
@@ -107,7 +111,7 @@ def shade_sample(v, x, y, z, r, g, b, px, py, pz, m_inv, surface, lights, ambien
     nz = -(m_inv[0, 2] * gx + m_inv[1, 2] * gy + m_inv[2, 2] * gz)
     length = math.sqrt(nx * nx + ny * ny + nz * nz)
     surface[0, OD], surface[0, OD + 1], surface[0, OD + 2] = r, g, b
-    return phong_point(px, py, pz, nx / length, ny / length, nz / length, 0, surface, lights,
+    return light_point(px, py, pz, nx / length, ny / length, nz / length, 0, surface, lights,
                        ambient, eye, halfway)
 
 
@@ -167,17 +171,17 @@ def march(v, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit, 
 
 
 def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient, eye,
-                 halfway=False):
+                 halfway=False, lighting_model=None):
     """``(color (N, 3), transmittance (N,), largest (N,))`` of ``volume`` along the rays (the
-    numpy entry; ``step`` in world units)."""
+    numpy entry; ``step`` in world units). ``lighting_model`` names a model that lights the
+    volume instead of its material's own (the settings' override); ``None`` keeps it."""
     n = len(origins)
     color, transmittance, largest = np.empty((n, 3)), np.empty(n), np.empty(n)
     m_inv = np.linalg.inv(volume.world_from_index())
-    mat = volume.material
-    material = np.zeros((1, SURFACE_COLUMNS))
-    material[0, :4] = mat.ka, mat.kd, mat.ks, mat.n
-    material[0, 7:10] = mat.os
-    material[0, 10] = 1.0                      # two-sided: the side the viewer sees is lit
+    mat = volume.material if lighting_model is None else with_model(volume.material,
+                                                                    lighting_model)
+    # two-sided: the side the viewer sees is lit; O_d is each sample's colour (march)
+    material = pack_surfaces([mat], [True])
     transfer = (volume.transfer if volume.transfer is not None
                 else np.zeros((1, 5)))
     lo, hi = volume.value_range

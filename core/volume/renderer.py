@@ -57,7 +57,7 @@ def draw(scene, view, settings, frame, context, timer) -> None:
         color, transmittance, largest = march_volume(
             volume, origins, directions, t_lo, t_hi, step_of(volume),
             pack_lights(scene.lights), pack_ambient(scene.ambient), pack_eye(eye),
-            scene.specular == "halfway")
+            scene.specular == "halfway", settings.lighting_model)
         if volume.mode == "mip":
             lo, hi = volume.mip_window()
             grey = np.where(np.isfinite(largest),
