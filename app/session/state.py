@@ -185,6 +185,11 @@ class ViewerState:
     paint_first: int | None = None
     # A lighting model for every material (core.shading.models; "": each material's own).
     lighting_model: str = ""
+    # The renderers' own options set in the panel (field name -> value; app.session.options),
+    # kept across renderers and scenes like the renderer itself; the last refused value's
+    # message, shown under the controls.
+    option_values: dict = field(default_factory=dict)
+    option_message: str = ""
     # The window's kernel gate while the warm-up compiles in worker processes (a frame waits
     # for its kernels rather than compiling them a second time; app.viewer.kernels.gated):
     # wraps each frame's job; None renders it as it is.
@@ -336,7 +341,8 @@ class ViewerState:
                                         transparency=self.transparency or None,
                                         lighting_model=self.lighting_model or None,
                                         paint_first=(self.paint_first if self.renderer_name in
-                                                     ("bsp", "depth-sort") else None))
+                                                     ("bsp", "depth-sort") else None),
+                                        **self.option_values)
 
     @property
     def invalid_messages(self) -> list[str]:
@@ -442,6 +448,27 @@ class ViewerState:
     def set_transparency(self, mode: str) -> None:
         from core.settings import TRANSPARENCIES
         self._set("transparency", mode, TRANSPARENCIES)
+
+    def renderer_options(self):
+        """The current renderer's options object as the next frame uses it (None: it has
+        none)."""
+        return self.settings().options_of(self.renderer_name or "zbuffer")
+
+    def set_option(self, name: str, value) -> bool:
+        """Set the renderer's option ``name`` (a field of its options class). A value its class
+        refuses keeps the last good one, with the class's message (:attr:`option_message`)."""
+        from app.session.options import changed
+        try:
+            changed(self.settings(), name, value)
+        except (ValueError, TypeError) as error:
+            kept = getattr(self.renderer_options(), name, None)
+            self.option_message = f"{error}; {name.replace('_', ' ')} stays {kept!r}"
+            return False
+        self.option_message = ""
+        if self.option_values.get(name, object()) != value:
+            self.option_values = {**self.option_values, name: value}
+            self.dirty = True
+        return True
 
     def set_paint_first(self, count: int | None) -> None:
         """Paint only the first ``count`` triangles of the order (None: all of them)."""

@@ -75,6 +75,7 @@ from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
 from app.viewer.loupe import Loupe, value_at
 from app.session.state import ViewerState, compile_count
+from app.viewer import options_panel
 from app.viewer.volume_panel import VolumePanel
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
@@ -1042,6 +1043,7 @@ class ViewerWindow:
         self.volume_panel.draw(imgui, displayable)
         self.tools.panel(imgui, displayable)
         self._draw_order()                    # the painter's draw-order slider
+        options_panel.draw(imgui, self.state, displayable)   # the renderer's own options
         self._camera_strip()
         self._plan_strip()
         self._invalid_views_strip()

@@ -9,18 +9,24 @@ Registered with the ``radiosity`` renderer: ``settings.options_of("radiosity")``
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from core.settings import FORM_FACTOR_METHODS, SOLVERS, require_one_of
 
 
 @dataclass(frozen=True)
 class RadiosityOptions:
-    form_factors: str = "hemicube"       # "hemicube" | "raycast"
-    hemicube_resolution: int = 128       # hemicube pixels per side
-    solver: str = "progressive"          # "progressive" | "gauss-seidel"
-    converge: float = 0.01               # stop at this fraction of unshot energy
-    max_elements: int = 2000
+    # Each field's metadata is what the window's panel shows beside it (app.session.options).
+    form_factors: str = field(default="hemicube", metadata={
+        "choices": FORM_FACTOR_METHODS, "help": "the hemicube, or rays cast through the BVH"})
+    hemicube_resolution: int = field(default=128, metadata={
+        "help": "hemicube pixels per side (even)"})
+    solver: str = field(default="progressive", metadata={
+        "choices": SOLVERS, "help": "progressive refinement or Gauss-Seidel"})
+    converge: float = field(default=0.01, metadata={
+        "help": "stop when this fraction of the emitted energy is still unshot"})
+    max_elements: int = field(default=2000, metadata={
+        "help": "the element budget, adaptive subdivision included"})
 
     def __post_init__(self) -> None:
         require_one_of("form factors", self.form_factors, FORM_FACTOR_METHODS)

@@ -16,7 +16,7 @@ are this module's (:meth:`RaytraceOptions.add_arguments`). The notes' options:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from core.settings import FRESNEL_FORMS, SHADOW_MODES, require_one_of
 
@@ -25,13 +25,20 @@ MAX_DEPTH_LIMIT = 64
 
 @dataclass(frozen=True)
 class RaytraceOptions:
-    max_depth: int = 7
-    adaptive_epsilon: float = 1e-3
-    shadows: str = "transmit"
-    fresnel: bool = False
-    fresnel_form: str = "schlick"
-    secondary_attenuation: tuple[float, float] = (0.0, 0.0)
-    adaptive_threshold: float = 0.1
+    # Each field's metadata is what the window's panel shows beside it (app.session.options):
+    # the choices of a named option and a line of help.
+    max_depth: int = field(default=7, metadata={"help": "the ray tree's depth limit"})
+    adaptive_epsilon: float = field(default=1e-3, metadata={
+        "help": "stop a branch when the product of its k's falls below this"})
+    shadows: str = field(default="transmit", metadata={
+        "choices": SHADOW_MODES, "help": "what an object between a point and a light does"})
+    fresnel: bool = field(default=False, metadata={"help": "Fresnel weighting of k_r and k_t"})
+    fresnel_form: str = field(default="schlick", metadata={
+        "choices": FRESNEL_FORMS, "help": "Schlick's approximation or the exact equations"})
+    secondary_attenuation: tuple[float, float] = field(default=(0.0, 0.0), metadata={
+        "help": "C1, C2 of 1 / (1 + C1 R + C2 R^2) over a secondary ray's length R"})
+    adaptive_threshold: float = field(default=0.1, metadata={
+        "help": "adaptive supersampling: split a pixel whose corners differ by more"})
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_depth, int) and 1 <= self.max_depth <= MAX_DEPTH_LIMIT):

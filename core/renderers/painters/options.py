@@ -8,15 +8,18 @@ Registered with both painters (``core/renderers/__init__.py``): ``settings.optio
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from core.settings import BSP_ROOTS, require_one_of
 
 
 @dataclass(frozen=True)
 class PainterOptions:
-    bsp_root: str = "fewest-splits"      # core.visibility.bsp.ROOT_RULES
-    paint_first: int | None = None       # None: every triangle of the order
+    # Each field's metadata is what the window's panel shows beside it (app.session.options);
+    # paint_first has the panel's draw-order slider instead.
+    bsp_root: str = field(default="fewest-splits", metadata={
+        "choices": BSP_ROOTS, "help": "how each BSP node's root triangle is chosen"})
+    paint_first: int | None = field(default=None, metadata={"panel": False})
 
     def __post_init__(self) -> None:
         require_one_of("BSP root rule", self.bsp_root, BSP_ROOTS)
