@@ -42,7 +42,10 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
   triangle id, ..., and a volume's axial, coronal and sagittal slices) in place of the
   picture; ``h`` compares with OpenGL and flips between the picture and the heat map;
 - a scene with volumes: the panel's Volume section (:mod:`app.viewer.volume_panel`): the
-  transfer function's plot over the histogram, the iso slider, the slice and its index.
+  transfer function's plot over the histogram, the iso slider, the slice and its index;
+- a renderer with options of its own (the ray tracer's depth limit and shadows, radiosity's
+  solver, the BSP root): the panel's options section (:mod:`app.viewer.options_panel`), one
+  control per field of its registered options class.
 
 Every user action and every new frame is logged (logger ``fvd``; ``app.viewer`` sends it to
 stderr and to ``$FVD_LOG``). On HiDPI screens sizes in points are scaled so that the picture
