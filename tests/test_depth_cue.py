@@ -79,6 +79,7 @@ def test_a_ray_tracer_under_a_new_name_is_cued_by_its_rays():
     ``blur_per_ray``): depth cueing casts its primary rays for the depths, as for the ray
     tracer (its frame has no depth buffer), and motion blur may time its rays."""
     from types import SimpleNamespace
+
     from core.animation import ray_blur
     from core.renderers import register_renderer, unregister_renderer
     register_renderer("whitted-again", "core.raytrace.renderer:draw", samples_itself=True,

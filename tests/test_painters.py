@@ -284,6 +284,7 @@ def test_a_painter_under_a_new_name_is_treated_as_the_one_it_copies(capsys):
     pixel history reads its order, the window's draw-order slider reaches it and the render
     log names it. Nothing but the registry entry says it is a painter."""
     import json
+
     from app.cli import _drawn_by, main
     from app.session.state import ViewerState
     from core.inspect import inspect_pixel
