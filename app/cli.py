@@ -404,8 +404,10 @@ def _painter_overrides(args) -> dict:
 
 def _painter_plan(args, scene) -> dict | None:
     """What the painter's renderer did for the view: the tree's or the sort's numbers."""
-    if getattr(args, "renderer", None) not in ("bsp", "depth-sort"):
-        return {}
+    from core.renderers import get_renderer, renderer_names
+    name = getattr(args, "renderer", None)
+    if name not in renderer_names() or get_renderer(name).painting is None:
+        return {}                                    # not a painter (its entry's painting)
     from core.render import render
     from core.settings import RenderSettings
     index = _pick_view(scene, args.view)
@@ -582,14 +584,9 @@ def _simulation_progress():
 
 
 def _drawn_by(settings) -> str:
-    """What drew the frame, in the render log's words."""
-    if settings.renderer == "zbuffer":
-        return f"z-buffer, {settings.rasterizer} rasterizer"
-    return {"raytrace": "ray traced", "raycast": "ray cast (exact)",
-            "radiosity": "radiosity ({0.form_factors} form factors, {0.solver})".format(
-                settings.options_of("radiosity")),
-            "pathtrace": f"path traced, {settings.samples} paths per pixel"}.get(settings.renderer,
-                                                                      settings.renderer)
+    """What drew the frame, in the render log's words (its registry entry's ``drawn_by``)."""
+    from core.renderers import get_renderer
+    return get_renderer(settings.renderer).words(settings)
 
 
 def _render(args) -> int:

@@ -11,7 +11,12 @@ the registry instead of lists of names. The functions, each ``"package.module:fu
   pixel (:mod:`core.inspect`); its module may define ``buffers(scene, view, settings,
   context, names)``, the buffer views (:mod:`core.inspect.buffers`); None: not inspectable;
 - ``plan_stages``: ``add_stages(stages, triangle_stage)``, which puts the renderer's own
-  stages in place in the z-buffer's list (:func:`core.plan.plan`); None: the z-buffer's.
+  stages in place in the z-buffer's list (:func:`core.plan.plan`); None: the z-buffer's;
+- ``painting``: ``painting(scene, view, settings, context, timer, n, z_min, vp)``, the
+  painter's order of the triangles (:mod:`core.visibility.paint`: the BSP tree's walk or
+  Newell's sort); set, it is a painter: the pixel inspector and the command line's plan
+  report ask it for its order, and transparency lays the clear triangles in it (None: not a
+  painter; transparency then lays them in the depth sort's order).
 
 What it can do:
 
@@ -24,6 +29,20 @@ What it can do:
 - ``progressive``: the window shows its picture coarse first, then refining;
 - ``volumes``: it draws a scene's emission–absorption and MIP volumes (every renderer draws an
   isosurface, which is a mesh);
+- ``ray_depth``: its frame keeps no depth buffer, and what each film sample shows is the first
+  hit of its primary ray: depth cueing casts those rays for the depths
+  (:mod:`core.effects.depth_cue`), and draws no line edges again cued (it draws none);
+- ``blur_per_ray``: motion blur may give each primary ray a time of its own
+  (:mod:`core.animation.ray_blur`, which traces with the Whitted tracer's kernels: set it only
+  for a renderer whose picture is the ray tracer's); the others accumulate whole frames;
+- ``rasterizes``: it scan-converts triangles, so a 16-sample frame costs about 16 of its frames
+  (the window draws the aliasing view only for these; the others cast rays per sample);
+- ``triangle_ids``: its buffer views keep the visible triangle at each pixel at the cost of
+  one z-buffer pass, which the window's status line draws again for every frame;
+- ``drawn_by``: the render log's words for what drew a frame, a :meth:`str.format` template
+  over ``settings`` and ``options`` (its options object); empty: its name;
+- ``status``: the window's status line's words for it (default "drawn by NAME"; empty: none,
+  as for the z-buffer, the default renderer);
 - ``label``: its name in the window's Render menu;
 - ``in_menu``: whether the Render menu lists it (the exact ray caster draws only analytic
   primitives, so it is chosen from the command line, not offered for every scene);
@@ -32,6 +51,8 @@ What it can do:
   are its command-line flags; :class:`core.settings.RenderSettings` carries one per class
   (``settings.options_of(name)``), and ``settings.replace(field=...)`` reaches it by the
   field's name (:func:`option_owner`). Two renderers may share one class (the painters').
+  :meth:`Renderer.has_option` says whether its options have a field (the window's draw-order
+  slider is for the renderers whose options have ``paint_first``).
 
 The entries are data and the targets strings (``"package.module:function"``), imported when
 first drawn, inspected or planned (:func:`load`), so this module sits at the bottom of the
@@ -64,6 +85,13 @@ class Renderer:
     inspector: str | None = None    # "package.module:function": inspect_pixel
     plan_stages: str | None = None  # "package.module:function": add_stages
     options: str | type | None = None
+    painting: str | Callable | None = None   # "package.module:function": the painter's order
+    ray_depth: bool = False
+    blur_per_ray: bool = False
+    rasterizes: bool = False
+    triangle_ids: bool = False
+    drawn_by: str = ""
+    status: str | None = None       # None: "drawn by NAME" (register_renderer fills it in)
 
     def function(self) -> Callable:
         return load(self.target)
@@ -71,6 +99,17 @@ class Renderer:
     def options_class(self) -> type | None:
         """Its options' dataclass (imported on first use), or None."""
         return load(self.options) if self.options is not None else None
+
+    def has_option(self, field: str) -> bool:
+        """Whether its options have a field named ``field`` (imports them)."""
+        cls = self.options_class()
+        return cls is not None and field in cls.__dataclass_fields__
+
+    def words(self, settings) -> str:
+        """What drew a frame of ``settings``, in the render log's words (``drawn_by``)."""
+        if not self.drawn_by:
+            return self.name
+        return self.drawn_by.format(settings=settings, options=settings.options_of(self.name))
 
 
 def load(target: str | Callable) -> Callable:
@@ -93,6 +132,7 @@ def register_renderer(name: str, target, samples_itself: bool = False, descripti
     if unknown:
         raise TypeError(f"unknown renderer capabilities: {', '.join(sorted(unknown))}")
     capabilities.setdefault("label", name)
+    capabilities.setdefault("status", f"drawn by {name}")
     entry = Renderer(name, target, samples_itself, description, **capabilities)
     _RENDERERS[name] = entry
     return entry

@@ -74,6 +74,37 @@ def test_surfaces_cued_at_three_depths(renderer, projection):
     assert tuple(off.color[row, col]) == (204, 204, 204)        # 0.8 uncued
 
 
+def test_a_ray_tracer_under_a_new_name_is_cued_by_its_rays():
+    """The ray tracer's function under a new name with its capabilities (``ray_depth``,
+    ``blur_per_ray``): depth cueing casts its primary rays for the depths, as for the ray
+    tracer (its frame has no depth buffer), and motion blur may time its rays."""
+    from types import SimpleNamespace
+
+    from core.animation import ray_blur
+    from core.renderers import register_renderer, unregister_renderer
+    register_renderer("whitted-again", "core.raytrace.renderer:draw", samples_itself=True,
+                      options="core.raytrace.options:RaytraceOptions", recursive=True,
+                      ray_depth=True, blur_per_ray=True)
+    try:
+        scene = _squares()
+        settings = RenderSettings.for_scene(scene, renderer="whitted-again",
+                                            projection="parallel")
+        frame = render(scene, scene.views[0], settings, RenderContext())
+        assert frame.message is None and frame.depth is None
+        for x, z in zip(CENTRES_X, DEPTHS):
+            col, row = _centre_pixel(x, z, "parallel")
+            assert (np.abs(frame.color[row, col].astype(int) - EXPECTED[z]) <= 1).all()
+        traced = render(scene, scene.views[0], settings.replace(renderer="raytrace"),
+                        RenderContext())
+        assert np.array_equal(frame.color, traced.color)
+        still = SimpleNamespace(sprites_at=lambda t: None)       # no particles
+        assert ray_blur.usable(still, 0.0, settings.replace(depth_cue=False)) is None
+        assert ray_blur.usable(still, 0.0, settings.replace(depth_cue=False,
+                                                            renderer="zbuffer")) is not None
+    finally:
+        unregister_renderer("whitted-again")
+
+
 @pytest.mark.parametrize("projection", ["perspective", "parallel"])
 def test_wireframe_cued_at_three_depths(projection):
     scene = _squares("wireframe")

@@ -278,6 +278,67 @@ def test_viewer_state_draw_order_and_toggles():
         state.set_transparency("glass")
 
 
+def test_a_painter_under_a_new_name_is_treated_as_the_one_it_copies(capsys):
+    """The BSP renderer's functions under a new name, with its capabilities: its transparent
+    pane is laid in the entry's painting order, the command line's plan reports its tree, the
+    pixel history reads its order, the window's draw-order slider reaches it and the render
+    log names it. Nothing but the registry entry says it is a painter."""
+    import json
+
+    from app.cli import _drawn_by, main
+    from app.session.state import ViewerState
+    from core.inspect import inspect_pixel
+    from core.renderers import register_renderer, unregister_renderer
+    from core.visibility.paint import bsp_painting
+    painted = []          # the meshes of each scene painted through the entry's painting
+
+    def counted(scene, *rest):
+        painted.append(len(scene.meshes))
+        return bsp_painting(scene, *rest)
+
+    register_renderer("bsp-again", "core.renderers.painters.draw:draw_bsp",
+                      inspector="core.renderers.painters.inspect:inspect_pixel",
+                      plan_stages="core.renderers.painters.plan:bsp_stages",
+                      options="core.renderers.painters.options:PainterOptions",
+                      painting=counted, transparency=True, shaders=True, rasterizes=True)
+    try:
+        pane = load_scene(SCENES / "transparent_pane.toml")
+        frames = [render(pane, pane.views[0],
+                         RenderSettings.for_scene(pane, renderer=name, size=(96, 96)),
+                         RenderContext()) for name in ("bsp", "bsp-again")]
+        assert painted == [1]                    # the pane alone, in the entry's order
+        assert frames[1].stats["transparent triangles"] == frames[0].stats[
+            "transparent triangles"] > 0
+        assert np.array_equal(frames[1].color, frames[0].color)
+        reports = []
+        for name in ("bsp", "bsp-again"):
+            assert main(["plan", str(SCENES / "three_bars.toml"), "--renderer", name]) == 0
+            reports.append(json.loads(capsys.readouterr().out))
+        trees = [{k: v for k, v in r[name]["BSP tree"].items() if "ms" not in k}   # untimed
+                 for r, name in zip(reports, ("bsp", "bsp-again"))]
+        assert trees[1] == trees[0] and trees[1]["nodes"] > 0
+        assert reports[1]["bsp-again"]["painted"] == reports[0]["bsp"]["painted"] > 0
+        assert [s["stage"] for s in reports[1]["runs"]] == [s["stage"] for s in reports[0]["runs"]]
+        bars = load_scene(SCENES / "three_bars.toml")
+        settings = RenderSettings.for_scene(bars, renderer="bsp-again", size=(80, 60))
+        shown = render(bars, bars.views[0], settings, RenderContext()).color
+        y, x = (int(c) for c in np.argwhere((shown != shown[0, 0]).any(axis=2))[0])
+        del painted[:]
+        record = inspect_pixel(bars, bars.views[0], settings, x, y, RenderContext())
+        same = inspect_pixel(bars, bars.views[0], settings.replace(renderer="bsp"), x, y,
+                             RenderContext())
+        assert painted == [len(bars.meshes)]
+        assert record["writes"] and record["writes"] == same["writes"]
+        assert _drawn_by(settings) == "bsp-again"
+        state = ViewerState.open(SCENES / "three_bars.toml")
+        state.set_renderer("bsp-again")
+        state.set_paint_first(7)
+        assert state.settings().options_of("bsp-again").paint_first == 7
+        assert state.renderer_entry.status == "drawn by bsp-again"
+    finally:
+        unregister_renderer("bsp-again")
+
+
 def test_bench_rows_for_the_painters(tmp_path):
     """``bench --renderer bsp,depth-sort,zbuffer``: a tree row per root rule, a frame row per
     renderer (tiny sizes: the numbers are the bench's business, the rows are this test's)."""

@@ -156,9 +156,11 @@ def job_of(args, animation, bundle, view_index: int) -> dict:
                 "shading": args.shading or scene.shading,
                 "renderer": args.renderer or "zbuffer", "view": view_index, "paths": args.paths}
     shutter = _shutter(args, animation)
-    if shutter.method == "per-ray" and settings["renderer"] != "raytrace":
-        raise JobError("--blur-method per-ray is the ray tracer's: give --renderer raytrace "
-                       "(the other renderers accumulate whole frames)")
+    if shutter.method == "per-ray" and not _blurs_per_ray(settings["renderer"]):
+        from core.renderers import names_that
+        raise JobError(f"--blur-method per-ray is the ray tracer's: give --renderer "
+                       f"{' or '.join(names_that('blur_per_ray'))} (the other renderers "
+                       f"accumulate whole frames)")
     if shutter.samples > 1 or getattr(animation, "shutter", None) is not None:
         # (recorded only where frames are blurred, or kept sharp against the scene's
         # blur: the sharp jobs of sharp scenes keep the hash they had)
@@ -168,6 +170,13 @@ def job_of(args, animation, bundle, view_index: int) -> dict:
     return {"scene": Path(args.scene).name, "bundle": bundle.digest, "fps": fps,
             "frames": int(count), "settings": settings,
             "load_size": list(args.size) if args.size else None}
+
+
+def _blurs_per_ray(name: str) -> bool:
+    """Whether renderer ``name`` may give each primary ray its own time (False for a name
+    that is no renderer's: the job's settings check words that)."""
+    from core.renderers import get_renderer, renderer_names
+    return name in renderer_names() and get_renderer(name).blur_per_ray
 
 
 def _shutter(args, animation):

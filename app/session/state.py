@@ -340,8 +340,8 @@ class ViewerState:
                                         depth_cue=self.depth_cue,
                                         transparency=self.transparency or None,
                                         lighting_model=self.lighting_model or None,
-                                        paint_first=(self.paint_first if self.renderer_name in
-                                                     ("bsp", "depth-sort") else None),
+                                        paint_first=(self.paint_first if self.renderer_entry
+                                                     .has_option("paint_first") else None),
                                         **self.option_values)
 
     @property
@@ -418,6 +418,11 @@ class ViewerState:
             self.dirty = True
 
     # -- the renderer, the texture filter and the bump demo ------------------------------------
+    @property
+    def renderer_entry(self):
+        """The renderer's registry entry (:class:`core.registry.Renderer`: what it can do)."""
+        return get_renderer(self.renderer_name or "zbuffer")
+
     def set_renderer(self, name: str) -> None:
         """``"zbuffer"`` or ``"raytrace"`` (any registered renderer)."""
         from core.renderers import renderer_names

@@ -39,8 +39,6 @@ ANTIALIASED = {"samples": 16, "pixel_filter": "mitchell", "filter_radius": None,
 # A wireframe's lines are antialiased by Wu's coverage at one sample a pixel: supersampled,
 # the renderer draws them one sample wide, a quarter of their ink at 16 samples.
 ANTIALIASED_LINES = {**ALIASED, "antialias_lines": True}
-# Those whose 16-sample frame costs about 16 of their frames (the others trace rays per sample).
-RASTERIZING = ("zbuffer", "scanline", "bsp", "depth-sort")
 
 
 class InspectorTools:
@@ -147,7 +145,7 @@ class InspectorTools:
         s = self.state
         if (self._picking is None and s.view is not None and s.scene is not None
                 and s.playback is None and s.scene.triangle_count <= MAX_PICKED
-                and s.renderer_name in ("zbuffer", "scanline")):
+                and s.renderer_entry.triangle_ids):
             drawn = self._drawn()
             self._picking = threading.Thread(target=self._pick, args=(frame, drawn),
                                              name="triangle ids", daemon=True)
@@ -225,10 +223,12 @@ class InspectorTools:
         lines), its right half antialiased (:data:`ANTIALIASED`), the same edges meeting at
         the middle column, for the loupe to show both."""
         from core.render import render
+        from core.renderers import get_renderer, names_that
         scene, view, settings = self._drawn()
-        if settings.renderer not in RASTERIZING:     # 16 rays a pixel: seconds on this thread
+        if not get_renderer(settings.renderer).rasterizes:  # 16 rays a pixel: seconds here
             log.info("action: %s -> buffer view %s: drawn for the rasterizing renderers only "
-                     "(%s), not %s", how, ALIASING, ", ".join(RASTERIZING), settings.renderer)
+                     "(%s), not %s", how, ALIASING, ", ".join(names_that("rasterizes")),
+                     settings.renderer)
             return False
         try:
             smooth = ANTIALIASED_LINES if settings.shading == "wireframe" else ANTIALIASED

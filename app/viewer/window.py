@@ -1199,7 +1199,7 @@ class ViewerWindow:
         """The painter's renderers: a slider that paints only the first K triangles."""
         s = self.state
         total = s.painted_total
-        if s.renderer_name not in ("bsp", "depth-sort") or not total:
+        if not s.renderer_entry.has_option("paint_first") or not total:
             return
         imgui.text("draw order (triangles painted)")
         imgui.push_item_width(-1)
@@ -1236,11 +1236,8 @@ class ViewerWindow:
                    else "window stretched over the viewport")
         if s.course_tri:
             imgui.text_disabled("course .tri rules: left Phong, middle Gouraud, right flat")
-        extras = [] if s.renderer_name == "zbuffer" else [
-            {"raytrace": "ray traced", "radiosity": "radiosity", "pathtrace": "path traced",
-             "bsp": "drawn by the BSP tree", "depth-sort": "drawn by the depth sort"}.get(
-                s.renderer_name, f"drawn by {s.renderer_name}")
-            + (" (refining)" if s.frame_partial else "")]
+        words = s.renderer_entry.status                   # the registry entry's status words
+        extras = [words + (" (refining)" if s.frame_partial else "")] if words else []
         if s.has_textures:
             extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))
         if extras:

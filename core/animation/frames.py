@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.animation.draw import draw_particles
+from core.renderers import get_renderer
 
 
 @dataclass(frozen=True)
@@ -107,8 +108,8 @@ def _per_ray(animation, t, settings, context, view_index, shutter):
     """``(frame, why not)``: the frame blurred a time per ray, or None where it is
     accumulated instead — the z-buffer's renderers, ``method = "accumulate"``, or what the
     per-ray path cannot take (``ray_blur.usable``: the reason goes in the frame's stats)."""
-    if shutter.method == "accumulate" or (shutter.method == "auto"
-                                          and settings.renderer != "raytrace"):
+    per_ray = get_renderer(settings.renderer).blur_per_ray      # the ray tracer's
+    if shutter.method == "accumulate" or (shutter.method == "auto" and not per_ray):
         return None, None
     from core.animation import ray_blur
     why = ray_blur.usable(animation, t, settings)

@@ -25,6 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.renderers import get_renderer
+
 MIN_BUCKETS = 64        # time buckets a frame at least (the distinct times a picture sees)
 BUCKETS_PER_STRATUM = 4
 MAX_BUCKETS = 4096
@@ -66,7 +68,7 @@ MAX_BAND_RAYS = 1 << 23     # rays a band: its picks sorted at a time (int64 ind
 
 def usable(animation, t: float, settings) -> str | None:
     """None when the frame can be blurred per ray, else why not (it is then accumulated)."""
-    if settings.renderer != "raytrace":
+    if not get_renderer(settings.renderer).blur_per_ray:
         return "per-ray times are the ray tracer's"
     if animation.sprites_at(t) is not None:
         return "particles are drawn over the picture, not traced"
@@ -156,7 +158,7 @@ def _frame(scene, settings, color, counts, buckets, per_pixel):
                   settings.renderer, settings.transparency)    # what the window lists
     frame = Frame(rgbx=np.empty((height, width, 4), np.uint8), plan=stages,
                   stats={"allocated": ["color"], "computed": ["ray tracing"],
-                         "renderer": "raytrace", "projection": settings.projection,
+                         "renderer": settings.renderer, "projection": settings.projection,
                          "shading": settings.shading})
     frame.color[:] = color
     frame.stats["rays"] = {n: int(c) for n, c in zip(whitted.COUNTERS, counts)}

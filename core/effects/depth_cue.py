@@ -15,9 +15,10 @@ back clipping plane fades fully into the background.
 
 Where the depth comes from: the z-buffer and the painters leave ``frame.depth`` (device depth;
 the device transformation is inverted at the pixel centre to get the world point); the ray
-tracer and ray caster's primary hits give it directly; wireframe lines are drawn again with
-each pixel's colour cued at its own depth along the line (the same pixels as the midpoint
-line: perspective-correct depth between the clipped endpoints).
+tracer and ray caster's primary hits give it directly (their registry entries'
+``ray_depth``); wireframe lines are drawn again with each pixel's colour cued at its own
+depth along the line (the same pixels as the midpoint line: perspective-correct depth between
+the clipped endpoints).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from core.registry import get_renderer
 from core.scene.formats.keys import register_scene_keys
 from core.shading.illumination import to_uint8
 
@@ -88,13 +90,14 @@ def depth_cued(draw):
 def apply(scene, view, settings, frame, context) -> None:
     """Cue ``frame.color`` in place: the surfaces, then the lines drawn again cued."""
     params = getattr(scene, "depth_cue", None) or DepthCue()
+    by_rays = get_renderer(settings.renderer).ray_depth     # no depth buffer: cast the rays
     height, width = frame.color.shape[:2]
     z_f, z_b, s_f, s_b, i_dc = params.resolved(view, scene.background)
     s = None
     if frame.depth is not None:
         z = _depth_from_device(frame.depth, view, settings, context, width, height)
         s = np.where(np.isfinite(z), scale_factor(z, z_f, z_b, s_f, s_b), np.nan)
-    elif settings.renderer in ("raytrace", "raycast") and settings.shading != "wireframe":
+    elif by_rays and settings.shading != "wireframe":
         z = _depth_from_rays(scene, view, settings, width, height)      # (samples, H, W)
         hit = np.isfinite(z)
         s_all = np.where(hit, scale_factor(z, z_f, z_b, s_f, s_b), 0.0)
@@ -107,7 +110,7 @@ def apply(scene, view, settings, frame, context) -> None:
     frame.stats.setdefault("computed", []).append("depth cue")
     line_meshes = [m for m in scene.meshes
                    if settings.shading == "wireframe" or not len(m.triangles)]
-    if line_meshes and settings.renderer not in ("raytrace", "raycast"):
+    if line_meshes and not by_rays:             # the ray casters draw no line edges
         draw_cued_lines(frame.color, line_meshes, view, settings, context, scene, params)
 
 

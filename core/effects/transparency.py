@@ -4,8 +4,8 @@ door" transparency), for the z-buffer and the painter's renderers.
 A mesh whose material has ``k_t > 0`` (the transmission coefficient; the same
 ``Material.kt`` the ray tracer refracts with) is transparent. The opaque meshes are drawn
 first, as usual, leaving colours and depths. The transparent triangles are then put in back
-to front order (Newell's depth sort, or for the BSP renderer their own BSP tree) and laid over
-the frame where they lie in front of the opaque surface:
+to front order (Newell's depth sort, or a painter's own order: the BSP renderer's tree) and
+laid over the frame where they lie in front of the opaque surface:
 
 - ``interpolated``: ``I = (1 - k_t) I_1 + k_t I_2``, ``I_1`` the transparent surface's own
   colour, ``I_2`` what was there (the opaque surface, or transparent ones painted before);
@@ -88,13 +88,16 @@ def box_layers(device, triangles, width, height):
 
 def composite(clear, view, settings, frame, context) -> None:
     """Lay the transparent meshes of ``clear`` over ``frame`` (its colour and depth)."""
-    from core.visibility.paint import Painting, SimpleFrame, paint, painting, resolve, true_depth
+    from core.registry import get_renderer
+    from core.visibility.paint import (Painting, SimpleFrame, depth_sorted_painting, paint,
+                                       painting, resolve, true_depth)
     if not clear.meshes:
         return
     height, width = frame.color.shape[:2]
-    order = "bsp" if settings.renderer == "bsp" else "depth-sort"
-    p = painting(clear, view, settings.replace(renderer=order, paint_first=None,
-                                               samples=1), context)
+    # a painter lays them in its own order, the others in Newell's depth sort
+    order = get_renderer(settings.renderer).painting or depth_sorted_painting
+    p = painting(clear, view, settings.replace(paint_first=None, samples=1), context,
+                 order=order)
     frame.stats["transparent triangles"] = 0 if p is None else int(len(p.triangles))
     if p is None or len(p.triangles) == 0:
         return

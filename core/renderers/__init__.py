@@ -31,46 +31,58 @@ from core.registry import (Renderer, get_renderer, names_that, register_renderer
 register_renderer("zbuffer", "core.renderers.zbuffer.draw:draw",
                   inspector="core.renderers.zbuffer.inspect:inspect_pixel",
                   description="the FvDFH viewing pipeline: clip, project, scan-line z-buffer",
-                  label="Z-buffer", transparency=True, shaders=True)
+                  label="Z-buffer", transparency=True, shaders=True, rasterizes=True,
+                  triangle_ids=True, drawn_by="z-buffer, {settings.rasterizer} rasterizer",
+                  status="")
 register_renderer("raycast", "core.renderers.raycast.draw:draw", samples_itself=True,
                   inspector="core.renderers.raycast.inspect:inspect_pixel",
                   description="the analytic surfaces ray-cast exactly (the reference)",
-                  label="Ray cast (exact analytic surfaces)", in_menu=False)
+                  label="Ray cast (exact analytic surfaces)", in_menu=False, ray_depth=True,
+                  drawn_by="ray cast (exact)")
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
                   inspector="core.raytrace.inspect:inspect_pixel",
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
                   label="Ray traced", recursive=True, progressive=True,
-                  options="core.raytrace.options:RaytraceOptions")
+                  options="core.raytrace.options:RaytraceOptions", ray_depth=True,
+                  blur_per_ray=True, drawn_by="ray traced", status="ray traced")
 register_renderer("radiosity", "core.radiosity.renderer:draw",
                   inspector="core.radiosity.inspect:inspect_pixel",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
                               "refinement), drawn Gouraud by the z-buffer (core.radiosity)",
                   label="Radiosity", emitters=True, textures=False, progressive=True,
-                  options="core.radiosity.options:RadiosityOptions")
+                  options="core.radiosity.options:RadiosityOptions",
+                  drawn_by="radiosity ({options.form_factors} form factors, {options.solver})",
+                  status="radiosity")
 register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
                   inspector="core.pathtrace.inspect:inspect_pixel",
                   description="Kajiya's rendering equation by path tracing on the BVH "
                               "(core.pathtrace)",
                   label="Path traced", emitters=True, recursive=True, textures=False,
-                  progressive=True)
+                  progressive=True, drawn_by="path traced, {settings.samples} paths per pixel",
+                  status="path traced")
 register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
                   plan_stages="core.renderers.painters.plan:bsp_stages",
                   description="a BSP tree built once in world space, painted back to front",
                   label="BSP tree (painter's)", transparency=True, shaders=True,
-                  options="core.renderers.painters.options:PainterOptions")
+                  options="core.renderers.painters.options:PainterOptions",
+                  painting="core.visibility.paint:bsp_painting", rasterizes=True,
+                  status="drawn by the BSP tree")
 register_renderer("scanline", "core.renderers.scanline.draw:draw",
                   inspector="core.renderers.scanline.inspect:inspect_pixel",
                   plan_stages="core.renderers.scanline.plan:add_stages",
                   description="Watkins' scan-line visible-surface algorithm (FvDFH 15.6): edge, "
                               "polygon and active edge tables, depth only at span ends",
-                  label="Scan line (Watkins)", transparency=True, shaders=True)
+                  label="Scan line (Watkins)", transparency=True, shaders=True,
+                  rasterizes=True, triangle_ids=True)
 register_renderer("depth-sort", "core.renderers.painters.draw:draw_depth_sort",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
                   plan_stages="core.renderers.painters.plan:depth_sort_stages",
                   description="Newell, Newell and Sancha's depth sort, painted back to front",
                   label="Depth sort (Newell, painter's)", transparency=True, shaders=True,
-                  options="core.renderers.painters.options:PainterOptions")
+                  options="core.renderers.painters.options:PainterOptions",
+                  painting="core.visibility.paint:depth_sorted_painting", rasterizes=True,
+                  status="drawn by the depth sort")
 register_renderer("volume", "core.volume.renderer:draw",
                   inspector="core.volume.inspect:inspect_pixel",
                   description="volumes ray-marched (emission-absorption with gradient "

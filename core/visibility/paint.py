@@ -4,10 +4,10 @@ share.
 
 A :class:`Painting` is a list of triangles in painting order, already clipped and projected,
 with the shader's attributes. :func:`painting` makes one for a view (the BSP tree's walk or
-Newell's sort, ``settings.renderer``); :func:`paint` rasterizes it with every triangle at the
-constant depth of its rank in the order, so "the nearer wins" is exactly "the later painted
-wins", the painter's overwrite; :func:`true_depth` recovers each pixel's real depth from the
-barycentrics afterwards.
+Newell's sort: the ``painting`` of ``settings.renderer``'s registry entry); :func:`paint`
+rasterizes it with every triangle at the constant depth of its rank in the order, so "the
+nearer wins" is exactly "the later painted wins", the painter's overwrite; :func:`true_depth`
+recovers each pixel's real depth from the barycentrics afterwards.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ import numpy as np
 
 from core.pipeline import project
 from core.camera.film import sample_viewport
+from core.registry import get_renderer, load
 from core.visibility import bsp as bsp_tree
 
 
@@ -199,19 +200,23 @@ def true_depth(vis, p: Painting, context=None) -> np.ndarray:
     return depth
 
 
-def painting(scene, view, settings, context=None, timer=None) -> Painting | None:
-    """The painting a frame of ``settings.renderer`` (bsp or depth-sort) would paint, or None
-    when it would paint no triangle (wireframe, no triangles, an invalid view)."""
+def painting(scene, view, settings, context=None, timer=None, order=None) -> Painting | None:
+    """The painting a frame of ``settings.renderer`` (a painter: its registry entry's
+    ``painting``) would paint, or None when it would paint no triangle (wireframe, no
+    triangles, an invalid view). ``order``: another painting function (transparency's)."""
     from core.context import DEFAULT_CONTEXT
     context = context or DEFAULT_CONTEXT
     if settings.shading == "wireframe" or scene.triangle_count == 0 or view is None:
         return None
+    order = order or get_renderer(settings.renderer).painting
+    if order is None:
+        raise ValueError(f"the {settings.renderer} renderer paints in no order (it is not a "
+                         f"painter's)")
     width, height = settings.size
     n, z_min = context.normalizing_transform(view, settings.projection)
     vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
-    make = {"bsp": bsp_painting, "depth-sort": depth_sorted_painting}[settings.renderer]
-    return make(scene, view, settings, context, timer or _NoClock(), n, z_min, vp)
+    return load(order)(scene, view, settings, context, timer or _NoClock(), n, z_min, vp)
 
 
 
