@@ -24,6 +24,7 @@ def draw(imgui, state, displayable) -> None:
     label = get_renderer(state.renderer_name or "zbuffer").label
     if not imgui.collapsing_header(f"{label}: options###renderer-options"):
         return
+    imgui.push_item_width(imgui.get_content_region_avail().x * 0.5)   # half for the names
     for control in found:
         changed, value = _control(imgui, control)
         if control.help and imgui.is_item_hovered():
@@ -32,6 +33,7 @@ def draw(imgui, state, displayable) -> None:
             ok = state.set_option(control.name, value)
             log.info("action: panel %s -> %s", control.name,
                      repr(value) if ok else state.option_message)
+    imgui.pop_item_width()
     if state.option_message:
         imgui.push_text_wrap_pos(0.0)
         imgui.text_colored((1.0, 0.45, 0.4, 1.0), displayable(state.option_message))
