@@ -72,7 +72,8 @@ def __getattr__(name: str):
     numpy, which ``--version`` does without."""
     if name in ("PROJECTION_CHOICES", "SHADING_CHOICES"):
         from core import settings
-        return settings.PROJECTIONS if name == "PROJECTION_CHOICES" else settings.SHADINGS
+        from core.registry import shading_names
+        return settings.PROJECTIONS if name == "PROJECTION_CHOICES" else shading_names()
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
@@ -176,7 +177,9 @@ def _view_parser(sub, scene_help: str) -> None:
 
 def _render_parser(sub, scene_help: str) -> None:
     """``render``: one view to a PNG, with every renderer's options."""
-    from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
+    from core.registry import shading_names
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES
+    shadings = shading_names()
     r = sub.add_parser("render", help="render one view to a PNG with the CPU core")
     r.add_argument("scene", help=scene_help)
     r.add_argument("--view", type=int, default=1,
@@ -184,7 +187,7 @@ def _render_parser(sub, scene_help: str) -> None:
                         "cannot be drawn, invalid in the file or in this projection, prints "
                         "its message and exits with status 2)")
     r.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
-    r.add_argument("--shading", choices=SHADING_CHOICES, default=None)
+    r.add_argument("--shading", choices=shadings, default=None)
     r.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's, 500x500)")
     r.add_argument("--out", default=None,
                    help="the PNG file to write (.png only; its folder must exist; an existing "
@@ -228,11 +231,13 @@ def _matrices_parser(sub, scene_help: str) -> None:
 
 
 def _plan_parser(sub, scene_help: str) -> None:
-    from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
+    from core.registry import shading_names
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES
+    shadings = shading_names()
     pl = sub.add_parser("plan", help="print, as JSON, the stages that will run and those left out")
     pl.add_argument("scene", help=scene_help)
     pl.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
-    pl.add_argument("--shading", choices=SHADING_CHOICES, default=None)
+    pl.add_argument("--shading", choices=shadings, default=None)
     pl.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None)
     pl.add_argument("--keep-aspect", action="store_true", default=None)
     _painter_arguments(pl, plan=True)         # the painter's renderers report their order
@@ -830,7 +835,9 @@ def _buffer_argument(parser) -> None:
 
 
 def _inspector_parsers(sub, scene_help: str) -> None:
-    from core.settings import PROJECTIONS as PROJECTION_CHOICES, SHADINGS as SHADING_CHOICES
+    from core.registry import shading_names
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES
+    shadings = shading_names()
     i = sub.add_parser("inspect", help="why one pixel has its colour: the renderer's record")
     c = sub.add_parser("compare", help="hold a picture (PNG) against our render of the same "
                                        "view: a diff heat map and a verdict (exit 1: differs)")
@@ -839,7 +846,7 @@ def _inspector_parsers(sub, scene_help: str) -> None:
         p.add_argument("--view", type=int, default=1,
                        help="which view: its position in the file, counting from 1")
         p.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
-        p.add_argument("--shading", choices=SHADING_CHOICES, default=None)
+        p.add_argument("--shading", choices=shadings, default=None)
         p.add_argument("--size", type=parse_size, default=None,
                        help="WxH (default: the scene's; compare: the picture's)")
         _texture_arguments(p)

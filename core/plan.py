@@ -10,9 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from core.registry import Renderer, get_renderer, load
+from core.registry import Renderer, get_renderer, get_shading, load
 from core.scene.model import Scene
-from core.settings import SHADINGS
 
 
 @dataclass(frozen=True)
@@ -29,9 +28,8 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
     renderer runs them (``core/render.py``, ``core/renderers/zbuffer/draw.py``); ``keep_aspect``,
     ``rasterizer`` and ``transparency`` as in :class:`core.settings.RenderSettings`
     (``transparency`` None: what the scene asks for, else what it needs)."""
-    if shading not in SHADINGS:
-        raise ValueError(f"shading must be one of {', '.join(SHADINGS)}, not {shading!r}")
-    solid = shading != "wireframe" and scene.triangle_count > 0
+    mode = get_shading(shading)                 # ValueError naming the modes there are
+    solid = mode.module is not None and scene.triangle_count > 0   # wireframe: lines only
     triangle_stage = _triangle_stage_for(scene, solid)
     stages = (_normal_and_lighting_stages(scene, shading, solid, triangle_stage)
               + _drawing_stages(scene, projection, shading, keep_aspect, rasterizer,
@@ -73,13 +71,14 @@ def _normal_and_lighting_stages(scene: Scene, shading: str, solid: bool,
                                 triangle_stage) -> list[Stage]:
     """Culling, the normals and the lighting before the projection, in the renderer's order."""
     closed = any(m.closed and len(m.triangles) for m in scene.meshes)
-    smooth = solid and shading in ("gouraud", "phong")
+    mode = get_shading(shading)                 # what it computes, where it lights
+    smooth = solid and mode.normals == "vertex"
     given_normals = all(m.normals is not None for m in scene.meshes if len(m.triangles))
     return [
         triangle_stage("cull back faces", solid and closed,
                        "closed, consistently wound meshes: faces turned away are never visible",
                        "no mesh is declared closed, so every face may be seen"),
-        triangle_stage("face normals", solid and shading == "flat",
+        triangle_stage("face normals", solid and mode.normals == "face",
                        "flat shading evaluates the model once per polygon with its normal",
                        f"{shading} shading uses vertex normals"),
         triangle_stage("vertex normals", smooth and not given_normals,
@@ -87,10 +86,10 @@ def _normal_and_lighting_stages(scene: Scene, shading: str, solid: bool,
                        "faces; vertices are split where faces meet beyond the crease angle)",
                        "given with the mesh (by its file or its generator)" if smooth
                        else "flat shading needs no vertex normals"),
-        triangle_stage("illuminate faces", solid and shading == "flat",
+        triangle_stage("illuminate faces", solid and mode.lights == "faces",
                        "one evaluation per planar polygon, at its centroid",
                        "not flat shading"),
-        triangle_stage("illuminate vertices", solid and shading == "gouraud",
+        triangle_stage("illuminate vertices", solid and mode.lights == "vertices",
                        "the model at each vertex; intensities are interpolated",
                        "not Gouraud shading"),
     ]
@@ -123,7 +122,7 @@ def _drawing_stages(scene: Scene, projection: str, shading: str, keep_aspect: bo
                        if rasterizer == "scanline" else
                        "edge functions over each triangle's box, top-left fill rule, "
                        "perspective-correct interpolation"),
-        triangle_stage("illuminate pixels", solid and shading == "phong",
+        triangle_stage("illuminate pixels", solid and get_shading(shading).lights == "pixels",
                        "Phong shading: normals interpolated, renormalised, the model at every "
                        "pixel", "not Phong shading"),
         triangle_stage("texture lookups", *_texture_stage(scene, shading, texture_filter)),

@@ -178,3 +178,66 @@ def option_owner(field: str) -> type | None:
         if field in cls.__dataclass_fields__:
             return cls
     return None
+
+
+# -- shading modes --------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ShadingMode:
+    """A shading mode a user may choose (a scene's ``shading``, ``--shading``, the Shading menu).
+
+    ``module`` registers its :class:`core.shading.registry.Shader` when imported (None: the
+    pipeline's own line drawing, wireframe); ``normals`` is what the plan computes for it
+    before lighting (``"face"``, ``"vertex"`` or None) and ``lights`` where it evaluates the
+    illumination model (``"faces"``, ``"vertices"``, ``"pixels"`` or None: unlit);
+    ``label`` and ``key`` are its Shading menu item."""
+
+    name: str
+    module: str | None
+    label: str = ""
+    key: str = ""
+    normals: str | None = None
+    lights: str | None = None
+    description: str = ""
+
+
+_SHADINGS: dict[str, ShadingMode] = {}
+
+
+def register_shading(name: str, module: str | None, **fields) -> ShadingMode:
+    """Make ``name`` a shading mode everything that chooses one offers (the built-in ones:
+    :mod:`core.shading.modes`)."""
+    fields.setdefault("label", name)
+    mode = ShadingMode(name, module, **fields)
+    if mode.normals not in (None, "face", "vertex"):
+        raise ValueError(f"normals must be 'face', 'vertex' or None, not {mode.normals!r}")
+    if mode.lights not in (None, "faces", "vertices", "pixels"):
+        raise ValueError(f"lights must be 'faces', 'vertices', 'pixels' or None, "
+                         f"not {mode.lights!r}")
+    _SHADINGS[name] = mode
+    return mode
+
+
+def unregister_shading(name: str) -> None:
+    _SHADINGS.pop(name, None)
+
+
+def _built_in_shadings() -> dict[str, ShadingMode]:
+    """The table, the built-in modes registered on the first lookup (their module is data
+    only, like the renderers' registrations)."""
+    if "flat" not in _SHADINGS:
+        importlib.import_module("core.shading.modes")
+    return _SHADINGS
+
+
+def shading_names() -> tuple[str, ...]:
+    return tuple(_built_in_shadings())
+
+
+def shading_modes() -> tuple[ShadingMode, ...]:
+    return tuple(_built_in_shadings().values())
+
+
+def get_shading(name: str) -> ShadingMode:
+    if name not in _built_in_shadings():
+        raise ValueError(f"shading must be one of {', '.join(_SHADINGS)}, not {name!r}")
+    return _SHADINGS[name]

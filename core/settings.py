@@ -1,8 +1,10 @@
 """How to draw: the projection, shading, size, samples and renderer of one frame.
 
-The names of the projections and shading modes are listed here once (:class:`Projection`,
-:class:`Shading`); everything else — the reader, the plan, the CLI, the window — takes them from
-here. Both are ``str`` enums, so ``Shading.PHONG == "phong"`` and scene files keep their words.
+The names of the projections are listed here once (:class:`Projection`); the shading modes a
+user may choose are the registered ones (:func:`core.registry.shading_names`, the built-in
+ones in :mod:`core.shading.modes`), which the reader, the plan, the CLI and the window offer.
+:class:`Shading` names the built-in modes. Both are ``str`` enums, so ``Shading.PHONG ==
+"phong"`` and scene files keep their words.
 
 :class:`RenderSettings` is a frozen value: a variant is ``settings.replace(…)``. Each
 renderer's own settings are its registered options class's (``settings.options_of(name)``).
@@ -17,7 +19,7 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from core.registry import get_renderer, option_owner
+from core.registry import get_renderer, option_owner, shading_names
 
 
 class Projection(str, Enum):
@@ -40,6 +42,8 @@ class Shading(str, Enum):
 
 
 PROJECTIONS = tuple(p.value for p in Projection)
+# The built-in shading modes (the course's and depth shading), for the sweeps and tests that
+# name them; what a user may choose is every registered mode (core.registry.shading_names).
 SHADINGS = tuple(s.value for s in Shading)
 # The lit modes that fill triangles (depth shading fills them unlit: it is left out
 # of the sweeps that compare lighting against the exact images).
@@ -131,6 +135,7 @@ class RenderSettings:
 
     def __post_init__(self) -> None:
         require_one_of("projection", self.projection, PROJECTIONS)
+        require_one_of("shading", str(self.shading), shading_names())
         if not (isinstance(self.samples, int) and 1 <= self.samples <= MAX_SAMPLES):
             raise ValueError(f"samples per pixel must be a whole number from 1 to {MAX_SAMPLES}, "
                              f"not {self.samples!r}")

@@ -65,9 +65,11 @@ def _counts(text: str) -> list[int]:
 
 def _shadings(text: str) -> list[str]:
     chosen = [part.strip() for part in text.split(",") if part.strip()]
+    from core.registry import shading_names
     for s in chosen:
-        if s not in SHADINGS:
-            raise argparse.ArgumentTypeError(f"shading must be among {', '.join(SHADINGS)}, not {s!r}")
+        if s not in shading_names():
+            raise argparse.ArgumentTypeError(f"shading must be among {', '.join(shading_names())}, "
+                                             f"not {s!r}")
     return chosen
 
 

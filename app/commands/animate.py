@@ -217,8 +217,8 @@ def _settings_problem(job: dict, animation) -> str | None:
     """What is wrong with the job's settings (a renderer, shading or sample count that does not
     exist), found once here rather than as the same failure of every frame."""
     from core.renderers import get_renderer
-    from core.settings import SHADINGS, RenderSettings
-    from core.shading.registry import shader_names
+    from core.registry import shading_names
+    from core.settings import RenderSettings
     s = job["settings"]
     try:
         RenderSettings.for_scene(animation.scene, size=tuple(s["size"]), samples=s["samples"],
@@ -227,8 +227,8 @@ def _settings_problem(job: dict, animation) -> str | None:
         get_renderer(s["renderer"])
     except ValueError as error:
         return str(error)
-    if s["shading"] not in SHADINGS[:1] + tuple(shader_names()):
-        return f"shading must be one of {', '.join(SHADINGS[:1] + tuple(shader_names()))}, not {s['shading']!r}"
+    if s["shading"] not in shading_names():
+        return f"shading must be one of {', '.join(shading_names())}, not {s['shading']!r}"
     return None
 
 

@@ -168,7 +168,8 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
     """(label, run) for every path the window can take; each ``run`` renders one small frame."""
     from core.render import render
     from core.scene.model import Scene
-    from core.settings import RASTERIZERS, SHADINGS, RenderSettings
+    from core.registry import shading_modes
+    from core.settings import RASTERIZERS, RenderSettings
 
     import dataclasses
 
@@ -181,7 +182,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
 
     for projection in ("perspective", "parallel"):
         add(f"wireframe, {projection}", opened, shading="wireframe", projection=projection)
-        for shading in SHADINGS[1:]:
+        for shading in (m.name for m in shading_modes() if m.module):   # those with a shader
             for rasterizer in RASTERIZERS:
                 add(f"{shading}, {projection}, {rasterizer} rasterizer", closed,
                     shading=shading, projection=projection, rasterizer=rasterizer)
@@ -233,8 +234,8 @@ def scene_jobs(path, size=SIZE):
     """(label, run) for the first picture of scene file ``path`` in every renderer, shading
     and (when it has textures) texture filter, each made as the window makes it."""
     from app.session.state import ViewerState
+    from core.registry import shading_names
     from core.renderers import renderer_names
-    from core.settings import SHADINGS
     from core.texture.modes import FILTERS
 
     state = ViewerState.open(path, size=size)
@@ -245,7 +246,7 @@ def scene_jobs(path, size=SIZE):
     filters = tuple(FILTERS) if state.has_textures else (state.texture_filter,)
     jobs = []
     for renderer in renderer_names():
-        for shading in SHADINGS:
+        for shading in shading_names():
             for filter_ in filters:
                 state.set_renderer(renderer)
                 state.set_shading(shading)

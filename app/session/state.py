@@ -41,7 +41,8 @@ from typing import Callable
 from core.registry import get_renderer
 from core.scene.model import Scene
 from core.scene import view_numbers
-from core.settings import PROJECTIONS, RASTERIZERS, SHADINGS
+from core.registry import shading_names
+from core.settings import PROJECTIONS, RASTERIZERS
 
 log = logging.getLogger("fvd")
 
@@ -521,7 +522,7 @@ class ViewerState:
         self._set("projection", projection, PROJECTIONS)
 
     def set_shading(self, shading: str) -> None:
-        self._set("shading", shading, SHADINGS)
+        self._set("shading", shading, shading_names())
 
     def set_rasterizer(self, rasterizer: str) -> None:
         self._set("rasterizer", rasterizer, RASTERIZERS)

@@ -86,8 +86,6 @@ from core.paths import SCENES_DIR
 log = logging.getLogger("fvd")
 
 PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel", "O"))
-SHADING_LABELS = (("wireframe", "Wireframe", "W"), ("flat", "Flat", "1"),
-                  ("gouraud", "Gouraud", "2"), ("phong", "Phong", "3"))
 # The Render menu lists the registry's renderers by their labels (core/registry.py): a renderer
 # registered there is in the menu with no line here. `r` flips between these two.
 RENDERER_KEYS = {"zbuffer": "R", "raytrace": "R"}
@@ -1026,9 +1024,11 @@ class ViewerWindow:
             imgui.push_text_wrap_pos(imgui.get_font_size() * 22)
             imgui.text_disabled(NO_TRIANGLES)
             imgui.pop_text_wrap_pos()
-        for value, label, key in SHADING_LABELS:
-            if imgui.menu_item_simple(label, key, self.state.shading == value, solid):
-                self.choose("shading", value, how)
+        from core.registry import shading_modes         # every registered mode, by its label
+        for mode in shading_modes():
+            if imgui.menu_item_simple(mode.label, mode.key, self.state.shading == mode.name,
+                                      solid):
+                self.choose("shading", mode.name, how)
 
     def _panel(self) -> None:
         scale = self._scale()

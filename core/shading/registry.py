@@ -6,8 +6,9 @@ visibility buffer into colours (``pixel``). The z-buffer knows nothing about lig
 of shading (textured, bump-mapped) is one new module that registers one more shader.
 
 ``register_shader(shader)`` adds one; ``get_shader(name)`` finds one (a ``ValueError`` names
-the modes there are); ``shader_names()`` lists them. flat, Gouraud and Phong register the first
-time a mode is looked up.
+the modes there are); ``shader_names()`` lists them. A mode's module registers its shader the
+first time the mode is looked up: :func:`core.registry.register_shading` names the module
+(the built-in ones: :mod:`core.shading.modes`).
 """
 
 from __future__ import annotations
@@ -39,26 +40,26 @@ def register_shader(shader: Shader) -> None:
     _SHADERS[shader.name] = shader
 
 
-BUILT_IN = ("core.shading.flat", "core.shading.gouraud", "core.shading.phong",
-            "core.shading.depth")                 # depth shading: unlit, a colour map
-
-
-def _load_built_in() -> None:
-    """Import the built-in modes (they register themselves), once, on the first lookup: a
-    scene can be read and a wireframe drawn without loading numba."""
+def _load(name: str) -> None:
+    """Import the module of shading mode ``name`` (it registers its shader), on the first
+    lookup: a scene can be read and a wireframe drawn without loading numba."""
     import importlib
-    for module in BUILT_IN:
-        importlib.import_module(module)
+    from core.registry import shading_modes
+    for mode in shading_modes():
+        if mode.module and (name is None or mode.name == name):
+            importlib.import_module(mode.module)
 
 
 def get_shader(name: str) -> Shader:
     if name not in _SHADERS:
-        _load_built_in()
+        _load(name)
+    if name not in _SHADERS:
+        _load(None)
     if name not in _SHADERS:
         raise ValueError(f"shading must be one of {', '.join(_SHADERS)}, not {name!r}")
     return _SHADERS[name]
 
 
 def shader_names() -> tuple[str, ...]:
-    _load_built_in()
+    _load(None)
     return tuple(_SHADERS)

@@ -41,7 +41,8 @@ from core.scene.formats.errors import (path_text, MAX_COORDINATE, ReaderError, d
                                  tolerant_of_underflow)
 from core.scene.formats.mesh import (MESH_EXTENSIONS, edge_problem, merge_vertices, read_mesh,
                                     signed_volume)
-from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, SHADINGS, Light, Material, Mesh, Scene
+from core.registry import shading_names
+from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, Light, Material, Mesh, Scene
 from core.transforms import (apply, rotate_axis, rotate_x, rotate_y, rotate_z, scale, shear,
                              translate)
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
@@ -296,7 +297,7 @@ class _Reader:
         for key, read in (("ambient", lambda v, p: self.vector(v, p, 3, 0.0, 10.0)),
                           ("background", self.colour),
                           ("line_color", self.colour),
-                          ("shading", lambda v, p: self.choice(v, p, SHADINGS)),
+                          ("shading", lambda v, p: self.choice(v, p, shading_names())),
                           ("projection", lambda v, p: self.choice(v, p, PROJECTIONS)),
                           ("specular", lambda v, p: self.choice(v, p, SPECULAR_FORMS)),
                           ("keep_aspect", self.boolean),
