@@ -102,8 +102,9 @@ class ShadeInput:
     float32_safe: bool | None = None     # wide_shading's answer on the materials and lights
     normals: np.ndarray | None = None
     before_clip: Callable | None = None
-    # Set by the renderer before the pixel step, for shaders that read them (the
-    # textured one): the frame's RenderSettings, and (device points, 1/W) of the clipped vertices.
+    # The frame's RenderSettings (given to prepare: both steps read it), and, set by the
+    # renderer before the pixel step for the textured shaders, (device points, 1/W) of the
+    # clipped vertices.
     settings: object = None
     device: tuple | None = None
     # Flat shading: each face's planar polygon (-1 alone) and the polygons' centroids.
@@ -226,7 +227,8 @@ def geometry(scene, context: RenderContext = DEFAULT_CONTEXT) -> tuple[np.ndarra
 
 def prepare(mode: str, scene, eye: Eye, weighting: str = "mean",
             faces: np.ndarray | None = None,
-            context: RenderContext = DEFAULT_CONTEXT, lazy: bool = False) -> ShadeInput:
+            context: RenderContext = DEFAULT_CONTEXT, lazy: bool = False,
+            settings=None) -> ShadeInput:
     """The vertex step of ``mode`` for every mesh of ``scene`` seen from ``eye``.
 
     ``eye`` is :func:`eye_from_view`'s answer. ``weighting`` picks the vertex-normal average
@@ -235,6 +237,8 @@ def prepare(mode: str, scene, eye: Eye, weighting: str = "mean",
     e.g. those back-face culling kept: flat lights only those faces and Gouraud only their
     vertices. ``lazy``: light nothing yet, :func:`resolve` lights only what is visible (the
     results are the same numbers; ``face_rgb`` and ``vertex_attrs`` are filled in as needed).
+    ``settings``: the frame's :class:`~core.settings.RenderSettings`, which both steps read
+    (the lighting's precision, the texture filter, the bump switch, depth shading's scalar).
     Raises ValueError for an unknown mode or weighting.
     """
     shader = get_shader(mode)
@@ -250,7 +254,8 @@ def prepare(mode: str, scene, eye: Eye, weighting: str = "mean",
         lights=pack_lights(scene.lights), ambient=pack_ambient(scene.ambient),
         eye=pack_eye(eye), halfway=scene.specular == "halfway",
         faces=(np.arange(len(triangles), dtype=np.int64) if faces is None
-               else np.ascontiguousarray(faces, dtype=np.int64)), context=context, lazy=lazy)
+               else np.ascontiguousarray(faces, dtype=np.int64)), context=context, lazy=lazy,
+        settings=settings)
     shader.vertex(s, scene, meshes, weighting)
     return s
 

@@ -70,7 +70,8 @@ def _front_sources(stages, scene, triangles, eye, context):
 def _inputs(stages, scene, settings, eye, kept, context):
     from core.texture.shaders import shading_for
     shading = shading_for(scene, settings.shading)
-    return stages.shade.prepare(shading, scene, eye, faces=kept, context=context, lazy=False)
+    return stages.shade.prepare(shading, scene, eye, faces=kept, context=context, lazy=False,
+                                settings=settings)
 
 
 def bsp_painting(scene, view, settings, context, timer, n, z_min, vp) -> Painting:
@@ -182,7 +183,6 @@ def resolve(p: Painting, vis, scene, settings, frame) -> None:
     vis.planes = None
     if stages.shade.get_shader(p.inputs.mode).needs_derivatives:
         vis.planes = stages.barycentric_planes(p.device, p.inv_w, p.triangles)
-    p.inputs.settings = settings
     p.inputs.device = (p.device, p.inv_w)
     stages.shade.resolve(p.inputs, vis, p.triangles, p.attrs, p.source, scene.background,
                          out=frame.color, trusted=True)     # our clipper's and rasterizer's

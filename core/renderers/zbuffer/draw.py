@@ -112,8 +112,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("cull back faces")
 
     inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context,
-                                  lazy=scene.triangle_count >= stages.shade.LIGHT_ALL_BELOW)
-    inputs.settings = settings              # the precision of lighting, the texture filter
+                                  lazy=scene.triangle_count >= stages.shade.LIGHT_ALL_BELOW,
+                                  settings=settings)
     stats["computed"].extend(inputs.computed)
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
@@ -125,7 +125,6 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     vis = _visible_surfaces(device, inv_w, clipped.triangles, width, height, rasterizer,
                             visible_surface, shading, context, stats,
                             timer)
-    inputs.settings = settings              # the texture filter and the bump switch
     inputs.device = (device, inv_w)         # exact (u, v) derivatives per triangle
     stages.shade.resolve(inputs, vis, clipped.triangles, clipped.attrs, source, scene.background,
                          out=frame.color, trusted=True)     # our clipper's and rasterizer's

@@ -184,8 +184,8 @@ def _shade_input(scene, view, settings, mode):
     lazily in a context of their own: nothing is lit, nothing the capture holds is touched."""
     from core.shading import stages
     eye = stages.shade.eye_from_view(view, settings.projection)
-    s = stages.shade.prepare(mode, scene, eye, context=RenderContext(), lazy=True)
-    s.settings = settings
+    s = stages.shade.prepare(mode, scene, eye, context=RenderContext(), lazy=True,
+                             settings=settings)
     return s
 
 
