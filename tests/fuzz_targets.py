@@ -1,4 +1,4 @@
-"""The readers' fuzz targets, shared by the CI fuzz tests (``tests/test_fuzz_readers.py``,
+"""The readers' fuzz targets, shared by the CI fuzz tests (``tests/core/scene/test_fuzz_readers.py``,
 hypothesis, a bounded number of cases) and the long run (``tests/fuzz_long.py``, plain seeded
 mutation, 100k+ cases per reader, run once by hand).
 

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
+from tests.conftest import ROOT
 from tools import unavailable
 
-ROOT = Path(__file__).resolve().parents[1]
 VERSION = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))["project"]["version"]
 SCRIPT = Path(sys.executable).parent / ("fvd-viewer.exe" if os.name == "nt" else "fvd-viewer")
 

@@ -9,7 +9,6 @@ show that a new renderer's options reach all of them through its one registratio
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,7 +17,9 @@ from app.session.options import Control, controls
 from core.registry import option_classes, option_owner, register_renderer, unregister_renderer
 from core.settings import SHADOW_MODES, RenderSettings
 
-SCENES = Path(__file__).resolve().parent.parent / "scenes"
+from tests.conftest import ROOT
+
+SCENES = ROOT / "scenes"
 
 
 def test_a_field_is_routed_to_its_renderers_options_and_defaults_are_not_stored():

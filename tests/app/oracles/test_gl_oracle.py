@@ -17,7 +17,6 @@ A failing comparison writes the two images and the difference to ``tests/_failur
 from __future__ import annotations
 
 import dataclasses
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -38,7 +37,7 @@ from app.oracles.reference_gl import GLRenderer, eye_of                  # noqa:
 from core.scene.normals import face_normals                             # noqa: E402
 from app.oracles.reference_gl import clip_from_world                      # noqa: E402
 
-FAILURES = Path(__file__).parent / "_failures"
+from tests.conftest import FAILURES                          # noqa: E402
 SIZE = (500, 500)
 MAGENTA = (1.0, 0.0, 1.0)          # a background no test scene's shading produces
 

@@ -11,7 +11,7 @@ from core.render import render
 from core.settings import RenderSettings
 from core.volume import generators
 from core.volume.data import Volume
-from tests.test_volume_render import scene_with
+from tests.core.volume.test_volume_render import scene_with
 
 
 class Collect:

@@ -4,7 +4,7 @@ A frame whose kernels are cached is drawn at once; one that would compile waits,
 until the warm-up has done its scene, then is drawn; a newer request ends the wait; once the
 warm-up has finished nothing is refused. The warm-up here is a stand-in with the same
 attributes as app.distribution.warmup.BackgroundWarmup, driven by the test (a consistency check of
-the gate's logic, not of the processes: tests/test_warmup_*.py hold those).
+the gate's logic, not of the processes: tests/app/distribution/test_warmup_*.py hold those).
 """
 
 from __future__ import annotations

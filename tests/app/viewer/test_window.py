@@ -30,7 +30,7 @@ from core.scene.model import Scene
 from core.camera.view import View
 from core.scene.formats.viewfile import read_view_entries
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.conftest import ROOT
 
 
 def house_scene() -> Scene:

@@ -22,7 +22,7 @@ import pytest
 from tools import need_programs
 
 from core.paths import SCENES_DIR as ROOT_SCENES
-from tests.test_window import App, frames, grab, start_xvfb
+from tests.app.viewer.test_window import App, frames, grab, start_xvfb
 
 
 def drag(app, path, button: int = 1) -> None:

@@ -15,7 +15,7 @@ import pytest
 
 from tools import need_programs
 
-from tests.test_window import ROOT, App, grab, start_xvfb
+from tests.app.viewer.test_window import ROOT, App, grab, start_xvfb
 
 SIZE = (240, 200)
 

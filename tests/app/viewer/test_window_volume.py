@@ -13,8 +13,8 @@ import pytest
 
 from tools import need_programs
 
-from tests.test_window import ROOT, grab, start_xvfb
-from tests.test_window_inspect import SceneApp
+from tests.app.viewer.test_window import ROOT, grab, start_xvfb
+from tests.app.viewer.test_window_inspect import SceneApp
 
 SIZE = (300, 560)
 SCENE = "scenes/volume_isosurface.toml"

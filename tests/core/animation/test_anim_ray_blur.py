@@ -12,7 +12,7 @@ from core.animation.frames import Shutter, render_at
 from core.animation.keys import animation_of
 from core.scene.formats import read_scene_file
 from core.settings import RenderSettings
-from tests.test_anim_blur import coverage, moving, SQUARE
+from tests.core.animation.test_anim_blur import coverage, moving, SQUARE
 
 
 def frame(text, t, shutter=None, renderer="raytrace", **options):

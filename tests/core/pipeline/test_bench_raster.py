@@ -5,7 +5,7 @@ clip with everything inside (the trivial-accept path), clip with a front plane t
 meshes (Sutherland–Hodgman on thousands of triangles), and rasterize, parallel and serial.
 
 The default run passes ``--benchmark-disable``: each benchmark runs once as a plain test and
-asserts what the stage produced, never a time. ``pytest tests/test_bench_raster.py
+asserts what the stage produced, never a time. ``pytest tests/core/pipeline/test_bench_raster.py
 --benchmark-enable`` times them.
 """
 

@@ -8,7 +8,7 @@ step and the pixel resolve of flat, Gouraud and Phong), and the full frame
 
 The default test run passes ``--benchmark-disable``: each benchmark then runs once as a plain
 test, and what it asserts is a real outcome (what the stage produced), never a time. Run
-``pytest tests/test_benchmarks.py --benchmark-enable`` to time them.
+``pytest tests/core/pipeline/test_benchmarks.py --benchmark-enable`` to time them.
 """
 
 from __future__ import annotations

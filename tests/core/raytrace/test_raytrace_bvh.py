@@ -22,7 +22,7 @@ from core.camera.rays import primary_rays
 from core.raytrace import bvh, intersect
 from core.scene.normals import face_normals
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.conftest import ROOT
 
 
 def _bunny_path() -> Path | None:

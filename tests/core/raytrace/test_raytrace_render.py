@@ -18,7 +18,7 @@ from core.scene.model import Light, Material, Scene
 from core.scene.primitives import Plane, Sphere
 from core.settings import RenderSettings
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.conftest import ROOT
 SCENES = ROOT / "scenes"
 
 

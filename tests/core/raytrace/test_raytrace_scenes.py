@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,7 +22,7 @@ from core.scene.model import Light, Material, Scene
 from core.scene.primitives import Plane, Sphere
 from core.settings import RenderSettings
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.conftest import ROOT
 SCENES = ROOT / "scenes"
 
 
@@ -280,7 +279,7 @@ def test_one_refracted_ray_keeps_to_snells_law(tmp_path):
 
 # ----------------------------------------------------------------------------- gouraud/phong
 
-# (faces uniform under Gouraud and Phong: tests/test_creases.py)
+# (faces uniform under Gouraud and Phong: tests/core/scene/test_creases.py)
 
 # ----------------------------------------------------------------------------- optics
 

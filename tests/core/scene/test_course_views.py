@@ -7,7 +7,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,7 +19,7 @@ from core.scene import view_numbers
 from core.scene.formats import load_scene
 from core.settings import RenderSettings
 
-ROOT = Path(__file__).resolve().parent.parent
+from tests.conftest import ROOT
 
 # Five views: valid, invalid (VUP parallel to VPN), valid, invalid (not a number), valid.
 VIEW_A = "0 0 0\n0 0 1\n0 1 0\n-50 50 -50 50\n8 6 84\n60 25\n"

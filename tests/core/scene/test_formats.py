@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import BUNNY
+from conftest import BUNNY, DATA
 
 from core.settings import RenderSettings
 from core.scene import generators
@@ -27,7 +27,6 @@ from core.render import render
 from core.transforms import apply
 from core.camera.view import normalizing_transform, problems
 
-DATA = Path(__file__).resolve().parent / "data"
 
 
 def tri_text(viewpoint, top_left, right, down, triangles, count=None) -> str:

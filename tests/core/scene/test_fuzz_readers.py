@@ -11,7 +11,6 @@ suite stays fast; ``tests/fuzz_long.py`` runs the same targets 100k times each.
 from __future__ import annotations
 
 import re
-from pathlib import Path
 import struct
 import tracemalloc
 
@@ -23,6 +22,7 @@ import trimesh.exchange.load  # noqa: F401  (imported before tracing: importing 
 
 from core.scene.formats import ReaderError, read_mesh, read_scene_file, read_tri
 from core.paths import SCENES_DIR
+from tests.conftest import TESTS
 from fuzz_targets import (NASTY, OBJ, OFF, PLY, STL_ASCII, STL_BINARY, SYSTEMS, TARGETS, TOML,
                           TRI, check, mutate_any, renders, small_budgets)
 
@@ -203,7 +203,7 @@ def test_mutated_inputs_reach_the_renderer(name):
     assert share >= MIN_RENDERED.get(name, 0.02), f"{name}: {dict(outcomes)}"
 
 
-CORPUS = Path(__file__).parent / "fuzz_corpus"
+CORPUS = TESTS / "fuzz_corpus"
 
 
 def _corpus():
