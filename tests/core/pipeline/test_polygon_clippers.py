@@ -113,8 +113,9 @@ def test_the_polygon_clippers_keep_the_same_polygons_to_1e12_in_npc(projection, 
 
 @pytest.mark.parametrize("projection, z_min", [("parallel", 0.0), ("perspective", -0.1)])
 def test_the_line_clippers_agree_on_segments_with_ends_on_planes(projection, z_min):
-    # tests/core/pipeline/test_clippers.py draws its 100,000 segments uniformly (no end lands on a plane):
-    # here one edge of each random triangle above, a quarter of them with ends on planes.
+    # tests/core/pipeline/test_clippers.py draws its 100,000 segments uniformly (no end lands
+    # on a plane): here one edge of each random triangle above, a quarter of them with ends on
+    # planes.
     from core.pipeline import clip
     from core.pipeline.project import project_lines
     points, triangles = random_triangles(100_000, projection, z_min)

@@ -18,8 +18,8 @@ need_module("moderngl", "the OpenGL oracle needs moderngl")
 
 from core.render import render                                        # noqa: E402
 from core.settings import RenderSettings                              # noqa: E402
-from tests.app.oracles.test_gl_oracle import (SIZE, _lit, _save_failure, edge_mask, gl,  # noqa: E402,F401
-                                               scene_file, valid_views)
+from tests.app.oracles.test_gl_oracle import (  # noqa: E402,F401
+    SIZE, _lit, _save_failure, edge_mask, gl, scene_file, valid_views)
 
 
 def _scanline(scene, view_index, projection, rasterizer="scanline"):

@@ -3,9 +3,9 @@
 pre-scan), and of mesh files of 1k to 8k triangles (OBJ, OFF, PLY, STL, .tri).
 
 The default run passes ``--benchmark-disable``: each case runs once as a plain test and
-asserts what was read, never a time. ``pytest tests/core/scene/test_hostile_bench.py --benchmark-enable``
-times them; doubling the input should about double the time (at most ~2.2x). Before the line
-locator was indexed, 1,000 views took 4.3 s and 4,000 took 39 s.
+asserts what was read, never a time. ``pytest tests/core/scene/test_hostile_bench.py
+--benchmark-enable`` times them; doubling the input should about double the time (at most
+~2.2x). Before the line locator was indexed, 1,000 views took 4.3 s and 4,000 took 39 s.
 """
 
 from __future__ import annotations

@@ -5,8 +5,8 @@ The data is a ramp falling along z, so every sample has the normal N = +z exactl
 trilinear field of linear data is that data; its central differences are exact), and the
 transfer function is one colour and one extinction: every sample along a ray is lit alike,
 so the marched colour is ``lit · (1 − T)`` and ``C / (1 − T)`` is one sample's lit colour.
-L and V are the Cook–Torrance tests' "tilted" pair (tests/core/shading/test_cook_torrance.py): mirror
-images at cos 4/5 about N, so H = N, D = 1/(4 m²), G = 1, V·H = 4/5, and Phong's R is V.
+L and V are the Cook–Torrance tests' "tilted" pair (tests/core/shading/test_cook_torrance.py):
+mirror images at cos 4/5 about N, so H = N, D = 1/(4 m²), G = 1, V·H = 4/5, and Phong's R is V.
 """
 
 from __future__ import annotations
