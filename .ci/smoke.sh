@@ -114,7 +114,8 @@ if [[ " $phases " == *" window "* ]]; then
   # scenes draw first (the window would wait for its worker processes otherwise)
   "$py" -m app.distribution.warmup --only whitted.toml --only house.toml > warmup-window.txt \
     || { tail -20 warmup-window.txt; fail "the window tests' warm-up"; }
-  CI=true "$py" -m pytest -q -p no:cacheprovider tests/test_window.py tests/test_window_newcomer.py \
+  CI=true "$py" -m pytest -q -p no:cacheprovider \
+    tests/app/viewer/test_window.py tests/app/viewer/test_window_newcomer.py \
     -k "click_menu_and_keys_under_xvfb or screenshots_follow_the_naming_rule" \
     || fail "the window tests"
   end

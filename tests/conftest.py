@@ -1,4 +1,6 @@
-"""Shared test set-up: seeded randomness, numpy warnings as errors, golden-image helpers."""
+"""Shared test set-up: seeded randomness, numpy warnings as errors, golden-image helpers, and
+the paths every test folder uses (``from tests.conftest import ROOT``: tests/core/<package>/
+and tests/app/<package>/ mirror the source tree, so no test counts its own parents)."""
 
 from __future__ import annotations
 
@@ -7,9 +9,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-GOLDEN = Path(__file__).resolve().parent / "golden"
-FAILURES = Path(__file__).resolve().parent / "_failures"
+TESTS = Path(__file__).resolve().parent
+ROOT = TESTS.parent
+DATA = TESTS / "data"
+GOLDEN = TESTS / "golden"
+FAILURES = TESTS / "_failures"
 SHARED = ROOT.parent / "shared"
 BUNNY = SHARED / "data" / "stanford-bunny" / "bun_zipper.ply"
 # Golden images: a pixel may differ by one level (1/255) per channel, on at most 0.1 % of them.
@@ -19,7 +23,7 @@ GOLDEN_PIXEL_SHARE = 0.001
 
 def pytest_collection_modifyitems(session, config, items):
     """The warm-up's completeness test goes first: no other test may have compiled a kernel
-    into the cache before it looks (tests/test_warmup_complete.py)."""
+    into the cache before it looks (tests/app/distribution/test_warmup_complete.py)."""
     first = [item for item in items if item.fspath.basename == "test_warmup_complete.py"]
     items[:] = first + [item for item in items if item not in first]
 

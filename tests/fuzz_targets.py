@@ -1,6 +1,6 @@
-"""The readers' fuzz targets, shared by the CI fuzz tests (``tests/test_fuzz_readers.py``,
-hypothesis, a bounded number of cases) and the long run (``tests/fuzz_long.py``, plain seeded
-mutation, 100k+ cases per reader, run once by hand).
+"""The readers' fuzz targets, shared by the CI fuzz tests
+(``tests/core/scene/test_fuzz_readers.py``, hypothesis, a bounded number of cases) and the long
+run (``tests/fuzz_long.py``, plain seeded mutation, 100k+ cases per reader, run once by hand).
 
 The invariant (issue 15): a reader given any bytes either raises a :class:`ReaderError` with a
 message, or returns a scene that renders: every view it accepts (up to ``VIEWS_RENDERED``) is

@@ -8,14 +8,13 @@ import os
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from app.naming import SAFE_NAME, frame_name, picture_name, slug, unused
+from tests.conftest import ROOT
 
-ROOT = Path(__file__).resolve().parents[1]
 SCENES = ROOT / "scenes"
 
 

@@ -1,8 +1,9 @@
 """``python -m app stability [--json]``: the stiff and extreme cases, PASS/FAIL.
 
-Runs :func:`core.analysis.stability.run_suite` (the same code ``tests/test_stability.py`` asserts) and
-prints one block per case: the result, the relative error against exact rational arithmetic,
-the condition number κ and whether the case is well- or ill-conditioned, then what is expected
+Runs :func:`core.analysis.stability.run_suite` (the same code
+``tests/core/analysis/test_stability.py`` asserts) and prints one block per case: the result,
+the relative error against exact rational arithmetic, the condition number κ and whether the
+case is well- or ill-conditioned, then what is expected
 and what was measured. ``--json`` prints the same as one JSON object. Progress goes to stderr.
 The exit status is 1 when any case fails, 0 otherwise.
 """

@@ -12,7 +12,7 @@ culling, ≥ 10 000 triangles), an open one (two-sided lighting), lines, and sev
 pixel. :func:`scene_steps` then opens every shipped scene (``scenes/``) the way the window
 does (:class:`app.session.state.ViewerState`), in every renderer and shading, and in every
 texture filter when it has textures, so that no first picture the user asks for compiles
-(``tests/test_warmup_complete.py`` checks it from an empty kernel cache).
+(``tests/app/distribution/test_warmup_complete.py`` checks it from an empty kernel cache).
 
 The steps run in worker processes, one a core (``--jobs``), each taking the next step from
 one queue, the longest first by :data:`COSTS` (``app/distribution/warmup_pool.py``). When every step

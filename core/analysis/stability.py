@@ -5,7 +5,7 @@ expected, what was measured, the relative error of the float64 pipeline against 
 arithmetic (:mod:`core.analysis.exact`) where the case has numbers to compare, the condition number of
 the problem, a note whether the case is well- or ill-conditioned, and PASS/FAIL.
 ``python -m app stability`` prints the same results (``app/commands/stability.py``) and
-``tests/test_stability.py`` asserts them: one code path.
+``tests/core/analysis/test_stability.py`` asserts them: one code path.
 
 How a case is judged:
 

@@ -14,8 +14,8 @@ a MIP level (the footprint of (u, v) on the texture) or a bump map's offsets nee
   r is device row ``H − 1 − r``, so d/d(image row) = −d/dy.
 
 They agree with the rasterizer's ``b1``, ``b2`` to the rounding of the fixed-point snap
-(1/256 pixel; ``tests/test_derivatives.py``). Computed only when a shader asks for them
-(``Shader.needs_derivatives``): flat, Gouraud and Phong do not.
+(1/256 pixel; ``tests/core/pipeline/test_derivatives.py``). Computed only when a shader asks
+for them (``Shader.needs_derivatives``): flat, Gouraud and Phong do not.
 """
 
 from __future__ import annotations

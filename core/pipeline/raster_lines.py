@@ -8,8 +8,8 @@ the two candidate minor-axis pixels by the sign of the decision variable
 
 Its closed form — after ``i`` steps the minor coordinate has advanced
 ``k_i = ceil((2 dy i - dx) / (2 dx))`` times (never below 0) — lets every pixel of every line
-be computed at once with integer numpy arithmetic; ``tests/test_raster_lines.py`` checks it
-against the step-by-step loop. No numba here: a wireframe frame needs no compiler.
+be computed at once with integer numpy arithmetic; ``tests/core/pipeline/test_raster_lines.py``
+checks it against the step-by-step loop. No numba here: a wireframe frame needs no compiler.
 """
 
 from __future__ import annotations

@@ -5,8 +5,9 @@ a 4 x 4 matrix — append a column of ones, multiply, slice, divide — builds s
 temporaries and spends its time moving memory (measured: 10–14 ms for N_per and 20–30 ms for
 the projection at 1M triangles). These loops read each point once and write each result once,
 on all cores. They compute exactly what ``core.transforms.apply`` and
-``core.pipeline.project.project_triangles`` compute (``tests/test_vertex_kernels.py`` holds them
-together); the wireframe path keeps the numpy forms and so needs no compiler.
+``core.pipeline.project.project_triangles`` compute
+(``tests/core/pipeline/test_vertex_kernels.py`` holds them together); the wireframe path keeps
+the numpy forms and so needs no compiler.
 """
 
 from __future__ import annotations

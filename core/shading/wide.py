@@ -24,7 +24,7 @@ lighting model (:mod:`core.shading.models`), go to the float64 kernel entirely
 NaN).
 
 Error against the float64 model: at most 1/255 per channel (one rounding step of the
-byte), held by ``tests/test_shading_wide.py`` on every shipped scene and golden.
+byte), held by ``tests/core/shading/test_shading_wide.py`` on every shipped scene and golden.
 """
 
 from __future__ import annotations

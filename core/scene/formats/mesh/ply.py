@@ -25,8 +25,8 @@ corners, as many on every row) is read by :func:`fast_ascii_ply` with numpy alon
 check has already found where the vertex rows end, and each block is parsed in one call of
 numpy's C text reader (``np.loadtxt``, correctly rounded as trimesh's parser rounds), then
 cast to the declared types as trimesh casts them. The result is trimesh's, bit for bit
-(``tests/test_ply_fast.py`` compares, switching :data:`FAST_ASCII_PLY` off); any other file
-goes to trimesh. The bunny's ``read_mesh`` now takes 0.2 s (its check 30-40 ms, the parse
+(``tests/core/scene/test_ply_fast.py`` compares, switching :data:`FAST_ASCII_PLY` off); any
+other file goes to trimesh. The bunny's ``read_mesh`` now takes 0.2 s (its check 30-40 ms, the parse
 ~60 ms, merging, repeats and closedness the rest), trimesh never imported.
 """
 
