@@ -26,7 +26,10 @@ What it can do:
 - ``transparency``: it lays ``k_t > 0`` over its opaque picture when asked;
 - ``shaders``: it shades through the registered shading modes (depth shading among them);
 - ``textures``: it draws a material's texture maps;
-- ``progressive``: the window shows its picture coarse first, then refining;
+- ``progressive``: the window shows its picture coarse first, then refining: drawn by its
+  ``progressive_drawer`` (``"package.module:function"``, :mod:`core.progressive`'s contract:
+  the ray tracer tile by tile, radiosity shot by shot, the path tracer pass by pass), or,
+  without one, by :func:`core.progressive.coarse_then_full`;
 - ``volumes``: it draws a scene's emission–absorption and MIP volumes (every renderer draws an
   isosurface, which is a mesh);
 - ``ray_depth``: its frame keeps no depth buffer, and what each film sample shows is the first
@@ -80,6 +83,7 @@ class Renderer:
     shaders: bool = False
     textures: bool = True
     progressive: bool = False
+    progressive_drawer: str | None = None   # "package.module:function" (core.progressive)
     volumes: bool = False
     in_menu: bool = True
     inspector: str | None = None    # "package.module:function": inspect_pixel
@@ -95,6 +99,10 @@ class Renderer:
 
     def function(self) -> Callable:
         return load(self.target)
+
+    def drawer(self) -> Callable:
+        """How the window draws it with pictures on the way (:mod:`core.progressive`)."""
+        return load(self.progressive_drawer or "core.progressive:coarse_then_full")
 
     def options_class(self) -> type | None:
         """Its options' dataclass (imported on first use), or None."""

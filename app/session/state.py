@@ -14,7 +14,7 @@ Views are numbered by their position in the file (``core.scene.view_numbers``): 
 steps over invalid ones and says "view 7 of 20 (6 invalid)".
 
 Beyond the course's settings it holds the renderer (``"zbuffer"`` or ``"raytrace"``: a
-ray-traced still is drawn progressively, :mod:`app.session.progressive`), the texture filter and
+ray-traced still is drawn progressively, :mod:`core.progressive`), the texture filter and
 whether bump maps are used (in the bump demo's scene also the demo's map, which its clicks
 change), and for an animated scene its :class:`app.session.playback.Playback` (the moment shown,
 playing or paused, the speed) and whether the keyed camera is the view.
@@ -657,8 +657,7 @@ class ViewerState:
                 frame.stats["time"] = t           # the moment drawn (the clock moves on)
                 return frame
         elif view is not None and get_renderer(settings.renderer).progressive:
-            from app.session.progressive import progressive_drawer
-            progressively = progressive_drawer(settings.renderer)
+            progressively = get_renderer(settings.renderer).drawer()
             what = f"{what}, {get_renderer(settings.renderer).label.lower()}"
 
             def run(control=None):

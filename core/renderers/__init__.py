@@ -43,6 +43,7 @@ register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True
                   inspector="core.raytrace.inspect:inspect_pixel",
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
                   label="Ray traced", recursive=True, progressive=True,
+                  progressive_drawer="core.raytrace.progressive:trace_progressively",
                   options="core.raytrace.options:RaytraceOptions", ray_depth=True,
                   blur_per_ray=True, drawn_by="ray traced", status="ray traced")
 register_renderer("radiosity", "core.radiosity.renderer:draw",
@@ -50,6 +51,7 @@ register_renderer("radiosity", "core.radiosity.renderer:draw",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
                               "refinement), drawn Gouraud by the z-buffer (core.radiosity)",
                   label="Radiosity", emitters=True, textures=False, progressive=True,
+                  progressive_drawer="core.radiosity.progressive:radiosity_progressively",
                   options="core.radiosity.options:RadiosityOptions",
                   drawn_by="radiosity ({options.form_factors} form factors, {options.solver})",
                   status="radiosity")
@@ -58,7 +60,9 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
                   description="Kajiya's rendering equation by path tracing on the BVH "
                               "(core.pathtrace)",
                   label="Path traced", emitters=True, recursive=True, textures=False,
-                  progressive=True, drawn_by="path traced, {settings.samples} paths per pixel",
+                  progressive=True,
+                  progressive_drawer="core.pathtrace.progressive:pathtrace_progressively",
+                  drawn_by="path traced, {settings.samples} paths per pixel",
                   status="path traced")
 register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   inspector="core.renderers.painters.inspect:inspect_pixel",

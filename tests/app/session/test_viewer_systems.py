@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from app.session.playback import Playback, render_animated
-from app.session.progressive import COARSE, trace_progressively, upscale
+from core.progressive import upscale
+from core.raytrace.progressive import COARSE, trace_progressively
 from app.session.state import ViewerState
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
@@ -71,7 +72,7 @@ def test_progressive_frame_is_coarse_first_and_ends_as_the_renderers_frame(whitt
     state = whitted
     state.set_renderer("raytrace")
     settings, control = state.settings(), Recorder()
-    final = trace_progressively(state.scene, state.view, settings, state.context,
+    final = trace_progressively(state.scene, state.view, settings, state.context, render,
                                 control=control)
     whole = render(state.scene, state.view, settings)
     assert np.array_equal(final.color, whole.color)          # the same rays, filter, rounding
@@ -366,7 +367,7 @@ def test_a_letterboxed_progressive_frame_is_the_renderers_too(whitted):
     whitted.set_renderer("raytrace")
     whitted.set_keep_aspect(True)                       # 60 x 44: letterboxed, not stretched
     settings = whitted.settings()
-    final = trace_progressively(whitted.scene, whitted.view, settings, whitted.context)
+    final = trace_progressively(whitted.scene, whitted.view, settings, whitted.context, render)
     assert np.array_equal(final.color, render(whitted.scene, whitted.view, settings).color)
     stretched = render(whitted.scene, whitted.view, settings.replace(keep_aspect=False))
     assert not np.array_equal(final.color, stretched.color)

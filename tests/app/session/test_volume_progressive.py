@@ -1,4 +1,4 @@
-"""The window's progressive volume frames (``coarse_then_full`` in app.session.progressive, the
+"""The window's progressive volume frames (``coarse_then_full`` in core.progressive, the
 drawer of a progressive renderer without one of its own): a coarse picture first, then exactly
 the front door's frame."""
 
@@ -6,7 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from app.session.progressive import COARSE_FIRST as COARSE, coarse_then_full, progressive_drawer
+from core.progressive import COARSE_FIRST as COARSE, coarse_then_full
+from core.registry import get_renderer
 from core.render import render
 from core.settings import RenderSettings
 from core.volume import generators
@@ -37,7 +38,7 @@ def test_coarse_first_then_the_front_doors_frame():
     scene = scene_with([volume])
     settings = RenderSettings.for_scene(scene, renderer="volume", size=(24, 16))
     control = Collect()
-    frame = coarse_then_full(scene, scene.views[0], settings, control=control)
+    frame = coarse_then_full(scene, scene.views[0], settings, None, render, control=control)
     assert np.array_equal(frame.color, render(scene, scene.views[0], settings).color)
     (coarse,) = control.partials
     assert coarse.shape == (16, 24, 3)
@@ -47,6 +48,6 @@ def test_coarse_first_then_the_front_doors_frame():
 
 
 def test_a_progressive_renderer_without_a_drawer_of_its_own_is_drawn_coarse_then_full():
-    from app.session.progressive import trace_progressively
-    assert progressive_drawer("volume") is coarse_then_full
-    assert progressive_drawer("raytrace") is trace_progressively
+    from core.raytrace.progressive import trace_progressively
+    assert get_renderer("volume").drawer() is coarse_then_full
+    assert get_renderer("raytrace").drawer() is trace_progressively

@@ -269,7 +269,7 @@ def test_inspect_pixel_matches_the_picture():
 
 
 def test_window_progress_brightens_step_by_step_then_equals_the_renderer(monkeypatch):
-    from app.session import progressive_gi
+    from core.radiosity import progressive as progressive_gi
     from core.context import RenderContext
     monkeypatch.setattr(progressive_gi, "PARTIAL_EVERY", 0.0)     # a picture after every shot
 

@@ -13,8 +13,8 @@ frozen z-buffer picture) for that long. :func:`trace_progressively` therefore
 3. returns the finished frame, which is pixel for pixel what ``core.render`` would give
    (the same rays, the same box filter, the same rounding; a test holds them equal).
 
-Between tiles it asks its :class:`app.viewer.worker.Control` whether a newer request has
-superseded it (the view or a setting changed) and stops there (:class:`Cancelled`).
+Between tiles it asks its control (:mod:`core.progressive`) whether a newer request has
+superseded it (the view or a setting changed) and stops there.
 """
 
 from __future__ import annotations
@@ -24,30 +24,10 @@ import time
 
 import numpy as np
 
+from core.progressive import PARTIAL_EVERY, Quiet, snapshot, upscale
+
 COARSE = 8                # the first picture: one ray per COARSE x COARSE pixels
 TILE = 32                 # refinement tiles, pixels a side
-PARTIAL_EVERY = 0.25      # seconds between refined pictures handed to the window
-
-
-class _Quiet:
-    """A control for callers without a window (ViewerState.update, tests): never cancelled."""
-
-    cancelled = False
-
-    def check(self) -> None:
-        pass
-
-    def report(self, fraction: float, detail: str) -> None:
-        pass
-
-    def partial(self, frame) -> None:
-        pass
-
-
-def upscale(color: np.ndarray, factor: int, width: int, height: int) -> np.ndarray:
-    """``color`` with each pixel repeated ``factor`` x ``factor`` times, cut to the size."""
-    big = np.repeat(np.repeat(color, factor, axis=0), factor, axis=1)
-    return big[:height, :width]
 
 
 def _prepare(scene, view, settings):
@@ -61,14 +41,12 @@ def _prepare(scene, view, settings):
                    TraceOptions.from_settings(settings), offsets, bool(settings.keep_aspect))
 
 
-def trace_progressively(scene, view, settings, context=None, render=None, control=None):
+def trace_progressively(scene, view, settings, context, render, control=None):
     """The ray-traced frame of ``view`` for ``settings`` (``settings.renderer`` is taken as
     ``"raytrace"``), handing pictures on the way to ``control.partial``."""
     from core.raytrace.renderer import stats_of, tiles, trace_tile
     from core.shading.illumination import to_uint8
-    if render is None:
-        from core.render import render
-    control = control or _Quiet()
+    control = control or Quiet()
     settings = settings.replace(renderer="raytrace")
     width, height = settings.size
     small = (max(1, math.ceil(width / COARSE)), max(1, math.ceil(height / COARSE)))
@@ -80,7 +58,7 @@ def trace_progressively(scene, view, settings, context=None, render=None, contro
     if coarse.message:                        # an invalid view, nothing to trace: said once
         return frame
     frame.stats["pass"] = "coarse"
-    control.partial(_copy(frame))
+    control.partial(snapshot(frame))
     setup = _prepare(scene, view, settings)
     boxes = tiles(width, height, TILE)
     start = last = time.perf_counter()
@@ -91,56 +69,8 @@ def trace_progressively(scene, view, settings, context=None, render=None, contro
         if time.perf_counter() - last >= PARTIAL_EVERY and k + 1 < len(boxes):
             last = time.perf_counter()
             frame.stats["pass"] = f"tile {k + 1} of {len(boxes)}"
-            control.partial(_copy(frame))
+            control.partial(snapshot(frame))
     frame.stats.update(stats_of(setup, time.perf_counter() - start))
     frame.stats["pass"] = "final"
     frame.stats["samples per pixel"] = len(setup.offsets)
-    return frame
-
-
-def _copy(frame):
-    """A snapshot of ``frame`` (the window uploads it while the tracer writes the next tiles)."""
-    return type(frame)(rgbx=frame.rgbx.copy(), plan=frame.plan, message=frame.message,
-                       stats=dict(frame.stats))
-
-
-# A progressive renderer (its registry entry says so) is drawn by a drawer of its own where it
-# has one: the ray tracer tile by tile, radiosity shot by shot, the path tracer pass by pass.
-# Any other is drawn coarse first, then whole (:func:`coarse_then_full`): a new renderer needs
-# no line here.
-DRAWERS = {"raytrace": "app.session.progressive:trace_progressively",
-           "radiosity": "app.session.progressive_gi:radiosity_progressively",
-           "pathtrace": "app.session.progressive_gi:pathtrace_progressively"}
-COARSE_FIRST = 4          # coarse_then_full's first picture: one pixel per 4 x 4
-
-
-def progressive_drawer(name: str):
-    """``f(scene, view, settings, context, render, control)`` that draws renderer ``name``'s
-    frame with pictures on the way."""
-    import importlib
-    module, _, function = DRAWERS.get(name, f"{__name__}:coarse_then_full").partition(":")
-    return getattr(importlib.import_module(module), function)
-
-
-def coarse_then_full(scene, view, settings, context=None, render=None, control=None):
-    """The frame at 1/``COARSE_FIRST`` of its size through the front door, handed over upscaled
-    by pixel repetition, then the full frame (exactly ``core.render``'s); between the two a
-    newer request may supersede it."""
-    if render is None:
-        from core.render import render
-    control = control or _Quiet()
-    width, height = settings.size
-    small = (max(1, math.ceil(width / COARSE_FIRST)), max(1, math.ceil(height / COARSE_FIRST)))
-    control.report(0.0, f"coarse pass (every {COARSE_FIRST}th pixel)")
-    coarse = render(scene, view, settings.replace(size=small, samples=1), context)
-    if coarse.message:                        # an invalid view: said once, nothing to refine
-        return coarse
-    shown = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
-                         stats={**coarse.stats, "pass": "coarse"})
-    shown.color[:] = upscale(coarse.color, COARSE_FIRST, width, height)
-    control.partial(shown)
-    control.check()
-    control.report(0.2, "full frame")
-    frame = render(scene, view, settings, context)
-    frame.stats["pass"] = "final"
     return frame
