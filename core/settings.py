@@ -177,9 +177,9 @@ class RenderSettings:
         """A variant; a change to a field of a renderer's options (``max_depth=3``) goes to
         that renderer's options object (TypeError for a name that is neither)."""
         own = {k: v for k, v in changes.items() if k in RenderSettings.__dataclass_fields__}
-        options = {type(o): o for o in self.options}
+        options = {type(o): o for o in own.pop("options", self.options)}   # whole objects too
         for name, value in changes.items():
-            if name in own:
+            if name in RenderSettings.__dataclass_fields__:
                 continue
             cls = option_owner(name)
             if cls is None:
