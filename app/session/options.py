@@ -46,9 +46,3 @@ def controls(options) -> list[Control]:
         found.append(Control(f.name, kind, getattr(options, f.name),
                              tuple(f.metadata.get("choices", ())), f.metadata.get("help", "")))
     return found
-
-
-def changed(settings, name: str, value):
-    """``settings`` with option ``name`` set to ``value``; ValueError with the options
-    class's own message when it refuses the value (the settings stay as they were)."""
-    return settings.replace(**{name: value})

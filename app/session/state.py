@@ -463,9 +463,8 @@ class ViewerState:
     def set_option(self, name: str, value) -> bool:
         """Set the renderer's option ``name`` (a field of its options class). A value its class
         refuses keeps the last good one, with the class's message (:attr:`option_message`)."""
-        from app.session.options import changed
         try:
-            changed(self.settings(), name, value)
+            self.settings().replace(**{name: value})      # the options class checks it
         except (ValueError, TypeError) as error:
             kept = getattr(self.renderer_options(), name, None)
             self.option_message = f"{error}; {name.replace('_', ' ')} stays {kept!r}"
