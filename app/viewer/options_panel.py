@@ -22,7 +22,7 @@ def draw(imgui, state, displayable) -> None:
     if not found:
         return
     label = get_renderer(state.renderer_name or "zbuffer").label
-    if not imgui.collapsing_header(f"{label}: options###renderer-options"):
+    if not imgui.collapsing_header(displayable(f"{label}: options") + "###renderer-options"):
         return
     imgui.push_item_width(imgui.get_content_region_avail().x * 0.5)   # half for the names
     for control in found:

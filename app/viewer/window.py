@@ -1026,8 +1026,8 @@ class ViewerWindow:
             imgui.pop_text_wrap_pos()
         from core.registry import shading_modes         # every registered mode, by its label
         for mode in shading_modes():
-            if imgui.menu_item_simple(mode.label, mode.key, self.state.shading == mode.name,
-                                      solid):
+            if imgui.menu_item_simple(displayable(mode.label), mode.key,
+                                      self.state.shading == mode.name, solid):
                 self.choose("shading", mode.name, how)
 
     def _panel(self) -> None:
@@ -1148,7 +1148,8 @@ class ViewerWindow:
         imgui.text_disabled("Lighting model")
         for value, label in (("", "Each material's own"),) + tuple(
                 (m.name, m.label) for m in lighting_models()):
-            if imgui.menu_item_simple(label, None, self.state.lighting_model == value):
+            if imgui.menu_item_simple(displayable(label), None,
+                                      self.state.lighting_model == value):
                 self.choose("lighting_model", value, "menu Render")
 
     def _render_items(self) -> None:
@@ -1156,7 +1157,7 @@ class ViewerWindow:
         imgui.text_disabled("Renderer")
         for entry in renderers():
             if entry.in_menu and imgui.menu_item_simple(
-                    entry.label, RENDERER_KEYS.get(entry.name, ""),
+                    displayable(entry.label), RENDERER_KEYS.get(entry.name, ""),
                     self.state.renderer_name == entry.name):
                 self.choose("renderer", entry.name, "menu Render")
         imgui.separator()
