@@ -67,16 +67,6 @@ def attach_values(argv: list[str], options=("--size",)) -> list[str]:
     return out
 
 
-def __getattr__(name: str):
-    """``PROJECTION_CHOICES`` and ``SHADING_CHOICES`` on first use: importing ``core`` imports
-    numpy, which ``--version`` does without."""
-    if name in ("PROJECTION_CHOICES", "SHADING_CHOICES"):
-        from core import settings
-        from core.registry import shading_names
-        return settings.PROJECTIONS if name == "PROJECTION_CHOICES" else shading_names()
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 # -- global options: --version, -v / --verbose, -q / --quiet, before or after the command
 VERBOSE = ("-v", "--verbose")
 QUIET = ("-q", "--quiet")
