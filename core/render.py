@@ -150,8 +150,9 @@ def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,
     """Add to ``stats["not drawn"]`` what of the scene this renderer leaves out by design:
     the local renderers take no light from area emitters, and draw mirrors (k_r) without
     their reflection and glass (k_t) opaque unless asked for transparency; the
-    global-illumination ones use each material's colour, not its texture maps; only the
-    z-buffer and the painters colour by depth (``shading = "depth"``)."""
+    global-illumination ones use each material's colour, not its texture maps, and the path
+    tracer takes no point light's light through glass; only the z-buffer and the painters
+    colour by depth (``shading = "depth"``)."""
     from core.texture.material import maps_of
     notes = stats.setdefault("not drawn", [])
     said = []                           # meshes of one name (a checker's two) say it once
@@ -169,6 +170,13 @@ def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,
         if not renderer.recursive and mesh.material.kr > 0:
             said.append(f"the reflection in the mirror ({name}): only {_who('recursive')} "
                         f"follow reflected rays")
+        if renderer.emitters and renderer.recursive and mesh.material.kt > 0 and scene.lights:
+            # A path tracer reaches a point or directional light only by a shadow ray, which a
+            # k_t > 0 surface stops: what lies behind glass or water gets none of their light
+            # (caustics of a delta light: no sampled path can hit it).
+            said.append(f"the scene's point and directional light through {name} "
+                        f"(k_t > 0): {name_of} finds none through it (a caustic of a point "
+                        f"light); an emitter's light is traced through")
         if not renderer.recursive and mesh.material.kt > 0 and not (
                 renderer.transparency and transparency != "off"):
             said.append(f"the transparency of {name} (k_t > 0): drawn opaque"

@@ -225,3 +225,24 @@ def test_the_ray_caster_says_which_meshes_it_leaves_out():
     assert said.count("floor: the ray caster draws only the analytic spheres and tori") == 1
     assert not any("sphere: the ray caster" in n for n in said)
     assert (frame.color != frame.color[0, 0]).any(axis=2).sum() > 100     # the spheres
+
+
+def test_the_path_tracer_says_it_takes_no_point_light_through_glass():
+    """refraction.toml: the pool floor is lit by one point light through the water (k_t 0.9).
+    The ray tracer's transmitted shadow rays light it; the path tracer's shadow rays stop at
+    the water, so the floor under it is near black, and its frame says why."""
+    from core import RenderSettings, render
+    from core.scene.formats import load_scene
+    from core.paths import SCENES_DIR
+    scene = load_scene(SCENES_DIR / "refraction.toml")
+
+    def frame(renderer):
+        settings = RenderSettings.for_scene(scene, renderer=renderer, size=(48, 36), samples=4)
+        return render(scene, scene.views[0], settings)
+    traced, path = frame("raytrace"), frame("pathtrace")
+    note = ("the scene's point and directional light through water (k_t > 0): pathtrace finds "
+            "none through it (a caustic of a point light); an emitter's light is traced through")
+    assert note in path.stats["not drawn"]
+    assert not any("through water" in n for n in traced.stats["not drawn"])
+    under = (slice(24, 36), slice(0, 48))              # the bottom third: floor under water
+    assert traced.color[under].mean() > 40 > path.color[under].mean()
