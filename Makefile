@@ -7,6 +7,7 @@ PYTHON ?= python3
 VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
+TESTED := $(VENV)/.installed-test
 WARM   := $(VENV)/.warm
 # The files that define numba kernels: when one changes (an edit, a pull), the kernels are
 # compiled again here, not in front of the user (core.jit ties every cached kernel to them).
@@ -14,11 +15,17 @@ KERNELS := $(shell grep -rl --include='*.py' 'core.jit import' core app 2>/dev/n
 
 .PHONY: run test bench report stability warmup clean
 
+# What running needs (the viewer, `animate`'s movies); the tests' oracles (Embree, Mitsuba,
+# scikit-image, pytest) only with `make test`.
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[anim]'
 	touch $(STAMP)
+
+$(TESTED): $(STAMP)
+	$(PY) -m pip install --quiet -e '.[test]'
+	touch $(TESTED)
 
 # The warm-up compiles on one worker process a core (JOBS=N for another number); when its
 # stamp says this code's kernels are all cached already (app/distribution/warm_stamp.py) it is
@@ -39,16 +46,16 @@ warmup: $(STAMP)
 run: $(STAMP)
 	$(PY) -m app
 
-test: $(WARM)
+test: $(TESTED) $(WARM)
 	$(PY) -m pytest -q
 
-bench: $(WARM)
+bench: $(TESTED) $(WARM)
 	$(PY) -m app bench --out bench
 
-report: $(WARM)
+report: $(TESTED) $(WARM)
 	$(PY) -m app report --out report
 
-stability: $(WARM)
+stability: $(TESTED) $(WARM)
 	$(PY) -m app stability
 
 clean:

@@ -15,13 +15,18 @@ cache load initialises only numba's runtime (NRT: the allocator the kernels call
 the cached code; a kernel that has to be compiled still gets the full refresh (numba's
 compiler does it itself), so what a compile sees is unchanged.
 
-A cached kernel is also tied to the source of every kernel module (``KERNEL_ROOTS``), not
-only to its own file. numba checks a cached kernel against its own file alone, but a kernel
-carries inside it the code of the kernels it inlines from other files: after
+A cached kernel is tied to what its machine code is made from (:func:`kernel_digest`): its
+own code, the code of every kernel it calls or inlines, in any file, followed through their
+globals to the end, and the values of the global constants they read (numba freezes those
+into the code). numba alone checks a cached kernel against its own file's time and size, but
+a kernel carries inside it the code of the kernels it calls: after
 ``core/raytrace/intersect.py`` changed, the cached ray-tracing kernels of ``whitted.py`` ran
-the old triangle test until their cache was deleted. Now a change to any file that defines
-kernels makes every kernel compile again when next used (``python -m app warmup`` does them
-all at once).
+the old triangle test until their cache was deleted. Tying every kernel to every kernel file
+instead (as we first did) made any edit recompile all of them; now an edit recompiles the
+kernels whose code it changed and those that call them, and nothing else: a comment, or a
+change to a kernel the torus never calls, leaves the torus's kernels cached. The digest is
+of the code this process compiled, not of the file on disk, so a file edited while a window
+runs cannot tie the old code to the new source.
 
 Setting up a kernel's cache (``@njit(cache=True)``) costs ~0.4 ms even when the kernel is
 never called: numba finds its cache folder, writes and deletes a file there to see that it
@@ -32,6 +37,13 @@ numba also wraps every call into LLVM in a pair of "numba:llvm_lock" events, whi
 only its compile-time statistics (``metadata["timers"]``); loading the first frame's nine
 cached kernels makes about 2,500 such calls, ~40 ms of events. Those two callbacks are
 removed (llvmlite's own lock stays).
+
+numba copies an inlined callee's IR block by block, each block with its own deep copy of the
+callee's whole variable scope: quadratic in the callee's size. For a large inlined helper
+(``shade_sample`` with both lighting models inside) that was 10 of the 57 s of the volume
+renderer's compile, and 9 of the 19 s of ``whitted.trace``. :func:`shared_scope_copies` makes
+the blocks of one such copy share one copy of their scope (what one deep copy of all the
+blocks together would give); numba's renaming then walks one scope instead of one per block.
 
 If numba's cache classes do not have the shape this expects (another numba version),
 nothing is changed: the kernels load as numba loads them.
@@ -50,23 +62,26 @@ save, and writes the data before the index, so that no index names a file not ye
 from __future__ import annotations
 
 import contextlib
+import enum
 import functools
 import hashlib
+import inspect
 import itertools
 import os
 from pathlib import Path
 
 import numba
+import numpy as np
 from llvmlite.binding import ffi as llvm_ffi
 from numba import config, prange  # noqa: F401  (re-exported: the kernels' imports)
 from numba.core import caching
 from numba.core.runtime import nrt
 
-__all__ = ["config", "njit", "prange", "quick_cache_loads", "serialised_cache_saves",
-           "stamp_with_kernel_sources", "untimed_llvm_calls"]
+__all__ = ["config", "kernel_digest", "njit", "prange", "quick_cache_loads",
+           "serialised_cache_saves", "untimed_llvm_calls"]
 
-# The packages whose kernels may inline one another: a change to any file of theirs that
-# defines kernels (imports this module) makes every cached kernel of theirs stale.
+# The packages whose kernel files the warm-up's stamp digests (app/distribution/warm_stamp.py:
+# after any change to one of them the warm-up runs again and compiles what went stale).
 JIT_FILE = Path(__file__).resolve()
 KERNEL_ROOTS = [JIT_FILE.parent, JIT_FILE.parent.parent / "app"]
 # A file that defines no kernel but shapes compiled code says so with these words (the
@@ -100,8 +115,99 @@ class _CacheOnFirstUse:
 
     def __getattr__(self, name):
         if self._cache is None:
-            self._cache = caching.FunctionCache(self._function)
+            cache = caching.FunctionCache(self._function)
+            stamp_with_callees(cache, self._function)
+            self._cache = cache
         return getattr(self._cache, name)
+
+
+def stamp_with_callees(cache, function) -> bool:
+    """Tie ``cache`` (numba's cache of kernel ``function``) to :func:`kernel_digest` instead
+    of to its own file's time and size (see the module). Returns whether it could."""
+    cache_file = getattr(cache, "_cache_file", None)
+    if not hasattr(cache_file, "_source_stamp"):
+        return False
+    cache_file._source_stamp = ("kernel digest", kernel_digest(function))
+    return True
+
+
+def kernel_digest(function) -> str:
+    """SHA-256 of what kernel ``function``'s machine code is made from: its code and that of
+    every kernel it reaches through its globals and closure (each kernel's numba options
+    too), and the global constants they read. Line numbers and file names are left out, so
+    a comment or a moved function changes nothing. About 0.1 ms a function reached."""
+    digest = hashlib.sha256()
+    seen, todo = set(), [function]
+    while todo:
+        f = todo.pop()
+        if f in seen:
+            continue
+        seen.add(f)
+        digest.update(_code_bytes(f.__code__) + _value_bytes(f.__defaults__))
+        for name, value in _globals_read(f):
+            digest.update(name.encode() + b"=")
+            if isinstance(value, numba.core.dispatcher.Dispatcher):
+                digest.update(repr(sorted(value.targetoptions.items())).encode())
+                todo.append(value.py_func)
+            else:
+                digest.update(_value_bytes(value))
+    return digest.hexdigest()
+
+
+@functools.lru_cache(maxsize=None)
+def _code_bytes(code) -> bytes:
+    """A code object's instructions, constants and names (nested code objects included),
+    without its line numbers and file name."""
+    consts = tuple(_code_bytes(c) if hasattr(c, "co_code") else c for c in code.co_consts)
+    return repr((code.co_code, consts, code.co_names, code.co_varnames, code.co_freevars,
+                 code.co_cellvars, code.co_argcount, code.co_posonlyargcount,
+                 code.co_kwonlyargcount, code.co_flags)).encode()
+
+
+def _names_read(code) -> set[str]:
+    names = set(code.co_names)
+    for c in code.co_consts:
+        if hasattr(c, "co_code"):
+            names |= _names_read(c)
+    return names
+
+
+def _globals_read(f):
+    """``(name, value)`` of each global, closure cell and module attribute ``f`` may read."""
+    names = sorted(_names_read(f.__code__))
+    found = [(name, f.__globals__[name]) for name in names if name in f.__globals__]
+    for module_name, module in [(n, v) for n, v in found if inspect.ismodule(v)]:
+        found += [(f"{module_name}.{name}", getattr(module, name)) for name in names
+                  if name in vars(module)]
+    cells = zip(f.__code__.co_freevars, f.__closure__ or ())
+    found += [(f"<cell {name}>", _cell(cell)) for name, cell in cells]
+    return [(name, value) for name, value in found if not inspect.ismodule(value)]
+
+
+def _cell(cell):
+    try:
+        return cell.cell_contents
+    except ValueError:                    # an empty cell
+        return None
+
+
+def _value_bytes(value) -> bytes:
+    """What a global read by a kernel contributes to its digest: a constant's value (numba
+    freezes it into the code), anything else its kind and name (library functions: numba's
+    version keys the cache already)."""
+    if isinstance(value, (bool, int, float, complex, str, bytes, type(None), np.generic)):
+        return repr(value).encode()
+    if isinstance(value, enum.Enum):
+        return repr(value).encode()
+    if isinstance(value, (tuple, list)):
+        return b"(" + b",".join(_value_bytes(v) for v in value) + b")"
+    if isinstance(value, np.ndarray):
+        return repr((value.dtype.str, value.shape)).encode() + value.tobytes()
+    if isinstance(value, type):
+        return repr((value.__module__, value.__qualname__,
+                     getattr(value, "_fields", None))).encode()
+    return repr((type(value).__module__, type(value).__qualname__,
+                 getattr(value, "__qualname__", None))).encode()
 
 
 def quick_cache_loads() -> bool:
@@ -147,37 +253,6 @@ def _python_files(root: Path) -> list[Path]:
         subfolders[:] = [d for d in subfolders if d != "__pycache__" and not d.startswith(".")]
         found += [Path(folder) / name for name in files if name.endswith(".py")]
     return sorted(found)
-
-
-@functools.lru_cache(maxsize=None)   # asked once per kernel (~130 at start-up): resolve is slow
-def _inside(path: str, roots) -> bool:
-    try:
-        resolved = Path(path).resolve()
-    except OSError:
-        return False
-    return any(root == resolved or root in resolved.parents for root in roots)
-
-
-def stamp_with_kernel_sources() -> bool:
-    """Tie each cached kernel under ``KERNEL_ROOTS`` to the kernel sources' digest as well as
-    to its own file (see the module). Returns whether the change is in place."""
-    mixin = getattr(caching, "_SourceFileBackedLocatorMixin", None)
-    if mixin is None or not hasattr(mixin, "get_source_stamp"):
-        return False
-    own_stamp = mixin.get_source_stamp
-    if getattr(own_stamp, "_with_kernel_sources", False):
-        return True
-
-    def get_source_stamp(self):
-        stamp = own_stamp(self)
-        roots = tuple(KERNEL_ROOTS)
-        if _inside(getattr(self, "_py_file", ""), roots):
-            return stamp, kernel_sources_digest(roots)
-        return stamp
-
-    get_source_stamp._with_kernel_sources = True
-    mixin.get_source_stamp = get_source_stamp
-    return True
 
 
 def untimed_llvm_calls() -> bool:
@@ -241,7 +316,40 @@ def serialised_cache_saves() -> bool:
     return True
 
 
+class _BlockCopier:
+    """``copy`` as numba's inliner sees it: a deep copy of an IR block shares its memo with the
+    copies of the blocks before it that have the same scope, so that the scope and its
+    variables are copied once per IR, not once per block (see the module)."""
+
+    def __init__(self, module):
+        self._module = module
+        self._scope, self._memo = None, {}
+
+    def __getattr__(self, name):
+        return getattr(self._module, name)
+
+    def deepcopy(self, x, memo=None):
+        from numba.core import ir
+        if memo is not None or not isinstance(x, ir.Block):
+            return self._module.deepcopy(x, memo)
+        if x.scope is not self._scope or id(x) in self._memo:    # another IR, or a 2nd copy
+            self._scope, self._memo = x.scope, {}
+        return self._module.deepcopy(x, self._memo)
+
+
+def shared_scope_copies() -> bool:
+    """Copy an inlined callee's blocks with one copy of their scope (see the module). Returns
+    whether the change is in place."""
+    import copy
+
+    from numba.core import inline_closurecall
+    if getattr(inline_closurecall, "copy", None) is not copy or \
+            not hasattr(inline_closurecall.InlineWorker, "inline_ir"):
+        return isinstance(getattr(inline_closurecall, "copy", None), _BlockCopier)
+    inline_closurecall.copy = _BlockCopier(copy)
+    return True
+
 QUICK_CACHE_LOADS = quick_cache_loads()
 SERIALISED_CACHE_SAVES = serialised_cache_saves()
 UNTIMED_LLVM_CALLS = untimed_llvm_calls()
-STAMPED_WITH_KERNEL_SOURCES = stamp_with_kernel_sources()
+SHARED_SCOPE_COPIES = shared_scope_copies()

@@ -341,12 +341,7 @@ def test_registered_renderer_through_the_front_door():
 def test_shipped_ray_tracing_scenes_render(name, kinds):
     from core.scene.formats.scenefile import read_scene_file
     path = SCENES / name
-    text, folder = path.read_text(), path.parent
-    if name == "glass_bunny.toml":
-        if BUNNY is None:
-            pytest.skip("the Stanford bunny (shared/data/stanford-bunny) is not on this machine")
-        text, folder = text.replace("../../shared/data/stanford-bunny/", ""), BUNNY.parent
-    scene = read_scene_file(text, str(path), folder)
+    scene = read_scene_file(path.read_text(), str(path), path.parent)
     for view in scene.views:
         _, raw, stats = render_image(scene, view, scene.projection, (40, 40))
         assert np.all(np.isfinite(raw)) and raw.min() >= 0.0

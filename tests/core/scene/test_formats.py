@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import BUNNY, DATA
+from conftest import DATA
 
 from core.settings import RenderSettings
 from core.scene import generators
@@ -568,9 +568,6 @@ SHIPPED = sorted(p.name for p in SCENES_DIR.iterdir() if p.suffix in (".toml", "
 
 @pytest.mark.parametrize("name", SHIPPED)
 def test_every_shipped_scene_loads(name):
-    text = (SCENES_DIR / name).read_text(errors="replace")
-    if "shared/data/" in text and not BUNNY.exists():
-        pytest.skip(f"{name} uses the shared data folder, which is not at {BUNNY.parent}")
     scene = load_scene(SCENES_DIR / name)
     assert len(scene.views) >= 1, name
     # lit by [[light]]s, or (issue 19) by emitting materials, which get no default lights
@@ -586,8 +583,7 @@ def test_every_shipped_scene_loads(name):
 
 
 def test_shipped_scene_kinds():
-    counts = {name: load_scene(SCENES_DIR / name).triangle_count for name in SHIPPED
-              if BUNNY.exists() or "shared/data/" not in (SCENES_DIR / name).read_text()}
+    counts = {name: load_scene(SCENES_DIR / name).triangle_count for name in SHIPPED}
     assert counts["big.toml"] >= 100_000
     assert counts["few_triangles.tri"] < 10
     assert {"cube.toml", "icosphere.toml", "torus.toml", "bezier.toml", "sphere.toml",
