@@ -67,7 +67,9 @@ import functools
 import hashlib
 import inspect
 import itertools
+import logging
 import os
+import pickle
 from pathlib import Path
 
 import numba
@@ -115,10 +117,80 @@ class _CacheOnFirstUse:
 
     def __getattr__(self, name):
         if self._cache is None:
-            cache = caching.FunctionCache(self._function)
+            try:
+                cache = caching.FunctionCache(self._function)
+            except RuntimeError as error:           # no folder it may write (numba's words)
+                _say_once("kernels are compiled but not kept on disk: %s", error)
+                cache = _NoCache()
             stamp_with_callees(cache, self._function)
             self._cache = cache
         return getattr(self._cache, name)
+
+
+class _NoCache:
+    """A kernel's cache where there is no folder to keep it in: every process compiles it."""
+
+    def load_overload(self, sig, target_context):
+        return None
+
+    def save_overload(self, sig, data):
+        pass
+
+
+_said = set()
+
+
+def _say_once(message: str, *args) -> None:
+    """One warning line per kind of cache trouble a process meets, not one per kernel."""
+    if message not in _said:
+        _said.add(message)
+        logging.getLogger("fvd").warning(message, *args)
+
+
+def tolerant_cache_files() -> bool:
+    """A kernel cache file that cannot be read back (half-written by a process that was killed
+    before numba's atomic rename existed, truncated, or written by something else) is a
+    cache miss, said once, not an exception in the middle of a frame: the kernel compiles
+    and its files are written anew. A cache folder that refuses a write (read-only, full)
+    leaves the kernel compiled in memory, said once. Returns whether the change is in place."""
+    cache_file = getattr(caching, "IndexDataCacheFile", None)
+    if cache_file is None or not all(hasattr(cache_file, name)
+                                     for name in ("_load_index", "_load_data", "save")):
+        return False
+    if getattr(cache_file._load_index, "_tolerant", False):
+        return True
+    load_index, load_data, save = cache_file._load_index, cache_file._load_data, cache_file.save
+    unreadable = (EOFError, pickle.UnpicklingError, ValueError, TypeError, AttributeError,
+                  ImportError, IndexError, OSError)
+
+    def _load_index(self):
+        try:
+            return load_index(self)
+        except unreadable as error:
+            _say_once("a kernel cache file could not be read (%s: %s); its kernel compiles "
+                      "again: %s", type(error).__name__, error, self._index_path)
+            return {}
+
+    def _load_data(self, name):
+        try:
+            return load_data(self, name)
+        except FileNotFoundError:
+            raise                                   # numba's own miss
+        except unreadable as error:
+            _say_once("a kernel cache file could not be read (%s: %s); its kernel compiles "
+                      "again: %s", type(error).__name__, error, self._data_path(name))
+            raise OSError(str(error)) from None      # numba's load treats OSError as a miss
+
+    def tolerant_save(self, key, data):
+        try:
+            save(self, key, data)
+        except OSError as error:
+            _say_once("kernels are compiled but not kept on disk: %s", error)
+
+    _load_index._tolerant = True
+    cache_file._load_index, cache_file._load_data = _load_index, _load_data
+    cache_file.save = tolerant_save
+    return True
 
 
 def stamp_with_callees(cache, function) -> bool:
@@ -351,5 +423,6 @@ def shared_scope_copies() -> bool:
 
 QUICK_CACHE_LOADS = quick_cache_loads()
 SERIALISED_CACHE_SAVES = serialised_cache_saves()
+TOLERANT_CACHE_FILES = tolerant_cache_files()    # after it: wraps its save
 UNTIMED_LLVM_CALLS = untimed_llvm_calls()
 SHARED_SCOPE_COPIES = shared_scope_copies()

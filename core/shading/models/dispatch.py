@@ -18,8 +18,9 @@ dispatch is written out when this module is imported, one branch per registered 
 Model 0 (Phong) is the last, unconditional branch: a row whose number names no model is lit
 by the course's model. The branches are inlined (``inline="always"``), as ``phong_point``
 always was, so a kernel's Phong pixels run the same instructions as before plus one compare
-per point. The compiled kernels carry this code; ``core.jit`` stamps them with the sources of
-the model modules and of the registrations, so a model added or removed recompiles them.
+per point. The compiled kernels carry this code; ``core.jit`` stamps them with the code they
+reach (this generated source, then each model's kernels), so a model added or removed
+recompiles them.
 """
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ event.register("numba:compile", Listener())
 from app.distribution.warmup import scene_jobs, shipped_scenes
 opened = 0
 for path in shipped_scenes():
-    for label, run in scene_jobs(path, size=(72, 40)):    # not the warm-up's size
+    for label, run in scene_jobs(path, size=(72, 40), every=True):   # not the warm-up's size
         before = len(compiled)
         run()
         opened += 1
