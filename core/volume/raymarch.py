@@ -119,65 +119,55 @@ def shade_sample(v, x, y, z, r, g, b, px, py, pz, m_inv, surface, lights, ambien
 def march(v, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit, material,
           lights, ambient, eye, halfway, flat, color, transmittance, largest):
     """March every ray (see the module). Fills ``color`` (N, 3) and ``transmittance`` (N,)
-    (emission–absorption) or ``largest`` (N,) (MIP; −inf where the ray misses the grid).
-
-    The parallel loop only hands each ray to :func:`march_ray`, which numba compiles once as
-    a plain function: numba's parallel passes then analyse a loop of a few lines, not the
-    whole inlined ray marcher (8 s of the 15 s this kernel took to compile), and a call a
-    ray costs nothing beside its hundreds of samples."""
+    (emission–absorption) or ``largest`` (N,) (MIP; −inf where the ray misses the grid)."""
     for n in prange(origins.shape[0]):
+        color[n, 0] = color[n, 1] = color[n, 2] = 0.0
+        transmittance[n] = 1.0
+        largest[n] = -np.inf
+        wx, wy, wz = origins[n, 0], origins[n, 1], origins[n, 2]
+        ex, ey, ez = directions[n, 0], directions[n, 1], directions[n, 2]
+        ox = m_inv[0, 0] * wx + m_inv[0, 1] * wy + m_inv[0, 2] * wz + m_inv[0, 3]
+        oy = m_inv[1, 0] * wx + m_inv[1, 1] * wy + m_inv[1, 2] * wz + m_inv[1, 3]
+        oz = m_inv[2, 0] * wx + m_inv[2, 1] * wy + m_inv[2, 2] * wz + m_inv[2, 3]
+        dx = m_inv[0, 0] * ex + m_inv[0, 1] * ey + m_inv[0, 2] * ez
+        dy = m_inv[1, 0] * ex + m_inv[1, 1] * ey + m_inv[1, 2] * ez
+        dz = m_inv[2, 0] * ex + m_inv[2, 1] * ey + m_inv[2, 2] * ez
+        ta, tb = box_interval(v, ox, oy, oz, dx, dy, dz)
+        ta, tb = max(ta, t_lo[n]), min(tb, t_hi[n])
+        if not ta < tb:
+            continue
         surface = material.copy()              # this ray's O_d is each sample's colour
-        cr, cg, cb, T, top = march_ray(v, m_inv, origins[n, 0], origins[n, 1], origins[n, 2],
-                                       directions[n, 0], directions[n, 1], directions[n, 2],
-                                       t_lo[n], t_hi[n], step, mode, transfer, lit, surface,
-                                       lights, ambient, eye, halfway, flat)
+        length = tb - ta
+        segments = int(length // step) + 1
+        T, cr, cg, cb, top = 1.0, 0.0, 0.0, 0.0, -np.inf
+        for s in range(segments):
+            t0 = ta + s * step
+            dt = min(step, tb - t0)
+            if dt <= 0.0:
+                break
+            t = t0 + 0.5 * dt
+            x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
+            value = trilinear(v, x, y, z)
+            if mode == MIP:
+                top = max(top, value)
+                continue
+            r, g, b, sigma = classify(transfer, value)
+            if sigma <= 0.0:
+                continue
+            if lit:
+                r, g, b = shade_sample(v, x, y, z, r, g, b, wx + t * ex, wy + t * ey,
+                                       wz + t * ez, m_inv, surface, lights, ambient, eye,
+                                       halfway, flat)
+            alpha = 1.0 - math.exp(-sigma * dt)
+            cr += T * alpha * r
+            cg += T * alpha * g
+            cb += T * alpha * b
+            T *= 1.0 - alpha
+            if T < EARLY_TERMINATION:
+                break
         color[n, 0], color[n, 1], color[n, 2] = cr, cg, cb
         transmittance[n] = T
         largest[n] = top
-
-
-@njit(cache=True, nogil=True)
-def march_ray(v, m_inv, wx, wy, wz, ex, ey, ez, t_lo, t_hi, step, mode, transfer, lit, surface,
-              lights, ambient, eye, halfway, flat):
-    """``(r, g, b, T, largest)`` of one ray from world point W along world direction E,
-    over ``t_lo .. t_hi``: black, T = 1 and −inf where it misses the grid."""
-    ox = m_inv[0, 0] * wx + m_inv[0, 1] * wy + m_inv[0, 2] * wz + m_inv[0, 3]
-    oy = m_inv[1, 0] * wx + m_inv[1, 1] * wy + m_inv[1, 2] * wz + m_inv[1, 3]
-    oz = m_inv[2, 0] * wx + m_inv[2, 1] * wy + m_inv[2, 2] * wz + m_inv[2, 3]
-    dx = m_inv[0, 0] * ex + m_inv[0, 1] * ey + m_inv[0, 2] * ez
-    dy = m_inv[1, 0] * ex + m_inv[1, 1] * ey + m_inv[1, 2] * ez
-    dz = m_inv[2, 0] * ex + m_inv[2, 1] * ey + m_inv[2, 2] * ez
-    ta, tb = box_interval(v, ox, oy, oz, dx, dy, dz)
-    ta, tb = max(ta, t_lo), min(tb, t_hi)
-    T, cr, cg, cb, top = 1.0, 0.0, 0.0, 0.0, -np.inf
-    if not ta < tb:
-        return cr, cg, cb, T, top
-    segments = int((tb - ta) // step) + 1
-    for s in range(segments):
-        t0 = ta + s * step
-        dt = min(step, tb - t0)
-        if dt <= 0.0:
-            break
-        t = t0 + 0.5 * dt
-        x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
-        value = trilinear(v, x, y, z)
-        if mode == MIP:
-            top = max(top, value)
-            continue
-        r, g, b, sigma = classify(transfer, value)
-        if sigma <= 0.0:
-            continue
-        if lit:
-            r, g, b = shade_sample(v, x, y, z, r, g, b, wx + t * ex, wy + t * ey, wz + t * ez,
-                                   m_inv, surface, lights, ambient, eye, halfway, flat)
-        alpha = 1.0 - math.exp(-sigma * dt)
-        cr += T * alpha * r
-        cg += T * alpha * g
-        cb += T * alpha * b
-        T *= 1.0 - alpha
-        if T < EARLY_TERMINATION:
-            break
-    return cr, cg, cb, T, top
 
 
 def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient, eye,
