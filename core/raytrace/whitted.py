@@ -266,7 +266,7 @@ def textured_colour(packed, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights
     return r, g, b
 
 
-@njit(cache=True, inline="always")   # a call per hit cost 22 % of the Whitted scene's time
+@njit(cache=True, inline="always")
 def shadowed_lights(packed, px, py, pz, nx, ny, nz, gx, gy, gz, lights, eye, shadows,
                     background, offset, scaled, surface_row, stack, counts):
     """The light rows as they arrive at P: ``lights`` itself with shadows off, else
@@ -592,19 +592,10 @@ def visible_many(packed, origins, directions, t_min, t_max, kind, index, t_hit):
     chunks = (n + CHUNK - 1) // CHUNK
     for m in prange(chunks):
         chunk = bvh.spread(m, chunks)
-        _visible_run(packed, origins, directions, t_min, t_max, chunk * CHUNK,
-                     min(n, (chunk + 1) * CHUNK), kind, index, t_hit)
-
-
-@njit(cache=True, nogil=True)
-def _visible_run(packed, origins, directions, t_min, t_max, begin, end, kind, index, t_hit):
-    """:func:`visible_many` for rays ``begin .. end − 1``. A plain function, so that numba's
-    parallel passes see a loop of two lines, not the inlined BVH walk (as ``trace`` is to
-    ``trace_many``)."""
-    stack = bvh.new_stack()
-    for i in range(begin, end):
-        k, j, t, _, _ = nearest(packed, origins[i, 0], origins[i, 1], origins[i, 2],
-                                directions[i, 0], directions[i, 1], directions[i, 2],
-                                t_min[i], t_max[i], stack)
-        kind[i], t_hit[i] = k, t
-        index[i] = packed.prim[j] if k == TRIANGLE else j
+        stack = bvh.new_stack()
+        for i in range(chunk * CHUNK, min(n, (chunk + 1) * CHUNK)):
+            k, j, t, _, _ = nearest(packed, origins[i, 0], origins[i, 1], origins[i, 2],
+                                    directions[i, 0], directions[i, 1], directions[i, 2],
+                                    t_min[i], t_max[i], stack)
+            kind[i], t_hit[i] = k, t
+            index[i] = packed.prim[j] if k == TRIANGLE else j

@@ -309,3 +309,29 @@ def test_an_edit_to_the_volume_ray_marcher_leaves_the_torus_cached(tmp_path):
         marcher.write("# an edit that changes no code the torus runs\n")
     again = draw()
     assert again["compiled"] == [] and again["lit"] == first["lit"]
+
+
+def test_a_cache_folder_that_refuses_writes_is_said_once_and_the_kernels_still_run(tmp_path):
+    """Read-only folders cannot be made as root (the tests' user on CI), so numba's own probe
+    of a folder is made to fail, and then a save: each is one line, and the kernels run."""
+    (tmp_path / "kernels_for_jit_test.py").write_text(KERNELS)
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+               PYTHONPATH=os.pathsep.join([str(tmp_path), str(ROOT)]))
+    for refuse in ("caching._CacheLocator.ensure_cache_path",
+                   "caching.IndexDataCacheFile._save_data"):
+        owner, name = refuse.rsplit(".", 1)
+        code = f"""
+            import errno, numpy as np
+            import core.jit
+            from numba.core import caching
+            def refuse(*args, **kwargs):
+                raise OSError(errno.EROFS, "Read-only file system")
+            setattr({owner}, {name!r}, refuse)
+            import kernels_for_jit_test as k
+            print(k.total(np.arange(4.0)), k.scaled(np.arange(3.0), 2.0).tolist())
+        """
+        done = subprocess.run([sys.executable, "-c", textwrap.dedent(code)], env=env, cwd=ROOT,
+                              capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0 and done.stdout.strip() == "6.0 [0.0, 2.0, 4.0]", done.stderr
+        said = [line for line in done.stderr.splitlines() if "not kept on disk" in line]
+        assert len(said) == 1, done.stderr
