@@ -6,6 +6,7 @@ import json
 import subprocess
 import sys
 
+from app.bench import bench as bench_module
 from tests.conftest import ROOT
 
 
@@ -21,8 +22,9 @@ def test_raytrace_bench_rows(tmp_path):
     assert whitted["primary_rays"] > 0 and whitted["primary_rays_per_s"] > 0
     assert whitted["rays_per_frame"]["reflected"] > 0 and whitted["rays_per_frame"]["refracted"] > 0
     assert whitted["whitted_fps"] > 0
-    if "glass bunny" in rows:                        # the bunny is on this machine
-        assert rows["glass bunny"]["triangles"] == 69451
+    # the full scan where ../shared has it, else the shipped decimated one (less 6 degenerate)
+    assert rows["glass bunny"]["triangles"] == (69451 if bench_module._bunny_file() else 16295)
+    if bench_module._bunny_file():
         assert rows["glass bunny"]["embree_rays_per_s"] > 0
         assert rows["glass bunny"]["primary_rays_per_cpu_s_one_thread"] > 0
         assert "ours on one thread, as Embree runs here" in run.stdout
