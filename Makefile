@@ -9,8 +9,9 @@ PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 TESTED := $(VENV)/.installed-test
 WARM   := $(VENV)/.warm
-# The files that define numba kernels: when one changes (an edit, a pull), the kernels are
-# compiled again here, not in front of the user (core.jit ties every cached kernel to them).
+# The files that define numba kernels: when one changes (an edit, a pull), the warm-up runs
+# again here, not in front of the user, and compiles the kernels whose code changed and those
+# that call them (core.jit.kernel_digest); it loads the rest.
 KERNELS := $(shell grep -rl --include='*.py' 'core.jit import' core app 2>/dev/null) core/jit.py
 
 .PHONY: run test bench report stability warmup clean

@@ -148,9 +148,9 @@ def _say_once(message: str, *args) -> None:
 
 
 def tolerant_cache_files() -> bool:
-    """A kernel cache file that cannot be read back (half-written by a process that was killed
-    before numba's atomic rename existed, truncated, or written by something else) is a
-    cache miss, said once, not an exception in the middle of a frame: the kernel compiles
+    """A kernel cache file that cannot be read back (truncated by a full disk or a copy cut
+    short, or written by something else) is a cache miss, said once, not an exception in
+    the middle of a frame: the kernel compiles
     and its files are written anew. A cache folder that refuses a write (read-only, full)
     leaves the kernel compiled in memory, said once. Returns whether the change is in place."""
     cache_file = getattr(caching, "IndexDataCacheFile", None)

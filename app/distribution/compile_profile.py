@@ -21,7 +21,6 @@ import os
 import sys
 import tempfile
 import time
-from collections import defaultdict
 from dataclasses import dataclass, field
 
 

@@ -291,28 +291,11 @@ def scene_label(path) -> str:
 def scene_steps() -> list[tuple[str, Callable[[], object]]]:
     """One step per shipped scene: its first pictures in every renderer, shading, filter."""
     def opener(path):
-        def run():
-            try:
-                jobs = scene_jobs(path)
-            except ValueError as error:
-                if not _needs_a_file_from_outside(error):
-                    raise
-                print(f"warm-up: skipped {Path(path).name}: {error}", file=sys.stderr)
-                return
-            for _, job in jobs:
+        def run():                   # every shipped scene's files are in the repository
+            for _, job in scene_jobs(path):
                 job()
         return run
     return [(scene_label(path), opener(path)) for path in shipped_scenes()]
-
-
-def _needs_a_file_from_outside(error: ValueError) -> bool:
-    """Whether a scene failed to open only because a file outside the checkout is absent (the
-    bunny in ../shared beside it): the scene's kernels are the other scenes' too, so the
-    warm-up goes on without it, as the tests skip it."""
-    from core.paths import ROOT
-    text = str(error)
-    missing, found, _ = text.partition(": cannot read it: no such file")
-    return bool(found) and ROOT.resolve() not in Path(missing).resolve().parents
 
 
 def opening_label(path) -> str:
@@ -443,8 +426,9 @@ COSTS: dict[str, float] = {
     "depth, parallel, scanline rasterizer": 0.0,
     "depth, parallel, open mesh and lines": 0.0,
     # Steps added since, from the cold warm-up of a CI run (2 workers, 2 cores):
-    "rigid bodies": 14.0,                    # split from "rigid bodies and linkages", 20.8 s
-    "linkages (both IK solvers)": 7.0,       # cold on 2 workers (issue 43): measured ~2:1
+    # the two halves of "rigid bodies and linkages" (33.56), cold on 2 workers: 13.69, 6.54
+    "rigid bodies": 13.69,
+    "linkages (both IK solvers)": 6.54,
     "cook_torrance.toml, every renderer, shading and filter": 28.65,
     "fast_wheel.toml, every renderer, shading and filter": 15.61,
     "blocks_falling.toml, every renderer, shading and filter": 12.41,
