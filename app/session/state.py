@@ -207,6 +207,7 @@ class ViewerState:
     slice_name: str = "axial"
     slice_index: int | None = None            # None: the middle slice
     scene_edits: int = 0                      # isosurfaces replaced in place so far
+    _requested_scene: object = field(default=None, repr=False)   # the last request's scene
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -694,13 +695,16 @@ class ViewerState:
     def request(self, worker) -> bool:
         """Hand the next frame to ``worker`` (an :class:`app.viewer.worker.RenderWorker`) if
         the picture changed; a request still waiting there is replaced. Returns whether one
-        was made; the frame arrives through :meth:`accept`."""
+        was made; the frame arrives through :meth:`accept`. Until it does, a picture the
+        worker finishes for an older request of the same scene may still come (a camera that
+        moves faster than frames are drawn); another scene's never does."""
         if not self.dirty or not self.renderable:
             return False
         run, what = self._job()
         if self.gate is not None:
             run = self.gate(run)
-        worker.submit(run, what, control=True)
+        worker.submit(run, what, control=True, keep_older=self.scene is self._requested_scene)
+        self._requested_scene = self.scene
         self.dirty = False
         return True
 

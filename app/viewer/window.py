@@ -105,8 +105,6 @@ PANEL_WIDTH = 340            # the side panel, in screen points
 NO_TRIANGLES = ("This scene has no triangles: it is drawn as lines whatever the shading, "
                 "so the shading modes change nothing.")
 SCREENSHOTS_DIR = "screenshots"
-# Within this many seconds of a wheel notch the wheel counts as spinning (see _hold_request).
-WHEEL_SPIN_S = 0.3
 SAVED_VIEWS = "saved.views"        # View > Save view appends here (in the current folder)
 # Files in scenes/ that are not scenes.
 NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
@@ -549,7 +547,7 @@ class ViewerWindow:
         self._note_kernels()
         self._poll_dialog()
         self.state.tick(time.perf_counter(), busy=self.worker.waiting)
-        if not self._hold_request() and self.state.request(self.worker):
+        if self.state.request(self.worker):
             self._compiles_at_request = compile_count()
         result = self.worker.collect()
         if result is not None and self.state.accept(result):
@@ -675,8 +673,6 @@ class ViewerWindow:
         self.hands = CameraHands(self.state)
         self.loupe = Loupe()
         self._loupe_drag: tuple[int, int] | None = None     # a drag moving the loupe's picture
-        self._wheel_at = -1e9                               # when the wheel last moved the camera
-        self._camera_owed = False         # a camera held back while a frame was drawn
         self._pressed: tuple[int, float, float, str] | None = None   # button, x, y, where
         self._view_file = Path.cwd() / SAVED_VIEWS
 
@@ -732,22 +728,6 @@ class ViewerWindow:
         if self.hands.move(x * scale, y * scale, self._drag_threshold()):
             self._wake()
 
-    def _hold_request(self) -> bool:
-        """While a drag moves the camera, ask for the next frame only once the last one is
-        in: the worker drops a finished frame that a newer request overtook, so asking at
-        every pointer move would show nothing until the drag stopped. The frame asked for
-        then is the newest camera (the ones in between are never drawn)."""
-        drag = self.hands.drag
-        moving = (drag is not None and drag.start is not None) or (
-            time.perf_counter() - self._wheel_at < WHEEL_SPIN_S)      # a wheel spun fast
-        if moving and self.worker.waiting:
-            if self.state.dirty:
-                self._camera_owed = True
-            return True
-        if self._camera_owed:             # accepting the last frame cleared the state's flag
-            self._camera_owed, self.state.dirty = False, True
-        return False
-
     def _pan_loupe(self, start, dx: float, dy: float) -> None:
         self.loupe.pan_from(start, dx, dy)
         self.blit.loupe(**self.loupe.uniforms())
@@ -773,7 +753,6 @@ class ViewerWindow:
             log.info("action: Alt+wheel %+g at (%.0f, %.0f) -> loupe %dx", notches, x, y, m)
             return
         zoom = held(glfw.KEY_LEFT_CONTROL, glfw.KEY_RIGHT_CONTROL)
-        self._wheel_at = time.perf_counter()
         if self.hands.wheel(notches, field_of_view=zoom):
             self._log_camera(f"wheel {notches:+g}{' with Ctrl (window)' if zoom else ' (dolly)'}")
         elif self.hands.message:

@@ -2,9 +2,13 @@
 
 The window asks for a frame (:meth:`RenderWorker.submit`) and keeps drawing; one background
 thread renders it. A request made while another is waiting replaces it (a stale request is
-never rendered), and a result that a newer request has overtaken is dropped when it is
-collected (:meth:`RenderWorker.collect`), so the picture always ends up showing the latest
-choice. While nothing is asked, the thread works through background jobs (the kernels'
+never rendered). A picture finished after a newer request was made is still shown when it is
+newer than the one on screen (:meth:`RenderWorker.collect` never goes back in time): while a
+drag moves the camera faster than frames are drawn, the window shows each frame as it comes
+and the worker draws the newest camera next, instead of showing nothing until the drag stops.
+A request made with ``keep_older=False`` (another scene) drops every older picture, so the old
+scene never flashes up after the new one was asked for. The picture always ends up showing the
+latest choice. While nothing is asked, the thread works through background jobs (the kernels'
 warm-up), one short job at a time, so that a frame request waits at most for one of them.
 
 A job submitted with ``control=True`` is called with a :class:`Control`: it can report how far
@@ -36,6 +40,7 @@ class Job:
     what: str
     generation: int = 0
     control: bool = False       # call run(Control) instead of run()
+    posted: bool = False        # has it handed over a picture yet?
 
 
 @dataclass
@@ -73,9 +78,12 @@ class Control:
         self._worker._report(self._job, fraction, detail)
 
     def partial(self, frame) -> None:
-        """A picture before the final one; the window shows it when it collects it."""
+        """A picture before the final one; the window shows it when it collects it. Once the
+        job is superseded only its first picture is still taken (a coarse picture drawn for a
+        moving camera); the refinements of an abandoned frame are not."""
         self._worker._post(Result(self._job.generation, self._job.what, frame,
-                                  seconds=time.perf_counter() - self._start, final=False))
+                                  seconds=time.perf_counter() - self._start, final=False),
+                           self._job)
 
 
 @dataclass
@@ -102,6 +110,8 @@ class RenderWorker:
         self._result: Result | None = None
         self._background: list[tuple[str, Callable]] = []
         self._generation = 0
+        self._floor = 0                 # results older than this generation are never shown
+        self._collected = 0             # the generation of the newest result collected
         self._running: str = ""
         self._since = 0.0
         self._done = 0
@@ -113,11 +123,17 @@ class RenderWorker:
         self._thread.start()
 
     # -- the window's side ---------------------------------------------------------------
-    def submit(self, run: Callable, what: str, control: bool = False) -> int:
+    def submit(self, run: Callable, what: str, control: bool = False,
+               keep_older: bool = True) -> int:
         """Ask for a frame; replaces any request still waiting and cancels a running one
-        that watches its :class:`Control`. Returns its generation."""
+        that watches its :class:`Control`. Until it arrives, the running one's picture may
+        still be shown, unless ``keep_older`` is False. Returns its generation."""
         with self._lock:
             self._generation += 1
+            if not keep_older:
+                self._floor = self._generation
+                if self._result is not None and self._result.generation < self._floor:
+                    self._result = None
             self._pending = Job(run, what, self._generation, control)
             self._lock.notify()
             return self._generation
@@ -130,13 +146,19 @@ class RenderWorker:
             self._lock.notify()
 
     def collect(self) -> Result | None:
-        """The newest finished frame, or None; results overtaken by a newer request are
-        dropped here (the newer one is on its way)."""
+        """The newest picture not yet collected, or None. A result of an older request than
+        one already collected, or from before a ``keep_older=False`` request, is dropped."""
         with self._lock:
             result, self._result = self._result, None
-            if result is None or result.generation != self._generation:
+            if result is None or result.generation < max(self._floor, self._collected):
                 return None
+            self._collected = result.generation
             return result
+
+    def is_current(self, result: Result) -> bool:
+        """Is ``result`` for the newest request (not a picture a newer request overtook)?"""
+        with self._lock:
+            return result.generation == self._generation
 
     @property
     def waiting(self) -> bool:
@@ -167,9 +189,17 @@ class RenderWorker:
                 self._fraction, self._detail = float(fraction), detail
         self._wake()
 
-    def _post(self, result: Result) -> None:
+    def _post(self, result: Result, job: Job | None = None) -> None:
+        """Keep ``result`` for :meth:`collect` unless a newer one waits there, it is older than
+        the floor, or its job, superseded, already handed over a picture."""
         with self._lock:
-            if result.generation != self._generation:
+            first = job is None or not job.posted
+            if job is not None:
+                job.posted = True
+            superseded = result.generation != self._generation
+            waiting = self._result.generation if self._result is not None else 0
+            if (result.generation < max(self._floor, waiting, self._collected)
+                    or (superseded and not first)):
                 return
             self._result = result
         self._wake()
@@ -214,6 +244,6 @@ class RenderWorker:
                 self._running = ""
                 if job.generation < 0:
                     self._done += 1
-                else:
-                    self._result = result
+            if job.generation >= 0:
+                self._post(result, job if result.error is None else None)
             self._wake()

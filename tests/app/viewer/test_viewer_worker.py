@@ -56,3 +56,65 @@ def test_errors_come_back_and_background_jobs_wait_for_frames():
         time.sleep(0.01)
     assert order == ["warm 1", "frame", "warm 2"] and worker.progress().total == 2
     worker.stop()
+
+
+def _slow_job(name, started, release, ran):
+    def job():
+        ran.append(name)
+        started.set()
+        release.wait(5)
+        return name + " frame"
+    return job
+
+
+def test_a_picture_a_newer_request_overtook_is_still_shown_but_never_after_a_newer_one():
+    # A camera that moves faster than frames are drawn: each finished frame is shown as it
+    # comes (the window would otherwise show nothing until the drag stops), in order.
+    started, release, ran = threading.Event(), threading.Event(), []
+    worker = RenderWorker()
+    try:
+        first = worker.submit(_slow_job("first", started, release, ran), "first")
+        assert started.wait(5)
+        second = worker.submit(lambda: ran.append("second") or "second frame", "second")
+        release.set()
+        shown = []
+        deadline = time.monotonic() + 10
+        while len(shown) < 2 and time.monotonic() < deadline:
+            result = worker.collect()
+            if result is not None:
+                shown.append((result.generation, result.frame, worker.is_current(result)))
+            time.sleep(0.001)
+        # the overtaken frame came first (it may be skipped if the newer one finished before
+        # it was collected, but it never comes after the newer one)
+        assert shown[-1] == (second, "second frame", True)
+        assert all(g == first for g, _, _ in shown[:-1])
+        assert worker.collect() is None and not worker.waiting
+    finally:
+        worker.stop()
+
+
+def test_an_older_result_waiting_is_never_collected_after_a_newer_one():
+    worker = RenderWorker()
+    try:
+        g = worker.submit(lambda: "a", "a")
+        result = _wait(worker)
+        assert result.generation == g and result.frame == "a"
+        from app.viewer.worker import Result
+        worker._post(Result(g - 1, "older", "older frame"))        # late, from before "a"
+        assert worker.collect() is None
+    finally:
+        worker.stop()
+
+
+def test_another_scenes_request_drops_the_old_scenes_picture():
+    started, release, ran = threading.Event(), threading.Event(), []
+    worker = RenderWorker()
+    try:
+        worker.submit(_slow_job("old scene", started, release, ran), "old scene")
+        assert started.wait(5)
+        worker.submit(lambda: "new scene frame", "new scene", keep_older=False)
+        release.set()
+        assert _wait(worker).frame == "new scene frame"     # the old scene's never shows
+        assert ran == ["old scene"]
+    finally:
+        worker.stop()
