@@ -160,6 +160,9 @@ def _view_parser(sub, scene_help: str) -> None:
                         + "; ".join(f"{r.name}: {r.label or r.description}"
                                     for r in renderers()))
     _crease_argument(v)
+    v.add_argument("--samples", type=_positive_samples, default=None, metavar="N",
+                   help="samples per pixel (default: the path tracer adds passes up to 256 "
+                        "while the camera rests; the others 1); also in the panel")
     v.add_argument("--reference", default=None, metavar="PNG",
                    help="a picture to hold ours against: h cycles our picture, the reference "
                         "and their difference heat map (with the numbers compare prints)")
@@ -302,6 +305,19 @@ def _option_overrides(args) -> dict:
     """What the renderers' own flags set (None: not given)."""
     from core.registry import option_classes
     return {k: v for options in option_classes() for k, v in options.overrides(args).items()}
+
+
+def _positive_samples(text: str) -> int:
+    """``view --samples``: a whole number of samples per pixel the settings take."""
+    from core.settings import MAX_SAMPLES
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= MAX_SAMPLES:
+        raise argparse.ArgumentTypeError(f"samples must be a whole number from 1 to "
+                                         f"{MAX_SAMPLES}, not {text!r}")
+    return value
 
 
 def _samples(text: str):
@@ -519,7 +535,8 @@ def _dispatch(args) -> int:
                                     "keep_aspect": args.keep_aspect,
                                     "course_tri": args.course_tri,
                                     "lighting_model": args.lighting_model,
-                                    "renderer_name": args.renderer, "loader": loader})
+                                    "renderer_name": args.renderer, "samples": args.samples,
+                                    "loader": loader})
     if args.command == "render":
         return _render(args)
     if args.command == "matrices":

@@ -8,16 +8,55 @@ door (:func:`core.render.render`, handed in: the renderers sit below it), and ``
 whether a newer request superseded the frame (``check`` raises), takes the progress
 (``report(fraction, detail)``) and the pictures on the way (``partial(frame)``). The last
 frame a drawer returns is, pixel for pixel, what ``render`` gives.
+
+The first picture is coarse so that it follows a moving camera: :func:`coarse_factor` picks
+the smallest reduction whose pass the last measured rate (:func:`note_rate`, seconds per ray
+of the renderer's one-sample passes, kept in the render context) predicts within
+``COARSE_BUDGET`` seconds, so that with the window's own work a drag sees at least eight
+pictures a second on any scene at any size; a superseded frame stops right after it.
 """
 
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
 PARTIAL_EVERY = 0.25      # seconds between pictures handed over on the way
-COARSE_FIRST = 4          # coarse_then_full's first picture: one pixel per 4 x 4
+COARSE_FIRST = 4          # coarse_then_full's first picture before any rate is known: 1 per 4 x 4
+COARSE_BUDGET = 0.08      # seconds a coarse picture may take (a drag then sees >= 8 a second)
+COARSE_FACTORS = (2, 4, 8, 16, 32, 64)      # reductions to choose from, finest first
+
+
+def _rates(context) -> dict:
+    """The rates measured so far in ``context`` (none kept without one)."""
+    return {} if context is None else context.buffer("progressive rates", None, dict)
+
+
+def note_rate(context, key: str, seconds: float, rays: int) -> None:
+    """A one-sample pass of renderer ``key`` traced ``rays`` rays in ``seconds``."""
+    if rays > 0 and seconds > 0:
+        _rates(context)[key] = seconds / rays
+
+
+def coarse_factor(context, key: str, width: int, height: int, default: int,
+                  least: int = 1) -> int:
+    """One ray per ``f`` x ``f`` pixels for the first picture of ``key`` at ``width`` x
+    ``height``: the smallest ``f`` (at least ``least``; 1 means no coarse picture is needed)
+    whose one-sample pass takes ``COARSE_BUDGET`` seconds at the last rate; ``default``
+    before any rate is known."""
+    rate = _rates(context).get(key)
+    if rate is None:
+        return max(default, least)
+    for f in (1,) + COARSE_FACTORS:
+        if f >= least and rate * math.ceil(width / f) * math.ceil(height / f) <= COARSE_BUDGET:
+            return f
+    return COARSE_FACTORS[-1]
+
+
+def coarse_size(width: int, height: int, factor: int) -> tuple[int, int]:
+    return max(1, math.ceil(width / factor)), max(1, math.ceil(height / factor))
 
 
 class Quiet:
@@ -48,19 +87,30 @@ def snapshot(frame):
 
 
 def coarse_then_full(scene, view, settings, context, render, control=None):
-    """The frame at 1/``COARSE_FIRST`` of its size through the front door, handed over upscaled
-    by pixel repetition, then the full frame (exactly ``core.render``'s); between the two a
-    newer request may supersede it."""
+    """The frame at 1/``f`` of its size through the front door (``f`` from
+    :func:`coarse_factor`), handed over upscaled by pixel repetition, then the full frame
+    (exactly ``core.render``'s); between the two a newer request may supersede it. A frame
+    fast enough to follow the mouse whole is drawn whole."""
     control = control or Quiet()
     width, height = settings.size
-    small = (max(1, math.ceil(width / COARSE_FIRST)), max(1, math.ceil(height / COARSE_FIRST)))
-    control.report(0.0, f"coarse pass (every {COARSE_FIRST}th pixel)")
+    key = settings.renderer or "zbuffer"
+    factor = coarse_factor(context, key, width, height, COARSE_FIRST)
+    if factor == 1:
+        start = time.perf_counter()
+        frame = render(scene, view, settings, context)
+        note_rate(context, key, (time.perf_counter() - start) / settings.samples, width * height)
+        frame.stats["pass"] = "final"
+        return frame
+    small = coarse_size(width, height, factor)
+    control.report(0.0, f"coarse pass (one pixel in {factor} x {factor})")
+    start = time.perf_counter()
     coarse = render(scene, view, settings.replace(size=small, samples=1), context)
+    note_rate(context, key, time.perf_counter() - start, small[0] * small[1])
     if coarse.message:                        # an invalid view: said once, nothing to refine
         return coarse
     shown = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
-                         stats={**coarse.stats, "pass": "coarse"})
-    shown.color[:] = upscale(coarse.color, COARSE_FIRST, width, height)
+                         stats={**coarse.stats, "pass": f"coarse (1 pixel in {factor} x {factor})"})
+    shown.color[:] = upscale(coarse.color, factor, width, height)
     control.partial(shown)
     control.check()
     control.report(0.2, "full frame")

@@ -30,6 +30,9 @@ What it can do:
   ``progressive_drawer`` (``"package.module:function"``, :mod:`core.progressive`'s contract:
   the ray tracer tile by tile, radiosity shot by shot, the path tracer pass by pass), or,
   without one, by :func:`core.progressive.coarse_then_full`;
+- ``samples_at_rest``: the samples per pixel the window draws it with when the user has not
+  chosen a number (the path tracer's passes add up to it while the camera rests); None: the
+  scene's;
 - ``volumes``: it draws a scene's emission–absorption and MIP volumes (every renderer draws an
   isosurface, which is a mesh);
 - ``ray_depth``: its frame keeps no depth buffer, and what each film sample shows is the first
@@ -84,6 +87,7 @@ class Renderer:
     textures: bool = True
     progressive: bool = False
     progressive_drawer: str | None = None   # "package.module:function" (core.progressive)
+    samples_at_rest: int | None = None      # the window's samples per pixel unless chosen
     volumes: bool = False
     in_menu: bool = True
     inspector: str | None = None    # "package.module:function": inspect_pixel

@@ -190,6 +190,9 @@ class ViewerState:
     # kept across renderers and scenes like the renderer itself; the last refused value's
     # message, shown under the controls.
     option_values: dict = field(default_factory=dict)
+    # Samples per pixel the user chose (the panel, ``view --samples``); None: the renderer's
+    # ``samples_at_rest`` where it has one (the path tracer accumulates 256), else the scene's.
+    samples: int | None = None
     option_message: str = ""
     # The window's kernel gate while the warm-up compiles in worker processes (a frame waits
     # for its kernels rather than compiling them a second time; app.viewer.kernels.gated):
@@ -338,6 +341,7 @@ class ViewerState:
                                         rasterizer=self.rasterizer,
                                         keep_aspect=bool(self.keep_aspect),
                                         renderer=self.renderer_name,
+                                        samples=self.samples_wanted,
                                         texture_filter=self.texture_filter, bump=self.bump,
                                         depth_cue=self.depth_cue,
                                         transparency=self.transparency or None,
@@ -345,6 +349,25 @@ class ViewerState:
                                         paint_first=(self.paint_first if self.renderer_entry
                                                      .has_option("paint_first") else None),
                                         **self.option_values)
+
+    @property
+    def samples_wanted(self) -> int | None:
+        """The next frame's samples per pixel: the user's, or the renderer's at rest."""
+        return self.samples if self.samples is not None else self.renderer_entry.samples_at_rest
+
+    def set_samples(self, samples: int | None) -> bool:
+        """Samples per pixel for the next frames (None: the default); a number the settings
+        refuse keeps the last good one, with its message in :attr:`option_message`."""
+        if samples is not None:
+            try:
+                self.settings().replace(samples=samples)
+            except (ValueError, TypeError) as error:
+                self.option_message = f"{error}; samples per pixel stay {self.samples_wanted}"
+                return False
+        self.option_message = ""
+        if samples != self.samples:
+            self.samples, self.dirty = samples, True
+        return True
 
     @property
     def invalid_messages(self) -> list[str]:

@@ -14,12 +14,14 @@ log = logging.getLogger("fvd")
 
 
 def draw(imgui, state, displayable) -> None:
-    """The section, under a header named for the renderer; nothing for a renderer without
-    options."""
+    """The samples per pixel, then the section under a header named for the renderer (none
+    for a renderer without options)."""
     from app.session.options import controls
     from core.registry import get_renderer
+    _samples(imgui, state)
     found = controls(state.renderer_options())
     if not found:
+        _message(imgui, state, displayable)
         return
     label = get_renderer(state.renderer_name or "zbuffer").label
     if not imgui.collapsing_header(displayable(f"{label}: options") + "###renderer-options"):
@@ -34,11 +36,30 @@ def draw(imgui, state, displayable) -> None:
             log.info("action: panel %s -> %s", control.name,
                      repr(value) if ok else state.option_message)
     imgui.pop_item_width()
+    _message(imgui, state, displayable)
+    imgui.separator()
+
+
+def _message(imgui, state, displayable) -> None:
     if state.option_message:
         imgui.push_text_wrap_pos(0.0)
         imgui.text_colored((1.0, 0.45, 0.4, 1.0), displayable(state.option_message))
         imgui.pop_text_wrap_pos()
-    imgui.separator()
+
+
+def _samples(imgui, state) -> None:
+    """Samples per pixel (taken on Enter): the path tracer's passes add up to it at rest."""
+    imgui.push_item_width(imgui.get_content_region_avail().x * 0.5)
+    shown = state.samples_wanted or 1
+    changed, value = imgui.input_int("samples per pixel##film-samples", int(shown), 1, 16,
+                                     imgui.InputTextFlags_.enter_returns_true)
+    imgui.pop_item_width()
+    if imgui.is_item_hovered():
+        imgui.set_tooltip("samples per pixel of the next frames; the path tracer adds one "
+                          "pass at a time while the camera rests")
+    if changed and value != shown:
+        ok = state.set_samples(int(value))
+        log.info("action: panel samples per pixel -> %s", value if ok else state.option_message)
 
 
 def _control(imgui, control) -> tuple[bool, object]:

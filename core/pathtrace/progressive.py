@@ -1,47 +1,72 @@
-"""The path tracer drawn progressively in the window (:mod:`core.progressive`): the film's
-samples one pass at a time, the running mean shown after each; the last picture is the
-renderer's own (same passes, same sums). It stops between passes when the window supersedes
-it (``control.check`` raises).
+"""The path tracer drawn progressively in the window (:mod:`core.progressive`): a coarse
+one-sample picture first (it follows a moving camera), then the film's samples one pass at a
+time, the running mean shown every ``PARTIAL_EVERY`` seconds with its samples per pixel and
+time, until ``settings.samples`` (the window asks for the renderer's ``samples_at_rest``, 256,
+unless the user chose another number). The last picture is the renderer's own (same passes,
+same sums). It stops between passes when the window supersedes it (``control.check`` raises).
 """
 
 from __future__ import annotations
 
 import time
 
-from core.progressive import PARTIAL_EVERY, Quiet
+import numpy as np
+
+from core.progressive import (COARSE_FIRST, PARTIAL_EVERY, Quiet, coarse_factor, coarse_size,
+                              note_rate, snapshot, upscale)
+
+
+def _coarse(scene, view, settings, context, render, control):
+    """The one-sample picture at 1/f of the size through the front door (its checks and
+    messages), handed over upscaled: (the full-size frame that carries it, its message)."""
+    width, height = settings.size
+    factor = coarse_factor(context, "pathtrace", width, height, COARSE_FIRST, least=2)
+    small = coarse_size(width, height, factor)
+    control.report(0.0, f"coarse pass (one path per {factor} x {factor} pixels)")
+    began = time.perf_counter()
+    coarse = render(scene, view, settings.replace(size=small, samples=1), context)
+    note_rate(context, "pathtrace", time.perf_counter() - began, small[0] * small[1])
+    frame = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
+                         message=coarse.message, stats=dict(coarse.stats))
+    frame.color[:] = upscale(coarse.color, factor, width, height)
+    frame.stats["pass"] = f"coarse (1 path per {factor} x {factor} pixels)"
+    return frame
 
 
 def pathtrace_progressively(scene, view, settings, context, render, control=None):
-    import numpy as np
-    from core.pathtrace.renderer import pass_offsets, render_passes
+    from core.pathtrace.renderer import render_passes
     from core.radiosity.mesh import RadiosityError, has_light
     from core.radiosity.tone import tone_map
     from core.shading.illumination import to_uint8
     control = control or Quiet()
-    first = render(scene, view, settings.replace(samples=1), context)     # checks, messages
-    if first.message or not has_light(scene) or settings.samples == 1:
-        return first if settings.samples == 1 or first.message else \
-            render(scene, view, settings, context)
-    passes = len(pass_offsets(settings.samples, settings.seed))
+    frame = _coarse(scene, view, settings, context, render, control)
+    if frame.message:                         # an invalid view: said once, nothing to refine
+        return frame
+    if not has_light(scene):                  # the renderer's own message for a dark scene
+        return render(scene, view, settings, context)
+    control.partial(snapshot(frame))
+    passes = settings.samples
     width, height = settings.size
     total = np.zeros((height, width, 3))
-    frame = first
-    last = time.perf_counter()
+    start = last = time.perf_counter()
     try:
         for k in range(passes):
             control.check()
+            began = time.perf_counter()
             radiance, _ = render_passes(scene, view, settings, context, first=k, count=1)
+            note_rate(context, "pathtrace", time.perf_counter() - began, width * height)
             total += radiance
-            control.report((k + 1) / passes, f"path tracing: pass {k + 1} of {passes}")
-            if time.perf_counter() - last >= PARTIAL_EVERY and k + 1 < passes:
+            spent = time.perf_counter() - start
+            done = f"{k + 1} of {passes} samples per pixel, {spent:.1f} s"
+            control.report((k + 1) / passes, f"path tracing: {done}")
+            if k + 1 < passes and (k == 0 or time.perf_counter() - last >= PARTIAL_EVERY):
                 last = time.perf_counter()
                 frame.color[:] = to_uint8(tone_map(total / (k + 1), scene.tone))
-                frame.stats["pass"] = f"pass {k + 1} of {passes}"
-                control.partial(type(frame)(rgbx=frame.rgbx.copy(), plan=frame.plan,
-                                            stats=dict(frame.stats)))
-    except RadiosityError:
+                frame.stats.update({"pass": done, "samples per pixel": k + 1})
+                control.partial(snapshot(frame))
+    except RadiosityError:                    # what the scene lacks: the renderer's message
         return render(scene, view, settings, context)
     frame.color[:] = to_uint8(tone_map(total / passes, scene.tone))
     frame.stats["pass"] = "final"
-    frame.stats["samples per pixel"] = settings.samples
+    frame.stats["samples per pixel"] = passes
     return frame

@@ -3,8 +3,9 @@
 A Whitted frame takes seconds on a small machine; the window should not show nothing (or a
 frozen z-buffer picture) for that long. :func:`trace_progressively` therefore
 
-1. traces a picture at 1/``COARSE`` of the size in each direction (one ray per ``COARSE`` x
-   ``COARSE`` block: every 8th pixel) through the front door (``core.render`` with the
+1. traces a picture at 1/``f`` of the size in each direction (one ray per ``f`` x ``f``
+   block; ``f`` from :func:`core.progressive.coarse_factor`, so that it takes about a tenth
+   of a second: ``COARSE`` = 8 before the first is timed) through the front door (``core.render`` with the
    ``"raytrace"`` renderer, so its checks and messages are the usual ones) and hands it over
    upscaled by pixel repetition — the first picture the user sees;
 2. then traces the full-size frame tile by tile (``core.raytrace.renderer.trace_tile``, in
@@ -19,14 +20,14 @@ superseded it (the view or a setting changed) and stops there.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
 
-from core.progressive import PARTIAL_EVERY, Quiet, snapshot, upscale
+from core.progressive import (PARTIAL_EVERY, Quiet, coarse_factor, coarse_size, note_rate,
+                              snapshot, upscale)
 
-COARSE = 8                # the first picture: one ray per COARSE x COARSE pixels
+COARSE = 8                # the first picture before a rate is known: one ray per 8 x 8 pixels
 TILE = 32                 # refinement tiles, pixels a side
 
 
@@ -49,15 +50,18 @@ def trace_progressively(scene, view, settings, context, render, control=None):
     control = control or Quiet()
     settings = settings.replace(renderer="raytrace")
     width, height = settings.size
-    small = (max(1, math.ceil(width / COARSE)), max(1, math.ceil(height / COARSE)))
-    control.report(0.0, "coarse pass (every 8th pixel)")
+    factor = coarse_factor(context, "raytrace", width, height, COARSE, least=2)
+    small = coarse_size(width, height, factor)
+    control.report(0.0, f"coarse pass (one ray per {factor} x {factor} pixels)")
+    began = time.perf_counter()
     coarse = render(scene, view, settings.replace(size=small, samples=1), context)
+    note_rate(context, "raytrace", time.perf_counter() - began, small[0] * small[1])
     frame = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
                          message=coarse.message, stats=dict(coarse.stats))
-    frame.color[:] = upscale(coarse.color, COARSE, width, height)
+    frame.color[:] = upscale(coarse.color, factor, width, height)
     if coarse.message:                        # an invalid view, nothing to trace: said once
         return frame
-    frame.stats["pass"] = "coarse"
+    frame.stats["pass"] = f"coarse (1 ray per {factor} x {factor} pixels)"
     control.partial(snapshot(frame))
     setup = _prepare(scene, view, settings)
     boxes = tiles(width, height, TILE)

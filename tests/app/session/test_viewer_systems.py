@@ -77,7 +77,7 @@ def test_progressive_frame_is_coarse_first_and_ends_as_the_renderers_frame(whitt
     whole = render(state.scene, state.view, settings)
     assert np.array_equal(final.color, whole.color)          # the same rays, filter, rounding
     coarse = render(state.scene, state.view, settings.replace(size=(8, 6)))   # ceil(60/8) x ...
-    assert control.partials[0].stats["pass"] == "coarse"
+    assert control.partials[0].stats["pass"] == "coarse (1 ray per 8 x 8 pixels)"
     assert np.array_equal(control.partials[0].color, upscale(coarse.color, COARSE, 60, 44))
     assert control.partials[0].color.shape == (44, 60, 3)
     fractions = [f for f, _ in control.reports]

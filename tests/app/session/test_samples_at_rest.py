@@ -1,0 +1,35 @@
+"""The window's samples per pixel: the path tracer's at rest from its registry entry (256),
+the others the scene's, the user's number over both, a refused number said and not taken."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from app.session.state import ViewerState
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def test_the_path_tracer_accumulates_to_its_registered_number_unless_the_user_chooses():
+    from core.registry import get_renderer
+    state = ViewerState.open(ROOT / "scenes" / "cornell_box.toml", size=(32, 32))
+    assert state.settings().samples == 1                       # the z-buffer: the scene's
+    state.set_renderer("pathtrace")
+    assert get_renderer("pathtrace").samples_at_rest == 256
+    assert state.settings().samples == 256
+    state.dirty = False
+    assert state.set_samples(16) and state.dirty and state.settings().samples == 16
+    state.set_renderer("zbuffer")
+    assert state.settings().samples == 16                      # the user's, for any renderer
+    state.dirty = False
+    assert not state.set_samples(0) and not state.dirty
+    assert state.option_message == ("samples per pixel must be a whole number from 1 to 256, "
+                                    "not 0; samples per pixel stay 16")
+    assert state.set_samples(None) and state.settings().samples == 1
+    assert state.option_message == ""
+
+
+def test_view_samples_on_the_command_line_reaches_the_state():
+    from app.cli import _parser
+    args = _parser("view").parse_args(["view", "scenes/cornell_box.toml", "--samples", "64"])
+    assert args.samples == 64
