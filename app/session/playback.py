@@ -133,8 +133,9 @@ def _simulate_to(system, t: float, control) -> None:
     target = int(math.floor(t / system.dt + 1e-9))     # what ParticleSystem.state_at steps to
     again = target < system.step_index
     if again:
-        system.reset()
-    how = "simulating the particles again from 0" if again else "simulating the particles"
+        system.go_back(target)
+    how = (f"simulating the particles again from step {system.step_index}" if again
+           else "simulating the particles")
     first = system.step_index
     while system.step_index < target:
         if control is not None:
@@ -143,4 +144,5 @@ def _simulate_to(system, t: float, control) -> None:
                 control.report((system.step_index - first) / (target - first),
                                f"{how}: step {system.step_index} of {target}")
         for _ in range(min(SIMULATION_CHUNK, target - system.step_index)):
+            system.note()
             system.step()

@@ -33,6 +33,8 @@ from typing import Callable
 
 import numpy as np
 
+from core.animation.rewind import Rewind
+
 STEP = 1.0 / 120.0
 MAX_ACTORS = 2000
 MAX_ACTOR_WORK = 2_000_000_000      # steps x N² (the neighbour tests) to the last frame
@@ -148,6 +150,7 @@ class Group:
     state: GroupState = field(init=False)
 
     def __post_init__(self) -> None:
+        self.rewind = Rewind()
         self.reset()
 
     def reset(self) -> None:
@@ -168,8 +171,10 @@ class Group:
     def state_at(self, t: float) -> "Group":
         target = int(math.floor(max(t, 0.0) / self.dt + 1e-9))
         if target < self.state.step_index:
-            self.reset()
+            saved = self.rewind.nearest(target)        # the nearest snapshot, else from 0
+            self.restore(saved) if saved is not None else self.reset()
         while self.state.step_index < target:
+            self.rewind.note(self.state.step_index, self.snapshot)
             self.step()
         return self
 

@@ -27,6 +27,8 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+from core.animation.rewind import Rewind
 from core.jit import njit
 
 SHAPES = ("point", "sphere", "disc", "mesh")
@@ -344,6 +346,7 @@ class ParticleSystem:
         self.fps, self.seed, self.substeps = float(fps), int(seed), int(substeps)
         self.dt = 1.0 / (self.fps * self.substeps)
         self._pack()
+        self.rewind = Rewind()         # snapshots to go back to (core.animation.rewind)
         self.reset()
 
     def _add(self, spec: Spec) -> int:
@@ -387,12 +390,24 @@ class ParticleSystem:
         """The particles at time t (after the last whole step at or before t)."""
         target = int(math.floor(t / self.dt + 1e-9))
         if target < self.step_index:
-            self.reset()
+            self.go_back(target)
         while self.step_index < target:
             if self.progress is not None and self.step_index % PROGRESS_EVERY == 0:
                 self.progress(self.step_index, target)
+            self.note()
             self.step()
         return self.particles
+
+    def go_back(self, target: int) -> None:
+        """To the nearest snapshot at or before step ``target``, else to step 0."""
+        from core.animation.checkpoint import restore
+        saved = self.rewind.nearest(target)
+        restore(self, saved) if saved is not None else self.reset()
+
+    def note(self) -> None:
+        """A snapshot of this step, when one is due (:class:`core.animation.rewind.Rewind`)."""
+        from core.animation.checkpoint import snapshot
+        self.rewind.note(self.step_index, lambda: snapshot(self))
 
     def step(self) -> None:
         """One fixed step; at each frame boundary, first the emission of that frame."""
