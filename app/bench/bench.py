@@ -98,6 +98,13 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
                              "process and 2 workers)")
     parser.add_argument("--no-depth", action="store_true",
                         help="skip the depth-complexity rows (100 stacked full-screen layers)")
+    parser.add_argument("--window", action="store_true",
+                        help="time the window as a user sees it (app/bench/window_bench.py): "
+                             "orbits of real scans at 500x500 and 1580x1080 and a ray-traced "
+                             "scene, driven by xdotool under X (Xvfb without a display), and "
+                             "the path tracer converging at rest")
+    parser.add_argument("--seconds", type=float, default=8.0,
+                        help="--window: how long each orbit drags (default 8)")
     parser.add_argument("--renderer", type=_renderers, default="zbuffer",
                         help="zbuffer (default); raytrace: the ray tracer's rows beside Embree; "
                              "radiosity,pathtrace (either or both): the global illumination rows "
@@ -681,7 +688,11 @@ def main(args) -> int:
 
 
 def _other_bench(args) -> int | None:
-    """The exit status of the bench of another renderer family, or None for the rasterizer's."""
+    """The exit status of the bench of another renderer family or of the window, or None for
+    the rasterizer's."""
+    if getattr(args, "window", False):
+        from app.bench.window_bench import main as window_main
+        return window_main(args)
     if args.renderer == "raytrace":
         return raytrace_bench(args)
     if args.renderer == "volume":

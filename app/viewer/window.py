@@ -105,6 +105,8 @@ PANEL_WIDTH = 340            # the side panel, in screen points
 NO_TRIANGLES = ("This scene has no triangles: it is drawn as lines whatever the shading, "
                 "so the shading modes change nothing.")
 SCREENSHOTS_DIR = "screenshots"
+# While a camera gesture waits for its frame, the window is drawn again at most this often.
+GESTURE_REDRAW_S = 1 / 30
 SAVED_VIEWS = "saved.views"        # View > Save view appends here (in the current folder)
 # Files in scenes/ that are not scenes.
 NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
@@ -525,12 +527,16 @@ class ViewerWindow:
         self._frames_in()
         if self.worker.waiting:
             self.tools.note_progress(self.worker.progress().fraction)
+        if self._redraw_can_wait():
+            imgui.end_frame()             # nothing new to show: the renderer keeps the CPU
+            return True
         self._build_gui()
         imgui.render()
 
         self._draw_picture(fb_w, fb_h)
         self.gui.render(imgui.get_draw_data())
         glfw.swap_buffers(self.window)
+        self._swapped_at, self._picture_new = time.perf_counter(), False
         if not self._first_frame_logged and self.state.frame is not None:
             self._first_frame_logged = True
             self._log_since_start("first frame shown")
@@ -541,6 +547,16 @@ class ViewerWindow:
             self._warm_up_due = False
             self._start_warm_up()
         return True
+
+    def _redraw_can_wait(self) -> bool:
+        """While a camera gesture waits for its frame and no new picture came, the window
+        need not be drawn again at every pointer move (each redraw of the panel and the
+        picture costs the software GL a few ms of the CPU the renderer is using): at most
+        every ``GESTURE_REDRAW_S``. No panel widget is active during a gesture on the picture,
+        so skipping its frames loses nothing."""
+        drag = self.hands.drag
+        return (drag is not None and drag.start is not None and not self._picture_new
+                and time.perf_counter() - self._swapped_at < GESTURE_REDRAW_S)
 
     def _frames_in(self) -> None:
         """Ask the worker for the next frame and take the one it finished, if any."""
@@ -561,10 +577,11 @@ class ViewerWindow:
                 self.tools.note_convergence(self.state.frame.stats)
             self.blit.upload(self.tools.picture(self.state.frame))
             self.tools.changed = False
+            self._picture_new = True
             self._wake()                  # the GUI shows the new frame's plan and timing next
         if self.tools.changed and self.state.frame is not None:
             self.blit.upload(self.tools.picture(self.state.frame))
-            self.tools.changed = False
+            self.tools.changed, self._picture_new = False, True
 
     def _draw_picture(self, fb_w: int, fb_h: int) -> None:
         """Clear, then blit the picture inside its own area."""
@@ -674,6 +691,7 @@ class ViewerWindow:
         self.loupe = Loupe()
         self._loupe_drag: tuple[int, int] | None = None     # a drag moving the loupe's picture
         self._pressed: tuple[int, float, float, str] | None = None   # button, x, y, where
+        self._swapped_at, self._picture_new = 0.0, False    # the last redraw; a picture since
         self._view_file = Path.cwd() / SAVED_VIEWS
 
     def _drag_threshold(self) -> float:

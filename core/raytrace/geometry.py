@@ -95,12 +95,12 @@ def traced_meshes(scene) -> list:
 def _primitives(scene) -> tuple[list, list]:
     spheres = [p for p in scene.primitives if isinstance(p, Sphere)]
     planes = [p for p in scene.primitives if isinstance(p, Plane)]
+    seen = {id(p) for p in spheres + planes}        # by identity: a set, not a scan per mesh
     for mesh in scene.meshes:
         prim = mesh.tessellates
-        if isinstance(prim, Sphere) and not any(prim is s for s in spheres):
-            spheres.append(prim)
-        if isinstance(prim, Plane) and not any(prim is p for p in planes):
-            planes.append(prim)
+        if isinstance(prim, (Sphere, Plane)) and id(prim) not in seen:
+            seen.add(id(prim))
+            (spheres if isinstance(prim, Sphere) else planes).append(prim)
     return spheres, planes
 
 

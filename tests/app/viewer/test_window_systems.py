@@ -107,7 +107,8 @@ def test_switch_to_ray_traced_changes_the_picture(display, tmp_path):
         mark = len(app.log())
         app.key("r")
         app.wait_for(r"key r -> renderer raytrace", timeout=10, after=mark)
-        app.wait_for(r"partial frame: .*\(coarse\)", timeout=120, after=mark)
+        app.wait_for(r"partial frame: .*\(coarse \(1 ray per \d+ x \d+ pixels\)\)", timeout=120,
+                     after=mark)
         app.wait_for(r"frame \d+: .* renderer=raytrace", timeout=180, after=mark)
         time.sleep(0.5)
         traced = grab(app, tmp_path / "traced.png", "160x120+0+0")
