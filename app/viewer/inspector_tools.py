@@ -12,6 +12,12 @@ imports nothing more (the inspector's modules load on first use).
 - View > Compare with OpenGL: the same view drawn by real OpenGL (the GLSL oracle), held
   against the frame; the heat map takes the picture's place and ``h`` flips between the two.
 - Plots: the last frames' times, and a progressive frame's progress, in the panel.
+
+Nothing long runs on the UI thread: a pixel's record, a buffer view, the aliasing view (16
+samples a pixel) and the OpenGL comparison are drawn on a thread of their own, one at a time
+(:meth:`InspectorTools.off_thread`); the status line says what is being drawn
+(:attr:`InspectorTools.busy`) and the window applies the result when it is done
+(:meth:`InspectorTools.poll`, on the UI thread), so every key is answered at once.
 """
 
 from __future__ import annotations
@@ -62,6 +68,63 @@ class InspectorTools:
         self._picked = (None, (None, ()))          # (frame, its triangle ids) for the status line
         self._picking = None                       # the thread drawing them
         self.profile_row: int | None = None        # the row whose intensity is plotted
+        self.wake = lambda: None                   # the window's: wakes its loop (any thread)
+        self._job: dict | None = None              # the tool job running off the UI thread
+        self._next_job: tuple | None = None        # the one asked for while it ran (newest)
+
+    # -- work off the UI thread --------------------------------------------------------------
+    def off_thread(self, what: str, work, done) -> None:
+        """``work()`` on a thread of its own, then ``done(result)`` on the UI thread at the
+        next :meth:`poll`. One job runs at a time; one asked for meanwhile waits, and a newer
+        one replaces it. ``work`` must not touch the window's state (take what it needs
+        first, on the UI thread)."""
+        self._next_job = (what, work, done)
+        self._start_next()
+
+    def _start_next(self) -> None:
+        if self._job is not None or self._next_job is None:
+            return
+        what, work, done = self._next_job
+        self._next_job = None
+        job = {"what": what, "done": done}
+
+        def run():
+            try:
+                job["result"] = work()
+            except Exception as error:            # said in the panel, never fatal
+                job["error"] = error
+            self.wake()                           # the window applies it at once
+
+        job["thread"] = threading.Thread(target=run, name=f"tool: {what}", daemon=True)
+        self._job = job
+        job["thread"].start()
+
+    def poll(self) -> bool:
+        """Apply a tool job that finished (on the UI thread); whether one was applied."""
+        job = self._job
+        if job is None or job["thread"].is_alive():
+            return False
+        self._job = None
+        if "error" in job:
+            error = job["error"]
+            self.verdict = f"{job['what']} failed: {type(error).__name__}: {error}"
+            log.error("%s", self.verdict, exc_info=error)
+        else:
+            job["done"](job["result"])
+        self._start_next()
+        return True
+
+    def settle(self, timeout: float = 300.0) -> None:
+        """Wait for the tool jobs asked for so far and apply them (tests; the window's close)."""
+        while self._job is not None:
+            self._job["thread"].join(timeout)
+            if not self.poll():
+                break
+
+    @property
+    def busy(self) -> str:
+        """What is being drawn off the UI thread ("" when nothing)."""
+        return f"drawing {self._job['what']}" if self._job is not None else ""
 
     # -- what the picture area shows ---------------------------------------------------------
     def picture(self, frame) -> np.ndarray:
@@ -86,9 +149,8 @@ class InspectorTools:
             self.reference.refresh(frame)
         if self.heat is not None:
             self.heat, self.showing_heat, self.verdict = None, False, ""
-        if self.buffer != PICTURE and not self._show_buffer(self.buffer, "the new frame"):
-            self.buffer, self.overlay = PICTURE, None        # this frame has no such buffer
-            log.info("buffer view: the new frame keeps none; showing the picture")
+        if self.buffer != PICTURE:
+            self._show_buffer(self.buffer, "the new frame", quiet_loss=False)
         self.changed = True
 
     # -- inspect mode ------------------------------------------------------------------------
@@ -97,12 +159,30 @@ class InspectorTools:
         log.info("action: %s -> inspect mode %s", how, "on" if self.inspecting else "off")
 
     def inspect(self, x: int, y: int, where: str) -> None:
-        import json
+        """The record of pixel (x, y), drawn off the UI thread and shown in the panel."""
         from core.inspect import NotInspectable, inspect_pixel
-        from core.inspect.text import describe
         try:
-            record = inspect_pixel(*self._drawn(), x, y, self.context())
+            drawn = self._drawn()
         except NotInspectable as error:
+            self._inspected((None, error), x, y, where)
+            return
+        context = self.context()
+
+        def work():
+            try:
+                return inspect_pixel(*drawn, x, y, context), None
+            except NotInspectable as error:
+                return None, error
+
+        log.info("action: %s -> drawing the record of pixel (%d, %d)", where, x, y)
+        self.off_thread(f"the record of pixel ({x}, {y})", work,
+                        lambda found: self._inspected(found, x, y, where))
+
+    def _inspected(self, found, x: int, y: int, where: str) -> None:
+        import json
+        from core.inspect.text import describe
+        record, error = found
+        if record is None:
             self.record, self.lines = None, [str(error)]
             log.info("action: %s -> inspect pixel (%d, %d): %s", where, x, y, error)
             return
@@ -175,71 +255,93 @@ class InspectorTools:
         return (*BUFFERS, ALIASING, *(SLICES if self.state.volumes else ()))
 
     def next_buffer(self, how: str) -> None:
+        """``v``: the next buffer view this frame keeps (those it lacks are skipped), found
+        and drawn off the UI thread; back to the picture after the last."""
+        from app.session.volume_controls import SLICES
+        from core.inspect import NotInspectable
+        if self._job is not None and self._job["what"].startswith("the buffer view"):
+            log.info("action: %s -> still %s", how, self.busy)
+            return
         cycle = (PICTURE, *self.buffer_names())
-        start = cycle.index(self.buffer)
-        for step in range(1, len(cycle) + 1):
-            name = cycle[(start + step) % len(cycle)]
-            if name == PICTURE:                  # the ones this frame lacks are skipped
+        start = cycle.index(self.buffer) if self.buffer in cycle else 0
+        names = [cycle[(start + step) % len(cycle)] for step in range(1, len(cycle))]
+        try:
+            drawn, shape = self._drawn(), self.state.frame.color.shape[:2]
+        except (NotInspectable, AttributeError):
+            drawn = shape = None
+        context = self.context()
+
+        def work():
+            for name in names:
+                if name == PICTURE:
+                    return PICTURE, None
+                if name in SLICES or drawn is None:
+                    return name, None            # slices are cut on the UI thread (cheap)
+                overlay, _ = buffer_overlay(drawn, name, shape, context)
+                if overlay is not None:
+                    return name, overlay
+            return PICTURE, None
+
+        def done(found):
+            name, overlay = found
+            if name == PICTURE or (name not in SLICES and overlay is None):
                 self.choose_buffer(PICTURE, how)
-                return
-            if self._show_buffer(name, how):
-                break
-        self.changed = True
+            elif name in SLICES:
+                self._show_slice(name, how)
+            else:
+                self._shown_buffer(name, overlay, how)
+            self.changed = True
+
+        self.off_thread(f"the buffer view after the {self.buffer}", work, done)
 
     def choose_buffer(self, name: str, how: str) -> None:
         if name == PICTURE:
             self.buffer, self.overlay = PICTURE, None
             log.info("action: %s -> buffer view: picture", how)
-        elif not self._show_buffer(name, how):
-            log.info("action: %s -> buffer view %s: not kept by this frame", how, name)
+        else:
+            self._show_buffer(name, how)
         self.changed = True
 
-    def _show_buffer(self, name: str, how: str) -> bool:
+    def _show_buffer(self, name: str, how: str, quiet_loss: bool = True) -> None:
+        """Show buffer ``name`` of the frame: a slice at once, any other drawn off the UI
+        thread (the picture stays until it is there). A buffer the frame does not keep
+        leaves the picture shown (said in the log)."""
         from app.session.volume_controls import SLICES
         from core.inspect import NotInspectable
-        from core.inspect.buffers import buffer
         s = self.state
         if s.view is None or s.frame is None:
-            return False
+            return
         if name in SLICES:
-            return self._show_slice(name, how)
-        if name == ALIASING:
-            return self._show_aliasing(how)
+            self._show_slice(name, how)
+            return
         try:
-            _, picture = buffer(*self._drawn(), name, self.context())
-        except NotInspectable:
-            return False
-        height, width = s.frame.color.shape[:2]
-        side = max(1, picture.shape[0] // height)
-        picture = picture[::side, ::side][:height, :width]
-        rgbx = np.zeros((height, width, 4), np.uint8)
-        rgbx[:picture.shape[0], :picture.shape[1], :3] = picture
-        self.buffer, self.overlay = name, rgbx
-        log.info("action: %s -> buffer view: %s", how, name)
-        return True
+            drawn = self._drawn()
+        except NotInspectable as error:
+            self._buffer_lost(name, how, str(error), quiet_loss)
+            return
+        shape, context = s.frame.color.shape[:2], self.context()
 
-    def _show_aliasing(self, how: str) -> bool:
-        """The split view: the picture's left half drawn with one sample a pixel (midpoint
-        lines), its right half antialiased (:data:`ANTIALIASED`), the same edges meeting at
-        the middle column, for the loupe to show both."""
-        from core.render import render
-        from core.renderers import get_renderer, names_that
-        scene, view, settings = self._drawn()
-        if not get_renderer(settings.renderer).rasterizes:  # 16 rays a pixel: seconds here
-            log.info("action: %s -> buffer view %s: drawn for the rasterizing renderers only "
-                     "(%s), not %s", how, ALIASING, ", ".join(names_that("rasterizes")),
-                     settings.renderer)
-            return False
-        try:
-            smooth = ANTIALIASED_LINES if settings.shading == "wireframe" else ANTIALIASED
-            halves = [render(scene, view, dataclasses.replace(settings, **how_drawn),
-                             self.context()).rgbx for how_drawn in (ALIASED, smooth)]
-        except ValueError as error:
-            log.info("action: %s -> buffer view %s: %s", how, ALIASING, error)
-            return False
-        self.buffer, self.overlay = ALIASING, split_view(*halves)
-        log.info("action: %s -> buffer view: %s", how, ALIASING)
-        return True
+        def done(found):
+            overlay, why = found
+            if overlay is None:
+                self._buffer_lost(name, how, why, quiet_loss)
+            else:
+                self._shown_buffer(name, overlay, how)
+
+        self.off_thread(f"the {name} view", lambda: buffer_overlay(drawn, name, shape, context),
+                        done)
+
+    def _shown_buffer(self, name: str, overlay: np.ndarray, how: str) -> None:
+        self.buffer, self.overlay, self.changed = name, overlay, True
+        log.info("action: %s -> buffer view: %s", how, name)
+
+    def _buffer_lost(self, name: str, how: str, why: str, quiet: bool) -> None:
+        if quiet:
+            log.info("action: %s -> buffer view %s: %s", how, name, why or "not kept by this "
+                     "frame")
+            return
+        self.buffer, self.overlay, self.changed = PICTURE, None, True
+        log.info("buffer view: the new frame keeps no %s buffer; showing the picture", name)
 
     def _show_slice(self, name: str, how: str) -> bool:
         """A slice through the volume the controls act on, in place of the picture."""
@@ -259,7 +361,7 @@ class InspectorTools:
     def show_slice(self, name: str, index: int | None, how: str) -> None:
         """The slice slider or its axis: show that slice now."""
         self.state.set_slice(name, index)
-        if self._show_buffer(name, how):
+        if self._show_slice(name, how):
             self.changed = True
 
     # -- the OpenGL comparison ---------------------------------------------------------------
@@ -277,20 +379,31 @@ class InspectorTools:
             self.verdict = f"no comparison: {error}"
             log.info("action: %s -> %s", how, self.verdict)
             return
-        reference, why = opengl_reference(scene, view, settings.replace(
-            size=(ours.shape[1], ours.shape[0])))
-        if reference is None:
-            self.verdict = f"no comparison: {why}"
-            log.info("action: %s -> %s", how, self.verdict)
-            return
-        result = compare(ours, reference)
-        heat = heat_map(result, reference)
-        self.heat = np.zeros(ours.shape[:2] + (4,), np.uint8)
-        self.heat[..., :3] = heat
-        self.verdict = "against OpenGL: " + result.verdict()
-        self.showing_heat = True
-        self.changed = True
-        log.info("action: %s -> compare with OpenGL: %s", how, result.verdict())
+        settings = settings.replace(size=(ours.shape[1], ours.shape[0]))
+
+        def work():
+            reference, why = opengl_reference(scene, view, settings)
+            if reference is None:
+                return None, why
+            result = compare(ours, reference)
+            return (result, heat_map(result, reference)), ""
+
+        def done(found):
+            compared, why = found
+            if compared is None:
+                self.verdict = f"no comparison: {why}"
+                log.info("action: %s -> %s", how, self.verdict)
+                return
+            result, heat = compared
+            self.heat = np.zeros(ours.shape[:2] + (4,), np.uint8)
+            self.heat[..., :3] = heat
+            self.verdict = "against OpenGL: " + result.verdict()
+            self.showing_heat = True
+            self.changed = True
+            log.info("action: %s -> compare with OpenGL: %s", how, result.verdict())
+
+        log.info("action: %s -> drawing the OpenGL reference to compare with", how)
+        self.off_thread("the OpenGL reference", work, done)
 
     def flip(self, how: str) -> None:
         if self.reference is not None:             # --reference: picture, reference, difference
@@ -369,6 +482,45 @@ class InspectorTools:
             imgui.plot_lines("##progress", np.array(self.progress, np.float32), scale_min=0.0,
                              scale_max=1.0, overlay_text="progressive frame",
                              graph_size=(0, 40))
+
+
+def buffer_overlay(drawn, name: str, shape: tuple[int, int], context):
+    """``(overlay, why)``: buffer ``name`` of the frame drawn as ``drawn`` (scene, view,
+    settings), an ``(H, W, 4)`` picture of the frame's ``shape``; ``(None, why)`` when the
+    renderer keeps no such buffer. Runs off the UI thread."""
+    from core.inspect import NotInspectable
+    from core.inspect.buffers import buffer
+    if name == ALIASING:
+        return aliasing_overlay(drawn, context)
+    try:
+        _, picture = buffer(*drawn, name, context)
+    except NotInspectable as error:
+        return None, str(error)
+    height, width = shape
+    side = max(1, picture.shape[0] // height)
+    picture = picture[::side, ::side][:height, :width]
+    rgbx = np.zeros((height, width, 4), np.uint8)
+    rgbx[:picture.shape[0], :picture.shape[1], :3] = picture
+    return rgbx, ""
+
+
+def aliasing_overlay(drawn, context):
+    """The split view: the picture's left half drawn with one sample a pixel (midpoint lines),
+    its right half antialiased (:data:`ANTIALIASED`), the same edges meeting at the middle
+    column, for the loupe to show both. ``(overlay, why)``; runs off the UI thread."""
+    from core.render import render
+    from core.renderers import get_renderer, names_that
+    scene, view, settings = drawn
+    if not get_renderer(settings.renderer).rasterizes:  # 16 rays a pixel: seconds here
+        return None, (f"drawn for the rasterizing renderers only "
+                      f"({', '.join(names_that('rasterizes'))}), not {settings.renderer}")
+    try:
+        smooth = ANTIALIASED_LINES if settings.shading == "wireframe" else ANTIALIASED
+        halves = [render(scene, view, dataclasses.replace(settings, **how_drawn),
+                         context).rgbx for how_drawn in (ALIASED, smooth)]
+    except ValueError as error:
+        return None, str(error)
+    return split_view(*halves), ""
 
 
 def row_profile(color: np.ndarray, row: int) -> np.ndarray:

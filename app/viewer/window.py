@@ -235,6 +235,7 @@ class ViewerWindow:
         self._close_popups = False        # Esc: close them in the next frame
         self._compiles_at_request = 0
         self.tools = InspectorTools(state)    # inspect mode, buffer views, compare
+        self.tools.wake = glfw.post_empty_event
         self.volume_panel = VolumePanel(state, self.tools)   # transfer, iso, slices
         self._init_hands()
         self._init_files()
@@ -501,7 +502,7 @@ class ViewerWindow:
                     glfw.poll_events()
                 elif self.state.playing:
                     glfw.wait_events_timeout(1 / 60)     # the movie's clock moves on
-                elif self.worker.waiting:
+                elif self.worker.waiting or self.tools.busy:
                     glfw.wait_events_timeout(0.1)
                 else:
                     glfw.wait_events_timeout(0.5)
@@ -565,6 +566,7 @@ class ViewerWindow:
         self.state.tick(time.perf_counter(), busy=self.worker.waiting)
         if self.state.request(self.worker):
             self._compiles_at_request = compile_count()
+        self.tools.poll()                 # a buffer view, a record, a comparison: done?
         result = self.worker.collect()
         if result is not None and self.state.accept(result):
             if getattr(result, "final", True):
@@ -1275,6 +1277,8 @@ class ViewerWindow:
         if p.what and self.worker.waiting:
             return (f"your frame is next; loading kernels ({p.done + 1} of {p.total}: "
                     f"{p.what}) {time.perf_counter() - p.since:.1f} s{extra}")
+        if self.tools.busy:
+            return f"{self.tools.busy} (the picture stays until it is there)"
         if p.done < p.total:
             return f"loading kernels in the background: {p.done} of {p.total}"
         return compiling or "ready"

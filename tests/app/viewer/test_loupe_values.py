@@ -84,6 +84,8 @@ def test_the_aliasing_view_is_the_aliased_frame_left_and_the_antialiased_right()
     assert state.update()
     tools = InspectorTools(state)
     tools.choose_buffer("aliasing", "test")
+    assert tools.buffer == "picture" and tools.busy == "drawing the aliasing view"   # off the UI thread
+    tools.settle()
     assert tools.buffer == "aliasing"
     view, settings = state.view, state.settings()
     aliased = render(state.scene, view, dataclasses.replace(settings, **ALIASED)).color
@@ -115,6 +117,7 @@ def test_the_aliasing_view_is_not_drawn_for_a_ray_tracer_on_the_ui_thread():
     assert state.update()
     tools = InspectorTools(state)
     tools.choose_buffer("aliasing", "test")
+    tools.settle()
     assert tools.buffer == "picture" and tools.overlay is None
 
 
@@ -126,6 +129,7 @@ def test_a_filled_scene_s_antialiased_half_is_16_samples_through_mitchell():
     assert state.update()
     tools = InspectorTools(state)
     tools.choose_buffer("aliasing", "test")
+    tools.settle()
     smooth = render(state.scene, state.view,
                     dataclasses.replace(state.settings(), **ANTIALIASED)).color
     shown = tools.picture(state.frame)[:, :, :3]

@@ -86,8 +86,8 @@ def test_inspect_mode_buffer_views_and_opengl_compare_under_xvfb(tmp_path):
                                      after=mark)[1])
             if seen[-1] == "picture":
                 break
-        assert seen[:4] == ["depth", "normal", "triangle", "barycentrics"]
-        assert seen[-1] == "picture"
+        assert seen[:4] == ["depth", "normal", "triangle", "barycentrics"], seen
+        assert seen[-1] == "picture", seen
 
         mark = len(app.log())
         app.key("v")                                          # depth, on screen
@@ -128,13 +128,16 @@ def test_the_tools_follow_the_frame_without_a_window():
     tools = InspectorTools(state)
     tools.toggle_inspect("test")
     tools.inspect(120, 100, "test")
+    tools.settle()                                  # drawn off the UI thread
     assert tools.record["color"] == state.frame.color[100, 120].tolist()
     assert tools.lines[0].startswith("pixel (120, 100)  zbuffer  colour")
     tools.next_buffer("test")
+    tools.settle()
     assert tools.buffer == "depth" and tools.overlay.shape == (SIZE[1], SIZE[0], 4)
     assert tools.picture(state.frame) is tools.overlay
     state.set_shading("wireframe")                  # no triangles filled: no depth buffer
     state.update()
     tools.frame_changed(state.frame, state.frame_seconds)
+    tools.settle()
     assert tools.buffer == PICTURE and tools.picture(state.frame) is state.frame.rgbx
     assert list(tools.frame_ms) == [pytest.approx(state.frame_seconds * 1e3)]
