@@ -165,6 +165,10 @@ class ViewerState:
     frame_seconds: float = 0.0                               # how long that frame took
     frame_count: int = 0
     render_error: str | None = None                          # the last render that raised
+    # The last scene that failed to open, said at the top of the status until a frame asked
+    # for after it is shown (the next successful action).
+    failed_open: str = ""
+    _clear_failed_open: bool = field(default=False, repr=False)
     dirty: bool = True
     renderer: Callable = render
     loader: Callable = load_scene
@@ -611,33 +615,49 @@ class ViewerState:
         at its first valid view with its own default settings.
         """
         if str(source).strip() == "-":            # the viewer's stdin is the terminal: refuse
-            self.open_messages.append("could not open -: a view file on standard input can only "
-                                      "be given at start-up (python -m app view - < views)")
-            return False
+            return self._open_failed("could not open -: a view file on standard input can only "
+                                     "be given at start-up (python -m app view - < views)")
         try:
             scene = self.loader(source, size=self.size if self.renderable else None)
         except reader_errors() as error:
             reason = str(error)        # the readers' messages start with the file's name
-            self.open_messages.append(f"could not open {reason}" if reason.startswith(str(source))
-                                      else f"could not open {source}: {reason}")
-            return False
+            return self._open_failed(f"could not open {reason}" if reason.startswith(str(source))
+                                     else f"could not open {source}: {reason}")
         if not scene.views:
-            self.open_messages.append(f"did not open {source}: none of its "
-                                      f"{view_numbers.total(scene)} views is valid; "
-                                      f"{self.scene.name} stays")
-            self.open_messages.extend(f"invalid view: {m}" for m in scene.view_messages)
-            return False
+            return self._open_failed(f"did not open {source}: none of its "
+                                     f"{view_numbers.total(scene)} views is valid; "
+                                     f"{self.scene.name} stays",
+                                     [f"invalid view: {m}" for m in scene.view_messages])
         self.scene = scene
         self.scene_source = str(source)
         self.view_index, self.hand_view = 0, None
         self._scene_defaults()
         self.open_messages.clear()
+        self.failed_open = ""
         self.frame = None
         self.dirty = True
         return True
 
+    def _open_failed(self, message: str, details: list[str] = ()) -> bool:
+        self.open_messages.append(message)
+        self.open_messages.extend(details)
+        self.failed_open, self._clear_failed_open = message, False
+        return False
+
+    @property
+    def problem(self) -> str:
+        """The last error or refusal, for the top of the status line: a render that failed,
+        the frame's own message (a renderer's refusal, an invalid view), a scene that did not
+        open, a refused setting or volume edit; "" when all is well."""
+        for text in (self.render_error, getattr(self.frame, "message", None), self.failed_open,
+                     self.option_message, self.volume_message):
+            if text:
+                return text
+        return ""
+
     def clear_messages(self) -> None:
         self.open_messages.clear()
+        self.failed_open = ""
 
     # -- frames ------------------------------------------------------------------------------
     def _job(self):
@@ -705,6 +725,7 @@ class ViewerState:
         watch = (announce_compiles(self.compile_notice_after) if first_of_mode
                  else contextlib.nullcontext())
         run, _ = self._job()
+        self._clear_failed_open = bool(self.failed_open)
         start = time.perf_counter()
         try:
             with watch:
@@ -727,6 +748,7 @@ class ViewerState:
         if self.gate is not None:
             run = self.gate(run)
         worker.submit(run, what, control=True, keep_older=self.scene is self._requested_scene)
+        self._clear_failed_open = bool(self.failed_open)    # its frame is the next success
         self._requested_scene = self.scene
         self.dirty = False
         return True
@@ -761,6 +783,8 @@ class ViewerState:
 
     def _shown(self, frame, seconds: float) -> None:
         self.frame, self.render_error, self.frame_partial = frame, None, False
+        if self._clear_failed_open:
+            self.failed_open, self._clear_failed_open = "", False
         self.frame_seconds = seconds
         self._modes_rendered.add(self.shading)
         self.frame_count += 1

@@ -105,6 +105,7 @@ PANEL_WIDTH = 340            # the side panel, in screen points
 NO_TRIANGLES = ("This scene has no triangles: it is drawn as lines whatever the shading, "
                 "so the shading modes change nothing.")
 SCREENSHOTS_DIR = "screenshots"
+PROBLEM_COLOUR = (1.0, 0.45, 0.4, 1.0)     # the last error or refusal, top of the status
 # While a camera gesture waits for its frame, the window is drawn again at most this often.
 GESTURE_REDRAW_S = 1 / 30
 SAVED_VIEWS = "saved.views"        # View > Save view appends here (in the current folder)
@@ -122,7 +123,7 @@ ANY_POPUP = imgui.PopupFlags_.any_popup_id | imgui.PopupFlags_.any_popup_level
 # ImGui's built-in font covers Latin-1 only; the core's messages use a few typographic marks.
 _TYPOGRAPHY = str.maketrans({"\u2013": "-", "\u2014": "-", "\u2212": "-", "\u2018": "'",
                              "\u2019": "'", "\u201c": '"', "\u201d": '"', "\u2026": "...",
-                             "\u00b7": "."})
+                             "\u00b7": ".", "\u203a": ">"})
 
 
 def displayable(text: str) -> str:
@@ -1227,6 +1228,9 @@ class ViewerWindow:
     def _status(self) -> None:
         s = self.state
         imgui.push_text_wrap_pos(0.0)
+        problem = s.problem or self.hands.message
+        if problem:                       # where the eye is, until the next success clears it
+            imgui.text_colored(PROBLEM_COLOUR, displayable(problem))
         imgui.text(displayable(f"{s.scene.name}: {s.view_label}"))
         if s.view_count:
             imgui.text_disabled(displayable(s.view.label))

@@ -165,7 +165,8 @@ def mesh_scene(scene, max_elements: int = 2000, elements_per_patch: int = 4) -> 
     if len(corners) > MAX_TRIANGLES:
         raise RadiosityError(f"{len(corners)} triangles (two-sided ones counted "
                              f"twice) are too many for radiosity (at most {MAX_TRIANGLES:,}); "
-                             "use --renderer pathtrace")
+                             "draw it path traced (Render › Path traced, or --renderer "
+                             "pathtrace)")
     # A scene with more triangles than the budget: each triangle one patch and one element.
     m = 2 if elements_per_patch >= 4 and 4 * len(corners) <= max_elements else 1
     k = _pieces_per_side(area, max(1, max_elements // (m * m)))
