@@ -45,6 +45,7 @@ from core.registry import shading_names
 from core.settings import PROJECTIONS, RASTERIZERS
 
 log = logging.getLogger("fvd")
+CAMERA_HISTORY = 100          # camera changes Ctrl+Z can go back through
 
 
 def load_scene(source: str | Path, size: tuple[int, int] | None = None,
@@ -215,6 +216,13 @@ class ViewerState:
     slice_index: int | None = None            # None: the middle slice
     scene_edits: int = 0                      # isosurfaces replaced in place so far
     _requested_scene: object = field(default=None, repr=False)   # the last request's scene
+    # The camera history (Ctrl+Z / Ctrl+Shift+Z): (view index, moved camera, keyed view) before
+    # each change, and the ones undone. The hands set ``camera_gesture`` to the gesture that
+    # moves the camera (a drag, a spin of the wheel): its changes are one step.
+    camera_gesture: object = field(default=None, repr=False)
+    _camera_undo: list = field(default_factory=list, repr=False)
+    _camera_redo: list = field(default_factory=list, repr=False)
+    _remembered_gesture: object = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -301,14 +309,54 @@ class ViewerState:
     def set_hand_view(self, view) -> None:
         """Show ``view`` (a moved camera, already checked) in place of the file's."""
         if view != self.hand_view:
+            self._remember_camera()
             self.hand_view, self.dirty = view, True
 
     def reset_view(self) -> bool:
         """Back to the file's view, bit for bit; returns whether the camera had moved."""
         if self.hand_view is None:
             return False
+        self.camera_gesture = None
+        self._remember_camera()
         self.hand_view, self.dirty = None, True
         return True
+
+    # -- the camera's history ------------------------------------------------------------------
+    def _camera(self) -> tuple:
+        return self.view_index, self.hand_view, self.keyed_view
+
+    def _remember_camera(self) -> None:
+        """Before the camera changes: keep it to go back to (one step per gesture)."""
+        gesture = self.camera_gesture
+        if gesture is not None and gesture is self._remembered_gesture:
+            return
+        self._remembered_gesture = gesture
+        self._camera_undo.append(self._camera())
+        del self._camera_undo[:-CAMERA_HISTORY]
+        self._camera_redo.clear()
+
+    def undo_camera(self) -> bool:
+        """The camera before the last change (a drag, a wheel spin, a fit, another view);
+        whether there was one."""
+        return self._swap_camera(self._camera_undo, self._camera_redo)
+
+    def redo_camera(self) -> bool:
+        """The camera change undone last, again; whether there was one."""
+        return self._swap_camera(self._camera_redo, self._camera_undo)
+
+    def _swap_camera(self, source: list, other: list) -> bool:
+        if not source:
+            return False
+        other.append(self._camera())
+        self.view_index, self.hand_view, self.keyed_view = source.pop()
+        self.camera_gesture = self._remembered_gesture = None
+        self.dirty = True
+        return True
+
+    @property
+    def camera_history(self) -> tuple[int, int]:
+        """(steps that can be undone, steps that can be redone)."""
+        return len(self._camera_undo), len(self._camera_redo)
 
     @property
     def animated(self) -> bool:
@@ -433,6 +481,8 @@ class ViewerState:
             return
         here = positions.index(-1 if self.keyed_view else self.view_index)
         there = positions[(here + step) % len(positions)]
+        self.camera_gesture = None
+        self._remember_camera()
         self.keyed_view = there < 0
         if there >= 0:
             self.view_index = there
@@ -443,6 +493,8 @@ class ViewerState:
         if not 0 <= index < max(self.view_count, 1):
             raise ValueError(f"view index must be in 0..{self.view_count - 1}, not {index}")
         if index != self.view_index or self.keyed_view or self.hand_view is not None:
+            self.camera_gesture = None
+            self._remember_camera()
             self.view_index, self.keyed_view, self.hand_view = index, False, None
             self.dirty = True
 
@@ -634,6 +686,8 @@ class ViewerState:
         self._scene_defaults()
         self.open_messages.clear()
         self.failed_open = ""
+        self._camera_undo.clear()               # another scene's cameras mean nothing here
+        self._camera_redo.clear()
         self.frame = None
         self.dirty = True
         return True

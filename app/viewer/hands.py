@@ -19,6 +19,7 @@ No GL and no window library here: the window calls these from its callbacks.
 from __future__ import annotations
 
 import logging
+import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -57,12 +58,14 @@ KEYS_HELP = (
     ("Window", ""),
     ("s", "save the frame as a PNG in screenshots/"),
     ("Ctrl+S", "save the view: six lines appended to saved.views"),
+    ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a camera move (a drag, a wheel spin, a view)"),
     ("F1", "this help"),
     ("Esc", "close a menu, dismiss a message, else quit"),
     ("q", "quit"),
 )
 
 WHEEL_STEP = 0.9             # one wheel notch nearer: the eye's distance (or window) x 0.9
+WHEEL_GESTURE_S = 0.6       # wheel notches closer than this in time are one gesture (one undo step)
 
 
 def scene_bounds(scene) -> tuple[np.ndarray, np.ndarray]:
@@ -95,6 +98,7 @@ class CameraHands:
         self._bounds_of = None
         self._bounds = (-np.ones(3), np.ones(3))
         self.drag: Drag | None = None
+        self._wheel_at, self._wheel_gesture = -1e9, None
 
     # -- what the gestures work on -----------------------------------------------------------
     @property
@@ -152,6 +156,7 @@ class CameraHands:
             d.start = self._base("drag")
             if d.start is None:
                 return False
+            self.state.camera_gesture = d         # the whole drag is one undo step
         d.moved = True
         width, height = self.state.size
         if d.pan:
@@ -175,6 +180,11 @@ class CameraHands:
         base = self._base(what)
         if base is None or not notches:
             return False
+        now = time.monotonic()                    # notches in quick succession: one step
+        if now - self._wheel_at > WHEEL_GESTURE_S:
+            self._wheel_gesture = object()
+        self._wheel_at = now
+        self.state.camera_gesture = self._wheel_gesture
         factor = WHEEL_STEP ** float(notches)
         candidate = (orbit.zoom(base, factor) if field_of_view
                      else orbit.dolly(base, factor, self.state.projection))
@@ -184,6 +194,7 @@ class CameraHands:
         base = self._base("fit")
         if base is None:
             return False
+        self.state.camera_gesture = None
         return self._take(orbit.fit(base, *self.bounds, self.state.projection), "fit")
 
     def reset(self) -> bool:

@@ -785,6 +785,13 @@ class ViewerWindow:
         if key == glfw.KEY_S and mods & glfw.MOD_CONTROL:
             self.save_view("key Ctrl+S")
             return True
+        if mods & glfw.MOD_CONTROL and (key == glfw.KEY_Y or (key == glfw.KEY_Z
+                                                              and mods & glfw.MOD_SHIFT)):
+            self.redo_camera("key Ctrl+Shift+Z" if key == glfw.KEY_Z else "key Ctrl+Y")
+            return True
+        if key == glfw.KEY_Z and mods & glfw.MOD_CONTROL:
+            self.undo_camera("key Ctrl+Z")
+            return True
         if key in (glfw.KEY_ENTER, glfw.KEY_KP_ENTER):
             self.reset_view("key Enter")
             return True
@@ -792,6 +799,20 @@ class ViewerWindow:
             self.toggle_help("key F1")
             return True
         return False
+
+    def undo_camera(self, how: str) -> None:
+        done = self.state.undo_camera()
+        back, ahead = self.state.camera_history
+        log.info("action: %s -> %s", how, f"camera undone ({back} more to undo)" if done
+                 else "nothing to undo")
+        if done:
+            self.hands.message = ""
+
+    def redo_camera(self, how: str) -> None:
+        done = self.state.redo_camera()
+        back, ahead = self.state.camera_history
+        log.info("action: %s -> %s", how, f"camera redone ({ahead} more to redo)" if done
+                 else "nothing to redo")
 
     def reset_view(self, how: str) -> None:
         moved = self.hands.reset()
@@ -1120,6 +1141,11 @@ class ViewerWindow:
             self.reset_view("menu View > Reset")
         if imgui.menu_item_simple("Fit the scene", "F"):
             self.fit_view("menu View > Fit")
+        back, ahead = self.state.camera_history
+        if imgui.menu_item_simple("Undo camera", "Ctrl+Z", False, back > 0):
+            self.undo_camera("menu View > Undo camera")
+        if imgui.menu_item_simple("Redo camera", "Ctrl+Shift+Z", False, ahead > 0):
+            self.redo_camera("menu View > Redo camera")
         if imgui.menu_item_simple(f"Save view (append to {SAVED_VIEWS})", "Ctrl+S"):
             self.save_view("menu View > Save view")
         if imgui.begin_menu("Loupe (Alt+wheel)"):

@@ -1,0 +1,65 @@
+"""Undo and redo of camera moves (Ctrl+Z, Ctrl+Shift+Z): a drag is one step, a spin of the
+wheel is one step, a click to the next view is one step; undo gives the picture from before,
+exactly."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from app.session.state import ViewerState
+from app.viewer.hands import CameraHands
+from core.paths import SCENES_DIR
+
+
+def _state():
+    state = ViewerState.open(SCENES_DIR / "house.toml", size=(80, 60))
+    state.set_shading("flat")
+    assert state.update()
+    return state, CameraHands(state)
+
+
+def _drag(hands, x0, y0, x1, y1, steps=6):
+    hands.press(x0, y0, pan=False)
+    for k in range(1, steps + 1):
+        hands.move(x0 + (x1 - x0) * k / steps, y0 + (y1 - y0) * k / steps, threshold=3)
+    assert hands.release(x1, y1, threshold=3)
+
+
+def test_a_drag_is_one_step_and_undo_gives_the_picture_before_it_exactly():
+    state, hands = _state()
+    before = state.frame.color.copy()
+    _drag(hands, 40, 30, 60, 35)
+    assert state.update() and not np.array_equal(state.frame.color, before)
+    after = state.frame.color.copy()
+    assert state.camera_history == (1, 0)             # six moves, one step
+    assert state.undo_camera() and state.update()
+    assert state.hand_view is None and np.array_equal(state.frame.color, before)
+    assert state.camera_history == (0, 1)
+    assert state.redo_camera() and state.update()
+    assert np.array_equal(state.frame.color, after)
+    assert not state.redo_camera()                    # nothing more to redo
+
+
+def test_wheel_notches_in_quick_succession_are_one_step_and_a_click_to_the_next_view_another():
+    state, hands = _state()
+    first = state.view
+    for _ in range(5):
+        assert hands.wheel(1)
+    assert state.camera_history == (1, 0)
+    dollied = state.view
+    state.next_view()                                 # a click on the picture
+    assert state.camera_history == (2, 0) and state.view_index == 1
+    assert state.undo_camera() and state.view is dollied     # back across the click
+    assert state.undo_camera() and state.view is first
+    assert not state.undo_camera()
+
+
+def test_a_new_move_after_undo_drops_the_redo_steps_and_another_scene_the_history():
+    state, hands = _state()
+    _drag(hands, 40, 30, 60, 35)
+    state.undo_camera()
+    assert state.camera_history == (0, 1)
+    assert hands.fit()                                # a new change: the undone one is gone
+    assert state.camera_history == (1, 0)
+    assert state.open_scene(SCENES_DIR / "cube.toml")
+    assert state.camera_history == (0, 0)
