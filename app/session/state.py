@@ -289,16 +289,18 @@ class ViewerState:
     def view_label(self) -> str:
         """``"view 7 of 20 (6 invalid)"``: positions in the file, or why there is nothing;
         ``"the keyed view"`` for an animation's moving camera."""
+        if self.hand_view is not None and self.playback is not None:
+            return "your camera (Enter: the scene's)"
         if self.keyed_view:
             return f"the keyed view (then the file's {self.view_count})"
         return view_numbers.label(self.scene, self.view_index)
 
     @property
     def view(self):
+        if self.hand_view is not None:          # the user's camera, over a keyed one too
+            return self.hand_view
         if self.keyed_view:
             return self.playback.animation.view_at(self.playback.time)
-        if self.hand_view is not None:
-            return self.hand_view
         return self.scene.views[self.view_index] if self.view_count else None
 
     @property
@@ -745,7 +747,8 @@ class ViewerState:
             t = playback.time
             # render_at numbers the keyed camera (when there is one) before the file's views
             keyed = 1 if playback.animation.view is not None else 0
-            index = 0 if self.keyed_view else self.view_index + keyed
+            index = (self.hand_view if self.hand_view is not None     # the user's camera
+                     else 0 if self.keyed_view else self.view_index + keyed)
             what = f"t = {t:.2f} s, {what}"
 
             def run(control=None):

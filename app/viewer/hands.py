@@ -113,8 +113,6 @@ class CameraHands:
         """"" when the camera can move; else why not."""
         if self.state.view is None:
             return "there is no valid view to move"
-        if self.state.keyed_view:
-            return "the keyed camera moves with the animation: step to a file's view to move it"
         return ""
 
     def _take(self, candidate: View, what: str) -> bool:

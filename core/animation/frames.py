@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.animation.draw import draw_particles
+from core.camera.view import View
 from core.renderers import get_renderer
 
 
@@ -71,10 +72,19 @@ BLUR_METHODS = ("auto", "accumulate", "per-ray")
 SHARP = Shutter(1)
 
 
+def pick_view(views: list, which):
+    """``views[which]`` (counting round), or ``which`` itself when it is a camera (a
+    :class:`core.camera.view.View`: the user's, which replaces the animation's)."""
+    if isinstance(which, View):
+        return which
+    return views[which % len(views)]
+
+
 def render_at(animation, t: float, settings, context=None, view_index: int = 0,
               paths: bool = False, shutter: Shutter | None = None):
     """The frame at time ``t`` of ``scene_at(t)``, seen through its view ``view_index`` (0: the
-    keyed view, or the scene's first view when none is keyed; then the file's views). With
+    keyed view, or the scene's first view when none is keyed; then the file's views), or
+    through ``view_index`` itself when it is a View (:func:`pick_view`). With
     ``paths`` the keyed paths are drawn over it (:mod:`core.animation.paths`). With a
     ``shutter`` of more than one sample (default: the scene file's, ``animation.shutter``),
     the motion-blurred frame (the module's text); ``Shutter(1)`` is sharp.
@@ -91,12 +101,12 @@ def render_at(animation, t: float, settings, context=None, view_index: int = 0,
             from core.animation.paths import draw_paths, paths_of
             keyed = animation.view_at(animation.local_time(t))
             views = ([keyed] if keyed is not None else []) + list(animation.scene.views)
-            draw_paths(frame, paths_of(animation), views[view_index % len(views)], settings)
+            draw_paths(frame, paths_of(animation), pick_view(views, view_index), settings)
         return frame
     scene = animation.scene_at(t)
     if not scene.views:
         raise ValueError(f"{scene.name}: no view to render")
-    view = scene.views[view_index % len(scene.views)]
+    view = pick_view(scene.views, view_index)
     frame = _with_particles(animation, t, scene, view, settings, context)
     if paths and frame.message is None:
         from core.animation.paths import draw_paths, paths_of

@@ -133,13 +133,14 @@ def _trace_into(total, setup, points, y, x) -> None:
 
 
 def _setup_at(animation, when, settings, view_index, options, context):
+    from core.animation.frames import pick_view
     from core.raytrace.renderer import prepare
     from core.render import DEFAULT_CONTEXT, lit_as_asked
     scene = animation.scene_at(when)
     if not scene.views:
         return None, scene
     scene = lit_as_asked(scene, settings, context or DEFAULT_CONTEXT)
-    view = scene.views[view_index % len(scene.views)]
+    view = pick_view(scene.views, view_index)
     try:
         return prepare(scene, view, settings.projection, settings.size, options, None,
                        settings.keep_aspect), scene

@@ -63,3 +63,23 @@ def test_a_new_move_after_undo_drops_the_redo_steps_and_another_scene_the_histor
     assert state.camera_history == (1, 0)
     assert state.open_scene(SCENES_DIR / "cube.toml")
     assert state.camera_history == (0, 0)
+
+
+def test_on_an_animated_scene_the_users_camera_replaces_the_keyed_one_until_enter():
+    state = ViewerState.open(SCENES_DIR / "robot_arm.toml", size=(80, 60))
+    hands = CameraHands(state)
+    assert state.playback is not None and not state.playing
+    assert state.update()
+    keyed = state.frame.color.copy()
+    assert hands.usable == ""
+    _drag(hands, 40, 30, 60, 38)
+    assert state.update() and not np.array_equal(state.frame.color, keyed)
+    assert state.view_label == "your camera (Enter: the scene's)"
+    assert hands.wheel(2) and state.update()                 # the wheel too
+    moved = state.frame.color.copy()
+    state.seek(0.5)                                          # the moment changes, not the camera
+    assert state.update() and state.view is state.hand_view
+    assert hands.reset() and state.update()                  # Enter: the scene's camera again
+    state.seek(0.0)
+    assert state.update() and np.array_equal(state.frame.color, keyed)
+    assert not np.array_equal(moved, keyed)
