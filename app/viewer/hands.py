@@ -65,6 +65,7 @@ KEYS_HELP = (
 )
 
 WHEEL_STEP = 0.9             # one wheel notch nearer: the eye's distance (or window) x 0.9
+PIVOTS = {"scene": "the scene's centre", "vrp": "the VRP (the course's)"}
 WHEEL_GESTURE_S = 0.6       # wheel notches closer than this in time are one gesture (one undo step)
 
 
@@ -99,6 +100,7 @@ class CameraHands:
         self._bounds = (-np.ones(3), np.ones(3))
         self.drag: Drag | None = None
         self._wheel_at, self._wheel_gesture = -1e9, None
+        self.pivot = "scene"        # a drag orbits about: "scene" (its bounds' centre) or "vrp"
 
     # -- what the gestures work on -----------------------------------------------------------
     @property
@@ -162,7 +164,7 @@ class CameraHands:
         else:
             p0 = orbit.ball_point(*orbit.screen_to_ball(d.x, d.y, width, height))
             p1 = orbit.ball_point(*orbit.screen_to_ball(x, y, width, height))
-            candidate = orbit.orbit(d.start, orbit.arcball(p0, p1))
+            candidate = orbit.orbit(d.start, orbit.arcball(p0, p1), self.pivot_point())
         return self._take(candidate, "pan" if d.pan else "orbit")
 
     def release(self, x: float, y: float, threshold: float) -> bool:
@@ -170,6 +172,19 @@ class CameraHands:
         self.move(x, y, threshold)
         d, self.drag = self.drag, None
         return d is not None and d.start is not None
+
+    def pivot_point(self):
+        """The world point a drag orbits about: the centre of the scene's bounds, or None for
+        the VRP (the course's views turn about it; the Cornell box's VRP is at the eye, so
+        there the camera would turn away from the box)."""
+        if self.pivot == "vrp":
+            return None
+        return orbit.sphere(*self.bounds)[0]
+
+    def set_pivot(self, pivot: str) -> None:
+        if pivot not in PIVOTS:
+            raise ValueError(f"the orbit pivot must be one of {', '.join(PIVOTS)}, not {pivot!r}")
+        self.pivot = pivot
 
     # -- the wheel, fit, reset ---------------------------------------------------------------
     def wheel(self, notches: float, field_of_view: bool = False) -> bool:

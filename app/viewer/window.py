@@ -1141,6 +1141,11 @@ class ViewerWindow:
             self.reset_view("menu View > Reset")
         if imgui.menu_item_simple("Fit the scene", "F"):
             self.fit_view("menu View > Fit")
+        from app.viewer.hands import PIVOTS
+        for pivot, words in PIVOTS.items():
+            if imgui.menu_item_simple(f"Orbit about {words}", None, self.hands.pivot == pivot):
+                self.hands.set_pivot(pivot)
+                log.info("action: menu View > Orbit about -> %s", words)
         back, ahead = self.state.camera_history
         if imgui.menu_item_simple("Undo camera", "Ctrl+Z", False, back > 0):
             self.undo_camera("menu View > Undo camera")

@@ -8,7 +8,8 @@ six-line view of Assignment #1 that ``python -m app matrices`` and ``render`` re
   two points on a unit ball in the VRC (u right, v up, n towards the viewer), and the unit
   quaternion ``p1 p0*`` turns the scene by twice the arc between them about ``p0 x p1``. The
   scene turns in front of the viewer, so the camera's frame (u, v, n) turns the other way
-  about the VRP; PRP, window, F and B are in VRC and go with it. The quaternions are written
+  about the VRP, or about a pivot (the window's: the scene's centre), the VRP turning round
+  it with the frame; PRP, window, F and B are in VRC and go with it. The quaternions are written
   as the course's animation notes write them (``(s, v)``, the notes' product, ``v' = q^-1 v q``)
   and kept here because the camera ranks below the animation package.
 - **Pan**: the VRP moves in the view plane (along u and v) by the window's units per pixel.
@@ -114,17 +115,26 @@ def _with(view: View, **changes) -> View:
     return View(**floats, label=view.label)
 
 
-def orbit(view: View, q: np.ndarray) -> View:
-    """The camera turned about the VRP so that the scene turns by ``q`` (given in the VRC).
+def orbit(view: View, q: np.ndarray, pivot=None) -> View:
+    """The camera turned about the VRP — or about the world point ``pivot`` — so that the
+    scene turns by ``q`` (given in the VRC).
 
     The camera's frame ``C = [u v n]`` becomes ``C Q^T``: the inverse turn, seen from the world.
     VPN and VUP become the new n and v, orthonormal to the last bit, so the frame never drifts
-    into a degenerate one however many drags add up."""
-    frame = np.column_stack(vrc_basis(view)) @ q_matrix(q).T
+    into a degenerate one however many drags add up. About a pivot P the VRP turns with the
+    frame, ``VRP' = P + W (VRP - P)`` with ``W = C' C^T`` the world's turn; PRP and the window
+    stay, being in the VRC, so the eye keeps its place relative to the VRP."""
+    before = np.column_stack(vrc_basis(view))
+    frame = before @ q_matrix(q).T
     n = unit3(frame[:, 2])[0]
     u = unit3(cross3(frame[:, 1], n))[0]
     v = cross3(n, u)
-    return _with(view, vpn=n, vup=v)
+    if pivot is None:
+        return _with(view, vpn=n, vup=v)
+    p = np.asarray(pivot, dtype=np.float64)
+    turn = np.column_stack((u, v, n)) @ before.T
+    vrp = p + turn @ (np.asarray(view.vrp, dtype=np.float64) - p)
+    return _with(view, vrp=vrp, vpn=n, vup=v)
 
 
 def pan(view: View, dx: float, dy: float, width: int, height: int) -> View:

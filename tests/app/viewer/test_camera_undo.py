@@ -83,3 +83,17 @@ def test_on_an_animated_scene_the_users_camera_replaces_the_keyed_one_until_ente
     state.seek(0.0)
     assert state.update() and np.array_equal(state.frame.color, keyed)
     assert not np.array_equal(moved, keyed)
+
+
+def test_a_long_drag_on_the_cornell_box_keeps_the_box_in_view():
+    # Its VRP is at the eye: turned about the VRP the camera looks away and the picture goes
+    # black; about the scene's centre (the default) the box turns in front of it.
+    for pivot, least, most in (("scene", 0.5, 1.0), ("vrp", 0.0, 0.05)):
+        state = ViewerState.open(SCENES_DIR / "cornell_box.toml", size=(60, 60))
+        state.set_renderer("zbuffer")
+        hands = CameraHands(state)
+        hands.set_pivot(pivot)
+        _drag(hands, 30, 30, 45, 30, steps=10)         # a quarter of the ball: ~60 degrees
+        assert state.update()
+        covered = np.isfinite(state.frame.depth).mean()     # pixels the box is drawn at
+        assert least <= covered <= most, (pivot, covered)

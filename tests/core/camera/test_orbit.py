@@ -177,3 +177,19 @@ def test_ten_thousand_random_gestures_never_degenerate():
     assert np.allclose(np.array([u, v, n]) @ np.array([u, v, n]).T, np.eye(3), atol=1e-12)
     assert np.linalg.norm(view.vpn) == pytest.approx(1.0, abs=1e-12)
     assert abs(np.dot(view.vpn, view.vup)) <= 1e-12
+
+
+def test_a_90_degree_orbit_about_a_pivot_carries_the_vrp_round_it():
+    # The same 90-degree turn about v, about the pivot (0, 0, -2) instead of the VRP (the
+    # origin): the VRP goes from 2 in front of the pivot along +z to 2 along -x, by hand.
+    q = o.arcball(o.ball_point(0.0, 0.0), o.ball_point(S45, 0.0))
+    turned = o.orbit(FRONT, q, pivot=(0.0, 0.0, -2.0))
+    assert np.abs(np.array(turned.vrp) - [-2.0, 0.0, -2.0]).max() <= 1e-12
+    assert np.abs(np.array(turned.vpn) - [-1.0, 0.0, 0.0]).max() <= 1e-12
+    assert turned.prp == FRONT.prp and turned.window == FRONT.window
+    # the eye (VRP + PRP_n n) keeps its distance to the pivot: 2 + 6 = 8 before and after
+    eye = np.array(turned.vrp) + 6.0 * np.array(turned.vpn)
+    assert abs(np.linalg.norm(eye - [0.0, 0.0, -2.0]) - 8.0) <= 1e-12
+    # about the VRP itself it is the plain orbit
+    same = o.orbit(FRONT, q, pivot=FRONT.vrp)
+    assert np.abs(np.array(same.vrp) - np.array(FRONT.vrp)).max() <= 1e-15
