@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.animation.draw import draw_particles
-from core.camera.view import View
+from core.camera.view import pick_view
 from core.renderers import get_renderer
 
 
@@ -72,19 +72,11 @@ BLUR_METHODS = ("auto", "accumulate", "per-ray")
 SHARP = Shutter(1)
 
 
-def pick_view(views: list, which):
-    """``views[which]`` (counting round), or ``which`` itself when it is a camera (a
-    :class:`core.camera.view.View`: the user's, which replaces the animation's)."""
-    if isinstance(which, View):
-        return which
-    return views[which % len(views)]
-
-
 def render_at(animation, t: float, settings, context=None, view_index: int = 0,
               paths: bool = False, shutter: Shutter | None = None):
     """The frame at time ``t`` of ``scene_at(t)``, seen through its view ``view_index`` (0: the
     keyed view, or the scene's first view when none is keyed; then the file's views), or
-    through ``view_index`` itself when it is a View (:func:`pick_view`). With
+    through ``view_index`` itself when it is a View (:func:`core.camera.view.pick_view`). With
     ``paths`` the keyed paths are drawn over it (:mod:`core.animation.paths`). With a
     ``shutter`` of more than one sample (default: the scene file's, ``animation.shutter``),
     the motion-blurred frame (the module's text); ``Shutter(1)`` is sharp.

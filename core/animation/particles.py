@@ -331,6 +331,18 @@ def _step(position, velocity, age, life, size, size_end, alpha, alpha_end, spec,
             fate[i] = 2
 
 
+@dataclass
+class Checkpoint:
+    """A particle system's state at one step (:mod:`core.animation.checkpoint`)."""
+
+    step_index: int
+    particles: Particles          # the live particles, compact copies (what is pickled)
+
+    @property
+    def nbytes(self) -> int:
+        return sum(getattr(self.particles, k).nbytes for k in ARRAYS)
+
+
 class ParticleSystem:
     """All emitters of an animation (and their child systems), stepped at a fixed rate.
 
@@ -400,14 +412,26 @@ class ParticleSystem:
 
     def go_back(self, target: int) -> None:
         """To the nearest snapshot at or before step ``target``, else to step 0."""
-        from core.animation.checkpoint import restore
         saved = self.rewind.nearest(target)
-        restore(self, saved) if saved is not None else self.reset()
+        self.restore(saved) if saved is not None else self.reset()
 
     def note(self) -> None:
         """A snapshot of this step, when one is due (:class:`core.animation.rewind.Rewind`)."""
-        from core.animation.checkpoint import snapshot
-        self.rewind.note(self.step_index, lambda: snapshot(self))
+        self.rewind.note(self.step_index, self.snapshot)
+
+    def snapshot(self) -> "Checkpoint":
+        """The state now (copies: the system steps on without changing it)."""
+        pool = self.particles
+        return Checkpoint(self.step_index,
+                          Particles(**{k: getattr(pool, k).copy() for k in ARRAYS}))
+
+    def restore(self, checkpoint: "Checkpoint") -> None:
+        """The state of ``checkpoint`` (made by a system of the same rules)."""
+        self.reset()
+        pool = ParticlePool(max(1024, len(checkpoint.particles)))
+        pool.append(checkpoint.particles)
+        self.particles = pool
+        self.step_index = checkpoint.step_index
 
     def step(self) -> None:
         """One fixed step; at each frame boundary, first the emission of that frame."""

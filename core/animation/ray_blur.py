@@ -133,7 +133,7 @@ def _trace_into(total, setup, points, y, x) -> None:
 
 
 def _setup_at(animation, when, settings, view_index, options, context):
-    from core.animation.frames import pick_view
+    from core.camera.view import pick_view
     from core.raytrace.renderer import prepare
     from core.render import DEFAULT_CONTEXT, lit_as_asked
     scene = animation.scene_at(when)

@@ -312,3 +312,11 @@ def eye_from_view(view: View, projection: str) -> Eye:
         toward_viewer = -(dop[0] * u + dop[1] * v + dop[2] * n)
         return Eye(None, toward_viewer / np.linalg.norm(toward_viewer))
     raise ValueError(f"projection must be 'perspective' or 'parallel', not {projection!r}")
+
+
+def pick_view(views: list, which):
+    """``views[which]`` (counting round), or ``which`` itself when it is a camera (a
+    :class:`View`: the window's user's, which replaces an animation's own)."""
+    if isinstance(which, View):
+        return which
+    return views[which % len(views)]

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import gzip
 import math
+import stat
 from pathlib import Path
 
 import numpy as np
@@ -43,10 +44,18 @@ def kind_of(path: str | Path, folder: Path | None = None) -> str:
 
 
 def file_size(path: Path, shown: str) -> int:
+    """The size of ``path``, a regular file (a FIFO would block the reader for ever, a device
+    such as /dev/zero never end): else one clear VolumeError."""
     try:
-        return path.stat().st_size
+        mode = path.stat()
     except OSError as error:
         raise VolumeError(f"{shown}: cannot be read ({error.strerror or error})") from None
+    if not stat.S_ISREG(mode.st_mode):
+        what = ("a FIFO (named pipe)" if stat.S_ISFIFO(mode.st_mode) else "a device"
+                if stat.S_ISCHR(mode.st_mode) or stat.S_ISBLK(mode.st_mode) else
+                "a folder" if stat.S_ISDIR(mode.st_mode) else "not a regular file")
+        raise VolumeError(f"{shown}: is {what}: volumes are read from regular files only")
+    return mode.st_size
 
 
 def read_raw(path: Path, dims, dtype: str = "uint8", byte_order: str = "little",
@@ -72,10 +81,12 @@ def read_raw(path: Path, dims, dtype: str = "uint8", byte_order: str = "little",
 def read_nrrd(path: Path, shown: str | None = None):
     import nrrd                                  # pynrrd: only when an NRRD file is read
     shown = shown or str(path)
+    file_size(path, shown)                       # a regular file, before it is opened
     try:
         with open(path, "rb") as fh:
             header = nrrd.read_header(fh)
             dims = check_dims([int(s) for s in header.get("sizes", [])], shown)
+            _check_nrrd_skips(path, header, shown)
             _check_nrrd_size(path, header, dims, fh.tell(), shown)
             data = nrrd.read_data(header, fh, str(path), index_order="F")
     except VolumeError:
@@ -87,6 +98,29 @@ def read_nrrd(path: Path, shown: str | None = None):
         raise VolumeError(f"{shown}: the data holds {data.size} samples, its header's sizes "
                           f"{' x '.join(map(str, dims))} say {math.prod(dims)}")
     return checked_samples(data, shown), _nrrd_spacing(header, shown)
+
+
+MAX_LINE_SKIP = 100_000         # header lines an NRRD may ask to skip before its data
+
+
+def _check_nrrd_skips(path: Path, header: dict, shown: str) -> None:
+    """``line skip`` and ``byte skip`` within reach, and a detached ``data file`` a regular
+    file (pynrrd would read a line at a time 10^10 times, or block on a FIFO)."""
+    try:
+        lines = int(header.get("line skip", 0))
+        skip = int(header.get("byte skip", 0))
+    except (TypeError, ValueError):
+        raise VolumeError(f"{shown}: line skip and byte skip must be whole numbers") from None
+    if not 0 <= lines <= MAX_LINE_SKIP:
+        raise VolumeError(f"{shown}: line skip {lines} is beyond reach (0 to {MAX_LINE_SKIP:,})")
+    detached = header.get("data file")
+    data = path if detached is None else path.parent / str(detached).strip()
+    if detached is not None and str(detached).strip().upper().startswith("LIST"):
+        return                                   # pynrrd reads the listed files itself
+    if detached is not None:
+        file_size(data, f"{shown}: data file {str(detached).strip()}")
+    if skip > file_size(data, shown):
+        raise VolumeError(f"{shown}: byte skip {skip} is past the end of the data file")
 
 
 def _check_nrrd_size(path: Path, header: dict, dims, data_start: int, shown: str) -> None:

@@ -1,0 +1,68 @@
+"""The volume readers take regular files only, and no header can make them loop or block:
+a FIFO, a device, a detached data file that is a FIFO, a line skip of 10^10."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from core.volume.data import VolumeError
+from core.volume.readers import read_nifti, read_nrrd, read_raw
+
+NRRD_HEAD = "NRRD0004\ntype: uint8\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n"
+
+
+@pytest.fixture
+def fifo(tmp_path) -> Path:
+    path = tmp_path / "pipe.nrrd"
+    os.mkfifo(path)
+    return path
+
+
+@pytest.mark.parametrize("read", [lambda p: read_raw(p, (2, 2, 2)), read_nrrd, read_nifti],
+                         ids=["raw", "nrrd", "nifti"])
+def test_a_fifo_is_refused_before_it_is_opened(fifo, read):
+    with pytest.raises(VolumeError, match=r"is a FIFO \(named pipe\): volumes are read from "
+                                          r"regular files only"):
+        read(fifo)
+
+
+def test_a_device_is_refused():
+    with pytest.raises(VolumeError, match="is a device"):
+        read_raw(Path("/dev/zero"), (4, 4, 4))
+
+
+def test_a_symlink_to_a_device_is_refused(tmp_path):
+    link = tmp_path / "zeros.nrrd"
+    link.symlink_to("/dev/zero")
+    with pytest.raises(VolumeError, match="is a device"):
+        read_nrrd(link)
+
+
+def test_a_detached_data_file_that_is_a_fifo_or_a_device_is_refused(tmp_path):
+    os.mkfifo(tmp_path / "data.raw")
+    header = tmp_path / "head.nhdr"
+    header.write_text(NRRD_HEAD + "data file: data.raw\n\n")
+    with pytest.raises(VolumeError, match=r"data file data.raw: is a FIFO"):
+        read_nrrd(header)
+    header.write_text(NRRD_HEAD + "data file: /dev/zero\n\n")
+    with pytest.raises(VolumeError, match=r"data file /dev/zero: is a device"):
+        read_nrrd(header)
+
+
+def test_a_line_skip_beyond_reach_is_refused_at_once(tmp_path):
+    path = tmp_path / "skip.nrrd"
+    path.write_bytes((NRRD_HEAD + "line skip: 10000000000\n\n").encode() + bytes(8))
+    with pytest.raises(VolumeError, match=r"line skip 10000000000 is beyond reach"):
+        read_nrrd(path)
+
+
+def test_a_plain_nrrd_still_reads(tmp_path):
+    path = tmp_path / "ok.nrrd"
+    path.write_bytes((NRRD_HEAD + "\n").encode() + bytes(range(8)))
+    values, spacing = read_nrrd(path)
+    assert values.shape == (2, 2, 2) and spacing == (1.0, 1.0, 1.0)
+    assert np.array_equal(np.sort(values.ravel()), np.arange(8))
