@@ -128,14 +128,41 @@ def worst_story(scene, view, settings, x, y) -> str:
         return str(error)
 
 
+MAX_PICTURE_PIXELS = 64 << 20        # --image: beyond any picture we would draw to match it
+
+
 def _read_picture(path: str):
+    """``--image``: a regular file, its size read from its header before it is decoded, 16-bit
+    samples scaled to 8 (not clipped); None after one ``error:`` line."""
+    import os
+    import stat
+    import warnings
     from PIL import Image, UnidentifiedImageError
     try:
-        with Image.open(path) as image:
+        mode = os.stat(path).st_mode
+    except OSError as error:
+        why = "no such file" if isinstance(error, FileNotFoundError) else error.strerror
+        print(f"error: --image {path}: {why}", file=sys.stderr)
+        return None
+    if not stat.S_ISREG(mode):
+        print(f"error: --image {path}: not a regular file (a FIFO, a device or a folder)",
+              file=sys.stderr)
+        return None
+    try:
+        with warnings.catch_warnings():      # its size is judged here, in one line
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            image = Image.open(path)
+        with image:
+            if image.width * image.height > MAX_PICTURE_PIXELS:
+                print(f"error: --image {path}: {image.width} x {image.height} pixels is larger "
+                      f"than any picture we draw to compare with", file=sys.stderr)
+                return None
+            if image.mode in ("I;16", "I;16B", "I;16L", "I"):
+                wide = np.asarray(image, dtype=np.float64)
+                grey = np.clip(np.rint(wide / 257.0), 0, 255).astype(np.uint8)
+                return np.repeat(grey[..., None], 3, axis=2)
             return np.asarray(image.convert("RGB"))
-    except FileNotFoundError:
-        print(f"error: --image {path}: no such file", file=sys.stderr)
-    except (UnidentifiedImageError, OSError) as error:
+    except (UnidentifiedImageError, OSError, ValueError, Image.DecompressionBombError) as error:
         print(f"error: --image {path}: not a picture that can be read ({error})",
               file=sys.stderr)
     return None

@@ -93,6 +93,29 @@ def config_dir() -> Path:
     return Path(platformdirs.user_config_dir(APP_NAME))
 
 
+def read_small_text(path: Path, limit: int, what: str) -> str:
+    """The text of ``path``, a regular file of at most ``limit`` bytes (a FIFO would block the
+    window for good, /dev/zero fill its memory): else ValueError saying which and why."""
+    try:
+        mode = os.stat(path)
+    except OSError as error:
+        raise ValueError(f"{what} {printable(path)} cannot be read: "
+                         f"{error.strerror or error}") from None
+    if not stat.S_ISREG(mode.st_mode):
+        raise ValueError(f"{what} {printable(path)} is {_kind(mode.st_mode)}, not a file")
+    if mode.st_size > limit:
+        raise ValueError(f"{what} {printable(path)} has {mode.st_size:,} bytes; at most "
+                         f"{limit:,} are read")
+    with open(path, "rb") as fh:
+        data = fh.read(limit + 1)            # a file that grew since: still no more than this
+    if len(data) > limit:
+        raise ValueError(f"{what} {printable(path)} has more than {limit:,} bytes")
+    return data.decode("utf-8")
+
+
+RECENT_LIMIT = 64 * 1024                 # bytes: ten paths take a few hundred
+
+
 class RecentFiles:
     """The last :data:`RECENT_COUNT` files opened, newest first, kept across sessions."""
 
@@ -108,13 +131,17 @@ class RecentFiles:
         print(f"warning: {text}", file=sys.stderr)
 
     def _load(self) -> None:
-        if not self.path.exists():
+        if not os.path.lexists(self.path):
             return
         try:
-            data = json.loads(self.path.read_text(encoding="utf-8"))
+            data = json.loads(read_small_text(self.path, RECENT_LIMIT, "the list"))
             listed = data["recent"] if isinstance(data, dict) else None
             if not isinstance(listed, list) or not all(isinstance(p, str) for p in listed):
                 raise ValueError('expected {"recent": [paths]}')
+        except RecursionError:
+            self._warn(f"the recent-files list {printable(self.path)} is ignored: it is nested "
+                       f"too deep to be a list of paths")
+            return
         except (OSError, ValueError, KeyError) as error:
             self._warn(f"the recent-files list {printable(self.path)} is ignored: it cannot be "
                        f"read ({printable(error)})")

@@ -19,6 +19,7 @@ No GL and no window library here: the window calls these from its callbacks.
 from __future__ import annotations
 
 import logging
+import os
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -66,6 +67,7 @@ KEYS_HELP = (
 
 WHEEL_STEP = 0.9             # one wheel notch nearer: the eye's distance (or window) x 0.9
 PIVOTS = {"scene": "the scene's centre", "vrp": "the VRP (the course's)"}
+VIEW_FILE_LIMIT = 16 * 1024 * 1024       # bytes of a view file Ctrl+S reads before appending
 WHEEL_GESTURE_S = 0.6       # wheel notches closer than this in time are one gesture (one undo step)
 
 
@@ -259,9 +261,11 @@ def save_view(view: View, path: Path, comment: str) -> int:
     cannot be read or written, ValueError when it is not a view file we can add to (a
     truncated last view would swallow the new numbers)."""
     from core.scene.formats.viewfile import read_view_entries
+    from app.viewer.files import read_small_text
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8") if path.exists() else ""
+        text = read_small_text(path, VIEW_FILE_LIMIT, "the view file") \
+            if os.path.lexists(path) else ""
     except UnicodeDecodeError:
         raise ValueError(f"{path} is not a text file: the view was not saved") from None
     entries = read_view_entries(text, str(path))

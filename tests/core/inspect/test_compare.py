@@ -142,3 +142,30 @@ def test_render_buffer_writes_the_png_and_the_raw_values(tmp_path, capsys):
     assert main(["render", SCENE, "--renderer", "raycast", "--buffer", "depth", "--out",
                  str(out)]) == 1
     assert "the raycast renderer keeps no depth buffer" in capsys.readouterr().err
+
+
+def test_hostile_pictures_are_refused_in_one_line_before_they_are_decoded(tmp_path, capsys):
+    import os
+    fifo = tmp_path / "pipe.png"
+    os.mkfifo(fifo)
+    assert main(["compare", SCENE, "--image", str(fifo)]) == 2
+    assert "not a regular file" in capsys.readouterr().err
+    big = tmp_path / "big.png"                      # 140 KB that declares 12,000 x 12,000
+    Image.new("L", (12000, 12000)).save(big, optimize=True)
+    assert main(["compare", SCENE, "--image", str(big)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "12000 x 12000 pixels is larger" in err   # no PIL warning
+
+
+def test_a_16_bit_grey_picture_is_scaled_not_clipped(tmp_path, ours, capsys):
+    grey = np.asarray(Image.fromarray(ours).convert("L"))
+    eight, sixteen = tmp_path / "eight.png", tmp_path / "sixteen.png"
+    Image.fromarray(grey).save(eight)
+    Image.fromarray(grey.astype(np.uint16) * 257).save(sixteen)
+    assert Image.open(sixteen).mode == "I;16"
+    outs = []
+    for path in (eight, sixteen):
+        main(["compare", SCENE, "--shading", "gouraud", "--image", str(path), "--out",
+              str(tmp_path / "heat.png")])
+        outs.append(capsys.readouterr().out.split(": ", 1)[1].splitlines()[0])
+    assert outs[0] == outs[1]                       # the same verdict for the same picture
