@@ -101,19 +101,42 @@ def sphere(size: int = 64, radius: float = 0.8, density: float = 1.0,
     return (density * ramp).astype(np.float32), (h, h, h)
 
 
+MAX_BALL_SAMPLES = 50_000_000       # samples within the balls' boxes: a few seconds of numpy
 DEFAULT_BALLS = ((-0.35, 0.0, 0.0, 0.55), (0.35, 0.1, 0.0, 0.5), (0.0, -0.2, 0.35, 0.45))
+
+
+def _reach(axis: np.ndarray, centre: float, radius: float) -> tuple[int, int]:
+    """The index range of the samples of ``axis`` within ``radius`` of ``centre``."""
+    return (int(np.searchsorted(axis, centre - radius, "left")),
+            int(np.searchsorted(axis, centre + radius, "right")))
 
 
 def metaballs(size: int = 64, balls=DEFAULT_BALLS):
     """``balls``: rows ``x, y, z, R``; the surface is usually taken at iso 0.5."""
-    balls = np.asarray(balls, dtype=np.float64)
+    try:
+        balls = np.asarray(balls, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise VolumeError("balls must be rows [x, y, z, R] of numbers") from None
     if balls.ndim != 2 or balls.shape[1] != 4 or not len(balls) or np.any(balls[:, 3] <= 0):
         raise VolumeError("balls must be rows [x, y, z, R] with R > 0")
-    x, y, z, h = grid(size)
-    values = np.zeros(x.shape)
-    for cx, cy, cz, r in balls:
+    if not np.all(np.isfinite(balls)) or np.any(np.abs(balls) > 1e6) \
+            or np.any(balls[:, 3] < 1e-6):
+        raise VolumeError("balls must be finite numbers within ±10^6, each R at least 10^-6 "
+                          "(a NaN centre, or an R whose square is zero, draws nothing)")
+    n = samples_a_side(size)
+    axis = np.linspace(-1.0, 1.0, n)
+    boxes = [tuple(_reach(axis, c, r) for c in (cx, cy, cz)) for cx, cy, cz, r in balls]
+    work = sum((i1 - i0) * (j1 - j0) * (k1 - k0) for (i0, i1), (j0, j1), (k0, k1) in boxes)
+    if work > MAX_BALL_SAMPLES:
+        raise VolumeError(f"{len(balls):,} balls reach {work:,} samples in all; at most "
+                          f"{MAX_BALL_SAMPLES:,}: fewer or smaller balls, or a smaller size")
+    values = np.zeros((n, n, n))
+    for (cx, cy, cz, r), ((i0, i1), (j0, j1), (k0, k1)) in zip(balls, boxes):
+        # only the samples within R of the centre can change: its bounding box of samples
+        x, y, z = np.meshgrid(axis[i0:i1], axis[j0:j1], axis[k0:k1], indexing="ij")
         q = ((x - cx) ** 2 + (y - cy) ** 2 + (z - cz) ** 2) / (r * r)
-        values += np.where(q < 1.0, (1.0 - q) ** 3, 0.0)
+        values[i0:i1, j0:j1, k0:k1] += np.where(q < 1.0, (1.0 - q) ** 3, 0.0)
+    h = 2.0 / (int(size) - 1)
     return values.astype(np.float32), (h, h, h)
 
 

@@ -15,7 +15,9 @@ ray marching, each ray stopped at the depth of the opaque surface in its pixel.
    which is exact while no ray passes through two at once.
 
 ``settings.volume_step`` is not a setting yet: the step is :data:`STEP` of the smallest voxel
-side (world units), the default the exact-integral tests hold to 1/255.
+side (world units), the default the exact-integral tests hold to 1/255, but never so short
+that a ray across the box's diagonal takes more than :data:`MAX_STEPS` (a very anisotropic
+spacing).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from core.volume.data import volumes_of
 from core.volume.raymarch import march_volume
 
 STEP = 0.5                      # samples per voxel side: two
+MAX_STEPS = 8192                # steps a ray may take across a volume's whole diagonal
 
 
 def draw(scene, view, settings, frame, context, timer) -> None:
@@ -71,9 +74,13 @@ def draw(scene, view, settings, frame, context, timer) -> None:
 
 
 def step_of(volume) -> float:
-    """:data:`STEP` times the smallest world length of one sample step along an axis."""
+    """:data:`STEP` times the smallest world length of one sample step along an axis, but no
+    shorter than the box's diagonal over :data:`MAX_STEPS`: a volume whose spacing is 10^6
+    times longer along one axis than another would take 10^7 steps a ray at the short one."""
     m = volume.world_from_index()
-    return STEP * float(np.linalg.norm(m[:3, :3], axis=0).min())
+    step = STEP * float(np.linalg.norm(m[:3, :3], axis=0).min())
+    diagonal = float(np.linalg.norm(m[:3, :3] @ (np.array(volume.dims, np.float64) - 1.0)))
+    return max(step, diagonal / MAX_STEPS)
 
 
 def farthest_first(volumes, eye) -> list:

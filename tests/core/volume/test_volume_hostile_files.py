@@ -66,3 +66,30 @@ def test_a_plain_nrrd_still_reads(tmp_path):
     values, spacing = read_nrrd(path)
     assert values.shape == (2, 2, 2) and spacing == (1.0, 1.0, 1.0)
     assert np.array_equal(np.sort(values.ravel()), np.arange(8))
+
+
+def test_a_very_anisotropic_volume_steps_at_most_max_steps_along_its_diagonal():
+    import math
+    from core.volume.data import Volume
+    from core.volume.renderer import MAX_STEPS, STEP, step_of
+    transfer = np.array([[0.0, 1, 1, 1, 0.0], [1.0, 1, 1, 1, 1.0]])
+    values = np.zeros((64, 64, 64), np.float32)
+    flat = Volume(values=values, spacing=(1e-3, 1e3, 1e3), transfer=transfer)
+    diagonal = 63 * math.sqrt(1e-6 + 2e6)
+    assert step_of(flat) == pytest.approx(diagonal / MAX_STEPS, rel=1e-12)   # not 0.5e-3
+    even = Volume(values=values, spacing=(0.1, 0.1, 0.1), transfer=transfer)
+    assert step_of(even) == pytest.approx(STEP * 0.1, rel=1e-12)            # unchanged
+
+
+def test_metaballs_are_bounded_by_the_samples_they_reach_and_refuse_nan():
+    from core.volume import generators
+    with pytest.raises(VolumeError, match=r"20,000 balls reach .* samples in all; at most "
+                                          r"50,000,000"):
+        generators.metaballs(128, [(0.0, 0.0, 0.0, 0.5)] * 20_000)
+    for bad in ([(float("nan"), 0, 0, 0.5)], [(0, 0, 0, 1e-300)]):
+        with pytest.raises(VolumeError, match="finite numbers within"):
+            generators.metaballs(32, bad)
+    # many small balls are cheap: each touches only the samples of its own box
+    values, _ = generators.metaballs(128, [(x, 0.0, 0.0, 0.05) for x in
+                                           np.linspace(-0.9, 0.9, 2000)])
+    assert values.max() > 0.9
