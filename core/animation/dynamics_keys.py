@@ -37,6 +37,7 @@ from core.scene.formats.keys import register_scene_keys
 TOP_KEYS = ("dynamics", "body")
 DYNAMICS_KEYS = ("gravity", "step", "iterations", "planes", "spheres")
 BODY_KEYS = ("mesh", "mass", "velocity", "spin", "restitution", "friction", "shape")
+MIN_MASS = 1e-9                  # a mass whose inertia (mass x size²) still has an inverse
 MAX_MASS = 1e12
 START_GAP = 1e-9            # overlaps at t = 0 deeper than this (relative to the size) refuse
 
@@ -134,8 +135,9 @@ def _body(reader, table, path, scene, anim, tables) -> Body:
         raise reader.fail(path + ("mesh",), f"{name!r} is keyed ([[key]] object.{name}) and a "
                                             "body: its motion comes from one or the other")
     mass = reader.number(t.get("mass", 1.0), path + ("mass",), -math.inf, MAX_MASS)
-    if not mass > 0.0:
-        raise reader.fail(path + ("mass",), f"a body's mass must be greater than 0, got {mass:g}")
+    if not mass >= MIN_MASS:         # 5e-324 is > 0, and its inertia has no inverse
+        raise reader.fail(path + ("mass",), f"a body's mass must be at least {MIN_MASS:g}, "
+                                            f"got {mass:g}")
     meshes = [scene.meshes[i] for i in indices]
     primitive = meshes[0].tessellates if isinstance(meshes[0].tessellates, Sphere) else None
     shape = reader.choice(t.get("shape", "sphere" if primitive else "hull"), path + ("shape",),

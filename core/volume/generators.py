@@ -89,12 +89,26 @@ def shepp_logan(size: int = 128, variant: str = "modified"):
     return values, (h, h, h)
 
 
+def _point(value, name: str) -> np.ndarray:
+    """``value`` as a point of the cube's space: three finite numbers within ±10^3."""
+    try:
+        point = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        point = None
+    if point is None or point.shape != (3,) or not np.all(np.isfinite(point)) \
+            or np.any(np.abs(point) > 1e3):
+        raise VolumeError(f"{name} must be three finite numbers [x, y, z] within ±1000, not "
+                          f"{value!r}")
+    return point
+
+
 def sphere(size: int = 64, radius: float = 0.8, density: float = 1.0,
            center=(0.0, 0.0, 0.0)):
     if not 0.0 < radius <= 2.0:
         raise VolumeError(f"radius must lie in (0, 2], not {radius!r}")
     if not 0.0 < density <= 1e6:
         raise VolumeError(f"density must lie in (0, 1e6], not {density!r}")
+    center = _point(center, "center")
     x, y, z, h = grid(size)
     d = np.sqrt((x - center[0]) ** 2 + (y - center[1]) ** 2 + (z - center[2]) ** 2)
     ramp = np.clip((radius - d) / h + 0.5, 0.0, 1.0)      # each sample's partial volume

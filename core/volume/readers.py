@@ -177,8 +177,8 @@ def read_nifti(path: Path, shown: str | None = None):
         zooms = image.header.get_zooms()[:3]
     except VolumeError:
         raise
-    except (nibabel.filebasedimages.ImageFileError, OSError, ValueError, EOFError,
-            gzip.BadGzipFile) as error:
+    except (nibabel.filebasedimages.ImageFileError, nibabel.spatialimages.HeaderDataError,
+            OSError, ValueError, EOFError, gzip.BadGzipFile) as error:
         raise VolumeError(f"{shown}: not a readable NIfTI file (truncated or malformed: "
                           f"{error})") from None
     return checked_samples(data, shown), check_spacing(zooms, f"{shown}: voxel sizes")
@@ -234,8 +234,18 @@ def read_dicom(folder: Path, shown: str | None = None):
         raise VolumeError(f"{shown}: not a readable DICOM series ({type(error).__name__}: "
                           f"{error})") from None
     gaps = np.diff([position for position, _ in _positions(slices)])
-    spacing = tuple(float(s) for s in headers[0].PixelSpacing)[::-1] + (float(np.median(gaps)),)
+    spacing = _pixel_spacing(headers[0], files[0], shown) + (float(np.median(gaps)),)
     return checked_samples(pixels, shown), check_spacing(spacing, f"{shown}: spacing")
+
+
+def _pixel_spacing(ds, path: Path, shown: str) -> tuple[float, float]:
+    """(column, row) spacing from PixelSpacing (row, column): two numbers, else one line."""
+    try:
+        row, column = (float(s) for s in ds.PixelSpacing)
+    except (TypeError, ValueError):
+        raise VolumeError(f"{shown}: {path.name}: PixelSpacing must be two numbers (row and "
+                          f"column spacing), not {ds.PixelSpacing!r}") from None
+    return column, row
 
 
 def _positions(slices):

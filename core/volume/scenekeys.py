@@ -162,8 +162,11 @@ def generate(reader, t, path):
                           tuple(inspect.signature(make).parameters))
     try:
         return make(**params)
-    except (TypeError, ValueError) as error:      # VolumeError is a ValueError
+    except VolumeError as error:
         raise VolumeError(f"{name}: {error}") from None
+    except (TypeError, ValueError, IndexError, KeyError) as error:   # a param of a wrong shape
+        raise VolumeError(f"{name}: params {params!r} do not fit the generator "
+                          f"({type(error).__name__}: {error})") from None
 
 
 def placement(reader, value, path) -> np.ndarray:

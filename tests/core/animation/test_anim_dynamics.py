@@ -238,8 +238,9 @@ def test_the_body_moves_its_mesh_in_the_scene():
 
 
 @pytest.mark.parametrize("change,message", [
-    (("mass = 1.5", "mass = 0"), "test.toml:25: body[1].mass: a body's mass must be greater than 0, got 0"),
-    (("mass = 1.5", "mass = -2"), "body[1].mass: a body's mass must be greater than 0, got -2"),
+    (("mass = 1.5", "mass = 0"), "test.toml:25: body[1].mass: a body's mass must be at least 1e-09, got 0"),
+    (("mass = 1.5", "mass = -2"), "body[1].mass: a body's mass must be at least 1e-09, got -2"),
+    (("mass = 1.5", "mass = 5e-324"), "body[1].mass: a body's mass must be at least 1e-09, got 4.94066e-324"),
     (("[dynamics]", "[dynamics]\nstep = 0"), "dynamics.step: the time step must be a positive number of seconds, got 0"),
     (("[dynamics]", "[dynamics]\nstep = 1e9"), "dynamics.step: a step of 1e+09 s is longer than a frame (1/fps = 0.0333333 s)"),
     (("[dynamics]", "[dynamics]\nstep = 1e-9"), "dynamics.step: a step of 1e-09 s is below 1e-05 s"),

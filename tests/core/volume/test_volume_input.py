@@ -248,3 +248,33 @@ def test_mutated_volume_tables_are_read_or_refused_never_crash(tmp_path, seed):
         settings = RenderSettings.for_scene(scene, renderer="volume", size=(6, 5))
         frame = render(scene, scene.views[0], settings)
         assert frame.color.shape == (5, 6, 3)
+
+
+@pytest.mark.parametrize("spacing", [["0.5"], ["1", "2", "3"]])
+def test_a_dicom_pixel_spacing_that_is_not_two_numbers_is_one_line(tmp_path, spacing):
+    pydicom = need_module("pydicom", "DICOM series are read through pydicom")
+    paths = ct_series(tmp_path / "ct")
+    for path in paths:
+        ds = pydicom.dcmread(path)
+        ds.PixelSpacing = spacing
+        ds.save_as(path)
+    message = refused(tmp_path, 'file = "ct"\nmode = "mip"')
+    assert "PixelSpacing must be two numbers (row and column spacing)" in message
+
+
+def test_a_nifti_header_nibabel_refuses_is_one_line(tmp_path):
+    image = nibabel.Nifti1Image(np.ones((4, 4, 4), np.float32), np.eye(4))
+    path = tmp_path / "v.nii"
+    nibabel.save(image, str(path))
+    raw = bytearray(path.read_bytes())
+    raw[70:72] = (999).to_bytes(2, "little")          # datatype 999: no such code
+    path.write_bytes(bytes(raw))
+    message = refused(tmp_path, 'file = "v.nii"\nmode = "mip"')
+    assert "not a readable NIfTI file" in message
+
+
+@pytest.mark.parametrize("center", ["[0, 0]", "{ x = 1 }"])
+def test_a_generator_param_of_the_wrong_shape_is_one_line(tmp_path, center):
+    message = refused(tmp_path, f'generator = "sphere"\nparams = {{ size = 16, center = '
+                                f'{center} }}\nmode = "mip"')
+    assert "center must be three finite numbers [x, y, z] within" in message
