@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import re
 import sys
 from pathlib import Path
@@ -33,18 +34,24 @@ def inspect_main(scene, view, settings, pixel: str, as_json: bool) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 1
     if as_json:
-        print(json.dumps(record, indent=1, default=_jsonable))
+        print(json.dumps(strict_json(record), indent=1, allow_nan=False))
     else:
         print("\n".join(describe(record)))
     return 0
 
 
-def _jsonable(value):
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    raise TypeError(f"{type(value).__name__} is not JSON")
+def strict_json(value):
+    """``value`` with numpy's types made plain and each non-finite number written as the
+    string "inf", "-inf" or "nan" (JSON has no Infinity or NaN; a volume's record has them)."""
+    if isinstance(value, dict):
+        return {k: strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [strict_json(v) for v in value]
+    if isinstance(value, (np.generic, np.ndarray)):
+        return strict_json(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return "nan" if math.isnan(value) else ("inf" if value > 0 else "-inf")
+    return value
 
 
 def render_buffer(scene, view, settings, name: str, out: Path, write_png) -> int:

@@ -169,3 +169,13 @@ def test_a_16_bit_grey_picture_is_scaled_not_clipped(tmp_path, ours, capsys):
               str(tmp_path / "heat.png")])
         outs.append(capsys.readouterr().out.split(": ", 1)[1].splitlines()[0])
     assert outs[0] == outs[1]                       # the same verdict for the same picture
+
+
+def test_inspect_json_of_a_volume_is_strict_json(capsys):
+    import json
+    assert main(["inspect", str(SCENES_DIR / "volume_phantom.toml"), "--pixel", "5,5",
+                 "--json", "--size", "40x40"]) == 0
+    text = capsys.readouterr().out
+    assert "Infinity" not in text and "NaN" not in text
+    record = json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in the JSON"))
+    assert record["renderer"] == "volume" and '"inf"' in text      # said as a string
