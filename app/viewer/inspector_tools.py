@@ -71,6 +71,7 @@ class InspectorTools:
         self.wake = lambda: None                   # the window's: wakes its loop (any thread)
         self._job: dict | None = None              # the tool job running off the UI thread
         self._next_job: tuple | None = None        # the one asked for while it ran (newest)
+        self._scene_serial = 0                     # scenes opened so far (a job's is kept)
 
     # -- work off the UI thread --------------------------------------------------------------
     def off_thread(self, what: str, work, done) -> None:
@@ -86,7 +87,7 @@ class InspectorTools:
             return
         what, work, done = self._next_job
         self._next_job = None
-        job = {"what": what, "done": done}
+        job = {"what": what, "done": done, "scene": self._scene_serial}
 
         def run():
             try:
@@ -105,7 +106,9 @@ class InspectorTools:
         if job is None or job["thread"].is_alive():
             return False
         self._job = None
-        if "error" in job:
+        if job["scene"] != self._scene_serial:
+            log.info("%s: done for the scene before; dropped", job["what"])
+        elif "error" in job:
             error = job["error"]
             self.verdict = f"{job['what']} failed: {type(error).__name__}: {error}"
             log.error("%s", self.verdict, exc_info=error)
@@ -152,6 +155,19 @@ class InspectorTools:
         if self.buffer != PICTURE:
             self._show_buffer(self.buffer, "the new frame", quiet_loss=False)
         self.changed = True
+
+    def scene_changed(self) -> None:
+        """Another scene: the last one's pixel record, comparison, plots and buffer view go."""
+        self.record, self.lines, self.profile_row = None, [], None
+        self.heat, self.showing_heat, self.verdict = None, False, ""
+        self.buffer, self.overlay, self.changed = PICTURE, None, True
+        self.frame_ms.clear()
+        self.progress.clear()
+        self.convergence.clear()
+        self._next_job = None                      # a job asked for the old scene is not wanted
+        self._scene_serial += 1                    # and one running for it is dropped when done
+        if self.reference is not None:
+            self.reference.refresh(None)
 
     # -- inspect mode ------------------------------------------------------------------------
     def toggle_inspect(self, how: str) -> None:

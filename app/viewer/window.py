@@ -451,6 +451,9 @@ class ViewerWindow:
         if self.state.open_scene(source):
             log.info("action: %s -> opened %s (%s)", how, source, self.state.view_label)
             self.recent.add(source)
+            self._notice = ""             # what the panel said of the last scene goes with it
+            self.tools.scene_changed()
+            self.hands.message = ""
             for message in self.state.scene.view_messages:
                 print(f"invalid view: {message}", file=sys.stderr)
             glfw.set_window_title(self.window, self._title())

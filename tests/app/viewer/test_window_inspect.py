@@ -141,3 +141,24 @@ def test_the_tools_follow_the_frame_without_a_window():
     tools.settle()
     assert tools.buffer == PICTURE and tools.picture(state.frame) is state.frame.rgbx
     assert list(tools.frame_ms) == [pytest.approx(state.frame_seconds * 1e3)]
+
+
+def test_another_scene_clears_the_last_ones_record_comparison_and_buffer_view():
+    from app.viewer.inspector_tools import PICTURE, InspectorTools
+    from app.session.state import ViewerState
+    from core.paths import SCENES_DIR
+    state = ViewerState.open(SCENES_DIR / "cube.toml", size=SIZE)
+    state.set_shading("phong")
+    state.update()
+    tools = InspectorTools(state)
+    tools.inspect(120, 100, "test")
+    tools.settle()
+    tools.choose_buffer("depth", "test")
+    tools.settle()
+    assert tools.lines and tools.buffer == "depth"
+    tools.choose_buffer("normal", "test")          # still drawing when the scene changes
+    assert state.open_scene(SCENES_DIR / "sphere.toml")
+    tools.scene_changed()
+    tools.settle()
+    assert tools.lines == [] and tools.record is None and tools.buffer == PICTURE
+    assert tools.overlay is None and tools.verdict == "" and not tools.frame_ms
