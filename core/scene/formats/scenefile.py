@@ -436,6 +436,12 @@ class _Reader:
         for key in ("ka", "kd", "ks"):
             if key in t:
                 fields[key] = self.number(t[key], path + (key,), 0.0, 10.0)
+                if fields[key] > 1.0:      # the notes' coefficients lie in [0, 1]: said, drawn
+                    line = self.locate(path + (key,))
+                    self.notes.append(f"{self.file}{'' if line is None else f':{line}'}: "
+                                      f"{path_text(path + (key,))} = {fields[key]:g} is above "
+                                      f"the notes' 0 <= {key} <= 1 (it reflects more light "
+                                      f"than falls on it); drawn as given")
         if "n" in t:
             fields["n"] = self.number(t["n"], path + ("n",), 0.0, 1e4, above=0.0)
         for key in ("od", "os"):

@@ -666,3 +666,16 @@ def test_a_scene_of_many_big_generators_is_refused_before_it_takes_the_memory(tm
 def test_image_sizes_are_whole_and_bounded(size):
     with pytest.raises(ReaderError, match="image size"):
         load_scene(SCENES_DIR / "house.toml", size=size)
+
+
+def test_a_coefficient_above_one_is_drawn_as_given_and_said_with_its_line(tmp_path):
+    # FvDFH 16.2: 0 <= ka, kd, ks <= 1; a kd of 2 reflects more light than falls on it
+    from core.scene.formats import load_scene
+    path = tmp_path / "bright.toml"
+    path.write_text('name = "bright"\n[[geometry]]\ngenerator = "cube"\n'
+                    'material = { ka = 0.2, kd = 2.0, ks = 1.0 }\n')
+    scene = load_scene(path)
+    assert scene.meshes[0].material.kd == 2.0
+    assert [m for m in scene.messages if "above the notes'" in m] == [
+        f"{path}:4: geometry[1].material.kd = 2 is above the notes' 0 <= kd <= 1 (it reflects "
+        f"more light than falls on it); drawn as given"]
