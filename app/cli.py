@@ -221,6 +221,11 @@ def _matrices_parser(sub, scene_help: str) -> None:
     m.add_argument("--size", type=parse_size, default=(500, 500), help="viewport for M_vv3dv")
     m.add_argument("--keep-aspect", action="store_true", default=None,
                    help="letterbox the window in the viewport instead of stretching it")
+    m.add_argument("--general", default=None, metavar="ZP,Q,DX,DY,DZ",
+                   help="also print M_general (FvDFH eq. 6.18) for the projection plane z = ZP "
+                        "and a centre of projection Q from (0, 0, ZP) along (DX, DY, DZ); Q = "
+                        "inf: parallel (e.g. -1,1,0,0,1 is M_per with d = -1, 0,inf,0,0,-1 is "
+                        "M_ort)")
 
 
 def _plan_parser(sub, scene_help: str) -> None:
@@ -803,6 +808,15 @@ def _matrices(args) -> int:
     if args.projection == "perspective":
         out["M_per"] = project.m_per(-1.0).tolist()
         out["M"] = project.perspective_to_parallel(float(factors["z_min"])).tolist()
+    if args.general is not None:
+        try:
+            z_p, q, *direction = (float(c) for c in args.general.split(","))
+            if len(direction) != 3:
+                raise ValueError("expected five numbers: ZP,Q,DX,DY,DZ")
+            out["M_general"] = project.m_general(z_p, q, direction).tolist()
+        except ValueError as error:
+            print(f"error: --general {args.general}: {error}", file=sys.stderr)
+            return 2
     print(json.dumps(out, indent=2, ensure_ascii=False))
     return 0
 

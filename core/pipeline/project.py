@@ -27,6 +27,25 @@ def m_per(d: float = -1.0) -> np.ndarray:
     return m
 
 
+def m_general(z_p: float, q: float, direction) -> np.ndarray:
+    """M_general (FvDFH eq. 6.18): projection onto the plane ``z = z_p`` from the centre of
+    projection ``(0, 0, z_p) + q (dx, dy, dz)``, ``direction`` = (dx, dy, dz) a unit vector
+    with dz ≠ 0; ``q = inf``: a parallel projection along ``direction``. Its special cases:
+    M_per (z_p = d, q = |d|, direction (0, 0, -sign d): the centre at the origin), M'_per
+    (z_p = 0, q = d, (0, 0, -1)), M_ort (z_p = 0, q = inf, (0, 0, -1)) and the oblique
+    projections (q = inf). The course packet's entry (2, 3) reads z_p/(Q dz) + z_p; FvDFH's
+    is z_p²/(Q dz) + z_p, which alone gives M_per back (docs/departures.md)."""
+    dx, dy, dz = (float(c) for c in direction)
+    if dz == 0.0 or not np.isfinite([dx, dy, dz, z_p]).all() or not q > 0.0:
+        raise ValueError(f"M_general needs dz != 0, finite z_p and direction, and q > 0, not "
+                         f"z_p={z_p!r}, q={q!r}, direction={direction!r}")
+    inv = 0.0 if np.isinf(q) else 1.0 / (q * dz)       # 1 / (Q dz); 0 when Q is infinite
+    return np.array([[1.0, 0.0, -dx / dz, z_p * dx / dz],
+                     [0.0, 1.0, -dy / dz, z_p * dy / dz],
+                     [0.0, 0.0, -z_p * inv, z_p * z_p * inv + z_p],
+                     [0.0, 0.0, -inv, z_p * inv + 1.0]])
+
+
 def perspective_to_parallel(z_min: float) -> np.ndarray:
     """FvDFH eq. 6.48: maps the canonical perspective volume onto the parallel one (after /W)."""
     return np.array([[1.0, 0.0, 0.0, 0.0],
