@@ -106,6 +106,7 @@ NO_TRIANGLES = ("This scene has no triangles: it is drawn as lines whatever the 
                 "so the shading modes change nothing.")
 SCREENSHOTS_DIR = "screenshots"
 PROBLEM_COLOUR = (1.0, 0.45, 0.4, 1.0)     # the last error or refusal, top of the status
+PROGRESS_LINES = 3                         # the progress line's space, whatever it says
 # While a camera gesture waits for its frame, the window is drawn again at most this often.
 GESTURE_REDRAW_S = 1 / 30
 SAVED_VIEWS = "saved.views"        # View > Save view appends here (in the current folder)
@@ -1292,12 +1293,24 @@ class ViewerWindow:
             imgui.text("")
         else:
             imgui.text(f"{s.size[0]} x {s.size[1]}, frame {s.frame_seconds * 1e3:.1f} ms")
-        imgui.text_colored((0.55, 0.8, 1.0, 1.0), displayable(self._progress_text()))
+        self._progress_line(displayable(self._progress_text()))
         if self._notice:
             imgui.text_disabled(displayable(self._notice))
         self._cursor_line()
         imgui.pop_text_wrap_pos()
         imgui.separator()
+
+    def _progress_line(self, text: str) -> None:
+        """What runs, in a space of :data:`PROGRESS_LINES` lines whatever it says, so that the
+        timeline and the controls under it do not jump as a render starts and ends (a click
+        aimed at the slider used to land on the speed combo)."""
+        width = imgui.get_content_region_avail().x
+        line = imgui.get_text_line_height_with_spacing()
+        top = imgui.get_cursor_pos_y()
+        imgui.text_colored((0.55, 0.8, 1.0, 1.0), text)
+        used = imgui.get_cursor_pos_y() - top
+        if used < PROGRESS_LINES * line and width > 0:
+            imgui.dummy((1.0, PROGRESS_LINES * line - used))
 
     def _progress_text(self) -> str:
         """What the worker is doing, how long it has taken, and whether it compiles."""
