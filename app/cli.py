@@ -399,10 +399,13 @@ def _painter_arguments(parser: argparse.ArgumentParser, plan: bool = False) -> N
                                  "(nodes, splits, depth, build time; tests run)")
         parser.add_argument("--view", type=int, default=1, help="the view whose order to report")
         _options_arguments(parser)
-    parser.add_argument("--transparency", choices=("off", "interpolated", "screen-door"),
+    from core.settings import TRANSPARENCIES
+    parser.add_argument("--transparency", choices=tuple(TRANSPARENCIES),
                         default=None, help="z-buffer, bsp, depth-sort: materials with k_t > 0 "
                         "laid over the opaque picture (default: the scene's, else "
-                        "interpolated where a material has k_t > 0; off draws them opaque)")
+                        "interpolated where a material has k_t > 0; interpolated-specular: "
+                        "the near surface's ambient and diffuse interpolated, its specular "
+                        "added, the notes' more realistic recipe; off draws them opaque)")
     parser.add_argument("--shading-precision", choices=("float32", "float64"), default=None,
                         help="Phong's pixel step: float32 over each row, 8 pixels at a time "
                              "(default; within 1/255 of float64), or the textbook float64 "

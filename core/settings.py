@@ -63,7 +63,12 @@ MAX_FILTER_RADIUS = 8.0
 CLIPPERS = ("cohen-sutherland", "liang-barsky", "homogeneous")   # core.pipeline.clip.CLIPPERS
 RASTERIZERS = ("edge", "scanline")     # core.pipeline.raster, core.pipeline.raster_scanline
 BSP_ROOTS = ("first", "random", "fewest-splits")   # core.visibility.bsp.ROOT_RULES
-TRANSPARENCIES = ("off", "interpolated", "screen-door")   # core.effects.transparency.MODES
+# The transparency kinds (core.effects.transparency) and their names in the window's menu:
+# the one list the settings, the scene reader, the command line and the menu read.
+TRANSPARENCIES = {"off": "Opaque (k_t ignored)",
+                  "interpolated": "Interpolated",
+                  "interpolated-specular": "Interpolated, the near one's specular added",
+                  "screen-door": "Screen door"}
 MAX_SAMPLES = 256          # samples per pixel any input may ask for
 
 
@@ -109,7 +114,8 @@ class RenderSettings:
     # Depth shading's scalar (core.shading.depth.MODES): "height" (world y) | "view" (eye distance).
     depth_shading: str = "height"
     # Transparency of materials with k_t > 0 in the z-buffer family (core.effects.transparency):
-    # "off" (drawn opaque, as before) | "interpolated" | "screen-door".
+    # "off" (drawn opaque, as before) | "interpolated" | "interpolated-specular" |
+    # "screen-door" (TRANSPARENCIES).
     transparency: str = "off"
     # The clipper of lines (core.pipeline.clip) and polygons (core.pipeline.clip_polygon):
     # "cohen-sutherland" (the course's outcodes and Sutherland–Hodgman, in the canonical

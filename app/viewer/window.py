@@ -89,8 +89,6 @@ PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel
 # The Render menu lists the registry's renderers by their labels (core/registry.py): a renderer
 # registered there is in the menu with no line here. `r` flips between these two.
 RENDERER_KEYS = {"zbuffer": "R", "raytrace": "R"}
-TRANSPARENCY_LABELS = (("off", "Opaque (k_t ignored)"), ("interpolated", "Interpolated"),
-                       ("screen-door", "Screen door"))
 FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),
                  ("trilinear", "Trilinear (MIP map)"), ("anisotropic", "Anisotropic"))
 RASTERIZER_LABELS = (("edge", "Edge functions (perspective-correct)"),
@@ -1227,7 +1225,8 @@ class ViewerWindow:
             self.choose("depth_cue", not cued, "menu Render")
         imgui.text_disabled("Transparency (k_t > 0)")
         current = self.state.settings().transparency
-        for value, label in TRANSPARENCY_LABELS:
+        from core.settings import TRANSPARENCIES
+        for value, label in TRANSPARENCIES.items():
             if imgui.menu_item_simple(label, None, current == value):
                 self.choose("transparency", value, "menu Render")
 

@@ -9,6 +9,11 @@ laid over the frame where they lie in front of the opaque surface:
 
 - ``interpolated``: ``I = (1 - k_t) I_1 + k_t I_2``, ``I_1`` the transparent surface's own
   colour, ``I_2`` what was there (the opaque surface, or transparent ones painted before);
+- ``interpolated-specular``: the notes' "more realistic effect": the near surface's ambient and
+  diffuse interpolated with the far colour, then its specular added,
+  ``I = (1 - k_t) I_1,ad + k_t I_2 + I_1,s``, so a highlight on glass stays as bright as on
+  an opaque surface instead of being dimmed by ``1 - k_t``. The near surface is shaded twice,
+  as it is and with ``k_s = 0``: its specular is the difference;
 - ``screen-door``: the surface is drawn, with the depth test, only on the pixels of an
   ordered-dither mask (4 x 4 Bayer) whose share is its opacity ``1 - k_t``; the eye averages
   the mesh of pixels. Order-independent in principle; drawn in the same order here.
@@ -25,9 +30,10 @@ import dataclasses
 import numpy as np
 
 from core.jit import njit
+from core.settings import TRANSPARENCIES
 from core.shading.illumination import to_uint8
 
-MODES = ("off", "interpolated", "screen-door")
+MODES = tuple(TRANSPARENCIES)
 # The 4 x 4 ordered-dither (Bayer) matrix: a pixel shows the surface where
 # (B + 0.5) / 16 < opacity, so any 16 pixels of a tile show round(16 opacity) of them.
 BAYER = np.array([[0, 8, 2, 10], [12, 4, 14, 6], [3, 11, 1, 9], [15, 7, 13, 5]])
@@ -47,6 +53,19 @@ def split_scene(scene, context):
                                                    for m in clear]))
         cache["transparency split"] = held
     return held[1], held[2]
+
+
+def without_specular(clear, context):
+    """``clear`` with every material's ``k_s`` 0 (its ambient and diffuse alone), kept in the
+    context while ``clear`` lives."""
+    cache = context.cache(clear)
+    held = cache.get("without specular")
+    if held is None:
+        held = dataclasses.replace(clear, meshes=[
+            dataclasses.replace(m, material=dataclasses.replace(m.material, ks=0.0))
+            for m in clear.meshes])
+        cache["without specular"] = held
+    return held
 
 
 def with_transparency(draw):
@@ -96,8 +115,11 @@ def composite(clear, view, settings, frame, context) -> None:
     height, width = frame.color.shape[:2]
     # a painter lays them in its own order, the others in Newell's depth sort
     order = get_renderer(settings.renderer).painting or depth_sorted_painting
-    p = painting(clear, view, settings.replace(paint_first=None, samples=1), context,
-                 order=order)
+    drawn = settings.replace(paint_first=None, samples=1)
+    p = painting(clear, view, drawn, context, order=order)
+    specular_added = settings.transparency == "interpolated-specular"
+    p_ad = (painting(without_specular(clear, context), view, drawn, context, order=order)
+            if specular_added and p is not None else None)
     frame.stats["transparent triangles"] = 0 if p is None else int(len(p.triangles))
     if p is None or len(p.triangles) == 0:
         return
@@ -108,12 +130,18 @@ def composite(clear, view, settings, frame, context) -> None:
     frame.stats["transparency layers"] = int(layers.max()) + 1
     opacity_mask = (BAYER[np.arange(height)[:, None] % 4, np.arange(width)[None, :] % 4] + 0.5) / 16
     colour = np.empty((height, width, 3), np.uint8)
+    colour_ad = np.empty((height, width, 3), np.uint8)
     for layer in range(int(layers.max()) + 1):
         chosen = np.flatnonzero(layers == layer)
         one = Painting(p.device, p.inv_w, p.triangles[chosen], p.attrs, p.source[chosen],
                        p.inputs, {})
         vis = paint(one, width, height, context)
         resolve(one, vis, clear, settings, SimpleFrame(colour))
+        if p_ad is not None:               # the same triangles, shaded with k_s = 0
+            one_ad = Painting(p_ad.device, p_ad.inv_w, p_ad.triangles[chosen], p_ad.attrs,
+                              p_ad.source[chosen], p_ad.inputs, {})
+            resolve(one_ad, vis, without_specular(clear, context), settings,
+                    SimpleFrame(colour_ad))
         z = true_depth(vis, one)
         covered = vis.tri >= 0
         kt = np.zeros((height, width))
@@ -123,6 +151,12 @@ def composite(clear, view, settings, frame, context) -> None:
             front &= opacity_mask < 1.0 - kt
             frame.color[front] = colour[front]
             depth[front] = z[front]
+        elif p_ad is not None:
+            k = kt[front][:, None]
+            ad = colour_ad[front] / 255.0
+            specular = np.maximum(colour[front] / 255.0 - ad, 0.0)
+            blend = (1.0 - k) * ad + k * frame.color[front] / 255.0 + specular
+            frame.color[front] = to_uint8(blend)
         else:
             k = kt[front][:, None]
             blend = (1.0 - k) * colour[front] / 255.0 + k * frame.color[front] / 255.0

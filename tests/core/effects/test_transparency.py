@@ -87,3 +87,23 @@ def test_screen_door_tile_means(renderer):
     # half the pixels of every tile show the pane, half the square behind
     shown = (door[240:256, 240:256] == [153, 77, 0]).all(axis=2)
     assert shown.reshape(4, 4, 4, 4).sum(axis=(1, 3)).tolist() == [[8] * 4] * 4
+
+
+@pytest.mark.parametrize("renderer", ["zbuffer", "depth-sort"])
+def test_the_notes_second_recipe_adds_the_near_ones_specular_by_hand(renderer):
+    # FvDFH 16.5.1 / the notes (L2104): ambient + diffuse of the near surface interpolated with
+    # the far colour, then its specular added. Parallel along -z, the light along +z: R = V,
+    # so (R . V)^n = 1 and the pane's specular is k_s O_s = 0.3 in every channel.
+    shiny = Material(ka=0.5, kd=0.5, ks=0.3, n=10, od=PANE_OD, kt=KT, ior=AIR)
+    scene = _scene(shiny)
+    settings = RenderSettings.for_scene(scene, renderer=renderer, projection="parallel",
+                                        shading="phong")
+    ad = I1                                                   # (0.60, 0.30, 0.00)
+    added = tuple((1 - KT) * a + KT * b + 0.3 for a, b in zip(ad, I2))      # (0.66, 0.63, 0.60)
+    dimmed = tuple((1 - KT) * (a + 0.3) + KT * b for a, b in zip(ad, I2))   # (0.51, 0.48, 0.45)
+    for mode, value in (("interpolated-specular", added), ("interpolated", dimmed)):
+        frame = render(scene, scene.views[0], settings.replace(transparency=mode),
+                       RenderContext())
+        pane = frame.color[CENTRE].reshape(-1, 3).astype(int)
+        hand = np.array([int(255 * c + 0.5) for c in value])
+        assert (np.abs(pane - hand) <= 1).all(), (mode, pane[0], hand)
