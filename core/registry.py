@@ -33,6 +33,8 @@ What it can do:
 - ``samples_at_rest``: the samples per pixel the window draws it with when the user has not
   chosen a number (the path tracer's passes add up to it while the camera rests); None: the
   scene's;
+- ``analytic``: it intersects ``scene.primitives`` exactly (spheres that the reader left
+  untessellated, past the triangle budget, are drawn only by these);
 - ``volumes``: it draws a scene's emission–absorption and MIP volumes (every renderer draws an
   isosurface, which is a mesh);
 - ``ray_depth``: its frame keeps no depth buffer, and what each film sample shows is the first
@@ -88,6 +90,7 @@ class Renderer:
     progressive: bool = False
     progressive_drawer: str | None = None   # "package.module:function" (core.progressive)
     samples_at_rest: int | None = None      # the window's samples per pixel unless chosen
+    analytic: bool = False                  # draws scene.primitives exactly
     volumes: bool = False
     in_menu: bool = True
     inspector: str | None = None    # "package.module:function": inspect_pixel

@@ -183,6 +183,11 @@ def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,
                          + (" (transparency interpolated or screen-door shows it: "
                             "--transparency, or the Render menu)"
                             if renderer.transparency else ""))
+    untessellated = getattr(scene, "untessellated", ())
+    if untessellated and not renderer.analytic:
+        said.append(f"{len(untessellated):,} spheres past the triangle budget, which were not "
+                    f"tessellated: {_who('analytic')} draw them (Render > Ray traced, or "
+                    f"--renderer raytrace)")
     from core.volume.data import volumes_of
     marched = [v.name for v in volumes_of(scene) if v.mode != "isosurface"]
     if marched and not renderer.volumes:

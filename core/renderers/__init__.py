@@ -38,11 +38,12 @@ register_renderer("raycast", "core.renderers.raycast.draw:draw", samples_itself=
                   inspector="core.renderers.raycast.inspect:inspect_pixel",
                   description="the analytic surfaces ray-cast exactly (the reference)",
                   label="Ray cast (exact analytic surfaces)", in_menu=False, ray_depth=True,
+                  analytic=True,
                   drawn_by="ray cast (exact)")
 register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
                   inspector="core.raytrace.inspect:inspect_pixel",
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
-                  label="Ray traced", recursive=True, progressive=True,
+                  label="Ray traced", recursive=True, progressive=True, analytic=True,
                   progressive_drawer="core.raytrace.progressive:trace_progressively",
                   options="core.raytrace.options:RaytraceOptions", ray_depth=True,
                   blur_per_ray=True, drawn_by="ray traced", status="ray traced")

@@ -151,6 +151,9 @@ class Scene:
     renderer: str = "zbuffer"             # the scene file's renderer (core.registry)
     # Analytic surfaces (core.scene.primitives): ray casters intersect them exactly.
     primitives: list = field(default_factory=list)
+    # Those of them that no mesh draws: spheres past the triangle budget, which the reader did
+    # not tessellate (the renderers that trace primitives draw them; the others say so).
+    untessellated: list = field(default_factory=list)
     # The crease angle (degrees) the reader split vertices at (core.scene.normals.with_creases):
     # faces meeting at more than this keep their own normals along the edge.
     crease_angle: float = CREASE_ANGLE

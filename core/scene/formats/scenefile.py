@@ -53,6 +53,13 @@ from core.scene.formats.keys import (material_keys, material_readers, scene_read
 from core.scene.media import index_of_refraction
 
 MAX_NUMBER = MAX_COORDINATE
+MAX_ANALYTIC = 1_000_000       # spheres past the triangle budget the ray tracers take
+
+
+def sphere_triangles(segments: int) -> int:
+    """The triangles of a sphere's tessellation (``core.scene.primitives.tessellate``: a UV
+    sphere of ``segments`` meridians and ``segments // 2`` bands, 2 s (b - 1) triangles)."""
+    return 2 * segments * (max(2, segments // 2) - 1)
 
 GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
 # Analytic primitives (the ray tracer intersects them, the z-buffer draws them tessellated):
@@ -234,7 +241,9 @@ class _Reader:
             self.crease_angle = (self.number(doc["crease_angle"], ("crease_angle",), 0.0, 180.0)
                                  if "crease_angle" in doc else CREASE_ANGLE)
         meshes = self.scene_meshes(doc)
-        points = np.concatenate([m.positions for m in meshes])
+        points = np.concatenate([m.positions for m in meshes] + [
+            np.array([np.subtract(s.center, s.radius), np.add(s.center, s.radius)])
+            for s in self.analytic])        # the untessellated spheres' boxes: views, lights
         order = self.views(doc, points)
         views = [v for v in order if isinstance(v, View)]
         messages = [v for v in order if not isinstance(v, View)]
@@ -250,7 +259,8 @@ class _Reader:
         # planes through Mesh.tessellates).
         from core.scene.primitives import Sphere
         scene.primitives = list({id(m.tessellates): m.tessellates for m in meshes
-                                 if isinstance(m.tessellates, Sphere)}.values())
+                                 if isinstance(m.tessellates, Sphere)}.values()) + self.analytic
+        scene.untessellated = list(self.analytic)
         self.scene_options(doc, scene, size)
         for entry in scene_readers():                         # the systems' keys
             entry.read(self, doc, scene)
@@ -273,12 +283,24 @@ class _Reader:
                               _long_number_line(self.text)) from None
 
     def scene_meshes(self, doc: dict) -> list[Mesh]:
-        """Every [[geometry]] table's meshes, the scene's triangles kept to the limit."""
+        """Every [[geometry]] table's meshes, the scene's triangles kept to the limit. A sphere
+        whose tessellation would pass the limit is kept analytic only (:attr:`analytic`: the
+        ray tracers draw it; the rasterizers say they leave it out), up to
+        :data:`MAX_ANALYTIC` of them."""
         meshes, total = [], 0
+        self.analytic = []
         for i, g in enumerate(self.tables(doc["geometry"], ("geometry",))):
             self.budget = generators.MAX_TRIANGLES - total     # what a mesh file may still add
             if "primitive" in g:             # a sphere or plane: its tessellation, 1-2 meshes
-                meshes.extend(self.primitive(g, ("geometry", i + 1)))
+                found = self.primitive(g, ("geometry", i + 1), room=self.budget)
+                if not isinstance(found, list):
+                    self.analytic.append(found)
+                    if len(self.analytic) > MAX_ANALYTIC:
+                        raise self.fail(("geometry", i + 1), f"more than {MAX_ANALYTIC:,} "
+                                        f"spheres past the triangle budget: the ray tracer "
+                                        f"traces at most {MAX_ANALYTIC:,} analytic spheres")
+                    continue
+                meshes.extend(found)
             else:
                 meshes.append(self.geometry(g, ("geometry", i + 1)))
             # Each generator keeps to the limit; the scene as a whole must too, or a short
@@ -287,7 +309,7 @@ class _Reader:
             if total > generators.MAX_TRIANGLES:
                 raise self.fail(("geometry", i + 1), f"the scene would have {total} triangles "
                                 f"by here; the limit is {generators.MAX_TRIANGLES}")
-        if not meshes:
+        if not meshes and not self.analytic:
             raise self.fail(("geometry",), "a scene needs at least one [[geometry]] table")
         return meshes
 
@@ -472,9 +494,11 @@ class _Reader:
                 raise self.fail(path + ("ior",), str(error).removeprefix("ior: ")) from None
         return fields
 
-    def primitive(self, g, path: Path_) -> list[Mesh]:
+    def primitive(self, g, path: Path_, room: float = math.inf):
         """``primitive = "sphere"`` (center, radius) or ``"plane"`` (point, normal, checker,
-        checker_color, extent): the primitive, drawn by its tessellation's meshes."""
+        checker_color, extent): the primitive, drawn by its tessellation's meshes; a sphere
+        whose tessellation has more than ``room`` triangles is returned itself, untessellated
+        (the ray tracers draw it exactly)."""
         from core.scene.primitives import Plane, Sphere, tessellate
         self.table(g, path, ("primitive", "name", "material", "segments") + {
             "sphere": ("center", "radius"),
@@ -507,6 +531,10 @@ class _Reader:
             if shape.checker > 0.0 and 2 * shape.extent > 1000.0 * shape.checker:
                 raise self.fail(path + ("checker",), "over a million checker squares: make the "
                                 "squares bigger or the extent smaller")
+        if kind == "sphere" and sphere_triangles(int(segments)) > room:
+            if "name" in g:
+                self.string(g["name"], path + ("name",))      # checked all the same
+            return shape
         meshes = tessellate(shape, int(segments))
         if not all(np.all(np.abs(m.positions) <= MAX_NUMBER) for m in meshes):
             raise self.fail(path, f"the primitive reaches coordinates beyond {MAX_NUMBER:g}")
