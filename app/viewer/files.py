@@ -11,8 +11,8 @@
   without it. A file that has since gone stays listed, greyed, and says so when chosen.
 - :class:`FileDialog`: the native open / save dialog of imgui-bundle's portable file dialogs,
   polled once a frame so that it never blocks the window's thread; where no dialog program
-  exists (Linux without zenity, kdialog, matedialog or qarma) it says so and the typed path of
-  File > Open stays.
+  exists (Linux without zenity, kdialog, matedialog or qarma) the window's own dialog on
+  ImGui's widgets (:mod:`app.viewer.path_dialog`) takes its place.
 
 No GL and no window library here.
 """
@@ -177,23 +177,35 @@ def dialog_missing() -> str:
     return ""
 
 
+# What the in-window dialog lists besides folders, for each purpose (empty: every file).
+DIALOG_SUFFIXES = {"save view": (".views",), "save screenshot": (".png",)}
+
+
 class FileDialog:
-    """One native dialog at a time, polled without blocking (imgui-bundle's
-    portable_file_dialogs runs the system's dialog in another process)."""
+    """One dialog at a time, polled without blocking: the desktop's (imgui-bundle's
+    portable_file_dialogs runs the system's dialog in another process) where there is one,
+    else the window's own (:mod:`app.viewer.path_dialog`, drawn by :meth:`draw` each frame)."""
 
     def __init__(self):
         self._dialog = None
         self._purpose = ""
+        self.chooser = None                 # the in-window dialog, while it is open
+        self._title = ""
+        self._chosen: tuple[str, str] | None = None
 
     @property
     def open(self) -> bool:
-        return self._dialog is not None
+        return self._dialog is not None or self.chooser is not None
 
     def start(self, purpose: str, title: str, save: bool = False, default: str = "") -> str:
         """Show the dialog for ``purpose`` ("open", "save view" ...); returns "" or why not."""
-        why = dialog_missing()
-        if why or self._dialog is not None:
-            return why or "a file dialog is already open"
+        if self.open:
+            return "a file dialog is already open"
+        if dialog_missing():
+            from app.viewer.path_dialog import PathChooser
+            self.chooser = PathChooser(purpose, save, suffixes=DIALOG_SUFFIXES.get(purpose, ()))
+            self._title = title
+            return ""
         from imgui_bundle import portable_file_dialogs as pfd
         make = pfd.save_file if save else pfd.open_file
         try:
@@ -203,8 +215,21 @@ class FileDialog:
         self._purpose = purpose
         return ""
 
+    def draw(self, imgui, displayable) -> None:
+        """The in-window dialog, inside the GUI frame (nothing when it is not open)."""
+        if self.chooser is None:
+            return
+        from app.viewer.path_dialog import draw
+        still, path = draw(imgui, self.chooser, self._title, displayable)
+        if not still:
+            self._chosen = (self.chooser.purpose, str(path) if path is not None else "")
+            self.chooser = None
+
     def poll(self) -> tuple[str, str] | None:
         """``(purpose, path)`` once the user has chosen ("" path: cancelled); else None."""
+        if self._chosen is not None:
+            chosen, self._chosen = self._chosen, None
+            return chosen
         if self._dialog is None or not self._dialog.ready(0):
             return None
         result = self._dialog.result()

@@ -1028,6 +1028,7 @@ class ViewerWindow:
     def _build_gui(self) -> None:
         self._panel()
         self._popup()
+        self.dialog.draw(imgui, displayable)      # the window's own file dialog, when open
         self._popup_open = imgui.is_popup_open("", ANY_POPUP)
         self._close_popups = False
 

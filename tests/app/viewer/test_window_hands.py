@@ -466,13 +466,16 @@ def test_view_refuses_a_reference_that_is_not_a_png(tmp_path):
     assert "Traceback" not in done.stderr
 
 
-def test_without_a_dialog_program_the_dialog_says_so(monkeypatch):
+def test_without_a_dialog_program_the_windows_own_dialog_opens(monkeypatch):
     import shutil as shutil_module
 
     from app.viewer import files
     monkeypatch.setattr(files.sys, "platform", "linux")
     monkeypatch.setattr(shutil_module, "which", lambda name: None)
+    assert "no file dialog program found (zenity, kdialog" in files.dialog_missing()
     dialog = files.FileDialog()
-    why = dialog.start("open", "Open")
-    assert "no file dialog program found (zenity, kdialog" in why and "File > Open scene" in why
-    assert not dialog.open and dialog.poll() is None
+    assert dialog.start("save view", "Append the view", save=True) == ""
+    assert dialog.open and dialog.chooser is not None and dialog.chooser.save
+    assert dialog.chooser.suffixes == (".views",)
+    assert dialog.start("open", "Open") == "a file dialog is already open"
+    assert dialog.poll() is None
