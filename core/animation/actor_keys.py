@@ -28,7 +28,8 @@ import dataclasses
 
 import numpy as np
 
-from core.animation.actors import MAX_ACTOR_WORK, MAX_ACTORS, STEP, Group, behaviours
+from core.animation.actors import (MAX_ACTOR_STEPS, MAX_ACTOR_WORK, MAX_ACTORS, STEP, Group,
+                                   behaviours)
 from core.scene.formats.keys import register_scene_keys
 
 GROUP_KEYS = ("mesh", "count", "behaviours", "position", "spread", "velocity",
@@ -51,6 +52,10 @@ def read_actors(reader, doc: dict, scene) -> None:
             raise reader.fail(("actor", i + 1, "count"), f"{total:,} actors; at most "
                                                          f"{MAX_ACTORS:,}")
         steps = anim.duration / STEP
+        if steps > MAX_ACTOR_STEPS:
+            raise reader.fail(("actor", i + 1), f"{anim.duration:g} s of actors is "
+                              f"{steps:,.0f} steps of {STEP:.4g} s; at most "
+                              f"{MAX_ACTOR_STEPS:,} (a shorter animation)")
         if steps * len(group.meshes) ** 2 > MAX_ACTOR_WORK:
             raise reader.fail(("actor", i + 1, "count"),
                               f"{len(group.meshes):,} actors over {steps:,.0f} steps are "

@@ -39,6 +39,7 @@ LINKAGE_KEYS = ("name", "base", "solver", "effector", "interpolation", "damping"
 JOINT_KEYS = ("name", "axis", "bone", "min", "max", "meshes", "parent")
 KEY_KEYS = ("time", "target", "angles")
 MAX_JOINTS = 256
+MAX_SCENE_JOINTS = 1024         # all linkages together: a frame about two seconds at most
 
 
 def read_linkages(reader, doc: dict, scene) -> None:
@@ -50,8 +51,14 @@ def read_linkages(reader, doc: dict, scene) -> None:
         raise reader.fail(("linkage",), "a linkage needs an [animation] table (its duration "
                                         "and fps)")
     taken = {i for mover in anim.movers for i in mover.matrices_at(0.0)}
+    joints = 0
     for i, table in enumerate(reader.tables(doc["linkage"], ("linkage",))):
         linkage = read_linkage(reader, table, ("linkage", i + 1), scene, anim, taken)
+        joints += len(linkage.parent)
+        if joints > MAX_SCENE_JOINTS:       # each frame solves every joint: ~2 ms apiece here
+            raise reader.fail(("linkage", i + 1), f"{joints:,} joints in the scene's linkages "
+                                                  f"by here; at most {MAX_SCENE_JOINTS:,} (a "
+                                                  f"frame solves every one)")
         taken |= {m for meshes in linkage.carried for m in meshes}
         anim.movers.append(linkage)
 

@@ -161,3 +161,19 @@ def test_a_short_path_and_parameters_of_an_unused_behaviour_are_refused():
     with pytest.raises(ReaderError) as error:
         group(BASE + 'behaviours = ["flock"]\n[actor.avoid]\ndistance = 1\n')
     assert "actor[1].avoid: parameters for 'avoid', which is not in behaviours" in str(error.value)
+
+
+def test_a_day_of_one_actor_is_refused_by_its_steps_before_it_runs():
+    # 24 h at 1/120 s is 10,368,000 steps (~30 min here); at most 300,000
+    text = BASE.replace("duration = 10", "duration = 86400") + 'behaviours = ["flock"]\n'
+    with pytest.raises(ReaderError, match=r"actor\[1\]: 86400 s of actors is 10,368,000 steps "
+                                          r"of 0.008333 s; at most 300,000"):
+        read_scene_file(text, "actors.toml")
+
+
+def test_two_thousand_flocking_actors_for_four_seconds_are_refused_by_their_work():
+    # 480 steps x 2000² = 1.92e9 neighbour tests (~3 min here); at most 5e8
+    text = BASE.replace("duration = 10", "duration = 4") + 'count = 2000\nbehaviours = ["flock"]\n'
+    with pytest.raises(ReaderError, match=r"2,000 actors over 480 steps are 1.92e\+09 "
+                                          r"neighbour tests; at most 5e\+08"):
+        read_scene_file(text, "actors.toml")

@@ -355,3 +355,17 @@ def test_only_a_convex_mesh_gets_face_planes():
     assert len(face_planes(box.positions, box.positions, box.triangles)) == 6
     ring = torus(1.0, 0.3, 16, 8)
     assert len(face_planes(ring.positions, ring.positions, ring.triangles)) == 0
+
+
+def test_three_hundred_bodies_for_three_seconds_are_refused_by_their_work():
+    # 720 steps x (44,850 pairs + 300 x 1 sphere tests + hull points) x 17 passes: past 3e8
+    # (~200 ns a unit here: over a minute), said before a step is taken
+    balls = "".join(f'[[geometry]]\nprimitive = "sphere"\nname = "b{k}"\ncenter = '
+                    f'[{(k % 20) * 0.3 - 3:.2f}, {1 + (k // 20) * 0.3:.2f}, 0]\nradius = 0.1\n'
+                    f'segments = 8\n' for k in range(300))
+    bodies = "".join(f'[[body]]\nmesh = "b{k}"\n' for k in range(300))
+    text = ("name = \"many\"\n" + balls + VIEW + "[animation]\nduration = 3\nfps = 30\n"
+            "[dynamics]\nplanes = [{ point = [0, 0, 0], normal = [0, 1, 0] }]\n" + bodies)
+    with pytest.raises(ReaderError, match=r"300 bodies over 720 steps are .* contact tests; "
+                                          r"at most 3e\+08"):
+        read_scene_file(text, "many.toml")

@@ -186,3 +186,14 @@ def test_bad_linkages_get_one_clear_message(change, message):
     with pytest.raises(ReaderError) as error:
         read_scene_file(ARM.replace(*change), "arm.toml")
     assert message in str(error.value)
+
+
+def test_the_scenes_linkages_together_are_bounded_in_joints():
+    # every frame solves every joint (~2 ms each here): 1,024 joints in all at most
+    head = ARM.split("[[linkage]]")[0]
+    chain = "".join(f'[[linkage.joint]]\nname = "j{k}"\nbone = [0.01, 0, 0]\n'
+                    for k in range(256))
+    linkages = "".join(f'[[linkage]]\nname = "arm {i}"\n' + chain for i in range(5))
+    with pytest.raises(ReaderError, match=r"linkage\[5\]: 1,280 joints in the scene's linkages "
+                                          r"by here; at most 1,024"):
+        read_scene_file(head + linkages, "arms.toml")
