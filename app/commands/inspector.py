@@ -145,6 +145,7 @@ def _read_picture(path: str):
     import stat
     import warnings
     from PIL import Image, UnidentifiedImageError
+    from core.scene.model import MAX_IMAGE_SIDE
     try:
         mode = os.stat(path).st_mode
     except OSError as error:
@@ -160,7 +161,8 @@ def _read_picture(path: str):
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
             image = Image.open(path)
         with image:
-            if image.width * image.height > MAX_PICTURE_PIXELS:
+            if image.width * image.height > MAX_PICTURE_PIXELS or \
+                    max(image.width, image.height) > MAX_IMAGE_SIDE:
                 print(f"error: --image {path}: {image.width} x {image.height} pixels is larger "
                       f"than any picture we draw to compare with", file=sys.stderr)
                 return None

@@ -23,13 +23,17 @@ MAX_PIXELS = 64 << 20            # a reference larger than any window's picture 
 
 def load_reference(path: str | Path) -> np.ndarray:
     """The PNG at ``path`` as ``(H, W, 3)`` uint8; ValueError with the reason otherwise."""
+    import warnings
     from PIL import Image
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"--reference {path}: no such file" if not path.exists()
                          else f"--reference {path}: not a regular file")
     try:
-        with Image.open(path) as image:
+        with warnings.catch_warnings():      # its size is judged below, in one line
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            image = Image.open(path)
+        with image:
             if image.format != "PNG":
                 raise ValueError(f"--reference {path}: a {image.format} image, not a PNG")
             if image.width * image.height > MAX_PIXELS:

@@ -18,6 +18,7 @@ The samples then pass :func:`core.volume.data.checked_samples` (NaN and infinity
 from __future__ import annotations
 
 import gzip
+import logging
 import math
 import stat
 from pathlib import Path
@@ -166,6 +167,8 @@ def read_nifti(path: Path, shown: str | None = None):
     import nibabel                              # only when a NIfTI file is read
     shown = shown or str(path)
     file_size(path, shown)
+    quiet = logging.getLogger("nibabel")         # its "sizeof_hdr should be 348" lines: our
+    quiet.setLevel(logging.CRITICAL)             # one error line says what is wrong instead
     try:
         image = nibabel.load(str(path))
         shape = tuple(int(n) for n in image.header.get_data_shape())
@@ -226,7 +229,13 @@ def read_dicom(folder: Path, shown: str | None = None):
                 raise VolumeError(f"{shown}: {path.name} holds a {image.shape} image, not "
                                   f"{rows} x {cols}")
             slope, intercept = float(ds.get("RescaleSlope", 1)), float(ds.get("RescaleIntercept", 0))
-            pixels[:, :, k] = (image.astype(np.float64) * slope + intercept).T
+            with np.errstate(over="ignore", invalid="ignore"):    # judged just below
+                rescaled = (image.astype(np.float64) * slope + intercept).T
+            if not (np.all(np.abs(rescaled) <= np.finfo(np.float32).max)):
+                raise VolumeError(f"{shown}: {path.name}: RescaleSlope {slope:g} and "
+                                  f"RescaleIntercept {intercept:g} take its values beyond "
+                                  f"what a sample holds")
+            pixels[:, :, k] = rescaled
     except VolumeError:
         raise
     except (InvalidDicomError, AttributeError, KeyError, OSError, ValueError, TypeError,

@@ -179,3 +179,21 @@ def test_inspect_json_of_a_volume_is_strict_json(capsys):
     assert "Infinity" not in text and "NaN" not in text
     record = json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in the JSON"))
     assert record["renderer"] == "volume" and '"inf"' in text      # said as a string
+
+
+def test_a_picture_wider_than_any_framebuffer_is_refused_naming_the_file(tmp_path, capsys):
+    wide = tmp_path / "wide.png"
+    Image.new("L", (8_000_000, 1)).save(wide)
+    assert main(["compare", SCENE, "--image", str(wide)]) == 2
+    assert f"--image {wide}: 8000000 x 1 pixels is larger" in capsys.readouterr().err
+
+
+def test_a_reference_bomb_is_one_line_without_pils_warning(tmp_path):
+    import warnings
+    from app.viewer.reference import load_reference
+    bomb = tmp_path / "bomb.png"
+    Image.new("L", (12000, 12000)).save(bomb, optimize=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="12000 x 12000 pixels is larger than any picture"):
+            load_reference(bomb)

@@ -278,3 +278,17 @@ def test_a_generator_param_of_the_wrong_shape_is_one_line(tmp_path, center):
     message = refused(tmp_path, f'generator = "sphere"\nparams = {{ size = 16, center = '
                                 f'{center} }}\nmode = "mip"')
     assert "center must be three finite numbers [x, y, z] within" in message
+
+
+def test_a_dicom_rescale_slope_past_float32_is_one_line_and_no_warning(tmp_path):
+    import warnings
+    pydicom = need_module("pydicom", "DICOM series are read through pydicom")
+    paths = ct_series(tmp_path / "ct")
+    for path in paths:
+        ds = pydicom.dcmread(path)
+        ds.RescaleSlope = "1e308"
+        ds.save_as(path)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")                      # no RuntimeWarning reaches anyone
+        message = refused(tmp_path, 'file = "ct"\nmode = "mip"')
+    assert "RescaleSlope 1e+308 and RescaleIntercept" in message
