@@ -125,17 +125,49 @@ def _check_nrrd_skips(path: Path, header: dict, shown: str) -> None:
 
 
 def _check_nrrd_size(path: Path, header: dict, dims, data_start: int, shown: str) -> None:
-    """Raw-encoded data in the same file must be all there (the header's sizes × type)."""
-    if header.get("encoding", "raw") != "raw" or "data file" in header:
-        return
+    """Raw-encoded data in the same file must be exactly there (the header's sizes × type),
+    and gzip-encoded data must inflate to no more than that: a 6 MB stream of 6 GiB of zeros
+    is refused after the bytes the sizes need, not inflated whole."""
+    encoding = str(header.get("encoding", "raw")).strip().lower()
     itemsize = NRRD_SIZES.get(str(header.get("type", "")).strip().lower())
     if itemsize is None:
         return                                  # pynrrd names the type it does not know
-    need = data_start + math.prod(dims) * itemsize
-    have = file_size(path, shown)
-    if have < need:
-        raise VolumeError(f"{shown}: the file is truncated: it has {have} bytes, and sizes "
-                          f"{' x '.join(map(str, dims))} need {need}")
+    want = math.prod(dims) * itemsize
+    detached = "data file" in header
+    data, start = (path.parent / str(header["data file"]).strip(), 0) if detached else \
+        (path, data_start)
+    if encoding == "raw" and not detached and int(header.get("byte skip", 0)) == 0 \
+            and int(header.get("line skip", 0)) == 0:
+        have = file_size(path, shown)
+        if have != data_start + want:
+            what = "is truncated" if have < data_start + want else "is longer than its sizes say"
+            raise VolumeError(f"{shown}: the file {what}: it has {have} bytes, and sizes "
+                              f"{' x '.join(map(str, dims))} need {data_start + want}")
+    elif encoding in ("gzip", "gz"):
+        _check_inflated(data, start, want, shown)
+
+
+def _check_inflated(path: Path, start: int, want: int, shown: str) -> None:
+    """The gzip stream from byte ``start`` of ``path`` inflates to at most ``want`` bytes
+    (read a chunk at a time, never more than that kept)."""
+    import zlib
+    inflate = zlib.decompressobj(zlib.MAX_WBITS | 16)
+    made = 0
+    with open(path, "rb") as fh:
+        fh.seek(start)
+        while chunk := fh.read(1 << 20):
+            while chunk:
+                try:
+                    made += len(inflate.decompress(chunk, 1 << 24))
+                except zlib.error as error:
+                    raise VolumeError(f"{shown}: the gzip data cannot be read ({error})") \
+                        from None
+                if made > want:
+                    raise VolumeError(f"{shown}: the gzip data inflates past the {want:,} "
+                                      f"bytes its sizes need: refused before it fills memory")
+                chunk = inflate.unconsumed_tail
+            if inflate.eof:
+                return
 
 
 # Bytes per sample of each NRRD type name (the format's own spellings).

@@ -93,3 +93,24 @@ def test_metaballs_are_bounded_by_the_samples_they_reach_and_refuse_nan():
     values, _ = generators.metaballs(128, [(x, 0.0, 0.0, 0.05) for x in
                                            np.linspace(-0.9, 0.9, 2000)])
     assert values.max() > 0.9
+
+
+def test_a_gzip_bomb_is_refused_after_the_bytes_its_sizes_need(tmp_path):
+    import gzip
+    path = tmp_path / "bomb.nrrd"
+    head = NRRD_HEAD.replace("encoding: raw", "encoding: gzip") + "\n"
+    path.write_bytes(head.encode() + gzip.compress(bytes(200 * 1024 * 1024), 9))   # 200 MiB
+    assert path.stat().st_size < 1_000_000
+    with pytest.raises(VolumeError, match=r"inflates past the 8 bytes its sizes need"):
+        read_nrrd(path)
+    ok = tmp_path / "ok.nrrd"
+    ok.write_bytes(head.encode() + gzip.compress(bytes(range(8))))
+    values, _ = read_nrrd(ok)
+    assert np.array_equal(np.sort(values.ravel()), np.arange(8))
+
+
+def test_a_raw_nrrd_longer_than_its_sizes_is_refused(tmp_path):
+    path = tmp_path / "long.nrrd"
+    path.write_bytes((NRRD_HEAD + "\n").encode() + bytes(8 + 1000))
+    with pytest.raises(VolumeError, match=r"is longer than its sizes say"):
+        read_nrrd(path)
