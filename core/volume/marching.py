@@ -46,6 +46,7 @@ import math
 import numpy as np
 
 from core.jit import njit, prange
+from core.scene.generators import MAX_TRIANGLES
 from core.scene.model import Mesh
 from core.volume.data import VolumeError, check_iso
 
@@ -437,6 +438,10 @@ def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
         starts.append(counts)
     offsets = np.cumsum([0] + [int(c.sum()) for c in starts])
     total = int(offsets[-1])
+    if total > MAX_TRIANGLES:          # a surface has about two triangles a vertex
+        raise VolumeError(f"{where}: the surface at iso {iso:g} crosses {total:,} cell edges, "
+                          f"about {2 * total:,} triangles; at most {MAX_TRIANGLES:,} (a "
+                          f"smoother volume or another iso)")
     positions, normals = np.empty((total, 3)), np.empty((total, 3))
     for axis in range(3):
         first = offsets[axis] + np.cumsum(starts[axis])
@@ -446,6 +451,9 @@ def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
     cell_triangles(v, iso, *ids, tables, tri_counts, extra_counts,
                    np.empty((0, 3), np.int64), positions, normals, False)
     tri_starts, extra_starts = np.cumsum(tri_counts), total + np.cumsum(extra_counts)
+    if int(tri_starts[-1]) > MAX_TRIANGLES:
+        raise VolumeError(f"{where}: the surface at iso {iso:g} has {int(tri_starts[-1]):,} "
+                          f"triangles; at most {MAX_TRIANGLES:,}")
     triangles = np.empty((int(tri_starts[-1]), 3), np.int64)
     extra = int(extra_starts[-1]) - total
     positions = np.concatenate([positions, np.empty((extra, 3))])

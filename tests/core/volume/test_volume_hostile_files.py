@@ -114,3 +114,16 @@ def test_a_raw_nrrd_longer_than_its_sizes_is_refused(tmp_path):
     path.write_bytes((NRRD_HEAD + "\n").encode() + bytes(8 + 1000))
     with pytest.raises(VolumeError, match=r"is longer than its sizes say"):
         read_nrrd(path)
+
+
+def test_marching_cubes_refuses_a_surface_past_the_budget_before_building_it(monkeypatch):
+    import core.volume.marching as marching
+    monkeypatch.setattr(marching, "MAX_TRIANGLES", 1000)
+    noise = np.random.default_rng(0).random((32, 32, 32)).astype(np.float32)
+    with pytest.raises(VolumeError, match=r"noise: the surface at iso 0.5 crosses .* cell "
+                                          r"edges, about .* triangles; at most 1,000"):
+        marching.marching_cubes(noise, 0.5, "noise")
+    ball = np.fromfunction(lambda i, j, k: (i - 8.0) ** 2 + (j - 8.0) ** 2 + (k - 8.0) ** 2,
+                           (17, 17, 17))
+    positions, triangles, _ = marching.marching_cubes(ball, 25.0, "ball")   # within it
+    assert 0 < len(triangles) <= 1000
