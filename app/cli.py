@@ -134,7 +134,7 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
     sub = p.add_subparsers(dest="command", parser_class=_CommandParser)
     scene_help = ("a scene file (.toml), a .tri file, a mesh (.obj/.ply/.off/.stl), a bare view "
                   "file (shown with the house), or - for a view file on standard input")
-    _view_parser(sub, scene_help)
+    _view_parser(sub, scene_help, command)
     _render_parser(sub, scene_help)
     _radiosity_parser(sub, command)
     _matrices_parser(sub, scene_help)
@@ -144,9 +144,17 @@ def _parser(command: str | None = None, prog: str = "python -m app") -> argparse
     return p
 
 
-def _view_parser(sub, scene_help: str) -> None:
-    """``view``: the window, or PNGs when there is no display."""
-    v = sub.add_parser("view", help="open the viewer window (renders PNGs when there is no display)")
+def _view_parser(sub, scene_help: str, command: str | None = None) -> None:
+    """``view``: the window, or PNGs when there is no display; its help lists every key and
+    mouse action (the F1 panel's list, read only when ``view`` is the command)."""
+    epilog = None
+    if command == "view":
+        from app.viewer.hands import KEYS_HELP
+        epilog = "in the window:\n" + "\n".join(
+            f"  {key:<24} {what}" if what else f" {key}" for key, what in KEYS_HELP)
+    v = sub.add_parser("view", help="open the viewer window (renders PNGs when there is no "
+                       "display)", epilog=epilog,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     v.add_argument("scene", nargs="?", help=scene_help + "; default: the house")
     v.add_argument("--size", type=parse_size, default=None,
                    help="framebuffer size WxH (default: the scene's, 500x500)")

@@ -35,7 +35,7 @@ log = logging.getLogger("fvd")
 KEYS_HELP = (
     ("Mouse on the picture", ""),
     ("left click", "next view (inspect mode: the pixel's record)"),
-    ("left drag", "orbit about the VRP (arcball)"),
+    ("left drag", "orbit about the scene's centre (arcball; View menu: about the VRP)"),
     ("Shift+drag, middle drag", "pan the VRP in the view plane"),
     ("wheel", "dolly (perspective: the PRP along VPN; parallel: the window)"),
     ("Ctrl+wheel", "the window alone (field of view)"),

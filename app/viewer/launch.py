@@ -140,7 +140,9 @@ def _open_state(scene_source, size, options, started):
         chosen = {k: v for k, v in (options or {}).items() if v is not None}
         state = ViewerState.open(scene_source, size=tuple(size) if size else None, **chosen)
     except reader_errors() as error:
-        print(f"error: cannot open {scene_source}: {error}", file=sys.stderr)
+        reason = str(error)                # the readers' messages start with the file's name
+        print(f"error: cannot open {reason}" if reason.startswith(str(scene_source))
+              else f"error: cannot open {scene_source}: {reason}", file=sys.stderr)
         return None
     for message in state.scene.view_messages:
         print(f"invalid view: {message}", file=sys.stderr)

@@ -1269,7 +1269,8 @@ class ViewerWindow:
         imgui.text(displayable(f"{s.scene.name}: {s.view_label}"))
         if s.view_count:
             imgui.text_disabled(displayable(s.view.label))
-        rasterizer = f", {s.rasterizer} rasterizer" if s.has_triangles else ""
+        rasterizer = (f", {s.rasterizer} rasterizer"                 # the tracers have none
+                      if s.has_triangles and s.renderer_entry.rasterizes else "")
         imgui.text(f"{s.projection}, {s.shading}{rasterizer}")
         imgui.text("aspect kept (letterbox)" if s.keep_aspect
                    else "window stretched over the viewport")

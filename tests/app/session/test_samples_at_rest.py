@@ -33,3 +33,14 @@ def test_view_samples_on_the_command_line_reaches_the_state():
     from app.cli import _parser
     args = _parser("view").parse_args(["view", "scenes/cornell_box.toml", "--samples", "64"])
     assert args.samples == 64
+
+
+def test_view_help_lists_every_key_and_mouse_action():
+    import subprocess
+    import sys
+    from app.viewer.hands import KEYS_HELP
+    done = subprocess.run([sys.executable, "-m", "app", "view", "--help"], capture_output=True,
+                          text=True, timeout=60, cwd=ROOT)
+    assert done.returncode == 0
+    for key, what in KEYS_HELP:
+        assert key in done.stdout and what[:30] in done.stdout.replace("\n", " ")
