@@ -6,6 +6,8 @@
 - ``.tri``: the course's triangle file with its pixel-grid camera (:mod:`core.scene.formats.tri`);
 - ``.obj`` ``.ply`` ``.off`` ``.stl``: a mesh file (:mod:`core.scene.formats.mesh`), shown from
   three views that frame its bounding box (:mod:`core.scene.formats.camera`);
+- ``.gltf`` ``.glb``: a glTF 2.0 scene, its meshes, materials, cameras and lights
+  (:mod:`core.scene.formats.gltf`);
 - anything else: a bare view file (Assignment #1's input), shown with the FvDFH house;
 - ``-``: a view file on standard input (the course's ``prog < grade.data``).
 
@@ -23,6 +25,8 @@ from pathlib import Path
 from core.scene.formats.errors import (MAX_INPUT_BYTES, ReaderError, decode_text, read_file,
                                       read_stream, tolerant_of_underflow)
 from core.scene.formats.mesh import MESH_EXTENSIONS, read_mesh
+
+GLTF_EXTENSIONS = (".gltf", ".glb")   # core.scene.formats.gltf (imported when one is read)
 from core.scene.formats.scenefile import read_scene_file
 from core.scene.formats.tri import read_tri
 from core.scene.model import CREASE_ANGLE, MAX_IMAGE_SIDE, Scene
@@ -64,6 +68,9 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None,
         scene = read_tri(data, name, size)
     elif ext in MESH_EXTENSIONS:
         scene = _mesh_scene(read_mesh(data, name, ext), name, size)
+    elif ext in GLTF_EXTENSIONS:
+        from core.scene.formats.gltf import read_gltf
+        scene = read_gltf(data, name, path.parent, size)
     else:
         return _views_scene(decode_text(data, name), name, size)
     from core.scene.normals import with_creases
@@ -74,7 +81,8 @@ def load_scene(source: str | Path, size: tuple[int, int] | None = None,
 
 def input_kind(ext: str) -> str:
     """Which input-size limit (``errors.MAX_INPUT_BYTES``) a file with extension ``ext`` has."""
-    return {".toml": "scene", ".tri": "tri"}.get(ext, "mesh" if ext in MESH_EXTENSIONS else "views")
+    return {".toml": "scene", ".tri": "tri"}.get(
+        ext, "mesh" if ext in MESH_EXTENSIONS + GLTF_EXTENSIONS else "views")
 
 
 def _size(size, name: str) -> tuple[int, int]:

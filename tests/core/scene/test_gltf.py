@@ -1,0 +1,114 @@
+"""glTF 2.0 scenes (core.scene.formats.gltf): meshes with their node transforms, the
+metallic-roughness materials mapped to Cook-Torrance, a perspective camera as a course view
+held to a pinhole worked by hand, KHR_lights_punctual lights, and bad files in one line."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from core.render import render
+from core.scene.formats import ReaderError, load_scene
+from core.settings import RenderSettings
+
+
+def _pbr(rgba, metallic, roughness):
+    return trimesh.visual.TextureVisuals(material=trimesh.visual.material.PBRMaterial(
+        baseColorFactor=rgba, metallicFactor=metallic, roughnessFactor=roughness))
+
+
+def _two_objects():
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    box.visual = _pbr([255, 0, 0, 255], 0.0, 0.4)
+    ball = trimesh.creation.icosphere(3, 0.6)
+    ball.visual = _pbr([200, 200, 255, 255], 1.0, 0.3)
+    scene = trimesh.Scene()
+    scene.add_geometry(box, node_name="box",
+                       transform=trimesh.transformations.translation_matrix([1.2, 0, 0]))
+    scene.add_geometry(ball, node_name="ball",
+                       transform=trimesh.transformations.translation_matrix([-0.8, 0, 0]))
+    return scene
+
+
+def test_a_glb_gives_its_meshes_in_place_and_its_materials(tmp_path):
+    path = tmp_path / "two.glb"
+    path.write_bytes(_two_objects().export(file_type="glb"))
+    scene = load_scene(path)
+    box = next(m for m in scene.meshes if m.name == "box")
+    assert np.allclose(box.positions.mean(axis=0), [1.2, 0, 0], atol=1e-6)
+    assert len(box.triangles) == 12 and box.closed
+    # plastic: k_d = 1 - metallic, F0 = 0.04; metal: k_d = 0, F0 = its base colour
+    assert box.material.od == (1.0, 0.0, 0.0) and box.material.kd == 1.0
+    lighting = box.material.extra["lighting"]
+    assert lighting["model"] == "cook-torrance"
+    assert lighting["parameters"] == {"roughness": pytest.approx(0.4),
+                                      "f0": pytest.approx((0.04, 0.04, 0.04))}
+    ball = next(m for m in scene.meshes if m.name == "ball")
+    assert ball.material.kd == 0.0
+    assert ball.material.extra["lighting"]["parameters"]["f0"] == pytest.approx(
+        (200 / 255, 200 / 255, 1.0))
+    assert len(scene.views) == 3 and len(scene.lights) >= 1     # no camera: the framing views
+
+
+def _gltf_with_camera_and_lights(tmp_path):
+    files = _two_objects().export(file_type="gltf")
+    doc = json.loads(files["model.gltf"])
+    for name, data in files.items():
+        if name != "model.gltf":
+            (tmp_path / name).write_bytes(data)
+    doc["cameras"] = [{"type": "perspective", "perspective": {
+        "yfov": 0.8, "aspectRatio": 1.0, "znear": 0.1, "zfar": 100.0}}]
+    c = math.sqrt(0.5)
+    doc["nodes"] += [{"name": "eye", "camera": 0, "translation": [0, 0, 5]},
+                     {"name": "lamp", "translation": [2, 3, 4],
+                      "extensions": {"KHR_lights_punctual": {"light": 0}}},
+                     {"name": "sun", "rotation": [-c, 0, 0, c],        # -90° about x: down
+                      "extensions": {"KHR_lights_punctual": {"light": 1}}}]
+    count = len(doc["nodes"])
+    doc["scenes"][doc.get("scene", 0)]["nodes"] += [count - 3, count - 2, count - 1]
+    doc["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": [1.0, 0.5, 0.5], "intensity": 100.0},
+        {"type": "directional", "color": [0.5, 0.5, 0.5]}]}}
+    doc.setdefault("extensionsUsed", []).append("KHR_lights_punctual")
+    path = tmp_path / "lit.gltf"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_a_camera_becomes_a_course_view_and_the_picture_is_the_pinholes(tmp_path):
+    scene = load_scene(_gltf_with_camera_and_lights(tmp_path), size=(200, 200))
+    (view,) = scene.views
+    d = 5.0                                     # the bounds' centre is at z = 0
+    assert view.vpn == pytest.approx((0, 0, 1)) and view.vup == pytest.approx((0, 1, 0))
+    assert view.prp == pytest.approx((0, 0, d)) and view.vrp == pytest.approx((0, 0, 0), abs=1e-9)
+    half = d * math.tan(0.4)
+    assert view.window == pytest.approx((-half, half, -half, half))
+    assert (view.front, view.back) == pytest.approx((d - 0.1, d - 100.0))
+    # a pinhole at (0, 0, 5) looking down -z: the box's front face centre (1.2, 0, 0.5) lands
+    # at x = 1.2 / (4.5 tan 0.4) of the half-width right of the centre
+    frame = render(scene, view, RenderSettings.for_scene(scene, shading="flat"))
+    red = (frame.color[:, :, 0] > 60) & (frame.color[:, :, 1] < 30)
+    columns = np.nonzero(red.any(axis=0))[0]
+    expected = 100 + 100 * 1.2 / (4.5 * math.tan(0.4))
+    assert abs((columns.min() + columns.max()) / 2 - expected) <= 3.0
+    # the lights: the point light at its node, the directional one shining down its -z
+    point = next(li for li in scene.lights if li.position is not None)
+    sun = next(li for li in scene.lights if li.direction is not None)
+    assert point.position == pytest.approx((2, 3, 4)) and point.intensity == (1.0, 0.5, 0.5)
+    assert sun.direction == pytest.approx((0, 1, 0), abs=1e-9)     # towards the light: up
+
+
+@pytest.mark.parametrize("data, words", [
+    (b"not json at all", "not glTF JSON"),
+    (b'{"asset": {"version": "1.0"}}', "not a glTF 2.0 file"),
+    (b"glTF\x02\x00\x00\x00", "shorter than its 20-byte header"),
+])
+def test_bad_gltf_files_are_one_line(tmp_path, data, words):
+    path = tmp_path / ("bad.glb" if data.startswith(b"glTF") else "bad.gltf")
+    path.write_bytes(data)
+    with pytest.raises(ReaderError, match=words):
+        load_scene(path)
