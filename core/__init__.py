@@ -1,6 +1,7 @@
 """The CPU core of the viewer: every transform, clip, z-buffer test and shading step.
 
-``render(scene, view, settings) -> Frame`` is the one call; read the packages in pipeline order:
+``render(scene, view, settings) -> Frame`` is the one call (``render_file(path, shading=…)``
+for a scene file; a ``Frame`` shows itself in Jupyter); read the packages in pipeline order:
 
 - ``transforms`` — T, S, R, shear, unit vectors (FvDFH 5);
 - ``scene/`` — what is drawn: meshes with named attributes, materials, lights, analytic
@@ -29,10 +30,10 @@ os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 from core.camera.view import View, ViewError  # noqa: E402
 from core.context import RenderContext  # noqa: E402
-from core.render import Frame, render  # noqa: E402
+from core.render import Frame, render, render_file  # noqa: E402
 from core.scene.model import Light, Material, Mesh, Scene  # noqa: E402
 from core.settings import Projection, RenderSettings, Shading  # noqa: E402
 import core.systems  # noqa: E402,F401  (the systems' scene keys, registered before any file is read)
 
-__all__ = ["render", "Frame", "RenderContext", "RenderSettings", "Projection", "Shading", "View",
+__all__ = ["render", "render_file", "Frame", "RenderContext", "RenderSettings", "Projection", "Shading", "View",
            "ViewError", "Scene", "Mesh", "Material", "Light"]

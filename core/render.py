@@ -63,6 +63,15 @@ class Frame:
     def color(self) -> np.ndarray:
         return self.rgbx[:, :, :3]
 
+    def _repr_png_(self) -> bytes:
+        """The picture as PNG bytes: Jupyter shows a frame inline as it shows an image."""
+        import io
+
+        from PIL import Image
+        out = io.BytesIO()
+        Image.fromarray(np.ascontiguousarray(self.color)).save(out, format="PNG")
+        return out.getvalue()
+
 
 
 
@@ -124,6 +133,20 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     _say_what_is_not_drawn(scene, renderer, frame.stats, settings.transparency,
                            settings.shading)
     return frame
+
+
+def render_file(source, view: int = 1, size: tuple[int, int] | None = None,
+                context: RenderContext | None = None, **settings) -> Frame:
+    """A scene file's view ``view`` (counting from 1, as ``render --view``) drawn with the
+    scene's own settings and ``settings`` over them: ``render_file("scenes/cube.toml",
+    shading="phong")`` in a notebook shows the picture (:meth:`Frame._repr_png_`). Raises
+    the reader's error for a file that cannot be read, ValueError for a view it lacks."""
+    from core.scene.formats import load_scene
+    scene = load_scene(source, size=size)
+    if not 1 <= view <= len(scene.views):
+        raise ValueError(f"{source}: view {view} of {len(scene.views)} valid views")
+    chosen = RenderSettings.for_scene(scene, **settings)
+    return render(scene, scene.views[view - 1], chosen, context)
 
 
 def lit_as_asked(scene: Scene, settings: RenderSettings, context: RenderContext) -> Scene:
