@@ -119,8 +119,34 @@ def read_gltf(data: bytes, name: str, folder: Path, size) -> "Scene":
     return scene
 
 
+def _check_uris(doc: dict, folder: Path, name: str) -> None:
+    """Every external buffer and image a regular file inside the glTF's own folder (a URI
+    of ``../../etc/passwd`` reads nothing), within the mesh files' size limit."""
+    from urllib.parse import unquote
+
+    from core.scene.formats.errors import MAX_INPUT_BYTES
+    limit = MAX_INPUT_BYTES["mesh"]
+    home = folder.resolve()
+    for kind in ("buffers", "images"):
+        for index, item in enumerate(doc.get(kind, [])):
+            uri = item.get("uri") if isinstance(item, dict) else None
+            if not isinstance(uri, str) or uri.startswith("data:"):
+                continue
+            target = (folder / unquote(uri)).resolve()
+            where = f"{kind}[{index}] {uri!r}"
+            if home not in target.parents:
+                raise ReaderError(name, f"{where} lies outside the file's folder: not read")
+            if not target.is_file():
+                raise ReaderError(name, f"{where}: no such file beside it"
+                                  if not target.exists() else f"{where}: not a regular file")
+            if target.stat().st_size > limit:
+                raise ReaderError(name, f"{where} has {target.stat().st_size:,} bytes; at "
+                                        f"most {limit:,}")
+
+
 def _meshes(data: bytes, name: str, folder: Path, doc: dict, notes: list) -> list[Mesh]:
     import trimesh
+    _check_uris(doc, folder, name)
     kind = "glb" if data[:4] == GLB_MAGIC else "gltf"
     try:
         loaded = trimesh.load(io.BytesIO(data), file_type=kind, process=False,

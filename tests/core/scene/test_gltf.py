@@ -112,3 +112,34 @@ def test_bad_gltf_files_are_one_line(tmp_path, data, words):
     path.write_bytes(data)
     with pytest.raises(ReaderError, match=words):
         load_scene(path)
+
+
+def test_a_buffer_outside_the_files_folder_is_not_read(tmp_path):
+    files = _two_objects().export(file_type="gltf")
+    doc = json.loads(files["model.gltf"])
+    doc["buffers"][0]["uri"] = "../../etc/passwd"
+    path = tmp_path / "sneaky.gltf"
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ReaderError, match=r"buffers\[0\] '../../etc/passwd' lies outside the "
+                                          r"file's folder: not read"):
+        load_scene(path)
+
+
+def test_a_gltf_with_its_external_bin_loads_and_a_missing_bin_is_one_line(tmp_path):
+    path = _gltf_with_camera_and_lights(tmp_path)
+    assert len(load_scene(path).meshes) == 2
+    for other in tmp_path.iterdir():
+        if other.suffix == ".bin":
+            other.unlink()
+    with pytest.raises(ReaderError, match=r"buffers\[0\] .*: no such file beside it"):
+        load_scene(path)
+
+
+def test_a_node_graph_with_a_cycle_is_read_once_per_node():
+    from core.scene.formats.gltf import node_matrices
+    doc = {"nodes": [{"children": [1], "translation": [1, 0, 0]},
+                     {"children": [0], "translation": [0, 2, 0]}],
+           "scenes": [{"nodes": [0]}]}
+    world = node_matrices(doc)
+    assert sorted(world) == [0, 1]
+    assert world[1][:3, 3] == pytest.approx((1, 2, 0))
