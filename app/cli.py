@@ -278,10 +278,11 @@ def _tool_parsers(sub, command: str | None) -> None:
 def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
     """--renderer, the film's and the clipper's choices, and every renderer's own flags;
     None keeps the defaults."""
-    from core.renderers import renderer_names
-    parser.add_argument("--renderer", choices=renderer_names(), default=None,
-                        help="zbuffer (default), raycast, or raytrace (Whitted: shadows, "
-                             "mirrors, glass)")
+    from core.renderers import renderers
+    parser.add_argument("--renderer", choices=[r.name for r in renderers()], default=None,
+                        help="one of the registered renderers (default: the scene's, else "
+                             "zbuffer): " + "; ".join(f"{r.name}: {r.label or r.description}"
+                                                      for r in renderers()))
     parser.add_argument("--samples", type=_samples, default=None,
                         help="samples per pixel (1, 4, 9, 16 ...), or 'adaptive' (raytrace: "
                              "Whitted's adaptive supersampling, up to 16 a pixel, or up to "
