@@ -87,7 +87,8 @@ def material_keys() -> tuple[str, ...]:
 # The reader's own keys (scenefile.py reads them); registered ones may not take their names.
 _OWN_TOP_KEYS = ("name", "shading", "projection", "specular", "size", "ambient", "background",
                  "line_color", "views", "view", "geometry", "light", "keep_aspect",
-                 "rasterizer", "renderer", "crease_angle", "tone", "transparency")
+                 "rasterizer", "renderer", "crease_angle", "tone", "transparency",
+                 "coefficients")
 _OWN_ARRAYS = ("geometry", "light", "view")          # written [[geometry]], [[light]], [[view]]
 _OWN_MATERIAL_KEYS = ("ka", "kd", "ks", "n", "od", "os",
                       "kr", "kt", "ior",              # Whitted's global terms

@@ -235,6 +235,9 @@ class _Reader:
     def scene(self, size: tuple[int, int] | None) -> Scene:
         doc = self.parsed_document()
         self.table(doc, (), top_keys())
+        # the notes' 0 <= k <= 1 for ka, kd, ks, unless the file lifts it (up to 10)
+        self.unbounded = "coefficients" in doc and self.choice(
+            doc["coefficients"], ("coefficients",), ("notes", "unbounded")) == "unbounded"
         if "geometry" not in doc:
             raise self.fail((), "a scene needs at least one [[geometry]] table")
         if self.crease_angle is None:
@@ -458,12 +461,11 @@ class _Reader:
         for key in ("ka", "kd", "ks"):
             if key in t:
                 fields[key] = self.number(t[key], path + (key,), 0.0, 10.0)
-                if fields[key] > 1.0:      # the notes' coefficients lie in [0, 1]: said, drawn
-                    line = self.locate(path + (key,))
-                    self.notes.append(f"{self.file}{'' if line is None else f':{line}'}: "
-                                      f"{path_text(path + (key,))} = {fields[key]:g} is above "
-                                      f"the notes' 0 <= {key} <= 1 (it reflects more light "
-                                      f"than falls on it); drawn as given")
+                if fields[key] > 1.0 and not getattr(self, "unbounded", False):
+                    raise self.fail(path + (key,), f"{key} = {fields[key]:g} is outside the "
+                                    f"notes' 0 <= {key} <= 1 (it would reflect more light than "
+                                    f"falls on it); coefficients = \"unbounded\" at the top "
+                                    f"of the file allows up to 10")
         if "n" in t:
             fields["n"] = self.number(t["n"], path + ("n",), 0.0, 1e4, above=0.0)
         for key in ("od", "os"):

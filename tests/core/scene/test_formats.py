@@ -668,14 +668,18 @@ def test_image_sizes_are_whole_and_bounded(size):
         load_scene(SCENES_DIR / "house.toml", size=size)
 
 
-def test_a_coefficient_above_one_is_drawn_as_given_and_said_with_its_line(tmp_path):
+def test_a_coefficient_above_one_is_refused_naming_the_line_unless_the_file_lifts_it(tmp_path):
     # FvDFH 16.2: 0 <= ka, kd, ks <= 1; a kd of 2 reflects more light than falls on it
-    from core.scene.formats import load_scene
+    from core.scene.formats import ReaderError, load_scene
     path = tmp_path / "bright.toml"
     path.write_text('name = "bright"\n[[geometry]]\ngenerator = "cube"\n'
                     'material = { ka = 0.2, kd = 2.0, ks = 1.0 }\n')
-    scene = load_scene(path)
-    assert scene.meshes[0].material.kd == 2.0
-    assert [m for m in scene.messages if "above the notes'" in m] == [
-        f"{path}:4: geometry[1].material.kd = 2 is above the notes' 0 <= kd <= 1 (it reflects "
-        f"more light than falls on it); drawn as given"]
+    with pytest.raises(ReaderError) as error:
+        load_scene(path)
+    assert str(error.value) == (
+        f"{path}:4: geometry[1].material.kd: kd = 2 is outside the notes' 0 <= kd <= 1 (it "
+        f"would reflect more light than falls on it); coefficients = \"unbounded\" at the top "
+        f"of the file allows up to 10")
+    path.write_text('name = "bright"\ncoefficients = "unbounded"\n[[geometry]]\n'
+                    'generator = "cube"\nmaterial = { ka = 0.2, kd = 2.0, ks = 1.0 }\n')
+    assert load_scene(path).meshes[0].material.kd == 2.0
