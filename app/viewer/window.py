@@ -31,12 +31,13 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
 - the bump demo's scene (J3DPanel): a left click toggles bump / Phong, any other button
   cycles the four height maps, as in the demo.
 - the camera's hands (:mod:`app.viewer.hands`, docs/hands.md): a left drag past ImGui's drag
-  threshold orbits about the VRP (arcball), Shift or middle drag pans, the wheel dollies,
-  Ctrl+wheel changes the window, Enter returns to the file's view, ``f`` fits the scene,
-  Ctrl+S appends the view to ``saved.views``; a click without a drag keeps its meaning above;
+  threshold orbits about the scene's centre (or the VRP: View menu) by the arcball, Shift or
+  middle drag pans, the wheel dollies, Ctrl+wheel changes the window, Enter returns to the
+  file's view, ``f`` fits the scene, Ctrl+Z / Ctrl+Shift+Z undo and redo a camera move, Ctrl+S
+  appends the view to ``saved.views``; a click without a drag keeps its meaning above;
   Alt+wheel is the loupe (:mod:`app.viewer.loupe`); F1 the keys' help in the panel; a file
   dropped on the window opens (:mod:`app.viewer.files`, with File > Recent and the native
-  dialog);
+  dialog, or the window's own where the desktop has none: :mod:`app.viewer.path_dialog`);
 - the inspector (View menu too; :mod:`app.viewer.inspector_tools`): ``i`` inspect mode, where a
   left click shows the pixel's record in the panel; ``v`` the next buffer view (depth, normal,
   triangle id, ..., and a volume's axial, coronal and sagittal slices) in place of the
