@@ -40,6 +40,7 @@ from core.scene.formats.errors import ReaderError
 from core.scene.model import Light, Material, Mesh
 
 GLB_MAGIC = b"glTF"
+MAX_ITEMS = 100_000          # nodes, meshes, accessors … a file may list (10^6 nodes: refused)
 
 
 def document(data: bytes, name: str) -> dict:
@@ -57,9 +58,15 @@ def document(data: bytes, name: str) -> dict:
         doc = json.loads(text.decode("utf-8"))
     except (UnicodeDecodeError, ValueError, RecursionError) as error:
         raise ReaderError(name, f"not glTF JSON ({error})") from None
-    if not isinstance(doc, dict) or str(doc.get("asset", {}).get("version", "")).split(".")[0] \
-            != "2":
+    if not isinstance(doc, dict) or not isinstance(doc.get("asset"), dict) \
+            or str(doc["asset"].get("version", "")).split(".")[0] != "2":
         raise ReaderError(name, "not a glTF 2.0 file (asset.version must be 2.x)")
+    for part in ("nodes", "meshes", "accessors", "buffers", "images", "cameras"):
+        found = doc.get(part, [])
+        if not isinstance(found, list):
+            raise ReaderError(name, f"{part} must be a list")
+        if len(found) > MAX_ITEMS:
+            raise ReaderError(name, f"{len(found):,} {part}; at most {MAX_ITEMS:,}")
     return doc
 
 

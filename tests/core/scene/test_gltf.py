@@ -143,3 +143,10 @@ def test_a_node_graph_with_a_cycle_is_read_once_per_node():
     world = node_matrices(doc)
     assert sorted(world) == [0, 1]
     assert world[1][:3, 3] == pytest.approx((1, 2, 0))
+
+
+def test_a_million_nodes_are_refused_before_they_are_walked(tmp_path):
+    path = tmp_path / "many.gltf"
+    path.write_text(json.dumps({"asset": {"version": "2.0"}, "nodes": [{}] * 1_000_000}))
+    with pytest.raises(ReaderError, match=r"1,000,000 nodes; at most 100,000"):
+        load_scene(path)
