@@ -954,8 +954,9 @@ class ViewerWindow:
     def _cursor_line(self) -> None:
         """The status line's value under the cursor (through the loupe), and the loupe's m."""
         x, y = glfw.get_cursor_pos(self.window)
-        if self.state.frame is None or not self._on_picture(x, y):
-            return
+        if self.state.frame is None or not self._on_picture(x, y) or self._popup_open \
+                or self.dialog.open:
+            return                        # a menu or a dialog over the picture: not a pixel
         scale = self._scale()
         column, row = self.loupe.texel_at(x * scale, y * scale)
         zoom = f"loupe {self.loupe.magnification}x, " if self.loupe.magnification > 1 else ""
