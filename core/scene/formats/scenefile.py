@@ -143,10 +143,20 @@ class _Reader:
             if len(starts) < index:
                 return None
             start = starts[index - 1]
-            own = re.compile(rf"\s*\[\s*{re.escape(name)}\s*\.")
+            own = re.compile(rf"\s*\[\[?\s*{re.escape(name)}\s*\.")   # [t.x] and [[t.x]]
             later = self._tables[bisect.bisect_right(self._tables, start):]
             stop = next((i for i in later if not own.match(self.lines[i])), len(self.lines))
             keys = keys[2:]
+            # a nested array of tables ([[linkage.joint]] number k): its own header's block
+            while len(keys) >= 2 and isinstance(keys[0], str) and isinstance(keys[1], int):
+                sub = re.compile(rf"\s*\[\[\s*{re.escape(name)}\s*\.\s*"
+                                 rf"(?:{_spellings(keys[0])})\s*\]\]")
+                heads = [i for i in self._tables if start < i < stop and sub.match(self.lines[i])]
+                if len(heads) < keys[1]:
+                    break
+                start = heads[keys[1] - 1]
+                stop = next((i for i in self._tables if start < i < stop), stop)
+                name, keys = f"{name}.{keys[0]}", keys[2:]
         elif keys:                            # a top-level key: before the first table,
             stop = self._tables[0] if self._tables else len(self.lines)
             if isinstance(keys[0], str):      # or inside its own [table] ([animation])

@@ -197,3 +197,10 @@ def test_the_scenes_linkages_together_are_bounded_in_joints():
     with pytest.raises(ReaderError, match=r"linkage\[5\]: 1,280 joints in the scene's linkages "
                                           r"by here; at most 1,024"):
         read_scene_file(head + linkages, "arms.toml")
+
+
+def test_an_error_inside_a_joint_cites_the_joints_own_line():
+    lines = ARM.replace("bone = [0.7, 0, 0]", 'bone = "long"').splitlines()
+    wrong = next(i + 1 for i, line in enumerate(lines) if 'bone = "long"' in line)
+    with pytest.raises(ReaderError, match=rf"^arm.toml:{wrong}: linkage\[1\]\.joint\[2\]\.bone: "):
+        read_scene_file("\n".join(lines), "arm.toml")
