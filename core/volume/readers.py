@@ -21,6 +21,7 @@ import gzip
 import logging
 import math
 import stat
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -249,8 +250,11 @@ def read_dicom(folder: Path, shown: str | None = None):
     if len(files) < 2:
         raise VolumeError(f"{shown}: a DICOM series is a folder of at least 2 slice files, "
                           f"found {len(files)}")
+    logging.getLogger("pydicom").setLevel(logging.CRITICAL)    # our one line says it instead
     try:
-        headers = [pydicom.dcmread(p, stop_before_pixels=True) for p in files]
+        with warnings.catch_warnings():       # an invalid value's warning: checked below
+            warnings.simplefilter("ignore", UserWarning)
+            headers = [pydicom.dcmread(p, stop_before_pixels=True) for p in files]
         slices = _dicom_order(headers, files, shown)
         rows, cols = int(headers[0].Rows), int(headers[0].Columns)
         check_dims((cols, rows, len(slices)), shown)
@@ -306,6 +310,14 @@ def _dicom_order(headers, files, shown):
                     "PixelSpacing"):
             if key not in ds:
                 raise VolumeError(f"{shown}: {path.name} has no {key}")
+        for key, count in (("ImageOrientationPatient", 6), ("ImagePositionPatient", 3)):
+            try:
+                values = np.asarray(ds[key].value, dtype=np.float64).reshape(-1)
+            except (TypeError, ValueError):
+                values = np.array([])
+            if values.size != count or not np.all(np.isfinite(values)):
+                raise VolumeError(f"{shown}: {path.name}: {key} must be {count} finite numbers, "
+                                  f"not {ds[key].value!r}")
         if (ds.Rows, ds.Columns) != (first.Rows, first.Columns) or not np.allclose(
                 ds.ImageOrientationPatient, first.ImageOrientationPatient, atol=1e-4):
             raise VolumeError(f"{shown}: {path.name} is not of the series' size and "

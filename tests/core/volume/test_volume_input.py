@@ -292,3 +292,20 @@ def test_a_dicom_rescale_slope_past_float32_is_one_line_and_no_warning(tmp_path)
         warnings.simplefilter("error")                      # no RuntimeWarning reaches anyone
         message = refused(tmp_path, 'file = "ct"\nmode = "mip"')
     assert "RescaleSlope 1e+308 and RescaleIntercept" in message
+
+
+@pytest.mark.parametrize("key, value", [("ImageOrientationPatient", ["nan", 0, 0, 0, 1, 0]),
+                                        ("ImagePositionPatient", [0, "nan", 0])])
+def test_a_nan_dicom_orientation_or_position_names_the_slice_and_the_tag(tmp_path, key, value):
+    pydicom = need_module("pydicom", "DICOM series are read through pydicom")
+    paths = ct_series(tmp_path / "ct")
+    import warnings
+    ds = pydicom.dcmread(paths[1])
+    with warnings.catch_warnings():             # pydicom says 'nan' is no DS: the test's own
+        warnings.simplefilter("ignore", UserWarning)
+        setattr(ds, key, value)
+        ds.save_as(paths[1])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")          # the reader lets no warning reach the user
+        message = refused(tmp_path, 'file = "ct"\nmode = "mip"')
+    assert f"{paths[1].name}: {key} must be" in message and "finite numbers" in message
