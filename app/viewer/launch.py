@@ -110,7 +110,8 @@ def main(scene_source: str | None, size: tuple[int, int] | None = None,
     state = _open_state(scene_source, size, options, started)
     if state is None:
         return 2
-    window, reason, what = _open_window(state, out_dir, started, reference_image, reference)
+    window, reason, what = _open_window(state, out_dir, started, reference_image, reference,
+                                        enlarge=size is None)
     if reason is not None:
         return render_all_views(state, out_dir, reason, what)
     log.info("window open, %dx%d framebuffer (%.3f s after process start)",
@@ -154,14 +155,32 @@ def _open_state(scene_source, size, options, started):
     return state
 
 
-def _open_window(state, out_dir, started, reference_image, reference):
+MIN_PICTURE_HEIGHT = 480    # a window shorter than this cuts the panel off (robot_arm: 240)
+
+
+def enlarged(size: tuple[int, int]) -> tuple[int, int]:
+    """A scene's own picture size, scaled up (its aspect kept) to at least
+    :data:`MIN_PICTURE_HEIGHT` high, so that the panel beside it can be read."""
+    width, height = size
+    if height >= MIN_PICTURE_HEIGHT:
+        return width, height
+    k = MIN_PICTURE_HEIGHT / height
+    return max(1, round(width * k)), MIN_PICTURE_HEIGHT
+
+
+def _open_window(state, out_dir, started, reference_image, reference, enlarge=False):
     """(the window, None, _) once it is open; else (None, why not, what was missing), for
-    the PNGs rendered instead."""
+    the PNGs rendered instead. ``enlarge``: the size is the scene's own (no ``--size``), so a
+    small one is scaled up for the window (:func:`enlarged`)."""
     reason = None if display_available() else "DISPLAY and WAYLAND_DISPLAY are not set"
     what = "no display found"
     window = None
     if reason is None:
         what = "no window could be opened on this display"
+        if enlarge and enlarged(state.size) != state.size:
+            log.info("picture %dx%d: the scene's %dx%d scaled up so that the panel fits",
+                     *enlarged(state.size), *state.size)
+            state.resize(*enlarged(state.size))
         prime_kernels(state)
         try:
             from app.viewer.window import ViewerWindow, WindowError
