@@ -150,3 +150,44 @@ def test_a_million_nodes_are_refused_before_they_are_walked(tmp_path):
     path.write_text(json.dumps({"asset": {"version": "2.0"}, "nodes": [{}] * 1_000_000}))
     with pytest.raises(ReaderError, match=r"1,000,000 nodes; at most 100,000"):
         load_scene(path)
+
+
+def test_the_cameras_picture_agrees_with_llvmpipe_using_the_gltfs_own_matrices(tmp_path):
+    # The oracle: OpenGL draws the same world triangles with glTF's own camera: the view
+    # matrix is the inverse of the camera node's world matrix, the projection the glTF
+    # specification's perspective matrix of yfov, aspectRatio, znear, zfar. Which pixels are
+    # covered must agree with our course view of the same camera.
+    from tests.tools import llvmpipe_context
+    size = (200, 200)
+    scene = load_scene(_gltf_with_camera_and_lights(tmp_path), size=size)
+    ours = render(scene, scene.views[0], RenderSettings.for_scene(scene, shading="flat"))
+    covered = np.isfinite(ours.depth)
+    yfov, aspect, near, far = 0.8, 1.0, 0.1, 100.0
+    f = 1.0 / math.tan(yfov / 2)
+    projection = np.array([[f / aspect, 0, 0, 0], [0, f, 0, 0],
+                           [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)],
+                           [0, 0, -1, 0]])
+    camera = np.eye(4)
+    camera[:3, 3] = (0, 0, 5)                       # the "eye" node: a translation only
+    mvp = projection @ np.linalg.inv(camera)
+    ctx = llvmpipe_context()
+    try:
+        program = ctx.program(
+            vertex_shader="#version 330\nuniform mat4 mvp; in vec3 p;\n"
+                          "void main() { gl_Position = mvp * vec4(p, 1.0); }",
+            fragment_shader="#version 330\nout vec4 c; void main() { c = vec4(1.0); }")
+        program["mvp"].write(mvp.T.astype("f4").tobytes())        # GL is column-major
+        points = np.concatenate([m.positions[m.triangles].reshape(-1, 3) for m in scene.meshes])
+        buffer = ctx.buffer(points.astype("f4").tobytes())
+        vao = ctx.vertex_array(program, [(buffer, "3f", "p")])
+        target = ctx.simple_framebuffer(size)
+        target.use()
+        target.clear(0.0, 0.0, 0.0, 1.0)
+        vao.render()
+        gl = np.frombuffer(target.read(components=1), np.uint8).reshape(size[1], size[0])
+    finally:
+        ctx.release()
+    theirs = gl[::-1] > 0                           # GL's rows run bottom up
+    assert theirs.mean() > 0.1
+    # the same pixels but for the edges' rounding: a pixel or so along the outlines
+    assert np.mean(covered != theirs) < 0.01, np.mean(covered != theirs)
