@@ -38,6 +38,7 @@ import numpy as np
 
 from core.animation.rewind import Rewind
 from core.jit import njit
+from core.vectors import dot3, mat_t_vec3, mat_vec3
 
 DEFAULT_STEP = 1.0 / 240.0
 MIN_STEP = 1e-5                    # below this a second of motion is over 100,000 steps
@@ -120,32 +121,6 @@ def mass_properties(positions: np.ndarray, triangles: np.ndarray) -> tuple[float
 
 
 @njit(cache=True)
-def _dot(a, b):
-    """a · b of two 3-vectors. numba's np.dot and @ call BLAS, slow at this size: written
-    out (here, :func:`_mv`, :func:`_mtv`), a step of blocks_falling.toml fell from 2.8–6.5 ms
-    to 0.56–0.86 ms."""
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-@njit(cache=True)
-def _mv(m, v):
-    """m v for a 3 x 3 m (numba's @ calls BLAS's gemv)."""
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = m[i, 0] * v[0] + m[i, 1] * v[1] + m[i, 2] * v[2]
-    return out
-
-
-@njit(cache=True)
-def _mtv(m, v):
-    """mᵀ v for a 3 x 3 m."""
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = m[0, i] * v[0] + m[1, i] * v[1] + m[2, i] * v[2]
-    return out
-
-
-@njit(cache=True)
 def _matrix(q):
     """The rotation matrix of the unit quaternion q = (w, x, y, z), R v = q v q*."""
     w, x, y, z = q[0], q[1], q[2], q[3]
@@ -176,7 +151,7 @@ def _turned(q, w, h):
 def _omega(q, inv_body, L):
     """ω = R I_body⁻¹ Rᵀ L."""
     r = _matrix(q)
-    return _mv(r, _mv(inv_body, _mtv(r, L)))
+    return mat_vec3(r, mat_vec3(inv_body, mat_t_vec3(r, L)))
 
 
 @njit(cache=True)
@@ -215,8 +190,9 @@ def _k(b, arm, direction, q, inv_body, inv_mass):
     if inv_mass[b] == 0.0:
         return 0.0
     r = _matrix(q[b])
-    turned = _mv(r, _mv(inv_body[b], _mtv(r, np.cross(arm, direction))))     # I_world⁻¹ (r×d)
-    return inv_mass[b] + _dot(np.cross(turned, arm), direction)
+    # I_world⁻¹ (r × d)
+    turned = mat_vec3(r, mat_vec3(inv_body[b], mat_t_vec3(r, np.cross(arm, direction))))
+    return inv_mass[b] + dot3(np.cross(turned, arm), direction)
 
 
 @njit(cache=True)
@@ -237,7 +213,7 @@ def _resolve(a, b, point, normal, e, mu, x, vel, q, L, inv_mass, inv_body, v_res
     if b >= 0:
         rb = point - x[b]
         rel = rel - _point_velocity(b, rb, vel, q, L, inv_body)
-    vn = _dot(rel, normal)
+    vn = dot3(rel, normal)
     c = counter[0]
     counter[0] += 1
     kn = _k(a, ra, normal, q, inv_body, inv_mass) + (_k(b, rb, normal, q, inv_body, inv_mass) if b >= 0 else 0.0)
@@ -261,8 +237,8 @@ def _resolve(a, b, point, normal, e, mu, x, vel, q, L, inv_mass, inv_body, v_res
     rel = _point_velocity(a, ra, vel, q, L, inv_body)
     if b >= 0:
         rel = rel - _point_velocity(b, rb, vel, q, L, inv_body)
-    slip = rel - _dot(rel, normal) * normal
-    speed = math.sqrt(_dot(slip, slip))
+    slip = rel - dot3(rel, normal) * normal
+    speed = math.sqrt(dot3(slip, slip))
     if speed == 0.0 or cap <= 0.0:
         return
     t = slip / speed
@@ -293,10 +269,10 @@ def _sphere_flight(b, x, vel, q, L, inv_mass, inv_body, radius, rest, fric, plan
         first, which = left + 1.0, -1
         for p in range(len(plane_p)):
             n = plane_n[p]
-            vn = _dot(vel[b], n)
-            d0 = _dot(x[b] - plane_p[p], n) - radius[b]
+            vn = dot3(vel[b], n)
+            d0 = dot3(x[b] - plane_p[p], n) - radius[b]
             if vn < -v_rest and d0 >= 0.0:
-                tau = _impact_time(d0, vn, _dot(g, n), left)
+                tau = _impact_time(d0, vn, dot3(g, n), left)
                 if 0.0 <= tau < first:
                     first, which = tau, p
         if which < 0:
@@ -318,7 +294,7 @@ def _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_s
         n = plane_n[p]
         deepest = 0.0
         if shape[b] == 0:
-            depth = radius[b] - _dot(x[b] - plane_p[p], n)
+            depth = radius[b] - dot3(x[b] - plane_p[p], n)
             if depth > 0.0:
                 deepest = depth
                 if not push:
@@ -327,8 +303,8 @@ def _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_s
         else:
             r = _matrix(q[b])
             for k in range(hull_start[b], hull_start[b + 1]):
-                point = x[b] + _mv(r, hull[k])
-                depth = -_dot(point - plane_p[p], n)
+                point = x[b] + mat_vec3(r, hull[k])
+                depth = -dot3(point - plane_p[p], n)
                 if depth > 0.0:
                     deepest = max(deepest, depth)
                     if not push:
@@ -345,7 +321,7 @@ def _sphere_pass(a, b, c, rc, x, vel, q, L, inv_mass, inv_body, radius, rest, fr
     other = c if b < 0 else x[b]
     reach = radius[a] + (rc if b < 0 else radius[b])
     d = x[a] - other
-    dist = math.sqrt(_dot(d, d))
+    dist = math.sqrt(dot3(d, d))
     if dist >= reach or dist == 0.0:
         return
     n = d / dist
@@ -369,12 +345,12 @@ def _separation(a, b, x, q, hull, hull_start, faces, face_start):
     ra, rb = _matrix(q[a]), _matrix(q[b])
     best, which = -1e300, -1
     for f in range(face_start[b], face_start[b + 1]):
-        n = _mv(rb, faces[f, :3])
-        d = faces[f, 3] + _dot(n, x[b]) - _dot(n, x[a])
-        m = _mtv(ra, n)                     # n · (x_a + R_a h) = n · x_a + (R_aᵀ n) · h
+        n = mat_vec3(rb, faces[f, :3])
+        d = faces[f, 3] + dot3(n, x[b]) - dot3(n, x[a])
+        m = mat_t_vec3(ra, n)               # n · (x_a + R_a h) = n · x_a + (R_aᵀ n) · h
         low = 1e300
         for k in range(hull_start[a], hull_start[a + 1]):
-            low = min(low, _dot(m, hull[k]) - d)
+            low = min(low, dot3(m, hull[k]) - d)
         if low > best:
             best, which = low, f
     return best, which
@@ -399,7 +375,7 @@ def _hull_pass(a, b, x, vel, q, L, inv_mass, inv_body, hull, hull_start, faces, 
     else:
         ref, inc, face, depth, sign = a, b, face_ba, -sep_ba, -1.0
     rr, ri = _matrix(q[ref]), _matrix(q[inc])
-    n = _mv(rr, faces[face, :3])            # out of ref, into inc
+    n = mat_vec3(rr, faces[face, :3])            # out of ref, into inc
     if push:
         share = inv_mass[inc] / (inv_mass[inc] + inv_mass[ref])
         x[inc] += depth * share * n
@@ -408,8 +384,8 @@ def _hull_pass(a, b, x, vel, q, L, inv_mass, inv_body, hull, hull_start, faces, 
     e = math.sqrt(rest[a] * rest[b])
     mu = math.sqrt(fric[a] * fric[b])
     for k in range(hull_start[inc], hull_start[inc + 1]):
-        point = x[inc] + _mv(ri, hull[k])
-        local = _mtv(rr, point - x[ref])
+        point = x[inc] + mat_vec3(ri, hull[k])
+        local = mat_t_vec3(rr, point - x[ref])
         inside = True
         for f in range(face_start[ref], face_start[ref + 1]):
             if faces[f, 0] * local[0] + faces[f, 1] * local[1] + faces[f, 2] * local[2] > faces[f, 3]:
@@ -431,7 +407,7 @@ def _pair(a, b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_star
                      v_rest, push, cache, counter)
         return
     d = x[a] - x[b]
-    if _dot(d, d) >= (radius[a] + radius[b]) ** 2:
+    if dot3(d, d) >= (radius[a] + radius[b]) ** 2:
         return
     _hull_pass(a, b, x, vel, q, L, inv_mass, inv_body, hull, hull_start, faces, face_start,
                rest, fric, v_rest, push, cache, counter)

@@ -33,6 +33,7 @@ import math
 import numpy as np
 
 from core.jit import njit
+from core.vectors import mat_vec3
 
 DLS, CCD = 0, 1
 SOLVERS = ("dls", "ccd")
@@ -57,14 +58,6 @@ def _axis_rotation(a, angle):
 
 
 @njit(cache=True)
-def _mat_vec(r, v):
-    out = np.empty(3)
-    for i in range(3):
-        out[i] = r[i, 0] * v[0] + r[i, 1] * v[1] + r[i, 2] * v[2]
-    return out
-
-
-@njit(cache=True)
 def _mat_mat(a, b):
     out = np.empty((3, 3))
     for i in range(3):
@@ -82,9 +75,9 @@ def chain_pose(base, axes, bones, theta, points, world_axes):
     r = np.eye(3)
     points[0] = base
     for i in range(len(theta)):
-        world_axes[i] = _mat_vec(r, axes[i])
+        world_axes[i] = mat_vec3(r, axes[i])
         r = _mat_mat(r, _axis_rotation(axes[i], theta[i]))
-        points[i + 1] = points[i] + _mat_vec(r, bones[i])
+        points[i + 1] = points[i] + mat_vec3(r, bones[i])
     return r
 
 
@@ -103,7 +96,7 @@ def _solve3(a, e):
     inv[0, 2] = a[0, 1] * a[1, 2] - a[0, 2] * a[1, 1]
     inv[1, 2] = a[0, 2] * a[1, 0] - a[0, 0] * a[1, 2]
     inv[2, 2] = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
-    return _mat_vec(inv, e) / det
+    return mat_vec3(inv, e) / det
 
 
 @njit(cache=True)
