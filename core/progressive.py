@@ -86,6 +86,26 @@ def snapshot(frame):
                        stats=dict(frame.stats))
 
 
+def coarse_picture(scene, view, settings, context, render, control, factor: int,
+                   unit: str = "pixel"):
+    """One sample per ``factor`` x ``factor`` pixels through the front door (its checks and
+    messages), timed for :func:`note_rate`, reported as the coarse pass, and returned upscaled
+    by pixel repetition in a frame of the full size that carries the small one's plan,
+    message and stats (``unit``: what a sample is, for the words: "ray", "path")."""
+    width, height = settings.size
+    small = coarse_size(width, height, factor)
+    control.report(0.0, f"coarse pass (one {unit} per {factor} x {factor} pixels)")
+    began = time.perf_counter()
+    coarse = render(scene, view, settings.replace(size=small, samples=1), context)
+    note_rate(context, settings.renderer or "zbuffer", time.perf_counter() - began,
+              small[0] * small[1])
+    frame = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
+                         message=coarse.message, stats=dict(coarse.stats))
+    frame.color[:] = upscale(coarse.color, factor, width, height)
+    frame.stats["pass"] = f"coarse (1 {unit} per {factor} x {factor} pixels)"
+    return frame
+
+
 def coarse_then_full(scene, view, settings, context, render, control=None):
     """The frame at 1/``f`` of its size through the front door (``f`` from
     :func:`coarse_factor`), handed over upscaled by pixel repetition, then the full frame
@@ -101,16 +121,9 @@ def coarse_then_full(scene, view, settings, context, render, control=None):
         note_rate(context, key, (time.perf_counter() - start) / settings.samples, width * height)
         frame.stats["pass"] = "final"
         return frame
-    small = coarse_size(width, height, factor)
-    control.report(0.0, f"coarse pass (one pixel in {factor} x {factor})")
-    start = time.perf_counter()
-    coarse = render(scene, view, settings.replace(size=small, samples=1), context)
-    note_rate(context, key, time.perf_counter() - start, small[0] * small[1])
-    if coarse.message:                        # an invalid view: said once, nothing to refine
-        return coarse
-    shown = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
-                         stats={**coarse.stats, "pass": f"coarse (1 pixel in {factor} x {factor})"})
-    shown.color[:] = upscale(coarse.color, factor, width, height)
+    shown = coarse_picture(scene, view, settings, context, render, control, factor)
+    if shown.message:                         # an invalid view: said once, nothing to refine
+        return shown
     control.partial(shown)
     control.check()
     control.report(0.2, "full frame")

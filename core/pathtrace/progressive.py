@@ -12,25 +12,8 @@ import time
 
 import numpy as np
 
-from core.progressive import (COARSE_FIRST, PARTIAL_EVERY, Quiet, coarse_factor, coarse_size,
-                              note_rate, snapshot, upscale)
-
-
-def _coarse(scene, view, settings, context, render, control):
-    """The one-sample picture at 1/f of the size through the front door (its checks and
-    messages), handed over upscaled: (the full-size frame that carries it, its message)."""
-    width, height = settings.size
-    factor = coarse_factor(context, "pathtrace", width, height, COARSE_FIRST, least=2)
-    small = coarse_size(width, height, factor)
-    control.report(0.0, f"coarse pass (one path per {factor} x {factor} pixels)")
-    began = time.perf_counter()
-    coarse = render(scene, view, settings.replace(size=small, samples=1), context)
-    note_rate(context, "pathtrace", time.perf_counter() - began, small[0] * small[1])
-    frame = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
-                         message=coarse.message, stats=dict(coarse.stats))
-    frame.color[:] = upscale(coarse.color, factor, width, height)
-    frame.stats["pass"] = f"coarse (1 path per {factor} x {factor} pixels)"
-    return frame
+from core.progressive import (COARSE_FIRST, PARTIAL_EVERY, Quiet, coarse_factor, coarse_picture,
+                              note_rate, snapshot)
 
 
 def pathtrace_progressively(scene, view, settings, context, render, control=None):
@@ -39,14 +22,15 @@ def pathtrace_progressively(scene, view, settings, context, render, control=None
     from core.radiosity.tone import tone_map
     from core.shading.illumination import to_uint8
     control = control or Quiet()
-    frame = _coarse(scene, view, settings, context, render, control)
+    width, height = settings.size
+    factor = coarse_factor(context, "pathtrace", width, height, COARSE_FIRST, least=2)
+    frame = coarse_picture(scene, view, settings, context, render, control, factor, "path")
     if frame.message:                         # an invalid view: said once, nothing to refine
         return frame
     if not has_light(scene):                  # the renderer's own message for a dark scene
         return render(scene, view, settings, context)
     control.partial(snapshot(frame))
     passes = settings.samples
-    width, height = settings.size
     total = np.zeros((height, width, 3))
     start = last = time.perf_counter()
     try:

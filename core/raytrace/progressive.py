@@ -24,8 +24,7 @@ import time
 
 import numpy as np
 
-from core.progressive import (PARTIAL_EVERY, Quiet, coarse_factor, coarse_size, note_rate,
-                              snapshot, upscale)
+from core.progressive import PARTIAL_EVERY, Quiet, coarse_factor, coarse_picture, snapshot
 
 COARSE = 8                # the first picture before a rate is known: one ray per 8 x 8 pixels
 TILE = 32                 # refinement tiles, pixels a side
@@ -51,17 +50,9 @@ def trace_progressively(scene, view, settings, context, render, control=None):
     settings = settings.replace(renderer="raytrace")
     width, height = settings.size
     factor = coarse_factor(context, "raytrace", width, height, COARSE, least=2)
-    small = coarse_size(width, height, factor)
-    control.report(0.0, f"coarse pass (one ray per {factor} x {factor} pixels)")
-    began = time.perf_counter()
-    coarse = render(scene, view, settings.replace(size=small, samples=1), context)
-    note_rate(context, "raytrace", time.perf_counter() - began, small[0] * small[1])
-    frame = type(coarse)(rgbx=np.empty((height, width, 4), np.uint8), plan=coarse.plan,
-                         message=coarse.message, stats=dict(coarse.stats))
-    frame.color[:] = upscale(coarse.color, factor, width, height)
-    if coarse.message:                        # an invalid view, nothing to trace: said once
+    frame = coarse_picture(scene, view, settings, context, render, control, factor, "ray")
+    if frame.message:                         # an invalid view, nothing to trace: said once
         return frame
-    frame.stats["pass"] = f"coarse (1 ray per {factor} x {factor} pixels)"
     control.partial(snapshot(frame))
     setup = _prepare(scene, view, settings)
     boxes = tiles(width, height, TILE)
