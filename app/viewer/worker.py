@@ -155,11 +155,6 @@ class RenderWorker:
             self._collected = result.generation
             return result
 
-    def is_current(self, result: Result) -> bool:
-        """Is ``result`` for the newest request (not a picture a newer request overtook)?"""
-        with self._lock:
-            return result.generation == self._generation
-
     @property
     def waiting(self) -> bool:
         """Is a frame request not yet collected (queued, running, or done but not shown)?"""
@@ -190,19 +185,21 @@ class RenderWorker:
         self._wake()
 
     def _post(self, result: Result, job: Job | None = None) -> None:
-        """Keep ``result`` for :meth:`collect` unless a newer one waits there, it is older than
-        the floor, or its job, superseded, already handed over a picture."""
         with self._lock:
-            first = job is None or not job.posted
-            if job is not None:
-                job.posted = True
-            superseded = result.generation != self._generation
-            waiting = self._result.generation if self._result is not None else 0
-            if (result.generation < max(self._floor, waiting, self._collected)
-                    or (superseded and not first)):
-                return
-            self._result = result
+            self._keep(result, job)
         self._wake()
+
+    def _keep(self, result: Result, job: Job | None) -> None:
+        """(The lock held.) Keep ``result`` for :meth:`collect` unless a newer one waits there,
+        it is older than the floor, or its job, superseded, already handed over a picture."""
+        first = job is None or not job.posted
+        if job is not None:
+            job.posted = True
+        superseded = result.generation != self._generation
+        waiting = self._result.generation if self._result is not None else 0
+        if (result.generation >= max(self._floor, waiting, self._collected)
+                and not (superseded and not first)):
+            self._result = result
 
     def _next(self):
         with self._lock:
@@ -241,9 +238,9 @@ class RenderWorker:
                 logging.getLogger("fvd").warning("background job %r failed: %s: %s", job.what,
                                                  type(result.error).__name__, result.error)
             with self._lock:
-                self._running = ""
+                self._running = ""      # and its result kept at once: never "not waiting"
                 if job.generation < 0:
                     self._done += 1
-            if job.generation >= 0:
-                self._post(result, job if result.error is None else None)
+                else:
+                    self._keep(result, job if result.error is None else None)
             self._wake()
