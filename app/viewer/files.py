@@ -215,12 +215,13 @@ class FileDialog:
         self._purpose = purpose
         return ""
 
-    def draw(self, imgui, displayable) -> None:
-        """The in-window dialog, inside the GUI frame (nothing when it is not open)."""
+    def draw(self, imgui, displayable, cancel: bool = False) -> None:
+        """The in-window dialog, inside the GUI frame (nothing when it is not open);
+        ``cancel``: Esc closes it."""
         if self.chooser is None:
             return
         from app.viewer.path_dialog import draw
-        still, path = draw(imgui, self.chooser, self._title, displayable)
+        still, path = draw(imgui, self.chooser, self._title, displayable, cancel)
         if not still:
             self._chosen = (self.chooser.purpose, str(path) if path is not None else "")
             self.chooser = None

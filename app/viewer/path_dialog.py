@@ -91,8 +91,10 @@ class PathChooser:
         return path
 
 
-def draw(imgui, chooser: PathChooser, title: str, displayable) -> tuple[bool, Path | None]:
-    """Show the dialog (call every frame while it is open): ``(still open, path chosen)``."""
+def draw(imgui, chooser: PathChooser, title: str, displayable,
+         cancel: bool = False) -> tuple[bool, Path | None]:
+    """Show the dialog (call every frame while it is open): ``(still open, path chosen)``.
+    ``cancel``: Esc was pressed, the dialog closes as Cancel would close it."""
     if not imgui.is_popup_open(POPUP):
         imgui.open_popup(POPUP)
     width, height = imgui.get_io().display_size     # within the window, however small
@@ -128,8 +130,8 @@ def draw(imgui, chooser: PathChooser, title: str, displayable) -> tuple[bool, Pa
         path = chooser.chosen()
         done = path is not None
     imgui.same_line()
-    if imgui.button("Cancel"):
-        done = True
+    if imgui.button("Cancel") or cancel:
+        done, path = True, None
     if done:
         imgui.close_current_popup()
     imgui.end_popup()

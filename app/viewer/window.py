@@ -805,7 +805,7 @@ class ViewerWindow:
 
     def undo_camera(self, how: str) -> None:
         done = self.state.undo_camera()
-        back, ahead = self.state.camera_history
+        back, _ = self.state.camera_history
         log.info("action: %s -> %s", how, f"camera undone ({back} more to undo)" if done
                  else "nothing to undo")
         if done:
@@ -813,7 +813,7 @@ class ViewerWindow:
 
     def redo_camera(self, how: str) -> None:
         done = self.state.redo_camera()
-        back, ahead = self.state.camera_history
+        _, ahead = self.state.camera_history
         log.info("action: %s -> %s", how, f"camera redone ({ahead} more to redo)" if done
                  else "nothing to redo")
 
@@ -1030,7 +1030,7 @@ class ViewerWindow:
     def _build_gui(self) -> None:
         self._panel()
         self._popup()
-        self.dialog.draw(imgui, displayable)      # the window's own file dialog, when open
+        self.dialog.draw(imgui, displayable, cancel=self._close_popups)   # Esc closes it
         self._popup_open = imgui.is_popup_open("", ANY_POPUP)
         self._close_popups = False
 

@@ -29,10 +29,17 @@ def test_the_path_tracer_accumulates_to_its_registered_number_unless_the_user_ch
     assert state.option_message == ""
 
 
-def test_view_samples_on_the_command_line_reaches_the_state():
-    from app.cli import _parser
-    args = _parser("view").parse_args(["view", "scenes/cornell_box.toml", "--samples", "64"])
-    assert args.samples == 64
+def test_view_samples_on_the_command_line_reaches_the_state(monkeypatch):
+    import app.viewer.launch as launch
+    from app.cli import main
+    opened = []
+    monkeypatch.setattr(launch, "main", lambda scene, size, **kw: opened.append(kw) or 0)
+    assert main(["view", str(ROOT / "scenes" / "cornell_box.toml"), "--samples", "64"]) == 0
+    assert opened[0]["options"]["samples"] == 64
+    state = ViewerState.open(ROOT / "scenes" / "cornell_box.toml", size=(8, 8),
+                             **{k: v for k, v in opened[0]["options"].items() if v is not None})
+    state.set_renderer("pathtrace")
+    assert state.settings().samples == 64
 
 
 def test_view_help_lists_every_key_and_mouse_action():
