@@ -98,9 +98,13 @@ def cluster(tmp_path_factory):
     processes = [scheduler]
     try:
         deadline = time.monotonic() + 120
-        while not scheduler_file.exists() and time.monotonic() < deadline:
-            time.sleep(0.1)
-        address = json.loads(scheduler_file.read_text())["address"]
+        address = None
+        while address is None and time.monotonic() < deadline:
+            try:                      # dask writes the file in more than one step: until whole
+                address = json.loads(scheduler_file.read_text())["address"]
+            except (OSError, ValueError, KeyError):
+                time.sleep(0.1)
+        assert address is not None, "the dask scheduler wrote no address in 120 s"
         worker = subprocess.Popen([dask, "worker", address, "--nthreads", "1", "--nworkers", "1",
                                    "--no-dashboard", "--local-directory", str(worker_tmp)],
                                   cwd=empty, env={**env, "TMPDIR": str(worker_tmp)},
