@@ -22,3 +22,10 @@ def read_only(a: np.ndarray) -> np.ndarray:
     view = a.view()
     view.flags.writeable = False
     return view
+
+
+def rgb_picture(height: int, width: int) -> np.ndarray:
+    """An ``(H, W, 3)`` uint8 picture laid out as a frame's colour is (the RGB view of an RGBA
+    buffer, ``core.render.Frame``): the pixel kernels that write pictures then compile for
+    one layout, not for this one and a contiguous one (about 2 s of compiling each)."""
+    return np.empty((max(height, 0), max(width, 0), 4), np.uint8)[..., :3]

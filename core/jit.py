@@ -76,11 +76,11 @@ import numba
 import numpy as np
 from llvmlite.binding import ffi as llvm_ffi
 from numba import config, prange  # noqa: F401  (re-exported: the kernels' imports)
-from numba.core import caching
+from numba.core import caching, types
 from numba.core.runtime import nrt
 
 __all__ = ["config", "kernel_digest", "njit", "prange", "quick_cache_loads",
-           "serialised_cache_saves", "untimed_llvm_calls"]
+           "reuse_plain_overloads", "serialised_cache_saves", "untimed_llvm_calls"]
 
 # The packages whose kernel files the warm-up's stamp digests (app/distribution/warm_stamp.py:
 # after any change to one of them the warm-up runs again and compiles what went stale).
@@ -103,8 +103,30 @@ def njit(*args, **options):
     def decorate(function):
         dispatcher = numba.njit(**options)(function)
         dispatcher._cache = _CacheOnFirstUse(function)
+        reuse_plain_overloads(dispatcher)
         return dispatcher
     return decorate
+
+
+def reuse_plain_overloads(dispatcher):
+    """Type a call from one kernel to ``dispatcher`` so that it reuses the kernel compiled for
+    plain arguments. numba would compile the callee once more for each constant argument
+    (``Literal[int](0)``: ``_push(rays, 0, ...)`` beside ``_push(rays, top, ...)``) and, in a
+    ``prange`` body, for the loop's index, which is ``int64`` when numba first types the
+    loop and ``uint64`` in the parallel body it makes of it. 41 kernels had such twins. A
+    constant is typed as its plain type; an unsigned argument as ``int64`` where that
+    kernel is compiled already (the path tracer's random state stays unsigned). The
+    caller's value is cast; LLVM still sees a constant when it inlines the call."""
+    typed_for = dispatcher.get_call_template
+
+    def get_call_template(args, kws):
+        args = tuple(types.unliteral(a) for a in args)
+        signed = tuple(types.int64 if a == types.uint64 else a for a in args)
+        if signed != args and signed in dispatcher.overloads:
+            args = signed
+        return typed_for(args, {k: types.unliteral(v) for k, v in kws.items()})
+    dispatcher.get_call_template = get_call_template
+    return dispatcher
 
 
 class _CacheOnFirstUse:

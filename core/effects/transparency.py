@@ -29,6 +29,7 @@ import dataclasses
 
 import numpy as np
 
+from core.arrays import rgb_picture
 from core.jit import njit
 from core.settings import TRANSPARENCIES
 from core.shading.illumination import to_uint8
@@ -129,8 +130,7 @@ def composite(clear, view, settings, frame, context) -> None:
     layers = box_layers(p.device, np.ascontiguousarray(p.triangles), width, height)
     frame.stats["transparency layers"] = int(layers.max()) + 1
     opacity_mask = (BAYER[np.arange(height)[:, None] % 4, np.arange(width)[None, :] % 4] + 0.5) / 16
-    colour = np.empty((height, width, 3), np.uint8)
-    colour_ad = np.empty((height, width, 3), np.uint8)
+    colour, colour_ad = rgb_picture(height, width), rgb_picture(height, width)
     for layer in range(int(layers.max()) + 1):
         chosen = np.flatnonzero(layers == layer)
         one = Painting(p.device, p.inv_w, p.triangles[chosen], p.attrs, p.source[chosen],

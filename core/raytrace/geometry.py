@@ -24,6 +24,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from core.arrays import read_only
 from core.raytrace import bvh as bvh_module
 from core.raytrace.optics import check_material
 from core.scene.normals import vertex_normals
@@ -188,12 +189,14 @@ def _texturing(meshes, surfaces: int, positions, normals) -> Texturing:
     usable = [m if m is not None and m.demo is None else None for m in all_maps]
     if not any(m is not None for m in usable):
         maps = np.full((surfaces, 7), -1.0)
-        return Texturing(np.zeros((0, VARYING_COLUMNS)), maps, np.zeros((1, 4), np.float32),
+        return Texturing(read_only(np.zeros((0, VARYING_COLUMNS))), maps,
+                         np.zeros((1, 4), np.float32),
                          np.array([[0, 1, 1]], np.int64), np.zeros((0, 3), np.int64))
     texels, levels, textures, rows = pack_maps(usable + [None] * (surfaces - len(meshes)))
     varyings = np.concatenate([mesh_varyings(m) for m in meshes])
     attrs = np.ascontiguousarray(np.concatenate([normals, positions, varyings], axis=1))
-    return Texturing(attrs, rows, texels, levels, textures)
+    # read-only, as the z-buffer's are: textured_at then compiles once for both renderers
+    return Texturing(read_only(attrs), rows, texels, levels, textures)
 
 
 def _scale(positions, spheres, planes) -> float:

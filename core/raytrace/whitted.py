@@ -56,7 +56,7 @@ from core.raytrace import bvh, intersect, optics
 from core.texture.surface import UV, textured_at
 from core.shading.illumination import (EYE_DIRECTION, EYE_POINT, LIGHT_INTENSITY, OD, POINT_LIGHT,
                                        TWO_SIDED, unit3)
-from core.shading.models.dispatch import light_point
+from core.shading.models.dispatch import light_point_calling
 
 from core.settings import SHADOW_MODES  # noqa: E402,F401  (listed with the other settings)
 SHADOW_OFF, SHADOW_BACKGROUND, SHADOW_OBJECT, SHADOW_TRANSMIT = 0, 1, 2, 3
@@ -238,7 +238,8 @@ def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lig
     checker_colour(packed, kind, index, s, px, py, pz, surface_row)
     arriving = shadowed_lights(packed, px, py, pz, nx, ny, nz, gx, gy, gz, lights, eye, shadows,
                                background, offset, scaled, surface_row, stack, counts)
-    return light_point(px, py, pz, nx, ny, nz, 0, surface_row, arriving, ambient, eye, halfway)
+    return light_point_calling(px, py, pz, nx, ny, nz, 0, surface_row, arriving, ambient, eye,
+                               halfway)
 
 
 @njit(cache=True)

@@ -53,7 +53,7 @@ import numpy as np
 
 from core.camera.film import fill_bytes
 from core.context import DEFAULT_CONTEXT, RenderContext
-from core.arrays import read_only
+from core.arrays import read_only, rgb_picture
 from core.jit import njit, prange
 from core.shading.illumination import (Eye, eye_from_view, pack_ambient, pack_eye, pack_lights,
                                         pack_surfaces, to_uint8)
@@ -276,7 +276,7 @@ def resolve(shading: ShadeInput, vis, clipped_triangles: np.ndarray, clipped_att
     tri = np.ascontiguousarray(vis.tri, dtype=np.int32)
     height, width = tri.shape
     if out is None:
-        out = np.empty((height, width, 3), dtype=np.uint8)
+        out = rgb_picture(height, width)
     background8 = to_uint8(background).reshape(3)
     # read-only whether cached or fresh: each pixel kernel compiles for one type (core/arrays)
     triangles = read_only(np.ascontiguousarray(clipped_triangles, dtype=np.int64).reshape(-1, 3))

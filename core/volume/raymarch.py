@@ -14,7 +14,7 @@ sampled at its midpoint by trilinear interpolation.
   For a homogeneous medium this is the exact integral ``c (1 − e^{−σ L})``.
 - **Gradient shading** (Levoy): where the data's gradient is not negligible, ``c`` is lit by
   the volume material's lighting model through the seam every renderer lights by
-  (:func:`core.shading.models.dispatch.light_point`: Phong unless the material names another,
+  (:func:`core.shading.models.dispatch.light_point_calling`: Phong unless the material names another,
   the scene's lights, the material with ``O_d = c``, two-sided) with the normal
   ``−∇f / |∇f|``; the gradient is the trilinear field's, by central differences half a
   sample either side.
@@ -32,7 +32,7 @@ import numpy as np
 from core.jit import njit, prange
 from core.shading.illumination import LIGHT_COLUMNS, OD, pack_surfaces
 from core.shading.models import with_model
-from core.shading.models.dispatch import light_point
+from core.shading.models.dispatch import light_point_calling
 
 EMISSION_ABSORPTION, MIP = 0, 1
 # The march stops when less than this of the light behind can still come through: what it
@@ -116,8 +116,8 @@ def shade_sample(v, x, y, z, r, g, b, px, py, pz, m_inv, surface, lights, ambien
     nz = -(m_inv[0, 2] * gx + m_inv[1, 2] * gy + m_inv[2, 2] * gz)
     length = math.sqrt(nx * nx + ny * ny + nz * nz)
     surface[0, OD], surface[0, OD + 1], surface[0, OD + 2] = r, g, b
-    return light_point(px, py, pz, nx / length, ny / length, nz / length, 0, surface, lights,
-                       ambient, eye, halfway)
+    return light_point_calling(px, py, pz, nx / length, ny / length, nz / length, 0, surface,
+                               lights, ambient, eye, halfway)
 
 
 @njit(cache=True, parallel=True, nogil=True)

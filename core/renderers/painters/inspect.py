@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.arrays import rgb_picture
 from core.pipeline.raster import count_fragments
 from core.visibility.paint import (Painting, SimpleFrame, paint, paint_ranks, painting, resolve,
                                    true_depth)
@@ -71,7 +72,7 @@ def inspect_pixel(scene, view, settings, x: int, y: int, context=None, *, render
         single = Painting(p.device, p.inv_w, p.triangles[rank:rank + 1], p.attrs,
                           p.source[rank:rank + 1], p.inputs, {})
         vis = paint(single, width, height, context)
-        color = np.empty((height, width, 3), np.uint8)
+        color = rgb_picture(height, width)
         resolve(single, vis, scene, settings, SimpleFrame(color))
         record["writes"].append({"rank": int(rank), "triangle": int(p.source[rank]),
                                  "color": [int(c) for c in color[y, x]],

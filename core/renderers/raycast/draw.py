@@ -47,7 +47,7 @@ import numpy as np
 from core.jit import njit, prange
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights, pack_surfaces,
                                unit3)
-from core.shading.models.dispatch import light_point
+from core.shading.models.dispatch import light_point_calling
 from core.camera.film import fill, grid_side, to_rgb8
 from core.camera.rays import (CAMERA_BACK, CAMERA_BASIS, CAMERA_FRONT, CAMERA_VRP, camera_ray,
                               pack_camera)
@@ -322,8 +322,8 @@ def _trace(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, backgr
                         nx, ny, nz, _ = unit3(px - shape[1], py - shape[2], pz - shape[3])
                     else:
                         nx, ny, nz = _torus_normal(px, py, pz, shape)
-                    r, g, b = light_point(px, py, pz, nx, ny, nz, int(shape[6]), surfaces,
-                                          lights, ambient, eye, halfway)
+                    r, g, b = light_point_calling(px, py, pz, nx, ny, nz, int(shape[6]),
+                                                  surfaces, lights, ambient, eye, halfway)
                     sr += r
                     sg += g
                     sb += b

@@ -27,6 +27,7 @@ from typing import Callable, NamedTuple
 
 import numpy as np
 
+from core.arrays import rgb_picture
 from core.camera.film import grid_side, sample_viewport, to_rgb8
 from core.camera.view import eye_from_view, n_par_factors, n_per_factors, vrc_basis
 from core.context import DEFAULT_CONTEXT, RenderContext
@@ -141,7 +142,7 @@ def _capture(scene, view, settings, zbuffer: Stages) -> Capture:
     width, height = settings.size[0] * side, settings.size[1] * side
     drawn = settings.replace(samples=1, size=(width, height))
     context = RenderContext()                 # private: nothing else reuses its buffers
-    frame = SimpleNamespace(color=np.empty((height, width, 3), np.uint8), depth=None,
+    frame = SimpleNamespace(color=rgb_picture(height, width), depth=None,
                             stats={"computed": [], "allocated": []}, message=None)
     recorder = _Recorder()
     zbuffer.draw(scene, view, drawn, frame, context, recorder)
