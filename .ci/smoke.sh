@@ -110,10 +110,18 @@ fi
 if [[ " $phases " == *" window "* ]]; then
   begin window
   cd "$clone"
-  # the tests run the clone's code, whose kernel cache is its own: compile what their two
-  # scenes draw first (the window would wait for its worker processes otherwise)
-  "$py" -m app.distribution.warmup --only whitted.toml --only house.toml > warmup-window.txt \
-    || { tail -20 warmup-window.txt; fail "the window tests' warm-up"; }
+  # The tests run the clone's code, whose kernel cache is its own folder. The installed
+  # package is the same code, and a cached kernel is keyed by its code's digest, not its
+  # path (core/jit.py): take the kernels the warm-up phase compiled rather than compile them
+  # again (about 100 s of this phase). Without them (no warm-up phase), compile what the
+  # tests' two scenes draw first: the window would wait for its worker processes otherwise.
+  site=$("$py" -c 'import core, pathlib; print(pathlib.Path(core.__file__).parent.parent)')
+  (cd "$site" && find core app -path '*/__pycache__/*' \( -name '*.nbi' -o -name '*.nbc' \
+    -o -name 'warm.json' \) -print0 | tar --null -cf - -T -) | tar -xf -
+  if [ ! -f core/__pycache__/warm.json ]; then
+    "$py" -m app.distribution.warmup --only whitted.toml --only house.toml > warmup-window.txt \
+      || { tail -20 warmup-window.txt; fail "the window tests' warm-up"; }
+  fi
   CI=true "$py" -m pytest -q -p no:cacheprovider \
     tests/app/viewer/test_window.py tests/app/viewer/test_window_newcomer.py \
     -k "click_menu_and_keys_under_xvfb or screenshots_follow_the_naming_rule" \

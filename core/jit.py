@@ -110,19 +110,25 @@ def njit(*args, **options):
 
 def reuse_plain_overloads(dispatcher):
     """Type a call from one kernel to ``dispatcher`` so that it reuses the kernel compiled for
-    plain arguments. numba would compile the callee once more for each constant argument
-    (``Literal[int](0)``: ``_push(rays, 0, ...)`` beside ``_push(rays, top, ...)``) and, in a
-    ``prange`` body, for the loop's index, which is ``int64`` when numba first types the
-    loop and ``uint64`` in the parallel body it makes of it. 41 kernels had such twins. A
-    constant is typed as its plain type; an unsigned argument as ``int64`` where that
-    kernel is compiled already (the path tracer's random state stays unsigned). The
-    caller's value is cast; LLVM still sees a constant when it inlines the call."""
+    plain arguments, where numba would compile the callee once more (41 kernels had such
+    twins, about 8 s of the warm-up):
+
+    - a constant argument (``Literal[int](0)``: ``_push(rays, 0, ...)`` beside
+      ``_push(rays, top, ...)``) is typed as its plain type; the caller's constant is cast,
+      and LLVM still sees it when it inlines the call;
+    - a ``prange`` index is ``int64`` when numba first types the loop and ``uint64`` in the
+      parallel body it makes of it: an unsigned argument is typed ``int64`` where that form
+      is compiled already, and only for a kernel that declares numpy's error model. The
+      form compiled for a parallel body takes numpy's model from it (a division by zero
+      gives inf, not an exception), so a kernel of Python's model keeps its twin there; the
+      path tracer's unsigned random state has no signed form and stays as it is."""
     typed_for = dispatcher.get_call_template
+    numpy_errors = dispatcher.targetoptions.get("error_model") == "numpy"
 
     def get_call_template(args, kws):
         args = tuple(types.unliteral(a) for a in args)
         signed = tuple(types.int64 if a == types.uint64 else a for a in args)
-        if signed != args and signed in dispatcher.overloads:
+        if numpy_errors and signed != args and signed in dispatcher.overloads:
             args = signed
         return typed_for(args, {k: types.unliteral(v) for k, v in kws.items()})
     dispatcher.get_call_template = get_call_template

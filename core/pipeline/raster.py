@@ -374,7 +374,9 @@ def _hidden_vertices(xy_z, fixed, n_tiles_x, width, height, tile_zmin, later_fir
                 hidden_in[v] = k
 
 
-@njit(cache=True)
+# numpy's error model, as in the parallel loops that call it with their index: one
+# compiled form for both (core.jit.reuse_plain_overloads)
+@njit(cache=True, error_model="numpy")
 def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk, n_chunks,
                  s_tri, s_xy, s_zw, chunk_end, counts, offset, tile_zmin, early_z, later_first,
                  hidden_in):
@@ -453,7 +455,7 @@ def _nearest(z0, z1, z2):
     return max(z0, z1, z2) + 1e-9 * (abs(z0) + abs(z1) + abs(z2))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_zw, chunk_end,
                cursor, bins, bin_z):
     """Append the chunk's scene slots to the bins of the tiles they draw into: the same tiles
@@ -608,7 +610,7 @@ def _later_first(bin_z, start, end):
     return late > early
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _clear_tile(k, ti0, ti1, tj0, tj1, depth, tri, span, tile_rows, unfilled, zmin):
     """Empty what the last frame wrote in tile k, and start its blocks: per 8 x 8 block (and,
     at index N_BLOCKS, the tile) the pixels (blocks) not yet written, and the coarse z, -inf
@@ -634,7 +636,7 @@ def _clear_tile(k, ti0, ti1, tj0, tj1, depth, tri, span, tile_rows, unfilled, zm
                 zmin[bj * side + bi] = np.inf  # outside the frame: never in the way
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
                span, tile_rows, hiz, count_fragments, fragments, first, order, tile_unfilled,
                tile_zmin):

@@ -22,14 +22,16 @@ from core.jit import njit, prange
 PARALLEL_POINTS = 20_000
 
 
-@njit(cache=True)
+# numpy's error model, as in the parallel loops that call it with their index: one
+# compiled form for both (core.jit.reuse_plain_overloads)
+@njit(cache=True, error_model="numpy")
 def _affine_point(m, points, out, i):
     x, y, z = points[i, 0], points[i, 1], points[i, 2]
     for r in range(3):
         out[i, r] = m[r, 0] * x + m[r, 1] * y + m[r, 2] * z + m[r, 3]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _projective_point(m, points, out, inv_w, i):
     x, y, z = points[i, 0], points[i, 1], points[i, 2]
     w = m[3, 0] * x + m[3, 1] * y + m[3, 2] * z + m[3, 3]

@@ -426,7 +426,9 @@ def occluded(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
 DEAL = max(1, config.NUMBA_NUM_THREADS)   # a constant of the compiled code (it is cached)
 
 
-@njit(cache=True)
+# numpy's error model, as in the parallel loops that call it with their index: one
+# compiled form for both (core.jit.reuse_plain_overloads)
+@njit(cache=True, error_model="numpy")
 def spread(j, chunks):
     """The chunk that parallel work item ``j`` of ``chunks`` handles, dealt round-robin.
 

@@ -178,7 +178,9 @@ def _lerp(attrs, c, i0, i1, i2, w0, w1, w2):
     return w0 * attrs[i0, c] + w1 * attrs[i1, c] + w2 * attrs[i2, c]
 
 
-@njit(cache=True)
+# numpy's error model, as in the parallel loops that call it with their index: one
+# compiled form for both (core.jit.reuse_plain_overloads)
+@njit(cache=True, error_model="numpy")
 def textured_pixel(attrs, i0, i1, i2, w0, w1, w2, t, col, row, constants, s, maps,
                    texels, levels, textures, filter_, bump, surf, lights, ambient, eye,
                    halfway):

@@ -111,7 +111,9 @@ def plane_constants(device_h, i0, i1, i2, u0, v0, u1, v1, u2, v2, height, out, s
     out[slot, 2, 2] = Mx * Ny - My * Nx
 
 
-@njit(cache=True)
+# numpy's error model: a triangle without (u, v) has zero constants, and its callers take the
+# inf or nan that gives as "no (u, v) here" (textured_pixel) wherever they run
+@njit(cache=True, error_model="numpy")
 def uv_at(constants, t, i, j):
     """(u, v) of triangle ``t`` at pixel (column i, row j from the top), and the exact
     screen-space derivatives ``du/dx, dv/dx, du/dy, dv/dy`` (x right, y up).

@@ -75,7 +75,9 @@ EDGE_FACES = np.array([[f for f in range(6) if e in FACE_EDGES[f]] for e in rang
                       dtype=np.int64)
 
 
-@njit(cache=True)
+# numpy's error model, as in the parallel loops that call it with their index: one
+# compiled form for both (core.jit.reuse_plain_overloads)
+@njit(cache=True, error_model="numpy")
 def gradient_at(v, i, j, k):
     """The data's gradient at sample (i, j, k), in index units: central differences, one-sided
     at the border."""
@@ -89,7 +91,7 @@ def gradient_at(v, i, j, k):
     return gx, gy, gz
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def edge_slab(v, iso, axis, i, ids, positions, normals, start, write):
     """Number (and, with ``write``, place) the crossing of every edge along ``axis`` in slab
     ``i``: ``ids[i]`` gets each crossed edge's vertex index from ``start`` on, -1 elsewhere.
@@ -339,7 +341,7 @@ def zip_tube(one, m, two, n, vert, positions, triangles, count, write):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, positions,
               normals, write):
     """The cells of slab ``i``, their loops cut into triangles (step 3), numbered from
