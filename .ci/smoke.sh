@@ -113,9 +113,10 @@ if [[ " $phases " == *" window "* ]]; then
   # The tests run the clone's code, whose kernel cache is its own folder. The installed
   # package is the same code, and a cached kernel is keyed by its code's digest, not its
   # path (core/jit.py): take the kernels the warm-up phase compiled rather than compile them
-  # again (about 100 s of this phase). Without them (no warm-up phase), compile what the
-  # tests' two scenes draw first: the window would wait for its worker processes otherwise.
-  site=$("$py" -c 'import core, pathlib; print(pathlib.Path(core.__file__).parent.parent)')
+  # again (about 100 s of this phase; -I finds the installed package, not the clone in the
+  # working folder). Without them (no warm-up phase), compile what the tests' two scenes
+  # draw first: the window would wait for its worker processes otherwise.
+  site=$("$py" -I -c 'import core, pathlib; print(pathlib.Path(core.__file__).parent.parent)')
   (cd "$site" && find core app -path '*/__pycache__/*' \( -name '*.nbi' -o -name '*.nbc' \
     -o -name 'warm.json' \) -print0 | tar --null -cf - -T -) | tar -xf -
   if [ ! -f core/__pycache__/warm.json ]; then
