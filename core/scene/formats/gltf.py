@@ -13,7 +13,13 @@ the same document. What becomes what:
   approximation) and ``F0 = 0.04 (1 − metallic) + base colour · metallic``; glTF's defaults
   (metallic 1, roughness 1) hold where a factor is absent. Emission is the emissive factor
   (radiosity and the path tracer light with it); alpha below 1 with ``alphaMode = BLEND`` is
-  ``k_t = 1 − alpha``. Textures are not read yet (said when a material has one).
+  ``k_t = 1 − alpha``. The base colour texture (with the mesh's ``TEXCOORD_0``) is the
+  colour map, sRGB, repeated, mipmapped, times the base colour factor (glTF's product); the
+  metallic–roughness, normal, occlusion and emissive textures are not read (said). An image
+  over ``MAX_TEXTURE_SIDE`` on a side, or over the scene's texel budget, is refused from
+  its header before its pixels are decoded (an image file beside the glTF before trimesh
+  opens it, an embedded one before its pixels are read); one that cannot be opened leaves
+  the factor, said.
 - **Cameras** become course views: the VRP a distance ``d`` in front of the eye (the scene's
   centre's depth), VPN the camera's +z (it looks down −z), VUP its +y, PRP ``(0, 0, d)``;
   perspective: the window ``± d tan(yfov/2)`` high and ``aspectRatio`` times that wide (the
@@ -32,6 +38,7 @@ from __future__ import annotations
 import io
 import json
 import struct
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -149,20 +156,47 @@ def _check_uris(doc: dict, folder: Path, name: str) -> None:
             if target.stat().st_size > limit:
                 raise ReaderError(name, f"{where} has {target.stat().st_size:,} bytes; at "
                                         f"most {limit:,}")
+            if kind == "images":
+                _check_image_size(target, where, name)
+
+
+def _check_image_size(path: Path, where: str, name: str) -> None:
+    """An image file's size from its header, before anything decodes it: a PNG of a few
+    hundred bytes may say 20000 x 20000 (a decompression bomb)."""
+    from PIL import Image
+
+    from core.texture.image import MAX_TEXTURE_SIDE
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(path) as image:
+                w, h = image.size
+    except Image.DecompressionBombError as error:
+        raise ReaderError(name, f"{where}: too large ({error})") from None
+    except Exception:                  # not an image Pillow reads: trimesh leaves it out
+        return
+    if max(w, h) > MAX_TEXTURE_SIDE:
+        raise ReaderError(name, f"{where} is {w} x {h}; textures may be at most "
+                                f"{MAX_TEXTURE_SIDE} on a side")
 
 
 def _meshes(data: bytes, name: str, folder: Path, doc: dict, notes: list) -> list[Mesh]:
     import trimesh
+    from PIL import Image
     _check_uris(doc, folder, name)
     kind = "glb" if data[:4] == GLB_MAGIC else "gltf"
+    resolver = trimesh.resolvers.FilePathResolver(str(folder) + "/")
     try:
-        loaded = trimesh.load(io.BytesIO(data), file_type=kind, process=False,
-                              resolver=trimesh.resolvers.FilePathResolver(str(folder) + "/"),
-                              force="scene")
+        with warnings.catch_warnings():      # Pillow's bomb warning an error: trimesh then
+            # leaves such an image out (said below) rather than decode it
+            warnings.simplefilter("error", Image.DecompressionBombWarning)
+            loaded = trimesh.load(io.BytesIO(data), file_type=kind, process=False,
+                                  resolver=resolver, force="scene")
     except Exception as error:        # trimesh raises many kinds for a broken file
         raise ReaderError(name, f"the glTF's meshes cannot be read ({type(error).__name__}: "
                                 f"{error})") from None
     meshes, skipped, textured = [], 0, 0
+    textures = _Textures(name)
     for node in sorted(loaded.graph.nodes_geometry):
         matrix, geometry = loaded.graph[node]
         part = loaded.geometry[geometry]
@@ -175,19 +209,77 @@ def _meshes(data: bytes, name: str, folder: Path, doc: dict, notes: list) -> lis
             triangles = triangles[:, [0, 2, 1]]
         material, has_texture = _material(part.visual)
         textured += has_texture
+        material, uv = textures.colour_map(part.visual, material)
         meshes.append(Mesh(positions=positions, triangles=triangles, material=material,
-                           name=str(node), closed=bool(part.is_watertight)))
+                           name=str(node), closed=bool(part.is_watertight), uv=uv))
     if skipped:
         notes.append(f"{name}: {skipped} point or line primitives left out (triangles only)")
     if textured:
-        notes.append(f"{name}: {textured} meshes have texture maps: not read yet, their "
-                     f"material's factors are drawn")
+        notes.append(f"{name}: {textured} meshes have metallic-roughness, normal, occlusion or "
+                     f"emissive textures: not read, their material's factors are drawn")
+    if _names_colour_maps(doc) and not textures.made:
+        notes.append(f"{name}: its base colour textures could not be decoded, or its meshes "
+                     f"have no TEXCOORD_0: drawn with the base colour factors")
     return meshes
+
+
+def _names_colour_maps(doc: dict) -> bool:
+    return any(isinstance(m, dict) and isinstance(m.get("pbrMetallicRoughness"), dict)
+               and "baseColorTexture" in m["pbrMetallicRoughness"]
+               for m in doc.get("materials", []) or [])
+
+
+class _Textures:
+    """The colour maps of one file's materials, each image made a texture once."""
+
+    def __init__(self, name: str):
+        from core.texture.image import TexelBudget
+        self.name, self.budget, self.made = name, TexelBudget(), {}
+
+    def colour_map(self, visual, material: Material):
+        """``(material with its colour map, uv)``, or ``(material, None)`` where the mesh has
+        no base colour texture or no texture coordinates."""
+        import dataclasses
+
+        from core.texture.material import MAPS_KEY, SurfaceMaps
+        pbr = getattr(visual, "material", None)
+        image = getattr(pbr, "baseColorTexture", None)
+        uv = getattr(visual, "uv", None)
+        if image is None or uv is None or len(uv) == 0:
+            return material, None
+        key = (id(image), material.od)
+        if key not in self.made:
+            self.made[key] = self._texture(image, material.od)
+        maps = SurfaceMaps(color=self.made[key])
+        return (dataclasses.replace(material, extra={**material.extra, MAPS_KEY: maps}),
+                np.asarray(uv, np.float64))
+
+    def _texture(self, image, factor):
+        from core.texture.image import MAX_TEXTURE_SIDE, Texture, _pixels, srgb_to_linear
+        w, h = image.size
+        where = f"its base colour texture ({w} x {h})"
+        if max(w, h) > MAX_TEXTURE_SIDE:
+            raise ReaderError(self.name, f"{where}: textures may be at most "
+                                         f"{MAX_TEXTURE_SIDE} on a side")
+        over = self.budget.take(w * h, where)
+        if over:
+            raise ReaderError(self.name, over)
+        pixels, divisor = _pixels(image)
+        pixels = np.asarray(pixels, np.float64) / divisor
+        if pixels.ndim == 2:
+            pixels = np.repeat(pixels[:, :, None], 3, axis=2)
+        # glTF's base colour is the decoded texel times the factor (our O_d): the product
+        colour = pixels[..., :3] if pixels.shape[2] >= 3 else pixels[..., :1]
+        linear = srgb_to_linear(np.clip(colour, 0.0, 1.0)) * np.asarray(factor)[:colour.shape[2]]
+        pixels = np.concatenate([linear, pixels[..., colour.shape[2]:]], axis=2)
+        # row 0 at v = 0: trimesh gives (u, v) with v up, the image top row first
+        return Texture.from_array(pixels[::-1], wrap="repeat", srgb=True, decoded=True,
+                                  source=f"{self.name}: base colour texture")
 
 
 def _material(visual) -> tuple[Material, bool]:
     """Our material for a trimesh visual (glTF metallic–roughness), and whether it has a
-    texture the reader left out."""
+    texture the reader leaves out (any but the base colour's)."""
     import dataclasses
     pbr = getattr(visual, "material", None)
     if pbr is None or not hasattr(pbr, "baseColorFactor"):
@@ -211,7 +303,7 @@ def _material(visual) -> tuple[Material, bool]:
         "model": "cook-torrance",
         "parameters": {"roughness": min(max(roughness, 0.01), 1.0), "f0": f0}}})
     textured = any(getattr(pbr, k, None) is not None for k in
-                   ("baseColorTexture", "metallicRoughnessTexture", "normalTexture",
+                   ("metallicRoughnessTexture", "normalTexture", "occlusionTexture",
                     "emissiveTexture"))
     return material, textured
 

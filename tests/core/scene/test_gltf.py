@@ -191,3 +191,124 @@ def test_the_cameras_picture_agrees_with_llvmpipe_using_the_gltfs_own_matrices(t
     assert theirs.mean() > 0.1
     # the same pixels but for the edges' rounding: a pixel or so along the outlines
     assert np.mean(covered != theirs) < 0.01, np.mean(covered != theirs)
+
+
+def _textured_quad(tmp_path, factor=(255, 255, 255, 255)):
+    """A unit quad in z = 0 with (u, v) over [0, 1]² and a 64 x 64 PNG whose quadrants are
+    red (top left), green (top right), blue (bottom left) and white, as a .glb and as an OBJ
+    with ``vt`` beside the same PNG."""
+    from PIL import Image
+    pixels = np.zeros((64, 64, 3), np.uint8)
+    pixels[:32, :32] = (255, 0, 0)
+    pixels[:32, 32:] = (0, 255, 0)
+    pixels[32:, :32] = (0, 0, 255)
+    pixels[32:, 32:] = (255, 255, 255)
+    Image.fromarray(pixels).save(tmp_path / "tex.png")
+    corners = np.array([[-1.0, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]])
+    uv = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    material = trimesh.visual.material.PBRMaterial(
+        baseColorTexture=Image.open(tmp_path / "tex.png"), baseColorFactor=factor,
+        metallicFactor=0.0, roughnessFactor=1.0)
+    quad = trimesh.Trimesh(corners, faces, process=False,
+                           visual=trimesh.visual.TextureVisuals(uv=uv, material=material))
+    (tmp_path / "quad.glb").write_bytes(quad.export(file_type="glb"))
+    (tmp_path / "quad.obj").write_text(
+        "".join(f"v {x} {y} {z}\n" for x, y, z in corners)
+        + "".join(f"vt {u} {v}\n" for u, v in uv) + "f 1/1 2/2 3/3\nf 1/1 3/3 4/4\n")
+    return tmp_path / "quad.glb"
+
+
+def test_a_textured_quad_draws_as_the_same_quad_in_a_toml_scene(tmp_path):
+    """The glTF's base colour texture against our own reader's: the quad as an OBJ with
+    ``vt`` and the PNG as ``texture``, lit by the same model with the glTF's material
+    (metallic 0, roughness 1: k_d 1, k_s 1, m 1, F0 0.04), drawn through the same view."""
+    glb = load_scene(_textured_quad(tmp_path))
+    (tmp_path / "quad.toml").write_text(
+        'background = [0.1, 0.1, 0.12]\nambient = [0.15, 0.15, 0.15]\n'
+        '[[geometry]]\nfile = "quad.obj"\nmaterial = { ka = 0.2, kd = 1.0, ks = 1.0, '
+        'od = [1, 1, 1], model = "cook-torrance", roughness = 1.0, f0 = 0.04, '
+        'texture = "tex.png" }\n')
+    toml = load_scene(tmp_path / "quad.toml")
+    assert glb.meshes[0].uv is not None
+    view = glb.views[0]
+    settings = RenderSettings.for_scene(glb, size=(96, 96), shading="phong")
+    a = render(glb, view, settings).color.astype(int)
+    b = render(toml, view, settings).color.astype(int)
+    assert np.abs(a - b).max() <= 1, np.abs(a - b).max()
+    # the quadrants where the picture says: the top-left quarter of the picture is red
+    q = a[20:28, 20:28].mean(axis=(0, 1))
+    assert q[0] > 2 * max(q[1], q[2]), q
+
+
+def test_the_base_colour_factor_multiplies_the_decoded_texture(tmp_path):
+    """glTF: base colour = factor x texel (texel decoded from sRGB); the white quadrant with
+    a factor of (0.5, 1, 1) becomes linear (0.5, 1, 1), which our O_d is."""
+    scene = load_scene(_textured_quad(tmp_path, factor=(128, 255, 255, 255)))
+    from core.texture.material import maps_of
+    texture = maps_of(scene.meshes[0].material).color
+    level = texture.levels[0]                       # row 0 at v = 0: the bottom of the PNG
+    assert np.allclose(level[0, -1, :3], (128 / 255, 1.0, 1.0), atol=1e-6)   # white, bottom right
+    assert np.allclose(level[-1, 0, :3], (128 / 255, 0.0, 0.0), atol=1e-6)   # red, top left
+
+
+def _quad_gltf_by_hand(tmp_path, image_uri: str):
+    """A .gltf written by hand (JSON, and its .bin: positions, TEXCOORD_0, indices) whose
+    material's base colour texture is the image file ``image_uri``."""
+    positions = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float32)
+    uv = np.array([[0, 1], [1, 1], [1, 0], [0, 0]], np.float32)      # glTF's v runs down
+    indices = np.array([0, 1, 2, 0, 2, 3], np.uint16)
+    blob = positions.tobytes() + uv.tobytes() + indices.tobytes()
+    (tmp_path / "quad.bin").write_bytes(blob)
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+           "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1},
+                                       "indices": 2, "material": 0}]}],
+           "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+                                                    "metallicFactor": 0.0}}],
+           "textures": [{"source": 0}], "images": [{"uri": image_uri}],
+           "buffers": [{"uri": "quad.bin", "byteLength": len(blob)}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 48},
+                           {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                           {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                          "min": [-1, -1, 0], "max": [1, 1, 0]},
+                         {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                         {"bufferView": 2, "componentType": 5123, "count": 6,
+                          "type": "SCALAR"}]}
+    path = tmp_path / "quad.gltf"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_a_hand_written_gltf_reads_its_texture_the_right_way_up(tmp_path):
+    """glTF's (u, v) has v down the image; the quad's top-left corner has (0, 0), the PNG's
+    top-left texel: the top-left of the picture is red."""
+    _textured_quad(tmp_path)                                   # writes tex.png
+    scene = load_scene(_quad_gltf_by_hand(tmp_path, "tex.png"))
+    settings = RenderSettings.for_scene(scene, size=(96, 96), shading="phong")
+    image = render(scene, scene.views[0], settings).color.astype(float)
+    corners = {"top left": image[20:28, 20:28], "top right": image[20:28, 68:76],
+               "bottom left": image[68:76, 20:28]}
+    means = {k: v.mean(axis=(0, 1)) for k, v in corners.items()}
+    assert means["top left"][0] > 2 * max(means["top left"][1:]), means
+    assert means["top right"][1] > 2 * max(means["top right"][[0, 2]]), means
+    assert means["bottom left"][2] > 2 * max(means["bottom left"][:2]), means
+
+
+def test_an_image_that_is_a_decompression_bomb_is_one_line(tmp_path):
+    """A PNG whose header says 20000 x 20000 (400 M texels, a few hundred bytes on disk):
+    refused from its header, one line naming the file, nothing decoded."""
+    import struct as st
+    import zlib
+
+    def chunk(kind, data):
+        return st.pack(">I", len(data)) + kind + data + st.pack(">I", zlib.crc32(kind + data))
+    png = (b"\x89PNG\r\n\x1a\n"
+           + chunk(b"IHDR", st.pack(">IIBBBBB", 20000, 20000, 8, 2, 0, 0, 0))
+           + chunk(b"IDAT", zlib.compress(b"\x00" * 60001, 9)) + chunk(b"IEND", b""))
+    (tmp_path / "bomb.png").write_bytes(png)
+    with pytest.raises(ReaderError) as error:
+        load_scene(_quad_gltf_by_hand(tmp_path, "bomb.png"))
+    message = str(error.value)
+    assert "quad.gltf" in message and "\n" not in message
