@@ -312,3 +312,22 @@ def test_an_image_that_is_a_decompression_bomb_is_one_line(tmp_path):
         load_scene(_quad_gltf_by_hand(tmp_path, "bomb.png"))
     message = str(error.value)
     assert "quad.gltf" in message and "\n" not in message
+
+
+def test_an_accessor_that_overruns_its_buffer_and_a_truncated_glb_are_one_line(tmp_path):
+    """An accessor counting 10^6 vertices in a 48-byte view, and a .glb cut inside its
+    binary chunk: one line naming the file, nothing read past the data."""
+    _textured_quad(tmp_path)
+    path = _quad_gltf_by_hand(tmp_path, "tex.png")
+    doc = json.loads(path.read_text())
+    doc["accessors"][0]["count"] = 1_000_000
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ReaderError) as error:
+        load_scene(path)
+    assert "quad.gltf" in str(error.value) and "\n" not in str(error.value)
+    whole = (tmp_path / "quad.glb").read_bytes()
+    cut = tmp_path / "cut.glb"
+    cut.write_bytes(whole[:len(whole) - 200])
+    with pytest.raises(ReaderError) as error:
+        load_scene(cut)
+    assert "cut.glb" in str(error.value) and "\n" not in str(error.value)
