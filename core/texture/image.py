@@ -28,9 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from core.scene.formats.errors import MAX_TEXTURE_SIDE  # the readers' limit, used here too
 from core.texture.modes import WRAPS
-
-MAX_TEXTURE_SIDE = 16384          # texels on a side; larger images are refused, not read
 
 
 class TextureError(ValueError):

@@ -22,10 +22,13 @@ A procedural past the budget is an error of the scene (its ``resolution`` is the
 
 from __future__ import annotations
 
-from core.scene.formats.keys import register_material_keys, register_scene_keys
+import numpy as np
+
+from core.scene.formats.keys import (register_colour_image, register_material_keys,
+                                     register_scene_keys)
 from core.texture import procedural
 from core.texture.image import TexelBudget, TextureError, load_image
-from core.texture.material import DemoMaterial, SurfaceMaps
+from core.texture.material import MAPS_KEY, DemoMaterial, SurfaceMaps
 from core.texture.demo_scene import MAPS, panel_views
 from core.texture.modes import WRAPS
 
@@ -140,3 +143,26 @@ def add_panel_view(reader, doc: dict, scene) -> None:
 
 register_material_keys("textures", TEXTURE_KEYS, read_material)
 register_scene_keys("bump demo panel", (), add_panel_view)
+
+
+def with_colour_image(material, pixels, factor, source: str, state: dict):
+    """``material`` with the image ``pixels`` ``(h, w, 4)`` uint8 sRGB (row 0 the top) as its
+    colour map times the linear RGB ``factor`` (glTF's base colour: the decoded texel times
+    the factor), repeated and mipmapped. Raises TextureError past the file's texel budget
+    (kept in ``state``, one dict per file)."""
+    import dataclasses
+
+    from core.texture.image import Texture, srgb_to_linear
+    h, w = pixels.shape[:2]
+    over = state.setdefault("budget", TexelBudget()).take(w * h, f"the image ({w} x {h})")
+    if over:
+        raise TextureError(over)
+    rgba = np.asarray(pixels, np.float64) / 255.0
+    rgba[..., :3] = srgb_to_linear(rgba[..., :3]) * np.asarray(factor, np.float64)[:3]
+    texture = Texture.from_array(rgba[::-1], wrap="repeat", srgb=True, decoded=True,
+                                 source=source)
+    maps = SurfaceMaps(color=texture)
+    return dataclasses.replace(material, extra={**material.extra, MAPS_KEY: maps})
+
+
+register_colour_image(with_colour_image)

@@ -23,6 +23,7 @@ MAX_COORDINATE = MAX_WORLD          # the views' validity rules assume this boun
 
 # A message is one line of at most this many characters (a 1 MB value once made a 2 MB message).
 MAX_MESSAGE = 400
+MAX_TEXTURE_SIDE = 16384          # texels on a side; larger images are refused, not read
 
 
 def printable(text: str, limit: int = MAX_MESSAGE) -> str:

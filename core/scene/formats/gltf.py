@@ -165,7 +165,7 @@ def _check_image_size(path: Path, where: str, name: str) -> None:
     hundred bytes may say 20000 x 20000 (a decompression bomb)."""
     from PIL import Image
 
-    from core.texture.image import MAX_TEXTURE_SIDE
+    from core.scene.formats.errors import MAX_TEXTURE_SIDE
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", Image.DecompressionBombWarning)
@@ -230,51 +230,40 @@ def _names_colour_maps(doc: dict) -> bool:
 
 
 class _Textures:
-    """The colour maps of one file's materials, each image made a texture once."""
+    """The colour maps of one file's materials, each image made a texture once (by the
+    texture system, through :func:`core.scene.formats.keys.register_colour_image`)."""
 
     def __init__(self, name: str):
-        from core.texture.image import TexelBudget
-        self.name, self.budget, self.made = name, TexelBudget(), {}
+        from core.scene.formats.keys import colour_image_maker
+        self.name, self.make, self.made = name, colour_image_maker(), {}
+        self.state = {}                # the texture system's own, for the whole file
 
     def colour_map(self, visual, material: Material):
         """``(material with its colour map, uv)``, or ``(material, None)`` where the mesh has
         no base colour texture or no texture coordinates."""
-        import dataclasses
-
-        from core.texture.material import MAPS_KEY, SurfaceMaps
         pbr = getattr(visual, "material", None)
         image = getattr(pbr, "baseColorTexture", None)
         uv = getattr(visual, "uv", None)
-        if image is None or uv is None or len(uv) == 0:
+        if self.make is None or image is None or uv is None or len(uv) == 0:
             return material, None
         key = (id(image), material.od)
         if key not in self.made:
-            self.made[key] = self._texture(image, material.od)
-        maps = SurfaceMaps(color=self.made[key])
-        return (dataclasses.replace(material, extra={**material.extra, MAPS_KEY: maps}),
-                np.asarray(uv, np.float64))
+            self.made[key] = self._mapped(image, material)
+        return self.made[key], np.asarray(uv, np.float64)
 
-    def _texture(self, image, factor):
-        from core.texture.image import MAX_TEXTURE_SIDE, Texture, _pixels, srgb_to_linear
+    def _mapped(self, image, material: Material) -> Material:
+        from core.scene.formats.errors import MAX_TEXTURE_SIDE
         w, h = image.size
         where = f"its base colour texture ({w} x {h})"
         if max(w, h) > MAX_TEXTURE_SIDE:
             raise ReaderError(self.name, f"{where}: textures may be at most "
                                          f"{MAX_TEXTURE_SIDE} on a side")
-        over = self.budget.take(w * h, where)
-        if over:
-            raise ReaderError(self.name, over)
-        pixels, divisor = _pixels(image)
-        pixels = np.asarray(pixels, np.float64) / divisor
-        if pixels.ndim == 2:
-            pixels = np.repeat(pixels[:, :, None], 3, axis=2)
-        # glTF's base colour is the decoded texel times the factor (our O_d): the product
-        colour = pixels[..., :3] if pixels.shape[2] >= 3 else pixels[..., :1]
-        linear = srgb_to_linear(np.clip(colour, 0.0, 1.0)) * np.asarray(factor)[:colour.shape[2]]
-        pixels = np.concatenate([linear, pixels[..., colour.shape[2]:]], axis=2)
-        # row 0 at v = 0: trimesh gives (u, v) with v up, the image top row first
-        return Texture.from_array(pixels[::-1], wrap="repeat", srgb=True, decoded=True,
-                                  source=f"{self.name}: base colour texture")
+        pixels = np.asarray(image.convert("RGBA"))   # (h, w, 4) uint8, row 0 the top
+        try:
+            return self.make(material, pixels, material.od, f"{self.name}: base colour "
+                             f"texture", self.state)
+        except ValueError as error:
+            raise ReaderError(self.name, f"{where}: {error}") from None
 
 
 def _material(visual) -> tuple[Material, bool]:

@@ -63,6 +63,23 @@ def register_material_keys(name: str, keys: tuple[str, ...], read: Callable) -> 
     _MATERIAL[name] = MaterialKeys(tuple(keys), read)
 
 
+_COLOUR_IMAGE: list[Callable] = []
+
+
+def register_colour_image(make: Callable) -> None:
+    """How a format whose files carry images (glTF's base colour texture) makes one a
+    material's colour map: ``make(material, pixels, factor, source, state) -> material``,
+    ``pixels`` ``(h, w, 4)`` uint8 sRGB as stored (row 0 the top), ``factor`` the linear RGB
+    it is multiplied by, ``state`` a dict kept for one file (its texel budget); a ValueError
+    says why it cannot (the texture system registers it)."""
+    _COLOUR_IMAGE[:] = [make]
+
+
+def colour_image_maker() -> Callable | None:
+    """The registered :func:`register_colour_image` function, or None."""
+    return _COLOUR_IMAGE[0] if _COLOUR_IMAGE else None
+
+
 def scene_readers() -> tuple[SceneKeys, ...]:
     return tuple(_SCENE.values())
 
