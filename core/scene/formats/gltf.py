@@ -8,7 +8,8 @@ the same document. What becomes what:
   scene graph flattened: an instanced mesh becomes one mesh per instance); closed (culled)
   when watertight. Points and lines are left out, and said.
 - **Materials** (metallic–roughness): the base colour factor is ``O_d``; the model is
-  Cook–Torrance (FvDFH 16.7) with ``k_d = 1 − metallic``, ``k_s = 1``, Beckmann's slope
+  Cook–Torrance (FvDFH 16.7) with ``k_d = 0.98 (1 − metallic)`` (``DIFFUSE_SHARE``: below
+  1, so that a white base colour reflects less than all the light), ``k_s = 1``, Beckmann's slope
   ``m = roughness`` (glTF's is a perceptual roughness for GGX: taken as ``m`` directly, an
   approximation) and ``F0 = 0.04 (1 − metallic) + base colour · metallic``; glTF's defaults
   (metallic 1, roughness 1) hold where a factor is absent. Emission is the emissive factor
@@ -48,6 +49,10 @@ from core.scene.model import Light, Material, Mesh
 
 GLB_MAGIC = b"glTF"
 MAX_ITEMS = 100_000          # nodes, meshes, accessors … a file may list (10^6 nodes: refused)
+# k_d of a dielectric (metallic 0): a white base colour would otherwise reflect all the light
+# (rho = k_d O_d = 1), which no real surface does and which the radiosity solver and the
+# path tracer refuse (the light would never die out); glTF's white is common
+DIFFUSE_SHARE = 0.98
 
 
 def document(data: bytes, name: str) -> dict:
@@ -285,7 +290,8 @@ def _material(visual) -> tuple[Material, bool]:
     alpha = float(base[3]) if len(base) > 3 else 1.0
     blended = str(getattr(pbr, "alphaMode", "") or "").upper() == "BLEND"
     f0 = tuple(float(0.04 * (1.0 - metallic) + c * metallic) for c in base[:3])
-    material = Material(ka=0.2, kd=1.0 - metallic, ks=1.0, od=tuple(float(c) for c in base[:3]),
+    material = Material(ka=0.2, kd=DIFFUSE_SHARE * (1.0 - metallic), ks=1.0,
+                        od=tuple(float(c) for c in base[:3]),
                         kt=1.0 - alpha if blended and alpha < 1.0 else 0.0,
                         emission=emissive)
     material = dataclasses.replace(material, extra={"lighting": {

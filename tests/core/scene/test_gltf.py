@@ -42,7 +42,7 @@ def test_a_glb_gives_its_meshes_in_place_and_its_materials(tmp_path):
     assert np.allclose(box.positions.mean(axis=0), [1.2, 0, 0], atol=1e-6)
     assert len(box.triangles) == 12 and box.closed
     # plastic: k_d = 1 - metallic, F0 = 0.04; metal: k_d = 0, F0 = its base colour
-    assert box.material.od == (1.0, 0.0, 0.0) and box.material.kd == 1.0
+    assert box.material.od == (1.0, 0.0, 0.0) and box.material.kd == pytest.approx(0.98)
     lighting = box.material.extra["lighting"]
     assert lighting["model"] == "cook-torrance"
     assert lighting["parameters"] == {"roughness": pytest.approx(0.4),
@@ -222,11 +222,11 @@ def _textured_quad(tmp_path, factor=(255, 255, 255, 255)):
 def test_a_textured_quad_draws_as_the_same_quad_in_a_toml_scene(tmp_path):
     """The glTF's base colour texture against our own reader's: the quad as an OBJ with
     ``vt`` and the PNG as ``texture``, lit by the same model with the glTF's material
-    (metallic 0, roughness 1: k_d 1, k_s 1, m 1, F0 0.04), drawn through the same view."""
+    (metallic 0, roughness 1: k_d 0.98, k_s 1, m 1, F0 0.04), drawn through the same view."""
     glb = load_scene(_textured_quad(tmp_path))
     (tmp_path / "quad.toml").write_text(
         'background = [0.1, 0.1, 0.12]\nambient = [0.15, 0.15, 0.15]\n'
-        '[[geometry]]\nfile = "quad.obj"\nmaterial = { ka = 0.2, kd = 1.0, ks = 1.0, '
+        '[[geometry]]\nfile = "quad.obj"\nmaterial = { ka = 0.2, kd = 0.98, ks = 1.0, '
         'od = [1, 1, 1], model = "cook-torrance", roughness = 1.0, f0 = 0.04, '
         'texture = "tex.png" }\n')
     toml = load_scene(tmp_path / "quad.toml")
@@ -312,6 +312,20 @@ def test_an_image_that_is_a_decompression_bomb_is_one_line(tmp_path):
         load_scene(_quad_gltf_by_hand(tmp_path, "bomb.png"))
     message = str(error.value)
     assert "quad.gltf" in message and "\n" not in message
+
+
+def test_a_white_dielectric_is_drawn_by_radiosity_and_the_path_tracer(tmp_path):
+    """glTF's white, metallic 0: k_d 0.98, so rho = k_d O_d stays below 1 and the two global
+    renderers draw it rather than refuse it (a red box and a metal ball, lit by the default
+    lights: radiosity's picture is not one flat colour)."""
+    path = tmp_path / "two.glb"
+    path.write_bytes(_two_objects().export(file_type="glb"))
+    scene = load_scene(path)
+    for renderer in ("radiosity", "pathtrace"):
+        settings = RenderSettings.for_scene(scene, size=(48, 48), renderer=renderer)
+        frame = render(scene, scene.views[0], settings.replace(
+            **({"samples": 1} if renderer == "pathtrace" else {"max_elements": 200})))
+        assert frame.message is None or "cannot" not in frame.message, frame.message
 
 
 def test_an_accessor_that_overruns_its_buffer_and_a_truncated_glb_are_one_line(tmp_path):
