@@ -152,15 +152,16 @@ def with_colour_image(material, pixels, factor, source: str, state: dict):
     (kept in ``state``, one dict per file)."""
     import dataclasses
 
-    from core.texture.image import Texture, srgb_to_linear
+    from core.texture.image import Texture
     h, w = pixels.shape[:2]
     over = state.setdefault("budget", TexelBudget()).take(w * h, f"the image ({w} x {h})")
     if over:
         raise TextureError(over)
-    rgba = np.asarray(pixels, np.float64) / 255.0
-    rgba[..., :3] = srgb_to_linear(rgba[..., :3]) * np.asarray(factor, np.float64)[:3]
-    texture = Texture.from_array(rgba[::-1], wrap="repeat", srgb=True, decoded=True,
+    # decoded a band of rows at a time, as an image file is (never the whole image in float64)
+    texture = Texture.from_array(pixels[::-1], wrap="repeat", srgb=True, divisor=255.0,
                                  source=source)
+    for level in texture.levels:      # linear, and the mipmaps are means: scale each level
+        level[..., :3] *= np.asarray(factor, np.float32)[:3]
     maps = SurfaceMaps(color=texture)
     return dataclasses.replace(material, extra={**material.extra, MAPS_KEY: maps})
 

@@ -73,14 +73,15 @@ def _build() -> dict:
     models = lighting_models()
     source = dispatch_source(tuple(m.name for m in models))
     scope = {"MODEL": MODEL}
-    for m in models:
+    for k, m in enumerate(models):
         module = m.kernels()
         for role in ROLES:
             scope[f"{_identifier(m.name)}_{role}"] = getattr(module, role)
-        # the same kernel not inlined: compiled once, linked into each kernel that calls it
-        # (no cache of its own: only a kernel being compiled needs it)
-        scope[f"{_identifier(m.name)}_point_call"] = reuse_plain_overloads(
-            numba.njit(module.point.py_func))
+        if k:       # the calling seam's: the kernel not inlined, compiled once and linked
+            # into each kernel that calls it (no cache of its own: only a kernel being
+            # compiled needs it)
+            scope[f"{_identifier(m.name)}_point_call"] = reuse_plain_overloads(
+                numba.njit(module.point.py_func))
     linecache.cache[GENERATED] = (len(source), None, source.splitlines(True), GENERATED)
     exec(compile(source, GENERATED, "exec"), scope)
     # Not cached on their own (no file behind them): they are inlined into cached kernels.

@@ -326,6 +326,8 @@ def test_a_white_dielectric_is_drawn_by_radiosity_and_the_path_tracer(tmp_path):
         frame = render(scene, scene.views[0], settings.replace(
             **({"samples": 1} if renderer == "pathtrace" else {"max_elements": 200})))
         assert frame.message is None or "cannot" not in frame.message, frame.message
+        box = frame.color[frame.color[..., 0] > frame.color[..., 1] + 60]    # the red box
+        assert len(box) > 20, renderer
 
 
 def test_an_accessor_that_overruns_its_buffer_and_a_truncated_glb_are_one_line(tmp_path):
