@@ -9,7 +9,7 @@ import numpy as np
 
 from core.camera.rays import camera_rays
 from core.pathtrace import kernel
-from core.pathtrace.renderer import packed_for, pass_offsets
+from core.pathtrace.renderer import packed_for, pass_offsets, sample_index
 from core.radiosity.mesh import has_light, reflectance
 from core.radiosity.tone import tone_map
 from core.shading.illumination import to_uint8
@@ -41,7 +41,8 @@ def inspect_pixel(scene, view, settings, x, y, context) -> dict:
             packed.emit_tri, packed.emit_cdf, packed.area, packed.emit_pdf, packed.lights,
             packed.background, np.ascontiguousarray(o[0]), np.ascontiguousarray(d[0]),
             float(t0[0]), float(t1[0]), kernel.EPS * packed.scale,
-            settings.seed * 1_000_003 + k, y * width + x, rays)
+            settings.seed * 1_000_003 + k, y * width + x, settings.seed,
+            sample_index(settings, k), rays)
         total += (r, g, b)
         if k == 0:
             recorded = int(np.count_nonzero(np.abs(rays[:, 3:6]).sum(axis=1)))   # direction set

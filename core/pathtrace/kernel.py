@@ -24,7 +24,14 @@ At each hit along a path (``throughput`` the product of f cos / pdf so far):
 4. Russian roulette from the fourth bounce on (survive with the throughput's largest channel,
    at most 0.95), and a hard limit of ``MAX_BOUNCES``.
 
-Random numbers: splitmix64 per (ray, pass, seed), so a picture is reproducible.
+Random numbers: splitmix64 per (ray, pass, seed), so a picture is reproducible. With a
+``sample`` index (the pass: the pixel's k-th path), the first hit's six numbers (the light
+sample's triangle and point, the BSDF's lobe and direction) are stratified instead: point k of
+the R3 sequence (Roberts 2018: k α mod 1, α the powers of 1/φ₃, φ₃ the root of x⁴ = x + 1),
+shifted by a random vector per pixel (Cranley and Patterson 1976). Each path stays an unbiased
+estimate, and a pixel's first k paths spread over its light and its hemisphere evenly for every
+k, so its noise falls faster than k^-1/2 where the first bounce carries it (the diffuse walls
+of a Cornell box). Deeper bounces draw from splitmix64 as before.
 """
 
 from __future__ import annotations
@@ -46,6 +53,9 @@ RHO, KS, SHINE, KR, KT, IOR, EMIT, TWO_SIDED, OS, SURFACE = 0, 3, 4, 5, 6, 7, 8,
 # model's glossy lobe reads (core.shading.models).
 MATERIAL_WIDTH = SURFACE + SURFACE_COLUMNS
 EPS = 1e-7          # ray offset, times the scene's size
+PHI3 = 1.2207440845731146                     # x**4 = x + 1: the R3 sequence's generator
+R3 = (1.0 / PHI3, 1.0 / PHI3 ** 2, 1.0 / PHI3 ** 3)
+INDEPENDENT = -1    # the sample index that asks for independent random numbers everywhere
 
 
 @njit(cache=True, inline="always")
@@ -139,6 +149,28 @@ RECORD_WIDTH = 15     # origin 3, direction 3, kind, throughput 3, t, triangle, 
 
 
 @njit(cache=True)
+def _strata(seed, pixel, sample):
+    """The six numbers of a pixel's ``sample``-th first hit: two points of the R3 sequence,
+    each shifted by the pixel's own random vector (the same in every pass)."""
+    state = np.uint64(seed) * np.uint64(0xD1B54A32D192ED03) + np.uint64(pixel)
+    state, a = _next(state)
+    state, b = _next(state)
+    state, c = _next(state)
+    state, d = _next(state)
+    state, e = _next(state)
+    state, f = _next(state)
+    return (_shifted(a, sample, R3[0]), _shifted(b, sample, R3[1]), _shifted(c, sample, R3[2]),
+            _shifted(d, sample, R3[0]), _shifted(e, sample, R3[1]), _shifted(f, sample, R3[2]))
+
+
+@njit(cache=True)
+def _shifted(shift, sample, alpha):
+    """Point ``sample`` of the sequence k α mod 1, moved by ``shift`` (mod 1)."""
+    v = shift + sample * alpha
+    return v - math.floor(v)
+
+
+@njit(cache=True)
 def _record(row, ox, oy, oz, dx, dy, dz, kind, tr, tg, tb, t, tri, lr, lg, lb):
     row[0], row[1], row[2], row[3], row[4], row[5] = ox, oy, oz, dx, dy, dz
     row[6], row[7], row[8], row[9] = kind, tr, tg, tb
@@ -148,11 +180,12 @@ def _record(row, ox, oy, oz, dx, dy, dz, kind, tr, tg, tb, t, tri, lr, lg, lb):
 @njit(cache=True)
 def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
                tri_area, tri_emit_pdf, lights, background, ox, oy, oz, dx, dy, dz, t_min, t_max,
-               offset, state, stack, record):
+               offset, state, strata, stratified, stack, record):
     """The radiance along one camera ray: ``(r, g, b, state, bounces)``; a camera ray that
     hits nothing sees the background colour (a path that leaves the scene later, nothing).
     ``record`` (R, RECORD_WIDTH): the first R rays of the path, for the pixel inspector
-    (R = 0 when rendering)."""
+    (R = 0 when rendering). ``strata``: the first hit's six numbers when ``stratified``
+    (:func:`_strata`)."""
     lr, lg, lb = 0.0, 0.0, 0.0
     tr, tg, tb = 1.0, 1.0, 1.0
     last_pdf = 0.0            # solid-angle pdf of the BSDF sample that made this ray
@@ -192,9 +225,12 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
         # 2. next-event estimation, for the diffuse and Phong lobes
         if pd + ps > 0.0:
             if emit_tri.shape[0] > 0:
-                state, u0 = _next(state)
-                state, u1 = _next(state)
-                state, u2 = _next(state)
+                if stratified and bounce == 0:
+                    u0, u1, u2 = strata[0], strata[1], strata[2]
+                else:
+                    state, u0 = _next(state)
+                    state, u1 = _next(state)
+                    state, u2 = _next(state)
                 j = min(np.searchsorted(emit_cdf, u0 * emit_cdf[-1], side="right"),
                         emit_tri.shape[0] - 1)
                 e = emit_tri[j]
@@ -244,9 +280,12 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
                 lg += tg * fg * light[4] * g
                 lb += tb * fb * light[5] * g
         # 3. the next direction, from a lobe chosen by its weight
-        state, u0 = _next(state)
-        state, u1 = _next(state)
-        state, u2 = _next(state)
+        if stratified and bounce == 0:
+            u0, u1, u2 = strata[3], strata[4], strata[5]
+        else:
+            state, u0 = _next(state)
+            state, u1 = _next(state)
+            state, u2 = _next(state)
         if u0 < pd + ps:
             wx, wy, wz = _sample_lobe(m, nx, ny, nz, wox, woy, woz, pd, ps, u0 / (pd + ps),
                                       u1, u2)
@@ -292,10 +331,12 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
                tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
-               out, bounces, first_index=0):
+               out, bounces, first_index, strata_seed, sample):
     """Radiance of every ray into ``out`` (N, 3); ``bounces`` (chunks,) the path lengths.
     Ray i draws its random numbers from (seed, first_index + i): its pixel's index in the
-    frame, so one pixel can be traced again alone (the inspector)."""
+    frame, so one pixel can be traced again alone (the inspector). ``sample`` >= 0: the rays
+    are their pixels' ``sample``-th paths, whose first hits are stratified
+    (:func:`_strata` with ``strata_seed``); ``INDEPENDENT``: they are not."""
     n = origins.shape[0]
     no_record = np.empty((0, RECORD_WIDTH))
     chunks = (n + 255) // 256
@@ -309,12 +350,13 @@ def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
             if not t_min[i] < t_max[i]:          # outside the viewport (letterbox)
                 out[i, 0], out[i, 1], out[i, 2] = background[0], background[1], background[2]
                 continue
+            strata = _strata(strata_seed, first_index + i, max(sample, 0))
             r, g, b, state, depth = trace_path(
                 bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
                 tri_area, tri_emit_pdf, lights, background,
                 origins[i, 0], origins[i, 1], origins[i, 2],
                 directions[i, 0], directions[i, 1], directions[i, 2], t_min[i], t_max[i],
-                offset, state, stack, no_record)
+                offset, state, strata, sample >= 0, stack, no_record)
             out[i, 0], out[i, 1], out[i, 2] = r, g, b
             total += depth
         bounces[chunk] = total
@@ -323,7 +365,7 @@ def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
 @njit(cache=True)
 def trace_recorded(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
                    tri_area, tri_emit_pdf, lights, background, origin, direction, t_min, t_max,
-                   offset, seed, index, record):
+                   offset, seed, index, strata_seed, sample, record):
     """One ray, as :func:`trace_many` traces ray ``index`` of its frame, with its path in
     ``record``: ``(r, g, b, bounces)``."""
     state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(index)
@@ -334,5 +376,6 @@ def trace_recorded(bvh, corners, tri_normal, tri_material, materials, emit_tri, 
     r, g, b, state, depth = trace_path(
         bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
         tri_emit_pdf, lights, background, origin[0], origin[1], origin[2], direction[0],
-        direction[1], direction[2], t_min, t_max, offset, state, stack, record)
+        direction[1], direction[2], t_min, t_max, offset, state,
+        _strata(strata_seed, index, max(sample, 0)), sample >= 0, stack, record)
     return r, g, b, depth

@@ -108,8 +108,11 @@ def packed_for(scene, context) -> Packed:
     return cache["pathtrace packing"]
 
 
-def trace(packed: Packed, origins, directions, t_min, t_max, seed: int) -> tuple[np.ndarray, int]:
-    """Radiance ``(N, 3)`` of the rays and the bounces their paths made."""
+def trace(packed: Packed, origins, directions, t_min, t_max, seed: int, strata_seed: int = 0,
+          sample: int = kernel.INDEPENDENT) -> tuple[np.ndarray, int]:
+    """Radiance ``(N, 3)`` of the rays and the bounces their paths made; ``sample``: which of
+    their pixels' paths they are, for the stratified first bounce (``kernel.INDEPENDENT``:
+    none)."""
     n = len(origins)
     out = np.empty((n, 3))
     bounces = np.zeros((n + 255) // 256, np.int64)
@@ -119,13 +122,19 @@ def trace(packed: Packed, origins, directions, t_min, t_max, seed: int) -> tuple
                       np.ascontiguousarray(origins),
                       np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
                       np.ascontiguousarray(t_max), kernel.EPS * packed.scale, int(seed), out,
-                      bounces)
+                      bounces, 0, int(strata_seed), int(sample))
     return out, int(bounces.sum())
 
 
 def pass_offsets(samples: int, seed: int) -> np.ndarray:
     """One film offset per pass: jittered strata (a single pass: the pixel centre)."""
     return sample_offsets(samples, "jittered" if samples > 1 else "regular", seed)
+
+
+def sample_index(settings, k: int) -> int:
+    """The kernel's ``sample`` for pass ``k``: k when the options stratify, else
+    ``kernel.INDEPENDENT``."""
+    return k if settings.options_of("pathtrace").sampler == "stratified" else kernel.INDEPENDENT
 
 
 def render_passes(scene, view, settings, context, first: int = 0, count: int | None = None,
@@ -142,7 +151,8 @@ def render_passes(scene, view, settings, context, first: int = 0, count: int | N
     for k in range(first, first + count):
         rays = camera_rays(view, settings.projection, width, height, [offsets[k]],
                            settings.keep_aspect)
-        radiance, b = trace(packed, *rays, seed=settings.seed * 1_000_003 + k)
+        radiance, b = trace(packed, *rays, seed=settings.seed * 1_000_003 + k,
+                            strata_seed=settings.seed, sample=sample_index(settings, k))
         total += radiance
         bounces += b
     seconds = time.perf_counter() - began

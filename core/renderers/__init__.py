@@ -63,8 +63,9 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
                   label="Path traced", emitters=True, recursive=True, textures=False,
                   progressive=True,
                   progressive_drawer="core.pathtrace.progressive:pathtrace_progressively",
-                  samples_at_rest=256,
-                  drawn_by="path traced, {settings.samples} paths per pixel",
+                  samples_at_rest=256, options="core.pathtrace.options:PathtraceOptions",
+                  drawn_by="path traced, {settings.samples} paths per pixel, "
+                           "{options.sampler}",
                   status="path traced")
 register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
