@@ -191,6 +191,12 @@ class ViewerState:
     paint_first: int | None = None
     # A lighting model for every material (core.shading.models; "": each material's own).
     lighting_model: str = ""
+    # The headlight (app.session.headlight): one light at the eye in place of the scene's,
+    # off by default (the course's lights are fixed in the world).
+    headlight: bool = False
+    # Depth shading's scalar (core.shading.depth.MODES): "view", the distance from the eye, or
+    # "height", the world y through the terrain map.
+    depth_shading: str = "view"
     # The renderers' own options set in the panel (field name -> value; app.session.options),
     # kept across renderers and scenes like the renderer itself; the last refused value's
     # message, shown under the controls.
@@ -223,6 +229,7 @@ class ViewerState:
     _camera_undo: list = field(default_factory=list, repr=False)
     _camera_redo: list = field(default_factory=list, repr=False)
     _remembered_gesture: object = field(default=None, repr=False)
+    _headlights: object = field(default=None, repr=False)   # app.session.headlight.Headlights
 
     def __post_init__(self) -> None:
         self._scene_defaults(keep_settings=True)
@@ -400,6 +407,7 @@ class ViewerState:
                                         depth_cue=self.depth_cue,
                                         transparency=self.transparency or None,
                                         lighting_model=self.lighting_model or None,
+                                        depth_shading=self.depth_shading,
                                         paint_first=(self.paint_first if self.renderer_entry
                                                      .has_option("paint_first") else None),
                                         **self.option_values)
@@ -615,6 +623,55 @@ class ViewerState:
             setattr(self, name, value)
             self.dirty = True
 
+    def set_headlight(self, on: bool) -> None:
+        if bool(on) != self.headlight:
+            self.headlight, self.dirty = bool(on), True
+
+    def set_depth_shading(self, mode: str) -> None:
+        """Depth shading by the distance from the eye ("view") or by height ("height")."""
+        from core.shading.depth import MODES
+        self._set("depth_shading", mode, MODES)
+
+    @property
+    def headlight_note(self) -> str:
+        """The status line's words for the headlight: "" when it is off."""
+        if not self.headlight:
+            return ""
+        from app.session.headlight import headlight_refused
+        if self.playback is not None:
+            return "headlight off on animated scenes: the scene's keyed lights are used"
+        return headlight_refused(self.renderer_entry) or "headlight on: a light at the eye"
+
+    def _lights_for(self, view):
+        """None when the scene's own lights draw the next frame; else ``lit(scene)`` giving
+        the scene lit by the headlight at ``view``'s eye (called on the rendering thread)."""
+        from app.session.headlight import Headlights, headlight_refused
+        if (not self.headlight or view is None or self.playback is not None
+                or headlight_refused(self.renderer_entry)):
+            return None
+        if self._headlights is None:
+            self._headlights = Headlights()
+        headlights, projection = self._headlights, self.projection
+        return lambda scene: headlights.lit(scene, self.scene_edits, view, projection)
+
+    def drawn_scene(self):
+        """The scene as the frame shown was drawn, for work beside the renderer (the
+        inspector's records and buffer views): the course's .tri rules applied, and under the
+        headlight a copy of its own lit at the eye (not the renderer's twin, which the
+        worker's next frame relights)."""
+        scene, view = self.scene, self.view
+        if self._lights_for(view) is not None:
+            import dataclasses
+            from app.session.headlight import headlight
+            from core.volume.data import attach_volumes, volumes_of
+            lit = dataclasses.replace(scene, lights=[headlight(view, self.projection)])
+            attach_volumes(lit, volumes_of(scene))
+            scene = lit
+        if self.course_tri and view is not None:
+            from core.scene.course_tri import course_tri_scene
+            scene = course_tri_scene(scene, view)
+        return scene
+
     def set_lighting_model(self, name: str) -> None:
         """A registered lighting model for every material, or "" for each material's own."""
         from core.shading.models import lighting_model_names
@@ -725,10 +782,8 @@ class ViewerState:
         drawn progressively; everything else is one ``core.render``. The bump demo's map and
         mode are set on its material here, on the thread that renders.
         """
-        scene, view, settings, renderer = self.scene, self.view, self.settings(), self.renderer
-        if self.course_tri and view is not None:
-            from core.scene.course_tri import course_tri_scene
-            scene = course_tri_scene(scene, view)
+        base, view, settings, renderer = self.scene, self.view, self.settings(), self.renderer
+        lights_for, course_tri = self._lights_for(view), self.course_tri and view is not None
         what = f"{self.view_label}, {self.projection}, {self.shading}"
         context = self.context
         demo = (self.bump_map, self.bump) if self.is_bump_demo else None
@@ -736,11 +791,24 @@ class ViewerState:
         isos = {v: iso for v, iso in self.iso_wanted.items() if v.iso != iso}
 
         def prepare(control=None):
+            """On the rendering thread: surfaces re-extracted, the demo's map set; returns
+            the scene to draw (headlit, with the course's .tri rules)."""
             if isos:
-                self._extract(scene, isos, control)
+                self._extract(base, isos, control)
             if demo is not None:
                 from core.texture.demo_scene import apply_demo_options
-                apply_demo_options(scene, *demo)
+                apply_demo_options(base, *demo)
+            scene = base if lights_for is None else lights_for(base)
+            if course_tri:
+                from core.scene.course_tri import course_tri_scene
+                scene = course_tri_scene(scene, view)
+            return scene
+
+        def picked(frame):
+            """The frame with its depth kept for the pivot under the cursor (app.session.pick)."""
+            from app.session.pick import PICK_KEY, depth_pick
+            frame.stats[PICK_KEY] = depth_pick(frame, view, settings)
+            return frame
 
         if playback is not None:
             from app.session.playback import render_animated
@@ -755,18 +823,17 @@ class ViewerState:
                 prepare(control)
                 frame = render_animated(playback.animation, t, settings, context, index, control)
                 frame.stats["time"] = t           # the moment drawn (the clock moves on)
-                return frame
+                return picked(frame)
         elif view is not None and get_renderer(settings.renderer).progressive:
             progressively = get_renderer(settings.renderer).drawer()
             what = f"{what}, {get_renderer(settings.renderer).label.lower()}"
 
             def run(control=None):
-                prepare(control)
-                return progressively(scene, view, settings, context, renderer, control)
+                return picked(progressively(prepare(control), view, settings, context,
+                                            renderer, control))
         else:
             def run(control=None):
-                prepare(control)
-                return renderer(scene, view, settings, context)
+                return picked(renderer(prepare(control), view, settings, context))
         return run, what
 
     def update(self) -> bool:

@@ -72,13 +72,19 @@ class Blit:
         self.program["screen_anchor"].value = tuple(int(c) for c in screen_anchor)
         self.program["texel_anchor"].value = tuple(int(c) for c in texel_anchor)
 
-    def draw(self, origin: tuple[int, int] = (0, 0)) -> None:
+    def draw(self, origin: tuple[int, int] = (0, 0),
+             shown: tuple[int, int] | None = None) -> None:
         """Draw the last uploaded frame over the current viewport (does nothing before one),
-        its bottom-left pixel at window pixel ``origin`` (set the viewport to the same rect)."""
+        its bottom-left pixel at window pixel ``origin`` (set the viewport to the same rect).
+        ``shown``: the size of the area it fills, when it is not the frame's own (a resized
+        window whose new frame is not there yet): the frame is stretched over it, nearest
+        neighbour (:func:`app.viewer.loupe.stretched`)."""
         if self.texture is None:
             return
         self.ctx.disable(moderngl.DEPTH_TEST | moderngl.BLEND | moderngl.CULL_FACE)
         self.program["origin"].value = (int(origin[0]), int(origin[1]))
+        width, height = shown if shown is not None else self.texture.size
+        self.program["shown"].value = (max(int(width), 1), max(int(height), 1))
         self.texture.use(location=0)
         self.vao.render(moderngl.TRIANGLES, vertices=3)
 

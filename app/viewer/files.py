@@ -93,6 +93,28 @@ def config_dir() -> Path:
     return Path(platformdirs.user_config_dir(APP_NAME))
 
 
+SAVED_VIEWS = "saved.views"          # Ctrl+S appends the view shown here
+
+
+def state_dir() -> Path:
+    """The user's state folder: ``$XDG_STATE_HOME/fvd-viewer`` on Linux, else
+    ``~/.local/state/fvd-viewer`` (``platformdirs``; the platform's own elsewhere)."""
+    import platformdirs
+    return Path(platformdirs.user_state_dir(APP_NAME))
+
+
+def saved_views_file() -> Path:
+    """The view file Ctrl+S appends to, in :func:`state_dir`; the folder is made, readable by
+    its owner only, when missing. Raises OSError when it cannot be made or is not a folder
+    (a file or a dangling link of that name). A ``saved.views`` that an earlier version
+    wrote into the folder it was started from stays there, and reads as before."""
+    folder = state_dir()
+    folder.mkdir(mode=0o700, parents=True, exist_ok=True)
+    if not folder.is_dir():
+        raise NotADirectoryError(f"{folder} is not a folder")
+    return folder / SAVED_VIEWS
+
+
 def read_small_text(path: Path, limit: int, what: str) -> str:
     """The text of ``path``, a regular file of at most ``limit`` bytes (a FIFO would block the
     window for good, /dev/zero fill its memory): else ValueError saying which and why."""

@@ -2,8 +2,10 @@
 
 Takes the :class:`app.session.state.ViewerState` and gestures in picture pixels (from the
 picture's top-left, y down) and gives the state a new :class:`core.camera.view.View` made by
-:mod:`core.camera.orbit`: a drag orbits about the VRP with Shoemake's arcball, Shift+drag or
-the middle button pans, the wheel dollies, Ctrl+wheel changes the window (the field of view);
+:mod:`core.camera.orbit`: a drag orbits with Shoemake's arcball or the turntable (yaw about
+the world's up axis, pitch about the camera's right axis) about the point under the cursor at
+the press (the window reads it from the frame's depth: :mod:`app.session.pick`), the scene's
+centre when the press misses, or the VRP (:data:`PIVOTS`); Shift+drag or the middle button pans, the wheel dollies, Ctrl+wheel changes the window (the field of view);
 F fits the scene's bounds, Enter returns to the file's view exactly. Each drag works from the
 view it started at (back at the start point, the view is the start view again). After every
 gesture F and B follow the scene's bounds; a pose that :func:`core.camera.orbit.pose_problems`
@@ -35,7 +37,9 @@ log = logging.getLogger("fvd")
 KEYS_HELP = (
     ("Mouse on the picture", ""),
     ("left click", "next view (inspect mode: the pixel's record)"),
-    ("left drag", "orbit about the scene's centre (arcball; View menu: about the VRP)"),
+    ("left drag", "orbit about the point under the cursor (the scene's centre off the "
+                  "model; View menu: the centre or the VRP)"),
+    ("y", "arcball / turntable (yaw about the up axis, pitch, no roll)"),
     ("Shift+drag, middle drag", "pan the VRP in the view plane"),
     ("wheel", "dolly (perspective: the PRP along VPN; parallel: the window)"),
     ("Ctrl+wheel", "the window alone (field of view)"),
@@ -45,6 +49,7 @@ KEYS_HELP = (
     ("Camera", ""),
     ("Enter", "the file's view again, exactly"),
     ("f", "fit the scene's bounds"),
+    ("l", "headlight on / off (a light at the eye in place of the scene's)"),
     ("Left / Right, Up / Down", "previous / next view"),
     ("Picture", ""),
     ("p / o", "perspective / parallel"),
@@ -58,7 +63,8 @@ KEYS_HELP = (
     (", .  [ ]", "step a frame back / forward, halve / double the speed"),
     ("Window", ""),
     ("s", "save the frame as a PNG in screenshots/"),
-    ("Ctrl+S", "save the view: six lines appended to saved.views"),
+    ("Ctrl+S", "save the view: six lines appended to saved.views in the user's state "
+               "folder (~/.local/state/fvd-viewer)"),
     ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a camera move (a drag, a wheel spin, a view)"),
     ("F1", "this help"),
     ("Esc", "close a menu, dismiss a message, else quit"),
@@ -66,9 +72,12 @@ KEYS_HELP = (
 )
 
 WHEEL_STEP = 0.9             # one wheel notch nearer: the eye's distance (or window) x 0.9
-PIVOTS = {"scene": "the scene's centre", "vrp": "the VRP (the course's)"}
+PIVOTS = {"cursor": "the point under the cursor", "scene": "the scene's centre",
+          "vrp": "the VRP (the course's)"}
+ROTATIONS = {"arcball": "Arcball (Shoemake)", "turntable": "Turntable (no roll)"}
 VIEW_FILE_LIMIT = 16 * 1024 * 1024       # bytes of a view file Ctrl+S reads before appending
 WHEEL_GESTURE_S = 0.6       # wheel notches closer than this in time are one gesture (one undo step)
+TURNTABLE_TURN = np.pi       # radians a drag across the picture's shorter side turns
 
 
 def scene_bounds(scene) -> tuple[np.ndarray, np.ndarray]:
@@ -90,6 +99,8 @@ class Drag:
     pan: bool
     start: View | None = None       # set once the drag passes the threshold
     moved: bool = False
+    under: np.ndarray | None = None     # the world point under the press (None: a miss)
+    pivot: np.ndarray | None = None     # what it orbits about (None: the VRP), at its start
 
 
 class CameraHands:
@@ -102,7 +113,10 @@ class CameraHands:
         self._bounds = (-np.ones(3), np.ones(3))
         self.drag: Drag | None = None
         self._wheel_at, self._wheel_gesture = -1e9, None
-        self.pivot = "scene"        # a drag orbits about: "scene" (its bounds' centre) or "vrp"
+        # a drag orbits about: "cursor" (the point under the press, else the scene's centre),
+        # "scene" (its bounds' centre) or "vrp"; by the arcball or the turntable
+        self.pivot = "cursor"
+        self.rotation = "arcball"
 
     # -- what the gestures work on -----------------------------------------------------------
     @property
@@ -142,9 +156,11 @@ class CameraHands:
         return self.state.view
 
     # -- drags -------------------------------------------------------------------------------
-    def press(self, x: float, y: float, pan: bool) -> None:
-        """A left (``pan``: Shift or middle) press at picture pixel (x, y)."""
-        self.drag = Drag(x, y, pan)
+    def press(self, x: float, y: float, pan: bool, under=None) -> None:
+        """A left (``pan``: Shift or middle) press at picture pixel (x, y); ``under``: the
+        world point drawn there, or None where the press misses the model."""
+        self.drag = Drag(x, y, pan, under=None if under is None
+                         else np.asarray(under, dtype=np.float64))
 
     def move(self, x: float, y: float, threshold: float) -> bool:
         """The pointer at (x, y) with the button down; a drag starts once it is more than
@@ -158,15 +174,20 @@ class CameraHands:
             d.start = self._base("drag")
             if d.start is None:
                 return False
+            d.pivot = self.pivot_point(d.under)
             self.state.camera_gesture = d         # the whole drag is one undo step
         d.moved = True
         width, height = self.state.size
         if d.pan:
             candidate = orbit.pan(d.start, x - d.x, y - d.y, width, height)
+        elif self.rotation == "turntable":
+            per_pixel = TURNTABLE_TURN / max(min(width, height), 1)
+            candidate = orbit.turntable(d.start, (x - d.x) * per_pixel, (y - d.y) * per_pixel,
+                                        self.up(), d.pivot)
         else:
             p0 = orbit.ball_point(*orbit.screen_to_ball(d.x, d.y, width, height))
             p1 = orbit.ball_point(*orbit.screen_to_ball(x, y, width, height))
-            candidate = orbit.orbit(d.start, orbit.arcball(p0, p1), self.pivot_point())
+            candidate = orbit.orbit(d.start, orbit.arcball(p0, p1), d.pivot)
         return self._take(candidate, "pan" if d.pan else "orbit")
 
     def release(self, x: float, y: float, threshold: float) -> bool:
@@ -175,18 +196,33 @@ class CameraHands:
         d, self.drag = self.drag, None
         return d is not None and d.start is not None
 
-    def pivot_point(self):
-        """The world point a drag orbits about: the centre of the scene's bounds, or None for
-        the VRP (the course's views turn about it; the Cornell box's VRP is at the eye, so
-        there the camera would turn away from the box)."""
+    def pivot_point(self, under=None):
+        """The world point a drag orbits about: ``under`` (the point under the press) when the
+        pivot is the cursor's and the press hit the model, else the centre of the scene's
+        bounds; None for the VRP (the course's views turn about it; the Cornell box's VRP is
+        at the eye, so there the camera would turn away from the box)."""
         if self.pivot == "vrp":
             return None
+        if self.pivot == "cursor" and under is not None:
+            return under
         return orbit.sphere(*self.bounds)[0]
+
+    def up(self) -> np.ndarray:
+        """The world's up axis of the turntable: the file's view's VUP (the scene's up)."""
+        source = self.state.file_view
+        return np.asarray(source.vup if source is not None else (0.0, 1.0, 0.0),
+                          dtype=np.float64)
 
     def set_pivot(self, pivot: str) -> None:
         if pivot not in PIVOTS:
             raise ValueError(f"the orbit pivot must be one of {', '.join(PIVOTS)}, not {pivot!r}")
         self.pivot = pivot
+
+    def set_rotation(self, rotation: str) -> None:
+        if rotation not in ROTATIONS:
+            raise ValueError(f"the rotation must be one of {', '.join(ROTATIONS)}, "
+                             f"not {rotation!r}")
+        self.rotation = rotation
 
     # -- the wheel, fit, reset ---------------------------------------------------------------
     def wheel(self, notches: float, field_of_view: bool = False) -> bool:

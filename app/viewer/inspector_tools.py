@@ -208,18 +208,15 @@ class InspectorTools:
         log.info("inspect record: %s", json.dumps(record, default=_jsonable))
 
     def _drawn(self):
-        """``(scene, view, settings)`` as the frame was drawn (the course's .tri rules
-        applied); animated scenes are refused (the moment's objects are not kept)."""
+        """``(scene, view, settings)`` as the frame was drawn (the course's .tri rules and
+        the headlight applied); animated scenes are refused (the moment's objects are not
+        kept)."""
         from core.inspect import NotInspectable
         s = self.state
         if s.playback is not None:
             raise NotInspectable("animated scenes are not inspected: the objects of the "
                                  "moment shown are not kept (use a still scene)")
-        scene = s.scene
-        if s.course_tri and s.view is not None:
-            from core.scene.course_tri import course_tri_scene
-            scene = course_tri_scene(scene, s.view)
-        return scene, s.view, s.settings()
+        return s.drawn_scene(), s.view, s.settings()
 
     def context(self):
         if self._context is None:

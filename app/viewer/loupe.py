@@ -66,6 +66,16 @@ class Loupe:
                 "texel_anchor": self.texel}
 
 
+def stretched(texel: tuple[int, int], shown: tuple[int, int],
+              size: tuple[int, int]) -> tuple[int, int]:
+    """The pixel of a ``size`` (W, H) frame that picture texel ``texel`` shows when the frame
+    is stretched over a picture of ``shown`` pixels (the blit's mapping, nearest neighbour:
+    ``floor(t * size / shown)``); the texel itself when the sizes agree or it lies outside."""
+    if tuple(shown) == tuple(size) or texel[0] < 0 or texel[1] < 0:
+        return texel
+    return (texel[0] * size[0] // max(shown[0], 1), texel[1] * size[1] // max(shown[1], 1))
+
+
 def value_at(frame, column: int, row: int, triangles=None, meshes=()) -> str:
     """The status line's words for frame pixel (column, row): its RGB and depth, and, where
     ``triangles`` (the frame's ``(H, W)`` visible-triangle ids in scene order, -1 empty) is

@@ -73,11 +73,11 @@ import moderngl  # noqa: E402
 from app import startup_gc
 from app.naming import picture_name, unused
 from app.viewer.blit import Blit
-from app.viewer.files import FileDialog, RecentFiles, check_drop
-from app.viewer.hands import KEYS_HELP, CameraHands, save_view, view_lines
+from app.viewer.files import SAVED_VIEWS, FileDialog, RecentFiles, check_drop, saved_views_file
+from app.viewer.hands import KEYS_HELP, PIVOTS, ROTATIONS, CameraHands, save_view, view_lines
 from app.viewer.gui_backend import GlfwInput, GuiRenderer
 from app.viewer.inspector_tools import InspectorTools
-from app.viewer.loupe import Loupe, value_at
+from app.viewer.loupe import Loupe, stretched, value_at
 from app.session.state import ViewerState, compile_count
 from app.viewer import options_panel
 from app.viewer.volume_panel import VolumePanel
@@ -108,7 +108,6 @@ PROBLEM_COLOUR = (1.0, 0.45, 0.4, 1.0)     # the last error or refusal, top of t
 PROGRESS_LINES = 3                         # the progress line's space, whatever it says
 # While a camera gesture waits for its frame, the window is drawn again at most this often.
 GESTURE_REDRAW_S = 1 / 30
-SAVED_VIEWS = "saved.views"        # View > Save view appends here (in the current folder)
 # Files in scenes/ that are not scenes.
 NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
 # After an event, draw a few frames so that ImGui's hover and menu states settle; then sleep
@@ -362,6 +361,11 @@ class ViewerWindow:
             self.tools.flip("key h")
         elif char == "f":
             self.fit_view("key f")
+        elif char == "y":
+            self.set_rotation("turntable" if self.hands.rotation == "arcball" else "arcball",
+                              "key y")
+        elif char == "l":
+            self.choose("headlight", not self.state.headlight, "key l")
 
     def _on_cursor(self, window, x, y) -> None:
         self.input.on_cursor(x, y)
@@ -413,7 +417,9 @@ class ViewerWindow:
                   "depth_cue": self.state.set_depth_cue,
                   "transparency": self.state.set_transparency,
                   "paint_first": self.state.set_paint_first,
-                  "lighting_model": self.state.set_lighting_model}[what]
+                  "lighting_model": self.state.set_lighting_model,
+                  "headlight": self.state.set_headlight,
+                  "depth_shading": self.state.set_depth_shading}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
         if what == "projection":
@@ -596,11 +602,12 @@ class ViewerWindow:
         if self.state.frame is not None and self.state.renderable:
             # after a scene change, never the old scene's picture; and only inside the picture's
             # area, so a frame of the old, larger size never shows under the panel
-            width, height = self.state.frame.color.shape[1::-1]
+            # a frame of another size (resized, the new one due) is stretched over the picture
+            width, height = self.state.size
             origin = (0, fb_h - height)   # the picture's bottom-left, GL counts rows up
             self.ctx.viewport = (*origin, width, height)
             self.ctx.scissor = (0, fb_h - self.state.size[1], *self.state.size)
-            self.blit.draw(origin)
+            self.blit.draw(origin, shown=(width, height))
             self.ctx.scissor = None
             self.ctx.viewport = (0, 0, fb_w, fb_h)
 
@@ -681,8 +688,7 @@ class ViewerWindow:
         elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
             self.toggle_play(where)
         elif self.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:
-            scale = self._scale()
-            self.tools.inspect(*self.loupe.texel_at(x * scale, y * scale), where)
+            self.tools.inspect(*self._frame_pixel(x, y), where)
         elif self.state.course_tri:
             self.choose("shading", COURSE_BUTTONS[button], f"{where} (course buttons)")
         elif button == glfw.MOUSE_BUTTON_LEFT:
@@ -698,7 +704,6 @@ class ViewerWindow:
         self._loupe_drag: tuple[int, int] | None = None     # a drag moving the loupe's picture
         self._pressed: tuple[int, float, float, str] | None = None   # button, x, y, where
         self._swapped_at, self._picture_new = 0.0, False    # the last redraw; a picture since
-        self._view_file = Path.cwd() / SAVED_VIEWS
 
     def _drag_threshold(self) -> float:
         """ImGui's drag threshold, in framebuffer pixels."""
@@ -707,7 +712,7 @@ class ViewerWindow:
     def _hand_press(self, button: int, x: float, y: float, mods: int, where: str) -> None:
         pan = button == glfw.MOUSE_BUTTON_MIDDLE or bool(mods & glfw.MOD_SHIFT)
         scale = self._scale()
-        self.hands.press(x * scale, y * scale, pan)
+        self.hands.press(x * scale, y * scale, pan, None if pan else self._point_under(x, y))
         self._pressed = (button, x, y, where)
         # magnified, a drag moves the loupe's picture instead of the camera
         self._loupe_drag = self.loupe.screen if self.loupe.magnification > 1 else None
@@ -751,6 +756,40 @@ class ViewerWindow:
             return
         if self.hands.move(x * scale, y * scale, self._drag_threshold()):
             self._wake()
+
+    def _frame_pixel(self, x: float, y: float) -> tuple[int, int]:
+        """The frame pixel shown at screen point (x, y): through the loupe, and stretched as
+        the blit stretches a frame of the old size after a resize (app.viewer.loupe)."""
+        scale = self._scale()
+        texel = self.loupe.texel_at(x * scale, y * scale)
+        frame = self.state.frame
+        if frame is None:
+            return texel
+        return stretched(texel, self.state.size, frame.color.shape[1::-1])
+
+    def _resizing(self) -> bool:
+        """Is the frame shown of another size than the picture (a resize, its frame due)?"""
+        frame = self.state.frame
+        return frame is not None and frame.color.shape[1::-1] != tuple(self.state.size)
+
+    def _point_under(self, x: float, y: float):
+        """The world point drawn at screen point (x, y), from the shown frame's depth
+        (app.session.pick); None off the model or where the frame keeps no depth."""
+        from app.session.pick import PICK_KEY, point_at
+        frame = self.state.frame
+        if frame is None or self.hands.pivot != "cursor":
+            return None
+        return point_at(frame.stats.get(PICK_KEY), *self._frame_pixel(x, y))
+
+    def set_rotation(self, rotation: str, how: str) -> None:
+        self.hands.set_rotation(rotation)
+        log.info("action: %s -> rotation %s", how, rotation)
+        self._wake()
+
+    def set_pivot(self, pivot: str, how: str) -> None:
+        self.hands.set_pivot(pivot)
+        log.info("action: %s -> orbit about %s", how, PIVOTS[pivot])
+        self._wake()
 
     def _pan_loupe(self, start, dx: float, dy: float) -> None:
         self.loupe.pan_from(start, dx, dy)
@@ -848,8 +887,14 @@ class ViewerWindow:
         view = self.state.view
         if view is None:
             return None
-        path = Path(path) if path is not None else self._view_file
-        s = self.state
+        if path is None:
+            try:
+                path = saved_views_file()
+            except OSError as error:
+                self._notice = f"could not make the folder for {SAVED_VIEWS}: {error}"
+                log.info("action: %s -> %s", how, self._notice)
+                return None
+        path, s = Path(path), self.state
         comment = (f"saved from the viewer: {s.scene.name}, {s.projection}, {s.shading}, "
                    f"{s.size[0]}x{s.size[1]} ({view.label})")
         try:
@@ -859,7 +904,7 @@ class ViewerWindow:
             log.info("action: %s -> %s", how, self._notice)
             print(self._notice, file=sys.stderr)
             return None
-        self._notice = f"view saved to {path.name} as view {number}"
+        self._notice = f"view saved to {path} as view {number}"
         log.info("action: %s -> view saved to %s as view %d", how, path, number)
         return number
 
@@ -957,9 +1002,10 @@ class ViewerWindow:
         if self.state.frame is None or not self._on_picture(x, y) or self._popup_open \
                 or self.dialog.open:
             return                        # a menu or a dialog over the picture: not a pixel
-        scale = self._scale()
-        column, row = self.loupe.texel_at(x * scale, y * scale)
+        column, row = self._frame_pixel(x, y)
         zoom = f"loupe {self.loupe.magnification}x, " if self.loupe.magnification > 1 else ""
+        if self._resizing():
+            zoom = "resizing (the last frame, stretched): " + zoom
         ids, meshes = (None, ()) if imgui.is_any_mouse_down() else \
             self.tools.triangle_ids(self.state.frame)        # not while a drag moves the view
         imgui.text_disabled(zoom + value_at(self.state.frame, column, row, ids, meshes))
@@ -1009,8 +1055,9 @@ class ViewerWindow:
             imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(self.hands.message))
         for line in view_lines(view, self.state.projection):
             imgui.text(displayable(line))
-        imgui.text_disabled("drag orbit, Shift/middle drag pan, wheel dolly, Ctrl+wheel window, "
-                            "F fit, Enter the file's view")
+        imgui.text_disabled(f"drag orbit ({self.hands.rotation}, about "
+                            f"{PIVOTS[self.hands.pivot]}), Shift/middle drag pan, wheel dolly, "
+                            "Ctrl+wheel window, F fit, Enter the file's view")
         imgui.pop_text_wrap_pos()
 
     def _log_frame(self) -> None:
@@ -1055,6 +1102,10 @@ class ViewerWindow:
             if imgui.menu_item_simple(displayable(mode.label), mode.key,
                                       self.state.shading == mode.name, solid):
                 self.choose("shading", mode.name, how)
+        by_height = self.state.depth_shading == "height"
+        if imgui.menu_item_simple("Depth colours by height (terrain map)", None, by_height,
+                                  solid):
+            self.choose("depth_shading", "view" if by_height else "height", how)
 
     def _panel(self) -> None:
         scale = self._scale()
@@ -1146,17 +1197,19 @@ class ViewerWindow:
             self.reset_view("menu View > Reset")
         if imgui.menu_item_simple("Fit the scene", "F"):
             self.fit_view("menu View > Fit")
-        from app.viewer.hands import PIVOTS
         for pivot, words in PIVOTS.items():
             if imgui.menu_item_simple(f"Orbit about {words}", None, self.hands.pivot == pivot):
-                self.hands.set_pivot(pivot)
-                log.info("action: menu View > Orbit about -> %s", words)
+                self.set_pivot(pivot, "menu View > Orbit about")
+        for rotation, words in ROTATIONS.items():
+            if imgui.menu_item_simple(words, "Y", self.hands.rotation == rotation):
+                self.set_rotation(rotation, "menu View")
         back, ahead = self.state.camera_history
         if imgui.menu_item_simple("Undo camera", "Ctrl+Z", False, back > 0):
             self.undo_camera("menu View > Undo camera")
         if imgui.menu_item_simple("Redo camera", "Ctrl+Shift+Z", False, ahead > 0):
             self.redo_camera("menu View > Redo camera")
-        if imgui.menu_item_simple(f"Save view (append to {SAVED_VIEWS})", "Ctrl+S"):
+        if imgui.menu_item_simple(f"Save view (append to {SAVED_VIEWS}, state folder)",
+                                  "Ctrl+S"):
             self.save_view("menu View > Save view")
         if imgui.begin_menu("Loupe (Alt+wheel)"):
             for m in (1, 2, 4, 8, 16, 32):
@@ -1198,6 +1251,8 @@ class ViewerWindow:
                 self.choose("renderer", entry.name, "menu Render")
         imgui.separator()
         self._lighting_model_items()
+        if imgui.menu_item_simple("Headlight (a light at the eye)", "L", self.state.headlight):
+            self.choose("headlight", not self.state.headlight, "menu Render")
         imgui.separator()
         imgui.text_disabled("Texture filter")
         for value, label in FILTER_LABELS:
@@ -1282,6 +1337,11 @@ class ViewerWindow:
         extras = [words + (" (refining)" if s.frame_partial else "")] if words else []
         if s.has_textures:
             extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))
+        if s.shading == "depth":
+            extras.append("depth: " + ("height, terrain map" if s.depth_shading == "height"
+                                       else "distance from the eye, near bright"))
+        if s.headlight_note:
+            extras.append(s.headlight_note)
         if extras:
             imgui.text(", ".join(extras))
         for note in (s.frame.stats.get("not drawn", []) if s.frame is not None else []):

@@ -12,6 +12,9 @@ six-line view of Assignment #1 that ``python -m app matrices`` and ``render`` re
   it with the frame; PRP, window, F and B are in VRC and go with it. The quaternions are written
   as the course's animation notes write them (``(s, v)``, the notes' product, ``v' = q^-1 v q``)
   and kept here because the camera ranks below the animation package.
+- **Turntable** (:func:`turntable`): yaw about the world's up axis and pitch about the
+  camera's right axis, with no roll (VUP becomes the up axis); the elevation stops short of
+  the poles, where VUP would be parallel to VPN.
 - **Pan**: the VRP moves in the view plane (along u and v) by the window's units per pixel.
 - **Dolly** (perspective): the PRP moves along VPN, and the window shrinks with the eye's
   distance about the PRP's foot, so the field of view stays and everything grows as the eye
@@ -42,6 +45,8 @@ NEAR_FRACTION = 1e-3
 DEPTH_MARGIN = 0.02
 # Sizes a pose may reach, in bounding-sphere radii, before it is refused as degenerate.
 SMALLEST, LARGEST = 1e-9, 1e9
+# The turntable's elevation stops this short of the poles (VUP parallel to VPN there).
+MAX_ELEVATION = math.radians(89.0)
 # The field of view fit uses when the view's own is unusable (half angle, radians).
 DEFAULT_HALF_ANGLE = math.radians(25.0)
 
@@ -135,6 +140,45 @@ def orbit(view: View, q: np.ndarray, pivot=None) -> View:
     turn = np.column_stack((u, v, n)) @ before.T
     vrp = p + turn @ (np.asarray(view.vrp, dtype=np.float64) - p)
     return _with(view, vrp=vrp, vpn=n, vup=v)
+
+
+def rotate_about(v, axis, angle: float) -> np.ndarray:
+    """``v`` turned counter-clockwise by ``angle`` radians about the unit ``axis``
+    (Rodrigues)."""
+    v, axis = np.asarray(v, dtype=np.float64), np.asarray(axis, dtype=np.float64)
+    c, s = math.cos(angle), math.sin(angle)
+    return v * c + cross3(axis, v) * s + axis * (axis @ v) * (1.0 - c)
+
+
+def turntable(view: View, yaw: float, pitch: float, up, pivot=None) -> View:
+    """The camera of a turntable: the scene turned by ``yaw`` radians about the world axis
+    ``up`` (positive: its front moves right) and by ``pitch`` about the camera's right axis
+    (positive: its front moves down, the eye rises), with no roll: VUP becomes ``up``.
+
+    VPN is written as its elevation over the horizon and its horizontal direction; the yaw
+    turns the direction about ``up`` by ``-yaw`` (the camera turns against the scene), the
+    pitch adds to the elevation, kept within ``MAX_ELEVATION`` of the horizon. The camera's
+    frame and the VRP turn as :func:`orbit` turns them (about ``pivot``, or the VRP when
+    None); PRP, window, F and B stay in the VRC."""
+    up = unit3(up)[0]
+    before = np.column_stack(vrc_basis(view))
+    u0, v0, n0 = before.T
+    level = n0 - (n0 @ up) * up
+    if np.linalg.norm(level) < 1e-12:             # looking along the up axis: tip backwards
+        level = -(v0 - (v0 @ up) * up)
+    level = unit3(level)[0]
+    elevation = math.asin(min(max(float(n0 @ up), -1.0), 1.0)) + pitch
+    elevation = min(max(elevation, -MAX_ELEVATION), MAX_ELEVATION)
+    level = rotate_about(level, up, -yaw)
+    n = unit3(math.cos(elevation) * level + math.sin(elevation) * up)[0]
+    u = unit3(cross3(up, n))[0]
+    v = cross3(n, u)
+    if pivot is None:
+        return _with(view, vpn=n, vup=up)
+    p = np.asarray(pivot, dtype=np.float64)
+    turn = np.column_stack((u, v, n)) @ before.T
+    vrp = p + turn @ (np.asarray(view.vrp, dtype=np.float64) - p)
+    return _with(view, vrp=vrp, vpn=n, vup=up)
 
 
 def pan(view: View, dx: float, dy: float, width: int, height: int) -> View:

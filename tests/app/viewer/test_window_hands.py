@@ -2,9 +2,9 @@
 
 One session of the default scene (the house, 500 x 500, perspective wireframe): a drag
 changes the picture and the panel's VPN and does not step the view; Ctrl+S appends the view to
-saved.views and ``python -m app render saved.views`` draws the screen's picture with 0 pixels
-different; Enter gives back the file's view with 0 pixels different from the first picture;
-the wheel then grows the picture monotonically; a click without a drag advances exactly one view;
+saved.views in the user's state folder (``$XDG_STATE_HOME/fvd-viewer``) and ``python -m app
+render`` of that file draws the screen's picture with 0 pixels different; Enter gives back
+the file's view with 0 pixels different from the first picture; the wheel then grows the picture monotonically; a click without a drag advances exactly one view;
 the loupe at 8x shows each frame pixel as an 8 x 8 block of its colour; F1 shows the keys
 in the panel and leaves the picture alone.
 """
@@ -67,7 +67,7 @@ def test_orbit_save_wheel_reset_click_and_help_under_xvfb(tmp_path):
     from PIL import Image
 
     xvfb, display = start_xvfb()
-    app = App(display, tmp_path)
+    app = App(display, tmp_path, env={"XDG_STATE_HOME": str(tmp_path / "state")})
     try:
         app.wait_for(r"first frame shown", timeout=90)
         app.find_window()
@@ -87,14 +87,16 @@ def test_orbit_save_wheel_reset_click_and_help_under_xvfb(tmp_path):
         assert not np.array_equal(moved, first)
         assert not np.array_equal(grab(app, tmp_path / "panel1.png", "340x500+500+0"), panel)
 
-        # Ctrl+S: the view appended to saved.views; render draws the same picture exactly.
+        # Ctrl+S: the view appended to saved.views in the user's state folder (not the
+        # folder the program was started from); render draws the same picture exactly.
         mark = len(app.log())
         app.key("ctrl+s")
         number = int(app.wait_for(r"view saved to .*saved\.views as view (\d+)", timeout=10,
                                   after=mark)[1])
-        assert number == 1
+        assert number == 1 and not (tmp_path / "saved.views").exists()
+        saved = tmp_path / "state" / "fvd-viewer" / "saved.views"
         out = tmp_path / "saved.png"
-        done = subprocess.run([sys.executable, "-m", "app", "render", "saved.views", "--view",
+        done = subprocess.run([sys.executable, "-m", "app", "render", str(saved), "--view",
                                "1", "--out", str(out)], cwd=tmp_path, env=app.env,
                               capture_output=True, text=True, timeout=120)
         assert done.returncode == 0, done.stderr
