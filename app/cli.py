@@ -494,12 +494,20 @@ def main(argv: list[str] | None = None, prog: str | None = None) -> int:
     args = _parser(argv[0], prog).parse_args(attach_values(argv))
     if argv[0] != "view":           # the viewer resumes at its first frame
         startup_gc.resume()
+    from app.progress_line import INTERRUPTED, ProgressLine
+    from core.work import watching
+    args.progress = ProgressLine(quiet=loudness == "quiet")
     try:
-        return _dispatch(args)
-    except KeyboardInterrupt:
-        return 130
+        with watching(args.progress if args.command in WATCHED else None):
+            return _dispatch(args)
+    except KeyboardInterrupt:       # a command that keeps files says what it kept itself
+        args.progress.say(args.progress.stopped())
+        return INTERRUPTED
     except MemoryError:
         return _out_of_memory()
+
+
+WATCHED = ("render", "animate")     # long work's progress line (app.progress_line)
 
 
 def _out_of_memory() -> int:
@@ -592,24 +600,7 @@ def _draw_still(scene, view, settings, time):
     if animation is None:
         return render(scene, view, settings)
     from core.animation.frames import render_at
-    if animation.particle_system is not None:       # simulated from 0: say how far it is
-        animation.particle_system.progress = _simulation_progress()
-    return render_at(animation, time, settings)
-
-
-def _simulation_progress():
-    """A ParticleSystem.progress that prints a line every few seconds of simulating."""
-    import time as clock
-    start = last = clock.monotonic()
-
-    def progress(step: int, of: int) -> None:
-        nonlocal last
-        now = clock.monotonic()
-        if now - last >= 5.0:
-            last = now
-            print(f"simulating the particles: step {step:,} of {of:,} "
-                  f"({now - start:.0f} s)", file=sys.stderr, flush=True)
-    return progress
+    return render_at(animation, time, settings)   # its simulations report their steps
 
 
 def _drawn_by(settings) -> str:
@@ -642,13 +633,26 @@ def _render(args) -> int:
     if args.buffer:                      # a buffer view instead of the picture
         from app.commands.inspector import render_buffer
         return render_buffer(scene, view, settings, args.buffer, Path(args.out), write_png)
-    frame, status = _render_frame(scene, view, settings, args)
-    if frame is None:
-        return status
-    status = _frame_problems(frame)
-    if status is not None:
-        return status
-    return _write_frame(frame, args, scene, index, settings)
+    there = os.path.lexists(args.out)
+    try:
+        frame, status = _render_frame(scene, view, settings, args)
+        if frame is None:
+            return status
+        status = _frame_problems(frame)
+        if status is not None:
+            return status
+        return _write_frame(frame, args, scene, index, settings)
+    except KeyboardInterrupt:            # the PNG is written whole or not at all (write_png)
+        return _stopped(args, f"nothing was written ({args.out} "
+                              f"{'is as it was' if there else 'was not made'})")
+
+
+def _stopped(args, kept: str) -> int:
+    """Say what Ctrl+C stopped and what stays; the status of an interrupted command."""
+    from app.progress_line import INTERRUPTED, ProgressLine
+    progress = getattr(args, "progress", None) or ProgressLine()
+    progress.say(progress.stopped(kept))
+    return INTERRUPTED
 
 
 def _render_settings(scene, args):

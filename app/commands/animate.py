@@ -299,32 +299,28 @@ def render_run(job: dict, bundle, frames: list[int], checkpoint=None) -> list[tu
 
 
 class Progress:
-    """``frame 12/90 (13%), 2.1 frames/s, ETA 37 s`` on stderr, one line updated in place."""
+    """The frames done, on the command's progress line (:class:`app.progress_line.ProgressLine`:
+    ``rendering the frames: frame 12 of 90 (13 %); 6 s, about 37 s left``, shown once the
+    command has run a second or two, silent with -q); counted as the frames are written."""
 
-    def __init__(self, total: int, done: int, stream=None):
-        self.total, self.done, self.start_done = total, done, done
-        self.t0 = time.perf_counter()
-        self.stream = stream = stream or sys.stderr
-        self.tty = hasattr(stream, "isatty") and stream.isatty()
+    def __init__(self, total: int, done: int, line=None):
+        from app.progress_line import ProgressLine
+        self.total, self.done = total, done
+        self.line = line or ProgressLine()
+        self.line(FRAMES, done, total, "frame")
 
     def tick(self) -> None:
         self.done += 1
-        elapsed = time.perf_counter() - self.t0
-        rate = (self.done - self.start_done) / elapsed if elapsed > 0 else 0.0
-        eta = (self.total - self.done) / rate if rate > 0 else float("inf")
-        line = (f"frame {self.done}/{self.total} ({100 * self.done // self.total}%), "
-                f"{rate:.2f} frames/s, ETA {eta:.0f} s")
-        self.say(line, final=False)
+        self.line(FRAMES, self.done, self.total, "frame")
 
-    def say(self, line: str, final: bool = True) -> None:
-        if self.tty:
-            print("\r\033[K" + line, end="\n" if final else "", file=self.stream, flush=True)
-        else:
-            print(line, file=self.stream, flush=True)
+    def say(self, line: str) -> None:
+        self.line.say(line)
 
     def finish(self) -> None:
-        if self.tty:
-            print(file=self.stream)
+        self.line.finish()
+
+
+FRAMES = "rendering the frames"
 
 
 class FrameWriter:
@@ -693,11 +689,15 @@ def main(args) -> int:
     if isinstance(todo, int):
         return todo
     total = job["frames"]
-    progress = Progress(total, total - len(todo))
+    progress = Progress(total, total - len(todo), getattr(args, "progress", None))
     movie = None
     if out.suffix.lower() in MOVIE_SUFFIXES:             # encoded as the frames come
         movie = Movie(out, folder, total, job["fps"], args.crf, done=set(range(total)) - set(todo))
-    ran = _render_and_write(args, job, bundle, animation, todo, folder, movie, progress, since)
+    try:
+        ran = _render_and_write(args, job, bundle, animation, todo, folder, movie, progress,
+                                since)
+    except KeyboardInterrupt:       # the frames written stay; the movie was abandoned whole
+        return _interrupted(progress, out, folder, movie is not None)
     if isinstance(ran, int):
         return ran
     failed, where, seconds = ran
@@ -796,6 +796,15 @@ def _render_and_write(args, job, bundle, animation, todo, folder, movie, progres
         raise
     progress.finish()
     return failed, where, time.perf_counter() - t0
+
+
+def _interrupted(progress, out: Path, folder: Path, movie: bool) -> int:
+    """Say what Ctrl+C stopped and which frames stay; the status of an interrupted command."""
+    from app.progress_line import INTERRUPTED
+    kept = (f"{progress.done} of {progress.total} frames are in {folder}; the same command "
+            f"renders the rest" + (f" and writes {out} (not written now)" if movie else ""))
+    progress.say(progress.line.stopped(kept))
+    return INTERRUPTED
 
 
 def _report_failures(failed, total: int, retries: int, movie) -> int:

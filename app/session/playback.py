@@ -7,10 +7,11 @@ one jump ahead instead of slowing the movie down. An animation that does not loo
 end; one that loops wraps.
 
 :func:`render_animated` draws the frame at a moment (``core.animation.frames.render_at``: the
-opaque picture and the particles). Particles are a simulation: playing forward continues from
-the last frame (cheap), but a moment before the simulation's present (a seek back, a loop
-wrapping) starts again from time 0; that re-simulation is done here in steps, reporting its
-progress and stopping when a newer request supersedes it.
+opaque picture and the particles). The simulations (particles, rigid bodies, actors) play
+forward from the last frame (cheap), but a moment before their present (a seek back, a loop
+wrapping) starts again from their nearest snapshot, and a far seek forward may take seconds:
+that stepping reports its progress and stops when a newer request supersedes it
+(:mod:`core.work`).
 
 No GL and no window library here.
 """
@@ -21,7 +22,6 @@ import math
 from dataclasses import dataclass
 
 SPEEDS = (0.125, 0.25, 0.5, 1.0, 2.0, 4.0)      # the speed control's choices (x real time)
-SIMULATION_CHUNK = 50                           # particle steps between progress reports
 
 
 @dataclass
@@ -119,30 +119,10 @@ class Playback:
 
 def render_animated(animation, t: float, settings, context, view_index: int, control=None):
     """The frame at ``t`` seen through ``view_index`` (``render_at``'s numbering: the keyed
-    view first), re-simulating the particles from 0 with progress when ``t`` lies before the
-    simulation's present."""
+    view first). Its simulations (particles, rigid bodies, actors) step in chunks that report
+    to ``control`` (:func:`core.work.control_watcher`): how far they are, and a newer request
+    stops them between two chunks; a simulation stopped so steps on from there next time."""
     from core.animation.frames import render_at
-    system = animation.particle_system
-    if system is not None:
-        _simulate_to(system, animation.local_time(t), control)
-    return render_at(animation, t, settings, context, view_index=view_index)
-
-
-def _simulate_to(system, t: float, control) -> None:
-    """Step ``system`` to time ``t`` as ``state_at`` would, in chunks, reporting progress."""
-    target = int(math.floor(t / system.dt + 1e-9))     # what ParticleSystem.state_at steps to
-    again = target < system.step_index
-    if again:
-        system.go_back(target)
-    how = (f"simulating the particles again from step {system.step_index}" if again
-           else "simulating the particles")
-    first = system.step_index
-    while system.step_index < target:
-        if control is not None:
-            control.check()
-            if target - first > SIMULATION_CHUNK:
-                control.report((system.step_index - first) / (target - first),
-                               f"{how}: step {system.step_index} of {target}")
-        for _ in range(min(SIMULATION_CHUNK, target - system.step_index)):
-            system.note()
-            system.step()
+    from core.work import control_watcher, watching
+    with watching(control_watcher(control) if control is not None else None):
+        return render_at(animation, t, settings, context, view_index=view_index)

@@ -34,6 +34,7 @@ from typing import Callable
 import numpy as np
 
 from core.animation.rewind import Rewind
+from core.work import advance
 
 STEP = 1.0 / 120.0
 MAX_ACTORS = 2000
@@ -176,10 +177,15 @@ class Group:
         if target < self.state.step_index:
             saved = self.rewind.nearest(target)        # the nearest snapshot, else from 0
             self.restore(saved) if saved is not None else self.reset()
-        while self.state.step_index < target:
+        if self.state.step_index < target:             # in chunks, reported (core.work)
+            advance("simulating the actors", self.state.step_index, target, self.step_on)
+        return self
+
+    def step_on(self, n: int) -> None:
+        """n steps on, snapshots noted on the way."""
+        for _ in range(n):
             self.rewind.note(self.state.step_index, self.snapshot)
             self.step()
-        return self
 
     def matrices_at(self, t: float) -> dict[int, np.ndarray]:
         self.state_at(t)

@@ -470,7 +470,6 @@ class World:
     iterations: int = 8
     planes: list = field(default_factory=list)       # (point, unit normal)
     spheres: list = field(default_factory=list)      # (center, radius)
-    progress = None                                  # progress(step, of) while state_at works
 
     def __post_init__(self) -> None:
         b = self.bodies
@@ -522,12 +521,16 @@ class World:
         if target < self.step_index:
             saved = self.rewind.nearest(target)        # the nearest snapshot, else from 0
             self.restore(saved) if saved is not None else self.reset()
-        while self.step_index < target:
-            if self.progress is not None and self.step_index % 10_000 == 0:
-                self.progress(self.step_index, target)
+        if self.step_index < target:                   # in chunks, reported
+            from core.work import advance              # (here: the kernels keep their lines)
+            advance("simulating the rigid bodies", self.step_index, target, self.step_on)
+        return self
+
+    def step_on(self, n: int) -> None:
+        """n steps on, snapshots noted on the way."""
+        for _ in range(n):
             self.rewind.note(self.step_index, self.snapshot)
             self.step()
-        return self
 
     def rotations(self) -> np.ndarray:
         """(N, 3, 3): each body's rotation since t = 0."""

@@ -30,6 +30,7 @@ import numpy as np
 
 from core.animation.rewind import Rewind
 from core.jit import njit
+from core.work import advance
 
 SHAPES = ("point", "sphere", "disc", "mesh")
 DRAW_MODES = ("point", "sprite", "streak")
@@ -42,7 +43,6 @@ MAX_PER_FRAME = 200_000
 # particle-step, the work budget is a minute or two of one core.
 MAX_SIMULATION_STEPS = 400_000    # duration · fps · SUBSTEPS (an hour of 30 fps is 432,000)
 MAX_PARTICLE_WORK = 4_000_000_000
-PROGRESS_EVERY = 2048             # steps between two calls of ParticleSystem.progress
 
 
 class ParticleBudgetError(ValueError):
@@ -396,19 +396,22 @@ class ParticleSystem:
         self.work = 0                       # particle-steps since 0 (MAX_PARTICLE_WORK)
         self.unborn = 0                     # particles and children the MAX_PARTICLES cap refused
 
-    progress = None                         # progress(step, of): called while state_at works
-
     def state_at(self, t: float) -> "ParticlePool":
         """The particles at time t (after the last whole step at or before t)."""
         target = int(math.floor(t / self.dt + 1e-9))
+        what = "simulating the particles"
         if target < self.step_index:
             self.go_back(target)
-        while self.step_index < target:
-            if self.progress is not None and self.step_index % PROGRESS_EVERY == 0:
-                self.progress(self.step_index, target)
+            what += f" again from step {self.step_index:,}"
+        if self.step_index < target:                   # in chunks, reported (core.work)
+            advance(what, self.step_index, target, self.step_on)
+        return self.particles
+
+    def step_on(self, n: int) -> None:
+        """n steps on, snapshots noted on the way."""
+        for _ in range(n):
             self.note()
             self.step()
-        return self.particles
 
     def go_back(self, target: int) -> None:
         """To the nearest snapshot at or before step ``target``, else to step 0."""

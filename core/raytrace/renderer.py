@@ -29,6 +29,7 @@ from core.raytrace.options import MAX_DEPTH_LIMIT, RaytraceOptions  # noqa: F401
 from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
                                        to_uint8)
+from core.work import report
 
 
 
@@ -194,6 +195,7 @@ def render_filtered(setup: Setup, name: str, radius: float) -> np.ndarray:
                  else None)
         raw = trace_rays(setup, origins, directions, t_min, t_max, diffs)
         bands.append(raw.reshape(len(setup.offsets), end - r, setup.width, 3))
+        report("ray tracing", end, setup.height, "row")
     samples = np.concatenate(bands, axis=1)
     # unclamped, as the box's mean is; on 0-255 for the filter, back to the tracer's 0-1
     return reconstruct(samples * 255.0, setup.offsets, name, radius) / 255.0
@@ -216,8 +218,11 @@ def render_raw(setup: Setup) -> np.ndarray:
                                         setup.width, setup.height, levels, threshold,
                                         min(levels, min_levels))
     rows = band_rows(setup.width, len(setup.offsets))
-    return np.concatenate([trace_tile(setup, r, min(r + rows, setup.height), 0, setup.width)
-                           for r in range(0, setup.height, rows)])
+    bands = []
+    for r in range(0, setup.height, rows):
+        bands.append(trace_tile(setup, r, min(r + rows, setup.height), 0, setup.width))
+        report("ray tracing", min(r + rows, setup.height), setup.height, "row")
+    return np.concatenate(bands)
 
 
 RAYS_PER_BAND = 1 << 20

@@ -22,6 +22,8 @@ spacing).
 
 from __future__ import annotations
 
+import time
+
 import numpy as np
 
 from core.camera.film import fill, sample_viewport
@@ -31,9 +33,11 @@ from core.pipeline import project
 from core.shading.illumination import pack_ambient, pack_eye, pack_lights, to_uint8
 from core.volume.data import volumes_of
 from core.volume.raymarch import march_volume
+from core.work import next_chunk, report
 
 STEP = 0.5                      # samples per voxel side: two
 MAX_STEPS = 8192                # steps a ray may take across a volume's whole diagonal
+FIRST_CHUNK = 1 << 14           # rays marched in the first call (the next sized by its time)
 
 
 def draw(scene, view, settings, frame, context, timer) -> None:
@@ -57,7 +61,7 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     eye = eye_from_view(view, settings.projection)
     behind = frame.color.reshape(-1, 3).astype(np.float64) / 255.0
     for volume in farthest_first(marched, eye):
-        color, transmittance, largest = march_volume(
+        color, transmittance, largest = march_in_chunks(
             volume, origins, directions, t_lo, t_hi, step_of(volume),
             pack_lights(scene.lights), pack_ambient(scene.ambient), pack_eye(eye),
             scene.specular == "halfway", settings.lighting_model)
@@ -71,6 +75,27 @@ def draw(scene, view, settings, frame, context, timer) -> None:
     frame.color[:] = to_uint8(behind).reshape(height, width, 3)
     frame.stats["computed"].append("ray marching")
     timer.lap("ray march")
+
+
+def march_in_chunks(volume, origins, directions, t_lo, t_hi, *marching):
+    """:func:`march_volume` over the rays a chunk at a time, each chunk sized to take about
+    ``core.work.CHUNK_SECONDS`` and reported: a large frame shows its progress and stops on
+    Ctrl+C or the window's cancel within a chunk. Each ray is marched alone, so the numbers
+    are those of one call over every ray."""
+    n = len(origins)
+    color, transmittance, largest = np.empty((n, 3)), np.empty(n), np.empty(n)
+    done, size = 0, FIRST_CHUNK
+    report("ray marching", 0, n, "ray")
+    while done < n:
+        end = min(n, done + size)
+        began = time.perf_counter()
+        color[done:end], transmittance[done:end], largest[done:end] = march_volume(
+            volume, origins[done:end], directions[done:end], t_lo[done:end], t_hi[done:end],
+            *marching)
+        size = next_chunk(end - done, time.perf_counter() - began)
+        done = end
+        report("ray marching", done, n, "ray")
+    return color, transmittance, largest
 
 
 def step_of(volume) -> float:
