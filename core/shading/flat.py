@@ -170,4 +170,5 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
                   np.ascontiguousarray(s.face_rgb, dtype=np.float64), out)
 
 
-register_shader(Shader("flat", _prepare_flat, _pixel, description="one colour per polygon"))
+register_shader(Shader("flat", _prepare_flat, _pixel, description="one colour per polygon",
+                       barycentrics=False))

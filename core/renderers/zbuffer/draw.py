@@ -168,9 +168,14 @@ def _visible_surfaces(device, inv_w, triangles, width, height, rasterizer, visib
     if visible_surface is not None:
         rasterize, rasterizer = visible_surface, getattr(visible_surface, "name", "other")
     stats["rasterizer"] = rasterizer
+    # the barycentrics only for a shader that reads them, or an inspection that shows them
+    weights = {} if rasterize is not stages.rasterize else {
+        "barycentrics": (stages.shade.get_shader(shading).barycentrics
+                         or getattr(timer, "inspect", None) is not None)}
     vis = rasterize(device, inv_w, triangles, width, height,
                     out=context.buffer("visibility", (width, height),
-                                       lambda: stages.VisibilityBuffer.allocate(width, height)))
+                                       lambda: stages.VisibilityBuffer.allocate(width, height)),
+                    **weights)
     if rasterize is not stages.rasterize:
         vis.forget_spans()       # speed: the edge rasterizer clears and shades only its spans
     stats["allocated"].append("depth")

@@ -346,6 +346,41 @@ def test_shuffled_order_gives_identical_buffers():
     assert np.array_equal(a.b1, b.b1) and np.array_equal(a.b2, b.b2)
 
 
+def test_without_barycentrics_the_depths_and_ids_are_the_same_and_the_weights_untouched():
+    rng = np.random.default_rng(9)
+    xy_z, inv_w, tris = _random_scene(rng, 400, 64, 48)
+    full = rasterize(xy_z, inv_w, tris, 64, 48)
+    assert full.barycentrics
+    lean = VisibilityBuffer.allocate(64, 48)
+    lean.b1.fill(7.0)
+    lean = rasterize(xy_z, inv_w, tris, 64, 48, out=lean, barycentrics=False)
+    assert not lean.barycentrics
+    assert np.array_equal(full.depth, lean.depth) and np.array_equal(full.tri, lean.tri)
+    assert (lean.b1 == 7.0).all()                     # not written: flat shading's frame
+    again = rasterize(xy_z, inv_w, tris, 64, 48, out=lean)
+    covered = again.tri >= 0
+    assert again.barycentrics and np.array_equal(again.b1[covered], full.b1[covered])
+
+
+def test_flat_frames_skip_the_weights_and_inspections_keep_them():
+    from core.render import render
+    from core.scene.generators import sphere_torus
+    from core.settings import RenderSettings
+    scene = sphere_torus(triangles=2_000)
+    seen = {}
+    for shading in ("flat", "gouraud"):
+        settings = RenderSettings.for_scene(scene, shading=shading, size=(64, 48))
+        plain = render(scene, scene.views[0], settings)
+        arrays = {}
+        inspected = render(scene, scene.views[0], settings,
+                           inspect=lambda stage, a: arrays.update(
+                               {stage: {k: np.array(v) for k, v in a.items()}}))
+        assert np.array_equal(plain.rgbx, inspected.rgbx)      # the same picture either way
+        seen[shading] = arrays["z-buffer"]                     # copies: the buffer is reused
+    b1 = seen["flat"]["b1"][seen["flat"]["tri"] >= 0]          # the inspector's weights
+    assert np.array_equal(b1, seen["gouraud"]["b1"][seen["gouraud"]["tri"] >= 0])
+
+
 def test_shuffled_mesh_gives_identical_buffers():
     rng = np.random.default_rng(8)
     xy_z, inv_w, tris = _sphere_torus(20_000)
