@@ -130,6 +130,15 @@ def displayable(text: str) -> str:
     return text.translate(_TYPOGRAPHY).encode("latin-1", "replace").decode("latin-1")
 
 
+def pivot_words(drag) -> str:
+    """What a finished orbit turned about, for the log."""
+    if drag.pivot is None:
+        return "the VRP"
+    where = "the point under the cursor" if drag.under is not None and np.array_equal(
+        drag.pivot, drag.under) else "the scene's centre"
+    return f"{where} ({', '.join(f'{c:.6g}' for c in drag.pivot)})"
+
+
 class WindowError(RuntimeError):
     """No window could be made (no display, no OpenGL 3.3)."""
 
@@ -723,7 +732,8 @@ class ViewerWindow:
         _, x0, y0, where = self._pressed
         self._pressed = None
         scale = self._scale()
-        pan = self.hands.drag is not None and self.hands.drag.pan
+        drag = self.hands.drag
+        pan = drag is not None and drag.pan
         if self._loupe_drag is not None:
             self.hands.drag, start, self._loupe_drag = None, self._loupe_drag, None
             if np.hypot(x - x0, y - y0) * scale <= self._drag_threshold():
@@ -735,7 +745,7 @@ class ViewerWindow:
         if not self.hands.release(x * scale, y * scale, self._drag_threshold()):
             self._click(button, x0, y0, where)
             return
-        what = "pan" if pan else "orbit"
+        what = "pan" if pan else f"{self.hands.rotation} orbit about {pivot_words(drag)}"
         self._log_camera(f"drag {what} from ({x0:.0f}, {y0:.0f}) to ({x:.0f}, {y:.0f})")
 
     def _hand_follow(self) -> None:
@@ -1200,6 +1210,7 @@ class ViewerWindow:
         for pivot, words in PIVOTS.items():
             if imgui.menu_item_simple(f"Orbit about {words}", None, self.hands.pivot == pivot):
                 self.set_pivot(pivot, "menu View > Orbit about")
+        imgui.separator()
         for rotation, words in ROTATIONS.items():
             if imgui.menu_item_simple(words, "Y", self.hands.rotation == rotation):
                 self.set_rotation(rotation, "menu View")

@@ -78,8 +78,8 @@ def test_orbit_save_wheel_reset_click_and_help_under_xvfb(tmp_path):
         # A drag orbits: VPN leaves (0, 0, 1), the picture and the panel change, view 1 stays.
         mark = len(app.log())
         drag(app, [(250, 250), (262, 252), (280, 255), (300, 255)])
-        line = app.wait_for(r"drag orbit from \(250, 250\) to \(300, 255\) -> camera .*VPN "
-                            r"\(([^)]*)\)", timeout=10, after=mark)
+        line = app.wait_for(r"drag arcball orbit about .* from \(250, 250\) to \(300, 255\) "
+                            r"-> camera .*VPN \(([^)]*)\)", timeout=10, after=mark)
         vpn = np.array([float(c) for c in line[1].split(",")])
         assert vpn[0] < -0.1 and abs(np.linalg.norm(vpn) - 1) < 1e-12
         moved = settled(app, tmp_path, "moved", mark)
