@@ -57,9 +57,10 @@ def watching(watcher: Watcher | None):
         _local.watcher = before
 
 
-def next_chunk(steps: int, seconds: float, aim: float = CHUNK_SECONDS) -> int:
+def next_chunk(steps: int, seconds: float, aim: float | None = None) -> int:
     """The steps of the next chunk after ``steps`` took ``seconds``: about ``aim`` seconds'
-    worth, growing at most GROWTH-fold, at least one."""
+    worth (default CHUNK_SECONDS), growing at most GROWTH-fold, at least one."""
+    aim = CHUNK_SECONDS if aim is None else aim
     if seconds <= 0.0:
         return max(1, steps * GROWTH)
     return max(1, min(steps * GROWTH, int(steps * aim / seconds)))
