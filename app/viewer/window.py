@@ -31,10 +31,14 @@ Input (the course's Assignment #1 controls, plus shading from Assignment #3):
 - the bump demo's scene (J3DPanel): a left click toggles bump / Phong, any other button
   cycles the four height maps, as in the demo.
 - the camera's hands (:mod:`app.viewer.hands`, docs/hands.md): a left drag past ImGui's drag
-  threshold orbits about the scene's centre (or the VRP: View menu) by the arcball, Shift or
+  threshold orbits about the point under the cursor (read from the shown frame's depth; the
+  scene's centre when the press misses, or the VRP: View menu) by the arcball or, ``y``, the
+  turntable; ``l`` the headlight (:mod:`app.session.headlight`); Shift or
   middle drag pans, the wheel dollies, Ctrl+wheel changes the window, Enter returns to the
   file's view, ``f`` fits the scene, Ctrl+Z / Ctrl+Shift+Z undo and redo a camera move, Ctrl+S
-  appends the view to ``saved.views``; a click without a drag keeps its meaning above;
+  appends the view to ``saved.views`` in the user's state folder; a click without a drag
+  keeps its meaning above; after a resize the last frame is stretched over the picture
+  until the new one arrives (the readout maps the cursor the same way);
   Alt+wheel is the loupe (:mod:`app.viewer.loupe`); F1 the keys' help in the panel; a file
   dropped on the window opens (:mod:`app.viewer.files`, with File > Recent and the native
   dialog, or the window's own where the desktop has none: :mod:`app.viewer.path_dialog`);
