@@ -4,7 +4,8 @@ Long work reports between its chunks (:func:`core.work.report`); :class:`Progres
 command line's watcher of it (``render``, ``animate``):
 
 - nothing until the command has run SHOW_AFTER seconds, so a short command prints no line;
-- on a terminal, one line rewritten in place, at most every REDRAW seconds;
+- on a terminal, one line rewritten in place, at most every REDRAW seconds (cut to the
+  terminal's width: a line that wrapped could not be rewritten);
 - elsewhere (a file, a pipe, a CI log), a plain line every PLAIN_EVERY seconds;
 - with ``-q``, nothing.
 
@@ -19,6 +20,7 @@ what it keeps) and exits with 130, the shell's status for a process ended by SIG
 
 from __future__ import annotations
 
+import shutil
 import sys
 import threading
 import time
@@ -128,7 +130,10 @@ class ProgressLine:
                 f"{f' ({doing})' if doing else ''}{f': {kept}' if kept else ''}")
 
     def _write(self, line: str) -> None:
-        if self.tty:
+        if self.tty:                  # cut to the width: a wrapped line is not rewritten
+            width = shutil.get_terminal_size().columns - 1
+            if len(line) > width:
+                line = line[:max(width - 3, 0)] + "..."
             self.stream.write("\r\033[K" + line)
             self.open = True
         else:

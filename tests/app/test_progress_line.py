@@ -66,6 +66,16 @@ def test_on_a_terminal_one_line_is_redrawn_in_place_a_few_times_a_second():
     assert progress.stream.getvalue().endswith("\r\x1b[Knote: a line that stays\n")
 
 
+def test_a_line_longer_than_the_terminal_is_cut_so_that_it_can_be_rewritten(monkeypatch):
+    import os
+    import shutil
+    monkeypatch.setattr(shutil, "get_terminal_size", lambda *a: os.terminal_size((40, 24)))
+    progress, clock = line(Terminal())
+    clock.now += 2.0
+    progress("simulating the rigid bodies", 5, 10, "step")
+    assert progress.stream.getvalue() == "\r\x1b[K" + "simulating the rigid bodies: step 5 ..."  # 39
+
+
 def test_quiet_shows_nothing():
     progress, clock = line(quiet=True)
     progress("simulating the actors", 0, 10, "step")
