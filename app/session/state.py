@@ -805,9 +805,13 @@ class ViewerState:
             return scene
 
         def picked(frame):
-            """The frame with its depth kept for the pivot under the cursor (app.session.pick)."""
+            """The frame with its depth kept for the pivot under the cursor (app.session.pick)
+            and the readout: a copy of its own, since the context's buffer it points at is
+            overwritten by the next frame while this one is still shown."""
             from app.session.pick import PICK_KEY, depth_pick
-            frame.stats[PICK_KEY] = depth_pick(frame, view, settings)
+            pick = frame.stats[PICK_KEY] = depth_pick(frame, view, settings)
+            if pick is not None:
+                frame.depth = pick.depth
             return frame
 
         if playback is not None:
