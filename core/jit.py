@@ -306,6 +306,8 @@ def _value_bytes(value) -> bytes:
     if isinstance(value, type):
         return repr((value.__module__, value.__qualname__,
                      getattr(value, "_fields", None))).encode()
+    if hasattr(value, "_defn") and hasattr(value._defn, "__code__"):   # an @intrinsic
+        return _code_bytes(value._defn.__code__)
     return repr((type(value).__module__, type(value).__qualname__,
                  getattr(value, "__qualname__", None))).encode()
 

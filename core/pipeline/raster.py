@@ -68,6 +68,7 @@ import numba
 import numpy as np
 from core.arrays import read_only
 from core.jit import njit, prange
+from core.prefetch import prefetch
 
 SUBPIXEL_BITS = 8
 SUBPIXEL_ONE = 1 << SUBPIXEL_BITS  # one pixel in fixed point
@@ -92,6 +93,7 @@ HIERARCHICAL_Z = True  # skip hidden triangles by tile and by block (the bench c
 BATCH_FROM = 200_000
 FIRST_BATCH = 64            # the first batch: this fraction (1/64) of the triangles
 COUNT_CELLS = 1 << 20  # at most this many (chunk, tile) counters: huge frames get fewer chunks
+PREFETCH = 8           # the rast asks for the scene slot of the bin entry this far ahead
 
 
 @dataclass
@@ -680,6 +682,11 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, 
         # Scan-convert the triangle into the tile, 8 x 8 block by block. (Written out here,
         # not called: a call passing the arrays costs two atomic reference counts per array
         # per triangle, more than the pixels of a small triangle.)
+        ahead = entry - PREFETCH if later_first else entry + PREFETCH
+        if start <= ahead < end:        # a gather from megabytes: ask for it early
+            prefetch(s_xy, bins[ahead])
+            prefetch(s_zw, bins[ahead])
+            prefetch(s_tri, bins[ahead])
         slot = bins[entry]
         t = s_tri[slot]
         z_near = bin_z[entry]
