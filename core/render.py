@@ -85,6 +85,12 @@ class Timer:
         self.inspect = inspect
         self.t = time.perf_counter()
 
+    @property
+    def keeps_arrays(self) -> bool:
+        """Does anyone look at the stages' arrays (then every one is computed, the
+        barycentrics of a flat frame included)?"""
+        return self.inspect is not None
+
     def lap(self, stage: str, **arrays) -> None:
         now = time.perf_counter()
         self.times[stage] = self.times.get(stage, 0.0) + (now - self.t) * 1e3

@@ -171,7 +171,7 @@ def _visible_surfaces(device, inv_w, triangles, width, height, rasterizer, visib
     # the barycentrics only for a shader that reads them, or an inspection that shows them
     weights = {} if rasterize is not stages.rasterize else {
         "barycentrics": (stages.shade.get_shader(shading).barycentrics
-                         or getattr(timer, "inspect", None) is not None)}
+                         or getattr(timer, "keeps_arrays", False))}
     vis = rasterize(device, inv_w, triangles, width, height,
                     out=context.buffer("visibility", (width, height),
                                        lambda: stages.VisibilityBuffer.allocate(width, height)),

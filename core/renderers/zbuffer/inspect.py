@@ -54,6 +54,8 @@ ZBUFFER = Stages(draw, draw_lines, sample_viewport)
 class _Recorder:
     """A Timer that keeps every stage's arrays (the last one of each name)."""
 
+    keeps_arrays = True
+
     def __init__(self) -> None:
         self.arrays: dict = {}
 
