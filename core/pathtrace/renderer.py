@@ -24,6 +24,9 @@ from core.pathtrace import kernel
 from core.radiosity.mesh import check_scene, has_light, reflectance
 from core.radiosity.tone import tone_map
 from core.shading.illumination import pack_surfaces, to_uint8
+from core.work import report
+
+BAND = 1 << 17         # rays traced in one call (about 0.1-0.5 s): the unit of progress
 
 
 @dataclass
@@ -109,10 +112,10 @@ def packed_for(scene, context) -> Packed:
 
 
 def trace(packed: Packed, origins, directions, t_min, t_max, seed: int, strata_seed: int = 0,
-          sample: int = kernel.INDEPENDENT) -> tuple[np.ndarray, int]:
+          sample: int = kernel.INDEPENDENT, first_index: int = 0) -> tuple[np.ndarray, int]:
     """Radiance ``(N, 3)`` of the rays and the bounces their paths made; ``sample``: which of
     their pixels' paths they are, for the stratified first bounce (``kernel.INDEPENDENT``:
-    none)."""
+    none); ``first_index``: the frame's index of the first ray (its pixel's random numbers)."""
     n = len(origins)
     out = np.empty((n, 3))
     bounces = np.zeros((n + 255) // 256, np.int64)
@@ -122,7 +125,7 @@ def trace(packed: Packed, origins, directions, t_min, t_max, seed: int, strata_s
                       np.ascontiguousarray(origins),
                       np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
                       np.ascontiguousarray(t_max), kernel.EPS * packed.scale, int(seed), out,
-                      bounces, 0, int(strata_seed), int(sample))
+                      bounces, int(first_index), int(strata_seed), int(sample))
     return out, int(bounces.sum())
 
 
@@ -148,13 +151,18 @@ def render_passes(scene, view, settings, context, first: int = 0, count: int | N
     count = len(offsets) - first if count is None else count
     total = np.zeros((height * width, 3))
     bounces, began = 0, time.perf_counter()
+    n = width * height
     for k in range(first, first + count):
         rays = camera_rays(view, settings.projection, width, height, [offsets[k]],
                            settings.keep_aspect)
-        radiance, b = trace(packed, *rays, seed=settings.seed * 1_000_003 + k,
-                            strata_seed=settings.seed, sample=sample_index(settings, k))
-        total += radiance
-        bounces += b
+        for start in range(0, n, BAND):       # a band at a time: progress, and Ctrl+C between
+            end = min(n, start + BAND)
+            radiance, b = trace(packed, *(r[start:end] for r in rays),
+                                seed=settings.seed * 1_000_003 + k, strata_seed=settings.seed,
+                                sample=sample_index(settings, k), first_index=start)
+            total[start:end] += radiance
+            bounces += b
+            report("path tracing", (k - first) * n + end, count * n, "path")
     seconds = time.perf_counter() - began
     stats = {"paths": count * width * height, "bounces": bounces, "trace seconds": seconds}
     return (total / max(count, 1)).reshape(height, width, 3), stats
