@@ -44,8 +44,8 @@ from core.scene.formats.keys import register_scene_keys
 from core.scene.model import meshes_named
 from core.animation.tracks import METHODS, ORIENTATION_METHODS, OrientationTrack, Track
 
-TOP_KEYS = ("animation", "key", "emitter")          # the scene file's top-level tables we read
-TABLE_ARRAYS = ("key", "emitter")                   # written [[key]], [[emitter]]
+TOP_KEYS = ("animation", "key", "emitter", "influence")   # the top-level tables we read
+TABLE_ARRAYS = ("key", "emitter", "influence")      # written [[key]], [[emitter]], [[influence]]
 ANIMATION_KEYS = ("duration", "fps", "loop", "interpolation", "orientation", "tension",
                   "continuity", "bias", "constant_speed", "seed", "level", "track",
                   "motion_blur", "shutter")
@@ -113,6 +113,12 @@ def read_animation(reader, doc: dict, scene) -> None:
         from core.animation.particles import read_emitters
         anim.emitters = read_emitters(reader, doc["emitter"], scene)
         _check_simulation_length(reader, anim)
+    if "influence" in doc:
+        if not anim.emitters:
+            raise reader.fail(("influence",), "a region of influence acts on particles: the "
+                                              "scene has no [[emitter]]")
+        from core.animation.particle_influence import read_influences
+        read_influences(reader, doc["influence"], anim.emitters)
     attach(scene, anim)
 
 

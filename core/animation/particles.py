@@ -15,6 +15,9 @@ notes write it, ``X = X_mean + Rand · V`` with ``Rand`` uniform in [-1, 1]:
   box), or when its transparency or size falls below a threshold;
 - **generations**: a particle that dies of age spawns ``children = N_mean ± V`` particles of
   the ``child`` system at its place (fireworks: rocket → burst → sparks).
+- **constraints and regions of influence**: a system's particles may be held to a subspace
+  (a cylinder or a curve, :mod:`core.animation.particle_constraint`), and regions of the
+  scene may change the velocity of those inside (:mod:`core.animation.particle_influence`).
 
 State is a structure of arrays (numpy), stepped by one numba kernel. The simulation is
 deterministic for a seed: the random numbers of step k come from their own generator, seeded
@@ -28,11 +31,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from core.animation import particle_constraint, particle_influence
 from core.animation.rewind import Rewind
 from core.jit import njit
 from core.work import advance
 
-SHAPES = ("point", "sphere", "disc", "mesh")
+SHAPES = ("point", "sphere", "disc", "mesh", "constraint")   # constraint: on its subspace
 DRAW_MODES = ("point", "sprite", "streak")
 SUBSTEPS = 4                      # fixed simulation steps per animation frame
 MAX_PARTICLES = 2_000_000         # live particles, all systems together (memory guard)
@@ -87,6 +91,9 @@ class Spec:
     streak: float = 0.05                           # streak length in seconds of velocity
     children: tuple[float, float] = (0.0, 0.0)
     child: "Spec | None" = None
+    # the subspace its particles move on (particle_constraint.Cylinder or Curve; None: free)
+    constraint: object | None = None
+    influences: tuple = ()                         # particle_influence.Region it feels
 
 
 def draw(rng, mean, var, n):
@@ -119,6 +126,10 @@ def generate(spec: Spec, rng, n: int, origin=None):
     ``origin`` (n, 3) replaces the shape's centre (children are born where their parent died).
     """
     centre = spec.position if origin is None else origin
+    if spec.constraint is not None:                # on the subspace, forward along it
+        points = spec.constraint.births(rng, n) if spec.shape == "constraint" \
+            else centre + np.zeros((n, 3))
+        return points, spec.constraint.tangent(points)
     if spec.shape == "point":
         return centre + np.zeros((n, 3)), _unit_vectors(rng, n)
     if spec.shape == "sphere":                     # uniform on the surface, pointing out
@@ -269,8 +280,14 @@ def _new_particles(spec: Spec, index: int, rng, n: int, frame_dt: float, origin=
         velocity += spec.inherit * parent_velocity
     age = rng.uniform(0.0, frame_dt, n) if origin is None else np.zeros(n)
     acceleration = spec.gravity + spec.wind                  # (drag is left to the steps)
-    position = position + velocity * age[:, None] + 0.5 * acceleration * (age * age)[:, None]
-    velocity = velocity + acceleration * age[:, None]
+    if spec.constraint is not None:          # one free step of length age, then onto it
+        velocity = velocity + acceleration * age[:, None]
+        position = position + velocity * age[:, None]
+        particle_constraint.pack([spec]).apply(position, velocity, np.zeros(n, np.int64), age,
+                                               np.zeros(n, np.int64))
+    else:
+        position = position + velocity * age[:, None] + 0.5 * acceleration * (age * age)[:, None]
+        velocity = velocity + acceleration * age[:, None]
     color = np.clip(draw(rng, *spec.color, n), 0.0, 1.0)
     alpha = np.clip(draw(rng, *spec.alpha, n), 0.0, 1.0)
     return Particles(
@@ -388,6 +405,8 @@ class ParticleSystem:
         self.k_region_hi = np.array([p.region[1] if p.region else np.zeros(3) for p in s]).reshape(-1, 3)
         self.k_alpha_min = np.array([p.alpha_min for p in s], np.float64)
         self.k_size_min = np.array([p.size_min for p in s], np.float64)
+        self.constraints = particle_constraint.pack(s)       # None: every particle is free
+        self.influences = particle_influence.pack(s)         # None: no region of influence
 
     def reset(self) -> None:
         self.particles = ParticlePool()
@@ -450,12 +469,16 @@ class ParticleSystem:
         if k % self.substeps == 0:
             self._emit(rng, k * self.dt)
         fate = np.zeros(len(p), np.int64)
+        if len(p) and self.influences is not None:    # regions act where the step starts
+            self.influences.apply(p.position, p.velocity, p.spec, self.dt)
         if len(p):
             _step(p.position, p.velocity, p.age, p.life, p.size, p.size_end, p.alpha,
                   p.alpha_end, p.spec, self.dt, self.k_gravity, self.k_wind, self.k_drag,
                   self.k_has_plane, self.k_plane_point, self.k_plane_normal, self.k_restitution,
                   self.k_friction, self.k_has_region, self.k_region_lo, self.k_region_hi,
                   self.k_alpha_min, self.k_size_min, fate)
+        if len(p) and self.constraints is not None:
+            self.constraints.apply(p.position, p.velocity, p.spec, self.dt, fate)
         if np.any(fate):
             children = self._children(p, fate, rng) if np.any(fate == 1) else None
             p.compact(fate)
@@ -524,6 +547,7 @@ EMITTER_KEYS = {
     "alpha_min": (_NUM, 0.0, 1.0), "size_min": (_NUM, 0.0, 1e6),
     "draw": ("choice", DRAW_MODES, 0), "streak": (_NUM, 0.0, 10.0),
     "children": (_NUM, 0.0, 10_000), "children_var": (_NUM, 0.0, 10_000), "child": ("child", 0, 0),
+    "constraint": ("constraint", 0, 0),
 }
 MAX_GENERATIONS = 4
 
@@ -570,6 +594,12 @@ def read_spec(reader, value, path, scene, depth: int) -> Spec:
             if depth >= MAX_GENERATIONS:
                 raise reader.fail(p, f"at most {MAX_GENERATIONS} generations")
             got[key] = read_spec(reader, raw, p, scene, depth + 1)
+        elif kind == "constraint":
+            if depth > 1:
+                raise reader.fail(p, "children are born where their parents die, off any "
+                                     "subspace of their own: a constraint belongs to an "
+                                     "[[emitter]] table")
+            got[key] = particle_constraint.read_constraint(reader, raw, p)
     return _spec(reader, got, path, scene)
 
 
@@ -612,6 +642,11 @@ def _spec(reader, got: dict, path, scene) -> Spec:
     spec.child = got.get("child")
     if spec.children[0] + spec.children[1] > 0 and spec.child is None:
         raise reader.fail(path + ("children",), "children need a 'child' table (their rules)")
+    spec.constraint = got.get("constraint")
+    if spec.constraint is not None:
+        particle_constraint.check_births(reader, spec, path)
+    elif spec.shape == "constraint":
+        raise reader.fail(path + ("shape",), "shape = \"constraint\" needs a constraint table")
     return spec
 
 
