@@ -76,7 +76,7 @@ import moderngl  # noqa: E402
 
 from app import startup_gc
 from app.naming import picture_name, unused
-from app.viewer.blit import Blit
+from app.viewer.blit import Blit, clear_around
 from app.viewer.files import SAVED_VIEWS, FileDialog, RecentFiles, check_drop, saved_views_file
 from app.viewer.hands import KEYS_HELP, PIVOTS, ROTATIONS, CameraHands, save_view, view_lines
 from app.viewer.gui_backend import GlfwInput, GuiRenderer
@@ -117,6 +117,7 @@ NOT_SCENES = {".md", ".py", ".pyc", ".txt", ".png"}
 # After an event, draw a few frames so that ImGui's hover and menu states settle; then sleep
 # until the next event (a busy loop would take the CPU the rasterizer needs).
 FRAMES_AFTER_EVENT = 3
+WINDOW_GREY = (0.11, 0.11, 0.13, 1.0)      # the window behind the picture and the panel
 _W = imgui.WindowFlags_
 PANEL_FLAGS = (_W.no_title_bar | _W.no_resize | _W.no_move | _W.no_collapse | _W.menu_bar
                | _W.no_saved_settings | _W.no_bring_to_front_on_focus)
@@ -611,7 +612,10 @@ class ViewerWindow:
     def _draw_picture(self, fb_w: int, fb_h: int) -> None:
         """Clear, then blit the picture inside its own area."""
         self.ctx.viewport = (0, 0, fb_w, fb_h)
-        self.ctx.clear(0.11, 0.11, 0.13, 1.0)
+        if self.state.frame is None or not self.state.renderable:
+            self.ctx.clear(*WINDOW_GREY)
+        else:
+            clear_around(self.ctx, (fb_w, fb_h), self.state.size, WINDOW_GREY)
         if self.state.frame is not None and self.state.renderable:
             # after a scene change, never the old scene's picture; and only inside the picture's
             # area, so a frame of the old, larger size never shows under the panel

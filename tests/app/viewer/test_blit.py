@@ -19,7 +19,7 @@ imgui_bundle = need_module("imgui_bundle", "the window's panel needs Dear ImGui 
 imgui = imgui_bundle.imgui
 
 from core.settings import RenderSettings
-from app.viewer.blit import Blit  # noqa: E402
+from app.viewer.blit import Blit, clear_around  # noqa: E402
 from app.viewer.gui_backend import GuiRenderer, framebuffer_scale, set_display  # noqa: E402
 
 
@@ -271,3 +271,31 @@ def test_the_loupe_shows_each_pixel_as_a_block_of_one_colour(ctx):
     block = out[17:25, 21:29]             # the 8 x 8 block that starts at the anchor
     assert (block == image[9, 13]).all()
     assert loupe.texel_at(21, 17) == (13, 9) and loupe.texel_at(20, 16) == (12, 8)
+
+
+def test_the_clear_leaves_the_picture_and_fills_the_rest(ctx):
+    # A 40 x 30 window with a 25 x 20 picture at its top left: the strip beside the picture
+    # and the strip below it take the colour; the picture's pixels keep what was there.
+    fbo = ctx.simple_framebuffer((40, 30), components=4)
+    fbo.use()
+    fbo.clear(1.0, 0.0, 0.0, 1.0)
+    clear_around(ctx, (40, 30), (25, 20), (0.0, 0.0, 1.0, 1.0))
+    out = read_image(fbo)
+    fbo.release()
+    assert (out[:20, :25] == (255, 0, 0)).all()               # the picture: untouched
+    assert (out[:, 25:] == (0, 0, 255)).all() and (out[20:, :] == (0, 0, 255)).all()
+    assert ctx.scissor is None or tuple(ctx.scissor) == (0, 0, 40, 30)
+
+
+def test_the_plain_copy_and_the_loupe_agree_at_magnification_one(ctx):
+    # Two fragment shaders draw the picture: the plain copy (every frame) and the loupe's
+    # (magnified or stretched). Forced through the loupe's shader, the plain frame must come
+    # out the same, bit for bit.
+    rng = np.random.default_rng(11)
+    image = rng.integers(0, 256, size=(37, 53, 3), dtype=np.uint8)
+    blit = Blit(ctx)
+    plain = blit_through(ctx, blit, image)
+    blit.magnify = 0                # not 1: draw() takes the loupe's program, uniforms at 1
+    through_loupe = blit_through(ctx, blit, image)
+    blit.release()
+    assert np.array_equal(plain, image) and np.array_equal(through_loupe, image)
