@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.scene.formats.keys import (register_colour_image, register_material_keys,
-                                     register_scene_keys)
+                                     register_normal_image, register_scene_keys)
 from core.texture import procedural
 from core.texture.image import TexelBudget, TextureError, load_image
 from core.texture.material import MAPS_KEY, DemoMaterial, SurfaceMaps
@@ -167,3 +167,29 @@ def with_colour_image(material, pixels, factor, source: str, state: dict):
 
 
 register_colour_image(with_colour_image)
+
+
+def with_normal_image(material, pixels, scale, source: str, state: dict):
+    """``material`` with the image ``pixels`` ``(h, w, 4)`` uint8 (row 0 the top; linear
+    data) as its tangent-space normal map, x and y times ``scale`` (glTF's
+    ``normalize((2 t − 1) · (scale, scale, 1))``), repeated and mipmapped; its colour map,
+    if any, kept. Raises TextureError past the file's texel budget (``state``)."""
+    import dataclasses
+
+    from core.texture.image import Texture
+    h, w = pixels.shape[:2]
+    over = state.setdefault("budget", TexelBudget()).take(w * h, f"the image ({w} x {h})")
+    if over:
+        raise TextureError(over)
+    texture = Texture.from_array(pixels[::-1], wrap="repeat", srgb=False, divisor=255.0,
+                                 source=source)
+    # the shader reads n = 2 t − 1: t' = scale t + (1 − scale) / 2 gives scale (2 t − 1);
+    # linear in t, so exact on the mip levels' means too (the shader normalises after)
+    for level in texture.levels:
+        level[..., :2] = scale * level[..., :2] + (1.0 - scale) / 2.0
+    maps = material.extra.get(MAPS_KEY) or SurfaceMaps()
+    maps = dataclasses.replace(maps, normal_map=texture)
+    return dataclasses.replace(material, extra={**material.extra, MAPS_KEY: maps})
+
+
+register_normal_image(with_normal_image)

@@ -7,20 +7,12 @@ the same document. What becomes what:
 - **Meshes**: every triangle mesh of the default scene, its node transform applied (the
   scene graph flattened: an instanced mesh becomes one mesh per instance); closed (culled)
   when watertight. Points and lines are left out, and said.
-- **Materials** (metallic–roughness): the base colour factor is ``O_d``; the model is
-  Cook–Torrance (FvDFH 16.7) with ``k_d = 0.98 (1 − metallic)`` (``DIFFUSE_SHARE``: below
-  1, so that a white base colour reflects less than all the light), ``k_s = 1``, Beckmann's slope
-  ``m = roughness`` (glTF's is a perceptual roughness for GGX: taken as ``m`` directly, an
-  approximation) and ``F0 = 0.04 (1 − metallic) + base colour · metallic``; glTF's defaults
-  (metallic 1, roughness 1) hold where a factor is absent. Emission is the emissive factor
-  (radiosity and the path tracer light with it); alpha below 1 with ``alphaMode = BLEND`` is
-  ``k_t = 1 − alpha``. The base colour texture (with the mesh's ``TEXCOORD_0``) is the
-  colour map, sRGB, repeated, mipmapped, times the base colour factor (glTF's product); the
-  metallic–roughness, normal, occlusion and emissive textures are not read (said). An image
-  over ``MAX_TEXTURE_SIDE`` on a side, or over the scene's texel budget, is refused from
-  its header before its pixels are decoded (an image file beside the glTF before trimesh
-  opens it, an embedded one before its pixels are read); one that cannot be opened leaves
-  the factor, said.
+- **Materials** (metallic–roughness): :mod:`core.scene.formats.gltf_materials` maps them to
+  Cook–Torrance (FvDFH 16.7), the base colour texture to the colour map and the normal
+  texture to the normal map (by the texture system), emission, alpha and occlusion. An image
+  over ``MAX_TEXTURE_SIDE`` on a side is refused from its header before its pixels are
+  decoded (an image file beside the glTF before trimesh opens it, an embedded one before its
+  pixels are read: Pillow's bomb limit); one that cannot be opened leaves the factor, said.
 - **Cameras** become course views: the VRP a distance ``d`` in front of the eye (the scene's
   centre's depth), VPN the camera's +z (it looks down −z), VUP its +y, PRP ``(0, 0, d)``;
   perspective: the window ``± d tan(yfov/2)`` high and ``aspectRatio`` times that wide (the
@@ -49,10 +41,6 @@ from core.scene.model import Light, Material, Mesh
 
 GLB_MAGIC = b"glTF"
 MAX_ITEMS = 100_000          # nodes, meshes, accessors … a file may list (10^6 nodes: refused)
-# k_d of a dielectric (metallic 0): a white base colour would otherwise reflect all the light
-# (rho = k_d O_d = 1), which no real surface does and which the radiosity solver and the
-# path tracer refuse (the light would never die out); glTF's white is common
-DIFFUSE_SHARE = 0.98
 
 
 def document(data: bytes, name: str) -> dict:
@@ -138,9 +126,10 @@ def read_gltf(data: bytes, name: str, folder: Path, size) -> "Scene":
     return scene
 
 
-def _check_uris(doc: dict, folder: Path, name: str) -> None:
+def _check_uris(doc: dict, folder: Path, name: str, roles: dict[int, str]) -> None:
     """Every external buffer and image a regular file inside the glTF's own folder (a URI
-    of ``../../etc/passwd`` reads nothing), within the mesh files' size limit."""
+    of ``../../etc/passwd`` reads nothing), within the mesh files' size limit; ``roles``
+    names what each image is (the metallic-roughness texture of materials[0])."""
     from urllib.parse import unquote
 
     from core.scene.formats.errors import MAX_INPUT_BYTES
@@ -152,7 +141,8 @@ def _check_uris(doc: dict, folder: Path, name: str) -> None:
             if not isinstance(uri, str) or uri.startswith("data:"):
                 continue
             target = (folder / unquote(uri)).resolve()
-            where = f"{kind}[{index}] {uri!r}"
+            where = f"{kind}[{index}] {uri!r}" + (f" ({roles[index]})" if kind == "images"
+                                                    and index in roles else "")
             if home not in target.parents:
                 raise ReaderError(name, f"{where} lies outside the file's folder: not read")
             if not target.is_file():
@@ -188,119 +178,123 @@ def _check_image_size(path: Path, where: str, name: str) -> None:
 def _meshes(data: bytes, name: str, folder: Path, doc: dict, notes: list) -> list[Mesh]:
     import trimesh
     from PIL import Image
-    _check_uris(doc, folder, name)
-    kind = "glb" if data[:4] == GLB_MAGIC else "gltf"
+
+    from core.scene.formats import gltf_materials
+    factors = gltf_materials.read_factors(doc, name)
+    _check_uris(doc, folder, name, gltf_materials.image_roles(factors))
+    glb = data[:4] == GLB_MAGIC
     resolver = trimesh.resolvers.FilePathResolver(str(folder) + "/")
     try:
         with warnings.catch_warnings():      # Pillow's bomb warning an error: trimesh then
             # leaves such an image out (said below) rather than decode it
             warnings.simplefilter("error", Image.DecompressionBombWarning)
-            loaded = trimesh.load(io.BytesIO(data), file_type=kind, process=False,
+            loaded = trimesh.load(io.BytesIO(gltf_materials.tagged(data, doc, glb)),
+                                  file_type="glb" if glb else "gltf", process=False,
                                   resolver=resolver, force="scene")
     except Exception as error:        # trimesh raises many kinds for a broken file
         raise ReaderError(name, f"the glTF's meshes cannot be read ({type(error).__name__}: "
                                 f"{error})") from None
-    meshes, skipped, textured = [], 0, 0
-    textures = _Textures(name)
+    meshes, skipped = [], 0
+    said = gltf_materials.Notes(name)
+    made = _Materials(name, factors, said)
     for node in sorted(loaded.graph.nodes_geometry):
         matrix, geometry = loaded.graph[node]
         part = loaded.geometry[geometry]
         if not isinstance(part, trimesh.Trimesh) or len(part.faces) == 0:
             skipped += 1
             continue
+        material, uv = made.of(part.visual)
+        if material is None:                  # alphaMode MASK below its cutoff
+            continue
         positions = np.asarray(part.vertices, np.float64) @ matrix[:3, :3].T + matrix[:3, 3]
         triangles = np.asarray(part.faces, np.int64)
         if np.linalg.det(matrix[:3, :3]) < 0:             # a mirror turns the winding over
             triangles = triangles[:, [0, 2, 1]]
-        material, has_texture = _material(part.visual)
-        textured += has_texture
-        material, uv = textures.colour_map(part.visual, material)
         meshes.append(Mesh(positions=positions, triangles=triangles, material=material,
                            name=str(node), closed=bool(part.is_watertight), uv=uv))
     if skipped:
         notes.append(f"{name}: {skipped} point or line primitives left out (triangles only)")
-    if textured:
-        notes.append(f"{name}: {textured} meshes have metallic-roughness, normal, occlusion or "
-                     f"emissive textures: not read, their material's factors are drawn")
-    if _names_colour_maps(doc) and not textures.made:
-        notes.append(f"{name}: its base colour textures could not be decoded, or its meshes "
-                     f"have no TEXCOORD_0: drawn with the base colour factors")
+    notes.extend(said.lines())
+    if _has_tangents(doc) and made.normal_maps:
+        notes.append(f"{name}: TANGENT is not read: the normal maps' tangents are derived from "
+                     f"TEXCOORD_0")
     return meshes
 
 
-def _names_colour_maps(doc: dict) -> bool:
-    return any(isinstance(m, dict) and isinstance(m.get("pbrMetallicRoughness"), dict)
-               and "baseColorTexture" in m["pbrMetallicRoughness"]
-               for m in doc.get("materials", []) or [])
+def _has_tangents(doc: dict) -> bool:
+    return any(isinstance(p, dict) and "TANGENT" in (p.get("attributes") or {})
+               for m in doc.get("meshes", []) if isinstance(m, dict)
+               for p in m.get("primitives", []) or [])
 
 
-class _Textures:
-    """The colour maps of one file's materials, each image made a texture once (by the
-    texture system, through :func:`core.scene.formats.keys.register_colour_image`)."""
+class _Materials:
+    """Our material of each JSON material (made once; its maps once with texture
+    coordinates, once without), the colour and normal maps made by the texture system
+    (through :func:`core.scene.formats.keys.register_colour_image` and
+    :func:`~core.scene.formats.keys.register_normal_image`)."""
 
-    def __init__(self, name: str):
-        from core.scene.formats.keys import colour_image_maker
-        self.name, self.make, self.made = name, colour_image_maker(), {}
+    def __init__(self, name: str, factors: list, notes):
+        from core.scene.formats.keys import colour_image_maker, normal_image_maker
+        self.name, self.factors, self.notes = name, factors, notes
+        self.colour, self.normal = colour_image_maker(), normal_image_maker()
+        self.made: dict = {}
+        self.normal_maps = 0
         self.state = {}                # the texture system's own, for the whole file
 
-    def colour_map(self, visual, material: Material):
-        """``(material with its colour map, uv)``, or ``(material, None)`` where the mesh has
-        no base colour texture or no texture coordinates."""
+    def of(self, visual) -> tuple[Material | None, np.ndarray | None]:
+        """``(material, uv)`` of a trimesh visual: uv None where no map is drawn."""
+        from core.scene.formats.gltf_materials import index_of
         pbr = getattr(visual, "material", None)
-        image = getattr(pbr, "baseColorTexture", None)
+        index = index_of(pbr)
+        if index is None or not 0 <= index < len(self.factors):
+            return _plain(visual), None
         uv = getattr(visual, "uv", None)
-        if self.make is None or image is None or uv is None or len(uv) == 0:
-            return material, None
-        key = (id(image), material.od)
+        uv = None if uv is None or len(uv) == 0 else np.asarray(uv, np.float64)
+        key = (index, uv is not None)
         if key not in self.made:
-            self.made[key] = self._mapped(image, material)
-        return self.made[key], np.asarray(uv, np.float64)
+            self.made[key] = self._material(self.factors[index], pbr, uv is not None)
+        material = self.made[key]
+        mapped = material is not None and "maps" in material.extra
+        return material, uv if mapped else None
 
-    def _mapped(self, image, material: Material) -> Material:
+    def _material(self, f, pbr, has_uv: bool) -> Material | None:
+        from core.scene.formats.gltf_materials import material_of
+        material = material_of(f, pbr, self.name, self.notes)
+        if material is None or not has_uv:
+            if material is not None and any(k in f.images for k in ("baseColorTexture",
+                                                                     "normalTexture")):
+                self.notes.add("no uv", f.label)
+            return material
+        image = getattr(pbr, "baseColorTexture", None) if "baseColorTexture" in f.images \
+            else None
+        if image is not None and self.colour is not None:
+            material = self._mapped(self.colour, image, material, material.od,
+                                    f"the base colour texture of {f.label}")
+        image = getattr(pbr, "normalTexture", None) if "normalTexture" in f.images else None
+        if image is not None and self.normal is not None:
+            material = self._mapped(self.normal, image, material, f.normal_scale,
+                                    f"the normal texture of {f.label}")
+            self.normal_maps += 1
+        return material
+
+    def _mapped(self, make, image, material: Material, factor, where: str) -> Material:
         from core.scene.formats.errors import MAX_TEXTURE_SIDE
         w, h = image.size
-        where = f"its base colour texture ({w} x {h})"
         if max(w, h) > MAX_TEXTURE_SIDE:
-            raise ReaderError(self.name, f"{where}: textures may be at most "
+            raise ReaderError(self.name, f"{where} is {w} x {h}: textures may be at most "
                                          f"{MAX_TEXTURE_SIDE} on a side")
         pixels = np.asarray(image.convert("RGBA"))   # (h, w, 4) uint8, row 0 the top
         try:
-            return self.make(material, pixels, material.od, f"{self.name}: base colour "
-                             f"texture", self.state)
+            return make(material, pixels, factor, f"{self.name}: {where}", self.state)
         except ValueError as error:
-            raise ReaderError(self.name, f"{where}: {error}") from None
+            raise ReaderError(self.name, f"{where} ({w} x {h}): {error}") from None
 
 
-def _material(visual) -> tuple[Material, bool]:
-    """Our material for a trimesh visual (glTF metallic–roughness), and whether it has a
-    texture the reader leaves out (any but the base colour's)."""
-    import dataclasses
-    pbr = getattr(visual, "material", None)
-    if pbr is None or not hasattr(pbr, "baseColorFactor"):
-        colour = getattr(visual, "main_color", None)
-        od = tuple(float(c) / 255.0 for c in colour[:3]) if colour is not None else (0.8,) * 3
-        return Material(od=od), False
-    base = np.asarray(pbr.baseColorFactor if pbr.baseColorFactor is not None
-                      else (255, 255, 255, 255), np.float64)
-    base = base / 255.0 if base.max() > 1.0 or base.dtype.kind in "ui" else base
-    metallic = 1.0 if pbr.metallicFactor is None else float(pbr.metallicFactor)
-    roughness = 1.0 if pbr.roughnessFactor is None else float(pbr.roughnessFactor)
-    emissive = tuple(float(c) for c in (pbr.emissiveFactor if pbr.emissiveFactor is not None
-                                        else (0.0, 0.0, 0.0)))
-    alpha = float(base[3]) if len(base) > 3 else 1.0
-    blended = str(getattr(pbr, "alphaMode", "") or "").upper() == "BLEND"
-    f0 = tuple(float(0.04 * (1.0 - metallic) + c * metallic) for c in base[:3])
-    material = Material(ka=0.2, kd=DIFFUSE_SHARE * (1.0 - metallic), ks=1.0,
-                        od=tuple(float(c) for c in base[:3]),
-                        kt=1.0 - alpha if blended and alpha < 1.0 else 0.0,
-                        emission=emissive)
-    material = dataclasses.replace(material, extra={"lighting": {
-        "model": "cook-torrance",
-        "parameters": {"roughness": min(max(roughness, 0.01), 1.0), "f0": f0}}})
-    textured = any(getattr(pbr, k, None) is not None for k in
-                   ("metallicRoughnessTexture", "normalTexture", "occlusionTexture",
-                    "emissiveTexture"))
-    return material, textured
+def _plain(visual) -> Material:
+    """The material of a primitive with no glTF material: its colour, else grey."""
+    colour = getattr(visual, "main_color", None)
+    od = tuple(float(c) / 255.0 for c in colour[:3]) if colour is not None else (0.8,) * 3
+    return Material(od=od)
 
 
 def _views(doc, world, points, size, name) -> tuple[list, list]:

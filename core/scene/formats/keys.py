@@ -80,6 +80,23 @@ def colour_image_maker() -> Callable | None:
     return _COLOUR_IMAGE[0] if _COLOUR_IMAGE else None
 
 
+_NORMAL_IMAGE: list[Callable] = []
+
+
+def register_normal_image(make: Callable) -> None:
+    """How a format makes an image a material's tangent-space normal map (glTF's
+    ``normalTexture``): ``make(material, pixels, scale, source, state) -> material``,
+    ``pixels`` as for :func:`register_colour_image` but linear data (x = 2 r − 1 along
+    ∂P/∂u, y along ∂P/∂v, z along the normal), ``scale`` the factor of x and y (glTF's
+    ``normalTexture.scale``); a ValueError says why it cannot."""
+    _NORMAL_IMAGE[:] = [make]
+
+
+def normal_image_maker() -> Callable | None:
+    """The registered :func:`register_normal_image` function, or None."""
+    return _NORMAL_IMAGE[0] if _NORMAL_IMAGE else None
+
+
 def scene_readers() -> tuple[SceneKeys, ...]:
     return tuple(_SCENE.values())
 
