@@ -61,7 +61,8 @@ def sphere_triangles(segments: int) -> int:
     sphere of ``segments`` meridians and ``segments // 2`` bands, 2 s (b - 1) triangles)."""
     return 2 * segments * (max(2, segments // 2) - 1)
 
-GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material")
+GEOMETRY_KEYS = ("name", "file", "generator", "params", "transform", "closed", "material",
+                 "deform")              # Barr's taper, twist, bend (core/scene/deformations.py)
 # Analytic primitives (the ray tracer intersects them, the z-buffer draws them tessellated):
 # [[geometry]] primitive = "sphere" | "plane" with these keys.
 PRIMITIVE_KEYS = ("primitive", "center", "radius", "point", "normal", "checker", "checker_color",
@@ -361,8 +362,9 @@ class _Reader:
             raise self.fail(path + ("params",), "params belong to a generator")
         mesh = self.mesh_file(g["file"], path + ("file",)) if "file" in g else \
             self.generate(g["generator"], g.get("params", {}), path)
-        if "transform" in g:
-            mesh = self.transform(mesh, g["transform"], path + ("transform",))
+        if "transform" in g or "deform" in g:
+            mesh = self.transform(mesh, g.get("transform", {}), path + ("transform",),
+                                  g.get("deform"), path + ("deform",))
         if not np.all(np.abs(mesh.positions) <= MAX_NUMBER):
             raise self.fail(path, f"the geometry reaches coordinates beyond {MAX_NUMBER:g}")
         if "closed" in g:
@@ -414,9 +416,10 @@ class _Reader:
         except (TypeError, ValueError) as error:
             raise self.fail(path + ("params",), f"{name}: {error}") from None
 
-    def transform(self, mesh: Mesh, value, path: Path_) -> Mesh:
+    def transform(self, mesh: Mesh, value, path: Path_, deform=None, deform_path=()) -> Mesh:
         """S, then the shears, R_x, R_y, R_z (degrees), the rotation about an axis, then T;
-        normals by the inverse transpose."""
+        normals by the inverse transpose. ``deform`` (Barr's deformations) acts between the
+        shears and the rotations: in the object's own frame, at its own size."""
         t = self.table(value, path, TRANSFORM_KEYS)
         factor = t.get("scale", 1.0)
         if isinstance(factor, list):
@@ -427,15 +430,21 @@ class _Reader:
             raise self.fail(path + ("scale",), "a scale factor is zero (or below 1e-6 in size)")
         rx, ry, rz = self.vector(t.get("rotate", [0, 0, 0]), path + ("rotate",), 3, -1e6, 1e6)
         tx, ty, tz = self.vector(t.get("translate", [0, 0, 0]), path + ("translate",), 3)
-        m = (translate(tx, ty, tz) @ self.axis_rotation(t, path)
-             @ rotate_z(np.radians(rz)) @ rotate_y(np.radians(ry)) @ rotate_x(np.radians(rx))
-             @ self.shears(t, path) @ scale(*s))
-        mesh.positions = apply(m, mesh.positions)[:, :3]
-        if mesh.normals is not None:
-            normals = mesh.normals @ np.linalg.inv(m[:3, :3])     # rows: n' = M^-T n
-            mesh.normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
-        if np.linalg.det(m[:3, :3]) < 0:                          # a mirror turns winding over
-            mesh.triangles = mesh.triangles[:, [0, 2, 1]]
+        placed = (translate(tx, ty, tz) @ self.axis_rotation(t, path)
+                  @ rotate_z(np.radians(rz)) @ rotate_y(np.radians(ry)) @ rotate_x(np.radians(rx)))
+        sized = self.shears(t, path) @ scale(*s)
+        if deform is None:
+            return _moved(mesh, placed @ sized)
+        return _moved(self.deform(_moved(mesh, sized), deform, deform_path), placed)
+
+    def deform(self, mesh: Mesh, value, path: Path_) -> Mesh:
+        """Barr's deformations in order, each refused where it would turn the mesh inside out."""
+        from core.scene.deformations import deformed, folds, read_deformations
+        for i, d in enumerate(read_deformations(self, value, path)):
+            why = folds(mesh.positions, d)
+            if why is not None:
+                raise self.fail(path + (i + 1,), why)
+            mesh.positions, mesh.normals = deformed(mesh.positions, mesh.normals, d)
         return mesh
 
     def shears(self, t: dict, path: Path_) -> np.ndarray:
@@ -701,6 +710,17 @@ def _toml_error(error: tomllib.TOMLDecodeError, file: str, last_line: int) -> Re
         return ReaderError(file, f"TOML: {message[:end.start()]} (at the end of the file)",
                            last_line)
     return ReaderError(file, f"TOML: {message}")
+
+
+def _moved(mesh: Mesh, m: np.ndarray) -> Mesh:
+    """``mesh`` by the 4 x 4 ``m``: normals by the inverse transpose, a mirror rewound."""
+    mesh.positions = apply(m, mesh.positions)[:, :3]
+    if mesh.normals is not None:
+        normals = mesh.normals @ np.linalg.inv(m[:3, :3])         # rows: n' = M^-T n
+        mesh.normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    if np.linalg.det(m[:3, :3]) < 0:                              # a mirror turns winding over
+        mesh.triangles = mesh.triangles[:, [0, 2, 1]]
+    return mesh
 
 
 def _kind(value) -> str:
