@@ -118,7 +118,8 @@ def read_gltf(data: bytes, name: str, folder: Path, size) -> "Scene":
     size = size or (500, 500)
     views, view_messages = _views(doc, world, points, size, name)
     lights = _lights(doc, world, notes)
-    scene = Scene(name=Path(name).stem, meshes=meshes,
+    projection = _projection(doc, world, notes)
+    scene = Scene(name=Path(name).stem, meshes=meshes, projection=projection,
                   views=views or framing_views(points, name), view_messages=view_messages,
                   lights=lights or default_lights(points), shading="phong", size=size,
                   source=name, background=(0.1, 0.1, 0.12), ambient=(0.15, 0.15, 0.15))
@@ -295,6 +296,20 @@ def _plain(visual) -> Material:
     colour = getattr(visual, "main_color", None)
     od = tuple(float(c) / 255.0 for c in colour[:3]) if colour is not None else (0.8,) * 3
     return Material(od=od)
+
+
+def _projection(doc: dict, world: dict, notes: list) -> str:
+    """The scene's projection (ours is one per scene, not per view): parallel when the
+    first camera is orthographic; mixed kinds are said."""
+    cameras = doc.get("cameras", [])
+    kinds = [cameras[int(n["camera"])].get("type") for i, n in enumerate(doc.get("nodes", []))
+             if isinstance(n, dict) and "camera" in n and i in world
+             and isinstance(n["camera"], int) and 0 <= n["camera"] < len(cameras)
+             and isinstance(cameras[n["camera"]], dict)]
+    if len(set(kinds)) > 1:
+        notes.append(f"perspective and orthographic cameras: every view is drawn with the "
+                     f"first camera's projection ({kinds[0]}); p and o switch it")
+    return "parallel" if kinds and kinds[0] == "orthographic" else "perspective"
 
 
 def _views(doc, world, points, size, name) -> tuple[list, list]:
