@@ -202,6 +202,16 @@ def _render_parser(sub, scene_help: str) -> None:
     r.add_argument("--time", type=float, default=None, metavar="SECONDS",
                    help="for an animated scene: the moment to draw, particles included "
                         "(the keyed view, objects and lights at that time)")
+    r.add_argument("--motion-blur", type=int, default=None, metavar="SAMPLES",
+                   help="with --time: the frame at that time motion-blurred, SAMPLES times over "
+                        "the shutter interval, as animate blurs its frames (1: sharp; default: "
+                        "the scene's [animation] motion_blur, else sharp)")
+    r.add_argument("--shutter", type=float, nargs=2, default=None, metavar=("OPEN", "CLOSE"),
+                   help="with --motion-blur: when the shutter opens and closes, in frames from "
+                        "the frame's time (default -0.25 0.25)")
+    r.add_argument("--blur-method", choices=("auto", "accumulate", "per-ray"), default=None,
+                   help="with --motion-blur: accumulate whole frames, or the ray tracer's time "
+                        "per ray (auto, the default: per-ray for the ray tracer)")
     _renderer_arguments(r)                    # the ray tracer's and the clipper's choices
     _buffer_argument(r)
     _cluster_arguments(r)                     # scale-out
@@ -591,16 +601,34 @@ def _dispatch(args) -> int:
     raise AssertionError(args.command)
 
 
-def _draw_still(scene, view, settings, time):
+def _draw_still(scene, view, settings, time, shutter=None):
     """The frame of ``view``, or with ``time`` an animated scene's frame at that moment
-    (core.animation.frames.render_at: keyed view, particles and all)."""
+    (core.animation.frames.render_at: keyed view, particles and all), blurred by ``shutter``
+    (None: the scene file's own motion blur, if any). A still scene is the same at every
+    moment of any shutter: its sharp frame."""
     from app.session.state import render          # listens for compiles, to announce them
     from core.animation.keys import animation_of
     animation = animation_of(scene) if time is not None else None
     if animation is None:
         return render(scene, view, settings)
     from core.animation.frames import render_at
-    return render_at(animation, time, settings)   # its simulations report their steps
+    return render_at(animation, time, settings, shutter=shutter)   # its simulations report
+
+
+def _still_shutter(args):
+    """``render``'s --motion-blur, --shutter and --blur-method as a Shutter (None: not given);
+    a ValueError says what is wrong with them."""
+    samples, opening, method = args.motion_blur, args.shutter, args.blur_method
+    if samples is None:
+        if opening is not None or method is not None:
+            raise ValueError(f"{'--shutter' if opening is not None else '--blur-method'} is the "
+                             "motion blur's: give --motion-blur SAMPLES too")
+        return None
+    if args.time is None:
+        raise ValueError("--motion-blur blurs an animated scene's frame at a moment: give "
+                         "--time SECONDS too")
+    from core.animation.frames import Shutter
+    return Shutter(samples, *(opening or (Shutter.open, Shutter.close)), method or "auto")
 
 
 def _drawn_by(settings) -> str:
@@ -614,6 +642,11 @@ def _render(args) -> int:
         print(f"error: --time {args.time}: expected a finite number of seconds", file=sys.stderr)
         return 2
     if args.out is not None and _refused(args.out, args):
+        return 2
+    try:
+        args.still_shutter = _still_shutter(args)
+    except ValueError as error:
+        print(f"error: {error}", file=sys.stderr)
         return 2
     scene = _load(args.scene, size=args.size, crease_angle=args.crease_angle)
     if scene is None:
@@ -714,7 +747,8 @@ def _render_frame(scene, view, settings, args):
         if split is not None:
             return SimpleNamespace(color=split, message=None, stats={}), None
         with announce_compiles():    # the first run compiles the kernels: say so
-            return _draw_still(scene, view, settings, args.time), None
+            return _draw_still(scene, view, settings, args.time,
+                               getattr(args, "still_shutter", None)), None
     except ParticleBudgetError as error:
         print(f"error: {error}", file=sys.stderr)
         return None, 1

@@ -30,12 +30,13 @@ import inspect
 import numpy as np
 
 from core.scene import generators as mesh_generators
-from core.scene.formats.keys import register_scene_keys
+from core.scene.formats.keys import register_scene_contents, register_scene_keys
 from core.scene.model import Material
 from core.transforms import rotate_x, rotate_y, rotate_z, scale, translate
 from core.volume import generators, readers
 from core.volume.data import (LIGHTINGS, MAX_VOXELS, MODES, Volume, VolumeError,
-                              attach_volumes, check_iso, check_spacing, checked_transfer)
+                              attach_volumes, check_iso, check_spacing, checked_transfer,
+                              volumes_of)
 from core.volume.marching import isosurface
 
 VOLUME_KEYS = ("name", "file", "generator", "params", "raw", "spacing", "transform", "mode",
@@ -183,4 +184,17 @@ def placement(reader, value, path) -> np.ndarray:
             @ rotate_x(np.radians(rx)) @ scale(*s))
 
 
+def corners(scene) -> np.ndarray:
+    """The world corners of every volume's sample grid (a scene of volumes alone is framed
+    and lit by them)."""
+    out = []
+    for volume in volumes_of(scene):
+        last = np.asarray(volume.dims, np.float64) - 1.0
+        grid = np.array([[i, j, k, 1.0] for i in (0, last[0]) for j in (0, last[1])
+                         for k in (0, last[2])])
+        out.append((grid @ volume.world_from_index().T)[:, :3])
+    return np.concatenate(out) if out else np.zeros((0, 3))
+
+
 register_scene_keys("volume", ("volume",), read_scene_keys, arrays=("volume",))
+register_scene_contents("volume", corners)

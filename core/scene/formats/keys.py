@@ -63,6 +63,22 @@ def register_material_keys(name: str, keys: tuple[str, ...], read: Callable) -> 
     _MATERIAL[name] = MaterialKeys(tuple(keys), read)
 
 
+_CONTENTS: dict[str, Callable] = {}
+
+
+def register_scene_contents(key: str, bounds: Callable) -> None:
+    """A top-level table array that draws something by itself (the ``[[volume]]``), so that a
+    scene of it alone, with no ``[[geometry]]``, is read; ``bounds(scene) -> (n, 3)`` world
+    points it spans (for the framing views and the default lights), called after the
+    systems' readers have run."""
+    _CONTENTS[key] = bounds
+
+
+def scene_contents() -> dict[str, Callable]:
+    """key → bounds of every :func:`register_scene_contents`."""
+    return dict(_CONTENTS)
+
+
 _COLOUR_IMAGE: list[Callable] = []
 
 

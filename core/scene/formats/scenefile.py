@@ -48,8 +48,8 @@ from core.transforms import (apply, rotate_axis, rotate_x, rotate_y, rotate_z, s
 from core.camera.view import PROJECTIONS, View, load_problems, unit3
 from core.registry import renderer_names
 from core.settings import RASTERIZERS, SPECULAR_FORMS
-from core.scene.formats.keys import (material_keys, material_readers, scene_readers, table_arrays,
-                                     top_keys)
+from core.scene.formats.keys import (material_keys, material_readers, scene_contents,
+                                     scene_readers, table_arrays, top_keys)
 from core.scene.media import index_of_refraction
 
 MAX_NUMBER = MAX_COORDINATE
@@ -249,25 +249,20 @@ class _Reader:
         # the notes' 0 <= k <= 1 for ka, kd, ks, unless the file lifts it (up to 10)
         self.unbounded = "coefficients" in doc and self.choice(
             doc["coefficients"], ("coefficients",), ("notes", "unbounded")) == "unbounded"
-        if "geometry" not in doc:
-            raise self.fail((), "a scene needs at least one [[geometry]] table")
+        contents = [key for key in scene_contents() if key in doc]   # a [[volume]] alone
+        if "geometry" not in doc and not contents:
+            also = "".join(f" or [[{key}]]" for key in scene_contents())
+            raise self.fail((), f"a scene needs at least one [[geometry]]{also} table")
         if self.crease_angle is None:
             self.crease_angle = (self.number(doc["crease_angle"], ("crease_angle",), 0.0, 180.0)
                                  if "crease_angle" in doc else CREASE_ANGLE)
-        meshes = self.scene_meshes(doc)
-        points = np.concatenate([m.positions for m in meshes] + [
-            np.array([np.subtract(s.center, s.radius), np.add(s.center, s.radius)])
-            for s in self.analytic])        # the untessellated spheres' boxes: views, lights
-        order = self.views(doc, points)
-        views = [v for v in order if isinstance(v, View)]
-        messages = [v for v in order if not isinstance(v, View)]
-        emitters = any(any(m.material.emission) for m in meshes)     # area lights light it
-        lights = ([self.light(t, ("light", i + 1))
-                   for i, t in enumerate(self.tables(doc["light"], ("light",)))]
-                  if "light" in doc else [] if emitters else default_lights(points))
+        self.analytic = []
+        meshes = self.scene_meshes(doc) if "geometry" in doc else []
         scene = Scene(name=self.string(doc.get("name", file_stem(self.file)), ("name",)),
-                      meshes=meshes, views=views, view_messages=messages, view_order=order,
-                      lights=lights, source=self.file, crease_angle=self.crease_angle)
+                      meshes=meshes, views=[], lights=[], source=self.file,
+                      crease_angle=self.crease_angle)
+        if meshes or self.analytic:
+            self.frame(doc, scene, [])
         # Spheres join scene.primitives (every ray caster traces them); planes stay with their
         # tessellation only (the exact ray caster knows spheres and tori; the ray tracer finds
         # planes through Mesh.tessellates).
@@ -278,8 +273,27 @@ class _Reader:
         self.scene_options(doc, scene, size)
         for entry in scene_readers():                         # the systems' keys
             entry.read(self, doc, scene)
+        if not (meshes or self.analytic):       # framed by what the systems' tables hold
+            self.frame(doc, scene, [bounds(scene) for key, bounds in scene_contents().items()
+                                    if key in contents])
         scene.messages += self.notes
         return scene
+
+    def frame(self, doc: dict, scene: Scene, more: list) -> None:
+        """The views and the lights, from the scene's meshes, its untessellated spheres and
+        ``more`` points (the extent of a volume): "auto" frames them, default lights light them."""
+        meshes = scene.meshes
+        points = np.concatenate([m.positions for m in meshes] + [
+            np.array([np.subtract(s.center, s.radius), np.add(s.center, s.radius)])
+            for s in self.analytic] + [np.asarray(p, np.float64).reshape(-1, 3) for p in more])
+        order = self.views(doc, points)
+        scene.view_order = order
+        scene.views = [v for v in order if isinstance(v, View)]
+        scene.view_messages = [v for v in order if not isinstance(v, View)]
+        emitters = any(any(m.material.emission) for m in meshes)     # area lights light it
+        scene.lights = ([self.light(t, ("light", i + 1))
+                         for i, t in enumerate(self.tables(doc["light"], ("light",)))]
+                        if "light" in doc else [] if emitters else default_lights(points))
 
     def parsed_document(self) -> dict:
         """The file as TOML, or a ReaderError that names the line."""

@@ -500,7 +500,7 @@ CUBE = '[[geometry]]\ngenerator = "cube"\n'
 
 @pytest.mark.parametrize("text, line, reason", [
     ('colour = 1\n' + CUBE, 1, "colour: unknown key 'colour'"),
-    ('name = "x"\n', None, "a scene needs at least one [[geometry]] table"),
+    ('name = "x"\n', None, "a scene needs at least one [[geometry]] or [[volume]] table"),
     ('shading = "gouraud shading"\n' + CUBE, 1, "shading: 'gouraud shading' is not one of"),
     ('size = [500.5, 10]\n' + CUBE, 1, "size: expected whole numbers of pixels"),
     ('size = [100000000000000000000000000000000000, 10]\n' + CUBE, 1, "size[1]"),
@@ -572,11 +572,14 @@ def test_every_shipped_scene_loads(name):
     assert len(scene.views) >= 1, name
     # lit by [[light]]s, or (issue 19) by emitting materials, which get no default lights
     emitters = any(any(m.material.emission) for m in scene.meshes)
-    assert (bool(scene.lights) != emitters or name == "radiosity_room.toml") and scene.meshes
+    from core.volume.data import volumes_of
+    alone = name == "volume_alone.toml"      # a [[volume]] and nothing else
+    assert bool(scene.lights) != emitters or name == "radiosity_room.toml"
+    assert scene.meshes or (alone and volumes_of(scene))
     if name != "house.toml":                  # the house's view file has invalid views on purpose
         assert scene.view_messages == []
     if name not in ("house.toml", "house_depth_cue.toml",       # the wireframe houses: lines only
-                    "house_projections.toml"):
+                    "house_projections.toml", "volume_alone.toml"):
         assert scene.triangle_count > 0
     for view in scene.views:
         assert problems(view) == []
