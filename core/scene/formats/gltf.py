@@ -259,19 +259,18 @@ class _Materials:
         return material, uv if mapped else None
 
     def _material(self, f, pbr, has_uv: bool) -> Material | None:
-        from core.scene.formats.gltf_materials import material_of
+        from core.scene.formats.gltf_materials import decoded_image, material_of
         material = material_of(f, pbr, self.name, self.notes)
         if material is None or not has_uv:
             if material is not None and any(k in f.images for k in ("baseColorTexture",
                                                                      "normalTexture")):
                 self.notes.add("no uv", f.label)
             return material
-        image = getattr(pbr, "baseColorTexture", None) if "baseColorTexture" in f.images \
-            else None
+        image = decoded_image(pbr, "baseColorTexture", f, self.notes)
         if image is not None and self.colour is not None:
             material = self._mapped(self.colour, image, material, material.od,
                                     f"the base colour texture of {f.label}")
-        image = getattr(pbr, "normalTexture", None) if "normalTexture" in f.images else None
+        image = decoded_image(pbr, "normalTexture", f, self.notes)
         if image is not None and self.normal is not None:
             material = self._mapped(self.normal, image, material, f.normal_scale,
                                     f"the normal texture of {f.label}")

@@ -198,20 +198,20 @@ def material_of(f: Factors, pbr, name: str, notes: "Notes") -> Material | None:
         notes.add("masked out", f.label)
         return None
     metallic, roughness = f.metallic, f.roughness
-    image = _image(pbr, "metallicRoughnessTexture", f, notes)
+    image = decoded_image(pbr, "metallicRoughnessTexture", f, notes)
     if image is not None:
         means = channel_means(image, False, f"the metallic-roughness texture of {f.label}", name)
         metallic, roughness = metallic * means[2], roughness * means[1]
         notes.add("metallic-roughness", f"{f.label} (metallic {metallic:.3g}, roughness "
                                         f"{roughness:.3g})")
     emission = np.asarray(f.emissive)
-    image = _image(pbr, "emissiveTexture", f, notes)
+    image = decoded_image(pbr, "emissiveTexture", f, notes)
     if image is not None:
         emission = emission * channel_means(image, True, f"the emissive texture of {f.label}",
                                             name)
         notes.add("emissive", f.label)
     ka = AMBIENT
-    image = _image(pbr, "occlusionTexture", f, notes)
+    image = decoded_image(pbr, "occlusionTexture", f, notes)
     if image is not None:
         mean = channel_means(image, False, f"the occlusion texture of {f.label}", name)[0]
         ka = AMBIENT * (1.0 + f.occlusion_strength * (mean - 1.0))
@@ -228,7 +228,7 @@ def material_of(f: Factors, pbr, name: str, notes: "Notes") -> Material | None:
         "parameters": {"roughness": min(max(roughness, 0.01), 1.0), "f0": f0}}})
 
 
-def _image(pbr, key: str, f: Factors, notes: "Notes"):
+def decoded_image(pbr, key: str, f: Factors, notes: "Notes"):
     """trimesh's decoded image for a role the material names, or None (said when the file
     names one that could not be decoded)."""
     if f.images.get(key) is None:
