@@ -66,8 +66,9 @@ class Factors:
 def tagged(data: bytes, doc: dict, glb: bool) -> bytes:
     """The file's bytes with each material's ``name`` its index (``TAG`` + index), for
     trimesh; a ``.glb``'s JSON chunk rewritten and its lengths mended."""
-    doc = {**doc, "materials": [{**m, "name": f"{TAG}{i}"} if isinstance(m, dict) else m
-                                for i, m in enumerate(doc.get("materials", []) or [])]}
+    if doc.get("materials"):
+        doc = {**doc, "materials": [{**m, "name": f"{TAG}{i}"} if isinstance(m, dict) else m
+                                    for i, m in enumerate(doc["materials"])]}
     text = json.dumps(doc).encode("utf-8")
     if not glb:
         return text
