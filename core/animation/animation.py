@@ -101,6 +101,8 @@ class Animation:
     objects: dict[int, ObjectTracks] = field(default_factory=dict)      # mesh index → tracks
     lights: dict[int, Track] = field(default_factory=dict)              # light index → position
     colors: dict[int, Track] = field(default_factory=dict)              # mesh index → O_d
+    transparencies: dict[int, Track] = field(default_factory=dict)      # mesh index → k_t
+    intensities: dict[int, Track] = field(default_factory=dict)         # light index → I_p
     emitters: list = field(default_factory=list)                        # particles.Spec, one per [[emitter]]
     seed: int = 0
     # Whatever else moves meshes each frame (rigid bodies, linkages, actors): objects with
@@ -153,7 +155,7 @@ class Animation:
             if id(old.tessellates) not in moved:     # a checkered plane has two meshes
                 moved[id(old.tessellates)] = moved_primitive(
                     old, self._matrix(i, t, moving.get(i)),
-                    new.material if i in self.colors else None)
+                    new.material if i in self.colors or i in self.transparencies else None)
             meshes[i] = dataclasses.replace(new, tessellates=moved[id(old.tessellates)])
         primitives = [moved.get(id(p), p) for p in base.primitives]
         return dataclasses.replace(base, meshes=meshes, lights=lights, views=views,
@@ -175,9 +177,9 @@ class Animation:
         return m
 
     def _mesh_at(self, i: int, mesh: Mesh, t: float, moved=None) -> Mesh:
-        color = self.colors.get(i)
+        color, kt = self.colors.get(i), self.transparencies.get(i)
         m = self._matrix(i, t, moved)
-        if m is None and color is None:
+        if m is None and color is None and kt is None:
             return mesh
         changes = {}
         if m is not None:
@@ -187,16 +189,24 @@ class Animation:
                 changes["normals"] = normals / np.linalg.norm(normals, axis=1, keepdims=True)
             if np.linalg.det(m[:3, :3]) < 0:                              # a mirror: rewind
                 changes["triangles"] = mesh.triangles[:, [0, 2, 1]]
+        material = {}
         if color is not None:
-            od = tuple(float(c) for c in np.clip(color(t), 0.0, 1.0))
-            changes["material"] = dataclasses.replace(mesh.material, od=od)
+            material["od"] = tuple(float(c) for c in np.clip(color(t), 0.0, 1.0))
+        if kt is not None:               # in-betweened past a key (Catmull-Rom): kept in 0..1
+            material["kt"] = float(np.clip(kt(t)[0], 0.0, 1.0))
+        if material:
+            changes["material"] = dataclasses.replace(mesh.material, **material)
         return dataclasses.replace(mesh, **changes)
 
     def _light_at(self, i: int, light: Light, t: float) -> Light:
-        track = self.lights.get(i)
-        if track is None:
-            return light
-        return dataclasses.replace(light, position=tuple(float(x) for x in track(t)), direction=None)
+        track, intensity = self.lights.get(i), self.intensities.get(i)
+        if track is not None:
+            light = dataclasses.replace(light, position=tuple(float(x) for x in track(t)),
+                                        direction=None)
+        if intensity is not None:        # an overshoot below 0 would be a light that darkens
+            light = dataclasses.replace(
+                light, intensity=tuple(float(x) for x in np.maximum(intensity(t), 0.0)))
+        return light
 
     # ------------------------------------------------------------------ particles
 

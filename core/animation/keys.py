@@ -23,13 +23,15 @@ that every message names the key's path and line the way the rest of the file's 
     time = 0.0
     view = { vrp = [0, 0, 0], vpn = [0, 0, 1], vup = [0, 1, 0], prp = [0, 0, 8] }
     object.ring = { translate = [0, 0, 0], rotate = [0, 0, 0], scale = 1.0 }
-    light.1 = { position = [3, 4, 6] }
-    material.ring = { od = [0.2, 0.4, 0.9] }
+    light.1 = { position = [3, 4, 6], intensity = [1, 0.9, 0.8] }
+    material.ring = { od = [0.2, 0.4, 0.9], kt = 0.5 }
 
 A key gives any subset of the channels; each channel's track is made of the keys that give it.
 ``vpn`` and ``vup`` come together (they are one orientation). Channel names: ``view.vrp``,
 ``view.frame``, ``view.window``, ``view.prp``, ``view.front``, ``view.back``,
-``object.NAME.translate|rotate|scale``, ``light.N.position``, ``material.NAME.od``.
+``object.NAME.translate|rotate|scale``, ``light.N.position|intensity``,
+``material.NAME.od|kt``: the notes' update dynamics (L2274: "changes in shape, color,
+transparency, size") and environmental changes (the lighting) beside the motion dynamics.
 """
 
 from __future__ import annotations
@@ -231,18 +233,25 @@ def _samples(reader, doc: dict, scene) -> dict[str, list]:
         allowed = tuple(str(k + 1) for k in range(len(scene.lights)))
         for number, value in reader.table(lights, path + ("light",), allowed).items():
             p = path + ("light", number)
-            t = reader.table(value, p, ("position",))
+            t = reader.table(value, p, ("position", "intensity"))
             if "position" in t:
                 if scene.lights[int(number) - 1].position is None:
                     raise reader.fail(p, "a directional light has no position to key")
                 add(f"light.{number}.position", time,
                     np.array(reader.vector(t["position"], p + ("position",))), p + ("position",))
+            if "intensity" in t:                 # I_p, as the [[light]] table's range
+                add(f"light.{number}.intensity", time,
+                    np.array(reader.vector(t["intensity"], p + ("intensity",), 3, 0.0, 1e6)),
+                    p + ("intensity",))
         for name, value in reader.table(key.get("material", {}), path + ("material",), tuple(names)).items():
             p = path + ("material", name)
-            t = reader.table(value, p, ("od",))
+            t = reader.table(value, p, ("od", "kt"))
             if "od" in t:
                 add(f"material.{name}.od", time, np.array(reader.vector(t["od"], p + ("od",), 3, 0.0, 1.0)),
                     p + ("od",))
+            if "kt" in t:                         # the transparency, 0 to 1 as in a material
+                add(f"material.{name}.kt", time,
+                    np.array([reader.number(t["kt"], p + ("kt",), 0.0, 1.0)]), p + ("kt",))
     return out
 
 
@@ -307,10 +316,12 @@ def _install(reader, anim: Animation, channel: str, keys: list, options: dict) -
         for index in meshes_named(scene, name):
             setattr(anim.objects.setdefault(index, ObjectTracks()), what, track)
     elif kind == "light":
-        anim.lights[int(rest.split(".")[0]) - 1] = track
+        number, what = rest.split(".")
+        (anim.lights if what == "position" else anim.intensities)[int(number) - 1] = track
     else:
-        for index in meshes_named(scene, rest.split(".")[0], own_material=True):
-            anim.colors[index] = track
+        name, what = rest.rsplit(".", 1)
+        for index in meshes_named(scene, name, own_material=True):
+            (anim.colors if what == "od" else anim.transparencies)[index] = track
 
 
 
