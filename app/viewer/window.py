@@ -522,7 +522,13 @@ class ViewerWindow:
             while not glfw.window_should_close(self.window):
                 # Sleep until an event unless a frame is due; while the worker renders, wake
                 # ten times a second to show how long it has taken (it wakes us when done).
-                if shown and (self._busy > 0 or self.state.dirty):
+                if shown and self._redraw_can_wait():
+                    # a drag waits for its frame: sleep until the next pointer move, the
+                    # frame, or the next redraw (polling here spun 600 times a second and took
+                    # a third of a core, and the GIL, from the renderer)
+                    glfw.wait_events_timeout(max(1e-3, GESTURE_REDRAW_S
+                                                 - (time.perf_counter() - self._swapped_at)))
+                elif shown and (self._busy > 0 or self.state.dirty):
                     glfw.poll_events()
                 elif self.state.playing:
                     glfw.wait_events_timeout(1 / 60)     # the movie's clock moves on
