@@ -1,7 +1,8 @@
 """The OpenGL oracle: the same scene drawn by real OpenGL (Mesa llvmpipe through EGL).
 
-Used ONLY by the tests (coverage and shading oracles) and by the bench; the viewer never
-draws with it. Takes a :class:`core.scene.Scene`, a view index, a projection and a shading
+Used by the tests (coverage and shading oracles), by the bench, and as the picture our frame is
+held against by the window's ``h`` (compare with OpenGL) and ``python -m app compare``; the
+viewer never shows a frame drawn with it as its own. Takes a :class:`core.scene.Scene`, a view index, a projection and a shading
 mode; returns an ``(H, W, 3)`` uint8 image in image order (row 0 is the top),
 exactly like ``core.render.render(...).color``.
 
