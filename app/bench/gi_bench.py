@@ -6,7 +6,8 @@ on the Cornell box (``scenes/cornell_box.toml``):
   ``--hemicube-resolution``, default 128) and ray-cast form factors (ray casting at 1,000 only
   unless ``--gi-large-raycast``), and form-factor rows per second;
 - pathtrace: samples (camera paths) per second of our path tracer and of Mitsuba 3
-  ``scalar_rgb`` in the same run, same picture (``--size``, default 128 x 128 here, 16 spp).
+  ``scalar_rgb`` and ``llvm_ad_rgb`` (when libLLVM is there) in the same run, same picture
+  (``--size``, default 128 x 128 here, 64 spp).
 
 The first solve and the first picture run once untimed (compiling). Writes
 ``DIR/bench_gi.json`` and prints a table.
@@ -77,9 +78,29 @@ def pathtrace_rows(scene, size, spp: int) -> list:
         _, seconds = mitsuba_oracle.render(scene, view, width, height, spp, timed=True)
         rows.append({"renderer": "Mitsuba 3 scalar_rgb", "samples": width * height * spp,
                      "seconds": seconds, "samples_per_second": width * height * spp / seconds})
+        rows.append(_mitsuba_llvm_row(scene, view, width, height, spp))
     else:
         rows.append({"renderer": "Mitsuba 3 scalar_rgb", "missing": "pip install mitsuba"})
     return rows
+
+
+def _mitsuba_llvm_row(scene, view, width: int, height: int, spp: int) -> dict:
+    """Mitsuba's ``llvm_ad_rgb`` on the same picture, its JIT warmed first on the same size
+    (Dr.Jit compiles a kernel per launch shape); or what is missing to run it."""
+    from app.oracles import mitsuba_oracle
+    name = "Mitsuba 3 llvm_ad_rgb"
+    if mitsuba_oracle.llvm_library() is None:
+        return {"renderer": name, "missing": "libLLVM (apt-get install libllvm19, or set "
+                                             "DRJIT_LIBLLVM_PATH)"}
+    _progress(f"pathtrace: {name}, {width} x {height} at {spp} spp ...")
+    try:
+        mitsuba_oracle.render(scene, view, width, height, spp, variant="llvm_ad_rgb")
+        _, seconds = mitsuba_oracle.render(scene, view, width, height, spp, timed=True,
+                                           variant="llvm_ad_rgb")
+    except (ImportError, RuntimeError) as error:
+        return {"renderer": name, "missing": f"the variant would not run: {error}"}
+    return {"renderer": name, "samples": width * height * spp, "seconds": seconds,
+            "samples_per_second": width * height * spp / seconds}
 
 
 def main(args) -> int:
@@ -100,7 +121,7 @@ def main(args) -> int:
         report["radiosity"] = radiosity_rows(scene, resolution)
     if "pathtrace" in wanted:
         size = tuple(args.size) if tuple(args.size) != (500, 500) else (128, 128)
-        report["pathtrace"] = pathtrace_rows(scene, size, 16)
+        report["pathtrace"] = pathtrace_rows(scene, size, 64)      # 64 spp: Mitsuba's llvm JIT amortised
     report["loadavg_after"] = list(os.getloadavg())
     (out / "bench_gi.json").write_text(json.dumps(report, indent=2))
     print(table(report))

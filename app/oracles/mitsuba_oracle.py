@@ -3,7 +3,10 @@ scene (our triangles written to OBJ files, diffuse BSDFs with ρ = k_d O_d, area
 our ``emission`` as radiance, the view as a perspective sensor) rendered by its path tracer.
 
 Only diffuse materials and area emitters are carried over (the Cornell box's kind); a test-only
-dependency (``pip install mitsuba``), imported when used.
+dependency (``pip install mitsuba``), imported when used. The bench also times its
+``llvm_ad_rgb`` variant (vectorised and JIT-compiled, Mitsuba's fastest on a CPU), which needs
+LLVM's shared library: Dr.Jit finds it through ``DRJIT_LIBLLVM_PATH`` (:func:`llvm_library`
+points it at Debian's ``libllvm19`` when that is installed).
 """
 
 from __future__ import annotations
@@ -16,6 +19,23 @@ from pathlib import Path
 import numpy as np
 
 from core.camera.view import vrc_basis
+
+
+LLVM_LIBRARIES = ("/usr/lib/x86_64-linux-gnu/libLLVM-19.so",
+                  "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1")
+
+
+def llvm_library() -> str | None:
+    """The libLLVM that Mitsuba's llvm variants will load (``DRJIT_LIBLLVM_PATH``, else one of
+    ``LLVM_LIBRARIES``, which it then names in that variable), or None when there is none."""
+    import os
+    named = os.environ.get("DRJIT_LIBLLVM_PATH")
+    if named:
+        return named if Path(named).exists() else None
+    found = next((p for p in LLVM_LIBRARIES if Path(p).exists()), None)
+    if found:
+        os.environ["DRJIT_LIBLLVM_PATH"] = found     # read when Dr.Jit first JITs
+    return found
 
 
 def available() -> bool:
@@ -55,11 +75,12 @@ def _write_obj(path: Path, positions, triangles) -> None:
 
 
 def render(scene, view, width: int, height: int, spp: int, seed: int = 0,
-           timed: bool = False):
+           timed: bool = False, variant: str = "scalar_rgb"):
     """Mitsuba's linear radiance ``(H, W, 3)`` of ``scene`` seen through ``view`` (with
-    ``timed``: and the seconds ``mi.render`` took, the scene's loading left out)."""
+    ``timed``: and the seconds ``mi.render`` took, the scene's loading left out), drawn by its
+    ``variant`` (``scalar_rgb``, or ``llvm_ad_rgb`` after :func:`llvm_library`)."""
     import mitsuba as mi
-    mi.set_variant("scalar_rgb")
+    mi.set_variant(variant)
     from core.radiosity.mesh import reflectance
     with tempfile.TemporaryDirectory() as folder:
         doc = {"type": "scene", "integrator": {"type": "path", "max_depth": -1},
