@@ -65,3 +65,49 @@ class Headlights:
         twin = self.twin(scene, edits)
         twin.lights[:] = [headlight(view, projection)]    # in place: copies share the list
         return twin
+
+
+class HeadlightChoice:
+    """The headlight on or off, and the scene it lights (a part of
+    :class:`app.session.state.ViewerState`)."""
+
+    def set_headlight(self, on: bool) -> None:
+        if bool(on) != self.headlight:
+            self.headlight, self.dirty = bool(on), True
+
+    @property
+    def headlight_note(self) -> str:
+        """The status line's words for the headlight: "" when it is off."""
+        if not self.headlight:
+            return ""
+        if self.playback is not None:
+            return "headlight off on animated scenes: the scene's keyed lights are used"
+        return headlight_refused(self.renderer_entry) or "headlight on: a light at the eye"
+
+    def _lights_for(self, view):
+        """None when the scene's own lights draw the next frame; else ``lit(scene)`` giving
+        the scene lit by the headlight at ``view``'s eye (called on the rendering thread)."""
+        if (not self.headlight or view is None or self.playback is not None
+                or headlight_refused(self.renderer_entry)):
+            return None
+        if self._headlights is None:
+            self._headlights = Headlights()
+        headlights, projection = self._headlights, self.projection
+        return lambda scene: headlights.lit(scene, self.scene_edits, view, projection)
+
+    def drawn_scene(self):
+        """The scene as the frame shown was drawn, for work beside the renderer (the
+        inspector's records and buffer views): the course's .tri rules applied, and under the
+        headlight a copy of its own lit at the eye (not the renderer's twin, which the
+        worker's next frame relights)."""
+        scene, view = self.scene, self.view
+        if self._lights_for(view) is not None:
+            import dataclasses
+            from core.volume.data import attach_volumes, volumes_of
+            lit = dataclasses.replace(scene, lights=[headlight(view, self.projection)])
+            attach_volumes(lit, volumes_of(scene))
+            scene = lit
+        if self.course_tri and view is not None:
+            from core.scene.course_tri import course_tri_scene
+            scene = course_tri_scene(scene, view)
+        return scene

@@ -126,3 +126,45 @@ def render_animated(animation, t: float, settings, context, view_index: int, con
     from core.work import control_watcher, watching
     with watching(control_watcher(control) if control is not None else None):
         return render_at(animation, t, settings, context, view_index=view_index)
+
+
+class PlaybackChoices:
+    """An animated scene's play, pause, step, seek and speed (a part of
+    :class:`app.session.state.ViewerState`; ``playback`` is None for a still scene)."""
+
+    @property
+    def animated(self) -> bool:
+        return self.playback is not None
+
+    @property
+    def playing(self) -> bool:
+        return self.playback is not None and self.playback.playing
+
+    def toggle_play(self, now: float) -> None:
+        if self.playback is not None:
+            self.playback.toggle(now)
+            self.dirty = True
+
+    def step_frame(self, frames: int) -> None:
+        if self.playback is not None:
+            self.playback.step(frames)
+            self.dirty = True
+
+    def seek(self, t: float, now: float | None = None) -> None:
+        if self.playback is not None and float(t) != self.playback.time:
+            self.playback.seek(t, now)
+            self.dirty = True
+
+    def set_speed(self, speed: float) -> None:
+        if self.playback is not None:
+            self.playback.set_speed(speed)
+
+    def tick(self, now: float, busy: bool) -> bool:
+        """While playing: move time on (the wall clock times the speed) unless the last frame
+        asked for is still being drawn (``busy``: the picture then skips ahead)."""
+        if self.playback is None or busy or not self.renderable:
+            return False
+        if self.playback.tick(now):
+            self.dirty = True
+            return True
+        return False

@@ -177,7 +177,7 @@ def test_messages_show_invalid_views_and_the_frame_message(state):
 
 
 def test_compile_notice_only_when_numba_compiles(capsys):
-    from app.session import state as state_module
+    from app.session import frames as state_module
 
     state_module._compiling.clear()
     state_module.compile_notice()                 # slow, but loading cached kernels: silent
