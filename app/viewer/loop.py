@@ -1,0 +1,218 @@
+"""The window's loop and the frames coming in: sleep until an event (or a frame, or the
+movie's clock), then input, clicks, ask the worker for the next frame and take the one it
+finished, build the GUI, blit the picture and swap. Also the kernels: compiled in worker
+processes while the cache is cold (:mod:`app.viewer.kernels`), loaded in the background after
+the first frame otherwise.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import sys
+import time
+
+from imgui_bundle import imgui  # noqa: I001  (first: it names the library glfw loads)
+import glfw
+
+from app import startup_gc
+from app.session.state import compile_count
+from app.viewer.blit import clear_around
+
+log = logging.getLogger("fvd")
+# While a camera gesture waits for its frame, the window is drawn again at most this often.
+GESTURE_REDRAW_S = 1 / 30
+# After an event, draw a few frames so that ImGui's hover and menu states settle; then sleep
+# until the next event (a busy loop would take the CPU the rasterizer needs).
+FRAMES_AFTER_EVENT = 3
+WINDOW_GREY = (0.11, 0.11, 0.13, 1.0)      # the window behind the picture and the panel
+
+
+class FrameLoop:
+    """The loop, the frames in, the picture drawn; the kernels' warm-up."""
+
+    def __init__(self, win):
+        self.win, self.state = win, win.state
+        self.warmup = None                # the kernels' worker processes (a cold cache)
+        self._kernels_logged = False
+        self._first_frame_logged = False
+        self._warming = False
+        self._warm_up_due = False
+        self.compiles_at_request = 0
+        self._swapped_at, self._picture_new = 0.0, False    # the last redraw; a picture since
+
+
+    def run(self) -> int:
+        try:
+            # Show the window (panel, the scene's background) before the first CPU frame: that
+            # frame may wait for numba to load or compile its kernels.
+            self.draw_frame()
+            self._log_since_start("window shown")
+            shown = True
+            while not glfw.window_should_close(self.win.window):
+                # Sleep until an event unless a frame is due; while the worker renders, wake
+                # ten times a second to show how long it has taken (it wakes us when done).
+                if shown and self._redraw_can_wait():
+                    # a drag waits for its frame: sleep until the next pointer move, the
+                    # frame, or the next redraw (polling here spun 600 times a second and took
+                    # a third of a core, and the GIL, from the renderer)
+                    glfw.wait_events_timeout(max(1e-3, GESTURE_REDRAW_S
+                                                 - (time.perf_counter() - self._swapped_at)))
+                elif shown and (self.win.busy > 0 or self.state.dirty):
+                    glfw.poll_events()
+                elif self.state.playing:
+                    glfw.wait_events_timeout(1 / 60)     # the movie's clock moves on
+                elif self.win.worker.waiting or self.win.tools.busy:
+                    glfw.wait_events_timeout(0.1)
+                else:
+                    glfw.wait_events_timeout(0.5)
+                shown = self.draw_frame()
+        finally:
+            self.win.close()
+        return 0
+
+    def draw_frame(self) -> bool:
+        """Input, clicks, ask for / collect a frame, GUI, blit, swap; False when minimised."""
+        fb_w, fb_h = glfw.get_framebuffer_size(self.win.window)
+        self.win.fit_picture()
+        if fb_w <= 0 or fb_h <= 0 or glfw.get_window_attrib(self.win.window, glfw.ICONIFIED):
+            self.win.pointer.clicks.clear()
+            self.win.busy = 0
+            return False                  # minimised: nothing to render or draw
+        self.win.busy -= 1
+        self.win.input.new_frame()
+        self.win.gui.new_frame()
+        imgui.new_frame()
+        self.win.pointer.handle_clicks()
+
+        self._frames_in()
+        if self.win.worker.waiting:
+            self.win.tools.note_progress(self.win.worker.progress().fraction)
+        if self._redraw_can_wait():
+            imgui.end_frame()             # nothing new to show: the renderer keeps the CPU
+            return True
+        self.win.panel.build()
+        imgui.render()
+
+        self._draw_picture(fb_w, fb_h)
+        self.win.gui.render(imgui.get_draw_data())
+        glfw.swap_buffers(self.win.window)
+        self._swapped_at, self._picture_new = time.perf_counter(), False
+        if not self._first_frame_logged and self.state.frame is not None:
+            self._first_frame_logged = True
+            self._log_since_start("first frame shown")
+            startup_gc.resume()
+        elif self.win.started is not None and time.perf_counter() - self.win.started > startup_gc.LATEST_S:
+            startup_gc.resume()
+        if self._warm_up_due:
+            self._warm_up_due = False
+            self._start_warm_up()
+        return True
+
+    def _redraw_can_wait(self) -> bool:
+        """While a camera gesture waits for its frame and no new picture came, the window
+        need not be drawn again at every pointer move (each redraw of the panel and the
+        picture costs the software GL a few ms of the CPU the renderer is using): at most
+        every ``GESTURE_REDRAW_S``. No panel widget is active during a gesture on the picture,
+        so skipping its frames loses nothing."""
+        drag = self.win.hands.drag
+        return (drag is not None and drag.start is not None and not self._picture_new
+                and time.perf_counter() - self._swapped_at < GESTURE_REDRAW_S)
+
+    def _frames_in(self) -> None:
+        """Ask the worker for the next frame and take the one it finished, if any."""
+        self._note_kernels()
+        self.win.files.poll_dialog()
+        self.state.tick(time.perf_counter(), busy=self.win.worker.waiting)
+        if self.state.request(self.win.worker):
+            self.compiles_at_request = compile_count()
+        self.win.tools.poll()                 # a buffer view, a record, a comparison: done?
+        result = self.win.worker.collect()
+        if result is not None and self.state.accept(result):
+            if getattr(result, "final", True):
+                self._log_frame()
+                self._warm_up_due = True  # once this frame is on screen (the thread takes the GIL)
+                self.win.tools.frame_changed(self.state.frame, self.state.frame_seconds)
+            else:
+                log.info("partial frame: %s (%s)", result.what,
+                         self.state.frame.stats.get("pass", "on its way"))
+                self.win.tools.note_convergence(self.state.frame.stats)
+            self.win.blit.upload(self.win.tools.picture(self.state.frame))
+            self.win.tools.changed = False
+            self._picture_new = True
+            self.win.wake()                  # the GUI shows the new frame's plan and timing next
+        if self.win.tools.changed and self.state.frame is not None:
+            self.win.blit.upload(self.win.tools.picture(self.state.frame))
+            self.win.tools.changed, self._picture_new = False, True
+
+    def _draw_picture(self, fb_w: int, fb_h: int) -> None:
+        """Clear, then blit the picture inside its own area."""
+        self.win.ctx.viewport = (0, 0, fb_w, fb_h)
+        if self.state.frame is None or not self.state.renderable:
+            self.win.ctx.clear(*WINDOW_GREY)
+        else:
+            clear_around(self.win.ctx, (fb_w, fb_h), self.state.size, WINDOW_GREY)
+        if self.state.frame is not None and self.state.renderable:
+            # after a scene change, never the old scene's picture; and only inside the picture's
+            # area, so a frame of the old, larger size never shows under the panel
+            # a frame of another size (resized, the new one due) is stretched over the picture
+            width, height = self.state.size
+            origin = (0, fb_h - height)   # the picture's bottom-left, GL counts rows up
+            self.win.ctx.viewport = (*origin, width, height)
+            self.win.ctx.scissor = (0, fb_h - self.state.size[1], *self.state.size)
+            self.win.blit.draw(origin, shown=(width, height))
+            self.win.ctx.scissor = None
+            self.win.ctx.viewport = (0, 0, fb_w, fb_h)
+
+    def start_kernel_processes(self) -> None:
+        """A cold kernel cache: compile it in worker processes, and gate the frames on it
+        (app/viewer/kernels.py); a warm one needs nothing."""
+        from app.distribution.warmup import BackgroundWarmup, is_warm
+        if is_warm():
+            return
+        from app.viewer.kernels import gated
+        try:
+            self.warmup = BackgroundWarmup(first_scene=self.state.scene_source,
+                                           on_event=glfw.post_empty_event)
+        except OSError as error:          # no process could be started: compile here instead
+            log.warning("could not start the kernel warm-up processes: %s", error)
+            return
+        log.info("kernel cache cold: compiling the kernels in worker processes (log: %s)",
+                 self.warmup.log_path)
+        self._kernels_logged = False
+        self.state.gate = lambda run: gated(run, self.warmup, self.state.scene_source)
+
+    def _note_kernels(self) -> None:
+        """Once the warm-up's processes are done: say so, and stop gating frames."""
+        if self.warmup is None or not self.warmup.finished or self._kernels_logged:
+            return
+        self._kernels_logged = True
+        self.state.gate = None
+        if self.warmup.ok:
+            self._log_since_start("all kernels ready")
+        else:
+            log.warning("kernel warm-up failed: %s", "; ".join(self.warmup.failed) or "see above")
+        self.win.wake()
+
+    def _start_warm_up(self) -> None:
+        """After the first frame: load (or compile) every other kernel in the background."""
+        if self._warming or self.warmup is not None:
+            return                        # worker processes compile them, not this one
+        self._warming = True
+        from app.distribution.warmup import steps
+        self.win.worker.add_background(steps())
+
+    def _log_since_start(self, what: str) -> None:
+        if self.win.started is None:
+            log.info("%s", what)
+        else:
+            # CPU seconds too: on a busy machine the wall time says more about the neighbours.
+            user, system = os.times()[:2]
+            log.info("%s %.3f s after process start (%.3f s CPU)", what,
+                     time.perf_counter() - self.win.started, user + system)
+
+    def _log_frame(self) -> None:
+        log.info("%s", self.state.frame_summary())
+        if self.state.frame.message:
+            print(self.state.frame.message, file=sys.stderr)
+        glfw.set_window_title(self.win.window, self.win.title())
