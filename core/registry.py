@@ -52,6 +52,9 @@ What it can do:
 - ``status``: the window's status line's words for it (default "drawn by NAME"; empty: none,
   as for the z-buffer, the default renderer);
 - ``label``: its name in the window's Render menu;
+- ``key``: its key in the window (and its Render menu item's): the key steps through the
+  renderers registered with it (``r``: the z-buffer and the ray tracer);
+- ``title``: the window title's words for it (empty: none, as for the z-buffer);
 - ``in_menu``: whether the Render menu lists it (the exact ray caster draws only analytic
   primitives, so it is chosen from the command line, not offered for every scene);
 - ``options``: its own settings, a frozen dataclass (``"package.module:Class"``) whose
@@ -103,6 +106,8 @@ class Renderer:
     triangle_ids: bool = False
     drawn_by: str = ""
     status: str | None = None       # None: "drawn by NAME" (register_renderer fills it in)
+    key: str = ""                   # the window's key for it ("R")
+    title: str = ""                 # the window title's words for it
 
     def function(self) -> Callable:
         return load(self.target)

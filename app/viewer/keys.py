@@ -11,11 +11,33 @@ import logging
 from imgui_bundle import imgui  # noqa: I001  (first: it names the library glfw loads)
 import glfw
 
+from core.registry import shading_modes
+
 
 log = logging.getLogger("fvd")
-CHAR_SHORTCUTS = {"p": ("projection", "perspective"), "o": ("projection", "parallel"),
-                  "w": ("shading", "wireframe"), "1": ("shading", "flat"),
-                  "2": ("shading", "gouraud"), "3": ("shading", "phong")}
+PROJECTION_KEYS = {"p": "perspective", "o": "parallel"}
+
+
+def char_shortcuts() -> dict[str, tuple[str, str]]:
+    """The characters that choose a setting: the projections, and each registered shading
+    mode's key (read at each key press, so a mode registered later has its key too)."""
+    found = {char: ("projection", value) for char, value in PROJECTION_KEYS.items()}
+    for mode in shading_modes():
+        if mode.key:
+            found.setdefault(mode.key.lower(), ("shading", mode.name))
+    return found
+
+
+def next_renderer(char: str, current: str) -> str | None:
+    """The renderer ``char`` chooses: the next of those registered with that key (from any
+    other renderer, the one after the first: ``r`` flips the z-buffer and the ray tracer);
+    None when no renderer has it."""
+    from core.renderers import renderers          # the built-in renderers registered
+    keyed = [entry.name for entry in renderers() if entry.key.lower() == char]
+    if not keyed:
+        return None
+    here = keyed.index(current) if current in keyed else 0
+    return keyed[(here + 1) % len(keyed)]
 
 
 class Keys:
@@ -31,7 +53,7 @@ class Keys:
         if action not in (glfw.PRESS, glfw.REPEAT):
             return
         if key == glfw.KEY_ESCAPE and self.win.menus.popup_open:
-            self.win.menus.close_popups = True     # Esc closes the open menu or pop-up, nothing more
+            self.win.menus.close_popups = True    # Esc closes the open menu or pop-up only
             log.info("action: key Esc -> close the open menu")
             return
         if key == glfw.KEY_ESCAPE and self.state.open_messages:
@@ -58,8 +80,9 @@ class Keys:
         if imgui.get_io().want_capture_keyboard:
             return
         char = chr(codepoint).lower()
-        if char in CHAR_SHORTCUTS:
-            what, value = CHAR_SHORTCUTS[char]
+        shortcuts = char_shortcuts()
+        if char in shortcuts:
+            what, value = shortcuts[char]
             self.win.actions.choose(what, value, f"key {char}")
         elif char == "a":
             self.win.actions.choose("keep_aspect", not self.state.keep_aspect, "key a")
@@ -70,9 +93,8 @@ class Keys:
             self.win.actions.choose("texture_filter", after, "key t")
         elif char == "s":
             self.win.actions.save_screenshot("key s")
-        elif char == "r":
-            self.win.actions.choose("renderer", "zbuffer" if self.state.renderer_name == "raytrace"
-                        else "raytrace", "key r")
+        elif (renderer := next_renderer(char, self.state.renderer_name)) is not None:
+            self.win.actions.choose("renderer", renderer, f"key {char}")
         elif char == "b":
             self.win.actions.choose("bump", not self.state.bump, "key b")
         elif char in ",." and self.state.animated:
@@ -90,7 +112,8 @@ class Keys:
         elif char == "f":
             self.win.actions.fit_view("key f")
         elif char == "y":
-            self.win.actions.set_rotation("turntable" if self.win.hands.rotation == "arcball" else "arcball",
+            turned = "turntable" if self.win.hands.rotation == "arcball" else "arcball"
+            self.win.actions.set_rotation(turned,
                               "key y")
         elif char == "l":
             self.win.actions.choose("headlight", not self.state.headlight, "key l")

@@ -102,7 +102,8 @@ class FrameLoop:
             self._first_frame_logged = True
             self._log_since_start("first frame shown")
             startup_gc.resume()
-        elif self.win.started is not None and time.perf_counter() - self.win.started > startup_gc.LATEST_S:
+        elif (self.win.started is not None
+              and time.perf_counter() - self.win.started > startup_gc.LATEST_S):
             startup_gc.resume()
         if self._warm_up_due:
             self._warm_up_due = False

@@ -18,9 +18,6 @@ from app.viewer.hands import PIVOTS, ROTATIONS
 log = logging.getLogger("fvd")
 
 PROJECTION_LABELS = (("perspective", "Perspective", "P"), ("parallel", "Parallel", "O"))
-# The Render menu lists the registry's renderers by their labels (core/registry.py): a renderer
-# registered there is in the menu with no line here. `r` flips between these two.
-RENDERER_KEYS = {"zbuffer": "R", "raytrace": "R"}
 FILTER_LABELS = (("nearest", "Nearest"), ("bilinear", "Bilinear"),
                  ("trilinear", "Trilinear (MIP map)"), ("anisotropic", "Anisotropic"))
 RASTERIZER_LABELS = (("edge", "Edge functions (perspective-correct)"),
@@ -205,7 +202,7 @@ class Menus:
         imgui.text_disabled("Renderer")
         for entry in renderers():
             if entry.in_menu and imgui.menu_item_simple(
-                    displayable(entry.label), RENDERER_KEYS.get(entry.name, ""),
+                    displayable(entry.label), entry.key,
                     self.state.renderer_name == entry.name):
                 self.win.actions.choose("renderer", entry.name, "menu Render")
         imgui.separator()

@@ -65,14 +65,16 @@ class SidePanel:
         for line in view_lines(view, self.state.projection):
             imgui.text(displayable(line))
         imgui.text_disabled(f"drag orbit ({self.win.hands.rotation}, about "
-                            f"{PIVOTS[self.win.hands.pivot]}), Shift/middle drag pan, wheel dolly, "
+                            f"{PIVOTS[self.win.hands.pivot]}), Shift/middle drag pan, "
+                            "wheel dolly, "
                             "Ctrl+wheel window, F fit, Enter the file's view")
         imgui.pop_text_wrap_pos()
 
     def build(self) -> None:
         self.draw()
         self.win.menus.draw_popup()
-        self.win.files.dialog.draw(imgui, displayable, cancel=self.win.menus.close_popups)   # Esc closes it
+        # Esc closes the window's own file dialog too
+        self.win.files.dialog.draw(imgui, displayable, cancel=self.win.menus.close_popups)
         self.win.menus.popup_open = imgui.is_popup_open("", ANY_POPUP)
         self.win.menus.close_popups = False
 

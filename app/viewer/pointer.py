@@ -55,7 +55,8 @@ class Pointer:
         rules, the startup code's buttons) at once — only on the picture, and unless ImGui
         wants this click."""
         clicks, self.clicks = self.clicks, []
-        captured = bool(clicks) and (imgui.get_io().want_capture_mouse or self.win.menus.popup_open)
+        captured = bool(clicks) and (imgui.get_io().want_capture_mouse
+                                     or self.win.menus.popup_open)
         for button, action, x, y, mods in clicks:
             if action == glfw.RELEASE:
                 self._release(button, x, y)
@@ -182,6 +183,7 @@ class Pointer:
             return
         zoom = held(glfw.KEY_LEFT_CONTROL, glfw.KEY_RIGHT_CONTROL)
         if self.win.hands.wheel(notches, field_of_view=zoom):
-            self.win.actions.log_camera(f"wheel {notches:+g}{' with Ctrl (window)' if zoom else ' (dolly)'}")
+            how = " with Ctrl (window)" if zoom else " (dolly)"
+            self.win.actions.log_camera(f"wheel {notches:+g}{how}")
         elif self.win.hands.message:
             log.info("action: wheel -> %s", self.win.hands.message)

@@ -34,7 +34,8 @@ class StatusLine:
                 or self.win.files.dialog.open:
             return                        # a menu or a dialog over the picture: not a pixel
         column, row = self.win.pointer.frame_pixel(x, y)
-        zoom = f"loupe {self.win.loupe.magnification}x, " if self.win.loupe.magnification > 1 else ""
+        m = self.win.loupe.magnification
+        zoom = f"loupe {m}x, " if m > 1 else ""
         if self.win.pointer.resizing():
             zoom = "resizing (the last frame, stretched): " + zoom
         ids, meshes = (None, ()) if imgui.is_any_mouse_down() else \

@@ -102,6 +102,15 @@ log = logging.getLogger("fvd")
 SCREENSHOTS_DIR = "screenshots"
 
 
+def window_title(s: ViewerState) -> str:
+    """The window's title: scene, view, projection, shading and the renderer's title words
+    (its registry entry's ``title``)."""
+    words = s.renderer_entry.title
+    renderer = f" - {words}" if words else ""
+    return (f"FvD viewer - {s.scene.name} - {s.view_label} - {s.projection} - "
+            f"{s.shading}{renderer}")
+
+
 class WindowError(RuntimeError):
     """No window could be made (no display, no OpenGL 3.3)."""
 
@@ -199,7 +208,7 @@ class ViewerWindow:
         self.loupe = Loupe()
         self._make_parts()
         self._install_callbacks()
-        self._drop_callback = self.files.drop_callback    # glfw's drop callback (the tests call it)
+        self._drop_callback = self.files.drop_callback    # glfw's, for the tests to call
         self.loop.start_kernel_processes()
 
     def _make_parts(self) -> None:
@@ -297,11 +306,7 @@ class ViewerWindow:
                      else "hidden: the panel takes the whole window")
 
     def title(self) -> str:
-        s = self.state
-        renderer = {"raytrace": " - ray traced", "radiosity": " - radiosity",
-                    "pathtrace": " - path traced"}.get(s.renderer_name, "")
-        return (f"FvD viewer - {s.scene.name} - {s.view_label} - {s.projection} - "
-                f"{s.shading}{renderer}")
+        return window_title(self.state)
 
     def close(self) -> None:
         self.worker.stop()

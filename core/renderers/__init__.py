@@ -33,7 +33,7 @@ register_renderer("zbuffer", "core.renderers.zbuffer.draw:draw",
                   description="the FvDFH viewing pipeline: clip, project, scan-line z-buffer",
                   label="Z-buffer", transparency=True, shaders=True, rasterizes=True,
                   triangle_ids=True, drawn_by="z-buffer, {settings.rasterizer} rasterizer",
-                  status="")
+                  status="", key="R")
 register_renderer("raycast", "core.renderers.raycast.draw:draw", samples_itself=True,
                   inspector="core.renderers.raycast.inspect:inspect_pixel",
                   description="the analytic surfaces ray-cast exactly (the reference)",
@@ -46,7 +46,8 @@ register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True
                   label="Ray traced", recursive=True, progressive=True, analytic=True,
                   progressive_drawer="core.raytrace.progressive:trace_progressively",
                   options="core.raytrace.options:RaytraceOptions", ray_depth=True,
-                  blur_per_ray=True, drawn_by="ray traced", status="ray traced")
+                  blur_per_ray=True, drawn_by="ray traced", status="ray traced", key="R",
+                  title="ray traced")
 register_renderer("radiosity", "core.radiosity.renderer:draw",
                   inspector="core.radiosity.inspect:inspect_pixel",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
@@ -55,7 +56,7 @@ register_renderer("radiosity", "core.radiosity.renderer:draw",
                   progressive_drawer="core.radiosity.progressive:radiosity_progressively",
                   options="core.radiosity.options:RadiosityOptions",
                   drawn_by="radiosity ({options.form_factors} form factors, {options.solver})",
-                  status="radiosity")
+                  status="radiosity", title="radiosity")
 register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
                   inspector="core.pathtrace.inspect:inspect_pixel",
                   description="Kajiya's rendering equation by path tracing on the BVH "
@@ -66,7 +67,7 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
                   samples_at_rest=256, options="core.pathtrace.options:PathtraceOptions",
                   drawn_by="path traced, {settings.samples} paths per pixel, "
                            "{options.sampler}",
-                  status="path traced")
+                  status="path traced", title="path traced")
 register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
                   plan_stages="core.renderers.painters.plan:bsp_stages",
