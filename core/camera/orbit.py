@@ -134,12 +134,20 @@ def orbit(view: View, q: np.ndarray, pivot=None) -> View:
     n = unit3(frame[:, 2])[0]
     u = unit3(cross3(frame[:, 1], n))[0]
     v = cross3(n, u)
+    return _turned(view, before, (u, v, n), v, pivot)
+
+
+def _turned(view: View, before: np.ndarray, after, vup, pivot) -> View:
+    """``view`` with the camera frame ``before`` (columns u, v, n) turned to ``after``
+    (u, v, n): VPN n, VUP ``vup``, and the VRP carried round ``pivot`` by the same turn
+    (kept where it is when ``pivot`` is None)."""
+    u, v, n = after
     if pivot is None:
-        return _with(view, vpn=n, vup=v)
+        return _with(view, vpn=n, vup=vup)
     p = np.asarray(pivot, dtype=np.float64)
     turn = np.column_stack((u, v, n)) @ before.T
     vrp = p + turn @ (np.asarray(view.vrp, dtype=np.float64) - p)
-    return _with(view, vrp=vrp, vpn=n, vup=v)
+    return _with(view, vrp=vrp, vpn=n, vup=vup)
 
 
 def rotate_about(v, axis, angle: float) -> np.ndarray:
@@ -172,13 +180,7 @@ def turntable(view: View, yaw: float, pitch: float, up, pivot=None) -> View:
     level = rotate_about(level, up, -yaw)
     n = unit3(math.cos(elevation) * level + math.sin(elevation) * up)[0]
     u = unit3(cross3(up, n))[0]
-    v = cross3(n, u)
-    if pivot is None:
-        return _with(view, vpn=n, vup=up)
-    p = np.asarray(pivot, dtype=np.float64)
-    turn = np.column_stack((u, v, n)) @ before.T
-    vrp = p + turn @ (np.asarray(view.vrp, dtype=np.float64) - p)
-    return _with(view, vrp=vrp, vpn=n, vup=up)
+    return _turned(view, before, (u, cross3(n, u), n), up, pivot)
 
 
 def pan(view: View, dx: float, dy: float, width: int, height: int) -> View:

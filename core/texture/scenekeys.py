@@ -152,14 +152,8 @@ def with_colour_image(material, pixels, factor, source: str, state: dict):
     (kept in ``state``, one dict per file)."""
     import dataclasses
 
-    from core.texture.image import Texture
-    h, w = pixels.shape[:2]
-    over = state.setdefault("budget", TexelBudget()).take(w * h, f"the image ({w} x {h})")
-    if over:
-        raise TextureError(over)
     # decoded a band of rows at a time, as an image file is (never the whole image in float64)
-    texture = Texture.from_array(pixels[::-1], wrap="repeat", srgb=True, divisor=255.0,
-                                 source=source)
+    texture = _budgeted_texture(pixels, True, source, state)
     for level in texture.levels:      # linear, and the mipmaps are means: scale each level
         level[..., :3] *= np.asarray(factor, np.float32)[:3]
     maps = SurfaceMaps(color=texture)
@@ -169,6 +163,18 @@ def with_colour_image(material, pixels, factor, source: str, state: dict):
 register_colour_image(with_colour_image)
 
 
+def _budgeted_texture(pixels, srgb: bool, source: str, state: dict):
+    """A repeating, mipmapped texture of the glTF image ``pixels`` ``(h, w, c)`` uint8 (row 0
+    the top), its texels taken from the file's budget (``state``; TextureError past it)."""
+    from core.texture.image import Texture
+    h, w = pixels.shape[:2]
+    over = state.setdefault("budget", TexelBudget()).take(w * h, f"the image ({w} x {h})")
+    if over:
+        raise TextureError(over)
+    return Texture.from_array(pixels[::-1], wrap="repeat", srgb=srgb, divisor=255.0,
+                              source=source)
+
+
 def with_normal_image(material, pixels, scale, source: str, state: dict):
     """``material`` with the image ``pixels`` ``(h, w, 4)`` uint8 (row 0 the top; linear
     data) as its tangent-space normal map, x and y times ``scale`` (glTF's
@@ -176,13 +182,7 @@ def with_normal_image(material, pixels, scale, source: str, state: dict):
     if any, kept. Raises TextureError past the file's texel budget (``state``)."""
     import dataclasses
 
-    from core.texture.image import Texture
-    h, w = pixels.shape[:2]
-    over = state.setdefault("budget", TexelBudget()).take(w * h, f"the image ({w} x {h})")
-    if over:
-        raise TextureError(over)
-    texture = Texture.from_array(pixels[::-1], wrap="repeat", srgb=False, divisor=255.0,
-                                 source=source)
+    texture = _budgeted_texture(pixels, False, source, state)
     # the shader reads n = 2 t − 1: t' = scale t + (1 − scale) / 2 gives scale (2 t − 1);
     # linear in t, so exact on the mip levels' means too (the shader normalises after)
     for level in texture.levels:
