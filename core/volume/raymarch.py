@@ -16,8 +16,11 @@ sampled at its midpoint by trilinear interpolation.
   the volume material's lighting model through the seam every renderer lights by
   (:func:`core.shading.models.dispatch.light_point_calling`: Phong unless the material names another,
   the scene's lights, the material with ``O_d = c``, two-sided) with the normal
-  ``−∇f / |∇f|``; the gradient is the trilinear field's, by central differences half a
-  sample either side.
+  ``−∇f / |∇f|``. The gradient is Levoy's: central differences at every sample (one-sided at
+  the border), computed once per volume (:func:`sample_gradients`) and interpolated
+  trilinearly like the data. A volume over :data:`GRADIENT_VOXELS` (whose gradients would
+  take more than 192 MiB) takes the trilinear field's central differences half a sample either
+  side at each lit sample instead (six more fetches; the two agree at the samples).
 - **MIP**: the largest sample along the ray.
 - **Empty-space skipping** (Levoy, "Efficient Ray Tracing of Volume Data", 1990): the grid's
   cells are grouped in blocks of :data:`BLOCK`³, each with the smallest and largest sample it
@@ -43,6 +46,7 @@ from core.jit import njit, prange
 from core.shading.illumination import LIGHT_COLUMNS, OD, pack_surfaces
 from core.shading.models import with_model
 from core.shading.models.dispatch import light_point_calling
+from core.volume.marching import gradient_at
 
 EMISSION_ABSORPTION, MIP = 0, 1
 # The march stops when less than this of the light behind can still come through: what it
@@ -51,6 +55,8 @@ EARLY_TERMINATION = 1e-3
 # Below this gradient (per sample, relative to the data's range) a sample is not lit: a
 # homogeneous region has no surface to shade.
 FLAT_GRADIENT = 1e-3
+# The largest volume whose gradients are kept (three float32 a sample): 256³, 192 MiB.
+GRADIENT_VOXELS = 1 << 24
 # Cells a side of an empty-space block: 32³ blocks for a 256³ volume, 128 KiB of ranges.
 BLOCK = 8
 
@@ -70,6 +76,26 @@ def trilinear(v, x, y, z):
     c0 = c00 * (1 - fy) + c10 * fy
     c1 = c01 * (1 - fy) + c11 * fy
     return c0 * (1 - fz) + c1 * fz
+
+
+@njit(cache=True, inline="always")
+def _component(g, i, j, k, a, fx, fy, fz):
+    c00 = g[i, j, k, a] * (1 - fx) + g[i + 1, j, k, a] * fx
+    c10 = g[i, j + 1, k, a] * (1 - fx) + g[i + 1, j + 1, k, a] * fx
+    c01 = g[i, j, k + 1, a] * (1 - fx) + g[i + 1, j, k + 1, a] * fx
+    c11 = g[i, j + 1, k + 1, a] * (1 - fx) + g[i + 1, j + 1, k + 1, a] * fx
+    return (c00 * (1 - fy) + c10 * fy) * (1 - fz) + (c01 * (1 - fy) + c11 * fy) * fz
+
+
+@njit(cache=True, inline="always")
+def trilinear3(g, x, y, z):
+    """The trilinear interpolant of the vectors ``g`` (nx, ny, nz, 3) at an index point inside
+    the grid."""
+    n0, n1, n2 = g.shape[0], g.shape[1], g.shape[2]
+    i, j, k = min(int(x), n0 - 2), min(int(y), n1 - 2), min(int(z), n2 - 2)
+    fx, fy, fz = x - i, y - j, z - k
+    return (_component(g, i, j, k, 0, fx, fy, fz), _component(g, i, j, k, 1, fx, fy, fz),
+            _component(g, i, j, k, 2, fx, fy, fz))
 
 
 @njit(cache=True, inline="always")
@@ -143,13 +169,17 @@ def _block_ranges(v, lows, highs):
 
 
 @njit(cache=True, inline="always")
-def shade_sample(v, x, y, z, r, g, b, px, py, pz, m_inv, surface, lights, ambient, eye,
+def shade_sample(v, grads, x, y, z, r, g, b, px, py, pz, m_inv, surface, lights, ambient, eye,
                  halfway, flat):
     """The sample's colour lit by the material's lighting model with the normal −∇f (world), or
-    as it is where the gradient is below ``flat``."""
-    gx = trilinear(v, x + 0.5, y, z) - trilinear(v, x - 0.5, y, z)
-    gy = trilinear(v, x, y + 0.5, z) - trilinear(v, x, y - 0.5, z)
-    gz = trilinear(v, x, y, z + 0.5) - trilinear(v, x, y, z - 0.5)
+    as it is where the gradient is below ``flat``. ``grads``: the samples' gradients, or one
+    row where they are not kept."""
+    if grads.shape[0] > 1:
+        gx, gy, gz = trilinear3(grads, x, y, z)
+    else:
+        gx = trilinear(v, x + 0.5, y, z) - trilinear(v, x - 0.5, y, z)
+        gy = trilinear(v, x, y + 0.5, z) - trilinear(v, x, y - 0.5, z)
+        gz = trilinear(v, x, y, z + 0.5) - trilinear(v, x, y, z - 0.5)
     if gx * gx + gy * gy + gz * gz <= flat * flat:
         return r, g, b
     # a gradient is a row: world ∇f = (M⁻¹)ᵀ ∇_index f
@@ -163,9 +193,18 @@ def shade_sample(v, x, y, z, r, g, b, px, py, pz, m_inv, surface, lights, ambien
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def march(v, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit, material,
+def _sample_gradients(v, out):
+    for i in prange(v.shape[0]):
+        for j in range(v.shape[1]):
+            for k in range(v.shape[2]):
+                out[i, j, k, 0], out[i, j, k, 1], out[i, j, k, 2] = gradient_at(v, i, j, k)
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit, material,
           lights, ambient, eye, halfway, flat, empty, highs, color, transmittance, largest):
-    """March every ray (see the module). Fills ``color`` (N, 3) and ``transmittance`` (N,)
+    """March every ray (see the module); ``grads``: the samples' gradients (or one row, not
+    kept). Fills ``color`` (N, 3) and ``transmittance`` (N,)
     (emission–absorption) or ``largest`` (N,) (MIP; −inf where the ray misses the grid).
     ``empty`` and ``highs``: each block's σ = 0 everywhere, its largest sample."""
     n0, n1, n2 = v.shape
@@ -216,7 +255,7 @@ def march(v, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit, 
             if sigma <= 0.0:
                 continue
             if lit:
-                r, g, b = shade_sample(v, x, y, z, r, g, b, wx + t * ex, wy + t * ey,
+                r, g, b = shade_sample(v, grads, x, y, z, r, g, b, wx + t * ex, wy + t * ey,
                                        wz + t * ez, m_inv, surface, lights, ambient, eye,
                                        halfway, flat)
             alpha = 1.0 - math.exp(-sigma * dt)
@@ -246,6 +285,25 @@ def block_ranges(volume):
         _block_ranges(v, lows, highs)
         kept = _ranges[volume] = (v, lows, highs)
     return kept[1], kept[2]
+
+
+_gradients: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+_NO_GRADIENTS = np.zeros((1, 1, 1, 3), np.float32)
+
+
+def sample_gradients(volume) -> np.ndarray:
+    """``(nx, ny, nz, 3)`` float32: the data's central differences at every sample, once per
+    volume; one row of zeros for a volume over :data:`GRADIENT_VOXELS` (the marcher then
+    differences the trilinear field at each lit sample)."""
+    v = volume.values
+    if v.size > GRADIENT_VOXELS:
+        return _NO_GRADIENTS
+    kept = _gradients.get(volume)
+    if kept is None or kept[0] is not v:
+        grads = np.empty((*v.shape, 3), np.float32)
+        _sample_gradients(v, grads)
+        kept = _gradients[volume] = (v, grads)
+    return kept[1]
 
 
 def empty_blocks(transfer, lows, highs) -> np.ndarray:
@@ -280,11 +338,12 @@ def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient,
     empty = empty_blocks(np.asarray(transfer, np.float64), lows, highs)
     if not skip_empty:
         empty, highs = np.zeros_like(empty), np.full_like(highs, np.inf)
-    march(volume.values, m_inv, np.ascontiguousarray(origins, dtype=np.float64),
+    lit = volume.lighting == "gradient" and volume.mode != "mip"
+    march(volume.values, sample_gradients(volume) if lit else _NO_GRADIENTS, m_inv, np.ascontiguousarray(origins, dtype=np.float64),
           np.ascontiguousarray(directions, dtype=np.float64),
           np.ascontiguousarray(t_lo, dtype=np.float64), np.ascontiguousarray(t_hi, dtype=np.float64),
           float(step), MIP if volume.mode == "mip" else EMISSION_ABSORPTION,
-          np.ascontiguousarray(transfer, dtype=np.float64), volume.lighting == "gradient",
+          np.ascontiguousarray(transfer, dtype=np.float64), lit,
           material, np.ascontiguousarray(lights, dtype=np.float64).reshape(-1, LIGHT_COLUMNS),
           np.asarray(ambient, dtype=np.float64), np.asarray(eye, dtype=np.float64),
           bool(halfway), FLAT_GRADIENT * max(hi - lo, 1e-30),

@@ -116,3 +116,12 @@ def test_a_constant_volume_every_block_empty_lets_all_light_through():
     assert np.all(color == 0.0) and np.all(through == 1.0)
     mip = Volume(values=volume.values, spacing=volume.spacing, mode="mip")
     assert np.all(_march(mip, _slab_rays(7))[2] == np.float32(0.5))
+
+
+def test_the_kept_gradients_are_central_differences_one_sided_at_the_border():
+    from core.volume.raymarch import sample_gradients
+    values = np.random.default_rng(3).random((6, 7, 5)).astype(np.float32)
+    got = sample_gradients(Volume(values=values, lighting="gradient"))
+    want = np.stack(np.gradient(values.astype(np.float64)), -1)      # numpy's edge_order=1
+    assert got.shape == (6, 7, 5, 3)
+    assert np.allclose(got, want, rtol=0, atol=1e-6)

@@ -73,6 +73,15 @@ def test_a_phong_volume_sample_is_phongs_value_by_hand():
     assert _one_sample_colour(_ramp(_material())) == pytest.approx([expected] * 3, rel=1e-12)
 
 
+def test_a_volume_over_the_gradient_budget_differences_each_sample_to_the_same_value(
+        monkeypatch):
+    import core.volume.raymarch as raymarch
+    monkeypatch.setattr(raymarch, "GRADIENT_VOXELS", 0)
+    assert raymarch.sample_gradients(_ramp(_material())).shape == (1, 1, 1, 3)
+    expected = float(KD * C * Q(4, 5) + KS)
+    assert _one_sample_colour(_ramp(_material())) == pytest.approx([expected] * 3, rel=1e-12)
+
+
 def test_a_cook_torrance_volume_sample_is_the_models_value_by_hand():
     got = _one_sample_colour(_ramp(_material(roughness=0.5, f0=F0_RGB)))
     expected = [_cook_torrance(Q(1, 2), f0) for f0 in F0_RGB]
