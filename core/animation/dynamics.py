@@ -216,6 +216,10 @@ def _resolve(a, b, point, normal, e, mu, x, vel, q, L, inv_mass, inv_body, v_res
     vn = dot3(rel, normal)
     c = counter[0]
     counter[0] += 1
+    if c < len(cache) and c >= counter[1]:   # a row's first use this step: empty it (the
+        cache[c, 0] = cache[c, 1] = 0.0      # cache is not cleared whole: 2 MB a step was
+        cache[c, 2] = cache[c, 3] = 0.0      # three quarters of a lone ball's step)
+        counter[1] = c + 1
     kn = _k(a, ra, normal, q, inv_body, inv_mass) + (_k(b, rb, normal, q, inv_body, inv_mass) if b >= 0 else 0.0)
     if c < len(cache):
         if cache[c, 2] == 0.0:
@@ -426,8 +430,8 @@ def step_world(x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start
                            plane_n, g, dt, v_rest)
         else:
             _flight(b, x, vel, q, L, inv_body, g, dt)
-    cache = np.zeros((MAX_CONTACTS, 4))
-    counter = np.zeros(1, np.int64)
+    cache = np.empty((MAX_CONTACTS, 4))
+    counter = np.zeros(2, np.int64)          # this pass's next row; the rows emptied so far
     for stage in range(2):
         push = stage == 1
         for it in range(iterations):
