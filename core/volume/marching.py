@@ -341,9 +341,49 @@ def zip_tube(one, m, two, n, vert, positions, triangles, count, write):
     return count
 
 
+@njit(cache=True, parallel=True, error_model="numpy")
+def row_trims(v, iso, trims):
+    """For each row of samples along k, ``trims[i, j]`` = (the first and the last k whose edge
+    to k + 1 is crossed, or (n2, -1) where none is; whether the row's first and last samples
+    are inside): flying edges' trim (Schroeder et al. 2015)."""
+    n0, n1, n2 = v.shape
+    for i in prange(n0):
+        for j in range(n1):
+            first, last = n2, -1
+            before = v[i, j, 0] > iso
+            for k in range(n2 - 1):
+                after = v[i, j, k + 1] > iso
+                if after != before:
+                    first = min(first, k)
+                    last = k
+                before = after
+            trims[i, j, 0], trims[i, j, 1] = first, last
+            trims[i, j, 2], trims[i, j, 3] = v[i, j, 0] > iso, before
+
+
 @njit(cache=True, error_model="numpy")
-def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, positions,
-              normals, write):
+def cell_range(trims, i, j, n2):
+    """The cells ``[k0, k1)`` of row (i, j) that can hold surface: outside it each of the four
+    sample rows is constant, and all four agree (else the cells from that end are kept)."""
+    k0, k1 = n2, 0
+    for a in range(2):
+        for b in range(2):
+            k0, k1 = min(k0, trims[i + a, j + b, 0]), max(k1, trims[i + a, j + b, 1] + 1)
+    for end in range(2):
+        side = trims[i, j, 2 + end]
+        for a in range(2):
+            for b in range(2):
+                if trims[i + a, j + b, 2 + end] != side:
+                    if end == 0:
+                        k0 = 0
+                    else:
+                        k1 = n2 - 1
+    return k0, k1
+
+
+@njit(cache=True, error_model="numpy")
+def cell_slab(v, iso, i, ids_x, ids_y, ids_z, trims, tables, count, extra, triangles,
+              positions, normals, write):
     """The cells of slab ``i``, their loops cut into triangles (step 3), numbered from
     ``count`` (triangles) and ``extra`` (loop-centre vertices, rows of ``positions``). Returns
     both next free numbers; with ``write``, fills ``triangles`` and the centres' rows."""
@@ -358,11 +398,14 @@ def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, p
     sizes = np.empty(4, np.int64)
     joined = np.empty(6, np.int64)
     for j in range(n1 - 1):
+        k0, k1 = cell_range(trims, i, j, n2)
+        if k0 >= k1:
+            continue
         # the cell's corners slide along k: the far four of one cell are the near four of
         # the next (corner c = x + 2y + 4z), so each cell loads four samples, not eight
-        w[4], w[5] = v[i, j, 0] - iso, v[i + 1, j, 0] - iso
-        w[6], w[7] = v[i, j + 1, 0] - iso, v[i + 1, j + 1, 0] - iso
-        for k in range(n2 - 1):
+        w[4], w[5] = v[i, j, k0] - iso, v[i + 1, j, k0] - iso
+        w[6], w[7] = v[i, j + 1, k0] - iso, v[i + 1, j + 1, k0] - iso
+        for k in range(k0, k1):
             w[0], w[1], w[2], w[3] = w[4], w[5], w[6], w[7]
             w[4], w[5] = v[i, j, k + 1] - iso, v[i + 1, j, k + 1] - iso
             w[6], w[7] = v[i, j + 1, k + 1] - iso, v[i + 1, j + 1, k + 1] - iso
@@ -409,15 +452,15 @@ def cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, count, extra, triangles, p
 
 
 @njit(cache=True, parallel=True)
-def cell_triangles(v, iso, ids_x, ids_y, ids_z, tables, tri_starts, extra_starts, triangles,
-                   positions, normals, write):
+def cell_triangles(v, iso, ids_x, ids_y, ids_z, trims, tables, tri_starts, extra_starts,
+                   triangles, positions, normals, write):
     """Every slab of cells on all cores: without ``write``, ``tri_starts[i + 1]`` and
     ``extra_starts[i + 1]`` get slab i's counts; with it, slab i writes from ``tri_starts[i]``
     and ``extra_starts[i]``."""
     for i in prange(v.shape[0] - 1):
         t0 = tri_starts[i] if write else 0
         e0 = extra_starts[i] if write else 0
-        t1, e1 = cell_slab(v, iso, i, ids_x, ids_y, ids_z, tables, t0, e0, triangles,
+        t1, e1 = cell_slab(v, iso, i, ids_x, ids_y, ids_z, trims, tables, t0, e0, triangles,
                            positions, normals, write)
         if not write:
             tri_starts[i + 1], extra_starts[i + 1] = t1 - t0, e1 - e0
@@ -449,8 +492,10 @@ def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
         first = offsets[axis] + np.cumsum(starts[axis])
         edge_vertices(v, iso, axis, ids[axis], positions, normals, first, True)
     tables = (CORNERS, EDGES, FACES, FACE_EDGES, EDGE_FACES)
+    trims = np.empty((n0, n1, 4), np.int64)
+    row_trims(v, iso, trims)
     tri_counts, extra_counts = np.zeros(n0, np.int64), np.zeros(n0, np.int64)
-    cell_triangles(v, iso, *ids, tables, tri_counts, extra_counts,
+    cell_triangles(v, iso, *ids, trims, tables, tri_counts, extra_counts,
                    np.empty((0, 3), np.int64), positions, normals, False)
     tri_starts, extra_starts = np.cumsum(tri_counts), total + np.cumsum(extra_counts)
     if int(tri_starts[-1]) > MAX_TRIANGLES:
@@ -460,8 +505,8 @@ def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
     extra = int(extra_starts[-1]) - total
     positions = np.concatenate([positions, np.empty((extra, 3))])
     normals = np.concatenate([normals, np.empty((extra, 3))])
-    cell_triangles(v, iso, *ids, tables, tri_starts, extra_starts, triangles, positions,
-                   normals, True)
+    cell_triangles(v, iso, *ids, trims, tables, tri_starts, extra_starts, triangles,
+                   positions, normals, True)
     return positions, triangles, normals
 
 

@@ -42,6 +42,8 @@ import weakref
 
 import numpy as np
 
+from numba import get_num_threads
+
 from core.jit import njit, prange
 from core.shading.illumination import LIGHT_COLUMNS, OD, pack_surfaces
 from core.shading.models import with_model
@@ -208,7 +210,15 @@ def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer
     (emission–absorption) or ``largest`` (N,) (MIP; −inf where the ray misses the grid).
     ``empty`` and ``highs``: each block's σ = 0 everywhere, its largest sample."""
     n0, n1, n2 = v.shape
-    for n in prange(origins.shape[0]):
+    rays = origins.shape[0]
+    # the loop's static split gives each core one contiguous run of rays (a frame's top
+    # rows to one, its middle to the other); dealt round-robin, the cores share the load
+    cores = get_num_threads()
+    per = -(-rays // cores)
+    for q in prange(per * cores):
+        n = (q % per) * cores + q // per
+        if n >= rays:
+            continue
         color[n, 0] = color[n, 1] = color[n, 2] = 0.0
         transmittance[n] = 1.0
         largest[n] = -np.inf
