@@ -41,7 +41,6 @@ import math
 import weakref
 
 import numpy as np
-
 from numba import get_num_threads
 
 from core.jit import njit, prange
@@ -204,16 +203,17 @@ def _sample_gradients(v, out):
 
 @njit(cache=True, parallel=True, nogil=True)
 def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit, material,
-          lights, ambient, eye, halfway, flat, empty, highs, color, transmittance, largest):
+          lights, ambient, eye, halfway, flat, empty, highs, cores, color, transmittance,
+          largest):
     """March every ray (see the module); ``grads``: the samples' gradients (or one row, not
     kept). Fills ``color`` (N, 3) and ``transmittance`` (N,)
     (emission–absorption) or ``largest`` (N,) (MIP; −inf where the ray misses the grid).
-    ``empty`` and ``highs``: each block's σ = 0 everywhere, its largest sample."""
+    ``empty`` and ``highs``: each block's σ = 0 everywhere, its largest sample; ``cores``:
+    numba's threads (read here: the kernel reading it would not be cached)."""
     n0, n1, n2 = v.shape
     rays = origins.shape[0]
     # the loop's static split gives each core one contiguous run of rays (a frame's top
     # rows to one, its middle to the other); dealt round-robin, the cores share the load
-    cores = get_num_threads()
     per = -(-rays // cores)
     for q in prange(per * cores):
         n = (q % per) * cores + q // per
@@ -357,5 +357,5 @@ def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient,
           material, np.ascontiguousarray(lights, dtype=np.float64).reshape(-1, LIGHT_COLUMNS),
           np.asarray(ambient, dtype=np.float64), np.asarray(eye, dtype=np.float64),
           bool(halfway), FLAT_GRADIENT * max(hi - lo, 1e-30),
-          empty, highs, color, transmittance, largest)
+          empty, highs, get_num_threads(), color, transmittance, largest)
     return color, transmittance, largest
