@@ -21,7 +21,7 @@ from types import SimpleNamespace
 
 from app import startup_gc
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate",
-            "warmup", "inspect", "compare", "radiosity")
+            "warmup", "inspect", "compare", "radiosity", "torques", "colour")
 RASTERIZER_CHOICES = ("edge", "scanline")
 
 
@@ -278,6 +278,15 @@ def _tool_parsers(sub, command: str | None) -> None:
 
     st = sub.add_parser("stability", help="the stiff and extreme cases, PASS/FAIL")
     st.add_argument("--json", action="store_true", help="print JSON instead of a table")
+
+    tq = sub.add_parser("torques", help="inverse dynamics: a linkage's joint torques, frame by frame")
+    if command == "torques":                  # options: app/commands/torques.py
+        from app.commands.torques import add_arguments as torques_arguments
+        torques_arguments(tq)
+    co = sub.add_parser("colour", help="the CIE 1931 chromaticity diagram with the sRGB gamut (PNG)")
+    if command == "colour":                   # options: app/commands/colour.py
+        from app.commands.colour import add_arguments as colour_arguments
+        colour_arguments(co)
 
     wu = sub.add_parser("warmup", help="compile every kernel once, on every core, with progress")
     if command == "warmup":                   # options: app/distribution/warmup.py
@@ -595,6 +604,9 @@ def _dispatch(args) -> int:
     if args.command == "radiosity":           # solve once, save for --solution
         from app.commands.radiosity import main as radiosity_main
         return radiosity_main(args)
+    if args.command in ("torques", "colour"):    # app/commands/torques.py, colour.py
+        import importlib
+        return importlib.import_module(f"app.commands.{args.command}").main(args)
     if args.command == "stability":
         from app.commands.stability import main as stability_main
         return stability_main(args)

@@ -259,6 +259,10 @@ class Linkage:
     moves. ``angles(t)`` (radians, every joint) and ``target(t)`` are keyed tracks or None.
     """
 
+    masses = None       # inverse dynamics' LinkMasses (core.animation.inverse_dynamics)
+    joint_names = ()    # the file's names, parents first
+    key_times = ()      # where the keyed motion may turn: finite differences stay on one side
+
     def __init__(self, name, base, parent, axes, bones, lo, hi, carried, effector,
                  solver=DLS, damping=0.5, angles=None, target=None):
         self.name = name

@@ -35,8 +35,10 @@ import numpy as np
 from core.animation.linkage import SOLVERS, Linkage
 from core.scene.formats.keys import register_scene_keys
 
-LINKAGE_KEYS = ("name", "base", "solver", "effector", "interpolation", "damping", "joint", "key")
-JOINT_KEYS = ("name", "axis", "bone", "min", "max", "meshes", "parent")
+LINKAGE_KEYS = ("name", "base", "solver", "effector", "interpolation", "damping", "joint", "key",
+                "gravity", "load")
+JOINT_KEYS = ("name", "axis", "bone", "min", "max", "meshes", "parent", "mass", "center",
+              "inertia")
 KEY_KEYS = ("time", "target", "angles")
 MAX_JOINTS = 256
 MAX_SCENE_JOINTS = 1024         # all linkages together: measured 0.17 s a frame here (IK)
@@ -91,12 +93,85 @@ def read_linkage(reader, table, path, scene, anim, taken) -> Linkage:
     angles, target = _tracks(reader, t.get("key", []), path, [names[k] for k in order], method)
     lo = [f[2] for f in fields]
     hi = [f[3] for f in fields]
-    return Linkage(name, reader.vector(t.get("base", [0, 0, 0]), path + ("base",)), parents,
+    linkage = Linkage(name, reader.vector(t.get("base", [0, 0, 0]), path + ("base",)), parents,
                    [f[0] for f in fields], [f[1] for f in fields], lo, hi,
                    [f[4] for f in fields], index[names.index(effector_name)],
                    SOLVERS.index(reader.choice(t.get("solver", "dls"), path + ("solver",), SOLVERS)),
                    reader.number(t.get("damping", 0.5), path + ("damping",), 1e-6, 1e3),
                    angles, target)
+    linkage.masses = read_masses(reader, t, [joints[k] for k in order], path, order, fields)
+    linkage.key_times = _key_times(t.get("key", []))
+    linkage.joint_names = [names[k] for k in order]
+    if linkage.masses is not None:
+        _check_smooth(reader, t.get("key", []), path, [names[k] for k in order],
+                      {"angles": angles, "target": target})
+    return linkage
+
+
+def read_masses(reader, t, joints, path, order, fields):
+    """The links' masses for inverse dynamics (core.animation.inverse_dynamics), or None when
+    no joint has a ``mass`` and the linkage holds no ``load``."""
+    from core.animation.inverse_dynamics import GRAVITY, LinkMasses, rod_inertia
+    if "load" not in t and not any("mass" in j for j in joints):
+        return None
+    mass, center, inertia = [], [], []
+    for j, k, field in zip(joints, order, fields):
+        p = path + ("joint", k + 1)
+        bone = field[1]
+        m = reader.number(j.get("mass", 0.0), p + ("mass",), 0.0, 1e9)
+        mass.append(m)
+        center.append(reader.vector(j.get("center", list(bone / 2)), p + ("center",)))
+        inertia.append(_inertia(reader, j["inertia"], p + ("inertia",)) if "inertia" in j
+                       else rod_inertia(m, bone))
+    return LinkMasses(np.array(mass), np.array(center, np.float64), np.array(inertia),
+                      reader.number(t.get("load", 0.0), path + ("load",), 0.0, 1e9),
+                      np.array(reader.vector(t.get("gravity", list(GRAVITY)), path + ("gravity",))))
+
+
+def _inertia(reader, value, path) -> np.ndarray:
+    """``inertia = k`` (k I: 0 for a point mass, 2/5 m r² for a ball) or a symmetric 3 x 3."""
+    if not isinstance(value, list):
+        return reader.number(value, path, 0.0, 1e12) * np.eye(3)
+    if len(value) != 3:
+        raise reader.fail(path, "expected a number or a 3 x 3 list of rows")
+    rows = np.array([reader.vector(row, path + (i + 1,)) for i, row in enumerate(value)])
+    if not np.allclose(rows, rows.T, rtol=0, atol=1e-12 * (1 + np.abs(rows).max())):
+        raise reader.fail(path, "an inertia tensor is symmetric (row i, column j equals row j, "
+                                "column i)")
+    return rows
+
+
+def _key_times(keys) -> list[float]:
+    """Every key time, sorted: where the keyed motion may change its curve."""
+    return sorted({float(k["time"]) for k in keys if isinstance(k, dict) and "time" in k})
+
+
+def _check_smooth(reader, keys, path, names, tracks) -> None:
+    """A linkage with masses must move with continuous rates: a keyed corner (a rate that
+    changes at once, as linear keys do) is an impulse, which no finite torque gives."""
+    from core.animation.inverse_dynamics import corner
+    from core.animation.tracks import Track
+    for what, track in tracks.items():
+        if not isinstance(track, Track):
+            continue
+        times = track.times
+        where = sorted((float(k["time"]), i) for i, k in enumerate(keys) if what in k)
+        for i in range(1, len(times) - 1):
+            gap = min(times[i] - times[i - 1], times[i + 1] - times[i])
+            before, after = corner(track, times[i], gap)
+            jump = np.abs(after - before)
+            worst = int(np.argmax(jump))
+            if jump[worst] > 1e-5 * (1.0 + max(np.abs(before).max(), np.abs(after).max())):
+                label = (f"the angle of {names[worst]!r} changes its rate from "
+                         f"{np.degrees(before[worst]):.4g} to {np.degrees(after[worst]):.4g} deg/s"
+                         if what == "angles" else
+                         f"the target's {'xyz'[worst]} changes its speed from "
+                         f"{before[worst]:.4g} to {after[worst]:.4g} m/s")
+                raise reader.fail(path + ("key", where[i][1] + 1),
+                                  f"the keyed motion turns a corner at t = {times[i]:g} s ({label} "
+                                  "at once): that is an impulse, and no finite torque makes it; "
+                                  "a linkage with masses needs smooth keys (interpolation = "
+                                  "\"catmull-rom\" or \"ease\")")
 
 
 def _parents(reader, joints, names, path) -> list[int]:

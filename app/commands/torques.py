@@ -1,0 +1,88 @@
+"""``python -m app torques SCENE [--fps N] [--linkage NAME] [--csv FILE]``: inverse dynamics.
+
+For each linkage of the scene whose links have masses (``mass`` on a ``[[linkage.joint]]``, or
+a ``load``), one table of the keyed motion frame by frame: the time, each joint's angle and
+the torque its motor must give (core.animation.inverse_dynamics: Newton–Euler).
+``--csv`` writes every column, θ, θ' and θ'' included, for a plot or a hand check.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import sys
+
+import numpy as np
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("scene", help="a scene file with a [[linkage]] whose joints have masses")
+    parser.add_argument("--fps", type=float, default=None,
+                        help="rows a second (default: the animation's fps)")
+    parser.add_argument("--linkage", default=None, help="only the linkage of this name")
+    parser.add_argument("--csv", default=None, metavar="FILE",
+                        help="write t and each joint's θ, θ', θ'' and τ (radians, N·m) here")
+
+
+def _linkages(animation, name):
+    from core.animation.linkage import Linkage
+    return [m for m in animation.movers if isinstance(m, Linkage) and m.masses is not None
+            and (name is None or m.name == name)]
+
+
+def rows(linkage, times):
+    """(t, θ, θ', θ'', τ) per time, the finite differences never straddling a key."""
+    from core.animation.inverse_dynamics import STEP, torques_at
+    keys = list(linkage.key_times)
+    step = min([STEP] + [float(g) / 8 for g in np.diff(keys)])
+    return [(t, *torques_at(linkage, linkage.masses, t, keys, step)) for t in times]
+
+
+def _table(linkage, data) -> str:
+    names = linkage.joint_names or [f"joint {j + 1}" for j in range(len(linkage.parent))]
+    head = f"{'t (s)':>8}" + "".join(f"  {n[:12] + ' θ°':>15}  {'τ (N·m)':>10}" for n in names)
+    lines = [f"linkage {linkage.name!r}: the joint torques of its keyed motion (gravity "
+             f"{tuple(float(g) for g in linkage.masses.gravity)} m/s², load "
+             f"{linkage.masses.load:g} kg)", head]
+    for t, theta, _, _, tau in data:
+        lines.append(f"{t:8.3f}" + "".join(f"  {math.degrees(a):15.3f}  {f:10.4f}"
+                                           for a, f in zip(theta, tau)))
+    return "\n".join(lines)
+
+
+def _write_csv(path, found) -> None:
+    with open(path, "w", newline="") as handle:
+        out = csv.writer(handle)
+        out.writerow(["linkage", "t", "joint", "theta", "theta_dot", "theta_ddot", "torque"])
+        for linkage, data in found:
+            for t, theta, d1, d2, tau in data:
+                for j in range(len(theta)):
+                    out.writerow([linkage.name, f"{t:.9g}", j + 1, f"{theta[j]:.12g}",
+                                  f"{d1[j]:.12g}", f"{d2[j]:.12g}", f"{tau[j]:.12g}"])
+
+
+def main(args) -> int:
+    from app.loading import load_or_say
+    from core.animation.keys import animation_of
+    scene = load_or_say(args.scene)
+    if scene is None:
+        return 2
+    animation = animation_of(scene)
+    found = [] if animation is None else _linkages(animation, args.linkage)
+    if not found:
+        print(f"error: {args.scene}: no linkage with masses"
+              + (f" named {args.linkage!r}" if args.linkage else "")
+              + " (give its joints a mass, kg, for inverse dynamics)", file=sys.stderr)
+        return 2
+    fps = args.fps or animation.fps
+    if not (0 < fps <= 10_000) or animation.duration * fps > 1e6:
+        print(f"error: --fps {fps:g}: from above 0 to 10,000 rows a second, at most 1,000,000 "
+              "rows", file=sys.stderr)
+        return 2
+    times = [k / fps for k in range(int(round(animation.duration * fps)) + 1)]
+    results = [(linkage, rows(linkage, times)) for linkage in found]
+    for linkage, data in results:
+        print(_table(linkage, data))
+    if args.csv:
+        _write_csv(args.csv, results)
+    return 0
