@@ -93,15 +93,17 @@ def joint_torques(linkage, masses: LinkMasses, theta, dtheta, ddtheta) -> np.nda
 
 
 def motion_at(linkage, t: float, breaks=(), step: float = STEP):
-    """(θ, θ', θ'') at t of the linkage's keyed motion. Near a key time in ``breaks`` the
-    stencil lies on one side of it (after it; before the last one), second order either way."""
+    """(θ, θ', θ'') at t of the linkage's keyed motion. Near a key time in ``breaks`` (sorted)
+    the stencil lies on one side of it (after it; before the last one, where the motion ends),
+    second order either way."""
     h = step
     f = linkage.angles_at
     near = [b for b in breaks if abs(b - t) < 3 * h]
     if not near:
         a, b, c = f(t - h), f(t), f(t + h)
         return b, (c - a) / (2 * h), (a - 2 * b + c) / (h * h)
-    s = 1.0 if t >= near[0] else -1.0         # after the key; before it if t lies before it
+    # after the key; before it if t lies before it, or if it is the last key (the motion's end)
+    s = 1.0 if near[0] <= t and near[0] != breaks[-1] else -1.0
     v = [f(t + s * k * h) for k in range(4)]
     d1 = (-3 * v[0] + 4 * v[1] - v[2]) / (2 * s * h)
     d2 = (2 * v[0] - 5 * v[1] + 4 * v[2] - v[3]) / (h * h)
