@@ -22,7 +22,6 @@ from types import SimpleNamespace
 from app import startup_gc
 COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability", "animate",
             "warmup", "inspect", "compare", "radiosity", "torques", "colour")
-RASTERIZER_CHOICES = ("edge", "scanline")
 
 
 _SIZE = re.compile(r"([+-]?[0-9]+)[xX]([+-]?[0-9]+)")
@@ -248,13 +247,13 @@ def _matrices_parser(sub, scene_help: str) -> None:
 
 def _plan_parser(sub, scene_help: str) -> None:
     from core.registry import shading_names
-    from core.settings import PROJECTIONS as PROJECTION_CHOICES
+    from core.settings import PROJECTIONS as PROJECTION_CHOICES, RASTERIZERS
     shadings = shading_names()
     pl = sub.add_parser("plan", help="print, as JSON, the stages that will run and those left out")
     pl.add_argument("scene", help=scene_help)
     pl.add_argument("--projection", choices=PROJECTION_CHOICES, default=None)
     pl.add_argument("--shading", choices=shadings, default=None)
-    pl.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None)
+    pl.add_argument("--rasterizer", choices=RASTERIZERS, default=None)
     pl.add_argument("--keep-aspect", action="store_true", default=None)
     _painter_arguments(pl, plan=True)         # the painter's renderers report their order
 
@@ -298,6 +297,7 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
     """--renderer, the film's and the clipper's choices, and every renderer's own flags;
     None keeps the defaults."""
     from core.renderers import renderers
+    from core.settings import CLIPPERS
     parser.add_argument("--renderer", choices=[r.name for r in renderers()], default=None,
                         help="one of the registered renderers (default: the scene's, else "
                              "zbuffer): " + "; ".join(f"{r.name}: {r.label or r.description}"
@@ -315,7 +315,7 @@ def _renderer_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--antialias-lines", action="store_true", default=None,
                         help="draw the wireframe with Wu's antialiased lines instead of the "
                              "midpoint line")
-    parser.add_argument("--clipper", choices=("cohen-sutherland", "liang-barsky", "homogeneous"),
+    parser.add_argument("--clipper", choices=CLIPPERS,
                         default=None, help="the line and polygon clipper: cohen-sutherland (the "
                         "course's outcodes and Sutherland-Hodgman, default), liang-barsky "
                         "(parametric tests) or homogeneous (in clip space before the divide); "
@@ -472,7 +472,8 @@ def _painter_plan(args, scene) -> dict | None:
 
 def _course_options(p: argparse.ArgumentParser) -> None:
     """The course's options shared by ``view`` and ``render`` (None: the scene's own)."""
-    p.add_argument("--rasterizer", choices=RASTERIZER_CHOICES, default=None,
+    from core.settings import RASTERIZERS
+    p.add_argument("--rasterizer", choices=RASTERIZERS, default=None,
                    help="edge: edge functions, perspective-correct (default); scanline: the "
                         "course's edge table / active edge table, screen-linear shading")
     p.add_argument("--keep-aspect", action="store_true", default=None,

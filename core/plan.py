@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from core.registry import Renderer, get_renderer, get_shading, load
+from core.registry import Renderer, get_renderer, get_shading, load, shading_modes
 from core.scene.model import Scene
 
 
@@ -79,20 +79,27 @@ def _normal_and_lighting_stages(scene: Scene, shading: str, solid: bool,
                        "closed, consistently wound meshes: faces turned away are never visible",
                        "no mesh is declared closed, so every face may be seen"),
         triangle_stage("face normals", solid and mode.normals == "face",
-                       "flat shading evaluates the model once per polygon with its normal",
+                       f"{shading} shading evaluates the model once per polygon with its "
+                       "normal",
                        f"{shading} shading uses vertex normals"),
         triangle_stage("vertex normals", smooth and not given_normals,
                        f"{shading} shading needs a normal at each vertex (average of the adjacent "
                        "faces; vertices are split where faces meet beyond the crease angle)",
                        "given with the mesh (by its file or its generator)" if smooth
-                       else "flat shading needs no vertex normals"),
+                       else f"{shading} shading needs no vertex normals"),
         triangle_stage("illuminate faces", solid and mode.lights == "faces",
                        "one evaluation per planar polygon, at its centroid",
-                       "not flat shading"),
+                       f"not {_lit_at('faces')}"),
         triangle_stage("illuminate vertices", solid and mode.lights == "vertices",
                        "the model at each vertex; intensities are interpolated",
-                       "not Gouraud shading"),
+                       f"not {_lit_at('vertices')}"),
     ]
+
+
+def _lit_at(where: str) -> str:
+    """The shading modes that light at ``where`` (their entries' ``lights``), in the plan's
+    words: "Gouraud shading", "Phong shading or Toon shading"."""
+    return " or ".join(f"{m.label} shading" for m in shading_modes() if m.lights == where)
 
 
 def _drawing_stages(scene: Scene, projection: str, shading: str, keep_aspect: bool,
@@ -123,8 +130,8 @@ def _drawing_stages(scene: Scene, projection: str, shading: str, keep_aspect: bo
                        "edge functions over each triangle's box, top-left fill rule, "
                        "perspective-correct interpolation"),
         triangle_stage("illuminate pixels", solid and get_shading(shading).lights == "pixels",
-                       "Phong shading: normals interpolated, renormalised, the model at every "
-                       "pixel", "not Phong shading"),
+                       f"{get_shading(shading).label} shading: normals interpolated, "
+                       "renormalised, the model at every pixel", f"not {_lit_at('pixels')}"),
         triangle_stage("texture lookups", *_texture_stage(scene, shading, texture_filter)),
     ]
 

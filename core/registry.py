@@ -64,6 +64,14 @@ What it can do:
   field's name (:func:`option_owner`). Two renderers may share one class (the painters').
   :meth:`Renderer.has_option` says whether its options have a field (the window's draw-order
   slider is for the renderers whose options have ``paint_first``).
+- ``bench``: the bench's family that times it (``python -m app bench --renderer``):
+  ``"zbuffer"``, ``"raytrace"``, ``"volume"`` (each alone), ``"gi"`` (a list of them) or
+  ``"painters"`` (a list of them with the z-buffer); empty: not benched;
+- ``warm_up``: the kernel warm-up's frames of its own, each ``(label, scene, settings)``:
+  ``scene`` one of the warm-up's small scenes (``"closed"``, ``"small"``: a closed sphere,
+  ``"box"``: a cube) and ``settings`` a dict of :class:`core.settings.RenderSettings` fields;
+- ``quick``: the settings (a dict) that cut its work to a token amount when the warm-up draws
+  a scene with it (the same kernels compile, only for less time).
 
 The entries are data and the targets strings (``"package.module:function"``), imported when
 first drawn, inspected or planned (:func:`load`), so this module sits at the bottom of the
@@ -108,6 +116,9 @@ class Renderer:
     status: str | None = None       # None: "drawn by NAME" (register_renderer fills it in)
     key: str = ""                   # the window's key for it ("R")
     title: str = ""                 # the window title's words for it
+    bench: str = ""                 # the bench's family that times it
+    warm_up: tuple = ()             # (label, scene, settings) frames of the warm-up
+    quick: dict | None = None       # its settings cut to a token amount (the warm-up)
 
     def function(self) -> Callable:
         return load(self.target)

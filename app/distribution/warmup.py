@@ -190,12 +190,10 @@ def _ray_marcher():
 
 def steps() -> list[tuple[str, Callable[[], object]]]:
     """(label, run) for every path the window can take; each ``run`` renders one small frame."""
-    from core.render import render
-    from core.scene.model import Scene
     from core.registry import shading_modes
+    from core.render import render
+    from core.renderers import renderers
     from core.settings import RASTERIZERS, RenderSettings
-
-    import dataclasses
 
     closed, opened, large = _scenes()
     out = []
@@ -216,23 +214,10 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
     add("phong, the float64 pixel kernel", opened, shading="phong", shading_precision="float64")
     add("flat, 50k faces culled on all cores", large, shading="flat")
     out.append(("a large frame in two batches (early z)", _batched_frame))
-    add("ray traced (Whitted)", closed, shading="phong", renderer="raytrace")
-    # The painters on a small closed mesh: the same kernels, and the window's background
-    # warm-up never holds a frame for a tree of 12k triangles (1.8 s).
-    from core.scene.generators import uv_sphere
-    small = Scene(name="warm-up small sphere", views=closed.views, meshes=[
-        dataclasses.replace(uv_sphere(1.0, segments=24, rings=12), closed=True)])
-    add("BSP tree (painter's)", small, shading="flat", renderer="bsp")
-    add("depth sort (painter's), depth-cued", small, shading="gouraud", renderer="depth-sort",
-        depth_cue=True)
-    add("scan-line visible surface (Watkins)", small, shading="phong", renderer="scanline")
-    # hemicube and ray-cast form factors, the solver, the display; the path tracer
-    from core.scene.generators import cube
-    box = Scene(name="warm-up box", meshes=[cube(1.0)], views=closed.views)
-    for method in ("hemicube", "raycast"):
-        add(f"radiosity ({method})", box, renderer="radiosity", form_factors=method,
-            max_elements=64, hemicube_resolution=16)
-    add("path traced", box, renderer="pathtrace")
+    scenes = {"closed": closed, **_renderer_scenes(closed)}
+    for entry in renderers():                   # each renderer's own frames (its entry's)
+        for label, scene, settings in entry.warm_up:
+            add(label, scenes[scene], renderer=entry.name, **settings)
     out.append(("the Liang-Barsky and homogeneous clippers", _other_clippers))
     out.append(("rigid bodies", _rigid_bodies))              # two steps: 20 s as one
     out.append(("linkages (both IK solvers)", _linkages))
@@ -241,15 +226,30 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
     return out
 
 
+def _renderer_scenes(closed) -> dict:
+    """The small scenes a renderer's warm-up frames name: ``small``, a closed sphere (the
+    painters' kernels, and the window's background warm-up never holds a frame for a tree of
+    12k triangles, 1.8 s), and ``box``, a cube (radiosity's form factors, solver and display;
+    the path tracer)."""
+    import dataclasses
+
+    from core.scene.generators import cube, uv_sphere
+    from core.scene.model import Scene
+    small = Scene(name="warm-up small sphere", views=closed.views, meshes=[
+        dataclasses.replace(uv_sphere(1.0, segments=24, rings=12), closed=True)])
+    box = Scene(name="warm-up box", meshes=[cube(1.0)], views=closed.views)
+    return {"small": small, "box": box}
+
+
 def _other_clippers() -> None:
     """Lines and triangles cut by the two clippers beside the default (``--clipper``): a
     scene whose front plane crosses it, so that the clipping kernels really run."""
     from core.paths import SCENES_DIR
     from core.render import render
     from core.scene.formats import load_scene
-    from core.settings import RenderSettings
+    from core.settings import CLIPPERS, RenderSettings
     scene = load_scene(SCENES_DIR / "crossing_front_plane.tri")
-    for clipper in ("liang-barsky", "homogeneous"):
+    for clipper in CLIPPERS[1:]:                # those beside the default
         for shading in ("wireframe", "flat"):
             settings = RenderSettings.for_scene(scene, size=SIZE, shading=shading,
                                                 clipper=clipper)
@@ -291,13 +291,10 @@ def scene_jobs(path, size=SIZE, every=False):
     return jobs
 
 
-QUICK = {"radiosity": {"hemicube_resolution": 16, "max_elements": 64, "converge": 0.99},
-         "pathtrace": {"samples": 1}}
-
-
 def quick(settings):
-    """``settings`` with the global-illumination renderers' work cut to a token amount."""
-    return settings.replace(**QUICK.get(settings.renderer, {}))
+    """``settings`` with its renderer's work cut to a token amount (its entry's ``quick``)."""
+    from core.renderers import get_renderer
+    return settings.replace(**(get_renderer(settings.renderer).quick or {}))
 
 
 def scene_label(path) -> str:

@@ -112,7 +112,7 @@ def clip_lines(p0: np.ndarray, p1: np.ndarray, projection: str, z_min: float = 0
 # Selectable with ``RenderSettings.clipper`` (``--clipper``): each keeps the same part of every
 # segment as Cohen–Sutherland (the same planes, a point on a plane inside), so the picture is
 # the same; they differ in how they find it.
-CLIPPERS = ("cohen-sutherland", "liang-barsky", "homogeneous")
+from core.settings import CLIPPERS  # noqa: E402,F401  (named once, with the settings)
 
 
 def _parametric(p0, p1, f0, f1):

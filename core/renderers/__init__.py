@@ -33,7 +33,7 @@ register_renderer("zbuffer", "core.renderers.zbuffer.draw:draw",
                   description="the FvDFH viewing pipeline: clip, project, scan-line z-buffer",
                   label="Z-buffer", transparency=True, shaders=True, rasterizes=True,
                   triangle_ids=True, drawn_by="z-buffer, {settings.rasterizer} rasterizer",
-                  status="", key="R")
+                  status="", key="R", bench="zbuffer")
 register_renderer("raycast", "core.renderers.raycast.draw:draw", samples_itself=True,
                   inspector="core.renderers.raycast.inspect:inspect_pixel",
                   description="the analytic surfaces ray-cast exactly (the reference)",
@@ -47,7 +47,8 @@ register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True
                   progressive_drawer="core.raytrace.progressive:trace_progressively",
                   options="core.raytrace.options:RaytraceOptions", ray_depth=True,
                   blur_per_ray=True, drawn_by="ray traced", status="ray traced", key="R",
-                  title="ray traced")
+                  title="ray traced", bench="raytrace",
+                  warm_up=(("ray traced (Whitted)", "closed", {"shading": "phong"}),))
 register_renderer("radiosity", "core.radiosity.renderer:draw",
                   inspector="core.radiosity.inspect:inspect_pixel",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
@@ -56,7 +57,12 @@ register_renderer("radiosity", "core.radiosity.renderer:draw",
                   progressive_drawer="core.radiosity.progressive:radiosity_progressively",
                   options="core.radiosity.options:RadiosityOptions",
                   drawn_by="radiosity ({options.form_factors} form factors, {options.solver})",
-                  status="radiosity", title="radiosity")
+                  status="radiosity", title="radiosity", bench="gi",
+                  warm_up=tuple((f"radiosity ({method})", "box",
+                                 {"form_factors": method, "max_elements": 64,
+                                  "hemicube_resolution": 16})
+                                for method in ("hemicube", "raycast")),
+                  quick={"hemicube_resolution": 16, "max_elements": 64, "converge": 0.99})
 register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
                   inspector="core.pathtrace.inspect:inspect_pixel",
                   description="Kajiya's rendering equation by path tracing on the BVH "
@@ -67,7 +73,8 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
                   samples_at_rest=256, options="core.pathtrace.options:PathtraceOptions",
                   drawn_by="path traced, {settings.samples} paths per pixel, "
                            "{options.sampler}",
-                  status="path traced", title="path traced")
+                  status="path traced", title="path traced", bench="gi",
+                  warm_up=(("path traced", "box", {}),), quick={"samples": 1})
 register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
                   plan_stages="core.renderers.painters.plan:bsp_stages",
@@ -75,14 +82,17 @@ register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   label="BSP tree (painter's)", transparency=True, shaders=True,
                   options="core.renderers.painters.options:PainterOptions",
                   painting="core.visibility.paint:bsp_painting", rasterizes=True,
-                  status="drawn by the BSP tree")
+                  status="drawn by the BSP tree", bench="painters",
+                  warm_up=(("BSP tree (painter's)", "small", {"shading": "flat"}),))
 register_renderer("scanline", "core.renderers.scanline.draw:draw",
                   inspector="core.renderers.scanline.inspect:inspect_pixel",
                   plan_stages="core.renderers.scanline.plan:add_stages",
                   description="Watkins' scan-line visible-surface algorithm (FvDFH 15.6): edge, "
                               "polygon and active edge tables, depth only at span ends",
                   label="Scan line (Watkins)", transparency=True, shaders=True,
-                  rasterizes=True, triangle_ids=True)
+                  rasterizes=True, triangle_ids=True, bench="painters",
+                  warm_up=(("scan-line visible surface (Watkins)", "small",
+                            {"shading": "phong"}),))
 register_renderer("depth-sort", "core.renderers.painters.draw:draw_depth_sort",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
                   plan_stages="core.renderers.painters.plan:depth_sort_stages",
@@ -90,11 +100,13 @@ register_renderer("depth-sort", "core.renderers.painters.draw:draw_depth_sort",
                   label="Depth sort (Newell, painter's)", transparency=True, shaders=True,
                   options="core.renderers.painters.options:PainterOptions",
                   painting="core.visibility.paint:depth_sorted_painting", rasterizes=True,
-                  status="drawn by the depth sort")
+                  status="drawn by the depth sort", bench="painters",
+                  warm_up=(("depth sort (painter's), depth-cued", "small",
+                            {"shading": "gouraud", "depth_cue": True}),))
 register_renderer("volume", "core.volume.renderer:draw",
                   inspector="core.volume.inspect:inspect_pixel",
                   description="volumes ray-marched (emission-absorption with gradient "
                               "shading, or MIP) over the z-buffer's opaque geometry "
                               "(core.volume)",
                   label="Volume (ray marching)", shaders=True, progressive=True,
-                  volumes=True)
+                  volumes=True, bench="volume")

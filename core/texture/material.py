@@ -87,16 +87,28 @@ def tangent_frames(positions: np.ndarray, triangles: np.ndarray, uv: np.ndarray)
     return frames
 
 
+# The shading mode whose frames the textured shader draws when a material has maps
+# (core.texture.shaders.shading_for): the one mode that draws textures.
+TEXTURED_MODE = "phong"
+
+
+def _lit_once_per_face_or_vertex(shading: str) -> bool:
+    """Whether the registered mode ``shading`` lights faces or vertices (its entry's
+    ``lights``), so that it has no per-pixel values to take a texture's."""
+    from core.registry import get_shading, shading_names
+    return shading in shading_names() and get_shading(shading).lights in ("faces", "vertices")
+
+
 def plan_stage(scene, shading: str, texture_filter: str = "trilinear") -> tuple[bool, str, str]:
     """``(runs, why, why_not)`` of the plan's "texture lookups" stage (core.plan)."""
     mapped = [m for m in scene.meshes if maps_of(m.material) is not None and len(m.triangles)]
     if not mapped:
         return False, "", "no material has a texture, bump, normal or environment map"
-    if shading in ("flat", "gouraud"):
+    if _lit_once_per_face_or_vertex(shading):
         return False, "", (f"{shading} shading computes no per-pixel values, which textures, bump "
-                           "and normal maps need: textured materials are drawn with their colour "
-                           "(use phong)")
-    if shading != "phong" and shading != "textured":
+                           f"and normal maps need: textured materials are drawn with their colour "
+                           f"(use {TEXTURED_MODE})")
+    if shading not in (TEXTURED_MODE, "textured"):
         return False, "", f"{shading} draws no textures"
     without_uv = [m.name for m in mapped if m.uv is None and maps_of(m.material).needs_uv]
     why = (f"{texture_filter} filtering of the material maps, (u, v) derivatives exact per "

@@ -29,7 +29,7 @@ from core.shading.illumination import OD, quantize
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import ShadeInput, all_vertex_normals, cached, scene_arrays
 from core.texture.bump_demo import DEMO_LIGHT, demo_pixel, java_color_byte
-from core.texture.material import maps_of, tangent_frames
+from core.texture.material import TEXTURED_MODE, maps_of, tangent_frames
 from core.texture.sample import FILTERS, TRILINEAR
 from core.texture.surface import UV, VARYING_COLUMNS, pack_maps, textured_pixel
 from core.texture.tutorial import plane_constants
@@ -41,7 +41,7 @@ DEMO_COLUMNS = 6
 
 def shading_for(scene, shading: str) -> str:
     """``"textured"`` for Phong shading of a scene with any mapped or demo material."""
-    if shading == "phong" and any(maps_of(m.material) is not None for m in scene.meshes):
+    if shading == TEXTURED_MODE and any(maps_of(m.material) is not None for m in scene.meshes):
         return NAME
     return shading
 

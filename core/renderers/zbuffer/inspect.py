@@ -231,8 +231,7 @@ def _triangle_pixel(cap: Capture, x: int, y: int, t: int) -> dict:
                     **_both_weights(cap, x, y, corners)},
         "depth": _depth(cap, y, x, world, canonical),
     }
-    shaded = {"flat": _flat, "gouraud": _gouraud, "phong": _phong,
-              "textured": _textured}.get(cap.mode)
+    shaded = _breakdown(cap.mode)
     if shaded is None:
         record["note"] = f"no breakdown for {cap.mode} shading"
         record["color"] = cap.color[y, x].tolist()
@@ -289,6 +288,32 @@ def _terms(s, p, n, surface, surfaces=None) -> dict:
 
 def _bytes(rgb) -> list:
     return [int(quantize(c)) for c in rgb]
+
+
+def _lit_where(mode: str) -> tuple[str | None, tuple[str, ...]]:
+    """Where shading ``mode`` lights (its registry entry's ``lights``; the textured shader,
+    which stands in for Phong, at pixels) and the varyings its shader carries."""
+    from core.registry import get_shading, shading_names
+    from core.shading.registry import get_shader, shader_names
+    varyings = get_shader(mode).varyings if mode in shader_names() else ()
+    if mode not in shading_names():
+        return ("pixels" if mode == "textured" else None), varyings
+    return get_shading(mode).lights, varyings
+
+
+def _breakdown(mode: str) -> Callable | None:
+    """The record of how ``mode`` made a pixel's colour, chosen by where it lights and what
+    its shader carries (None: a mode this inspector cannot take apart)."""
+    if mode == "textured":
+        return _textured
+    lights, varyings = _lit_where(mode)
+    if lights == "faces":
+        return _flat
+    if lights == "vertices" and varyings == ("rgb",):
+        return _gouraud
+    if lights == "pixels" and varyings[:2] == ("normal", "position"):
+        return _phong
+    return None
 
 
 def _flat(cap, x, y, corners, weights, face, mesh) -> dict:
@@ -405,13 +430,15 @@ def buffer_views(scene, view, settings, context, stages: Stages, names) -> dict:
 
 
 def _normals(cap, corners, weights, source) -> np.ndarray:
-    """The normal shading used: interpolated (Phong, textured), the face's (flat), or the
-    vertex normals interpolated at the world point (Gouraud, which keeps colours instead)."""
+    """The normal shading used: carried by its shader and interpolated (Phong, textured), the
+    face's (a mode lit at faces: flat), or the vertex normals interpolated at the world point
+    (Gouraud, which keeps colours instead, and a mode that lights nothing)."""
     a, s = cap.arrays, cap.shade
-    if cap.mode in ("phong", "textured"):
+    lights, varyings = _lit_where(cap.mode)
+    if varyings[:1] == ("normal",):             # carried through the clipper
         attrs = a["clipped_attrs"]
         n = sum(weights[:, k, None] * attrs[corners[:, k], 0:3] for k in range(3))
-    elif cap.mode == "flat":
+    elif lights == "faces":
         n = s.normals[source]
     else:
         points = a["clipped_points"]

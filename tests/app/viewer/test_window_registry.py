@@ -10,14 +10,10 @@ from tests.conftest import ROOT
 
 @pytest.fixture
 def toys():
-    from core.registry import register_shading, unregister_shading
-    from core.renderers import register_renderer, unregister_renderer
-    register_shading("toy-mode", None, label="Toy mode", key="9")
-    register_renderer("toy", "core.renderers.zbuffer.draw:draw", label="Toy", key="X",
-                      title="toy drawn")
+    import registry_toys                # tests/registry_toys.py: one module registers both
+    registry_toys.register()
     yield
-    unregister_shading("toy-mode")
-    unregister_renderer("toy")
+    registry_toys.unregister()
 
 
 def test_the_built_in_keys_are_as_they_were():

@@ -12,8 +12,7 @@ from core import RenderSettings, render
 from core.pipeline.clip_polygon import clip_triangles
 from core.pipeline.project import triangle_matrix
 from core.scene.formats import load_scene
-
-CLIPPERS = ("cohen-sutherland", "liang-barsky", "homogeneous")
+from core.settings import CLIPPERS
 UNIT = (0.0, 1.0, 0.0, 1.0, 0.0, 1.0)           # the unit viewport: device = NPC
 
 
