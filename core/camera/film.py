@@ -26,6 +26,39 @@ def grid_side(samples: int) -> int:
     return int(math.ceil(math.sqrt(samples) - 1e-9))
 
 
+def progressive_order(samples: int) -> np.ndarray:
+    """An order of a full grid's ``samples`` strata (row by row, as :func:`sample_offsets`
+    makes them) whose every prefix covers the pixel evenly: the strata of the points of the
+    (0, 2)-sequence in base 2 (van der Corput's radical inverse beside Sobol's second
+    dimension; Kollig and Keller 2002). Its first 4, 16, 64, … points lie one in each cell of
+    a 2 x 2, 4 x 4, 8 x 8, … grid, so a picture accumulated pass by pass samples the whole
+    pixel at every count. Row by row when the grid's side is not a power of two."""
+    side = grid_side(samples)
+    if side * side != samples or side & (side - 1):
+        return np.arange(samples)
+    order = np.empty(samples, np.int64)
+    for i in range(samples):
+        x, y = _radical_inverse(i), _sobol_second(i)
+        order[i] = int(y * side) * side + int(x * side)
+    return order
+
+
+def _radical_inverse(i: int) -> float:
+    """Van der Corput: the bits of ``i`` mirrored about the binary point."""
+    return int(f"{i:032b}"[::-1], 2) / 2.0 ** 32
+
+
+def _sobol_second(i: int) -> float:
+    """Sobol's second dimension (generator matrix: Pascal's triangle mod 2)."""
+    v, r = 1 << 31, 0
+    while i:
+        if i & 1:
+            r ^= v
+        i >>= 1
+        v ^= v >> 1
+    return r / 2.0 ** 32
+
+
 def sample_offsets(samples: int, pattern: str = "regular", seed: int = 0) -> np.ndarray:
     """``(samples, 2)`` offsets (x right, y down) in ``[0, 1)²``, row by row over the strata."""
     if samples < 1:

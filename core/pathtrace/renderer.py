@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.camera.film import sample_offsets
+from core.camera.film import progressive_order, sample_offsets
 from core.camera.rays import camera_rays
 from core.pathtrace import kernel
 from core.radiosity.mesh import check_scene, has_light, reflectance
@@ -130,8 +130,12 @@ def trace(packed: Packed, origins, directions, t_min, t_max, seed: int, strata_s
 
 
 def pass_offsets(samples: int, seed: int) -> np.ndarray:
-    """One film offset per pass: jittered strata (a single pass: the pixel centre)."""
-    return sample_offsets(samples, "jittered" if samples > 1 else "regular", seed)
+    """One film offset per pass: jittered strata (a single pass: the pixel centre), in an
+    order whose every prefix covers the pixel (:func:`core.camera.film.progressive_order`),
+    so that the window's running mean is antialiased across the whole pixel at every count,
+    not along its top rows of strata first."""
+    offsets = sample_offsets(samples, "jittered" if samples > 1 else "regular", seed)
+    return offsets[progressive_order(samples)]
 
 
 def sample_index(settings, k: int) -> int:
