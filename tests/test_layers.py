@@ -88,7 +88,7 @@ def test_no_import_cycles_between_modules():
 CORE_RANKS = {
     "core.jit": 0, "core.vectors": 0, "core.transforms": 0, "core.settings": 0, "core.paths": 0,
     "core.registry": 0, "core.arrays": 0, "core.progressive": 0, "core.work": 0,
-    "core.prefetch": 0,
+    "core.prefetch": 0, "core.colour": 0,
     "core.camera": 1,
     "core.scene": 2,
     "core.context": 3,

@@ -1,0 +1,101 @@
+"""``python -m app colour [--out chromaticity.png] [--size WxH] [--scene FILE]``: the CIE 1931
+chromaticity diagram (core.colour.diagram) with the sRGB gamut, D65 and, with ``--scene``,
+the chromaticity of every material's O_d in the scene (a grey one sits on D65). The numbers
+and words on it are Pillow's default bitmap font; the diagram itself is numpy.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+SIZE = (640, 720)
+MARGIN = 48
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """``WxH`` → (W, H), each 200 to 4096 pixels."""
+    import argparse
+    parts = text.lower().split("x")
+    if len(parts) != 2 or not all(p.isascii() and p.isdigit() for p in parts) \
+            or not all(200 <= int(p) <= 4096 for p in parts):
+        raise argparse.ArgumentTypeError(f"size must be WIDTHxHEIGHT, each 200 to 4096, like "
+                                         f"640x720, not {text[:40]!r}")
+    return int(parts[0]), int(parts[1])
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--out", default="chromaticity.png", help="the PNG to write")
+    parser.add_argument("--size", type=parse_size, default=SIZE, help="WxH (default 640x720)")
+    parser.add_argument("--scene", default=None,
+                        help="plot the chromaticities of this scene's material colours (O_d)")
+
+
+def scene_colours(path: str):
+    """(xy (P, 2), sRGB bytes (P, 3)) of the scene's distinct, non-black O_d, or None after
+    printing the reader's message. O_d is linear RGB (the Phong model's)."""
+    from app.loading import load_or_say
+    from core.colour import srgb
+    from core.colour.cie import chromaticity
+    scene = load_or_say(path)
+    if scene is None:
+        return None
+    ods = {tuple(float(c) for c in m.material.od) for m in scene.meshes}
+    ods = np.array(sorted(od for od in ods if sum(od) > 0), np.float64).reshape(-1, 3)
+    xy = chromaticity(ods @ srgb.RGB_TO_XYZ.T)
+    return xy, np.round(srgb.encode(ods) * 255).astype(np.uint8)
+
+
+def label(image: np.ndarray, width: int, height: int) -> np.ndarray:
+    """The axes' numbers, the marked wavelengths, D65 and sRGB, written beside their marks."""
+    from PIL import Image, ImageDraw
+    from core.colour import cie, diagram, srgb
+    picture = Image.fromarray(image)
+    draw = ImageDraw.Draw(picture)
+    at = lambda xy: diagram.pixel_of(xy, width, height, MARGIN)     # noqa: E731
+    for k in range(9):
+        c, r = at([k / 10, 0])
+        draw.text((c - 8, r + 6), f"{k / 10:.1f}", fill=(200, 200, 200))
+    for k in range(10):
+        c, r = at([0, k / 10])
+        draw.text((c - 30, r - 6), f"{k / 10:.1f}", fill=(200, 200, 200))
+    c, r = at([0.4, 0])
+    draw.text((c - 3, r + 22), "x", fill=(230, 230, 230))
+    c, r = at([0, 0.45])
+    draw.text((c - 44, r - 6), "y", fill=(230, 230, 230))
+    nm, xy = cie.spectral_locus()
+    for tick in diagram.TICKS:
+        p = xy[np.searchsorted(nm, tick)]
+        out = p - srgb.D65
+        c, r = at(p + 0.035 * out / np.hypot(*out))
+        draw.text((c - 10, r - 6), f"{tick}", fill=(220, 220, 220))
+    c, r = at(srgb.D65)
+    draw.text((c + 8, r - 4), "D65", fill=(0, 0, 0))
+    c, r = at(srgb.PRIMARIES[1])
+    draw.text((c + 8, r - 4), "sRGB", fill=(0, 0, 0))
+    return np.asarray(picture)
+
+
+def write_png(image: np.ndarray, out: Path) -> None:
+    """Beside ``out`` first, then renamed over it (app.output_files): no half-written file."""
+    from PIL import Image
+    from app.output_files import write_beside
+    write_beside(out, lambda temp: Image.fromarray(image).save(temp, format="PNG"))
+
+
+def main(args) -> int:
+    from core.colour.diagram import chromaticity_diagram
+    width, height = args.size
+    points = colours = None
+    if args.scene is not None:
+        found = scene_colours(args.scene)
+        if found is None:
+            return 2
+        points, colours = found
+    image = chromaticity_diagram(width, height, MARGIN, points, colours)
+    write_png(label(image, width, height), Path(args.out))
+    print(f"wrote {args.out}: the CIE 1931 xy diagram, the sRGB gamut and D65"
+          + (f", {len(points)} material colours of {args.scene}" if points is not None else ""))
+    return 0
