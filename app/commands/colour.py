@@ -1,6 +1,7 @@
 """``python -m app colour [--out chromaticity.png] [--size WxH] [--scene FILE]``: the CIE 1931
 chromaticity diagram (core.colour.diagram) with the sRGB gamut, D65 and, with ``--scene``,
-the chromaticity of every material's O_d in the scene (a grey one sits on D65). The numbers
+the chromaticity of every material's O_d in the scene (a grey one sits on D65; O_d read as
+the sRGB code value the z-buffer shows, or as linear light in a ``tone = "srgb"`` scene). The numbers
 and words on it are Pillow's default bitmap font; the diagram itself is numpy.
 """
 
@@ -34,8 +35,10 @@ def add_arguments(parser) -> None:
 
 
 def scene_colours(path: str):
-    """(xy (P, 2), sRGB bytes (P, 3)) of the scene's distinct, non-black O_d, or None after
-    printing the reader's message. O_d is linear RGB (the Phong model's)."""
+    """(xy (P, 2), the dots' bytes (P, 3)) of the scene's distinct, non-black O_d, or None
+    after printing the reader's message. The Phong model works on display values, so O_d is
+    an sRGB code value (decoded to linear light for its chromaticity); a scene with
+    ``tone = "srgb"`` gives reflectances in linear light (encoded for the dot)."""
     from app.loading import load_or_say
     from core.colour import srgb
     from core.colour.cie import chromaticity
@@ -44,8 +47,9 @@ def scene_colours(path: str):
         return None
     ods = {tuple(float(c) for c in m.material.od) for m in scene.meshes}
     ods = np.array(sorted(od for od in ods if sum(od) > 0), np.float64).reshape(-1, 3)
-    xy = chromaticity(ods @ srgb.RGB_TO_XYZ.T)
-    return xy, np.round(srgb.encode(ods) * 255).astype(np.uint8)
+    linear = ods if scene.tone == "srgb" else srgb.decode(ods)
+    shown = srgb.encode(ods) if scene.tone == "srgb" else ods
+    return chromaticity(linear @ srgb.RGB_TO_XYZ.T), np.round(shown * 255).astype(np.uint8)
 
 
 def label(image: np.ndarray, width: int, height: int) -> np.ndarray:

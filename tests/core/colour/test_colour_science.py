@@ -108,10 +108,11 @@ def test_the_colour_command_plots_a_scenes_material(tmp_path):
     assert done.returncode == 0, done.stderr
     image = np.asarray(Image.open(out).convert("RGB"))
     from app.commands.colour import MARGIN
-    od = np.array([0.2, 0.5, 0.9])                  # the load's O_d, linear RGB
-    xy = cie.chromaticity(srgb.RGB_TO_XYZ @ od)
+    od = np.array([0.2, 0.5, 0.9])                  # the load's O_d: a display value (code)
+    xy = cie.chromaticity(srgb.RGB_TO_XYZ @ srgb.decode(od))
     c, r = (int(v) for v in diagram.pixel_of(xy, W, H, MARGIN))
-    assert tuple(image[r, c]) == tuple(np.round(srgb.encode(od) * 255).astype(int))
+    assert tuple(image[r, c]) == (51, 128, 230)     # its dot, in the bytes the z-buffer shows
+    assert 0.15 < xy[0] < 0.2 and 0.1 < xy[1] < 0.2     # a blue, between D65 and the blue primary
     bad = subprocess.run([sys.executable, "-m", "app", "colour", "--out", str(out), "--scene",
                           str(tmp_path / "none.toml")], cwd=ROOT, capture_output=True, text=True,
                          timeout=120)
