@@ -60,6 +60,8 @@ def test_one_srgb_curve_in_every_package():
     np.testing.assert_array_equal(srgb.encode(v), linear_to_srgb(v))
     np.testing.assert_array_equal(srgb.encode(v), tone_map(v, "srgb"))
     np.testing.assert_array_equal(srgb.decode(v), srgb_to_linear(v))
+    from core.texture.surface import encode_srgb                      # the kernels' scalar one
+    np.testing.assert_allclose([encode_srgb(x) for x in v], srgb.encode(v), rtol=0, atol=1e-15)
     assert srgb.encode(0.5) * 255 == pytest.approx(187.5, abs=0.1)     # mid grey's code, 188
 
 
