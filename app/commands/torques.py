@@ -14,6 +14,8 @@ import sys
 
 import numpy as np
 
+MAX_ROWS = 100_000
+
 
 def add_arguments(parser) -> None:
     parser.add_argument("scene", help="a scene file with a [[linkage]] whose joints have masses")
@@ -36,6 +38,28 @@ def rows(linkage, times):
     keys = list(linkage.key_times)
     step = min([STEP] + [float(g) / 8 for g in np.diff(keys)])
     return [(t, *torques_at(linkage, linkage.masses, t, keys, step)) for t in times]
+
+
+def jump_message(linkage, data) -> str | None:
+    """One line where the solved motion jumps between two rows (inverse kinematics changing
+    branch), naming the key before it; None where it is continuous. Keyed angles alone
+    cannot jump (their tracks are continuous)."""
+    from core.animation.inverse_dynamics import find_jump
+    if linkage.target is None:
+        return None
+    for (t0, a0, *_), (t1, a1, *_) in zip(data, data[1:]):
+        found = find_jump(linkage.angles_at, t0, t1, a0, a1)
+        if found is None:
+            continue
+        t, before, after = found
+        j = int(np.argmax(np.abs(after - before)))
+        names = linkage.joint_names or [f"joint {k + 1}" for k in range(len(before))]
+        where = ([w for k, w in linkage.key_places if k <= t] or [linkage.name])[-1]
+        return (f"{where}: the inverse kinematics' solution jumps at t = {t:.6g} s ("
+                f"{names[j]!r} from {math.degrees(before[j]):.1f} to "
+                f"{math.degrees(after[j]):.1f} degrees at once): no finite torque makes that "
+                "motion; key angles through it, or move the target so the arm need not turn over")
+    return None
 
 
 def _table(linkage, data) -> str:
@@ -75,12 +99,17 @@ def main(args) -> int:
               + " (give its joints a mass, kg, for inverse dynamics)", file=sys.stderr)
         return 2
     fps = args.fps or animation.fps
-    if not (0 < fps <= 10_000) or animation.duration * fps > 1e6:
-        print(f"error: --fps {fps:g}: from above 0 to 10,000 rows a second, at most 1,000,000 "
-              "rows", file=sys.stderr)
+    if not (0 < fps <= 10_000) or animation.duration * fps > MAX_ROWS:
+        print(f"error: --fps {fps:g}: from above 0 to 10,000 rows a second, at most "
+              f"{MAX_ROWS:,} rows (each row solves the linkage 3 to 5 times)", file=sys.stderr)
         return 2
     times = [k / fps for k in range(int(round(animation.duration * fps)) + 1)]
     results = [(linkage, rows(linkage, times)) for linkage in found]
+    for linkage, data in results:
+        message = jump_message(linkage, data)
+        if message is not None:
+            print(f"error: {message}", file=sys.stderr)
+            return 2
     for linkage, data in results:
         print(_table(linkage, data))
     if args.csv:

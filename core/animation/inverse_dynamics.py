@@ -123,3 +123,27 @@ def corner(track, t: float, gap: float):
     before = (3 * track(t) - 4 * track(t - h) + track(t - 2 * h)) / (2 * h)
     after = (-3 * track(t) + 4 * track(t + h) - track(t + 2 * h)) / (2 * h)
     return np.asarray(before, np.float64), np.asarray(after, np.float64)
+
+
+JUMP_SPLITS = 40       # halvings of a frame: a change left over ~1e-13 s of it is a jump
+
+
+def find_jump(angles_at, t0: float, t1: float, theta0, theta1, least: float = 0.05):
+    """Where the angles jump between t0 and t1 (inverse kinematics changing its solution's
+    branch), as (t, before, after), or None. Bisection keeps the half that changes more; a
+    change of at least half the whole's left in a sliver of time is no motion at all."""
+    theta0, theta1 = np.asarray(theta0), np.asarray(theta1)
+    whole = float(np.max(np.abs(theta1 - theta0)))
+    if whole < least:
+        return None
+    for _ in range(JUMP_SPLITS):
+        tm = 0.5 * (t0 + t1)
+        middle = np.asarray(angles_at(tm))
+        if np.max(np.abs(middle - theta0)) >= np.max(np.abs(theta1 - middle)):
+            t1, theta1 = tm, middle
+        else:
+            t0, theta0 = tm, middle
+    if float(np.max(np.abs(theta1 - theta0))) < 0.5 * whole:
+        return None
+    return 0.5 * (t0 + t1), theta0, theta1
+

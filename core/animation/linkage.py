@@ -262,6 +262,7 @@ class Linkage:
     masses = None       # inverse dynamics' LinkMasses (core.animation.inverse_dynamics)
     joint_names = ()    # the file's names, parents first
     key_times = ()      # where the keyed motion may turn: finite differences stay on one side
+    key_places = ()     # (time, "file:line: linkage[i].key[k]") of each key, for messages
 
     def __init__(self, name, base, parent, axes, bones, lo, hi, carried, effector,
                  solver=DLS, damping=0.5, angles=None, target=None):

@@ -102,6 +102,7 @@ def read_linkage(reader, table, path, scene, anim, taken) -> Linkage:
     linkage.masses = read_masses(reader, t, [joints[k] for k in order], path, order, fields)
     linkage.key_times = _key_times(t.get("key", []))
     linkage.joint_names = [names[k] for k in order]
+    linkage.key_places = _key_places(reader, t.get("key", []), path)
     if linkage.masses is not None:
         _check_smooth(reader, t.get("key", []), path, [names[k] for k in order],
                       {"angles": angles, "target": target})
@@ -144,6 +145,19 @@ def _inertia(reader, value, path) -> np.ndarray:
 def _key_times(keys) -> list[float]:
     """Every key time, sorted: where the keyed motion may change its curve."""
     return sorted({float(k["time"]) for k in keys if isinstance(k, dict) and "time" in k})
+
+
+def _key_places(reader, keys, path) -> list[tuple[float, str]]:
+    """(time, "file:line: linkage[i].key[k]") of each key: plain text, so a linkage that
+    travels to a worker process carries no reader."""
+    from core.scene.formats.errors import path_text
+    out = []
+    for k, key in enumerate(keys):
+        p = path + ("key", k + 1)
+        line = reader.locate(p)
+        out.append((float(key["time"]), f"{reader.file}{'' if line is None else f':{line}'}: "
+                                        f"{path_text(p)}"))
+    return sorted(out)
 
 
 def _check_smooth(reader, keys, path, names, tracks) -> None:

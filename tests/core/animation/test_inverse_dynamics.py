@@ -225,3 +225,54 @@ def test_the_torques_command_prints_the_static_holding_torque(tmp_path):
     none = subprocess.run([sys.executable, "-m", "app", "torques", str(ROOT / "scenes/robot_arm.toml")],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert none.returncode == 2 and "no linkage with masses" in none.stderr
+
+
+POINTER = """
+[[geometry]]
+generator = "cube"
+name = "rod"
+[[view]]
+vrp = [0, 0, 0]
+vpn = [0, 0, 1]
+vup = [0, 1, 0]
+window = [-2, 2, -2, 2]
+prp = [0, 0, 5]
+front = 2
+back = -2
+[animation]
+duration = 2
+fps = 10
+[[linkage]]
+interpolation = "linear"
+[[linkage.joint]]
+name = "pointer"
+bone = [1, 0, 0]
+mass = 1.0
+meshes = ["rod"]
+[[linkage.key]]
+time = 0
+target = [1, {y}, 0]
+[[linkage.key]]
+time = 2
+target = [-1, {y}, 0]
+"""
+
+
+def test_an_inverse_kinematics_jump_is_refused_and_a_smooth_pass_is_not(tmp_path):
+    """A one-joint arm pointing at a target that passes straight through its base turns
+    half round at once (no finite torque); passing 0.5 beside it, it turns smoothly."""
+    through, beside = tmp_path / "through.toml", tmp_path / "beside.toml"
+    through.write_text(POINTER.format(y=0))
+    beside.write_text(POINTER.format(y=0.5))
+    run = lambda path: subprocess.run([sys.executable, "-m", "app", "torques", str(path)],  # noqa: E731
+                                      cwd=ROOT, capture_output=True, text=True, timeout=120)
+    done = run(through)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1
+    line = POINTER.splitlines().index("time = 0")                # the first key's header line
+    assert done.stderr.startswith(f"error: {through}:{line}: linkage[1].key[1]: the inverse "
+                                  "kinematics' solution jumps at t = 1 s ('pointer' from ")
+    assert "no finite torque" in done.stderr
+    done = run(beside)
+    assert done.returncode == 0, done.stderr
+    row = next(r for r in done.stdout.splitlines() if r.strip().startswith("1.000"))
+    assert float(row.split()[1]) == pytest.approx(90.0, abs=1e-6)   # straight at (0, 0.5)
