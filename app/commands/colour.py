@@ -91,7 +91,12 @@ def write_png(image: np.ndarray, out: Path) -> None:
 
 def main(args) -> int:
     from core.colour.diagram import chromaticity_diagram
+    from app.output_files import out_problem
     width, height = args.size
+    refusal = out_problem(Path(args.out), args.scene or "-", force=False)
+    if refusal:
+        print(f"error: --out {args.out}: {refusal}", file=sys.stderr)
+        return 2
     points = colours = None
     if args.scene is not None:
         found = scene_colours(args.scene)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import math
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -85,6 +86,18 @@ def _write_csv(path, found) -> None:
                                   f"{d1[j]:.12g}", f"{d2[j]:.12g}", f"{tau[j]:.12g}"])
 
 
+def csv_problem(out: Path, scene: Path) -> str | None:
+    """Why ``--csv`` cannot be written, or None: a table is replaced freely, nothing else."""
+    from app.output_files import same_file
+    if out.suffix.lower() != ".csv":
+        return f"the name must end in .csv (got {out.suffix or 'no extension'!r})"
+    if not out.parent.is_dir():
+        return f"the folder {str(out.parent)!r} does not exist (it is not created)"
+    if out.exists() and (not out.is_file() or same_file(out, scene)):
+        return "it is a folder or the scene itself: it is kept"
+    return None
+
+
 def main(args) -> int:
     from app.loading import load_or_say
     from core.animation.keys import animation_of
@@ -98,6 +111,11 @@ def main(args) -> int:
               + (f" named {args.linkage!r}" if args.linkage else "")
               + " (give its joints a mass, kg, for inverse dynamics)", file=sys.stderr)
         return 2
+    if args.csv is not None:
+        refusal = csv_problem(Path(args.csv), Path(args.scene))
+        if refusal:
+            print(f"error: --csv {args.csv}: {refusal}", file=sys.stderr)
+            return 2
     fps = args.fps or animation.fps
     if not (0 < fps <= 10_000) or animation.duration * fps > MAX_ROWS:
         print(f"error: --fps {fps:g}: from above 0 to 10,000 rows a second, at most "

@@ -222,6 +222,10 @@ def test_the_torques_command_prints_the_static_holding_torque(tmp_path):
     for row in rows:
         assert float(row[-1]) == pytest.approx(1.7 * G * 0.9 * math.sin(math.radians(30)), abs=1e-9)
     assert f"{1.7 * G * 0.9 * 0.5:.4f}" in done.stdout
+    lost = subprocess.run([sys.executable, "-m", "app", "torques", str(scene), "--csv",
+                           str(tmp_path / "no" / "t.csv")], cwd=ROOT, capture_output=True,
+                          text=True, timeout=120)
+    assert lost.returncode == 2 and lost.stderr.count("\n") == 1 and "does not exist" in lost.stderr
     none = subprocess.run([sys.executable, "-m", "app", "torques", str(ROOT / "scenes/robot_arm.toml")],
                           cwd=ROOT, capture_output=True, text=True, timeout=120)
     assert none.returncode == 2 and "no linkage with masses" in none.stderr

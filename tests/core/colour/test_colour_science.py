@@ -119,3 +119,7 @@ def test_the_colour_command_plots_a_scenes_material(tmp_path):
                           str(tmp_path / "none.toml")], cwd=ROOT, capture_output=True, text=True,
                          timeout=120)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1
+    scene_out = subprocess.run([sys.executable, "-m", "app", "colour", "--out",
+                                str(tmp_path / "c.toml")], cwd=ROOT, capture_output=True,
+                               text=True, timeout=120)
+    assert scene_out.returncode == 2 and "must end in .png" in scene_out.stderr
