@@ -6,7 +6,7 @@ import json
 import subprocess
 import sys
 
-from app.bench import bench as bench_module
+from app.bench import raytrace_bench as bench_module
 from tests.conftest import ROOT
 
 
