@@ -12,6 +12,8 @@ import sys
 import pytest
 
 from app import cli
+from app.cli_arguments import parse_size
+from app.output_files import PNG_SIGNATURE
 from core.paths import SCENES_DIR
 
 VIEWS = SCENES_DIR / "house.views"
@@ -77,7 +79,7 @@ def test_an_existing_file_that_is_not_a_png_is_kept_unless_forced(tmp_path, caps
     status, err = render(capsys, VIEWS, notes)
     assert status == 2 and "--force" in err and notes.read_text() == "my notes"
     status, _ = render(capsys, VIEWS, notes, "--force")
-    assert status == 0 and notes.read_bytes().startswith(cli.PNG_SIGNATURE)
+    assert status == 0 and notes.read_bytes().startswith(PNG_SIGNATURE)
     status, _ = render(capsys, VIEWS, notes)          # now a PNG: replaced without --force
     assert status == 0
 
@@ -119,7 +121,7 @@ def test_the_written_png_has_ordinary_permissions(tmp_path, capsys):
 ])
 def test_size_accepts_ascii_digits_only_and_says_what_is_wrong(text, reason):
     with pytest.raises(argparse.ArgumentTypeError, match=reason):
-        cli.parse_size(text)
+        parse_size(text)
 
 
 def test_size_with_a_leading_minus_reaches_the_parser(tmp_path, capsys):

@@ -95,9 +95,9 @@ def test_a_new_renderers_options_reach_settings_panel_and_command_line(toy):
     s = RenderSettings(renderer="toy-knob").replace(knob=5)
     assert s.options_of("toy-knob") == KnobOptions(knob=5)
     assert [c.name for c in controls(s.options_of("toy-knob"))] == ["knob", "tint"]
-    from app.cli import _option_overrides, _parser
-    args = _parser("render").parse_args(["render", "scenes/torus.toml", "--knob", "4"])
-    assert _option_overrides(args)["knob"] == 4
+    from app.cli_arguments import command_parser, option_overrides
+    args = command_parser("render").parse_args(["render", "scenes/torus.toml", "--knob", "4"])
+    assert option_overrides(args)["knob"] == 4
     from app.session.state import ViewerState
     state = ViewerState.open(SCENES / "torus.toml", size=(32, 24))
     state.set_renderer("toy-knob")

@@ -82,11 +82,11 @@ def test_a_registered_mode_is_read_planned_and_drawn(tmp_path, normal_colours):
 
 
 def test_the_command_line_and_the_window_offer_it(tmp_path, normal_colours):
-    from app.cli import _parser
+    from app.cli_arguments import command_parser
     from app.session.state import ViewerState
     path = tmp_path / "cube.toml"
     path.write_text(CUBE.format(shading="flat"))
-    args = _parser("render").parse_args(["render", str(path), "--shading", "normal-colours"])
+    args = command_parser("render").parse_args(["render", str(path), "--shading", "normal-colours"])
     assert args.shading == "normal-colours"
     state = ViewerState.open(path, size=(32, 32))
     state.set_shading("normal-colours")

@@ -283,7 +283,8 @@ def test_a_painter_under_a_new_name_is_treated_as_the_one_it_copies(capsys):
     log names it. Nothing but the registry entry says it is a painter."""
     import json
 
-    from app.cli import _drawn_by, main
+    from app.cli import main
+    from app.commands.scene_commands import _drawn_by
     from app.session.state import ViewerState
     from core.inspect import inspect_pixel
     from core.renderers import register_renderer, unregister_renderer
