@@ -89,7 +89,7 @@ def profile(only: list[str] | None) -> tuple[CompileTimer, list[tuple[str, float
     every compile; returns the timer and each step's seconds."""
     from numba.core import event
 
-    from app.distribution.warmup import all_steps
+    from app.distribution.warmup_steps import all_steps
     timer = CompileTimer()
     event.register("numba:compile", timer.listener())
     steps = []

@@ -65,8 +65,8 @@ class Outcome:
 
 # The steps a worker runs, named rather than imported: app.distribution.warmup starts this pool, so
 # the pool finds its list by name in the worker process (no import cycle between the two).
-STEPS = "app.distribution.warmup:all_steps"
-OPENING = "app.distribution.warmup:opening_steps"     # (label, run) of one file's first picture
+STEPS = "app.distribution.warmup_steps:all_steps"
+OPENING = "app.distribution.warmup_steps:opening_steps"     # (label, run) of one file's first picture
 
 
 def _named(target: str):

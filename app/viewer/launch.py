@@ -214,7 +214,7 @@ def prime_kernels(state) -> threading.Thread | None:
         return None
 
     def prime():
-        from app.distribution.warmup import quick
+        from app.distribution.warmup_steps import quick
         from app.session.state import render
         from core.context import RenderContext
         try:
@@ -249,7 +249,7 @@ def prime_while_loading(source: str, renderer: str | None) -> threading.Thread |
     # viewer exits ("partially initialized module 'numba.core.event'", seen once in CI). So
     # numba, and what the thread imports, come in here before it starts.
     import core.jit  # noqa: F401
-    from app.distribution.warmup import quick
+    from app.distribution.warmup_steps import quick
     from app.session.state import render
     from core.context import RenderContext
     from core.scene.generators import sphere_torus

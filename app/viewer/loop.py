@@ -168,7 +168,8 @@ class FrameLoop:
     def start_kernel_processes(self) -> None:
         """A cold kernel cache: compile it in worker processes, and gate the frames on it
         (app/viewer/kernels.py); a warm one needs nothing."""
-        from app.distribution.warmup import BackgroundWarmup, is_warm
+        from app.distribution.background_warmup import BackgroundWarmup
+        from app.distribution.warm_stamp import is_warm
         if is_warm():
             return
         from app.viewer.kernels import gated
@@ -200,7 +201,7 @@ class FrameLoop:
         if self._warming or self.warmup is not None:
             return                        # worker processes compile them, not this one
         self._warming = True
-        from app.distribution.warmup import steps
+        from app.distribution.warmup_steps import steps
         self.win.worker.add_background(steps())
 
     def _log_since_start(self, what: str) -> None:

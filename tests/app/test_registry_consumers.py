@@ -49,7 +49,7 @@ def test_the_bench_lists_it(toys):
 
 
 def test_the_warm_up_draws_them(toys):
-    from app.distribution.warmup import quick, steps
+    from app.distribution.warmup_steps import quick, steps
     from core.settings import RenderSettings
     labels = [label for label, _ in steps()]
     assert "toy frame" in labels                    # the renderer's own frame

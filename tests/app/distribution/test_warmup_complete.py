@@ -29,7 +29,7 @@ class Listener(event.Listener):
     def on_end(self, ev):
         pass
 event.register("numba:compile", Listener())
-from app.distribution.warmup import scene_jobs, shipped_scenes
+from app.distribution.warmup_steps import scene_jobs, shipped_scenes
 opened = 0
 for path in shipped_scenes():
     for label, run in scene_jobs(path, size=(72, 40), every=True):   # not the warm-up's size

@@ -1,6 +1,6 @@
 """``python -m app warmup`` on worker processes (issue 33): the order and spread of its steps,
 the stamp that says the cache is warm, what an interrupted or failing warm-up leaves, the
-JSON progress lines, :class:`app.distribution.warmup.BackgroundWarmup`, and numba's cache when two
+JSON progress lines, :class:`app.distribution.background_warmup.BackgroundWarmup`, and numba's cache when two
 processes save one kernel at once.
 
 The runs here take only the tests' own cheap steps (``tests/warmup_steps.py``, chosen with
@@ -21,7 +21,8 @@ from pathlib import Path
 
 import pytest
 
-from app.distribution import warm_stamp, warmup, warmup_pool
+from app.distribution import (background_warmup, warm_stamp, warmup, warmup_pool,
+                              warmup_steps)
 from tests.conftest import ROOT
 
 EXTRA = ["--extra-steps", "tests.warmup_steps:steps"]
@@ -81,12 +82,12 @@ def test_the_longest_steps_go_first_and_the_first_scenes_before_them():
 
 
 def test_every_step_is_in_the_cost_table_and_first_puts_a_scene_first():
-    labels = [label for label, _ in warmup.all_steps()]
+    labels = [label for label, _ in warmup_steps.all_steps()]
     assert len(labels) == len(set(labels))
     assert set(labels) <= set(warmup.COSTS), "measure the new steps into COSTS"
-    scenes = warmup.step_scenes()
+    scenes = warmup_steps.step_scenes()
     assert all(label in labels for label in scenes)
-    bunny = warmup.scene_label("glass_bunny.toml")
+    bunny = warmup_steps.scene_label("glass_bunny.toml")
     ordered = warmup_pool.order(labels, warmup.COSTS, warmup.DEFAULT_COST,
                                 first=lambda l: "glass_bunny.toml" in scenes.get(l, ()))
     assert ordered[0] == bunny
@@ -211,7 +212,7 @@ def test_background_warmup_reports_a_tiny_run(tmp_path, monkeypatch):
     monkeypatch.setenv("FVD_WARMUP_TEST_DIR", str(tmp_path))
     woken = []
     stamp = tmp_path / "warm.json"
-    run = warmup.BackgroundWarmup(jobs=1, on_event=lambda: woken.append(1),
+    run = background_warmup.BackgroundWarmup(jobs=1, on_event=lambda: woken.append(1),
                                   log_path=tmp_path / "warmup.log",
                                   extra_args=[*EXTRA, "--stamp", stamp, "--only", "test: quick"])
     scene = ROOT / "scenes" / "sphere.toml"
@@ -228,7 +229,7 @@ def test_background_warmup_reports_a_tiny_run(tmp_path, monkeypatch):
 
 def test_background_warmup_stops_its_workers(tmp_path, monkeypatch):
     monkeypatch.setenv("FVD_WARMUP_TEST_DIR", str(tmp_path))
-    run = warmup.BackgroundWarmup(jobs=1, log_path=tmp_path / "warmup.log", extra_args=[
+    run = background_warmup.BackgroundWarmup(jobs=1, log_path=tmp_path / "warmup.log", extra_args=[
         *EXTRA, "--stamp", tmp_path / "warm.json", "--only", "test: waits"])
     while not list(tmp_path.glob("sleeping.*")):
         assert not run.finished, run.failed
@@ -247,8 +248,8 @@ def test_the_warm_up_ends_when_the_window_that_started_it_is_killed(tmp_path):
     stamp = tmp_path / "warm.json"
     starter = textwrap.dedent(f"""
         import sys, time
-        from app.distribution import warmup
-        run = warmup.BackgroundWarmup(jobs=1, log_path={str(tmp_path / "warmup.log")!r},
+        from app.distribution import background_warmup
+        run = background_warmup.BackgroundWarmup(jobs=1, log_path={str(tmp_path / "warmup.log")!r},
             extra_args={[*EXTRA, "--stamp", str(stamp), "--only", "test: waits"]!r})
         print(run._process.pid, flush=True)
         time.sleep(600)
@@ -273,7 +274,7 @@ def test_the_warm_up_ends_when_the_window_that_started_it_is_killed(tmp_path):
 
 def test_ready_for_a_shipped_scene_when_its_step_is_done():
     """The bookkeeping alone: the events a run would print, fed to the reader."""
-    run = warmup.BackgroundWarmup.__new__(warmup.BackgroundWarmup)
+    run = background_warmup.BackgroundWarmup.__new__(background_warmup.BackgroundWarmup)
     import threading
     run._lock = threading.Condition()
     run._total, run._done, run._current, run._scenes_done = None, [], [], set()
@@ -282,16 +283,16 @@ def test_ready_for_a_shipped_scene_when_its_step_is_done():
     run._scenes_dir = (ROOT / "scenes").resolve()
     bunny = ROOT / "scenes" / "glass_bunny.toml"
     run._take({"event": "start", "total": 2})
-    run._take({"event": "begin", "label": warmup.scene_label(bunny), "scenes": [bunny.name]})
-    assert run.current == (warmup.scene_label(bunny),) and not run.ready_for(bunny)
-    run._take({"event": "done", "k": 1, "total": 2, "label": warmup.scene_label(bunny),
+    run._take({"event": "begin", "label": warmup_steps.scene_label(bunny), "scenes": [bunny.name]})
+    assert run.current == (warmup_steps.scene_label(bunny),) and not run.ready_for(bunny)
+    run._take({"event": "done", "k": 1, "total": 2, "label": warmup_steps.scene_label(bunny),
                "seconds": 1.0, "scenes": [bunny.name]})
     assert run.ready_for(bunny) and not run.ready_for(ROOT / "scenes" / "sphere.toml")
     assert run.ready_for(bunny, every_setting=True)
     assert not run.ready_for(Path("/elsewhere") / bunny.name)   # a file of the same name
     assert run.wait_for(bunny, timeout=0)
     mine = Path("/elsewhere/mine.obj")
-    run._take({"event": "done", "k": 2, "total": 3, "label": warmup.opening_label(mine),
+    run._take({"event": "done", "k": 2, "total": 3, "label": warmup_steps.opening_label(mine),
                "seconds": 1.0, "scenes": [], "opens": str(mine)})
     assert run.ready_for(mine) and not run.ready_for(mine, every_setting=True)
     run._take({"event": "failed", "k": 3, "total": 3, "label": "x", "error": "E: e",
