@@ -132,7 +132,7 @@ def fail_once(marker: str):
     def run(job, bundle, frames_, checkpoint=None):
         import os
 
-        from app.commands.animate import render_run
+        from app.commands.animate_frames import render_run
         try:
             os.unlink(marker)
         except FileNotFoundError:
@@ -142,18 +142,18 @@ def fail_once(marker: str):
 
 
 def test_a_worker_in_an_empty_folder_renders_shipped_files(cluster, tmp_path, monkeypatch, capsys):
-    import app.commands.animate as animate
+    import app.commands.animate_frames as animate_frames
     address, worker_tmp, empty = cluster
     user = user_folder(tmp_path)
     here = tmp_path / "here"
     assert main(["animate", str(user / "scene.toml"), "--out", str(here), "--size", "40x40"]) == 0
-    real = animate.render_on_cluster
+    real = animate_frames.render_on_cluster
 
     def user_files_gone(*args, **kwargs):
         shutil.rmtree(user)                    # loaded here; the worker must use the bundle
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(animate, "render_on_cluster", user_files_gone)
+    monkeypatch.setattr(animate_frames, "render_on_cluster", user_files_gone)
     there = tmp_path / "there"
     assert main(["animate", str(user / "scene.toml"), "--out", str(there), "--size", "40x40",
                  "--scheduler", address]) == 0
@@ -169,12 +169,12 @@ def test_a_worker_in_an_empty_folder_renders_shipped_files(cluster, tmp_path, mo
 
 
 def test_dask_retries_a_run_that_failed_on_the_worker(cluster, tmp_path, monkeypatch, capsys):
-    import app.commands.animate as animate
+    import app.commands.animate_frames as animate_frames
     address, _, _ = cluster
     user = user_folder(tmp_path)
     marker = tmp_path / "fail-once"
     marker.write_text("")
-    monkeypatch.setattr(animate, "render_run", fail_once(str(marker)))
+    monkeypatch.setattr(animate_frames, "render_run", fail_once(str(marker)))
     out = tmp_path / "m"
     assert main(["animate", str(user / "scene.toml"), "--out", str(out), "--size", "32x32",
                  "--scheduler", address, "--retries", "1"]) == 0

@@ -86,14 +86,14 @@ def decoded(movie: Path) -> list[np.ndarray]:
 def on_the_cluster(monkeypatch):
     """A short job on --workers 2 (or any on a busy machine) would be kept in this process
     (a cluster cannot win); these tests want frames rendered by the local cluster's worker."""
-    import app.commands.animate as animate
-    monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
-    monkeypatch.setattr(animate, "idle_cores", lambda since: 8.0)
-    monkeypatch.setattr(animate, "RENDER_WHILE_STARTING", False)
+    import app.commands.animate_frames as animate_frames
+    monkeypatch.setattr(animate_frames, "CLUSTER_START_SECONDS", 0.0)
+    monkeypatch.setattr(animate_frames, "idle_cores", lambda since: 8.0)
+    monkeypatch.setattr(animate_frames, "RENDER_WHILE_STARTING", False)
     # The prediction also uses the cores this process was measured to keep busy while timing
     # a frame; on a loaded machine that measure once said "could not win" (12 tiny frames).
     # The decision has tests of its own (predict, _cannot_win): here the cluster must run.
-    monkeypatch.setattr(animate, "_cannot_win", lambda *args, **kwargs: None)
+    monkeypatch.setattr(animate_frames, "_cannot_win", lambda *args, **kwargs: None)
 
 
 def test_two_local_workers_give_the_single_process_movie(scene_file, tmp_path, on_the_cluster,
@@ -152,8 +152,8 @@ def test_a_killed_run_resumed_completes(scene_file, tmp_path):
 
 
 def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypatch, capsys):
-    import app.commands.animate as animate
-    real, calls = animate.render_pixels, []
+    import app.commands.animate_frames as animate_frames
+    real, calls = animate_frames.render_pixels, []
 
     def flaky(job, k, *rest):
         calls.append(k)
@@ -161,7 +161,7 @@ def test_a_failed_frame_is_retried_not_the_movie(scene_file, tmp_path, monkeypat
             raise MemoryError("the machine was busy")
         return real(job, k, *rest)
 
-    monkeypatch.setattr(animate, "render_pixels", flaky)
+    monkeypatch.setattr(animate_frames, "render_pixels", flaky)
     out = tmp_path / "seq"
     assert main(["animate", str(scene_file), "--out", str(out), "--size", "32x32"]) == 0
     assert calls.count(4) == 2 and all(calls.count(k) == 1 for k in range(12) if k != 4)

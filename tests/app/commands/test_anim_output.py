@@ -333,7 +333,7 @@ view = { front = 4, back = -4 }
 time = 0.5
 view = { front = -4, back = 4 }
 """)
-    code = ("import app.commands.animate as a; a.CLUSTER_START_SECONDS = 0; "
+    code = ("import app.commands.animate_frames as a; a.CLUSTER_START_SECONDS = 0; "
             "a.idle_cores = lambda since: 8.0; "
             "a.RENDER_WHILE_STARTING = False; from app.cli import main; import sys; "
             f"sys.exit(main(['animate', {str(scene)!r}, '--out', {str(tmp_path / 'm.mp4')!r}, "
@@ -376,8 +376,8 @@ def test_the_mp4_bytes_do_not_depend_on_the_cores(tmp_path):
 def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, capsys, monkeypatch):
     """The decision is a prediction from two measurements: a frame's time here, and the cores
     the other processes left idle since the command started."""
-    import app.commands.animate as animate
-    monkeypatch.setattr(animate, "idle_cores", lambda since: 1.0)
+    import app.commands.animate_frames as animate_frames
+    monkeypatch.setattr(animate_frames, "idle_cores", lambda since: 1.0)
     assert run(scene_file, "--out", tmp_path / "short", "--size", "24x24", "--workers", "2",
                "--frames", "6") == 0
     captured = capsys.readouterr()                  # 2 tiny frames left: shorter than a start
@@ -385,8 +385,8 @@ def test_workers_are_not_started_when_they_cannot_win(scene_file, tmp_path, caps
            "local worker (~1 s to start, 1.0 idle core measured) against ~0.0 s" in captured.err
     assert "a cluster starts when it promises x1.2, this is x0.0" in captured.err
     assert "in this process (a cluster could not win)" in captured.out
-    monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
-    monkeypatch.setattr(animate, "idle_cores", lambda since: 0.1)    # others keep the cores
+    monkeypatch.setattr(animate_frames, "CLUSTER_START_SECONDS", 0.0)
+    monkeypatch.setattr(animate_frames, "idle_cores", lambda since: 0.1)    # others keep the cores
     assert run(scene_file, "--out", tmp_path / "busy", "--size", "24x24", "--workers", "2",
                "--frames", "6") == 0
     captured = capsys.readouterr()
@@ -398,29 +398,29 @@ def test_the_prediction_behind_the_decision():
     """Hand-derived: 100 frames of 0.1 s are 10 s here; with a 1 s start and one idle core
     the worker joins for the last 9 s of work, adding 0.35 of a core (measured: what a
     second process adds beside this one and its frame writer): 1 + 9 / 1.35 = 7.67 s."""
-    from app.commands import animate
-    assert animate.WORKER_SHARE == 0.35 and animate.CLUSTER_START_SECONDS == 1.0
-    assert animate.predict(100, 0.1, 2, 1.0) == pytest.approx((10.0, 1 + 9 / 1.35))
-    assert animate.predict(100, 0.1, 2, 0.5) == pytest.approx((10.0, 1 + 9 / 1.175))
-    assert animate.predict(100, 0.1, 4, 1.0) == pytest.approx((10.0, 1 + 9 / 1.35))  # 1 idle core
-    assert animate.predict(100, 0.1, 2, 0.0) == pytest.approx((10.0, 10.0))  # no gain
-    assert animate._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.30
-    assert "~9.3 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 0.25)  # x1.08
-    assert animate._cannot_win(100, 0.1, 2, 0.25).endswith(
+    import app.commands.animate_frames as animate_frames
+    assert animate_frames.WORKER_SHARE == 0.35 and animate_frames.CLUSTER_START_SECONDS == 1.0
+    assert animate_frames.predict(100, 0.1, 2, 1.0) == pytest.approx((10.0, 1 + 9 / 1.35))
+    assert animate_frames.predict(100, 0.1, 2, 0.5) == pytest.approx((10.0, 1 + 9 / 1.175))
+    assert animate_frames.predict(100, 0.1, 4, 1.0) == pytest.approx((10.0, 1 + 9 / 1.35))  # 1 idle core
+    assert animate_frames.predict(100, 0.1, 2, 0.0) == pytest.approx((10.0, 10.0))  # no gain
+    assert animate_frames._cannot_win(100, 0.1, 2, 1.0) is None                    # x1.30
+    assert "~9.3 s with 1 local worker" in animate_frames._cannot_win(100, 0.1, 2, 0.25)  # x1.08
+    assert animate_frames._cannot_win(100, 0.1, 2, 0.25).endswith(
         "a cluster starts when it promises x1.2, this is x1.08")          # 10 / 9.28
-    assert animate._cannot_win(10, 0.1, 2, 1.0).endswith(
+    assert animate_frames._cannot_win(10, 0.1, 2, 1.0).endswith(
         "against ~1.0 s in this process (on 1.0 cores): a cluster starts when it promises "
         "x1.2, this is x1.00")
     # A process already on 1.5 cores (its kernel threads and frame writer) is 1.5 cores'
     # worth: the same worker on the idle core gives 1 + 9 x 1.5 / 1.35 = 11.0 s, no gain.
-    assert animate.predict(100, 0.1, 2, 1.0, 1.5) == pytest.approx((10.0, 1 + 9 * 1.5 / 1.35))
-    assert animate.predict(100, 0.1, 2, 1.0, 0.5) == animate.predict(100, 0.1, 2, 1.0)
-    assert "~11.0 s with 1 local worker" in animate._cannot_win(100, 0.1, 2, 1.0, 1.5)
+    assert animate_frames.predict(100, 0.1, 2, 1.0, 1.5) == pytest.approx((10.0, 1 + 9 * 1.5 / 1.35))
+    assert animate_frames.predict(100, 0.1, 2, 1.0, 0.5) == animate_frames.predict(100, 0.1, 2, 1.0)
+    assert "~11.0 s with 1 local worker" in animate_frames._cannot_win(100, 0.1, 2, 1.0, 1.5)
 
 
 def test_runs_are_long_first_and_short_at_the_end():
     """Guided runs: each at most 1/(2 x renderers) of what is left (and MAX_RUN), cut at gaps."""
-    from app.commands.animate import Runs
+    from app.commands.animate_frames import Runs
     runs = Runs(list(range(100)), 2)
     lengths = []
     while runs:
@@ -432,9 +432,9 @@ def test_runs_are_long_first_and_short_at_the_end():
 
 def test_the_idle_cores_are_measured(monkeypatch):
     """Idle seconds of every core over wall seconds: 3 s idle in 2 s is 1.5 idle cores."""
-    from app.commands import animate
-    monkeypatch.setattr(animate, "idle_mark", lambda: (12.0, 103.0))
-    assert animate.idle_cores((10.0, 100.0)) == pytest.approx(1.5)
+    import app.commands.animate_frames as animate_frames
+    monkeypatch.setattr(animate_frames, "idle_mark", lambda: (12.0, 103.0))
+    assert animate_frames.idle_cores((10.0, 100.0)) == pytest.approx(1.5)
 
 
 @pytest.mark.parametrize("hold", [0, 1 << 30])

@@ -286,10 +286,10 @@ def test_an_open_mesh_and_a_keyed_mesh_cannot_be_bodies():
 def on_the_cluster(monkeypatch):
     """A short job on --workers 2 would be kept in this process (a cluster cannot win);
     this test wants frames rendered by the local cluster's worker from checkpoints."""
-    import app.commands.animate as animate
-    monkeypatch.setattr(animate, "CLUSTER_START_SECONDS", 0.0)
-    monkeypatch.setattr(animate, "idle_cores", lambda since: 8.0)
-    monkeypatch.setattr(animate, "RENDER_WHILE_STARTING", False)
+    import app.commands.animate_frames as animate_frames
+    monkeypatch.setattr(animate_frames, "CLUSTER_START_SECONDS", 0.0)
+    monkeypatch.setattr(animate_frames, "idle_cores", lambda since: 8.0)
+    monkeypatch.setattr(animate_frames, "RENDER_WHILE_STARTING", False)
 
 
 def test_one_and_two_workers_give_the_same_frames_byte_for_byte(tmp_path, on_the_cluster, capsys):
