@@ -152,6 +152,39 @@ def test_no_private_name_is_imported_across_packages():
     assert private_imports() == []
 
 
+def _module_names(tree, modules) -> dict[str, str]:
+    """The names a module binds to other modules of ours (``from core.texture import sample
+    as sampling``, ``import app.commands.animate as animate``): name -> module."""
+    bound = {}
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            bound.update({a.asname or a.name: f"{node.module}.{a.name}" for a in node.names
+                          if f"{node.module}.{a.name}" in modules})
+        elif isinstance(node, ast.Import):
+            bound.update({a.asname: a.name for a in node.names
+                          if a.asname and a.name in modules})
+    return bound
+
+
+def private_attributes() -> list[tuple[str, str, str]]:
+    """(module, other module, name): ``other._name`` read from another package's module."""
+    modules, found = _modules(), set()
+    for name, path in modules.items():
+        tree = ast.parse(path.read_text())
+        bound = _module_names(tree, modules)
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name)
+                    and node.value.id in bound and node.attr.startswith("_")
+                    and not node.attr.startswith("__")
+                    and core_package(bound[node.value.id]) != core_package(name)):
+                found.add((name, bound[node.value.id], node.attr))
+    return sorted(found)
+
+
+def test_no_private_module_attribute_is_read_across_packages():
+    assert private_attributes() == []
+
+
 # -- the packages of app -------------------------------------------------------------------
 # Which package of app may import which (imports in functions too). The oracles are outside
 # references and import nothing of app; the rest is the graph as it stands, so a new edge

@@ -124,7 +124,7 @@ def _raytrace_row(args, label: str, scene, view, frames: int, warmup: int) -> di
     from core.raytrace.renderer import TraceOptions, prepare, primary, render_raw
     progress(f"{label}: build, primary rays, Whitted frames ...")
     bvh.build(np.eye(3), [[0, 1, 2]])                 # load the compiled build first
-    geometry._cache.pop(scene, None)                  # time the build from nothing
+    geometry.forget(scene)                            # time the build from nothing
     setup = prepare(scene, view, args.projection, args.size, TraceOptions())
     build = setup.packing.build
     origins, directions, t_min, t_max = primary(setup, 0, args.size[1], 0, args.size[0])

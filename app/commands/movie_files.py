@@ -30,7 +30,6 @@ from app.naming import frame_name          # one rule for the name of every file
 from app.output_files import beside, write_beside
 
 MOVIE_SUFFIXES = (".mp4", ".gif")
-_FRAME = re.compile(r"frame_([0-9]{5})\.png")
 _OWN_TEMP = re.compile(r"frame_([0-9]{5})\.png\.tmp")
 TEXT_KEY = "fvd-animate"             # the PNG text chunk: "<job hash> <frame number>"
 GIF_MIN_CS, GIF_MAX_CS = 2, 65535    # a GIF frame's delay, hundredths of a second (16 bits;

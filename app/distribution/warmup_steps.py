@@ -261,7 +261,7 @@ def scene_jobs(path, size=SIZE, every=False):
                 state.set_renderer(renderer)
                 state.set_shading(shading)
                 state.set_texture_filter(filter_)
-                run, _ = state._job()
+                run, _ = state.frame_job()
                 jobs.append((f"{path.name}: {renderer}, {shading}, {filter_}", run))
     return jobs
 
@@ -299,7 +299,7 @@ def opening_steps(path) -> list[tuple[str, Callable[[], object]]]:
     def run():
         from app.session.state import ViewerState
         state = ViewerState.open(path, size=SIZE)
-        state._job()[0]()
+        state.frame_job()[0]()
     return [(opening_label(path), run)]
 
 

@@ -122,7 +122,7 @@ class FrameRequests:
         """A zero-sized framebuffer (a minimised window) is never rendered."""
         return self.size[0] > 0 and self.size[1] > 0
 
-    def _job(self):
+    def frame_job(self):
         """What the next frame needs: ``run(control=None)`` that renders it (a
         :class:`app.viewer.worker.Control` lets it report progress, hand over pictures on the
         way and stop when superseded), and a short description.
@@ -201,7 +201,7 @@ class FrameRequests:
         first_of_mode = self.shading not in self._modes_rendered
         watch = (announce_compiles(self.compile_notice_after) if first_of_mode
                  else contextlib.nullcontext())
-        run, _ = self._job()
+        run, _ = self.frame_job()
         self._clear_failed_open = bool(self.failed_open)
         start = time.perf_counter()
         try:
@@ -221,7 +221,7 @@ class FrameRequests:
         moves faster than frames are drawn); another scene's never does."""
         if not self.dirty or not self.renderable:
             return False
-        run, what = self._job()
+        run, what = self.frame_job()
         if self.gate is not None:
             run = self.gate(run)
         worker.submit(run, what, control=True, keep_older=self.scene is self._requested_scene)

@@ -122,6 +122,12 @@ def pack(scene) -> Packing:
     return packing
 
 
+def forget(scene) -> None:
+    """Drop ``scene``'s packing, so that the next :func:`pack` builds it from nothing (the
+    bench times the build)."""
+    _cache.pop(scene, None)
+
+
 def _pack(meshes, spheres, planes) -> Packing:
     start = time.perf_counter()
     materials = [m.material for m in meshes] + [s.material for s in spheres] + [

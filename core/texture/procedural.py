@@ -206,7 +206,6 @@ _WHOLE = {"resolution": (1, MAX_RESOLUTION), "scale": (1, 1024), "rows": (1, 102
           "seed": (0, 2**63 - 1), "map": (0, 3)}
 _REAL = {"mortar": (0.0, 1.0), "strength": (0.0, 1e3)}
 _COLOURS = ("a", "b", "brick", "joint", "zenith", "horizon", "ground")
-_POINTS = ("sun",)
 # The finest noise lattice has scale · 2^(octaves − 1) cells a side (tables of that many
 # squared numbers); finer than the texels it is aliasing only, and its tables the largest
 # arrays (32768²: 8.6 GB each). It may have as many cells a side as the texture has texels,

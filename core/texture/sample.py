@@ -59,7 +59,7 @@ def wrap_index(i, size, mode):
 
 
 @njit(cache=True)
-def _floor_index(x):
+def floor_index(x):
     """⌊x⌋ as an integer, with coordinates far outside the texture kept in int64 range."""
     return int(math.floor(min(max(x, -1e15), 1e15)))
 
@@ -76,8 +76,8 @@ def texel(texels, levels, level, i, j):
 def nearest(texels, levels, wrap, level, u, v):
     """GL_NEAREST on ``level``: the texel that contains (u, v)."""
     w, h = levels[level, 1], levels[level, 2]
-    i = wrap_index(_floor_index(u * w), w, wrap)
-    j = wrap_index(_floor_index(v * h), h, wrap)
+    i = wrap_index(floor_index(u * w), w, wrap)
+    j = wrap_index(floor_index(v * h), h, wrap)
     return texel(texels, levels, level, i, j)
 
 
@@ -86,7 +86,7 @@ def bilinear(texels, levels, wrap, level, u, v):
     """GL_LINEAR on ``level``: the four texels around (u, v), weighted by distance."""
     w, h = levels[level, 1], levels[level, 2]
     x, y = u * w - 0.5, v * h - 0.5
-    i0, j0 = _floor_index(x), _floor_index(y)
+    i0, j0 = floor_index(x), floor_index(y)
     alpha, beta = x - math.floor(x), y - math.floor(y)
     if not (math.isfinite(alpha) and math.isfinite(beta)):
         alpha, beta = 0.0, 0.0

@@ -150,8 +150,8 @@ def _texel(texels, levels, level, i, j):
 
 def _nearest(texels, levels, wrap, level, u, v) -> dict:
     w, h = int(levels[level, 1]), int(levels[level, 2])
-    i = int(sampling.wrap_index(sampling._floor_index(u * w), w, wrap))
-    j = int(sampling.wrap_index(sampling._floor_index(v * h), h, wrap))
+    i = int(sampling.wrap_index(sampling.floor_index(u * w), w, wrap))
+    j = int(sampling.wrap_index(sampling.floor_index(v * h), h, wrap))
     return {"level": 0, "i": i, "j": j, "weight": 1.0,
             "rgba": _texel(texels, levels, level, i, j)}
 
@@ -159,7 +159,7 @@ def _nearest(texels, levels, wrap, level, u, v) -> dict:
 def _bilinear(texels, levels, wrap, level, index, u, v, weight) -> list:
     w, h = int(levels[level, 1]), int(levels[level, 2])
     x, y = u * w - 0.5, v * h - 0.5
-    i0, j0 = sampling._floor_index(x), sampling._floor_index(y)
+    i0, j0 = sampling.floor_index(x), sampling.floor_index(y)
     alpha, beta = x - math.floor(x), y - math.floor(y)
     if not (math.isfinite(alpha) and math.isfinite(beta)):
         alpha, beta = 0.0, 0.0

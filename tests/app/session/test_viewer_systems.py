@@ -133,7 +133,7 @@ def test_the_zbuffer_picture_stays_until_the_coarse_traced_one_arrives(whitted):
     zbuffer = state.frame
     state.set_renderer("raytrace")
     gate = threading.Event()
-    run, _ = state._job()
+    run, _ = state.frame_job()
     worker = RenderWorker()
     try:
         worker.submit(lambda control: gate.wait(30) and run(control), "traced", control=True)
