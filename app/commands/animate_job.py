@@ -36,7 +36,10 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
     length.add_argument("--duration", type=_number(float, 0.0, math.inf, low_open=True),
                         default=None, help="seconds")
     p.add_argument("--size", type=parse_size, default=None, help="WxH (default: the scene's)")
-    p.add_argument("--renderer", default=None, help="a registered renderer (default: zbuffer)")
+    from core.registry import shading_names
+    from core.renderers import renderer_names
+    p.add_argument("--renderer", default=None,     # the registered ones, checked with the job
+                   help=f"{' | '.join(renderer_names())} (default: zbuffer)")
     p.add_argument("--samples", type=_number(int, 1, 1024), default=None, help="samples per pixel")
     p.add_argument("--motion-blur", type=_number(int, 1, 1024), default=None, metavar="SAMPLES",
                    help="motion blur: SAMPLES times a frame over the shutter interval (the "
@@ -52,7 +55,7 @@ def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
                         "tracer's) a time per ray; auto (default): per-ray for the ray tracer, "
                         "accumulate for the others")
     p.add_argument("--projection", choices=PROJECTIONS, default=None)
-    p.add_argument("--shading", default=None, help="wireframe | flat | gouraud | phong | …")
+    p.add_argument("--shading", default=None, help=" | ".join(shading_names()))
     p.add_argument("--view", type=_number(int, 1, 10 ** 6), default=None, metavar="K",
                    help="the file's view K (its position in the file, counting from 1, as "
                         "everywhere); default: the keyed view, or the first valid view")

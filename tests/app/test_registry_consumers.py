@@ -37,6 +37,8 @@ def test_the_command_line_offers_them(toys):
     render = _help("render")
     assert "toy: Toy" in render and "{zbuffer," in render and ",toy}" in render
     assert "toy" in _help("view")
+    animate = _help("animate")                      # checked with the job, named in the help
+    assert "| toy (default: zbuffer)" in animate and "| toy-mode" in animate
     with contextlib.redirect_stdout(io.StringIO()):  # parsed, not refused
         assert main(["plan", str(ROOT / "scenes" / "torus.toml"), "--renderer", "toy",
                      "--shading", "toy-mode"]) == 0
