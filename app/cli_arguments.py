@@ -81,9 +81,9 @@ def _view_parser(sub, scene_help: str, command: str | None = None) -> None:
     mouse action (the F1 panel's list, read only when ``view`` is the command)."""
     epilog = None
     if command == "view":
-        from app.viewer.hands import KEYS_HELP
+        from app.viewer.hands import keys_help
         epilog = "in the window:\n" + "\n".join(
-            f"  {key:<24} {what}" if what else f" {key}" for key, what in KEYS_HELP)
+            f"  {key:<24} {what}" if what else f" {key}" for key, what in keys_help())
     v = sub.add_parser("view", help="open the viewer window (renders PNGs when there is no "
                        "display)", epilog=epilog,
                        formatter_class=argparse.RawDescriptionHelpFormatter)

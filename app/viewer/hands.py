@@ -52,9 +52,9 @@ KEYS_HELP = (
     ("Left / Right, Up / Down", "previous / next view"),
     ("Picture", ""),
     ("p / o", "perspective / parallel"),
-    ("w 1 2 3", "wireframe, flat, Gouraud, Phong"),
+    ("shading keys", ""),                  # keys_help: the registered modes' keys
     ("a", "keep the window's aspect (letterbox) or stretch it"),
-    ("r", "z-buffer / ray traced"),
+    ("renderer keys", ""),                 # keys_help: the registered renderers' keys
     ("l", "headlight on / off (a light at the eye in place of the scene's)"),
     ("t / b", "next texture filter / bump maps on-off"),
     ("i / v / h", "inspect mode / next buffer view / compare (OpenGL or --reference)"),
@@ -70,6 +70,22 @@ KEYS_HELP = (
     ("Esc", "close a menu, dismiss a message, else quit"),
     ("q", "quit"),
 )
+
+
+
+def keys_help() -> tuple[tuple[str, str], ...]:
+    """:data:`KEYS_HELP` with the shading modes' and the renderers' keys as registered (each
+    entry's ``key`` and ``label``): a mode or renderer registered with a key is in the help."""
+    from core.registry import shading_modes
+    from core.renderers import renderers
+    modes = [m for m in shading_modes() if m.key]
+    shading = [(" ".join(m.key.lower() for m in modes), ", ".join(m.label for m in modes))]
+    keys = dict.fromkeys(r.key for r in renderers() if r.key)
+    render = [(key.lower(), " / ".join(r.label for r in renderers() if r.key == key))
+              for key in keys]
+    rows = {"shading keys": shading, "renderer keys": render}
+    return tuple(row for key, what in KEYS_HELP for row in rows.get(key, [(key, what)]))
+
 
 WHEEL_STEP = 0.9             # one wheel notch nearer: the eye's distance (or window) x 0.9
 PIVOTS = {"cursor": "the point under the cursor", "scene": "the scene's centre",

@@ -14,7 +14,7 @@ import glfw
 
 from app.viewer import options_panel
 from app.viewer.gui_text import displayable
-from app.viewer.hands import KEYS_HELP, PIVOTS, view_lines
+from app.viewer.hands import PIVOTS, keys_help, view_lines
 
 log = logging.getLogger("fvd")
 PANEL_WIDTH = 340            # the side panel, in screen points
@@ -39,7 +39,7 @@ class SidePanel:
         if not imgui.collapsing_header("Keys and mouse (F1 closes)###help"):
             return
         imgui.push_text_wrap_pos(0.0)
-        for key, what in KEYS_HELP:
+        for key, what in keys_help():
             if not what:
                 imgui.text_colored((0.55, 0.8, 1.0, 1.0), key)
             else:

@@ -1,7 +1,8 @@
 """A renderer and a shading mode registered in one module (``tests/registry_toys.py``) are
 found in every consumer beyond the window (whose keys, menus and title
-``tests/app/viewer/test_window_registry.py`` holds): the command line's choices and help,
-the bench's list, the warm-up's steps, the pixel inspector and the plan report."""
+``tests/app/viewer/test_window_registry.py`` holds): the window's key help, the command
+line's choices and help, the bench's list, the warm-up's steps, the pixel inspector and the
+plan report."""
 
 from __future__ import annotations
 
@@ -42,6 +43,13 @@ def test_the_command_line_offers_them(toys):
     with contextlib.redirect_stdout(io.StringIO()):  # parsed, not refused
         assert main(["plan", str(ROOT / "scenes" / "torus.toml"), "--renderer", "toy",
                      "--shading", "toy-mode"]) == 0
+
+
+def test_the_windows_help_names_their_keys(toys):
+    from app.viewer.hands import keys_help
+    rows = dict(keys_help())                        # F1 and view --help
+    assert rows["w 1 2 3 9"].endswith(", Phong, Toy mode") and rows["x"] == "Toy"
+    assert rows["r"] == "Z-buffer / Ray traced"
 
 
 def test_the_bench_lists_it(toys):

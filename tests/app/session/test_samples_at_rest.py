@@ -45,9 +45,9 @@ def test_view_samples_on_the_command_line_reaches_the_state(monkeypatch):
 def test_view_help_lists_every_key_and_mouse_action():
     import subprocess
     import sys
-    from app.viewer.hands import KEYS_HELP
+    from app.viewer.hands import keys_help
     done = subprocess.run([sys.executable, "-m", "app", "view", "--help"], capture_output=True,
                           text=True, timeout=60, cwd=ROOT)
     assert done.returncode == 0
-    for key, what in KEYS_HELP:
+    for key, what in keys_help():
         assert key in done.stdout and what[:30] in done.stdout.replace("\n", " ")
