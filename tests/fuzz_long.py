@@ -1,9 +1,9 @@
-"""The long fuzz run of the readers (issue 15), run once by hand, not in CI:
+"""The long fuzz run of the readers, run once by hand, not in CI:
 
     python tests/fuzz_long.py --cases 100000 --budget 4500 --out fuzz-long.json
 
 Every reader of ``tests/fuzz_targets.py`` gets ``--cases`` inputs (seeded mutations of its
-seed file; one in ten is random bytes; the systems' targets of issue 23 — textures, keys,
+seed file; one in ten is random bytes; the systems' targets — textures, keys,
 emitters, primitives — get their parsed values edited two times in three), each held to the invariant there: a ReaderError with a
 one-line message, or a scene whose views all render in both projections. The readers take
 turns, a batch at a time, so that a time budget cut short still covers every reader. The

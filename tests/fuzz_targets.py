@@ -2,7 +2,7 @@
 (``tests/core/scene/test_fuzz_readers.py``, hypothesis, a bounded number of cases) and the long
 run (``tests/fuzz_long.py``, plain seeded mutation, 100k+ cases per reader, run once by hand).
 
-The invariant (issue 15): a reader given any bytes either raises a :class:`ReaderError` with a
+The invariant: a reader given any bytes either raises a :class:`ReaderError` with a
 message, or returns a scene that renders: every view it accepts (up to ``VIEWS_RENDERED``) is
 drawn through ``core.render.render`` in both projections without an exception, and a frame
 that comes back with a message is one whose view the validity rules refuse for that projection.
@@ -99,7 +99,7 @@ direction = [0, 1, 1]
 """
 VIEWS = (SCENES_DIR / "house.views").read_bytes()
 
-# Issue 23: the systems' keys. Each seed is a small valid scene that uses most of its system's
+# The systems' keys. Each seed is a small valid scene that uses most of its system's
 # keys; its files (a 4 x 4 PNG) lie in FOLDER, made once per process.
 TEXTURES = b"""[[geometry]]
 generator = "uv_sphere"
@@ -272,7 +272,7 @@ TARGETS = {
     "stl-binary": (lambda d: read_mesh(d, "fuzz.stl", ".stl"), STL_BINARY),
     "toml": (lambda d: read_scene_file(d, "fuzz.toml", SCENES_DIR), TOML),
     "views": (_views_scene, VIEWS),
-    # issue 23
+    # the systems' keys
     "textures": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), TEXTURES),
     "keys": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), KEYS),
     "emitters": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), EMITTERS),
@@ -354,7 +354,7 @@ def renders(result) -> str:
 
 
 def animates(scene) -> str:
-    """An animated scene (issue 23) is also drawn at TIMES moments, particles included: a
+    """An animated scene is also drawn at TIMES moments, particles included: a
     frame may come back with a message only for a view the rules refuse or for the particle
     budget, and the simulation may stop only with its budget's message."""
     from core.animation.frames import render_at

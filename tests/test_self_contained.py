@@ -1,5 +1,5 @@
 """A clone needs nothing outside itself: every shipped scene opens with nothing beside the
-repository (issue 43). The scenes folder is copied where no ``../shared`` can be found from it
+repository. The scenes folder is copied where no ``../shared`` can be found from it
 (``tmp_path``), and each scene is opened from the copy, as a user's fresh clone would."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Hostile use of the command line (issue 15): --out never destroys what the user owns,
+"""Hostile use of the command line: --out never destroys what the user owns,
 --size says what is wrong, and MemoryError or a closed standard input end in a message."""
 
 from __future__ import annotations

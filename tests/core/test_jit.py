@@ -286,7 +286,7 @@ RENDER_TORUS = """
 
 
 def test_an_edit_to_the_volume_ray_marcher_leaves_the_torus_cached(tmp_path):
-    """Issue 43: a comment appended to ``core/volume/raymarch.py`` made every kernel compile
+    """A comment appended to ``core/volume/raymarch.py`` made every kernel compile
     again. In a copy of the code with a cache of its own, the torus is drawn (its kernels
     compile), the comment is appended, and the torus drawn again compiles nothing."""
     import json

@@ -1,4 +1,4 @@
-"""``animate`` under hostile use (issue 23): no user file lost, one output rule, verified
+"""``animate`` under hostile use: no user file lost, one output rule, verified
 resumes, options that would be clamped or crash refused in one clean line, a scheduler that
 is not one named for what it is not, and a failing frame on workers reported in one line."""
 

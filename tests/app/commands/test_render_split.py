@@ -1,4 +1,4 @@
-"""``render --scheduler`` (issue 21): a ray-traced frame traced by bands on a Dask cluster is
+"""``render --scheduler``: a ray-traced frame traced by bands on a Dask cluster is
 byte for byte the picture one process traces; ``--workers`` on one machine says why it keeps
 the frame in this process; a scene that is not ray traced is not split."""
 

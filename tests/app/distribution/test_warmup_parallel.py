@@ -1,4 +1,4 @@
-"""``python -m app warmup`` on worker processes (issue 33): the order and spread of its steps,
+"""``python -m app warmup`` on worker processes: the order and spread of its steps,
 the stamp that says the cache is warm, what an interrupted or failing warm-up leaves, the
 JSON progress lines, :class:`app.distribution.background_warmup.BackgroundWarmup`, and numba's cache when two
 processes save one kernel at once.

@@ -212,7 +212,7 @@ def valid_views(scene: Scene, projection: str) -> list[int]:
     return [i for i, view in enumerate(scene.views) if not problems(view, projection)]
 
 
-# ------------------------------------------------------------------ coverage (issue 3)
+# ------------------------------------------------------------------ coverage
 
 def cpu_coverage(scene: Scene, view_index: int, projection: str) -> np.ndarray:
     on_magenta = dataclasses.replace(scene, background=MAGENTA)
@@ -270,7 +270,7 @@ def test_edge_mask_traces_a_known_triangle():
     assert mask.mean() < 0.02
 
 
-# ------------------------------------------------------------------ shading (issue 4)
+# ------------------------------------------------------------------ shading
 
 def _lit(scene: Scene, variant: str) -> Scene:
     """The scene's own lights, or a set that exercises the rest of the model."""

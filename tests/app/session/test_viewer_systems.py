@@ -1,4 +1,4 @@
-"""The viewer's parts for the ray tracer (issue 12), animation (13) and textures (11), without a
+"""The viewer's parts for the ray tracer, animation and textures, without a
 display: ViewerState's transitions, the settings its frames are drawn with, and the worker's
 cancelling of a superseded ray-traced frame."""
 
@@ -48,7 +48,7 @@ class Recorder:
         self.partials.append(frame)
 
 
-# -- issue 12: the ray tracer in the window ---------------------------------------------------
+# -- the ray tracer in the window ------------------------------------------------------------
 
 @pytest.fixture
 def whitted():
@@ -174,7 +174,7 @@ def test_a_superseded_job_learns_it_and_its_pictures_are_dropped():
         worker.stop()
 
 
-# -- issue 13: playing an animated scene ------------------------------------------------------
+# -- playing an animated scene ---------------------------------------------------------------
 
 class Clip:
     """The least an Animation needs for a Playback."""
@@ -296,7 +296,7 @@ def test_a_file_view_of_an_animated_scene_is_render_ats_numbering(fountain):
     assert np.array_equal(state.frame.color, expected.color)
 
 
-# -- issue 11: texture filter and the bump demo ---------------------------------------------
+# -- texture filter and the bump demo ------------------------------------------------------
 
 def test_texture_filter_and_bump_are_settings_of_the_next_frame(whitted):
     state = whitted

@@ -1,4 +1,4 @@
-"""The window's inspector tools under Xvfb (issue 22): inspect mode and a click show the
+"""The window's inspector tools under Xvfb: inspect mode and a click show the
 pixel's record (the CLI's ``inspect`` of the same pixel), buffer views cycle in place of the
 picture, and the comparison with OpenGL shows its heat map."""
 

@@ -1,4 +1,4 @@
-"""``compare`` (issue 22): made-up student pictures held against our render, and the buffer
+"""``compare``: made-up student pictures held against our render, and the buffer
 views (``render --buffer``) against the inspector's per-pixel records."""
 
 from __future__ import annotations

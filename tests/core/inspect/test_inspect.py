@@ -1,4 +1,4 @@
-"""The pixel inspector (issue 22): each renderer's record sums to the pixel the frame shows,
+"""The pixel inspector: each renderer's record sums to the pixel the frame shows,
 on 10,000 random pixels per renderer; the notes' worked example gives its hand values."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The path tracer (issue 19) against Mitsuba 3, and radiosity against the path tracer, on the
+"""The path tracer against Mitsuba 3, and radiosity against the path tracer, on the
 Cornell box: both path tracers well converged at the same sample count, compared away from
 edges (every pixel of a 2 x 2 block sees one surface through its whole 3 x 3 neighbourhood)."""
 

@@ -1,4 +1,4 @@
-"""pytest-benchmark timings of the clipper and the scan conversion (issue 5).
+"""pytest-benchmark timings of the clipper and the scan conversion.
 
 The bench scene (a sphere plus a torus, perspective, 500 x 500) at 1k and 100k triangles:
 clip with everything inside (the trivial-accept path), clip with a front plane through the

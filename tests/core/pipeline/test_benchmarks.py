@@ -1,4 +1,4 @@
-"""pytest-benchmark timings of the pipeline's stages, so that a regression shows (issue 5).
+"""pytest-benchmark timings of the pipeline's stages, so that a regression shows.
 
 Stages, on the bench's sphere + torus at 100k triangles, 500 x 500, perspective:
 transform (N_per on every vertex), clip (Sutherland–Hodgman, once with everything inside and

@@ -1,4 +1,4 @@
-"""Radiosity (issue 19): form factors against closed forms, energy, the two solvers, the
+"""Radiosity: form factors against closed forms, energy, the two solvers, the
 renderer, saved solutions and bad input."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 20: one scene, two renderers. The ray tracer draws what the z-buffer draws (textures,
+"""One scene, two renderers. The ray tracer draws what the z-buffer draws (textures,
 keyed objects, primitives), keeps secondary rays on the geometric normal's sides, and has
 adaptive supersampling, exact Fresnel and distance attenuation; its pixel inspector's ray tree
 sums to the pixel."""

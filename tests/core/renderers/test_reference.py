@@ -1,4 +1,4 @@
-"""The exact analytic reference (core/renderers/raycast/draw.py), and the sphere test of issue 4: the
+"""The exact analytic reference (core/renderers/raycast/draw.py), and the sphere test: the
 pipeline's flat, Gouraud and Phong shading against it."""
 
 from __future__ import annotations
@@ -163,7 +163,7 @@ def test_invalid_view_and_bad_shapes_are_refused():
                          size=(4, 4))
 
 
-# --- the sphere test of issue 4 -----------------------------------------------------------
+# --- the sphere test -------------------------------------------------------------------
 
 SPHERE_MATERIAL = Material(ka=0.15, kd=0.6, ks=0.4, n=40.0, od=(0.9, 0.45, 0.25))
 SPHERE_VIEW = View(vrp=(0, 0, 0), vpn=(0, 0, 1), vup=(0, 1, 0), window=(-1.25, 1.25, -1.25, 1.25),

@@ -1,4 +1,4 @@
-"""The speed work of issue 14 changes no picture: deferred lighting computes the numbers the
+"""The speed work changes no picture: deferred lighting computes the numbers the
 eager path computes, the z-buffer's spans never leave a stale pixel, the background memset is
 the colour asked for; and the bench's two new rows draw the same scene."""
 

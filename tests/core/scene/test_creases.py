@@ -1,4 +1,4 @@
-"""Normals with a crease angle (issue 20; core/scene/normals.py ``crease_split``): boxes get
+"""Normals with a crease angle (core/scene/normals.py ``crease_split``): boxes get
 flat faces under Gouraud and Phong, smooth surfaces stay smooth, and the angle is a scene key
 and a command-line option."""
 

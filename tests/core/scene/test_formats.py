@@ -379,7 +379,7 @@ def test_bunny_loads_with_framing_views(bunny_path):
     mesh = scene.meshes[0]
     assert len(mesh.triangles) == 69451
     # no two of the file's 35947 vertices coincide; the default crease angle (45°) splits the
-    # 271 where its scan's rims fold sharply (issue 20); 180° splits none
+    # 271 where its scan's rims fold sharply; 180° splits none
     assert len(mesh.positions) == 35947 + 271
     assert len(load_scene(bunny_path, crease_angle=180.0).meshes[0].positions) == 35947
     assert not mesh.closed                   # it has holes in its base
@@ -570,7 +570,7 @@ SHIPPED = sorted(p.name for p in SCENES_DIR.iterdir() if p.suffix in (".toml", "
 def test_every_shipped_scene_loads(name):
     scene = load_scene(SCENES_DIR / name)
     assert len(scene.views) >= 1, name
-    # lit by [[light]]s, or (issue 19) by emitting materials, which get no default lights
+    # lit by [[light]]s, or by emitting materials, which get no default lights
     emitters = any(any(m.material.emission) for m in scene.meshes)
     from core.volume.data import volumes_of
     alone = name == "volume_alone.toml"      # a [[volume]] and nothing else

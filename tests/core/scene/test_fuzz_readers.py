@@ -1,5 +1,5 @@
 """Fuzzing the readers: mutated valid files and random bytes give a ReaderError or a scene
-that renders (the invariant of ``tests/fuzz_targets.py``, issue 15).
+that renders (the invariant of ``tests/fuzz_targets.py``).
 
 Nothing else may escape (no IndexError, no FloatingPointError, no MemoryError), every
 ReaderError has a one-line message, every scene a reader returns is drawn in both projections
@@ -168,7 +168,7 @@ def test_every_fuzz_seed_renders(name):
         assert renders(read(seed)) == ("animated" if name in ("keys", "emitters") else "rendered")
 
 
-# Issue 23: the systems' keys, mutated at the value level two times in three (a seeded
+# The systems' keys, mutated at the value level two times in three (a seeded
 # mutation per example, so a failure names its seed); animated scenes drawn at three moments.
 @settings(FUZZ, max_examples=25)
 @given(st.integers(0, 2**32 - 1))

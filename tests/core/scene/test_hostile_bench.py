@@ -1,4 +1,4 @@
-"""Linear time in the readers (issue 15): pytest-benchmark timings of scene files with 1k, 2k,
+"""Linear time in the readers: pytest-benchmark timings of scene files with 1k, 2k,
 4k and 8k views, lights and geometries, of a 1k- to 8k-part dotted key (refused by the
 pre-scan), and of mesh files of 1k to 8k triangles (OBJ, OFF, PLY, STL, .tri).
 

@@ -1,4 +1,4 @@
-"""Malformed and degenerate meshes (issue 15): what used to load silently wrong is refused
+"""Malformed and degenerate meshes: what used to load silently wrong is refused
 with its line, and a mesh of many copies of one triangle costs what one triangle costs."""
 
 from __future__ import annotations

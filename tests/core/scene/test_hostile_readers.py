@@ -1,4 +1,4 @@
-"""Hostile input to the readers (issue 15): each reproducer gives one clean ReaderError, or a
+"""Hostile input to the readers: each reproducer gives one clean ReaderError, or a
 scene that renders; nothing else escapes, and no input is read beyond its size limit.
 
 Small inputs are written here; large ones are generated in the test (a sparse file costs no

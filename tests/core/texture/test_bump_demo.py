@@ -1,4 +1,4 @@
-"""The Java bump demo (J3DPanel), pixel for pixel (issue 11).
+"""The Java bump demo (J3DPanel), pixel for pixel.
 
 ``j3dpanel`` below is an independent transcription of the course's ``J3DPanel.java`` into
 vectorised numpy, written from the Java and not from core.texture.bump_demo: the panel's pixel

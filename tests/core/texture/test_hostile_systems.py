@@ -1,4 +1,4 @@
-"""Textures, animation keys, particles and primitives under hostile input (issue 23).
+"""Textures, animation keys, particles and primitives under hostile input.
 
 Every reproducer of the issue ends in one clean line and a non-zero exit, or in a correct
 picture: nothing hangs (a FIFO as a texture), nothing grows without a budget (texels, particle

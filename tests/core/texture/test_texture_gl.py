@@ -1,4 +1,4 @@
-"""The texture oracle: our samplers against Mesa's llvmpipe on the same textured floor (issue 11).
+"""The texture oracle: our samplers against Mesa's llvmpipe on the same textured floor.
 
 The floor is a quad seen at a grazing angle under perspective, (u, v) repeating 4 x 5 times,
 a 64 x 64 texture of random texels (the hardest case: neighbours differ by anything) with

@@ -1,4 +1,4 @@
-"""Texture samplers, MIP chain, image files and procedural textures (issue 11).
+"""Texture samplers, MIP chain, image files and procedural textures.
 
 The samplers are held to hand values and to an independent numpy statement of GL's rules
 (4.6 core, 8.14); the GL oracle itself (llvmpipe) is in test_texture_gl.py.

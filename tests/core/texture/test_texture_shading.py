@@ -1,5 +1,5 @@
 """The textured shader in the renderer: colour maps, bump and normal maps, environment maps,
-bad texture files (issue 11)."""
+bad texture files."""
 
 from __future__ import annotations
 

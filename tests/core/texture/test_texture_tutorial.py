@@ -1,4 +1,4 @@
-"""The tutorial's nine-constant texture path equals perspective-correct interpolation (issue 11).
+"""The tutorial's nine-constant texture path equals perspective-correct interpolation.
 
 Random triangles under perspective are rasterized by the project's z-buffer, which leaves
 perspective-correct barycentrics per pixel; (u, v) interpolated with them must equal the

@@ -1,4 +1,4 @@
-"""The painter's renderers (issue 18): the BSP tree and Newell's depth sort give the
+"""The painter's renderers: the BSP tree and Newell's depth sort give the
 z-buffer's picture, including where no order of whole polygons exists (cycles, piercing), and
 the BSP tree of the notes' worked example is built and walked as the lecture does it."""
 
