@@ -23,8 +23,8 @@ COMMANDS = ("view", "render", "matrices", "plan", "bench", "report", "stability"
 
 def attach_values(argv: list[str], options=("--size",)) -> list[str]:
     """``--size -5x5`` → ``--size=-5x5``: argparse takes a value that starts with ``-`` for an
-    option (and says "expected one argument"); joined, it reaches :func:`parse_size`, which
-    says what is wrong with it."""
+    option (and says "expected one argument"); joined, it reaches
+    :func:`app.cli_arguments.parse_size`, which says what is wrong with it."""
     out = []
     i = 0
     while i < len(argv):

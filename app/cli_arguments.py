@@ -36,7 +36,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def _global_arguments(parser: argparse.ArgumentParser, top: bool) -> None:
-    """The global options in a parser's --help (:func:`global_options` has taken them out of
+    """The global options in a parser's --help (:func:`app.cli.global_options` has taken them out of
     the command line before argparse sees it)."""
     g = parser.add_argument_group("global options (before or after the command)")
     if top:

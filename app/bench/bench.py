@@ -72,7 +72,7 @@ def _shadings(text: str) -> list[str]:
 
 
 def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
-    """The bench's options, added to the ``bench`` sub-parser by ``app/cli.py`` (which hands
+    """The bench's options, added to the ``bench`` sub-parser by ``app/cli_arguments.py`` (which hands
     over its ``WxH`` parser, so that there is one)."""
     parser.add_argument("--scene", default=None,
                         help="a scene file to time instead of the generated sphere + torus "

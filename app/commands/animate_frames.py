@@ -91,7 +91,8 @@ def render_here(job, frames, on_frame, retries: int, animation, failed: list,
                 stop=lambda: False) -> int:
     """Render ``frames`` in this process, in order, until ``stop()``; returns how many were
     taken (rendered or failed). Each goes to ``on_frame(k, None, pixels)``: its PNG is made
-    where it is written (:class:`FrameWriter`), beside the next frame's rendering."""
+    where it is written (:class:`app.commands.animate.FrameWriter`), beside the next frame's
+    rendering."""
     taken = 0
     for k in frames:
         if stop():
@@ -263,9 +264,9 @@ def _one_numba_thread() -> int:
 def render_frames(args, job, bundle, animation, todo, writer, progress,
                   since=None) -> tuple[list, str | None]:
     """Render ``todo`` where the options say; returns ``(failures, what ran where)``, each
-    failure ``(frames, why)``. ``writer`` (:class:`FrameWriter`) takes the frames. ``since``
-    (:func:`idle_mark`, taken when the command started) is where the idle cores are measured
-    from."""
+    failure ``(frames, why)``. ``writer`` (:class:`app.commands.animate.FrameWriter`) takes
+    the frames. ``since`` (:func:`idle_mark`, taken when the command started) is where the
+    idle cores are measured from."""
     from app.commands import cluster
     failed: list = []
     on_frame = writer.put

@@ -16,7 +16,8 @@ MAX_RETRIES = 100
 
 
 def add_arguments(p: argparse.ArgumentParser, parse_size) -> None:
-    """The options of ``animate`` (the sub-parser and ``WxH`` parser come from ``app/cli.py``)."""
+    """The options of ``animate`` (the sub-parser and ``WxH`` parser come from
+    ``app/cli_arguments.py``)."""
     from core.settings import PROJECTIONS
     p.add_argument("scene", help="a scene file with [animation], [[key]] or [[emitter]] tables")
     p.add_argument("--out", required=True,

@@ -6,20 +6,23 @@ step the first frame of each shading mode would compile in front of the user (se
 ``make`` runs it when it creates ``.venv``; the window runs the same steps in the background
 after its first frame, so that switching modes later loads cached kernels off the UI thread.
 
-:func:`app.distribution.warmup_steps.steps` lists one small render per path through the renderers: every shading mode, both
-projections and both rasterizers, a closed mesh large enough for the parallel set-up (back-face
-culling, ≥ 10 000 triangles), an open one (two-sided lighting), lines, and several samples a
-pixel. :func:`~app.distribution.warmup_steps.scene_steps` then opens every shipped scene (``scenes/``) the way the window
-does (:class:`app.session.state.ViewerState`), in every renderer and shading, and in every
-texture filter when it has textures, so that no first picture the user asks for compiles
-(``tests/app/distribution/test_warmup_complete.py`` checks it from an empty kernel cache).
+:func:`app.distribution.warmup_steps.steps` lists one small render per path through the
+renderers: every shading mode, both projections and both rasterizers, a closed mesh large
+enough for the parallel set-up (back-face culling, ≥ 10 000 triangles), an open one
+(two-sided lighting), lines, and several samples a pixel.
+:func:`~app.distribution.warmup_steps.scene_steps` then opens every shipped scene
+(``scenes/``) the way the window does (:class:`app.session.state.ViewerState`), in every
+renderer and shading, and in every texture filter when it has textures, so that no first
+picture the user asks for compiles (``tests/app/distribution/test_warmup_complete.py`` checks
+it from an empty kernel cache).
 
 The steps run in worker processes, one a core (``--jobs``), each taking the next step from
 one queue, the longest first by :data:`COSTS` (``app/distribution/warmup_pool.py``). When every step
 has succeeded a stamp says the cache is warm (``app/distribution/warm_stamp.py``: :func:`is_warm`).
 ``--progress-json`` prints one JSON object a line instead of the table, and
-:class:`app.distribution.background_warmup.BackgroundWarmup` runs the whole thing as a subprocess for the window, so that the
-window opens at once and its kernels compile beside it.
+:class:`app.distribution.background_warmup.BackgroundWarmup` runs the whole thing as a
+subprocess for the window, so that the window opens at once and its kernels compile beside
+it.
 """
 
 from __future__ import annotations
@@ -180,7 +183,7 @@ def _end_when_stdin_closes() -> None:
 
 
 def _options(args) -> argparse.Namespace:
-    """``args`` as parsed by app/cli.py (which may not know these options yet: their
+    """``args`` as parsed by app/cli_arguments.py (which may not know these options yet: their
     defaults), a list of strings, or None (``sys.argv``)."""
     parser = add_arguments(argparse.ArgumentParser(prog="python -m app warmup"))
     if args is None or isinstance(args, (list, tuple)):
