@@ -46,14 +46,14 @@ class Blit:
         self.ctx = ctx
         self.program = load_program(ctx, "blit")
         self.program["frame"].value = 0
-        self.copy = ctx.program(vertex_shader=(SHADERS_DIR / "blit.vert").read_text(),
-                                fragment_shader=(SHADERS_DIR / "copy.frag").read_text())
-        self.copy["frame"].value = 0
         self.magnify = 1
         self.loupe(1, (0, 0), (0, 0))
         # No buffers: the vertex shader places the triangle from gl_VertexID.
         self.vao = ctx.vertex_array(self.program, [])
-        self.copy_vao = ctx.vertex_array(self.copy, [])
+        # the plain copy's program, made at the first draw: only a window draws (a bench that
+        # times the uploads on the OpenGL oracle's context made llvmpipe draw the oracle's
+        # Phong frames 100 times slower with a second program there; not understood)
+        self.copy = self.copy_vao = None
         self.texture: moderngl.Texture | None = None
 
     @property
@@ -107,6 +107,12 @@ class Blit:
         self.texture.use(location=0)
         origin = (int(origin[0]), int(origin[1]))
         if self.magnify == 1 and (width, height) == self.texture.size:
+            if self.copy is None:
+                self.copy = self.ctx.program(
+                    vertex_shader=(SHADERS_DIR / "blit.vert").read_text(),
+                    fragment_shader=(SHADERS_DIR / "copy.frag").read_text())
+                self.copy["frame"].value = 0
+                self.copy_vao = self.ctx.vertex_array(self.copy, [])
             self.copy["origin"].value = origin            # the plain copy: every other frame
             self.copy_vao.render(moderngl.TRIANGLES, vertices=3)
             return
@@ -119,6 +125,7 @@ class Blit:
             self.texture.release()
             self.texture = None
         self.vao.release()
-        self.copy_vao.release()
         self.program.release()
-        self.copy.release()
+        if self.copy is not None:
+            self.copy_vao.release()
+            self.copy.release()
