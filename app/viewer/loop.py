@@ -50,26 +50,29 @@ class FrameLoop:
             self._log_since_start("window shown")
             shown = True
             while not glfw.window_should_close(self.win.window):
-                # Sleep until an event unless a frame is due; while the worker renders, wake
-                # ten times a second to show how long it has taken (it wakes us when done).
-                if shown and self._redraw_can_wait():
-                    # a drag waits for its frame: sleep until the next pointer move, the
-                    # frame, or the next redraw (polling here spun 600 times a second and took
-                    # a third of a core, and the GIL, from the renderer)
-                    glfw.wait_events_timeout(max(1e-3, GESTURE_REDRAW_S
-                                                 - (time.perf_counter() - self._swapped_at)))
-                elif shown and (self.win.busy > 0 or self.state.dirty):
-                    glfw.poll_events()
-                elif self.state.playing:
-                    glfw.wait_events_timeout(1 / 60)     # the movie's clock moves on
-                elif self.win.worker.waiting or self.win.tools.busy:
-                    glfw.wait_events_timeout(0.1)
-                else:
-                    glfw.wait_events_timeout(0.5)
+                self._wait(shown)
                 shown = self.draw_frame()
         finally:
             self.win.close()
         return 0
+
+    def _wait(self, shown: bool) -> None:
+        """Sleep until an event unless a frame is due; while the worker renders, wake ten
+        times a second to show how long it has taken (it wakes us when done)."""
+        if shown and self._redraw_can_wait():
+            # a drag waits for its frame: sleep until the next pointer move, the frame, or
+            # the next redraw (polling here spun 600 times a second and took a third of a
+            # core, and the GIL, from the renderer)
+            glfw.wait_events_timeout(max(1e-3, GESTURE_REDRAW_S
+                                         - (time.perf_counter() - self._swapped_at)))
+        elif shown and (self.win.busy > 0 or self.state.dirty):
+            glfw.poll_events()
+        elif self.state.playing:
+            glfw.wait_events_timeout(1 / 60)     # the movie's clock moves on
+        elif self.win.worker.waiting or self.win.tools.busy:
+            glfw.wait_events_timeout(0.1)
+        else:
+            glfw.wait_events_timeout(0.5)
 
     def draw_frame(self) -> bool:
         """Input, clicks, ask for / collect a frame, GUI, blit, swap; False when minimised."""
