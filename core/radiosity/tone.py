@@ -6,9 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.colour.srgb import encode
+
 
 def tone_map(values: np.ndarray, tone: str = "linear") -> np.ndarray:
     if tone == "linear":
         return values
-    v = np.clip(values, 0.0, 1.0)
-    return np.where(v <= 0.0031308, 12.92 * v, 1.055 * np.power(v, 1 / 2.4) - 0.055)
+    return encode(values)                 # the sRGB curve (core.colour.srgb), clamped

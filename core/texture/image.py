@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from core.colour.srgb import decode, encode
+
 from core.scene.formats.errors import MAX_TEXTURE_SIDE  # the readers' limit, used here too
 from core.texture.modes import WRAPS
 
@@ -36,16 +38,9 @@ class TextureError(ValueError):
     """A texture that cannot be used; the message names the file and the scene key."""
 
 
-def srgb_to_linear(c: np.ndarray) -> np.ndarray:
-    """The sRGB decoding (IEC 61966-2-1): code values in [0, 1] to linear light."""
-    c = np.asarray(c, dtype=np.float64)
-    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-
-
-def linear_to_srgb(c: np.ndarray) -> np.ndarray:
-    """The sRGB encoding, the inverse of :func:`srgb_to_linear` (clamped to [0, 1])."""
-    c = np.clip(np.asarray(c, dtype=np.float64), 0.0, 1.0)
-    return np.where(c <= 0.0031308, c * 12.92, 1.055 * c ** (1 / 2.4) - 0.055)
+# The sRGB curve (IEC 61966-2-1), one definition for the whole program (core.colour.srgb).
+srgb_to_linear = decode
+linear_to_srgb = encode
 
 
 def _box_weights(n_fine: int, n_coarse: int) -> np.ndarray:

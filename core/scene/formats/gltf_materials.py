@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from core.colour.srgb import decode
 from core.scene.formats.errors import MAX_TEXTURE_SIDE, ReaderError
 from core.scene.model import Material
 
@@ -186,7 +187,7 @@ def channel_means(image, srgb: bool, where: str, name: str) -> np.ndarray:
     counts = np.asarray(image.convert("RGB").histogram(), np.float64).reshape(3, 256)
     levels = np.arange(256) / 255.0
     if srgb:
-        levels = np.where(levels <= 0.04045, levels / 12.92, ((levels + 0.055) / 1.055) ** 2.4)
+        levels = decode(levels)           # the sRGB curve (core.colour.srgb)
     return counts @ levels / counts.sum(axis=1)
 
 

@@ -108,10 +108,11 @@ def test_a_chain_holding_a_load_still_needs_the_weights_times_their_horizontal_l
         assert tau[j] == pytest.approx(expected, abs=1e-12)
 
 
-PENDULUM = """
+# The scenes below: one cube named {name}, seen along -z.
+CUBE_AND_VIEW = """
 [[geometry]]
 generator = "cube"
-name = "bob"
+name = "{name}"
 [[view]]
 vrp = [0, 0, 0]
 vpn = [0, 0, 1]
@@ -120,7 +121,9 @@ window = [-2, 2, -2, 2]
 prp = [0, 0, 5]
 front = 2
 back = -2
-[animation]
+"""
+
+PENDULUM = CUBE_AND_VIEW.format(name="bob") + """[animation]
 duration = 4
 fps = 10
 [[linkage]]
@@ -231,19 +234,7 @@ def test_the_torques_command_prints_the_static_holding_torque(tmp_path):
     assert none.returncode == 2 and "no linkage with masses" in none.stderr
 
 
-POINTER = """
-[[geometry]]
-generator = "cube"
-name = "rod"
-[[view]]
-vrp = [0, 0, 0]
-vpn = [0, 0, 1]
-vup = [0, 1, 0]
-window = [-2, 2, -2, 2]
-prp = [0, 0, 5]
-front = 2
-back = -2
-[animation]
+POINTER = CUBE_AND_VIEW.format(name="rod") + """[animation]
 duration = 2
 fps = 10
 [[linkage]]
