@@ -16,6 +16,7 @@ of one of them.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -33,14 +34,18 @@ def progressive_order(samples: int) -> np.ndarray:
     dimension; Kollig and Keller 2002). Its first 4, 16, 64, … points lie one in each cell of
     a 2 x 2, 4 x 4, 8 x 8, … grid, so a picture accumulated pass by pass samples the whole
     pixel at every count. Row by row when the grid's side is not a power of two."""
+    return np.array(_progressive_order(samples), np.int64)
+
+
+@functools.lru_cache(maxsize=8)
+def _progressive_order(samples: int) -> tuple[int, ...]:
+    """:func:`progressive_order` as a tuple, made once per count (the window asks at every
+    pass)."""
     side = grid_side(samples)
     if side * side != samples or side & (side - 1):
-        return np.arange(samples)
-    order = np.empty(samples, np.int64)
-    for i in range(samples):
-        x, y = _radical_inverse(i), _sobol_second(i)
-        order[i] = int(y * side) * side + int(x * side)
-    return order
+        return tuple(range(samples))
+    return tuple(int(_sobol_second(i) * side) * side + int(_radical_inverse(i) * side)
+                 for i in range(samples))
 
 
 def _radical_inverse(i: int) -> float:
