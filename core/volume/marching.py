@@ -42,6 +42,7 @@ the smooth field the samples come from, rather than the facets' (Lorensen and Cl
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
 
@@ -73,6 +74,11 @@ FACE_EDGES = _face_edges()           # FACE_EDGES[f, q]: the edge from corner q 
 # EDGE_FACES[e]: the two faces edge e lies on.
 EDGE_FACES = np.array([[f for f in range(6) if e in FACE_EDGES[f]] for e in range(12)],
                       dtype=np.int64)
+TABLES = (CORNERS, EDGES, FACES, FACE_EDGES, EDGE_FACES)
+# EDGE_MASK[case]: bit e set when the case's corners differ across edge e.
+EDGE_MASK = np.array([sum(1 << e for e, (a, b) in enumerate(EDGES)
+                          if (case >> a & 1) != (case >> b & 1)) for case in range(256)],
+                     dtype=np.int64)
 
 
 # numpy's error model, as in the parallel loops that call it with their index: one
@@ -92,44 +98,27 @@ def gradient_at(v, i, j, k):
 
 
 @njit(cache=True, error_model="numpy")
-def edge_slab(v, iso, axis, i, ids, positions, normals, start, write):
-    """Number (and, with ``write``, place) the crossing of every edge along ``axis`` in slab
-    ``i``: ``ids[i]`` gets each crossed edge's vertex index from ``start`` on, -1 elsewhere.
-    Returns the next free index."""
-    _, n1, n2 = ids.shape
-    count = start
-    for j in range(n1):
-        for k in range(n2):
-            a = v[i, j, k] - iso
-            i2, j2, k2 = i + (axis == 0), j + (axis == 1), k + (axis == 2)
-            b = v[i2, j2, k2] - iso
-            if (a > 0.0) == (b > 0.0):
-                ids[i, j, k] = -1
-                continue
-            ids[i, j, k] = count
-            if write:
-                t = a / (a - b)
-                positions[count, 0] = i + t * (i2 - i)
-                positions[count, 1] = j + t * (j2 - j)
-                positions[count, 2] = k + t * (k2 - k)
-                ax, ay, az = gradient_at(v, i, j, k)
-                bx, by, bz = gradient_at(v, i2, j2, k2)
-                normals[count, 0] = -(ax + t * (bx - ax))
-                normals[count, 1] = -(ay + t * (by - ay))
-                normals[count, 2] = -(az + t * (bz - az))
-            count += 1
-    return count
+def place(v, i, j, k, i2, j2, k2, p, q, positions, normals, at):
+    """Row ``at``: where the edge from sample (i, j, k) (offset ``p`` from iso) to sample
+    (i2, j2, k2) (offset ``q``) crosses iso, with the gradient interpolated the same way."""
+    t = p / (p - q)
+    positions[at, 0] = i + t * (i2 - i)
+    positions[at, 1] = j + t * (j2 - j)
+    positions[at, 2] = k + t * (k2 - k)
+    ax, ay, az = gradient_at(v, i, j, k)
+    bx, by, bz = gradient_at(v, i2, j2, k2)
+    normals[at, 0] = -(ax + t * (bx - ax))
+    normals[at, 1] = -(ay + t * (by - ay))
+    normals[at, 2] = -(az + t * (bz - az))
 
 
-@njit(cache=True, parallel=True)
-def edge_vertices(v, iso, axis, ids, positions, normals, starts, write):
-    """Every slab's crossings along ``axis`` on all cores: without ``write``, ``starts[i + 1]``
-    gets slab i's count; with it, slab i numbers its vertices from ``starts[i]``."""
-    for i in prange(ids.shape[0]):
-        first = starts[i] if write else 0
-        found = edge_slab(v, iso, axis, i, ids, positions, normals, first, write) - first
-        if not write:
-            starts[i + 1] = found
+@njit(cache=True, error_model="numpy")
+def place_edge(v, i, j, k, e, w, edges, positions, normals, at):
+    """Row ``at``: the crossing on edge ``e`` of cell (i, j, k), whose corner offsets are
+    ``w``."""
+    a, b = edges[e, 0], edges[e, 1]
+    place(v, i + (a & 1), j + (a >> 1 & 1), k + (a >> 2), i + (b & 1), j + (b >> 1 & 1),
+          k + (b >> 2), w[a], w[b], positions, normals, at)
 
 
 @njit(cache=True)
@@ -203,9 +192,11 @@ def clip_ears(loop, length, edge_faces, vert, triangles, count, write):
 
 
 @njit(cache=True)
-def cap(loop, length, edge_faces, vert, triangles, count, extra, positions, normals, write):
+def cap(loop, length, edge_faces, vert, triangles, count, extra, spots, slopes, positions,
+        normals, write):
     """One loop as a disc: cut ear by ear, or fanned from a centre vertex (numbered
-    ``extra``) when no ear is left. Returns the next triangle and centre numbers."""
+    ``extra``, at the mean of the loop's ``spots`` and ``slopes``, the cell's crossings by
+    edge) when no ear is left. Returns the next triangle and centre numbers."""
     count, length = clip_ears(loop, length, edge_faces, vert, triangles, count, write)
     if length == 3:
         return count, extra
@@ -221,8 +212,8 @@ def cap(loop, length, edge_faces, vert, triangles, count, extra, positions, norm
             positions[centre, d] = 0.0
             normals[centre, d] = 0.0
             for m in range(length):
-                positions[centre, d] += positions[vert[loop[m]], d] / length
-                normals[centre, d] += normals[vert[loop[m]], d] / length
+                positions[centre, d] += spots[loop[m], d] / length
+                normals[centre, d] += slopes[loop[m], d] / length
     return count, extra + 1
 
 
@@ -304,28 +295,30 @@ def tunnel(w, inside, joined, edges, face_corners):
 
 
 @njit(cache=True)
-def zip_tube(one, m, two, n, vert, positions, triangles, count, write):
+def zip_tube(one, m, two, n, vert, spots, triangles, count, write):
     """The band between two loops: each loop's edges run as the discs ran them, so the zipper
     walks the first loop forward and the second backward, taking the shorter rung each step
-    (m + n triangles). Returns the next triangle number."""
+    (m + n triangles; ``spots``: the cell's crossings by edge). Returns the next triangle
+    number."""
     start, best = 0, np.inf
     if write:
         for q in range(n):                     # the second loop's vertex nearest one[0]
             dist = 0.0
             for k in range(3):
-                dist += (positions[vert[one[0]], k] - positions[vert[two[q]], k]) ** 2
+                dist += (spots[one[0], k] - spots[two[q], k]) ** 2
             if dist < best:
                 start, best = q, dist
     i, j, done_i, done_j = 0, start, 0, 0
     while done_i < m or done_j < n:
-        a, a_next = vert[one[i % m]], vert[one[(i + 1) % m]]
-        b, b_prev = vert[two[j % n]], vert[two[(j - 1) % n]]
+        ea, ea_next = one[i % m], one[(i + 1) % m]
+        eb, eb_prev = two[j % n], two[(j - 1) % n]
+        a, a_next, b, b_prev = vert[ea], vert[ea_next], vert[eb], vert[eb_prev]
         forward = done_j >= n
         if done_i < m and done_j < n and write:
             da = db = 0.0
             for k in range(3):
-                da += (positions[a_next, k] - positions[b, k]) ** 2
-                db += (positions[a, k] - positions[b_prev, k]) ** 2
+                da += (spots[ea_next, k] - spots[eb, k]) ** 2
+                db += (spots[ea, k] - spots[eb_prev, k]) ** 2
             forward = da <= db
         elif done_i < m and done_j < n:
             forward = True
@@ -342,23 +335,26 @@ def zip_tube(one, m, two, n, vert, positions, triangles, count, write):
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
-def row_trims(v, iso, trims):
+def row_trims(v, iso, trims, counts):
     """For each row of samples along k, ``trims[i, j]`` = (the first and the last k whose edge
     to k + 1 is crossed, or (n2, -1) where none is; whether the row's first and last samples
-    are inside): flying edges' trim (Schroeder et al. 2015)."""
+    are inside): flying edges' trim (Schroeder et al. 2015); ``counts[i, j, 2]`` = how many of
+    the row's edges are crossed."""
     n0, n1, n2 = v.shape
     for i in prange(n0):
         for j in range(n1):
-            first, last = n2, -1
+            first, last, found = n2, -1, 0
             before = v[i, j, 0] > iso
             for k in range(n2 - 1):
                 after = v[i, j, k + 1] > iso
                 if after != before:
                     first = min(first, k)
                     last = k
+                    found += 1
                 before = after
             trims[i, j, 0], trims[i, j, 1] = first, last
             trims[i, j, 2], trims[i, j, 3] = v[i, j, 0] > iso, before
+            counts[i, j, 2] = found
 
 
 @njit(cache=True, error_model="numpy")
@@ -381,132 +377,260 @@ def cell_range(trims, i, j, n2):
     return k0, k1
 
 
-@njit(cache=True, error_model="numpy")
-def cell_slab(v, iso, i, ids_x, ids_y, ids_z, trims, tables, count, extra, triangles,
-              positions, normals, write):
-    """The cells of slab ``i``, their loops cut into triangles (step 3), numbered from
-    ``count`` (triangles) and ``extra`` (loop-centre vertices, rows of ``positions``). Returns
-    both next free numbers; with ``write``, fills ``triangles`` and the centres' rows."""
-    corners, edges, face_corners, face_edges, edge_faces = tables
-    n0, n1, n2 = v.shape
-    w = np.empty(8)
-    inside = np.empty(8, np.bool_)
-    nxt = np.empty(12, np.int64)
-    vert = np.empty(12, np.int64)
-    loop = np.empty(12, np.int64)
-    ring = np.empty((4, 12), np.int64)          # the cell's loops (at most four)
-    sizes = np.empty(4, np.int64)
-    joined = np.empty(6, np.int64)
-    for j in range(n1 - 1):
-        k0, k1 = cell_range(trims, i, j, n2)
-        if k0 >= k1:
+@njit(cache=True)
+def cell_loops(nxt, ring, sizes):
+    """The segments chained into the cell's closed loops (step 3): ``ring[m, :sizes[m]]`` is
+    loop m's edges in order, the first loop starting at the lowest crossed edge. Returns the
+    number of loops."""
+    loops = 0
+    for e in range(12):
+        if nxt[e] < 0:
             continue
-        # the cell's corners slide along k: the far four of one cell are the near four of
-        # the next (corner c = x + 2y + 4z), so each cell loads four samples, not eight
-        w[4], w[5] = v[i, j, k0] - iso, v[i + 1, j, k0] - iso
-        w[6], w[7] = v[i, j + 1, k0] - iso, v[i + 1, j + 1, k0] - iso
-        for k in range(k0, k1):
-            w[0], w[1], w[2], w[3] = w[4], w[5], w[6], w[7]
-            w[4], w[5] = v[i, j, k + 1] - iso, v[i + 1, j, k + 1] - iso
-            w[6], w[7] = v[i, j + 1, k + 1] - iso, v[i + 1, j + 1, k + 1] - iso
-            ins = 0
-            for c in range(8):
-                inside[c] = w[c] > 0.0
-                ins += inside[c]
-            if ins == 0 or ins == 8:
-                continue
-            nxt[:] = -1
-            face_segments(w, inside, face_corners, face_edges, nxt, joined)
-            for e in range(12):
-                if nxt[e] < 0:
-                    continue
-                base = edges[e, 0]
-                a, b, c = i + corners[base, 0], j + corners[base, 1], k + corners[base, 2]
-                axis = e // 4
-                vert[e] = ids_x[a, b, c] if axis == 0 else (
-                    ids_y[a, b, c] if axis == 1 else ids_z[a, b, c])
-            loops = 0
-            for e in range(12):
-                if nxt[e] < 0:
-                    continue
-                length, cur = 0, e
-                while True:                # the loop through e, in order
-                    ring[loops, length] = cur
-                    length += 1
-                    after = nxt[cur]
-                    nxt[cur] = -1
-                    cur = after
-                    if cur == e:
-                        break
-                sizes[loops] = length
-                loops += 1
-            if loops == 2 and tunnel(w, inside, joined, edges, face_corners):
-                count = zip_tube(ring[0], sizes[0], ring[1], sizes[1], vert, positions,
-                                 triangles, count, write)
-                continue
-            for m in range(loops):
-                loop[:sizes[m]] = ring[m, :sizes[m]]
-                count, extra = cap(loop, sizes[m], edge_faces, vert, triangles, count, extra,
-                                   positions, normals, write)
+        length, cur = 0, e
+        while True:
+            ring[loops, length] = cur
+            length += 1
+            after = nxt[cur]
+            nxt[cur] = -1
+            cur = after
+            if cur == e:
+                break
+        sizes[loops] = length
+        loops += 1
+    return loops
+
+
+@njit(cache=True)
+def cell_scratch():
+    """The arrays one cell's polygon work reuses: corner offsets, sides, segments, vertex
+    numbers, a loop, the loops and their sizes, the ambiguous faces' choices, and the
+    crossings' positions and gradients by edge."""
+    return (np.empty(8), np.empty(8, np.bool_), np.empty(12, np.int64), np.empty(12, np.int64),
+            np.empty(12, np.int64), np.empty((4, 12), np.int64), np.empty(4, np.int64),
+            np.empty(6, np.int64), np.empty((12, 3)), np.empty((12, 3)))
+
+
+@njit(cache=True)
+def case_table(tables):
+    """Every sign pattern (corner c inside is bit c) whose polygons the values cannot change —
+    no ambiguous face, no possible tunnel, no loop that needs a centre — cut into triangles by
+    the cell's own steps: ``counts[case]`` triangles of cell edges ``edges[case]``; -1 where
+    the cell must be worked out from its values. The edge numbers stand for the vertices."""
+    corners, edges, face_corners, face_edges, edge_faces = tables
+    counts = np.full(256, -1, np.int64)
+    table = np.zeros((256, 12, 3), np.int64)
+    w, inside, nxt, vert, loop, ring, sizes, joined, _, _ = cell_scratch()
+    vert[:] = np.arange(12)
+    for case in range(1, 255):
+        for c in range(8):
+            inside[c] = (case >> c) & 1 == 1
+            w[c] = 1.0 if inside[c] else -1.0
+        nxt[:] = -1
+        face_segments(w, inside, face_corners, face_edges, nxt, joined)
+        loops = cell_loops(nxt, ring, sizes)
+        if loops == 2 or joined.max() >= 0:
+            continue
+        count, plain = 0, True
+        for m in range(loops):
+            loop[:sizes[m]] = ring[m, :sizes[m]]
+            count, left = clip_ears(loop, sizes[m], edge_faces, vert, table[case], count, True)
+            plain = plain and left == 3
+        if plain:
+            counts[case] = count
+    return counts, table
+
+
+@njit(cache=True, error_model="numpy")
+def sides(v, iso, i, j, k):
+    """Bits 0-3: whether samples (i, j, k), (i + 1, j, k), (i, j + 1, k), (i + 1, j + 1, k)
+    are inside."""
+    bits = 0
+    if v[i, j, k] > iso:
+        bits |= 1
+    if v[i + 1, j, k] > iso:
+        bits |= 2
+    if v[i, j + 1, k] > iso:
+        bits |= 4
+    if v[i + 1, j + 1, k] > iso:
+        bits |= 8
+    return bits
+
+
+@njit(cache=True, error_model="numpy")
+def corner_values(v, iso, i, j, k, w, inside):
+    """Cell (i, j, k)'s corner offsets from iso (corner c at (c & 1, c >> 1 & 1, c >> 2))."""
+    for c in range(8):
+        w[c] = v[i + (c & 1), j + (c >> 1 & 1), k + (c >> 2)] - iso
+        inside[c] = w[c] > 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def odd_cell(v, i, j, k, mask, tables, count, extra, triangles, positions, normals, scratch,
+             write):
+    """A cell the case table leaves to its values (an ambiguous face, two loops, a centre):
+    its loops from the faces, zipped into a tube or capped. Returns the next triangle and
+    centre numbers."""
+    corners, edges, face_corners, face_edges, edge_faces = tables
+    w, inside, nxt, vert, loop, ring, sizes, joined, spots, slopes = scratch
+    nxt[:] = -1
+    face_segments(w, inside, face_corners, face_edges, nxt, joined)
+    loops = cell_loops(nxt, ring, sizes)
+    if write:                 # the crossings here, as their owners place them
+        for e in range(12):
+            if mask >> e & 1:
+                place_edge(v, i, j, k, e, w, edges, spots, slopes, e)
+    if loops == 2 and tunnel(w, inside, joined, edges, face_corners):
+        return zip_tube(ring[0], sizes[0], ring[1], sizes[1], vert, spots, triangles, count,
+                        write), extra
+    for m in range(loops):
+        loop[:sizes[m]] = ring[m, :sizes[m]]
+        count, extra = cap(loop, sizes[m], edge_faces, vert, triangles, count, extra, spots,
+                           slopes, positions, normals, write)
     return count, extra
 
 
-@njit(cache=True, parallel=True)
-def cell_triangles(v, iso, ids_x, ids_y, ids_z, trims, tables, tri_starts, extra_starts,
-                   triangles, positions, normals, write):
-    """Every slab of cells on all cores: without ``write``, ``tri_starts[i + 1]`` and
-    ``extra_starts[i + 1]`` get slab i's counts; with it, slab i writes from ``tri_starts[i]``
-    and ``extra_starts[i]``."""
-    for i in prange(v.shape[0] - 1):
-        t0 = tri_starts[i] if write else 0
-        e0 = extra_starts[i] if write else 0
-        t1, e1 = cell_slab(v, iso, i, ids_x, ids_y, ids_z, trims, tables, t0, e0, triangles,
-                           positions, normals, write)
+@njit(cache=True, error_model="numpy")
+def cell_row(v, iso, i, j, trims, counts, cases, tables, count, extra, triangles, positions,
+             normals, scratch, write):
+    """The cells of row (i, j): without ``write``, count their triangles and loop centres and
+    the row's crossings along x and y into ``counts`` (the cells see every one); with it,
+    ``counts`` holds each row's first vertex per axis, and the cells write their triangles
+    from ``count``, their centres from ``extra``, and place the crossings they own (on the
+    rows at x = i and y = j, and on the grid's last rows). Returns the next two numbers.
+
+    A crossed edge's vertex is its row's first plus the crossings before it on that row, so
+    eight counters walking k with the cells number every vertex of the four rows."""
+    table_counts, table = cases
+    edges = tables[1]
+    w, inside, vert = scratch[0], scratch[1], scratch[3]
+    n0, n1, n2 = v.shape
+    k0, k1 = cell_range(trims, i, j, n2)
+    if k0 >= k1:
+        return count, extra
+    # below k0 the four rows are constant and agree, so no counter has anything to count
+    ox0, ox1 = counts[i, j, 0], counts[i, j + 1, 0]            # along x, at y = j, j + 1
+    oy0, oy1 = counts[i, j, 1], counts[i + 1, j, 1]            # along y, at x = i, i + 1
+    oz0, oz1 = counts[i, j, 2], counts[i + 1, j, 2]            # along z, the four rows
+    oz2, oz3 = counts[i, j + 1, 2], counts[i + 1, j + 1, 2]
+    cx0 = cx1 = cy0 = cy1 = cz0 = cz1 = cz2 = cz3 = far = 0
+    own = 0b000100010001 | (0b010000000010 if j == n1 - 2 else 0) \
+        | (0b001000100000 if i == n0 - 2 else 0) | (1 << 11 if i == n0 - 2 and j == n1 - 2 else 0)
+    own_far = 0b000001000100 | (0b1000 if j == n1 - 2 else 0) | (0b10000000 if i == n0 - 2 else 0)
+    high = sides(v, iso, i, j, k0)
+    for k in range(k0, k1):
+        low, high = high, sides(v, iso, i, j, k + 1)
+        case = low | high << 4
+        if case == 0 or case == 255:
+            continue
+        mask = EDGE_MASK[case]
+        if k == k1 - 1:
+            far = mask
+        if write:
+            vert[0], vert[2] = ox0 + cx0, ox0 + cx0 + (mask & 1)
+            vert[1], vert[3] = ox1 + cx1, ox1 + cx1 + (mask >> 1 & 1)
+            vert[4], vert[6] = oy0 + cy0, oy0 + cy0 + (mask >> 4 & 1)
+            vert[5], vert[7] = oy1 + cy1, oy1 + cy1 + (mask >> 5 & 1)
+            vert[8], vert[9], vert[10], vert[11] = oz0 + cz0, oz1 + cz1, oz2 + cz2, oz3 + cz3
+            corner_values(v, iso, i, j, k, w, inside)
+            placing = mask & (own | (own_far if k == k1 - 1 else 0))
+            for e in range(12):
+                if placing >> e & 1:
+                    place_edge(v, i, j, k, e, w, edges, positions, normals, vert[e])
+        cx0, cx1, cy0, cy1 = cx0 + (mask & 1), cx1 + (mask >> 1 & 1), \
+            cy0 + (mask >> 4 & 1), cy1 + (mask >> 5 & 1)
+        cz0, cz1 = cz0 + (mask >> 8 & 1), cz1 + (mask >> 9 & 1)
+        cz2, cz3 = cz2 + (mask >> 10 & 1), cz3 + (mask >> 11 & 1)
+        if table_counts[case] >= 0:             # the values cannot change this cell's polygons
+            if write:
+                for t in range(table_counts[case]):
+                    for d in range(3):
+                        triangles[count + t, d] = vert[table[case, t, d]]
+            count += table_counts[case]
+            continue
         if not write:
-            tri_starts[i + 1], extra_starts[i + 1] = t1 - t0, e1 - e0
+            corner_values(v, iso, i, j, k, w, inside)
+        count, extra = odd_cell(v, i, j, k, mask, tables, count, extra, triangles, positions,
+                                normals, scratch, write)
+    if not write:                    # the rows' crossings along x and y, the last edge too
+        counts[i, j, 0], counts[i, j, 1] = cx0 + (far >> 2 & 1), cy0 + (far >> 6 & 1)
+        if j == n1 - 2:
+            counts[i, j + 1, 0] = cx1 + (far >> 3 & 1)
+        if i == n0 - 2:
+            counts[i + 1, j, 1] = cy1 + (far >> 7 & 1)
+    return count, extra
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def count_rows(v, iso, trims, counts, cases, tables, tri_counts, extra_counts):
+    """On all cores, each row of cells' triangles and loop centres (``tri_counts[i, j]``,
+    ``extra_counts[i, j]``) and each row's crossings along x and y (``counts[i, j, 0 | 1]``)."""
+    n0, n1, _ = v.shape
+    empty_i, empty_f = np.empty((0, 3), np.int64), np.empty((0, 3))
+    for i in prange(n0 - 1):
+        scratch = cell_scratch()
+        for j in range(n1 - 1):
+            tri_counts[i, j], extra_counts[i, j] = cell_row(
+                v, iso, i, j, trims, counts, cases, tables, 0, 0, empty_i, empty_f, empty_f,
+                scratch, False)
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def write_cells(v, iso, trims, firsts, cases, tables, tri_starts, extra_starts, triangles,
+                positions, normals):
+    """On all cores, every row of cells' vertices (each row's first along each axis in
+    ``firsts``), triangles from ``tri_starts[i, j]`` and loop centres from
+    ``extra_starts[i, j]``."""
+    n0, n1, _ = v.shape
+    for i in prange(n0 - 1):
+        scratch = cell_scratch()
+        for j in range(n1 - 1):
+            cell_row(v, iso, i, j, trims, firsts, cases, tables, tri_starts[i, j],
+                     extra_starts[i, j], triangles, positions, normals, scratch, True)
+
+
+def _exclusive(counts: np.ndarray, base: int = 0) -> np.ndarray:
+    """Each entry's start when the entries are laid out in order from ``base``."""
+    flat = counts.ravel()
+    return (base + np.cumsum(flat) - flat).reshape(counts.shape)
+
+
+@lru_cache(maxsize=1)
+def _cases():
+    return case_table(TABLES)
 
 
 def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
     """``(positions (V, 3), triangles (T, 3), normals (V, 3))`` of the surface ``value = iso``
     in index coordinates (sample (i, j, k) at point (i, j, k)); normals are the negated
-    gradient (not unit length)."""
+    gradient (not unit length).
+
+    Three passes over rows of samples along k, as flying edges runs them (Schroeder et al.
+    2015): trim each row to where it changes side; count each row of cells' triangles and
+    the crossings it sees; lay the counts out and write the vertices and triangles."""
     v = np.ascontiguousarray(values, dtype=np.float32)
     iso = check_iso(iso, v, where)
     n0, n1, n2 = v.shape
-    ids = [np.empty((n0 - 1, n1, n2), np.int64), np.empty((n0, n1 - 1, n2), np.int64),
-           np.empty((n0, n1, n2 - 1), np.int64)]
-    empty = np.empty((0, 3))
-    starts = []
-    for axis in range(3):                      # count each slab's crossings, then place them
-        counts = np.zeros(ids[axis].shape[0] + 1, np.int64)
-        edge_vertices(v, iso, axis, ids[axis], empty, empty, counts, False)
-        starts.append(counts)
-    offsets = np.cumsum([0] + [int(c.sum()) for c in starts])
-    total = int(offsets[-1])
+    if min(n0, n1, n2) < 2:                    # no cell
+        return np.empty((0, 3)), np.empty((0, 3), np.int64), np.empty((0, 3))
+    trims, counts = np.empty((n0, n1, 4), np.int64), np.zeros((n0, n1, 3), np.int64)
+    tri_counts = np.zeros((n0 - 1, n1 - 1), np.int64)
+    extra_counts = np.zeros((n0 - 1, n1 - 1), np.int64)
+    cases = _cases()
+    row_trims(v, iso, trims, counts)
+    count_rows(v, iso, trims, counts, cases, TABLES, tri_counts, extra_counts)
+    total, count = int(counts.sum()), int(tri_counts.sum())
     if total > MAX_TRIANGLES:          # a surface has about two triangles a vertex
         raise VolumeError(f"{where}: the surface at iso {iso:g} crosses {total:,} cell edges, "
                           f"about {2 * total:,} triangles; at most {MAX_TRIANGLES:,} (a "
                           f"smoother volume or another iso)")
-    positions, normals = np.empty((total, 3)), np.empty((total, 3))
-    for axis in range(3):
-        first = offsets[axis] + np.cumsum(starts[axis])
-        edge_vertices(v, iso, axis, ids[axis], positions, normals, first, True)
-    tables = (CORNERS, EDGES, FACES, FACE_EDGES, EDGE_FACES)
-    trims = np.empty((n0, n1, 4), np.int64)
-    row_trims(v, iso, trims)
-    tri_counts, extra_counts = np.zeros(n0, np.int64), np.zeros(n0, np.int64)
-    cell_triangles(v, iso, *ids, trims, tables, tri_counts, extra_counts,
-                   np.empty((0, 3), np.int64), positions, normals, False)
-    tri_starts, extra_starts = np.cumsum(tri_counts), total + np.cumsum(extra_counts)
-    if int(tri_starts[-1]) > MAX_TRIANGLES:
-        raise VolumeError(f"{where}: the surface at iso {iso:g} has {int(tri_starts[-1]):,} "
-                          f"triangles; at most {MAX_TRIANGLES:,}")
-    triangles = np.empty((int(tri_starts[-1]), 3), np.int64)
-    extra = int(extra_starts[-1]) - total
-    positions = np.concatenate([positions, np.empty((extra, 3))])
-    normals = np.concatenate([normals, np.empty((extra, 3))])
-    cell_triangles(v, iso, *ids, trims, tables, tri_starts, extra_starts, triangles,
-                   positions, normals, True)
+    if count > MAX_TRIANGLES:
+        raise VolumeError(f"{where}: the surface at iso {iso:g} has {count:,} triangles; at "
+                          f"most {MAX_TRIANGLES:,}")
+    vertices = total + int(extra_counts.sum())
+    positions, normals = np.empty((vertices, 3)), np.empty((vertices, 3))
+    triangles = np.empty((count, 3), np.int64)
+    write_cells(v, iso, trims, _exclusive(counts), cases, TABLES, _exclusive(tri_counts),
+                _exclusive(extra_counts, total), triangles, positions, normals)
     return positions, triangles, normals
 
 

@@ -161,3 +161,46 @@ def test_two_opposite_corners_join_through_the_body_saddle(corner, triangles):
     assert len(positions) == 6 and len(found) == triangles
     directed, _ = edge_uses(found)
     assert set(directed.values()) == {1}
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_every_sign_pattern_of_one_cell_is_a_surface_bounded_by_the_cells_faces(seed):
+    # All 254 mixed patterns of a single cell, at random magnitudes: every crossed edge has its
+    # vertex at the linear-interpolation point (worked out here), every triangle uses only
+    # those, and the surface's open edges (used once) each lie on one face of the cell, where
+    # the neighbouring cell continues it. The common patterns come from the case table, the
+    # rest from the cell's values: both must hold this.
+    rng = np.random.default_rng(seed)
+    for case in range(1, 255):
+        sign = np.array([1.0 if case >> c & 1 else -1.0 for c in range(8)])
+        w = (sign * rng.uniform(0.1, 1.0, 8)).astype(np.float32).astype(float)  # as stored
+        values = np.empty((2, 2, 2), np.float32)
+        for c in range(8):
+            values[c & 1, c >> 1 & 1, c >> 2] = w[c]
+        positions, triangles, _ = marching_cubes(values, 0.0, f"case {case}")
+        expected = []
+        for a in range(8):
+            for axis in range(3):
+                b = a | 1 << axis
+                if b != a and (w[a] > 0) != (w[b] > 0):
+                    pa = np.array([a & 1, a >> 1 & 1, a >> 2], float)
+                    expected.append(pa + w[a] / (w[a] - w[b]) * (np.eye(3)[axis]))
+        used = positions[np.unique(triangles)]
+        on_edges = [p for p in used if np.sum((p > 1e-9) & (p < 1 - 1e-9)) <= 1]
+        assert len(on_edges) == len(expected), case
+        for p in expected:
+            assert np.min(np.abs(used - p).max(axis=1)) < 1e-12, case
+        _, undirected = edge_uses(triangles)
+        for (a, b), uses in undirected.items():
+            assert uses <= 2, case
+            if uses == 1:
+                pa, pb = positions[a], positions[b]
+                assert any(abs(pa[d] - s) < 1e-12 and abs(pb[d] - s) < 1e-12
+                           for d in range(3) for s in (0.0, 1.0)), case
+
+
+@pytest.mark.parametrize("shape", [(1, 6, 6), (6, 1, 6), (6, 6, 1)])
+def test_a_grid_one_sample_thick_has_no_cells_and_no_surface(shape):
+    values = np.random.default_rng(0).standard_normal(shape)
+    positions, triangles, normals = marching_cubes(values, 0.0, "slab")
+    assert positions.shape == normals.shape == (0, 3) and triangles.shape == (0, 3)
