@@ -80,6 +80,28 @@ def trilinear(v, x, y, z):
 
 
 @njit(cache=True, inline="always")
+def trilinear_flat(flat, n0, n1, n2, x, y, z):
+    """:func:`trilinear` on the samples as one C-ordered row (``flat``): the eight corners
+    are one index plus fixed strides, unsigned, so that no load checks for a negative index;
+    the same arithmetic in the same order, so the same value."""
+    if not (0.0 <= x <= n0 - 1 and 0.0 <= y <= n1 - 1 and 0.0 <= z <= n2 - 1):
+        return 0.0
+    i, j, k = min(int(x), n0 - 2), min(int(y), n1 - 2), min(int(z), n2 - 2)
+    fx, fy, fz = x - i, y - j, z - k
+    sj = np.uint64(n2)
+    si = np.uint64(n1) * sj
+    at = np.uint64(i) * si + np.uint64(j) * sj + np.uint64(k)
+    one = np.uint64(1)
+    c00 = flat[at] * (1 - fx) + flat[at + si] * fx
+    c10 = flat[at + sj] * (1 - fx) + flat[at + si + sj] * fx
+    c01 = flat[at + one] * (1 - fx) + flat[at + si + one] * fx
+    c11 = flat[at + sj + one] * (1 - fx) + flat[at + si + sj + one] * fx
+    c0 = c00 * (1 - fy) + c10 * fy
+    c1 = c01 * (1 - fy) + c11 * fy
+    return c0 * (1 - fz) + c1 * fz
+
+
+@njit(cache=True, inline="always")
 def _component(g, i, j, k, a, fx, fy, fz):
     c00 = g[i, j, k, a] * (1 - fx) + g[i + 1, j, k, a] * fx
     c10 = g[i, j + 1, k, a] * (1 - fx) + g[i + 1, j + 1, k, a] * fx
@@ -140,18 +162,29 @@ def box_interval(v, ox, oy, oz, dx, dy, dz):
 
 
 @njit(cache=True, inline="always")
-def block_exit(ox, oy, oz, dx, dy, dz, bi, bj, bk):
-    """The ray's t where it leaves block (bi, bj, bk) (index space, Kay–Kajiya's far slab)."""
+def block_exit(ox, oy, oz, rx, ry, rz, bi, bj, bk):
+    """The ray's t where it leaves block (bi, bj, bk) (index space, Kay–Kajiya's far slab);
+    ``r``: the direction's reciprocals (0 along an axis it does not move on), so that a ray
+    crossing fifty empty blocks does not divide 150 times."""
     t = np.inf
-    b = (bi, bj, bk)
-    o = (ox, oy, oz)
-    d = (dx, dy, dz)
-    for a in range(3):
-        if d[a] > 0.0:
-            t = min(t, ((b[a] + 1) * BLOCK - o[a]) / d[a])
-        elif d[a] < 0.0:
-            t = min(t, (b[a] * BLOCK - o[a]) / d[a])
+    if rx > 0.0:
+        t = min(t, ((bi + 1) * BLOCK - ox) * rx)
+    elif rx < 0.0:
+        t = min(t, (bi * BLOCK - ox) * rx)
+    if ry > 0.0:
+        t = min(t, ((bj + 1) * BLOCK - oy) * ry)
+    elif ry < 0.0:
+        t = min(t, (bj * BLOCK - oy) * ry)
+    if rz > 0.0:
+        t = min(t, ((bk + 1) * BLOCK - oz) * rz)
+    elif rz < 0.0:
+        t = min(t, (bk * BLOCK - oz) * rz)
     return t
+
+
+@njit(cache=True, inline="always")
+def reciprocal(d):
+    return 1.0 / d if d != 0.0 else 0.0
 
 
 @njit(cache=True, parallel=True, nogil=True)
@@ -202,23 +235,31 @@ def _sample_gradients(v, out):
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit, material,
-          lights, ambient, eye, halfway, flat, empty, highs, cores, color, transmittance,
+def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit,
+          material, lights, ambient, eye, halfway, flat, empty, highs, cores, color, transmittance,
           largest):
     """March every ray (see the module); ``grads``: the samples' gradients (or one row, not
     kept). Fills ``color`` (N, 3) and ``transmittance`` (N,)
     (emission–absorption) or ``largest`` (N,) (MIP; −inf where the ray misses the grid).
     ``empty`` and ``highs``: each block's σ = 0 everywhere, its largest sample; ``cores``:
-    numba's threads (read here: the kernel reading it would not be cached)."""
+    numba's threads (read here: the kernel reading it would not be cached). The rays are
+    dealt round-robin: the loop's static split would give each core one contiguous run (a
+    frame's top rows to one, its middle to the other)."""
+    for c in prange(cores):
+        march_rays(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer,
+                   lit, material.copy(), lights, ambient, eye, halfway, flat, empty, highs,
+                   c, cores, color, transmittance, largest)
+
+
+@njit(cache=True, nogil=True)
+def march_rays(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer,
+               lit, surface, lights, ambient, eye, halfway, flat, empty, highs, first, every,
+               color, transmittance, largest):
+    """Rays ``first``, ``first + every``, ... of :func:`march` (``surface``: this core's
+    copy of the material, whose O_d each lit sample sets)."""
     n0, n1, n2 = v.shape
-    rays = origins.shape[0]
-    # the loop's static split gives each core one contiguous run of rays (a frame's top
-    # rows to one, its middle to the other); dealt round-robin, the cores share the load
-    per = -(-rays // cores)
-    for q in prange(per * cores):
-        n = (q % per) * cores + q // per
-        if n >= rays:
-            continue
+    row = v.reshape(n0 * n1 * n2)          # the samples as one row (trilinear_flat)
+    for n in range(first, origins.shape[0], every):
         color[n, 0] = color[n, 1] = color[n, 2] = 0.0
         transmittance[n] = 1.0
         largest[n] = -np.inf
@@ -234,11 +275,15 @@ def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer
         ta, tb = max(ta, t_lo[n]), min(tb, t_hi[n])
         if not ta < tb:
             continue
-        surface = material.copy()              # this ray's O_d is each sample's colour
         length = tb - ta
         segments = int(length // step) + 1
+        rx, ry, rz = reciprocal(dx), reciprocal(dy), reciprocal(dz)
         T, cr, cg, cb, top = 1.0, 0.0, 0.0, 0.0, -np.inf
         s = -1
+        # where the ray leaves the block it is in: till then no sample looks the block up (one
+        # near the face that rounds into the next block reads a value within both blocks'
+        # ranges, so skipping it or not adds the same)
+        block_end = -np.inf
         while s + 1 < segments:
             s += 1
             t0 = ta + s * step
@@ -247,17 +292,19 @@ def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer
                 break
             t = t0 + 0.5 * dt
             x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
-            if 0.0 <= x <= n0 - 1 and 0.0 <= y <= n1 - 1 and 0.0 <= z <= n2 - 1:
+            if t > block_end and 0.0 <= x <= n0 - 1 and 0.0 <= y <= n1 - 1 \
+                    and 0.0 <= z <= n2 - 1:
                 bi, bj, bk = int(x) // BLOCK, int(y) // BLOCK, int(z) // BLOCK
                 bi, bj, bk = (min(bi, empty.shape[0] - 1), min(bj, empty.shape[1] - 1),
                               min(bk, empty.shape[2] - 1))
+                out = block_exit(ox, oy, oz, rx, ry, rz, bi, bj, bk)
                 if empty[bi, bj, bk] if mode != MIP else highs[bi, bj, bk] <= top:
                     # every sample up to the block's far face adds nothing: the next one
                     # taken is the first whose midpoint (ta + (s + ½)·step) is past it
-                    out = block_exit(ox, oy, oz, dx, dy, dz, bi, bj, bk)
                     s = max(s, int(math.ceil((out - ta) / step - 0.5)) - 1)
                     continue
-            value = trilinear(v, x, y, z)
+                block_end = out
+            value = trilinear_flat(row, n0, n1, n2, x, y, z)
             if mode == MIP:
                 top = max(top, value)
                 continue
@@ -349,7 +396,7 @@ def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient,
     if not skip_empty:
         empty, highs = np.zeros_like(empty), np.full_like(highs, np.inf)
     lit = volume.lighting == "gradient" and volume.mode != "mip"
-    march(volume.values, sample_gradients(volume) if lit else _NO_GRADIENTS, m_inv, np.ascontiguousarray(origins, dtype=np.float64),
+    march(np.ascontiguousarray(volume.values), sample_gradients(volume) if lit else _NO_GRADIENTS, m_inv, np.ascontiguousarray(origins, dtype=np.float64),
           np.ascontiguousarray(directions, dtype=np.float64),
           np.ascontiguousarray(t_lo, dtype=np.float64), np.ascontiguousarray(t_hi, dtype=np.float64),
           float(step), MIP if volume.mode == "mip" else EMISSION_ABSORPTION,
