@@ -13,5 +13,6 @@ from core.animation import keys  # noqa: F401  ([animation], [[key]], [[emitter]
 from core.animation import dynamics_keys  # noqa: F401  ([dynamics], [[body]])
 from core.animation import linkage_keys  # noqa: F401  ([[linkage]])
 from core.animation import actor_keys  # noqa: F401  ([[actor]])
+from core.animation import mocap_keys  # noqa: F401  ([[mocap]])
 from core.volume import scenekeys as volume_keys  # noqa: F401  ([[volume]])
 from core.shading.models import scenekeys as lighting_keys  # noqa: F401  (a material's model)

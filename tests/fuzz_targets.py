@@ -236,6 +236,118 @@ extent = 4.0
 name = "floor"
 """
 
+# Motion capture: a take of three joints (read through a scene that plays it on its limbs),
+# and reactive actors (value edits of their senses and behaviours).
+BVH = b"""HIERARCHY
+ROOT a
+{
+  OFFSET 0 1 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT b
+  {
+    OFFSET 0 -0.5 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    JOINT c
+    {
+      OFFSET 0 -0.5 0
+      CHANNELS 2 Yrotation Xrotation
+      End Site
+      {
+        OFFSET 0 0 0.2
+      }
+    }
+  }
+}
+MOTION
+Frames: 3
+Frame Time: 0.25
+0 0 0 0 0 0 0 -20 0 0 10
+0.2 0 0 5 10 0 0 20 0 30 -10
+0.4 0 0 0 0 90 0 -20 0 0 10
+"""
+BVH_SCENE = b"""[[geometry]]
+generator = "cube"
+[[view]]
+vrp = [0, 0.8, 0]
+vpn = [0, 0, 1]
+vup = [0, 1, 0]
+window = [-2, 2, -2, 2]
+prp = [0, 0, 10]
+front = 5
+back = -5
+[[mocap]]
+file = "fuzz.bvh"
+limb = "box"
+radii = { a = 0.1 }
+materials = { b = { od = [0.2, 0.4, 0.9] } }
+"""
+ACTORS = b"""[[geometry]]
+generator = "cube"
+name = "a"
+transform = { scale = 0.1 }
+[[geometry]]
+generator = "cube"
+name = "b"
+transform = { scale = 0.1 }
+[[geometry]]
+generator = "icosphere"
+name = "rock"
+params = { subdivisions = 1, radius = 0.5 }
+[[view]]
+vrp = [0, 0, 0]
+vpn = [0, 1, 1]
+vup = [0, 1, 0]
+window = [-3, 3, -3, 3]
+prp = [0, 0, 10]
+front = 5
+back = -5
+[animation]
+duration = 1.0
+fps = 4
+[[actor]]
+name = "hunter"
+mesh = "a"
+behaviours = ["avoid_obstacles", "pursue", "wander"]
+steering = "priority"
+position = [-2, 0, 0]
+velocity = [1, 0, 0]
+max_speed = 2
+max_force = 5
+[actor.senses]
+radius = 3
+fov = 120
+[actor.avoid_obstacles]
+obstacles = ["rock"]
+spheres = [{ center = [1, 0, 1], radius = 0.3 }]
+clearance = 0.2
+acceleration = 4
+horizontal = true
+[actor.pursue]
+target = "prey"
+prediction = 0.5
+[actor.wander]
+speed = 1
+turn = 30
+[[actor]]
+name = "prey"
+mesh = "b"
+count = 3
+behaviours = ["flee", "wander"]
+position = [1, 0, 0]
+spread = [1, 0, 1]
+velocity_var = [0.5, 0, 0.5]
+[actor.senses]
+radius = 2
+[actor.flee]
+threat = "hunter"
+"""
+
+
+def _mocap_scene(data: bytes):
+    """``data`` as the take a small scene plays (the file written where the scene finds it)."""
+    (FOLDER / "fuzz.bvh").write_bytes(data)
+    return read_scene_file(BVH_SCENE, "fuzz.toml", FOLDER)
+
 
 def _texture_folder():
     """A folder with the textures' seed file ``tex.png`` (4 x 4, made once)."""
@@ -277,8 +389,10 @@ TARGETS = {
     "keys": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), KEYS),
     "emitters": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), EMITTERS),
     "primitives": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), PRIMITIVES),
+    "bvh": (_mocap_scene, BVH),
+    "actors": (lambda d: read_scene_file(d, "fuzz.toml", FOLDER), ACTORS),
 }
-SYSTEMS = ("textures", "keys", "emitters", "primitives")
+SYSTEMS = ("textures", "keys", "emitters", "primitives", "actors")
 
 # While fuzzing, the budgets are small, so that a mutation that asks for a day of particles or
 # a 4096² texture is refused (or stopped) in milliseconds: the budgets are what is tested, not

@@ -48,15 +48,18 @@ MAX_ACTOR_STEPS = 300_000
 class Behaviour:
     run: Callable
     params: dict                       # name → default (a number, a 3-vector, or a list)
+    senses: bool = False               # run(t, x, v, params, surroundings): reactive control
 
 
 _BEHAVIOURS: dict[str, Behaviour] = {}
 
 
-def register_behaviour(name: str, run: Callable, params: dict) -> None:
+def register_behaviour(name: str, run: Callable, params: dict, senses: bool = False) -> None:
     """``run(t, x, v, params) -> accelerations`` under ``name``; ``params``: the table keys
-    it reads and their defaults (registered again, it replaces the earlier one)."""
-    _BEHAVIOURS[name] = Behaviour(run, dict(params))
+    it reads and their defaults (registered again, it replaces the earlier one). With
+    ``senses``, it is called ``run(t, x, v, params, surroundings)`` (a :class:`Surroundings`:
+    what the group's actors perceive through its ``senses``, the other groups included)."""
+    _BEHAVIOURS[name] = Behaviour(run, dict(params), senses)
 
 
 def behaviours() -> dict[str, Behaviour]:
@@ -139,10 +142,61 @@ class GroupState:
     v: np.ndarray
 
 
+@dataclass(frozen=True)
+class Senses:
+    """What an actor perceives: points within ``radius`` of it and within ``fov`` degrees
+    (the whole angle of a cone about its heading; 360: all round)."""
+
+    radius: float
+    fov: float = 360.0
+
+    def see(self, x: np.ndarray, v: np.ndarray, points: np.ndarray,
+            sizes: np.ndarray | float = 0.0) -> np.ndarray:
+        """``(N, M)``: does actor i (at x[i], heading along v[i]) perceive point j — a sphere
+        of radius ``sizes[j]`` about it — nearer than ``radius`` (to its surface) and inside
+        its field of view (the centre's direction within fov/2 of the heading; an actor at
+        rest has no heading and sees all round)?"""
+        d = points[None, :, :] - x[:, None, :]
+        dist = np.linalg.norm(d, axis=2)
+        near = dist - sizes <= self.radius
+        if self.fov >= 360.0:
+            return near
+        speed = np.linalg.norm(v, axis=1)
+        h = v / np.maximum(speed, 1e-300)[:, None]
+        cos = np.einsum("nmk,nk->nm", d, h) / np.maximum(dist, 1e-300)
+        inside = (cos >= math.cos(math.radians(self.fov / 2.0)) - 1e-12) | (dist == 0.0)
+        return near & (inside | (speed == 0.0)[:, None])
+
+
+class Surroundings:
+    """One group's view of the stage at the start of a step: every group's positions and
+    velocities (``others(name)``), its own ``senses``, ``max_speed`` and ``max_force``."""
+
+    def __init__(self, groups: list, index: int):
+        self.groups, self.index = groups, index
+        me = groups[index]
+        self.senses, self.max_speed, self.max_force = me.senses, me.max_speed, me.max_force
+
+    def others(self, name: str) -> tuple[np.ndarray, np.ndarray, bool]:
+        """(x, v, same): the group named ``name``'s actors now; ``same`` when it is the
+        asking group (an actor does not sense itself: the behaviour leaves the diagonal out)."""
+        for k, g in enumerate(self.groups):
+            if g.name == name:
+                return g.state.x, g.state.v, k == self.index
+        raise KeyError(name)
+
+    def see(self, x, v, points, sizes=0.0) -> np.ndarray:
+        if self.senses is None:
+            return np.ones((len(x), len(points)), bool)
+        return self.senses.see(x, v, points, sizes)
+
+
 @dataclass
 class Group:
     """The actors of one ``[[actor]]`` table: ``meshes[k]`` the mesh indices actor k carries
-    (modelled at ``pivot`` facing +x)."""
+    (modelled at ``pivot`` facing +x). The behaviours' accelerations are summed
+    (``steering = "sum"``) or taken in priority (``"priority"``: for each actor, the first
+    behaviour in the list that asks for any), then cut to ``max_force`` (per unit mass)."""
 
     meshes: list
     pivot: np.ndarray
@@ -151,6 +205,10 @@ class Group:
     steps: list                                   # (Behaviour, params)
     max_speed: float = 3.0
     dt: float = STEP
+    name: str = "actors"
+    senses: Senses | None = None
+    max_force: float = math.inf
+    steering: str = "sum"
     state: GroupState = field(init=False)
 
     def __post_init__(self) -> None:
@@ -160,17 +218,37 @@ class Group:
     def reset(self) -> None:
         self.state = GroupState(0, self.x0.copy(), self.v0.copy())
 
-    def step(self) -> None:
+    def accelerations(self, t: float, world: Surroundings) -> np.ndarray:
+        """Every actor's steering at t from the state now (nothing moves)."""
         s = self.state
-        t = s.step_index * self.dt
         a = np.zeros_like(s.x)
+        undecided = np.ones(len(s.x), bool)
         for behaviour, params in self.steps:
-            a += behaviour.run(t, s.x, s.v, params)
+            b = (behaviour.run(t, s.x, s.v, params, world) if behaviour.senses
+                 else behaviour.run(t, s.x, s.v, params))
+            if self.steering == "priority":
+                asks = undecided & np.any(b != 0.0, axis=1)
+                a[asks] = b[asks]
+                undecided &= ~asks
+            else:
+                a += b
+        if math.isfinite(self.max_force):
+            size = np.linalg.norm(a, axis=1, keepdims=True)
+            a *= np.minimum(1.0, self.max_force / np.maximum(size, 1e-300))
+        return a
+
+    def integrate(self, a: np.ndarray) -> None:
+        """Semi-implicit Euler: v += a dt, the speed cut to max_speed, x += v dt."""
+        s = self.state
         s.v += a * self.dt
         speed = np.linalg.norm(s.v, axis=1, keepdims=True)
         s.v *= np.minimum(1.0, self.max_speed / np.maximum(speed, 1e-300))
         s.x += s.v * self.dt
         s.step_index += 1
+
+    def step(self) -> None:
+        t = self.state.step_index * self.dt
+        self.integrate(self.accelerations(t, Surroundings([self], 0)))
 
     def state_at(self, t: float) -> "Group":
         target = int(math.floor(max(t, 0.0) / self.dt + 1e-9))
@@ -189,6 +267,10 @@ class Group:
 
     def matrices_at(self, t: float) -> dict[int, np.ndarray]:
         self.state_at(t)
+        return self.placed()
+
+    def placed(self) -> dict[int, np.ndarray]:
+        """mesh index → its 4 x 4 in the state now."""
         out = {}
         for k, meshes in enumerate(self.meshes):
             m = np.eye(4)
@@ -207,9 +289,72 @@ class Group:
 
     def copy(self) -> "Group":
         other = Group(self.meshes, self.pivot, self.x0, self.v0, self.steps, self.max_speed,
-                      self.dt)
+                      self.dt, self.name, self.senses, self.max_force, self.steering)
         other.restore(self.snapshot())
         return other
+
+
+@dataclass
+class StageState:
+    groups: list                                  # each group's GroupState
+
+
+class Stage:
+    """Groups that sense one another (reactive control), stepped together: each step every
+    group's steering is found from the state of all of them at its start, then all move.
+    A mover like a :class:`Group` (``state_at``, ``matrices_at``, ``snapshot``, ``restore``,
+    ``copy``)."""
+
+    def __init__(self, groups: list):
+        self.groups = groups
+        self.dt = groups[0].dt
+        self.rewind = Rewind()
+
+    @property
+    def step_index(self) -> int:
+        return self.groups[0].state.step_index
+
+    def reset(self) -> None:
+        for g in self.groups:
+            g.reset()
+
+    def step(self) -> None:
+        t = self.step_index * self.dt
+        steering = [g.accelerations(t, Surroundings(self.groups, k))
+                    for k, g in enumerate(self.groups)]
+        for g, a in zip(self.groups, steering):
+            g.integrate(a)
+
+    def state_at(self, t: float) -> "Stage":
+        target = int(math.floor(max(t, 0.0) / self.dt + 1e-9))
+        if target < self.step_index:
+            saved = self.rewind.nearest(target)
+            self.restore(saved) if saved is not None else self.reset()
+        if self.step_index < target:
+            advance("simulating the actors", self.step_index, target, self.step_on)
+        return self
+
+    def step_on(self, n: int) -> None:
+        for _ in range(n):
+            self.rewind.note(self.step_index, self.snapshot)
+            self.step()
+
+    def matrices_at(self, t: float) -> dict[int, np.ndarray]:
+        self.state_at(t)
+        out = {}
+        for g in self.groups:
+            out.update(g.placed())
+        return out
+
+    def snapshot(self) -> StageState:
+        return StageState([g.snapshot() for g in self.groups])
+
+    def restore(self, state: StageState) -> None:
+        for g, s in zip(self.groups, state.groups):
+            g.restore(s)
+
+    def copy(self) -> "Stage":
+        return Stage([g.copy() for g in self.groups])
 
 
 def heading(v: np.ndarray) -> np.ndarray:

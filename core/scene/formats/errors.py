@@ -119,7 +119,7 @@ def short(token: str, limit: int = 40) -> str:
 # to the 4M-triangle budget anyway (a binary STL of 4M triangles is 200 MB).
 MiB = 1 << 20
 MAX_INPUT_BYTES = {"scene": 16 * MiB, "views": 16 * MiB, "tri": 256 * MiB, "mesh": 512 * MiB,
-                   "texture": 256 * MiB}
+                   "texture": 256 * MiB, "motion": 64 * MiB}
 
 
 def _too_big(shown: str, size: int | str, kind: str) -> ReaderError:
