@@ -41,12 +41,6 @@ def _stepping(mover) -> bool:
     return hasattr(mover, "snapshot")
 
 
-def snapshot_animation(animation) -> SceneCheckpoint:
-    system = animation.particle_system
-    return SceneCheckpoint(snapshot(system) if system is not None else None,
-                           [m.snapshot() if _stepping(m) else None for m in animation.movers])
-
-
 def restore_animation(animation, checkpoint: SceneCheckpoint) -> None:
     """Put every simulation of ``animation`` in the state of ``checkpoint``."""
     if checkpoint.particles is not None and animation.particle_system is not None:

@@ -54,10 +54,6 @@ SPHERE, HULL = 0, 1
 SHAPES = ("sphere", "hull")
 
 
-class DynamicsError(ValueError):
-    """A body or the world's settings cannot be simulated; the message says which and why."""
-
-
 @dataclass
 class Body:
     """One rigid body as the scene file gives it (world units, the file's pose at t = 0)."""

@@ -827,7 +827,6 @@ def _rast_serial(n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, t
 # Public entry points
 
 _NO_FRAGMENTS = np.zeros((1, 1), np.int32)
-_NO_PARALLEL_CHUNKS = 1
 
 
 def _checked(xy_z, inv_w, triangles, width, height):
