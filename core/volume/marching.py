@@ -410,30 +410,31 @@ def cell_scratch():
             np.empty(6, np.int64), np.empty((12, 3)), np.empty((12, 3)))
 
 
-@njit(cache=True)
 def case_table(tables):
     """Every sign pattern (corner c inside is bit c) whose polygons the values cannot change —
     no ambiguous face, no possible tunnel, no loop that needs a centre — cut into triangles by
-    the cell's own steps: ``counts[case]`` triangles of cell edges ``edges[case]``; -1 where
-    the cell must be worked out from its values. The edge numbers stand for the vertices."""
+    the cell's own steps (run here in Python, once): ``counts[case]`` triangles of cell edges
+    ``edges[case]``; -1 where the cell must be worked out from its values. The edge numbers
+    stand for the vertices."""
     corners, edges, face_corners, face_edges, edge_faces = tables
     counts = np.full(256, -1, np.int64)
     table = np.zeros((256, 12, 3), np.int64)
-    w, inside, nxt, vert, loop, ring, sizes, joined, _, _ = cell_scratch()
-    vert[:] = np.arange(12)
+    nxt, joined = np.empty(12, np.int64), np.empty(6, np.int64)
+    ring, sizes = np.empty((4, 12), np.int64), np.empty(4, np.int64)
+    vert = np.arange(12)
     for case in range(1, 255):
-        for c in range(8):
-            inside[c] = (case >> c) & 1 == 1
-            w[c] = 1.0 if inside[c] else -1.0
+        inside = np.array([(case >> c) & 1 == 1 for c in range(8)])
+        w = np.where(inside, 1.0, -1.0)
         nxt[:] = -1
-        face_segments(w, inside, face_corners, face_edges, nxt, joined)
-        loops = cell_loops(nxt, ring, sizes)
+        face_segments.py_func(w, inside, face_corners, face_edges, nxt, joined)
+        loops = cell_loops.py_func(nxt, ring, sizes)
         if loops == 2 or joined.max() >= 0:
             continue
         count, plain = 0, True
         for m in range(loops):
-            loop[:sizes[m]] = ring[m, :sizes[m]]
-            count, left = clip_ears(loop, sizes[m], edge_faces, vert, table[case], count, True)
+            loop = ring[m].copy()
+            count, left = clip_ears.py_func(loop, int(sizes[m]), edge_faces, vert, table[case],
+                                            count, True)
             plain = plain and left == 3
         if plain:
             counts[case] = count
@@ -561,31 +562,23 @@ def cell_row(v, iso, i, j, trims, counts, cases, tables, count, extra, triangles
 
 
 @njit(cache=True, parallel=True, error_model="numpy")
-def count_rows(v, iso, trims, counts, cases, tables, tri_counts, extra_counts):
-    """On all cores, each row of cells' triangles and loop centres (``tri_counts[i, j]``,
-    ``extra_counts[i, j]``) and each row's crossings along x and y (``counts[i, j, 0 | 1]``)."""
-    n0, n1, _ = v.shape
-    empty_i, empty_f = np.empty((0, 3), np.int64), np.empty((0, 3))
-    for i in prange(n0 - 1):
-        scratch = cell_scratch()
-        for j in range(n1 - 1):
-            tri_counts[i, j], extra_counts[i, j] = cell_row(
-                v, iso, i, j, trims, counts, cases, tables, 0, 0, empty_i, empty_f, empty_f,
-                scratch, False)
-
-
-@njit(cache=True, parallel=True, error_model="numpy")
-def write_cells(v, iso, trims, firsts, cases, tables, tri_starts, extra_starts, triangles,
-                positions, normals):
-    """On all cores, every row of cells' vertices (each row's first along each axis in
-    ``firsts``), triangles from ``tri_starts[i, j]`` and loop centres from
-    ``extra_starts[i, j]``."""
+def cell_rows(v, iso, trims, counts, cases, tables, tri, extra, triangles, positions, normals,
+              write):
+    """Every row of cells on all cores. Without ``write``: each row's triangles and loop
+    centres into ``tri[i, j]`` and ``extra[i, j]``, and each row's crossings along x and y
+    into ``counts[i, j, 0 | 1]``. With it (``counts``: each row's first vertex per axis;
+    ``tri``, ``extra``: each row of cells' first triangle and centre): the vertices and
+    triangles."""
     n0, n1, _ = v.shape
     for i in prange(n0 - 1):
         scratch = cell_scratch()
         for j in range(n1 - 1):
-            cell_row(v, iso, i, j, trims, firsts, cases, tables, tri_starts[i, j],
-                     extra_starts[i, j], triangles, positions, normals, scratch, True)
+            t0 = tri[i, j] if write else 0
+            e0 = extra[i, j] if write else 0
+            t1, e1 = cell_row(v, iso, i, j, trims, counts, cases, tables, t0, e0, triangles,
+                              positions, normals, scratch, write)
+            if not write:
+                tri[i, j], extra[i, j] = t1, e1
 
 
 def _exclusive(counts: np.ndarray, base: int = 0) -> np.ndarray:
@@ -616,8 +609,10 @@ def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
     tri_counts = np.zeros((n0 - 1, n1 - 1), np.int64)
     extra_counts = np.zeros((n0 - 1, n1 - 1), np.int64)
     cases = _cases()
+    no_int, no_float = np.empty((0, 3), np.int64), np.empty((0, 3))
     row_trims(v, iso, trims, counts)
-    count_rows(v, iso, trims, counts, cases, TABLES, tri_counts, extra_counts)
+    cell_rows(v, iso, trims, counts, cases, TABLES, tri_counts, extra_counts, no_int,
+              no_float, no_float, False)
     total, count = int(counts.sum()), int(tri_counts.sum())
     if total > MAX_TRIANGLES:          # a surface has about two triangles a vertex
         raise VolumeError(f"{where}: the surface at iso {iso:g} crosses {total:,} cell edges, "
@@ -629,8 +624,8 @@ def marching_cubes(values: np.ndarray, iso: float, where: str = "volume"):
     vertices = total + int(extra_counts.sum())
     positions, normals = np.empty((vertices, 3)), np.empty((vertices, 3))
     triangles = np.empty((count, 3), np.int64)
-    write_cells(v, iso, trims, _exclusive(counts), cases, TABLES, _exclusive(tri_counts),
-                _exclusive(extra_counts, total), triangles, positions, normals)
+    cell_rows(v, iso, trims, _exclusive(counts), cases, TABLES, _exclusive(tri_counts),
+              _exclusive(extra_counts, total), triangles, positions, normals, True)
     return positions, triangles, normals
 
 
