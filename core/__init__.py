@@ -32,8 +32,8 @@ from core.camera.view import View, ViewError  # noqa: E402
 from core.context import RenderContext  # noqa: E402
 from core.render import Frame, render, render_file  # noqa: E402
 from core.scene.model import Light, Material, Mesh, Scene  # noqa: E402
-from core.settings import Projection, RenderSettings, Shading  # noqa: E402
+from core.settings import Projection, RenderSettings  # noqa: E402
 import core.systems  # noqa: E402,F401  (the systems' scene keys, registered before any file is read)
 
-__all__ = ["render", "render_file", "Frame", "RenderContext", "RenderSettings", "Projection", "Shading", "View",
+__all__ = ["render", "render_file", "Frame", "RenderContext", "RenderSettings", "Projection", "View",
            "ViewError", "Scene", "Mesh", "Material", "Light"]

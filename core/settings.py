@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass
 from enum import Enum
 
-from core.registry import get_renderer, option_owner, shading_names
+from core.registry import get_renderer, option_owner, shading_modes, shading_names
 
 
 class Projection(str, Enum):
@@ -30,24 +30,13 @@ class Projection(str, Enum):
         return self.value
 
 
-class Shading(str, Enum):
-    WIREFRAME = "wireframe"
-    FLAT = "flat"
-    GOURAUD = "gouraud"
-    PHONG = "phong"
-    DEPTH = "depth"          # colour from height or view depth alone (core.shading.depth)
-
-    def __str__(self) -> str:
-        return self.value
-
-
 PROJECTIONS = tuple(p.value for p in Projection)
-# The built-in shading modes (the course's and depth shading), for the sweeps and tests that
-# name them; what a user may choose is every registered mode (core.registry.shading_names).
-SHADINGS = tuple(s.value for s in Shading)
-# The lit modes that fill triangles (depth shading fills them unlit: it is left out
-# of the sweeps that compare lighting against the exact images).
-SOLID_SHADINGS = SHADINGS[1:4]
+# The shading modes, for the sweeps and tests that go through them: the registry's
+# (core.registry, core.shading.modes), read here once; SOLID_SHADINGS are those that light
+# filled triangles (depth shading fills them unlit: it is left out of the sweeps that compare
+# lighting against the exact images).
+SHADINGS = shading_names()
+SOLID_SHADINGS = tuple(mode.name for mode in shading_modes() if mode.lights)
 SAMPLE_PATTERNS = ("regular", "jittered", "adaptive")   # adaptive: the ray tracer's
 FRESNEL_FORMS = ("schlick", "exact")
 SPECULAR_FORMS = ("reflect", "halfway")     # (R·V)^n, or the halfway vector's (N·H)^n
