@@ -36,7 +36,7 @@ def plan(scene: Scene, projection: str, shading: str, keep_aspect: bool = False,
                                 texture_filter, solid, triangle_stage))
     entry = _entry(renderer)
     if entry is not None and entry.plan_stages:      # the renderer's own stages, in place
-        load(entry.plan_stages)(stages, triangle_stage)
+        load(entry.plan_stages)(stages, triangle_stage, scene)
     if shading == "depth":
         _depth_shading_stages(stages, solid)
     stages.append(_transparency_stage(scene, solid, renderer, transparency))
@@ -170,9 +170,11 @@ def _depth_shading_stages(stages: list, solid: bool) -> None:
     for i, s in enumerate(stages):
         if s.name in unlit:
             stages[i] = Stage(s.name, False, "depth shading uses no normals and no light")
-    at = next(i for i, s in enumerate(stages)
-              if s.name in ("z-buffer scan conversion", "scan-line visible surface")) + 1
-    stages.insert(at, Stage("depth shading", solid,
+    at = next((i for i, s in enumerate(stages)
+               if s.name in ("z-buffer scan conversion", "scan-line visible surface")), None)
+    if at is None:                  # a renderer that scan-converts nothing has no colour map
+        return
+    stages.insert(at + 1, Stage("depth shading", solid,
                             "each pixel's height (or eye distance) through a colour map"
                             if solid else "no triangles are drawn"))
 

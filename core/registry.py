@@ -10,8 +10,9 @@ the registry instead of lists of names. The functions, each ``"package.module:fu
 - ``inspector``: ``inspect_pixel(scene, view, settings, x, y, context)``, the record of one
   pixel (:mod:`core.inspect`); its module may define ``buffers(scene, view, settings,
   context, names)``, the buffer views (:mod:`core.inspect.buffers`); None: not inspectable;
-- ``plan_stages``: ``add_stages(stages, triangle_stage)``, which puts the renderer's own
-  stages in place in the z-buffer's list (:func:`core.plan.plan`); None: the z-buffer's;
+- ``plan_stages``: ``add_stages(stages, triangle_stage, scene)``, which puts the renderer's
+  own stages in place in the z-buffer's list, or replaces it (:func:`core.plan.plan`); None:
+  the z-buffer's;
 - ``painting``: ``painting(scene, view, settings, context, timer, n, z_min, vp)``, the
   painter's order of the triangles (:mod:`core.visibility.paint`: the BSP tree's walk or
   Newell's sort); set, it is a painter: the pixel inspector and the command line's plan
@@ -23,6 +24,8 @@ What it can do:
 - ``samples_itself``: it places the film's samples (the front door does not run it per sample);
 - ``emitters``: it takes light from area emitters (global illumination);
 - ``recursive``: it follows reflected and refracted rays (``k_r``, ``k_t``);
+- ``caustics``: the light its paths carry reaches diffuse surfaces off mirrors and through
+  glass (the path tracer; the two-pass method's radiosity pass carries none);
 - ``transparency``: it lays ``k_t > 0`` over its opaque picture when asked;
 - ``shaders``: it shades through the registered shading modes (depth shading among them);
 - ``textures``: it draws a material's texture maps;
@@ -95,6 +98,7 @@ class Renderer:
     label: str = ""
     emitters: bool = False
     recursive: bool = False
+    caustics: bool = False
     transparency: bool = False
     shaders: bool = False
     textures: bool = True

@@ -199,7 +199,18 @@ def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,
         if not renderer.recursive and mesh.material.kr > 0:
             said.append(f"the reflection in the mirror ({name}): only {_who('recursive')} "
                         f"follow reflected rays")
-        if renderer.emitters and renderer.recursive and mesh.material.kt > 0 and scene.lights:
+        if (renderer.emitters and renderer.recursive and not renderer.caustics
+                and (mesh.material.kt > 0 or mesh.material.kr > 0)):
+            # The two-pass method's first pass is radiosity: no light is carried from a
+            # mirror or through glass onto the diffuse surfaces (no extended form factors).
+            from core.registry import names_that
+            said.append(f"the light that {name} passes on to the diffuse surfaces (k_r, "
+                        f"k_t > 0: a mirror's light thrown on a wall, the light through glass, "
+                        f"caustics): {name_of}'s first pass is radiosity, where {name} is an "
+                        f"opaque diffuse surface of rho = k_d O_d (--renderer "
+                        f"{' or '.join(names_that('caustics'))} draws it)")
+        if (renderer.emitters and renderer.recursive and renderer.caustics
+                and mesh.material.kt > 0 and scene.lights):
             # A path tracer reaches a point or directional light only by a shadow ray, which a
             # k_t > 0 surface stops: what lies behind glass or water gets none of their light
             # (caustics of a delta light: no sampled path can hit it).

@@ -99,6 +99,7 @@ CORE_RANKS = {
     "core.effects": 8,
     "core.plan": 9,
     "core.renderers": 10, "core.radiosity": 10, "core.pathtrace": 10, "core.volume": 10,
+    "core.twopass": 10,
     "core.render": 11,
     "core.inspect": 12, "core.animation": 12, "core.systems": 12, "core": 12,
     "core.analysis": 13,

@@ -105,8 +105,9 @@ def add_arguments(parser: argparse.ArgumentParser, parse_size) -> None:
                         help="--window: how long each orbit drags (default 8)")
     parser.add_argument("--renderer", type=_renderers, default="zbuffer",
                         help="zbuffer (default); raytrace: the ray tracer's rows beside Embree; "
-                             "radiosity,pathtrace (either or both): the global illumination rows "
-                             "on the Cornell box, beside Mitsuba; a list with bsp, depth-sort or "
+                             "radiosity,pathtrace,twopass (any of them): the global illumination "
+                             "rows on the Cornell box, beside Mitsuba, and the two-pass method's "
+                             "on its room; a list with bsp, depth-sort or "
                              "scanline (e.g. bsp,depth-sort,scanline,zbuffer): the painter's "
                              "algorithms and Watkins' scan line against the z-buffer; volume: the "
                              "ray marcher and marching cubes on a 256³ phantom, beside scikit-image")

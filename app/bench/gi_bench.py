@@ -1,5 +1,5 @@
-"""``python -m app bench --renderer radiosity,pathtrace``: the global-illumination rows
-on the Cornell box (``scenes/cornell_box.toml``):
+"""``python -m app bench --renderer radiosity,pathtrace,twopass``: the global-illumination
+rows on the Cornell box (``scenes/cornell_box.toml``), and the two-pass method's on its room:
 
 - radiosity: seconds from the scene to 1 % unshot energy (meshing, BVH, form factors, progressive
   refinement; no adaptive round) at about 1,000 and 10,000 elements, hemicube (resolution
@@ -7,7 +7,10 @@ on the Cornell box (``scenes/cornell_box.toml``):
   unless ``--gi-large-raycast``), and form-factor rows per second;
 - pathtrace: samples (camera paths) per second of our path tracer and of Mitsuba 3
   ``scalar_rgb`` and ``llvm_ad_rgb`` (when libLLVM is there) in the same run, same picture
-  (``--size``, default 128 x 128 here, 64 spp).
+  (``--size``, default 128 x 128 here, 64 spp);
+- twopass: ``scenes/two_pass.toml`` at its own size (``--size`` otherwise): the first frame
+  (pass 1, the radiosity solution, then pass 2) and a second one from the held solution
+  (pass 2 alone: the eye rays and the specular rays), with the rays of each kind.
 
 The first solve and the first picture run once untimed (compiling). Writes
 ``DIR/bench_gi.json`` and prints a table.
@@ -23,7 +26,7 @@ from pathlib import Path
 
 from core.paths import ROOT
 
-RENDERERS = ("radiosity", "pathtrace")
+RENDERERS = ("radiosity", "pathtrace", "twopass")
 
 
 def _progress(text: str) -> None:
@@ -84,6 +87,31 @@ def pathtrace_rows(scene, size, spp: int) -> list:
     return rows
 
 
+def twopass_rows(size=None) -> list:
+    """The two-pass room: both passes from nothing, then pass 2 alone (the solution held)."""
+    from core.context import RenderContext
+    from core.render import render
+    from core.scene.formats import load_scene
+    from core.settings import RenderSettings
+    scene = load_scene(ROOT / "scenes" / "two_pass.toml")
+    view = scene.views[0]
+    settings = RenderSettings.for_scene(scene, renderer="twopass", size=size)
+    render(scene, view, settings.replace(size=(16, 12), max_elements=64,
+                                         hemicube_resolution=16), RenderContext())  # compile
+    _progress(f"twopass: {scene.name}, {settings.size[0]} x {settings.size[1]} ...")
+    context = RenderContext()
+    began = time.perf_counter()
+    render(scene, view, settings, context)
+    both = time.perf_counter() - began
+    began = time.perf_counter()
+    frame = render(scene, view, settings, context)
+    second = time.perf_counter() - began
+    stats = frame.stats["twopass"]
+    return [{"scene": "scenes/two_pass.toml", "size": list(settings.size),
+             "elements": stats["radiosity"]["elements"], "both_passes_seconds": both,
+             "second_pass_seconds": second, "rays": stats["rays"]}]
+
+
 def _mitsuba_llvm_row(scene, view, width: int, height: int, spp: int) -> dict:
     """Mitsuba's ``llvm_ad_rgb`` on the same picture, its JIT warmed first on the same size
     (Dr.Jit compiles a kernel per launch shape); or what is missing to run it."""
@@ -122,6 +150,9 @@ def main(args) -> int:
     if "pathtrace" in wanted:
         size = tuple(args.size) if tuple(args.size) != (500, 500) else (128, 128)
         report["pathtrace"] = pathtrace_rows(scene, size, 64)      # 64 spp: Mitsuba's llvm JIT amortised
+    if "twopass" in wanted:
+        report["twopass"] = twopass_rows(tuple(args.size) if tuple(args.size) != (500, 500)
+                                         else None)
     report["loadavg_after"] = list(os.getloadavg())
     (out / "bench_gi.json").write_text(json.dumps(report, indent=2))
     print(table(report))
@@ -148,6 +179,16 @@ def table(report) -> str:
             else:
                 lines.append(f"| {r['renderer']} | {r['samples']} | {r['seconds']:.2f} | "
                              f"{r['samples_per_second']:.0f} |")
+    if "twopass" in report:
+        lines += ["", "| two-pass | size | elements | both passes s | pass 2 alone s | "
+                      "primary, reflected, refracted, shadow rays |",
+                  "|---|---|---:|---:|---:|---|"]
+        for r in report["twopass"]:
+            rays = r["rays"]
+            lines.append(f"| {r['scene']} | {r['size'][0]} x {r['size'][1]} | "
+                         f"{r['elements']} | {r['both_passes_seconds']:.2f} | "
+                         f"{r['second_pass_seconds']:.2f} | {rays['primary']:,}, "
+                         f"{rays['reflected']:,}, {rays['refracted']:,}, {rays['shadow']:,} |")
     lines.append(f"\nload average {report['loadavg_before'][0]:.1f} -> "
                  f"{report['loadavg_after'][0]:.1f} on {report['cpus']} CPUs")
     return "\n".join(lines)

@@ -65,9 +65,29 @@ def _body(record: dict) -> list[str]:
         return lines + _ray_samples(record)
     if "ray tree" in record or "samples" in record:
         return lines + _ray_tree(record)
+    if "rays" in record and "radiance" in record:
+        return lines + _two_pass(record)
     if record.get("layer") is None and "weights" not in record:
         return _generic(record)
     return lines + _sample(record)
+
+
+def _two_pass(record: dict, limit: int = 24) -> list[str]:
+    """The two-pass renderer's ray tree: each ray, what it hit, the diffuse term pass 1 gave
+    there and the specular terms; the radiance the pixel sums."""
+    out = [f"radiance {_rgb(record['radiance'])} (tone {record['tone']}): the sum of each "
+           "ray's weight x (diffuse from pass 1 + highlight)"]
+    for ray in record["rays"][:limit]:
+        head = f"{'  ' * ray['depth']}{ray['ray']}, weight {ray['weight']:.4g}: "
+        if ray["hit"] is None:
+            out.append(head + "leaves the scene (the background)")
+            continue
+        out.append(head + f"{ray['hit']} (element {ray['element']}, t {ray['t']:.4g}): "
+                   f"diffuse {_rgb(ray['diffuse (pass 1)'])}, highlight "
+                   f"{_rgb(ray['highlight'])}, k_r {ray['k_r']:g}, k_t {ray['k_t']:g}")
+    if len(record["rays"]) > limit:
+        out.append(f"  ... {len(record['rays']) - limit} more rays (--json lists them all)")
+    return out
 
 
 def _sample(record: dict) -> list[str]:

@@ -133,23 +133,45 @@ def _frames(corners):
     return area, normal, corners.mean(axis=1)
 
 
-def mesh_scene(scene, max_elements: int = 2000, elements_per_patch: int = 4) -> Elements:
-    """The scene's triangles as patches and elements, about ``max_elements`` elements in all
-    (before adaptive subdivision adds any). ``elements_per_patch``: 1 or 4 (``m`` = 1 or 2)."""
-    check_scene(scene)
-    tris, rho, emission, mesh_of, sided = [], [], [], [], []
+@dataclass
+class Surfaces:
+    """The scene's planar pieces, one row per side of a scene triangle that takes part (a
+    two-sided mesh's triangles twice, the second copy reversed), in the order an element's
+    ``surface`` counts them: ``corners`` (S, 3, 3), ``rho`` and ``emission`` (S, 3), ``mesh``
+    (S,) the scene mesh, ``two_sided`` (S,), ``triangle`` (S,) the triangle's index in its
+    mesh, ``reversed`` (S,) the reversed copy of a two-sided pair; ``scale`` the scene's size.
+    What a renderer that draws from a solution needs to find an element's source triangle
+    (the two-pass renderer's vertex normals and sides)."""
+
+    corners: np.ndarray
+    rho: np.ndarray
+    emission: np.ndarray
+    mesh: np.ndarray
+    two_sided: np.ndarray
+    triangle: np.ndarray
+    reversed: np.ndarray
+    scale: float
+
+
+def surfaces(scene) -> Surfaces:
+    """The scene's surfaces (:class:`Surfaces`), zero-area triangles left out, as
+    :func:`mesh_scene` meshes them. Raises :class:`RadiosityError` for a scene without
+    triangles or of only zero-area ones."""
+    tris, rho, emission, mesh_of, sided, index, flipped = [], [], [], [], [], [], []
     for i, mesh in enumerate(scene.meshes):
         if not len(mesh.triangles):
             continue
         corners = mesh.positions[mesh.triangles]
         copies = [corners] + ([corners[:, ::-1]] if is_two_sided(mesh) else [])
-        for c in copies:
+        for k, c in enumerate(copies):
             tris.append(c)
             n = len(c)
             rho.append(np.repeat(reflectance(mesh.material)[None], n, axis=0))
             emission.append(np.repeat(np.asarray(mesh.material.emission, float)[None], n, axis=0))
             mesh_of.append(np.full(n, i))
             sided.append(np.full(n, len(copies) == 2))
+            index.append(np.arange(n))
+            flipped.append(np.full(n, k == 1))
     if not tris:
         raise RadiosityError("no triangles to mesh into patches")
     corners = np.concatenate(tris)
@@ -159,9 +181,19 @@ def mesh_scene(scene, max_elements: int = 2000, elements_per_patch: int = 4) -> 
     keep = area > MIN_AREA * scale * scale                       # zero-area triangles drop out
     if not keep.any():
         raise RadiosityError("every triangle has zero area")
-    corners, area = corners[keep], area[keep]
-    rho, emission = np.concatenate(rho)[keep], np.concatenate(emission)[keep]
-    mesh_of, sided = np.concatenate(mesh_of)[keep], np.concatenate(sided)[keep]
+    return Surfaces(corners[keep], np.concatenate(rho)[keep], np.concatenate(emission)[keep],
+                    np.concatenate(mesh_of)[keep], np.concatenate(sided)[keep],
+                    np.concatenate(index)[keep], np.concatenate(flipped)[keep], scale)
+
+
+def mesh_scene(scene, max_elements: int = 2000, elements_per_patch: int = 4) -> Elements:
+    """The scene's triangles as patches and elements, about ``max_elements`` elements in all
+    (before adaptive subdivision adds any). ``elements_per_patch``: 1 or 4 (``m`` = 1 or 2)."""
+    check_scene(scene)
+    s = surfaces(scene)
+    corners, rho, emission, mesh_of, sided, scale = (s.corners, s.rho, s.emission, s.mesh,
+                                                     s.two_sided, s.scale)
+    area, _, _ = _frames(corners)
     if len(corners) > MAX_TRIANGLES:
         raise RadiosityError(f"{len(corners)} triangles (two-sided ones counted "
                              f"twice) are too many for radiosity (at most {MAX_TRIANGLES:,}); "

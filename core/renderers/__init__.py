@@ -17,6 +17,8 @@ frame imports only its stages:
 - ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`);
 - ``raytrace``, ``radiosity``, ``pathtrace``: the Whitted ray tracer, radiosity and the path
   tracer (:mod:`core.raytrace`, :mod:`core.radiosity`, :mod:`core.pathtrace`);
+- ``twopass``: the two-pass method, radiosity's solution for the diffuse part and Whitted's
+  rays for the specular part (:mod:`core.twopass`);
 - ``volume``: the opaque geometry by the z-buffer, then the scene's volumes ray-marched
   (emission–absorption, MIP), cut at the z-buffer's depth (:mod:`core.volume`).
 """
@@ -67,7 +69,8 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
                   inspector="core.pathtrace.inspect:inspect_pixel",
                   description="Kajiya's rendering equation by path tracing on the BVH "
                               "(core.pathtrace)",
-                  label="Path traced", emitters=True, recursive=True, textures=False,
+                  label="Path traced", emitters=True, recursive=True, caustics=True,
+                  textures=False,
                   progressive=True,
                   progressive_drawer="core.pathtrace.progressive:pathtrace_progressively",
                   samples_at_rest=256, options="core.pathtrace.options:PathtraceOptions",
@@ -75,6 +78,21 @@ register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=Tr
                            "{options.sampler}",
                   status="path traced", title="path traced", bench="gi",
                   warm_up=(("path traced", "box", {}),), quick={"samples": 1})
+register_renderer("twopass", "core.twopass.renderer:draw",
+                  inspector="core.twopass.inspect:inspect_pixel",
+                  plan_stages="core.twopass.plan:add_stages",
+                  description="the two-pass method: radiosity for the diffuse part, Whitted "
+                              "ray tracing for the specular part (core.twopass)",
+                  label="Two-pass (radiosity, then ray tracing)", emitters=True,
+                  recursive=True, textures=False, progressive=True,
+                  progressive_drawer="core.radiosity.progressive:radiosity_progressively",
+                  options="core.radiosity.options:RadiosityOptions", ray_depth=True,
+                  drawn_by="two-pass: radiosity ({options.form_factors} form factors, "
+                           "{options.solver}), then Whitted's eye rays",
+                  status="two-pass", title="two-pass", bench="gi",
+                  warm_up=(("two-pass (radiosity, then rays)", "box",
+                            {"form_factors": "raycast", "max_elements": 64}),),
+                  quick={"hemicube_resolution": 16, "max_elements": 64, "converge": 0.99})
 register_renderer("bsp", "core.renderers.painters.draw:draw_bsp",
                   inspector="core.renderers.painters.inspect:inspect_pixel",
                   plan_stages="core.renderers.painters.plan:bsp_stages",

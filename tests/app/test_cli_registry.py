@@ -3,6 +3,7 @@ a choice of the flags and named in their help."""
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -11,8 +12,10 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _help(*command) -> str:
+    # Wide enough that argparse wraps no line: it breaks words at hyphens ("depth-" "sort").
+    env = {**os.environ, "COLUMNS": "10000"}
     done = subprocess.run([sys.executable, "-m", "app", *command, "--help"], cwd=ROOT,
-                          capture_output=True, text=True, timeout=60)
+                          capture_output=True, text=True, timeout=60, env=env)
     assert done.returncode == 0, done.stderr
     return " ".join(done.stdout.split())
 

@@ -203,8 +203,8 @@ def test_mirrors_and_glass_that_a_local_renderer_draws_opaque_are_said():
 
     for renderer in ("zbuffer", "bsp", "depth-sort"):
         said = notes(renderer, transparency="off")
-        assert "the reflection in the mirror (mirror sphere): only raytrace and pathtrace " \
-               "follow reflected rays" in said, renderer
+        assert "the reflection in the mirror (mirror sphere): only raytrace, pathtrace and " \
+               "twopass follow reflected rays" in said, renderer
         assert any(n.startswith("the transparency of glass sphere (k_t > 0): drawn opaque")
                    for n in said), renderer
         shown = notes(renderer, transparency="interpolated")

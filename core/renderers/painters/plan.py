@@ -11,14 +11,14 @@ from __future__ import annotations
 from core.plan import Stage
 
 
-def bsp_stages(stages: list, triangle_stage) -> None:
+def bsp_stages(stages: list, triangle_stage, scene=None) -> None:
     """The BSP tree: its order is known before clipping."""
     _painter_stages(stages, triangle_stage, "BSP tree", before="clip triangles",
                     why="built once per scene in world space (spanning triangles split), "
                         "walked back to front from the eye")
 
 
-def depth_sort_stages(stages: list, triangle_stage) -> None:
+def depth_sort_stages(stages: list, triangle_stage, scene=None) -> None:
     """Newell's depth sort: it orders the projected triangles."""
     _painter_stages(stages, triangle_stage, "depth sort", after="project",
                     why="Newell, Newell and Sancha: sorted by farthest z, overlap tests in "

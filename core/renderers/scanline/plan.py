@@ -11,7 +11,7 @@ from __future__ import annotations
 STAGE = "scan-line visible surface"
 
 
-def add_stages(stages: list, triangle_stage) -> None:
+def add_stages(stages: list, triangle_stage, scene=None) -> None:
     """Watkins' algorithm decides visibility span by span: no depth test per pixel."""
     for i, s in enumerate(stages):
         if s.name == "depth buffer":
