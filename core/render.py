@@ -165,12 +165,9 @@ def lit_as_asked(scene: Scene, settings: RenderSettings, context: RenderContext)
     cache = context.cache(scene)
     key = f"lit by {settings.lighting_model}"
     if key not in cache:
-        from core.volume.data import attach_volumes, volumes_of
-        lit = scene_lit_by(scene, settings.lighting_model)
-        # the same volumes (the window edits them in place): the marcher takes the model
-        # from the settings
-        attach_volumes(lit, volumes_of(scene))
-        cache[key] = lit
+        # the copy has the same volumes (Scene.systems; the window edits them in place): the
+        # marcher takes the model from the settings
+        cache[key] = scene_lit_by(scene, settings.lighting_model)
     return cache[key]
 
 

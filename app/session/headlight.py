@@ -54,9 +54,7 @@ class Headlights:
     def twin(self, scene, edits: int):
         """The twin of ``scene`` (``edits``: the scene's in-place edits so far)."""
         if self._of is None or self._of[0] is not scene or self._of[1] != edits:
-            from core.volume.data import attach_volumes, volumes_of
-            twin = dataclasses.replace(scene, lights=[])
-            attach_volumes(twin, volumes_of(scene))
+            twin = dataclasses.replace(scene, lights=[])      # volumes too (Scene.systems)
             self._of, self._twin = (scene, edits), twin
         return self._twin
 
@@ -103,10 +101,7 @@ class HeadlightChoice:
         scene, view = self.scene, self.view
         if self._lights_for(view) is not None:
             import dataclasses
-            from core.volume.data import attach_volumes, volumes_of
-            lit = dataclasses.replace(scene, lights=[headlight(view, self.projection)])
-            attach_volumes(lit, volumes_of(scene))
-            scene = lit
+            scene = dataclasses.replace(scene, lights=[headlight(view, self.projection)])
         if self.course_tri and view is not None:
             from core.scene.course_tri import course_tri_scene
             scene = course_tri_scene(scene, view)

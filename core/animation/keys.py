@@ -36,7 +36,6 @@ transparency, size") and environmental changes (the lighting) beside the motion 
 
 from __future__ import annotations
 
-import weakref
 
 import numpy as np
 
@@ -58,16 +57,14 @@ KEY_OBJECT_KEYS = ("translate", "rotate", "scale")
 MAX_FPS = 1000.0
 MAX_DURATION = 24 * 3600.0
 
-_animations: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-
-
 def animation_of(scene) -> Animation | None:
-    """The animation a scene file described for ``scene`` (None for a still scene)."""
-    return _animations.get(scene)
+    """The animation a scene file described for ``scene`` (None for a still scene), kept in
+    ``Scene.systems``."""
+    return scene.systems.get("animation")
 
 
 def attach(scene, animation: Animation) -> None:
-    _animations[scene] = animation
+    scene.systems = {**scene.systems, "animation": animation}
 
 
 def read_animation(reader, doc: dict, scene) -> None:

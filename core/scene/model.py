@@ -167,6 +167,11 @@ class Scene:
     # the file does not say, and the settings choose what the scene needs
     # (core.settings.needed_transparency: interpolated where a material has k_t > 0).
     transparency: str | None = None
+    # Each system's own data on the scene, by the system's name (core.volume: "volumes",
+    # core.animation: "animation"): a copy of the scene (dataclasses.replace) carries them.
+    # A system sets its entry by replacing the dict (attach), never by editing it, so a copy
+    # made earlier keeps what it had.
+    systems: dict = field(default_factory=dict)
 
     @property
     def triangle_count(self) -> int:

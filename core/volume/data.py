@@ -28,7 +28,6 @@ copy of the file's type.
 from __future__ import annotations
 
 import math
-import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -159,14 +158,11 @@ def transfer_at(transfer: np.ndarray, value) -> np.ndarray:
     return np.stack([np.interp(v, transfer[:, 0], transfer[:, c]) for c in range(1, 5)], -1)
 
 
-# A scene's volumes, kept beside it (the scene model, below this package, has no field for
-# them): the ``[[volume]]`` reader attaches them, the renderer and the inspector read them.
-_volumes: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-
-
 def volumes_of(scene) -> list[Volume]:
-    return _volumes.get(scene, [])
+    """The scene's volumes (``Scene.systems``): the ``[[volume]]`` reader attaches them, the
+    renderer and the inspector read them, and a copy of the scene has them too."""
+    return scene.systems.get("volumes", [])
 
 
 def attach_volumes(scene, volumes) -> None:
-    _volumes[scene] = list(volumes)
+    scene.systems = {**scene.systems, "volumes": list(volumes)}
