@@ -25,6 +25,9 @@ SIZE = (160, 120)
 
 
 def _both(scene, view=None, shading="phong", **overrides):
+    # the z-buffer, whose shading modes the float32 passes serve, whatever the scene's own
+    # renderer (the two-pass scene's would solve its radiosity for every picture)
+    overrides.setdefault("renderer", "zbuffer")
     settings = RenderSettings.for_scene(scene, shading=shading, size=SIZE, **overrides)
     view = view or scene.views[0]
     wide = render(scene, view, settings, RenderContext())
