@@ -106,6 +106,21 @@ def box_layers(device, triangles, width, height):
     return layer
 
 
+def _layer_box(device, triangles, width, height):
+    """The rows and columns (a pair of slices) holding every pixel of ``triangles``, or None:
+    the union of their pixel boxes as :func:`box_layers` draws them (one pixel wider)."""
+    if len(triangles) == 0:
+        return None
+    xy = device[triangles][..., :2]
+    c0 = max(int(np.floor(xy[..., 0].min())) - 1, 0)
+    c1 = min(int(np.ceil(xy[..., 0].max())) + 1, width - 1)
+    r0 = max(height - 1 - int(np.ceil(xy[..., 1].max())) - 1, 0)
+    r1 = min(height - 1 - int(np.floor(xy[..., 1].min())) + 1, height - 1)
+    if c0 > c1 or r0 > r1:
+        return None
+    return slice(r0, r1 + 1), slice(c0, c1 + 1)
+
+
 def composite(clear, view, settings, frame, context) -> None:
     """Lay the transparent meshes of ``clear`` over ``frame`` (its colour and depth)."""
     from core.registry import get_renderer
@@ -143,23 +158,30 @@ def composite(clear, view, settings, frame, context) -> None:
             resolve(one_ad, vis, without_specular(clear, context), settings,
                     SimpleFrame(colour_ad))
         z = true_depth(vis, one)
-        covered = vis.tri >= 0
-        kt = np.zeros((height, width))
-        kt[covered] = kt_of_face[one.source[vis.tri[covered]]]
-        front = covered & (z >= depth)
+        # the layer's pixels lie in its triangles' boxes: the masks are made there alone
+        # (over the whole picture they cost 2 of a frame's 2.7 s, 624 layers at 800 x 600)
+        box = _layer_box(p.device, one.triangles, width, height)
+        if box is None:
+            continue
+        tri, colour_s, colour_ad_s = vis.tri[box], colour[box], colour_ad[box]
+        shown, below = frame.color[box], depth[box]          # views: written in place
+        covered = tri >= 0
+        kt = np.zeros(covered.shape)
+        kt[covered] = kt_of_face[one.source[tri[covered]]]
+        front = covered & (z[box] >= below)
         if settings.transparency == "screen-door":
-            front &= opacity_mask < 1.0 - kt
-            frame.color[front] = colour[front]
-            depth[front] = z[front]
+            front &= opacity_mask[box] < 1.0 - kt
+            shown[front] = colour_s[front]
+            below[front] = z[box][front]
         elif p_ad is not None:
             k = kt[front][:, None]
-            ad = colour_ad[front] / 255.0
-            specular = np.maximum(colour[front] / 255.0 - ad, 0.0)
-            blend = (1.0 - k) * ad + k * frame.color[front] / 255.0 + specular
-            frame.color[front] = to_uint8(blend)
+            ad = colour_ad_s[front] / 255.0
+            specular = np.maximum(colour_s[front] / 255.0 - ad, 0.0)
+            blend = (1.0 - k) * ad + k * shown[front] / 255.0 + specular
+            shown[front] = to_uint8(blend)
         else:
             k = kt[front][:, None]
-            blend = (1.0 - k) * colour[front] / 255.0 + k * frame.color[front] / 255.0
-            frame.color[front] = to_uint8(blend)
+            blend = (1.0 - k) * colour_s[front] / 255.0 + k * shown[front] / 255.0
+            shown[front] = to_uint8(blend)
     if settings.transparency == "screen-door":
         frame.depth = depth
