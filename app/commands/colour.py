@@ -3,6 +3,10 @@ chromaticity diagram (core.colour.diagram) with the sRGB gamut, D65 and, with ``
 the chromaticity of every material's O_d in the scene (a grey one sits on D65; O_d read as
 the sRGB code value the z-buffer shows, or as linear light in a ``tone = "srgb"`` scene). The numbers
 and words on it are Pillow's default bitmap font; the diagram itself is numpy.
+
+``python -m app colour --perception [--out perception.png]``: the perception chart instead
+(core.colour.perception): simultaneous contrast, and even steps of code beside even steps of
+light with the rises of CIE L* along each printed.
 """
 
 from __future__ import annotations
@@ -28,7 +32,11 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--out", default="chromaticity.png", help="the PNG to write")
+    parser.add_argument("--out", default=None,
+                        help="the PNG to write (default chromaticity.png, or perception.png)")
+    parser.add_argument("--perception", action="store_true",
+                        help="draw the perception chart (simultaneous contrast; even steps of "
+                             "code and of light) instead of the chromaticity diagram")
     parser.add_argument("--size", type=parse_size, default=SIZE, help="WxH (default 640x720)")
     parser.add_argument("--scene", default=None,
                         help="plot the chromaticities of this scene's material colours (O_d)")
@@ -89,14 +97,48 @@ def write_png(image: np.ndarray, out: Path) -> None:
     write_beside(out, lambda temp: Image.fromarray(image).save(temp, format="PNG"))
 
 
+def perception_labels(image: np.ndarray) -> np.ndarray:
+    """The chart's parts named on it."""
+    from PIL import Image, ImageDraw
+    from core.colour import perception
+    picture = Image.fromarray(image)
+    draw = ImageDraw.Draw(picture)
+    rows = perception.layout(image.shape[1], image.shape[0])
+    draw.text((8, 6), "the same grey on a dark and on a light ground", fill=(200, 200, 200))
+    draw.text((8, rows["even codes"][0] + 4), "even steps of sRGB code", fill=(255, 60, 60))
+    draw.text((8, rows["even light"][0] + 4), "even steps of light", fill=(255, 60, 60))
+    return np.asarray(picture)
+
+
+def perception_main(args, out: Path) -> int:
+    from core.colour import perception
+    width, height = args.size
+    write_png(perception_labels(perception.perception_chart(width, height)), out)
+    codes, light = perception.ramps()
+    print(f"wrote {out}: simultaneous contrast (code {perception.PATCH:g} on "
+          f"{perception.DARK_GROUND:g} and on {perception.LIGHT_GROUND:g}); "
+          f"{perception.RAMP_STEPS} patches of even code and of even light")
+    for name, ramp in (("even code", codes), ("even light", light)):
+        rises = perception.lightness_steps(ramp)
+        print(f"  {name:10s} L* rises " + " ".join(f"{r:4.1f}" for r in rises))
+    return 0
+
+
 def main(args) -> int:
     from core.colour.diagram import chromaticity_diagram
     from app.output_files import out_problem
+    args.out = args.out or ("perception.png" if args.perception else "chromaticity.png")
+    if args.perception and args.scene is not None:
+        print("error: --scene plots a scene's colours on the chromaticity diagram; the "
+              "perception chart takes none", file=sys.stderr)
+        return 2
     width, height = args.size
     refusal = out_problem(Path(args.out), args.scene or "-", force=False)
     if refusal:
         print(f"error: --out {args.out}: {refusal}", file=sys.stderr)
         return 2
+    if args.perception:
+        return perception_main(args, Path(args.out))
     points = colours = None
     if args.scene is not None:
         found = scene_colours(args.scene)

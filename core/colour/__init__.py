@@ -5,5 +5,7 @@ its transfer curve, and the chromaticity diagram (the course's "Color Theory / P
   015:2004), XYZ → xy, the spectral locus;
 - :mod:`core.colour.srgb`: the sRGB primaries and D65 white (IEC 61966-2-1), the RGB → XYZ
   matrix they make, the encoding curve;
-- :mod:`core.colour.diagram`: the xy diagram drawn with numpy onto an image.
+- :mod:`core.colour.diagram`: the xy diagram drawn with numpy onto an image;
+- :mod:`core.colour.perception`: CIE L*, and the perception chart (simultaneous contrast;
+  even steps of code beside even steps of light).
 """
