@@ -59,6 +59,11 @@ class Volume:
     window: tuple[float, float] | None = None             # MIP's grey ramp
     name: str = "volume"
 
+    def __post_init__(self):
+        # the readers check this on a file's header; a volume made in code is held to it
+        # too (the marcher's cells are indexed unsigned and need two samples a side)
+        check_dims(np.shape(self.values), self.name)
+
     @property
     def dims(self) -> tuple[int, int, int]:
         return tuple(int(n) for n in self.values.shape)

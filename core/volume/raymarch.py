@@ -47,7 +47,6 @@ from core.jit import njit, prange
 from core.shading.illumination import LIGHT_COLUMNS, OD, pack_surfaces
 from core.shading.models import with_model
 from core.shading.models.dispatch import light_point_calling
-from core.volume.data import MIN_SIDE, VolumeError
 from core.volume.marching import gradient_at
 
 EMISSION_ABSORPTION, MIP = 0, 1
@@ -382,9 +381,6 @@ def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient,
     numpy entry; ``step`` in world units). ``lighting_model`` names a model that lights the
     volume instead of its material's own (the settings' override); ``None`` keeps it.
     ``skip_empty=False`` takes every sample (the tests' reference for the skipping)."""
-    if min(volume.values.shape) < MIN_SIDE:    # the kernel's cells need two samples a side
-        raise VolumeError(f"{volume.name}: {' x '.join(map(str, volume.values.shape))} "
-                          f"samples; a volume needs at least {MIN_SIDE} along each axis")
     n = len(origins)
     color, transmittance, largest = np.empty((n, 3)), np.empty(n), np.empty(n)
     m_inv = np.linalg.inv(volume.world_from_index())
