@@ -104,24 +104,34 @@ def display(scene, solution, context) -> Scene:
     return held[1]
 
 
-def draw(scene, view, settings, frame, context, timer) -> None:
-    """Fill ``frame`` with the radiosity solution of ``scene`` seen through ``view``."""
-    from core.pipeline import project
-    from core.camera.film import sample_viewport
-    from core.renderers.zbuffer.draw import draw_triangles
+def solved_or_said(scene, settings, frame, context):
+    """The scene's radiosity solution (one loaded with ``--solution`` first), or None with
+    the frame black and the reason in it: nothing emits light (a warning), or the scene
+    cannot be solved (its message). The radiosity and two-pass renderers start here."""
     if not has_light(scene):
         fill(frame.color, (0.0, 0.0, 0.0))
         frame.stats.setdefault("warnings", []).append(
             f"{scene.name}: nothing emits light (no material with emission, no [[light]] "
             "of any intensity): the picture is black")
-        return
+        return None
     try:
         held = context.cache(scene).get("radiosity solution")
-        solution = held if held is not None and held.stats.get("loaded") else \
-            solution_for(scene, settings, context)
+        if held is not None and held.stats.get("loaded"):
+            return held
+        return solution_for(scene, settings, context)
     except ValueError as error:          # RadiosityError: a material, a zero-area scene
         fill(frame.color, (0.0, 0.0, 0.0))
         frame.message = f"{scene.name}: cannot solve for radiosity: {error}"
+        return None
+
+
+def draw(scene, view, settings, frame, context, timer) -> None:
+    """Fill ``frame`` with the radiosity solution of ``scene`` seen through ``view``."""
+    from core.pipeline import project
+    from core.camera.film import sample_viewport
+    from core.renderers.zbuffer.draw import draw_triangles
+    solution = solved_or_said(scene, settings, frame, context)
+    if solution is None:
         return
     timer.lap("radiosity solution")
     shown = display(scene, solution, context)

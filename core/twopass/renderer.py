@@ -62,8 +62,7 @@ def geometry_for(scene, solution, context):
 def draw(scene, view, settings, frame, context, timer) -> None:
     """Fill ``frame`` with the two-pass picture of ``scene`` seen through ``view``."""
     from core.camera.rays import camera_rays
-    from core.radiosity.mesh import has_light
-    from core.radiosity.renderer import solution_for
+    from core.radiosity.renderer import solved_or_said
     from core.radiosity.tone import tone_map
     from core.shading.illumination import to_uint8
     from core.twopass.second_pass import Rules, trace
@@ -74,22 +73,11 @@ def draw(scene, view, settings, frame, context, timer) -> None:
         fill(frame.color, (0.0, 0.0, 0.0))
         frame.message = f"{scene.name}: cannot draw by the two-pass method: {error}"
         return
-    if not has_light(scene):
-        fill(frame.color, (0.0, 0.0, 0.0))
-        frame.stats.setdefault("warnings", []).append(
-            f"{scene.name}: nothing emits light (no material with emission, no [[light]] "
-            "of any intensity): the picture is black")
+    solution = solved_or_said(scene, settings, frame, context)
+    if solution is None:
         return
-    try:
-        held = context.cache(scene).get("radiosity solution")
-        solution = held if held is not None and held.stats.get("loaded") else \
-            solution_for(scene, settings, context)
-        timer.lap("radiosity solution")
-        geometry = geometry_for(scene, solution, context)
-    except ValueError as error:          # RadiosityError: a material, a zero-area scene
-        fill(frame.color, (0.0, 0.0, 0.0))
-        frame.message = f"{scene.name}: cannot solve for radiosity: {error}"
-        return
+    timer.lap("radiosity solution")
+    geometry = geometry_for(scene, solution, context)
     frame.stats["computed"] += [SOLUTION, VERTICES, BVH]
     timer.lap("vertex radiosity, element BVH")
     width, height = settings.size
