@@ -76,20 +76,20 @@ def ramp_panel(codes, width: int, height: int) -> np.ndarray:
 
 def perception_chart(width: int, height: int, background=(36, 36, 40)) -> np.ndarray:
     """(H, W, 3) uint8: the contrast panel over the top half, the even-code ramp and the
-    even-light ramp below it, ``GAP`` pixels apart."""
+    even-light ramp below it, ``GAP`` pixels apart (rows: :func:`layout`)."""
     image = np.empty((height, width, 3), np.uint8)
     image[:] = np.array(background, np.uint8)
-    top = (height - 2 * GAP) // 2
-    band = (height - top - 2 * GAP) // 2
+    rows = layout(width, height)
+    (_, top), codes, light = rows["contrast"], *ramps()
     image[:top] = contrast_panel(width, top)
-    codes, light = ramps()
-    image[top + GAP:top + GAP + band] = ramp_panel(codes, width, band)
-    image[top + 2 * GAP + band:top + 2 * GAP + 2 * band] = ramp_panel(light, width, band)
+    for name, ramp in (("even codes", codes), ("even light", light)):
+        a, b = rows[name]
+        image[a:b] = ramp_panel(ramp, width, b - a)
     return image
 
 
 def layout(width: int, height: int) -> dict:
-    """Where :func:`perception_chart` put its parts: rows (start, stop) of each."""
+    """Where :func:`perception_chart` puts its parts: rows (start, stop) of each."""
     top = (height - 2 * GAP) // 2
     band = (height - top - 2 * GAP) // 2
     return {"contrast": (0, top), "even codes": (top + GAP, top + GAP + band),
