@@ -19,8 +19,8 @@ laid over the frame where they lie in front of the opaque surface:
   the mesh of pixels. Order-independent in principle; drawn in the same order here.
 
 Painting order matters only where transparent triangles overlap: they are grouped into layers
-whose pixel boxes do not meet (a triangle's layer is one above the highest layer under its
-box), and each layer is rasterized and shaded at once, in order.
+that share no pixel (a triangle's layer is one above the highest layer among the pixels it
+covers), and each layer is rasterized and shaded at once, in order.
 """
 
 from __future__ import annotations
@@ -31,6 +31,8 @@ import numpy as np
 
 from core.arrays import rgb_picture
 from core.jit import njit
+from core.pipeline.raster import (INVALID, PIXEL_CENTRE, SUBPIXEL_ONE, pixel_box,
+                                  snap_vertices, triangle_edges)
 from core.settings import TRANSPARENCIES
 from core.shading.illumination import to_uint8
 
@@ -82,33 +84,49 @@ def with_transparency(draw):
 
 
 @njit(cache=True, nogil=True)
-def box_layers(device, triangles, width, height):
-    """Each triangle's layer, in order: one above the highest layer under its pixel box."""
+def coverage_layers(xy_z, inv_w, triangles, width, height):
+    """Each triangle's layer, in order: one above the highest layer among the pixel centres
+    it covers. Coverage is the rasterizer's own (its fixed point, edge functions and fill
+    rule), so no two triangles of a layer share a pixel and a pixel meets its triangles in
+    rising layers: as many layers as the most triangles over one pixel, where layers by
+    pixel box were nearly one per triangle (boxes of neighbours overlap; 32,259 layers for
+    the glass bunny's BSP fragments at 64 x 48)."""
+    fixed = np.empty((xy_z.shape[0], 2), np.int32)
+    snap_vertices(xy_z, inv_w, fixed, 0, xy_z.shape[0])
     top = np.zeros((height, width), np.int32)
-    layer = np.empty(triangles.shape[0], np.int32)
+    layer = np.zeros(triangles.shape[0], np.int32)
     for t in range(triangles.shape[0]):
-        x0, x1, y0, y1 = np.inf, -np.inf, np.inf, -np.inf
-        for c in range(3):
-            p = device[triangles[t, c]]
-            x0, x1 = min(x0, p[0]), max(x1, p[0])
-            y0, y1 = min(y0, p[1]), max(y1, p[1])
-        c0, c1 = max(int(np.floor(x0)) - 1, 0), min(int(np.ceil(x1)) + 1, width - 1)
-        r0 = max(height - 1 - int(np.ceil(y1)) - 1, 0)
-        r1 = min(height - 1 - int(np.floor(y0)) + 1, height - 1)
-        m = 0
-        for r in range(r0, r1 + 1):
-            for c in range(c0, c1 + 1):
-                m = max(m, top[r, c])
-        layer[t] = m
-        for r in range(r0, r1 + 1):
-            for c in range(c0, c1 + 1):
-                top[r, c] = m + 1
+        v0, v1, v2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+        x0, y0 = np.int64(fixed[v0, 0]), np.int64(fixed[v0, 1])
+        x1, y1 = np.int64(fixed[v1, 0]), np.int64(fixed[v1, 1])
+        x2, y2 = np.int64(fixed[v2, 0]), np.int64(fixed[v2, 1])
+        if x0 == INVALID or x1 == INVALID or x2 == INVALID:
+            continue                               # the rasterizer draws nothing of it
+        area2, edge0, edge1, edge2 = triangle_edges(x0, y0, x1, y1, x2, y2)
+        if area2 == 0:
+            continue
+        i_min, i_max, j_min, j_max = pixel_box(x0, y0, x1, y1, x2, y2, width, height)
+        for step in range(2):                      # the highest layer under it, then above
+            m = layer[t]
+            for j in range(j_min, j_max + 1):
+                py = j * SUBPIXEL_ONE + PIXEL_CENTRE
+                row = height - 1 - j
+                for i in range(i_min, i_max + 1):
+                    px = i * SUBPIXEL_ONE + PIXEL_CENTRE
+                    if edge0[0] * px + edge0[1] * py + edge0[2] >= 0 \
+                            and edge1[0] * px + edge1[1] * py + edge1[2] >= 0 \
+                            and edge2[0] * px + edge2[1] * py + edge2[2] >= 0:
+                        if step == 0:
+                            m = max(m, top[row, i])
+                        else:
+                            top[row, i] = m + 1
+            layer[t] = m
     return layer
 
 
 def _layer_box(device, triangles, width, height):
     """The rows and columns (a pair of slices) holding every pixel of ``triangles``, or None:
-    the union of their pixel boxes as :func:`box_layers` draws them (one pixel wider)."""
+    the union of their pixel boxes, one pixel wider."""
     if len(triangles) == 0:
         return None
     xy = device[triangles][..., :2]
@@ -142,7 +160,8 @@ def composite(clear, view, settings, frame, context) -> None:
     kt_of_face = np.array([m.material.kt for m in clear.meshes])[p.inputs.face_surface]
     depth = frame.depth if frame.depth is not None else np.full((height, width), -np.inf)
     depth = depth.copy()
-    layers = box_layers(p.device, np.ascontiguousarray(p.triangles), width, height)
+    layers = coverage_layers(p.device, p.inv_w, np.ascontiguousarray(p.triangles), width,
+                             height)
     frame.stats["transparency layers"] = int(layers.max()) + 1
     opacity_mask = (BAYER[np.arange(height)[:, None] % 4, np.arange(width)[None, :] % 4] + 0.5) / 16
     colour, colour_ad = rgb_picture(height, width), rgb_picture(height, width)

@@ -976,4 +976,5 @@ def count_fragments(xy_z, inv_w, triangles, width, height, parallel: bool = True
 # the same pixel centres and compute the same depths (core.visibility.scanline's Watkins).
 snap_vertices = _snap_vertices
 triangle_edges = _triangle_edges
+pixel_box = _pixel_box
 checked_inputs = _checked

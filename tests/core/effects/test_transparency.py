@@ -107,3 +107,55 @@ def test_the_notes_second_recipe_adds_the_near_ones_specular_by_hand(renderer):
         pane = frame.color[CENTRE].reshape(-1, 3).astype(int)
         hand = np.array([int(255 * c + 0.5) for c in value])
         assert (np.abs(pane - hand) <= 1).all(), (mode, pane[0], hand)
+
+
+def _random_triangles(rng, count, width, height):
+    """``count`` triangles of random size over a ``width`` x ``height`` picture, some off it."""
+    centres = rng.uniform(-5, [width + 5, height + 5], (count, 2))
+    corners = centres[:, None, :] + rng.normal(0, rng.uniform(0.5, 12, (count, 1, 1)),
+                                                (count, 3, 2))
+    xy_z = np.column_stack([corners.reshape(-1, 2), np.zeros(3 * count)])
+    return xy_z, np.ones(3 * count), np.arange(3 * count).reshape(-1, 3)
+
+
+def test_layers_share_no_pixel_and_each_pixel_meets_its_triangles_in_rising_layers():
+    """The layers come from the rasterizer's own coverage (count_fragments, each triangle
+    alone, is the oracle): a layer's triangles never cover one pixel twice; a pixel's
+    triangles, in painting order, sit in strictly rising layers; each triangle sits just
+    above the highest layer it covers (so there are as few layers as the depth allows)."""
+    from core.effects.transparency import coverage_layers
+    from core.pipeline.raster import count_fragments
+    rng = np.random.default_rng(7)
+    width, height = 40, 30
+    xy_z, inv_w, triangles = _random_triangles(rng, 150, width, height)
+    layers = coverage_layers(xy_z, inv_w, triangles, width, height)
+    covers = [count_fragments(xy_z, inv_w, triangles[t:t + 1], width, height, parallel=False) > 0
+              for t in range(len(triangles))]
+    top = np.zeros((height, width), np.int64)
+    for t, covered in enumerate(covers):
+        expected = top[covered].max() if covered.any() else 0
+        if covered.any():
+            assert layers[t] == expected, t
+        top[covered] = layers[t] + 1
+    for layer in range(layers.max() + 1):
+        chosen = triangles[layers == layer]
+        together = count_fragments(xy_z, inv_w, chosen, width, height, parallel=False)
+        assert together.max() <= 1, layer
+    assert 2 < layers.max() + 1 < 40        # overlaps, but far fewer layers than triangles
+
+
+def test_a_closed_glass_sphere_is_two_layers():
+    """The sphere's back faces cover each pixel once and its front faces once: two layers,
+    however many triangles (by pixel box it was nearly one layer a triangle)."""
+    from core.scene.generators import uv_sphere
+    glass = Material(ka=0.1, kd=0.2, ks=0.5, od=(0.8, 0.9, 1.0), kt=0.6, ior=AIR)
+    ball = uv_sphere(radius=1.0)
+    sphere = Mesh(positions=ball.positions + [0.0, 0.0, -1.0], triangles=ball.triangles,
+                  material=glass)
+    scene = _scene(PANE)
+    scene = Scene(name="glass", meshes=[scene.meshes[0], sphere], views=scene.views,
+                  ambient=scene.ambient, lights=scene.lights, background=(0, 0, 0),
+                  transparency="interpolated")
+    frame = render(scene, scene.views[0], RenderSettings.for_scene(scene, size=(80, 80)))
+    assert frame.stats["transparent triangles"] > 500
+    assert frame.stats["transparency layers"] == 2
