@@ -251,7 +251,9 @@ def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer
                    c, cores, color, transmittance, largest)
 
 
-@njit(cache=True, nogil=True)
+# numpy's error model, as the parallel loop that calls it has: one compiled form (the loop's
+# unsigned core index reuses the signed one, core.jit.reuse_plain_overloads), not two (5 s).
+@njit(cache=True, nogil=True, error_model="numpy")
 def march_rays(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer,
                lit, surface, lights, ambient, eye, halfway, flat, empty, highs, first, every,
                color, transmittance, largest):
