@@ -112,7 +112,8 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     scene = lit_as_asked(scene, settings, context)
     renderer = get_renderer(settings.renderer)
     width, height = settings.size
-    frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8),
+    shape = (max(height, 0), max(width, 0), 4)
+    frame = Frame(rgbx=context.recycled("frame", shape, lambda: np.empty(shape, np.uint8)),
                   plan=plan(scene, settings.projection, settings.shading, settings.keep_aspect,
                             settings.rasterizer, settings.texture_filter, settings.renderer,
                             settings.transparency),
