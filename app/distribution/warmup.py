@@ -37,7 +37,7 @@ import time
 from pathlib import Path
 
 from app.distribution.warm_stamp import is_warm  # noqa: F401  (the viewer's import)
-from app.distribution.warmup_steps import opening_label, step_scenes
+from app.distribution.warmup_steps import foundation_label, opening_label, step_scenes
 from app.loading import shipped_scenes  # noqa: F401  (tests and the smoke set read it here)
 
 
@@ -301,8 +301,8 @@ def _steps_to_run(options) -> tuple[list, dict, str | None]:
     if first is not None:
         listed.append(opening_label(first))
     todo = warmup_pool.order(listed, COSTS, DEFAULT_COST,
-                             first=lambda label: first is not None
-                             and label == opening_label(first),
+                             first=lambda label: label == foundation_label() or (
+                                 first is not None and label == opening_label(first)),
                              later=lambda label: label in scenes)
     return todo, scenes, first
 

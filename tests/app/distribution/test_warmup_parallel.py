@@ -370,3 +370,16 @@ def test_processes_saving_one_kernel_at_once_keep_every_signature(tmp_path):
     assert result["sums"] == [15.0] * 8                # and each is its own machine code
     leftovers = [p.name for p in (tmp_path / "cache").rglob("*") if ".tmp." in p.name]
     assert leftovers == []
+
+
+def test_the_zbuffers_own_step_goes_first_beside_the_costliest():
+    """The first flat frame compiles the z-buffer's kernels, which the volume renderer's, the
+    painters' and the inspectors' steps draw through too: it is handed out first, so that a
+    second worker never compiles them beside it; the costliest step goes to the other
+    worker."""
+    class Options:
+        extra_steps, only, first = (), None, None
+    todo, _, _ = warmup._steps_to_run(Options())
+    assert todo[0] == warmup_steps.foundation_label() == "flat, perspective, edge rasterizer"
+    rest = [label for label in todo[1:] if label not in warmup_steps.step_scenes()]
+    assert rest[0] == max(rest, key=lambda label: warmup.COSTS.get(label, 0.0))
