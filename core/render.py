@@ -46,7 +46,9 @@ class Frame:
     ``depth`` ``(H, W)``: the z-buffer's canonical depth at each pixel centre (larger is nearer,
     ``-inf`` where nothing was drawn), for stages drawn after the opaque pass; ``None`` when the
     renderer keeps none or the frame is supersampled. It is the context's buffer, valid until
-    the next frame drawn with the same context. ``sample_color``: for a regular grid drawn in
+    the next frame drawn with the same context (``rgbx`` is the frame's own while the frame is
+    kept: the context hands it out again only once nobody holds it). ``sample_color``: for a
+    regular grid drawn in
     one pass, the ``(s·H, s·W, 3)`` samples before the box filter, and ``filtered`` their
     ``(H, W, 3)`` means on 0–255 before rounding.
     """

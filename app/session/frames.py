@@ -155,10 +155,12 @@ class FrameRequests:
 
         def picked(frame):
             """The frame with its depth kept for the pivot under the cursor (app.session.pick)
-            and the readout (the frame's own depth buffer: the context never hands out again
-            a buffer that a frame still holds)."""
+            and the readout: a copy of its own, since the context's buffer it points at is
+            overwritten by the next frame while this one is still shown."""
             from app.session.pick import PICK_KEY, depth_pick
-            frame.stats[PICK_KEY] = depth_pick(frame, view, settings)
+            pick = frame.stats[PICK_KEY] = depth_pick(frame, view, settings)
+            if pick is not None:
+                frame.depth = pick.depth
             return frame
 
         if playback is not None:

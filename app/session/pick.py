@@ -2,8 +2,8 @@
 
 A frame of the z-buffer family keeps the canonical depth of every pixel (``Frame.depth``:
 device z, larger nearer, ``-inf`` where nothing was drawn). :func:`depth_pick`, called on the
-render worker's thread as the frame is finished, keeps it (the frame's own array: the render
-context hands a buffer out again only once nobody holds it) with the inverse of the one
+render worker's thread as the frame is finished, keeps a copy of it (the frame's own array is
+the render context's buffer, which the next frame overwrites) with the inverse of the one
 matrix that took world points to the device for that frame: ``M_vv3dv · M · N`` (perspective)
 or ``M_vv3dv · N`` (parallel), as ``core.renderers.zbuffer.draw`` composes it. :func:`point_at`
 then turns pixel (column, row) into the world point drawn there with one 4 x 4 product: the
@@ -26,7 +26,7 @@ PICK_KEY = "pick"          # the frame's stats entry holding its DepthPick
 
 @dataclass(frozen=True)
 class DepthPick:
-    """A frame's depth buffer and the device-to-world matrix of its camera."""
+    """A frame's depth buffer (a copy) and the device-to-world matrix of its camera."""
 
     depth: np.ndarray          # (H, W) canonical depth, larger nearer, -inf empty
     to_world: np.ndarray       # (4, 4): device (x, y, z, 1) -> world, homogeneous
@@ -51,7 +51,7 @@ def depth_pick(frame, view, settings) -> DepthPick | None:
         to_world = np.linalg.inv(triangle_matrix(settings.projection, z_min, vp) @ n)
     except (ValueError, np.linalg.LinAlgError):
         return None
-    return DepthPick(depth, to_world)
+    return DepthPick(depth.copy(), to_world)
 
 
 def point_at(pick: DepthPick | None, column: int, row: int) -> np.ndarray | None:

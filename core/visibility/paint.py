@@ -193,9 +193,8 @@ def true_depth(vis, p: Painting, context=None) -> np.ndarray:
     nearer, -inf where nothing was painted), from the barycentrics: depth is affine in the
     screen, so its weights are the perspective-correct ones divided by 1/W, renormalised."""
     from core.visibility._kernels import depth_from_barycentrics
-    shape = vis.tri.shape
-    depth = (np.empty(shape) if context is None
-             else context.recycled("painted depth", shape, lambda: np.empty(shape)))
+    depth = (np.empty(vis.tri.shape) if context is None
+             else context.scratch("painted depth", vis.tri.shape))
     depth_from_barycentrics(np.ascontiguousarray(vis.tri, dtype=np.int32), vis.b1, vis.b2,
                             np.ascontiguousarray(p.triangles), p.device, p.inv_w, depth)
     return depth

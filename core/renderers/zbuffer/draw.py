@@ -157,10 +157,6 @@ def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, 
     return clipped, source, device, inv_w
 
 
-# the visibility buffer's arrays a frame or an inspection may keep (the frame its depth)
-VISIBILITY_FIELDS = ("depth", "tri", "b1", "b2")
-
-
 def _visible_surfaces(device, inv_w, triangles, width, height, rasterizer, visible_surface,
                       shading, context, stats, timer):
     """Scan-convert into the visibility buffer (depth, triangle, barycentrics) with the edge
@@ -177,9 +173,8 @@ def _visible_surfaces(device, inv_w, triangles, width, height, rasterizer, visib
         "barycentrics": (stages.shade.get_shader(shading).barycentrics
                          or getattr(timer, "keeps_arrays", False))}
     vis = rasterize(device, inv_w, triangles, width, height,
-                    out=context.recycled("visibility", (width, height),
-                                         lambda: stages.VisibilityBuffer.allocate(width, height),
-                                         fields=VISIBILITY_FIELDS),
+                    out=context.buffer("visibility", (width, height),
+                                       lambda: stages.VisibilityBuffer.allocate(width, height)),
                     **weights)
     if rasterize is not stages.rasterize:
         vis.forget_spans()       # speed: the edge rasterizer clears and shades only its spans
