@@ -165,4 +165,4 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
 
 
 register_shader(Shader("flat", _prepare_flat, _pixel, description="one colour per polygon",
-                       barycentrics=False))
+                       barycentrics=False, lit_items=lambda scene: scene.triangle_count))

@@ -107,4 +107,5 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
 
 
 register_shader(Shader("gouraud", _prepare_gouraud, _pixel, varyings=("rgb",), width=3,
-                       description="the model at the vertices, colours interpolated"))
+                       description="the model at the vertices, colours interpolated",
+                       lit_items=lambda scene: sum(len(m.positions) for m in scene.meshes)))

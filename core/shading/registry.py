@@ -34,6 +34,10 @@ class Shader(NamedTuple):
     # False: the pixel step reads only vis.tri, so the rasterizer may skip the barycentrics
     # (flat shading: a quarter of the rast's time on a real scan at 1580 x 1080).
     barycentrics: bool = True
+    # How many items (faces, vertices) the vertex step lights when it lights them all, for a
+    # scene: the z-buffer weighs it against the picture's pixels to decide whether to light
+    # only the visible ones (core.shading.shade.defers_lighting); None: it lights per pixel.
+    lit_items: Callable | None = None
 
 
 _SHADERS: dict[str, Shader] = {}

@@ -112,7 +112,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     timer.lap("cull back faces")
 
     inputs = stages.shade.prepare(shading, scene, eye, faces=kept, context=context,
-                                  lazy=scene.triangle_count >= stages.shade.LIGHT_ALL_BELOW,
+                                  lazy=stages.shade.defers_lighting(
+                                      stages.shade.get_shader(shading), scene, width * height),
                                   settings=settings)
     stats["computed"].extend(inputs.computed)
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
