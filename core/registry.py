@@ -80,6 +80,9 @@ The entries are data and the targets strings (``"package.module:function"``), im
 first drawn, inspected or planned (:func:`load`), so this module sits at the bottom of the
 core: the scene reader checks a file's ``renderer`` key against :func:`renderer_names`
 without importing a renderer, and the plan (below the renderers) reaches their stages.
+
+The renderers and the shading modes are each a :class:`core.registries.Registry`, the one
+shape of every registry; the functions here are its wrappers.
 """
 
 from __future__ import annotations
@@ -87,6 +90,8 @@ from __future__ import annotations
 import importlib
 from dataclasses import dataclass
 from typing import Callable
+
+from core.registries import Registry, load
 
 
 @dataclass(frozen=True)
@@ -147,16 +152,7 @@ class Renderer:
         return self.drawn_by.format(settings=settings, options=settings.options_of(self.name))
 
 
-def load(target: str | Callable) -> Callable:
-    """The function ``"package.module:function"`` names, its module imported now (a function
-    is its own target)."""
-    if callable(target):
-        return target
-    module, _, name = target.partition(":")
-    return getattr(importlib.import_module(module), name)
-
-
-_RENDERERS: dict[str, Renderer] = {}
+RENDERERS = Registry("renderer")
 
 
 def register_renderer(name: str, target, samples_itself: bool = False, description: str = "",
@@ -168,39 +164,35 @@ def register_renderer(name: str, target, samples_itself: bool = False, descripti
         raise TypeError(f"unknown renderer capabilities: {', '.join(sorted(unknown))}")
     capabilities.setdefault("label", name)
     capabilities.setdefault("status", f"drawn by {name}")
-    entry = Renderer(name, target, samples_itself, description, **capabilities)
-    _RENDERERS[name] = entry
-    return entry
+    return RENDERERS.register(Renderer(name, target, samples_itself, description, **capabilities))
 
 
 def unregister_renderer(name: str) -> None:
     """Remove ``name`` (a test's or a plug-in's renderer); the built-in ones stay registered."""
-    _RENDERERS.pop(name, None)
+    RENDERERS.unregister(name)
 
 
 def get_renderer(name: str) -> Renderer:
-    if name not in _RENDERERS:
-        raise ValueError(f"renderer must be one of {', '.join(_RENDERERS)}, not {name!r}")
-    return _RENDERERS[name]
+    return RENDERERS.get(name)
 
 
 def renderer_names() -> tuple[str, ...]:
-    return tuple(_RENDERERS)
+    return RENDERERS.names()
 
 
 def renderers() -> tuple[Renderer, ...]:
-    return tuple(_RENDERERS.values())
+    return RENDERERS.entries()
 
 
 def names_that(capability: str) -> tuple[str, ...]:
     """The renderers that can do ``capability`` (a field of :class:`Renderer`), in order."""
-    return tuple(r.name for r in _RENDERERS.values() if getattr(r, capability))
+    return RENDERERS.names_that(capability)
 
 
 def option_classes() -> tuple[type, ...]:
     """The renderers' options classes, each once, in registration order."""
     found = []
-    for entry in _RENDERERS.values():
+    for entry in RENDERERS.entries():
         cls = entry.options_class()
         if cls is not None and cls not in found:
             found.append(cls)
@@ -235,7 +227,13 @@ class ShadingMode:
     description: str = ""
 
 
-_SHADINGS: dict[str, ShadingMode] = {}
+def _load_built_in_shadings(name: str | None) -> None:
+    """The built-in modes, registered on the first lookup (their module is data only, like
+    the renderers' registrations)."""
+    importlib.import_module("core.shading.modes")
+
+
+SHADINGS = Registry("shading", _load_built_in_shadings)
 
 
 def register_shading(name: str, module: str | None, **fields) -> ShadingMode:
@@ -248,31 +246,20 @@ def register_shading(name: str, module: str | None, **fields) -> ShadingMode:
     if mode.lights not in (None, "faces", "vertices", "pixels"):
         raise ValueError(f"lights must be 'faces', 'vertices', 'pixels' or None, "
                          f"not {mode.lights!r}")
-    _SHADINGS[name] = mode
-    return mode
+    return SHADINGS.register(mode)
 
 
 def unregister_shading(name: str) -> None:
-    _SHADINGS.pop(name, None)
-
-
-def _built_in_shadings() -> dict[str, ShadingMode]:
-    """The table, the built-in modes registered on the first lookup (their module is data
-    only, like the renderers' registrations)."""
-    if "flat" not in _SHADINGS:
-        importlib.import_module("core.shading.modes")
-    return _SHADINGS
+    SHADINGS.unregister(name)
 
 
 def shading_names() -> tuple[str, ...]:
-    return tuple(_built_in_shadings())
+    return SHADINGS.names()
 
 
 def shading_modes() -> tuple[ShadingMode, ...]:
-    return tuple(_built_in_shadings().values())
+    return SHADINGS.entries()
 
 
 def get_shading(name: str) -> ShadingMode:
-    if name not in _built_in_shadings():
-        raise ValueError(f"shading must be one of {', '.join(_SHADINGS)}, not {name!r}")
-    return _SHADINGS[name]
+    return SHADINGS.get(name)

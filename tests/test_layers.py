@@ -87,8 +87,8 @@ def test_no_import_cycles_between_modules():
 # elements, the path tracer reads radiosity's patches).
 CORE_RANKS = {
     "core.jit": 0, "core.vectors": 0, "core.transforms": 0, "core.settings": 0, "core.paths": 0,
-    "core.registry": 0, "core.arrays": 0, "core.progressive": 0, "core.work": 0,
-    "core.prefetch": 0, "core.colour": 0,
+    "core.registry": 0, "core.registries": 0, "core.arrays": 0, "core.progressive": 0,
+    "core.work": 0, "core.prefetch": 0, "core.colour": 0,
     "core.camera": 1,
     "core.scene": 2,
     "core.context": 3,

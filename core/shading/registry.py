@@ -8,12 +8,17 @@ of shading (textured, bump-mapped) is one new module that registers one more sha
 ``register_shader(shader)`` adds one; ``get_shader(name)`` finds one (a ``ValueError`` names
 the modes there are); ``shader_names()`` lists them. A mode's module registers its shader the
 first time the mode is looked up: :func:`core.registry.register_shading` names the module
-(the built-in ones: :mod:`core.shading.modes`).
+(the built-in ones: :mod:`core.shading.modes`). The shaders are a
+:class:`core.registries.Registry` (the one shape of every registry) whose loader imports
+those modules; a shader's functions are its own, as its module is imported lazily.
 """
 
 from __future__ import annotations
 
+import importlib
 from typing import Callable, NamedTuple
+
+from core.registries import Registry
 
 
 class Shader(NamedTuple):
@@ -38,35 +43,32 @@ class Shader(NamedTuple):
     # scene: the z-buffer weighs it against the picture's pixels to decide whether to light
     # only the visible ones (core.shading.shade.defers_lighting); None: it lights per pixel.
     lit_items: Callable | None = None
+    label: str = ""                     # its words in listings ("": its name)
 
 
-_SHADERS: dict[str, Shader] = {}
-
-
-def register_shader(shader: Shader) -> None:
-    _SHADERS[shader.name] = shader
-
-
-def _load(name: str) -> None:
-    """Import the module of shading mode ``name`` (it registers its shader), on the first
-    lookup: a scene can be read and a wireframe drawn without loading numba."""
-    import importlib
+def _load(name: str | None) -> None:
+    """Import the module of shading mode ``name`` (None: of every mode), which registers its
+    shader, on the first lookup: a scene can be read and a wireframe drawn without numba."""
     from core.registry import shading_modes
     for mode in shading_modes():
         if mode.module and (name is None or mode.name == name):
             importlib.import_module(mode.module)
 
 
+SHADERS = Registry("shading", _load)
+
+
+def register_shader(shader: Shader) -> None:
+    SHADERS.register(shader if shader.label else shader._replace(label=shader.name))
+
+
+def unregister_shader(name: str) -> None:
+    SHADERS.unregister(name)
+
+
 def get_shader(name: str) -> Shader:
-    if name not in _SHADERS:
-        _load(name)
-    if name not in _SHADERS:
-        _load(None)
-    if name not in _SHADERS:
-        raise ValueError(f"shading must be one of {', '.join(_SHADERS)}, not {name!r}")
-    return _SHADERS[name]
+    return SHADERS.get(name)
 
 
 def shader_names() -> tuple[str, ...]:
-    _load(None)
-    return tuple(_SHADERS)
+    return SHADERS.names()

@@ -17,7 +17,12 @@ Mitsuba's loader routes a table to the plugin that registered its type name. So 
 A reader gets the scene reader itself: its checks (``fail``, ``number``, ``vector``,
 ``string``, ``choice``, ``table``, ``tables``, ``boolean``), ``file`` and ``folder``, a
 ``notes`` list whose lines become the scene's messages, and ``state``, a dict for what one
-file's readers share (the textures' texel budget).
+file's readers share (the textures' texel budget). A reader is the function itself or
+``"package.module:function"``, imported when first called.
+
+The scene keys, the material keys and the scene contents are each a
+:class:`core.registries.Registry` (the one shape of every registry), by the name each system
+registers under.
 """
 
 from __future__ import annotations
@@ -25,45 +30,69 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
+from core.registries import Registry, load
+
 
 @dataclass(frozen=True)
 class SceneKeys:
+    name: str                    # the system that reads them ("animation")
     keys: tuple[str, ...]
     arrays: tuple[str, ...]
-    read: Callable
+    target: str | Callable       # read(reader, doc, scene)
+    label: str = ""
+    description: str = ""
+
+    def read(self, reader, doc, scene) -> None:
+        load(self.target)(reader, doc, scene)
 
 
 @dataclass(frozen=True)
 class MaterialKeys:
+    name: str
     keys: tuple[str, ...]
-    read: Callable
+    target: str | Callable       # read(reader, table, path, material) -> material
+    label: str = ""
+    description: str = ""
+
+    def read(self, reader, table, path, material):
+        return load(self.target)(reader, table, path, material)
 
 
-_SCENE: dict[str, SceneKeys] = {}
-_MATERIAL: dict[str, MaterialKeys] = {}
+@dataclass(frozen=True)
+class SceneContents:
+    name: str                    # the top-level table array ("volume")
+    bounds: Callable             # bounds(scene) -> (n, 3) world points
+    label: str = ""
+    description: str = ""
 
 
-def register_scene_keys(name: str, keys: tuple[str, ...], read: Callable,
+SCENE_KEYS = Registry("scene keys")
+MATERIAL_KEYS = Registry("material keys")
+CONTENTS = Registry("scene contents")
+
+
+def _taken(registry: Registry, name: str, own: tuple[str, ...]) -> set[str]:
+    """The keys read already: the reader's own and those of every other entry."""
+    return set(own) | {k for entry in registry.entries() if entry.name != name
+                       for k in entry.keys}
+
+
+def register_scene_keys(name: str, keys: tuple[str, ...], read: str | Callable,
                         arrays: tuple[str, ...] = ()) -> None:
     """``read(reader, doc, scene)`` for the top-level ``keys`` (registered again under the
     same ``name``, it replaces the earlier reader: a module reloaded in a test)."""
-    taken = {k for other, entry in _SCENE.items() if other != name for k in entry.keys}
-    clash = sorted(set(keys) & (taken | set(_OWN_TOP_KEYS)))
+    clash = sorted(set(keys) & _taken(SCENE_KEYS, name, _OWN_TOP_KEYS))
     if clash:
         raise ValueError(f"scene keys {clash} are read elsewhere already")
-    _SCENE[name] = SceneKeys(tuple(keys), tuple(arrays), read)
+    SCENE_KEYS.register(SceneKeys(name, tuple(keys), tuple(arrays), read, label=name))
 
 
-def register_material_keys(name: str, keys: tuple[str, ...], read: Callable) -> None:
+def register_material_keys(name: str, keys: tuple[str, ...], read: str | Callable) -> None:
     """``read(reader, table, path, material) -> material`` for the material ``keys``."""
-    taken = {k for other, entry in _MATERIAL.items() if other != name for k in entry.keys}
-    clash = sorted(set(keys) & (taken | set(_OWN_MATERIAL_KEYS)))
+    clash = sorted(set(keys) & _taken(MATERIAL_KEYS, name, _OWN_MATERIAL_KEYS))
     if clash:
         raise ValueError(f"material keys {clash} are read elsewhere already")
-    _MATERIAL[name] = MaterialKeys(tuple(keys), read)
-
-
-_CONTENTS: dict[str, Callable] = {}
+    MATERIAL_KEYS.register(MaterialKeys(name, tuple(keys), read, label=name))
 
 
 def register_scene_contents(key: str, bounds: Callable) -> None:
@@ -71,12 +100,12 @@ def register_scene_contents(key: str, bounds: Callable) -> None:
     scene of it alone, with no ``[[geometry]]``, is read; ``bounds(scene) -> (n, 3)`` world
     points it spans (for the framing views and the default lights), called after the
     systems' readers have run."""
-    _CONTENTS[key] = bounds
+    CONTENTS.register(SceneContents(key, bounds, label=key))
 
 
 def scene_contents() -> dict[str, Callable]:
     """key → bounds of every :func:`register_scene_contents`."""
-    return dict(_CONTENTS)
+    return {entry.name: entry.bounds for entry in CONTENTS.entries()}
 
 
 _COLOUR_IMAGE: list[Callable] = []
@@ -114,24 +143,24 @@ def normal_image_maker() -> Callable | None:
 
 
 def scene_readers() -> tuple[SceneKeys, ...]:
-    return tuple(_SCENE.values())
+    return SCENE_KEYS.entries()
 
 
 def material_readers() -> tuple[MaterialKeys, ...]:
-    return tuple(_MATERIAL.values())
+    return MATERIAL_KEYS.entries()
 
 
 def top_keys() -> tuple[str, ...]:
     """Every top-level key a scene file may have: the reader's own and the registered."""
-    return _OWN_TOP_KEYS + tuple(k for entry in _SCENE.values() for k in entry.keys)
+    return _OWN_TOP_KEYS + tuple(k for entry in SCENE_KEYS.entries() for k in entry.keys)
 
 
 def table_arrays() -> tuple[str, ...]:
-    return _OWN_ARRAYS + tuple(k for entry in _SCENE.values() for k in entry.arrays)
+    return _OWN_ARRAYS + tuple(k for entry in SCENE_KEYS.entries() for k in entry.arrays)
 
 
 def material_keys() -> tuple[str, ...]:
-    return _OWN_MATERIAL_KEYS + tuple(k for entry in _MATERIAL.values() for k in entry.keys)
+    return _OWN_MATERIAL_KEYS + tuple(k for entry in MATERIAL_KEYS.entries() for k in entry.keys)
 
 
 # The reader's own keys (scenefile.py reads them); registered ones may not take their names.

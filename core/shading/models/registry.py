@@ -22,7 +22,8 @@ A model's *parameters* (its material keys beyond the Phong terms, e.g. a roughne
 declared in its registration, so that the scene reader checks them without importing numba;
 :func:`pack_model` writes them into the surface row's ``PARAMETERS`` columns in order.
 Models are numbered in the order they register; ``phong`` (FvDFH 16.2) is model 0, the
-default, and every material without a ``model`` key is lit by it.
+default, and every material without a ``model`` key is lit by it. The models are a
+:class:`core.registries.Registry` (the one shape of every registry), in that order.
 """
 
 from __future__ import annotations
@@ -30,6 +31,8 @@ from __future__ import annotations
 import dataclasses
 import importlib
 from dataclasses import dataclass
+
+from core.registries import Registry
 
 PARAMETER_COLUMNS = 4            # the surface row's room for a model's parameters
 DEFAULT_MODEL = "phong"
@@ -61,7 +64,7 @@ class LightingModel:
         return importlib.import_module(self.module)
 
 
-_MODELS: dict[str, LightingModel] = {}
+MODELS = Registry("lighting model")
 
 
 def register_lighting_model(name: str, module: str, label: str = "",
@@ -73,33 +76,30 @@ def register_lighting_model(name: str, module: str, label: str = "",
     if width > PARAMETER_COLUMNS:
         raise ValueError(f"lighting model {name!r}: its parameters need {width} columns, "
                          f"a surface row has {PARAMETER_COLUMNS}")
-    entry = LightingModel(name, module, label or name, tuple(parameters), description)
-    _MODELS[name] = entry
-    return entry
+    return MODELS.register(LightingModel(name, module, label or name, tuple(parameters),
+                                         description))
 
 
 def unregister_lighting_model(name: str) -> None:
-    _MODELS.pop(name, None)
+    MODELS.unregister(name)
 
 
 def lighting_model_names() -> tuple[str, ...]:
-    return tuple(_MODELS)
+    return MODELS.names()
 
 
 def lighting_models() -> tuple[LightingModel, ...]:
-    return tuple(_MODELS.values())
+    return MODELS.entries()
 
 
 def lighting_model(name: str) -> LightingModel:
-    if name not in _MODELS:
-        raise ValueError(f"lighting model must be one of {', '.join(_MODELS)}, not {name!r}")
-    return _MODELS[name]
+    return MODELS.get(name)
 
 
 def model_id(name: str) -> int:
     """The model's number: its row's ``MODEL`` column, the dispatch's branch."""
     lighting_model(name)
-    return list(_MODELS).index(name)
+    return MODELS.names().index(name)
 
 
 def model_of(material) -> tuple[str, dict]:

@@ -16,9 +16,10 @@ normals the file carries (trimesh 4.x); faces that are all k-gons come back from
 untriangulated (trimesh's mesh constructor would fan them), so :func:`fan` does that here.
 
 trimesh does not validate everything, and some malformed input goes through silently, so the
-format's module checks its structure first and reports the line (:data:`CHECKS`: ``obj``,
-``ply``, ``off``, ``stl``), and the result is checked here for NaN, infinities, coordinates
-beyond 1e30 and indices out of range ("vertex k has a NaN or infinite coordinate", "vertex k
+format's module checks its structure first and reports the line (:data:`MESH_FORMATS`, a
+:class:`core.registries.Registry` of the file types by extension: ``obj``, ``ply``, ``off``,
+``stl``), and the result is checked here for NaN, infinities, coordinates beyond 1e30 and
+indices out of range ("vertex k has a NaN or infinite coordinate", "vertex k
 has a coordinate beyond 1e+30", "triangle k refers to vertex [a, b, c], but there are V
 vertices", "the file holds no triangles", "the file is empty", "not a mesh file type we
 read ..."). Every trimesh exception becomes a :class:`ReaderError` naming the file ("the mesh
@@ -32,25 +33,42 @@ import contextlib
 import gc
 import io
 import logging
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
+from core.registries import Registry, load
 from core.scene.formats.errors import (MAX_COORDINATE, ReaderError, file_stem, over_budget,
                                        tolerant_of_underflow)
-from core.scene.formats.mesh.obj import checked_obj
-from core.scene.formats.mesh.off import checked_off
-from core.scene.formats.mesh.ply import checked_ply
-from core.scene.formats.mesh.stl import checked_stl
 from core.scene.formats.mesh.topology import (drop_repeated_triangles, fan, inverse_of, is_closed,
                                               merge_vertices)
 from core.scene.model import Mesh
 from core.transforms import unit_rows
 
-# Each format's pre-check, which refuses bad files and too many triangles before the mesh
-# library reads them: ``check(data, file, budget) -> (data to read, the mesh read without the
-# library or None)``.
-CHECKS = {".obj": checked_obj, ".ply": checked_ply, ".off": checked_off, ".stl": checked_stl}
-MESH_EXTENSIONS = tuple(CHECKS)               # (".obj", ".ply", ".off", ".stl")
+
+@dataclass(frozen=True)
+class MeshFormat:
+    """A mesh file type by its extension. ``check(data, file, budget) -> (data to read, the
+    mesh read without the library or None)`` refuses bad files and too many triangles before
+    the mesh library reads them."""
+
+    name: str                    # the extension, ".obj"
+    check: str | Callable        # "package.module:function": the format's own module
+    label: str = ""
+    description: str = ""
+
+
+MESH_FORMATS = Registry("mesh file type")
+MESH_FORMATS.register(MeshFormat(".obj", "core.scene.formats.mesh.obj:checked_obj", "OBJ",
+                                 "Wavefront OBJ"))
+MESH_FORMATS.register(MeshFormat(".ply", "core.scene.formats.mesh.ply:checked_ply", "PLY",
+                                 "the Stanford polygon file"))
+MESH_FORMATS.register(MeshFormat(".off", "core.scene.formats.mesh.off:checked_off", "OFF",
+                                 "the Object File Format"))
+MESH_FORMATS.register(MeshFormat(".stl", "core.scene.formats.mesh.stl:checked_stl", "STL",
+                                 "stereolithography, binary or ASCII"))
+MESH_EXTENSIONS = MESH_FORMATS.names()        # (".obj", ".ply", ".off", ".stl")
 
 _QUIET = logging.NullHandler()            # added once: a logger keeps a set-like list
 
@@ -102,11 +120,12 @@ def read_mesh(data: bytes, file: str, ext: str, budget: int | None = None) -> Me
     from core.scene.generators import MAX_TRIANGLES
     budget = MAX_TRIANGLES if budget is None else budget
     ext = ext.lower()
-    if ext not in MESH_EXTENSIONS:
-        raise ReaderError(file, f"not a mesh file type we read ({', '.join(MESH_EXTENSIONS)})")
+    if ext not in MESH_FORMATS:
+        raise ReaderError(file, f"not a mesh file type we read "
+                                f"({', '.join(MESH_FORMATS.names())})")
     if not data.strip():
         raise ReaderError(file, "the file is empty")
-    data, fast = CHECKS[ext](data, file, budget)
+    data, fast = load(MESH_FORMATS.get(ext).check)(data, file, budget)
     parts = [fast] if fast is not None else _library_parts(data, ext, file)
     positions, triangles, normals, uvs = _gathered(parts, file)
     if not triangles:
