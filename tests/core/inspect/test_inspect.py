@@ -169,12 +169,15 @@ def _plain(scene, view, settings, frame, context, timer):
 
 
 def test_a_renderer_without_an_inspector_is_refused_in_words():
-    from core.renderers import register_renderer
+    from core.renderers import register_renderer, unregister_renderer
     register_renderer("plain", _plain)
     scene = load_scene(SCENES_DIR / "sphere.toml")
-    settings = RenderSettings.for_scene(scene, renderer="plain", size=(20, 20))
-    with pytest.raises(NotInspectable, match="the plain renderer has no pixel inspector"):
-        inspect_pixel(scene, scene.views[0], settings, 3, 3)
+    try:                 # (left registered, it would show up in later tests' listings)
+        settings = RenderSettings.for_scene(scene, renderer="plain", size=(20, 20))
+        with pytest.raises(NotInspectable, match="the plain renderer has no pixel inspector"):
+            inspect_pixel(scene, scene.views[0], settings, 3, 3)
+    finally:
+        unregister_renderer("plain")
     settings = settings.replace(renderer="zbuffer")
     with pytest.raises(NotInspectable, match=r"pixel \(20, 3\) is outside the 20 x 20 frame"):
         inspect_pixel(scene, scene.views[0], settings, 20, 3)
