@@ -7,12 +7,9 @@ Whoever draws frames in a row (the viewer, the bench, an animation) keeps one
 
 from __future__ import annotations
 
-import sys
 import weakref
 
 import numpy as np
-
-KEEP_RECYCLED = 3      # objects kept a kind: the frame shown, the one drawn, one spare
 
 
 class RenderContext:
@@ -32,31 +29,6 @@ class RenderContext:
         if held is None or held[0] != key:
             self._buffers[kind] = held = (key, make())
         return held[1]
-
-    def recycled(self, kind: str, key, make):
-        """An array for ``kind`` and ``key`` that nobody outside this context holds: one made
-        before (by ``make()``) and let go since, else a new one.
-
-        Memory used again costs no page faults (a fresh 1580 x 1080 frame: about 1,700 of
-        them), and since a held object is never handed out, a frame keeps its own pixels for
-        as long as anyone keeps it. ``buffer(kind, …)`` answers the object handed out last.
-
-        Not for the visibility buffer: a frame kept while the next is drawn (the window's,
-        the bench's) would make frames alternate between two of them, and the larger working
-        set cost the bunny at 500 x 500 about 1 ms a frame (10 %) against one buffer reused
-        and its depth copied for the pivot."""
-        pool = [kept for kept in self._buffers.get(("recycled", kind), []) if kept[0] == key]
-        self._buffers[("recycled", kind)] = pool
-        self._buffers.pop(kind, None)         # (the last one handed out: not a holder)
-        for kept in pool:
-            if _let_go(kept[1]):
-                break
-        else:
-            kept = (key, make())
-            if len(pool) < KEEP_RECYCLED:
-                pool.append(kept)
-        self._buffers[kind] = kept
-        return kept[1]
 
     def normalizing_transform(self, view, projection: str):
         """``core.camera.view.normalizing_transform``, kept for the last view asked (a viewer
@@ -95,12 +67,6 @@ class RenderContext:
         if entry is None:
             entry = self._caches[owner] = {}
         return entry
-
-
-def _let_go(array) -> bool:
-    """Is ``array`` referenced only by the pool's tuple? ``sys.getrefcount`` counts this
-    function's parameter and its own argument too (a view of the array counts, its base)."""
-    return sys.getrefcount(array) <= 3
 
 
 DEFAULT_CONTEXT = RenderContext()

@@ -46,9 +46,7 @@ class Frame:
     ``depth`` ``(H, W)``: the z-buffer's canonical depth at each pixel centre (larger is nearer,
     ``-inf`` where nothing was drawn), for stages drawn after the opaque pass; ``None`` when the
     renderer keeps none or the frame is supersampled. It is the context's buffer, valid until
-    the next frame drawn with the same context (``rgbx`` is the frame's own while the frame is
-    kept: the context hands it out again only once nobody holds it). ``sample_color``: for a
-    regular grid drawn in
+    the next frame drawn with the same context. ``sample_color``: for a regular grid drawn in
     one pass, the ``(s·H, s·W, 3)`` samples before the box filter, and ``filtered`` their
     ``(H, W, 3)`` means on 0–255 before rounding.
     """
@@ -114,8 +112,7 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
     scene = lit_as_asked(scene, settings, context)
     renderer = get_renderer(settings.renderer)
     width, height = settings.size
-    shape = (max(height, 0), max(width, 0), 4)
-    frame = Frame(rgbx=context.recycled("frame", shape, lambda: np.empty(shape, np.uint8)),
+    frame = Frame(rgbx=np.empty((max(height, 0), max(width, 0), 4), dtype=np.uint8),
                   plan=plan(scene, settings.projection, settings.shading, settings.keep_aspect,
                             settings.rasterizer, settings.texture_filter, settings.renderer,
                             settings.transparency),

@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 import logging
 import threading
-import weakref
 from collections import deque
 
 import numpy as np
@@ -66,9 +65,7 @@ class InspectorTools:
         self._edits = state.scene_edits            # the scene's in-place edits seen so far
         self.changed = False                       # the picture to show changed: upload it
         self.reference = None                      # app.viewer.reference.ReferenceView (--reference)
-        # (a weak reference to the frame, its triangle ids) for the status line: weak, so that
-        # the context can use the old frame's memory again (RenderContext.recycled)
-        self._picked = (lambda: None, (None, ()))
+        self._picked = (None, (None, ()))          # (frame, its triangle ids) for the status line
         self._picking = None                       # the thread drawing them
         self.profile_row: int | None = None        # the row whose intensity is plotted
         self.wake = lambda: None                   # the window's: wakes its loop (any thread)
@@ -236,7 +233,7 @@ class InspectorTools:
         kernels: seconds for a large mesh; a fresh context, so that no cache is shared with
         the UI thread), for scenes up to ``MAX_PICKED`` triangles."""
         done_for, found = self._picked
-        if done_for() is frame:
+        if done_for is frame:
             return found
         s = self.state
         if (self._picking is None and s.view is not None and s.scene is not None
@@ -261,7 +258,7 @@ class InspectorTools:
                 [(m.name, len(m.triangles)) for m in drawn[0].meshes]
         except (NotInspectable, ValueError, MemoryError) as error:
             log.info("triangle ids: %s", error)
-        self._picked, self._picking = (weakref.ref(frame), found), None
+        self._picked, self._picking = (frame, found), None
 
     # -- buffer views ------------------------------------------------------------------------
     def buffer_names(self) -> tuple[str, ...]:

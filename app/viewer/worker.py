@@ -243,7 +243,4 @@ class RenderWorker:
                     self._done += 1
                 else:
                     self._keep(result, job if result.error is None else None)
-            # let go of the frame here: held through the next job, its memory could not be
-            # handed out again (core.context.RenderContext.recycled)
-            result = None
             self._wake()

@@ -68,7 +68,6 @@ def _phong_faces_parallel(positions, triangles, faces, normals, polygon, polygon
                     face_surface, surfaces, lights, ambient, eye, halfway, out)
 
 
-
 def _mesh_polygons(mesh) -> tuple[np.ndarray, np.ndarray]:
     """``(polygon (T,), point (T, 3))`` of one mesh: each face's polygon (its lowest face; -1
     for a face alone in its plane) and, at that lowest face's row, the polygon's area-weighted

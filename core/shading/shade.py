@@ -206,7 +206,7 @@ PARALLEL_ITEMS = 4_096
 LIGHT_ALL_BELOW = 8_192
 # Past that, the pass costs about as much per covered pixel as lighting one face or vertex
 # does: the z-buffer defers only when the items outnumber a fifth of the picture's pixels.
-# Measured on the bunny (69,451 faces, 34,834 vertices), the vertex and pixel steps with
+# Measured on the bunny (69,451 faces, 36,218 vertices), the vertex and pixel steps with
 # deferred lighting against all lit: at 1580 x 1080 Gouraud 7.03 against 5.68 ms, flat 5.83
 # against 5.10; at 500 x 500 Gouraud 2.12 against 1.91, flat 2.43 against 2.69 (deferred
 # wins: 0.28 faces a pixel); the bunny subdivided to 1.1M faces defers at any size here.

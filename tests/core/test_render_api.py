@@ -4,7 +4,6 @@ renderers by name."""
 from __future__ import annotations
 
 import dataclasses
-import weakref
 
 import numpy as np
 import pytest
@@ -248,30 +247,3 @@ def test_the_path_tracer_says_it_takes_no_point_light_through_glass():
     under = (slice(24, 36), slice(0, 48))              # the bottom third: floor under water
     assert traced.color[under].mean() > 40 > path.color[under].mean()
 
-
-def test_a_kept_frame_keeps_its_pixels_while_the_context_draws_on():
-    """The context hands a frame's pixels out again only once nobody holds them: a frame kept
-    (as the window keeps the one it shows) is never drawn over by the next frames, and memory
-    let go is used again (the same array, no new pages)."""
-    scene = load_scene(SCENES_DIR / "torus.toml")
-    context = RenderContext()
-    first_view = scene.views[0]
-    other = dataclasses.replace(first_view, prp=tuple(np.asarray(first_view.prp) * 1.3))
-    settings = RenderSettings.for_scene(scene, size=(64, 48))
-    kept = render(scene, first_view, settings, context)
-    pixels = kept.color.copy()
-    for _ in range(3):
-        later = render(scene, other, settings, context)
-        assert later.rgbx is not kept.rgbx
-    assert np.array_equal(kept.color, pixels)
-    assert not np.array_equal(later.color, pixels)          # the other view: other pixels
-    del later
-    # what was let go is kept and comes back (a weak reference: alive only through the pool)
-    again = render(scene, other, settings, context)
-    rgbx = weakref.ref(again.rgbx)
-    for _ in range(3):
-        del again
-        assert rgbx() is not None
-        again = render(scene, other, settings, context)
-        assert again.rgbx is rgbx()
-    assert again.rgbx is not kept.rgbx
