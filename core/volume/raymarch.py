@@ -271,8 +271,8 @@ def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer
     (emission–absorption) or ``largest`` (N,) (MIP; −inf where the ray misses the grid).
     ``empty`` and ``highs``: each block's σ = 0 everywhere, its largest sample;
     ``coarse_empty`` and ``coarse_highs`` the same of each coarse block
-    (:func:`coarse_blocks`); ``constants``: each block's one value or NaN
-    (:func:`block_constants`); ``cores``:
+    (:func:`coarse_blocks`); ``constants``: each block's one value or NaN, its colour and
+    one step's ``1 − α`` (:func:`classified_constants`); ``cores``:
     numba's threads (read here: the kernel reading it would not be cached). The rays are
     dealt round-robin: the loop's static split would give each core one contiguous run (a
     frame's top rows to one, its middle to the other)."""
@@ -342,20 +342,19 @@ def march_rays(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, tra
                     s = max(s, int(math.ceil((out - ta) / step - 0.5)) - 1)
                     continue
                 block_end = out
-                c = constants[bi, bj, bk]
+                one = constants[bi, bj, bk]
                 last = min(int(math.ceil((out - ta) / step - 0.5)) - 1, segments - 2)
-                if c == c and last >= s:
+                if one[0] == one[0] and last >= s:
                     # one value all through the block: its samples s..last in closed form
                     if mode == MIP:
-                        top = max(top, c)
+                        top = max(top, one[0])
                         s = last
                         continue
-                    r, g, b, sigma = classify(transfer, c)
-                    kept = (1.0 - (1.0 - math.exp(-sigma * step))) ** (last - s + 1)
+                    kept = one[4] ** (last - s + 1)
                     if T * kept >= EARLY_TERMINATION:
-                        cr += T * (1.0 - kept) * r
-                        cg += T * (1.0 - kept) * g
-                        cb += T * (1.0 - kept) * b
+                        cr += T * (1.0 - kept) * one[1]
+                        cg += T * (1.0 - kept) * one[2]
+                        cb += T * (1.0 - kept) * one[3]
                         T *= kept
                         s = last
                         continue
@@ -450,6 +449,19 @@ def empty_blocks(transfer, lows, highs) -> np.ndarray:
     return ~(at_ends | (between > 0))
 
 
+def classified_constants(values, transfer, step) -> np.ndarray:
+    """``(..., 5)``: each block's one value (NaN where it has none), its colour as the transfer
+    function gives it, and ``1 − α`` of one full step there (the march's own ``1 − (1 −
+    e^{−σ·Δt})``)."""
+    transfer = np.asarray(transfer, np.float64)
+    out = np.empty(values.shape + (5,))
+    out[..., 0] = values
+    for column in range(1, 5):                 # numpy's interp: classify's rule (NaN stays)
+        out[..., column] = np.interp(values, transfer[:, 0], transfer[:, column])
+    out[..., 4] = 1.0 - (1.0 - np.exp(-out[..., 4] * step))
+    return out
+
+
 def coarse_blocks(empty, highs):
     """``(coarse_empty, coarse_highs)``: whether every block of each coarse block of
     :data:`COARSE`³ is empty, and its largest sample (the grid of blocks padded with empty
@@ -483,11 +495,11 @@ def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient,
     lo, hi = float(lows.min()), float(highs.max())          # the data's range
     empty = empty_blocks(np.asarray(transfer, np.float64), lows, highs)
     lit = volume.lighting == "gradient" and volume.mode != "mip"
-    constants = block_constants(volume, 1 if lit else 0)
+    constants = classified_constants(block_constants(volume, 1 if lit else 0), transfer, step)
     if not skip_empty:
         empty, highs = np.zeros_like(empty), np.full_like(highs, np.inf)
     if not (skip_empty and skip_constant):
-        constants = np.full_like(constants, np.nan)
+        constants[..., 0] = np.nan
     march(np.ascontiguousarray(volume.values), sample_gradients(volume) if lit else _NO_GRADIENTS, m_inv, np.ascontiguousarray(origins, dtype=np.float64),
           np.ascontiguousarray(directions, dtype=np.float64),
           np.ascontiguousarray(t_lo, dtype=np.float64), np.ascontiguousarray(t_hi, dtype=np.float64),
