@@ -3,8 +3,8 @@ render worker's), rendered at once (:meth:`FrameRequests.update`, for the PNG pa
 tests) or on the worker (:meth:`FrameRequests.request`, then :meth:`FrameRequests.accept`), and
 numba's compiles heard while they run (the slow first frame's notice, the window's progress).
 
-:class:`FrameRequests` is a part of :class:`app.session.state.ViewerState`, which holds the
-fields (``frame``, ``dirty``, ``render_error``, ...).
+:class:`FrameRequests` is the ``frames`` part of :class:`app.session.state.ViewerState`, which
+holds the fields (``frame``, ``dirty``, ``render_error``, ...).
 """
 
 from __future__ import annotations
@@ -101,28 +101,28 @@ def compiling() -> bool:
 
 
 class FrameRequests:
-    """The next frame: its job, asked for and taken; the last frame's summary."""
+    """The next frame: its job, asked for and taken; the last frame's summary
+    (``state.frames``)."""
 
-    def frame_summary(self) -> str:
+    def __init__(self, state):
+        self.state = state        # the ViewerState: the fields live there, not here
+
+    def summary(self) -> str:
         """One log line for the last frame: which view, settings, size and time."""
-        label = self.view.label if self.view_count else "-"
-        message = getattr(self.frame, "message", None)
-        stats = getattr(self.frame, "stats", None) or {}
+        s, views = self.state, self.state.views
+        label = views.current.label if views.count else "-"
+        message = getattr(s.frame, "message", None)
+        stats = getattr(s.frame, "stats", None) or {}
         moment = f" t={stats['time']:.3f}" if "time" in stats else ""
-        return (f"frame {self.frame_count}: {self.view_label} ({label}) "
-                f"projection={self.projection} shading={self.shading} "
-                f"renderer={self.renderer_name} filter={self.texture_filter}{moment} "
-                f"rasterizer={self.rasterizer} aspect={'kept' if self.keep_aspect else 'stretched'} "
-                f"size={self.size[0]}x{self.size[1]} render={self.frame_seconds * 1e3:.1f}ms"
-                + (" camera=moved" if self.hand_view is not None else "")
+        return (f"frame {s.frame_count}: {views.label} ({label}) "
+                f"projection={s.projection} shading={s.shading} "
+                f"renderer={s.renderer_name} filter={s.texture_filter}{moment} "
+                f"rasterizer={s.rasterizer} aspect={'kept' if s.keep_aspect else 'stretched'} "
+                f"size={s.size[0]}x{s.size[1]} render={s.frame_seconds * 1e3:.1f}ms"
+                + (" camera=moved" if s.hand_view is not None else "")
                 + (f" message={message!r}" if message else ""))
 
-    @property
-    def renderable(self) -> bool:
-        """A zero-sized framebuffer (a minimised window) is never rendered."""
-        return self.size[0] > 0 and self.size[1] > 0
-
-    def frame_job(self):
+    def job(self):
         """What the next frame needs: ``run(control=None)`` that renders it (a
         :class:`app.viewer.worker.Control` lets it report progress, hand over pictures on the
         way and stop when superseded), and a short description.
@@ -131,19 +131,21 @@ class FrameRequests:
         drawn progressively; everything else is one ``core.render``. The bump demo's map and
         mode are set on its material here, on the thread that renders.
         """
-        base, view, settings, renderer = self.scene, self.view, self.settings(), self.renderer
-        lights_for, course_tri = self._lights_for(view), self.course_tri and view is not None
-        what = f"{self.view_label}, {self.projection}, {self.shading}"
-        context = self.context
-        demo = (self.bump_map, self.bump) if self.is_bump_demo else None
-        playback = self.playback
-        isos = {v: iso for v, iso in self.iso_wanted.items() if v.iso != iso}
+        s = self.state
+        base, view, settings, renderer = s.scene, s.views.current, s.choices.settings(), s.renderer
+        lights_for, course_tri = s.lighting.lights_for(view), s.course_tri and view is not None
+        what = f"{s.views.label}, {s.projection}, {s.shading}"
+        context = s.context
+        demo = (s.bump_map, s.bump) if s.choices.is_bump_demo else None
+        playback = s.playback
+        isos = {v: iso for v, iso in s.iso_wanted.items() if v.iso != iso}
+        extract = s.volumes.extract
 
         def prepare(control=None):
             """On the rendering thread: surfaces re-extracted, the demo's map set; returns
             the scene to draw (headlit, with the course's .tri rules)."""
             if isos:
-                self._extract(base, isos, control)
+                extract(base, isos, control)
             if demo is not None:
                 from core.texture.demo_scene import apply_demo_options
                 apply_demo_options(base, *demo)
@@ -168,8 +170,8 @@ class FrameRequests:
             t = playback.time
             # render_at numbers the keyed camera (when there is one) before the file's views
             keyed = 1 if playback.animation.view is not None else 0
-            index = (self.hand_view if self.hand_view is not None     # the user's camera
-                     else 0 if self.keyed_view else self.view_index + keyed)
+            index = (s.hand_view if s.hand_view is not None     # the user's camera
+                     else 0 if s.keyed_view else s.view_index + keyed)
             what = f"t = {t:.2f} s, {what}"
 
             def run(control=None):
@@ -196,13 +198,14 @@ class FrameRequests:
         traceback goes to the log), the last good frame stays, and another mode or view can
         still be chosen.
         """
-        if not self.dirty or not self.renderable:
+        s = self.state
+        if not s.dirty or not s.renderable:
             return False
-        first_of_mode = self.shading not in self._modes_rendered
-        watch = (announce_compiles(self.compile_notice_after) if first_of_mode
+        first_of_mode = s.shading not in s._modes_rendered
+        watch = (announce_compiles(s.compile_notice_after) if first_of_mode
                  else contextlib.nullcontext())
-        run, _ = self.frame_job()
-        self._clear_failed_open = bool(self.failed_open)
+        run, _ = self.job()
+        s._clear_failed_open = bool(s.failed_open)
         start = time.perf_counter()
         try:
             with watch:
@@ -219,50 +222,54 @@ class FrameRequests:
         was made; the frame arrives through :meth:`accept`. Until it does, a picture the
         worker finishes for an older request of the same scene may still come (a camera that
         moves faster than frames are drawn); another scene's never does."""
-        if not self.dirty or not self.renderable:
+        s = self.state
+        if not s.dirty or not s.renderable:
             return False
-        run, what = self.frame_job()
-        if self.gate is not None:
-            run = self.gate(run)
-        worker.submit(run, what, control=True, keep_older=self.scene is self._requested_scene)
-        self._clear_failed_open = bool(self.failed_open)    # its frame is the next success
-        self._requested_scene = self.scene
-        self.dirty = False
+        run, what = self.job()
+        if s.gate is not None:
+            run = s.gate(run)
+        worker.submit(run, what, control=True, keep_older=s.scene is s._requested_scene)
+        s._clear_failed_open = bool(s.failed_open)    # its frame is the next success
+        s._requested_scene = s.scene
+        s.dirty = False
         return True
 
     def accept(self, result) -> bool:
         """Take a finished request (or a picture on its way: ``result.final`` False) from the
         worker; returns whether a new frame is shown."""
+        s = self.state
         if result.error is not None:
             self._failed(result.error)
             return False
         if not getattr(result, "final", True):
-            self.frame, self.frame_partial = result.frame, True
-            self.frame_seconds = result.seconds
+            s.frame, s.frame_partial = result.frame, True
+            s.frame_seconds = result.seconds
             return True
         self._shown(result.frame, result.seconds)
         return True
 
     def _failed(self, error: BaseException) -> None:
         from core.volume.data import VolumeError
-        if isinstance(error, VolumeError) and self.extracting:
+        s = self.state
+        if isinstance(error, VolumeError) and s.volumes.extracting:
             # the surface could not be re-extracted: the last good one stays, and is asked for
-            self.volume_message = f"{error}; the surface stays at the last good iso"
-            self.iso_wanted = {v: v.iso for v in self.iso_wanted}
-            log.info("volume: %s", self.volume_message)
-            self.dirty = False
+            s.volume_message = f"{error}; the surface stays at the last good iso"
+            s.iso_wanted = {v: v.iso for v in s.iso_wanted}
+            log.info("volume: %s", s.volume_message)
+            s.dirty = False
             return
-        self.render_error = (f"could not render {self.view_label} "
-                             f"({self.projection}, {self.shading}): "
-                             f"{type(error).__name__}: {error}")
-        log.error("%s", self.render_error, exc_info=error)
-        self.dirty = False
+        s.render_error = (f"could not render {s.views.label} "
+                          f"({s.projection}, {s.shading}): "
+                          f"{type(error).__name__}: {error}")
+        log.error("%s", s.render_error, exc_info=error)
+        s.dirty = False
 
     def _shown(self, frame, seconds: float) -> None:
-        self.frame, self.render_error, self.frame_partial = frame, None, False
-        if self._clear_failed_open:
-            self.failed_open, self._clear_failed_open = "", False
-        self.frame_seconds = seconds
-        self._modes_rendered.add(self.shading)
-        self.frame_count += 1
-        self.dirty = False
+        s = self.state
+        s.frame, s.render_error, s.frame_partial = frame, None, False
+        if s._clear_failed_open:
+            s.failed_open, s._clear_failed_open = "", False
+        s.frame_seconds = seconds
+        s._modes_rendered.add(s.shading)
+        s.frame_count += 1
+        s.dirty = False

@@ -65,44 +65,51 @@ class Headlights:
         return twin
 
 
-class HeadlightChoice:
-    """The headlight on or off, and the scene it lights (a part of
-    :class:`app.session.state.ViewerState`)."""
+class Lighting:
+    """Which lights draw the frame: the scene's own, or the headlight in their place; and the
+    scene as the frame shown was drawn (``state.lighting`` of
+    :class:`app.session.state.ViewerState`, which holds the fields)."""
+
+    def __init__(self, state):
+        self.state = state        # the ViewerState: the fields live there, not here
 
     def set_headlight(self, on: bool) -> None:
-        if bool(on) != self.headlight:
-            self.headlight, self.dirty = bool(on), True
+        s = self.state
+        if bool(on) != s.headlight:
+            s.headlight, s.dirty = bool(on), True
 
     @property
-    def headlight_note(self) -> str:
+    def note(self) -> str:
         """The status line's words for the headlight: "" when it is off."""
-        if not self.headlight:
+        s = self.state
+        if not s.headlight:
             return ""
-        if self.playback is not None:
+        if s.playback is not None:
             return "headlight off on animated scenes: the scene's keyed lights are used"
-        return headlight_refused(self.renderer_entry) or "headlight on: a light at the eye"
+        return headlight_refused(s.choices.renderer_entry) or "headlight on: a light at the eye"
 
-    def _lights_for(self, view):
+    def lights_for(self, view):
         """None when the scene's own lights draw the next frame; else ``lit(scene)`` giving
         the scene lit by the headlight at ``view``'s eye (called on the rendering thread)."""
-        if (not self.headlight or view is None or self.playback is not None
-                or headlight_refused(self.renderer_entry)):
+        s = self.state
+        if (not s.headlight or view is None or s.playback is not None
+                or headlight_refused(s.choices.renderer_entry)):
             return None
-        if self._headlights is None:
-            self._headlights = Headlights()
-        headlights, projection = self._headlights, self.projection
-        return lambda scene: headlights.lit(scene, self.scene_edits, view, projection)
+        if s._headlights is None:
+            s._headlights = Headlights()
+        headlights, projection = s._headlights, s.projection
+        return lambda scene: headlights.lit(scene, s.scene_edits, view, projection)
 
     def drawn_scene(self):
         """The scene as the frame shown was drawn, for work beside the renderer (the
         inspector's records and buffer views): the course's .tri rules applied, and under the
         headlight a copy of its own lit at the eye (not the renderer's twin, which the
         worker's next frame relights)."""
-        scene, view = self.scene, self.view
-        if self._lights_for(view) is not None:
-            import dataclasses
-            scene = dataclasses.replace(scene, lights=[headlight(view, self.projection)])
-        if self.course_tri and view is not None:
+        s = self.state
+        scene, view = s.scene, s.views.current
+        if self.lights_for(view) is not None:
+            scene = dataclasses.replace(scene, lights=[headlight(view, s.projection)])
+        if s.course_tri and view is not None:
             from core.scene.course_tri import course_tri_scene
             scene = course_tri_scene(scene, view)
         return scene

@@ -128,43 +128,49 @@ def render_animated(animation, t: float, settings, context, view_index: int, con
         return render_at(animation, t, settings, context, view_index=view_index)
 
 
-class PlaybackChoices:
-    """An animated scene's play, pause, step, seek and speed (a part of
-    :class:`app.session.state.ViewerState`; ``playback`` is None for a still scene)."""
+class Player:
+    """An animated scene's play, pause, step, seek and speed, as the window's controls ask
+    (``state.player`` of :class:`app.session.state.ViewerState`, whose ``playback`` field is
+    the :class:`Playback` moved, None for a still scene). Each move that changes the moment
+    shown sets the state's ``dirty``."""
+
+    def __init__(self, state):
+        self.state = state        # the ViewerState: the fields live there, not here
 
     @property
     def animated(self) -> bool:
-        return self.playback is not None
+        return self.state.playback is not None
 
     @property
     def playing(self) -> bool:
-        return self.playback is not None and self.playback.playing
+        return self.animated and self.state.playback.playing
 
-    def toggle_play(self, now: float) -> None:
-        if self.playback is not None:
-            self.playback.toggle(now)
-            self.dirty = True
+    def toggle(self, now: float) -> None:
+        if self.animated:
+            self.state.playback.toggle(now)
+            self.state.dirty = True
 
-    def step_frame(self, frames: int) -> None:
-        if self.playback is not None:
-            self.playback.step(frames)
-            self.dirty = True
+    def step(self, frames: int) -> None:
+        if self.animated:
+            self.state.playback.step(frames)
+            self.state.dirty = True
 
     def seek(self, t: float, now: float | None = None) -> None:
-        if self.playback is not None and float(t) != self.playback.time:
-            self.playback.seek(t, now)
-            self.dirty = True
+        if self.animated and float(t) != self.state.playback.time:
+            self.state.playback.seek(t, now)
+            self.state.dirty = True
 
     def set_speed(self, speed: float) -> None:
-        if self.playback is not None:
-            self.playback.set_speed(speed)
+        if self.animated:
+            self.state.playback.set_speed(speed)
 
     def tick(self, now: float, busy: bool) -> bool:
         """While playing: move time on (the wall clock times the speed) unless the last frame
         asked for is still being drawn (``busy``: the picture then skips ahead)."""
-        if self.playback is None or busy or not self.renderable:
+        s = self.state
+        if s.playback is None or busy or not s.renderable:
             return False
-        if self.playback.tick(now):
-            self.dirty = True
+        if s.playback.tick(now):
+            s.dirty = True
             return True
         return False

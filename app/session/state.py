@@ -5,10 +5,10 @@ settings the user chose (projection, shading, rasterizer, kept aspect, the ``.tr
 code's rules), the picture's size, the messages to show (invalid views from the reader, in
 their own collapsed strip; scenes that could not be opened; the current frame's own message),
 the last :class:`core.render.Frame` and a ``dirty`` flag. The window changes it through its
-methods and reads it to draw; a frame is rendered only when something that changes the
+parts' methods and reads it to draw; a frame is rendered only when something that changes the
 picture changed, and never for a zero-sized (minimised) framebuffer: at once
-(:meth:`ViewerState.update`, for the PNG path and the tests) or on the render worker's thread
-(:meth:`ViewerState.request`, then :meth:`ViewerState.accept`, for the window).
+(``state.frames.update()``, for the PNG path and the tests) or on the render worker's thread
+(``state.frames.request(worker)``, then ``state.frames.accept(result)``, for the window).
 
 Views are numbered by their position in the file (``core.scene.view_numbers``): the window
 steps over invalid ones and says "view 7 of 20 (6 invalid)".
@@ -24,12 +24,16 @@ which volume, the iso values asked for (re-extracted by the next frame's job, on
 thread), the transfer edits (checked; a bad one keeps the last good function with a message)
 and the slice shown among the buffer views.
 
-It is one dataclass made of parts, one job each, that share its fields: the views and the
-camera's history (:mod:`app.session.views`), the render settings chosen
-(:mod:`app.session.choices`), the headlight (:mod:`app.session.headlight`), playing an
-animation (:mod:`app.session.playback`), the messages (:mod:`app.session.messages`), the
-volume controls (:mod:`app.session.volumes`) and the frames asked for and taken
-(:mod:`app.session.frames`). Opening a scene and the picture's size are here.
+It is one dataclass that holds its parts, one job each, as attributes; each part reads and
+changes the state's fields through its ``state``: ``views``, the view shown and the camera's
+history (:mod:`app.session.views`); ``choices``, the render settings chosen and the
+:class:`core.settings.RenderSettings` they make (:mod:`app.session.choices`); ``lighting``, the
+headlight (:mod:`app.session.headlight`); ``player``, playing an animation
+(:mod:`app.session.playback`); ``messages``, what there is to say
+(:mod:`app.session.messages`); ``volumes``, the volume controls (:mod:`app.session.volumes`);
+and ``frames``, the frames asked for and taken (:mod:`app.session.frames`). Held, not
+inherited: a mixin's methods would all land on the one class. Opening a scene and the
+picture's size are here.
 
 No GL and no window library here, so everything about it is testable without a display.
 """
@@ -44,9 +48,9 @@ from app.session.choices import RenderChoices, bump_demos
 # render, announce_compiles and compile_count: the front door's callers import them from here
 from app.session.frames import (FrameRequests, announce_compiles, compile_count,  # noqa: F401
                                 render)
-from app.session.headlight import HeadlightChoice
+from app.session.headlight import Lighting
 from app.session.messages import Messages
-from app.session.playback import PlaybackChoices
+from app.session.playback import Player
 from app.session.views import CameraViews
 from app.session.volumes import VolumeChoices
 from core.scene import view_numbers
@@ -66,13 +70,19 @@ def reader_errors() -> tuple[type[BaseException], ...]:
     return (ReaderError, OSError)
 
 
+def _part():
+    """A field for one of the state's parts: made by ``__post_init__``, left out of the
+    constructor, the repr and comparisons (each part points back at the state)."""
+    return field(init=False, repr=False, compare=False)
+
+
 @dataclass
-class ViewerState(CameraViews, RenderChoices, HeadlightChoice, PlaybackChoices, Messages,
-                  VolumeChoices, FrameRequests):
-    """Scene, settings, messages and the last frame. Change it only through its methods.
+class ViewerState:
+    """Scene, settings, messages and the last frame. Change it only through its parts'
+    methods (and the few here that concern it whole: opening a scene, the picture's size).
 
     Every field is declared here, the one place the viewer's state lives; what is done with
-    them is in the parts it is made of, one job each (the modules beside this one)."""
+    them is in the parts it holds, one job each (the modules beside this one)."""
 
     scene: Scene
     scene_source: str
@@ -153,8 +163,20 @@ class ViewerState(CameraViews, RenderChoices, HeadlightChoice, PlaybackChoices, 
     _camera_redo: list = field(default_factory=list, repr=False)
     _remembered_gesture: object = field(default=None, repr=False)
     _headlights: object = field(default=None, repr=False)   # app.session.headlight.Headlights
+    # The parts, each with its own job over the fields above (made in __post_init__).
+    views: CameraViews = _part()
+    choices: RenderChoices = _part()
+    lighting: Lighting = _part()
+    player: Player = _part()
+    messages: Messages = _part()
+    volumes: VolumeChoices = _part()
+    frames: FrameRequests = _part()
 
     def __post_init__(self) -> None:
+        self.views, self.choices = CameraViews(self), RenderChoices(self)
+        self.lighting, self.player = Lighting(self), Player(self)
+        self.messages, self.volumes = Messages(self), VolumeChoices(self)
+        self.frames = FrameRequests(self)
         self._scene_defaults(keep_settings=True)
         self.size = (int(self.size[0]), int(self.size[1]))
         if self.context is None:
@@ -207,28 +229,33 @@ class ViewerState(CameraViews, RenderChoices, HeadlightChoice, PlaybackChoices, 
             if self.renderable and shown != size:
                 self.dirty = True
 
+    @property
+    def renderable(self) -> bool:
+        """A zero-sized framebuffer (a minimised window) is never rendered."""
+        return self.size[0] > 0 and self.size[1] > 0
+
     def open_scene(self, source: str | Path) -> bool:
         """Replace the scene by ``source``; on a reader error keep the current one.
 
-        Returns whether it opened. A failure's message goes into :attr:`messages` — the user's
+        Returns whether it opened. A failure's message goes into the messages — the user's
         scene, view and settings stay as they were; so does a file whose views are all
         invalid (its messages are shown, there is nothing of it to draw). A new scene starts
         at its first valid view with its own default settings.
         """
+        failed = self.messages.open_failed
         if str(source).strip() == "-":            # the viewer's stdin is the terminal: refuse
-            return self._open_failed("could not open -: a view file on standard input can only "
-                                     "be given at start-up (python -m app view - < views)")
+            return failed("could not open -: a view file on standard input can only "
+                          "be given at start-up (python -m app view - < views)")
         try:
             scene = self.loader(source, size=self.size if self.renderable else None)
         except reader_errors() as error:
             reason = str(error)        # the readers' messages start with the file's name
-            return self._open_failed(f"could not open {reason}" if reason.startswith(str(source))
-                                     else f"could not open {source}: {reason}")
+            return failed(f"could not open {reason}" if reason.startswith(str(source))
+                          else f"could not open {source}: {reason}")
         if not scene.views:
-            return self._open_failed(f"did not open {source}: none of its "
-                                     f"{view_numbers.total(scene)} views is valid; "
-                                     f"{self.scene.name} stays",
-                                     [f"invalid view: {m}" for m in scene.view_messages])
+            return failed(f"did not open {source}: none of its "
+                          f"{view_numbers.total(scene)} views is valid; {self.scene.name} stays",
+                          [f"invalid view: {m}" for m in scene.view_messages])
         self.scene = scene
         self.scene_source = str(source)
         self.view_index, self.hand_view = 0, None

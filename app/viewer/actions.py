@@ -30,31 +30,32 @@ class Actions:
 
 
     def step_view(self, step: int, how: str) -> None:
-        before = self.state.view_label
-        self.state.next_view() if step > 0 else self.state.prev_view()
+        before = self.state.views.label
+        self.state.views.next_view() if step > 0 else self.state.views.prev_view()
         log.info("action: %s -> %s %s -> %s", how, "next" if step > 0 else "previous",
-                 before, self.state.view_label)
+                 before, self.state.views.label)
 
     def go_to_view(self, index: int, how: str) -> None:
-        self.state.set_view(index)
-        log.info("action: %s -> %s", how, self.state.view_label)
+        self.state.views.set_view(index)
+        log.info("action: %s -> %s", how, self.state.views.label)
 
     def choose(self, what: str, value, how: str) -> None:
         """Set the projection, shading, rasterizer, kept aspect or course rules; the frame is
         re-rendered at once."""
-        setter = {"projection": self.state.set_projection, "shading": self.state.set_shading,
-                  "rasterizer": self.state.set_rasterizer,
-                  "keep_aspect": self.state.set_keep_aspect,
-                  "course_tri": self.state.set_course_tri,
-                  "renderer": self.state.set_renderer,
-                  "texture_filter": self.state.set_texture_filter,
-                  "bump": self.state.set_bump,
-                  "depth_cue": self.state.set_depth_cue,
-                  "transparency": self.state.set_transparency,
-                  "paint_first": self.state.set_paint_first,
-                  "lighting_model": self.state.set_lighting_model,
-                  "headlight": self.state.set_headlight,
-                  "depth_shading": self.state.set_depth_shading}[what]
+        choices = self.state.choices
+        setter = {"projection": choices.set_projection, "shading": choices.set_shading,
+                  "rasterizer": choices.set_rasterizer,
+                  "keep_aspect": choices.set_keep_aspect,
+                  "course_tri": choices.set_course_tri,
+                  "renderer": choices.set_renderer,
+                  "texture_filter": choices.set_texture_filter,
+                  "bump": choices.set_bump,
+                  "depth_cue": choices.set_depth_cue,
+                  "transparency": choices.set_transparency,
+                  "paint_first": choices.set_paint_first,
+                  "lighting_model": choices.set_lighting_model,
+                  "headlight": self.state.lighting.set_headlight,
+                  "depth_shading": choices.set_depth_shading}[what]
         setter(value)
         log.info("action: %s -> %s %s", how, what, value)
         if what == "projection":
@@ -62,16 +63,17 @@ class Actions:
         self.win.wake()
 
     def toggle_play(self, how: str) -> None:
-        if not self.state.animated:
+        player = self.state.player
+        if not player.animated:
             log.info("action: %s -> nothing to play (the scene is not animated)", how)
             return
-        self.state.toggle_play(time.perf_counter())
-        log.info("action: %s -> %s at t=%.3f", how, "play" if self.state.playing else "pause",
+        player.toggle(time.perf_counter())
+        log.info("action: %s -> %s at t=%.3f", how, "play" if player.playing else "pause",
                  self.state.playback.time)
         self.win.wake()
 
     def step_frame(self, frames: int, how: str) -> None:
-        self.state.step_frame(frames)
+        self.state.player.step(frames)
         log.info("action: %s -> %s frame: %s", how, "next" if frames > 0 else "previous",
                  self.state.playback.label())
         self.win.wake()
@@ -79,7 +81,7 @@ class Actions:
     def change_speed(self, factor: float, how: str) -> None:
         from app.session.playback import SPEEDS
         speed = min(max(self.state.playback.speed * factor, SPEEDS[0]), SPEEDS[-1])
-        self.state.set_speed(speed)
+        self.state.player.set_speed(speed)
         log.info("action: %s -> speed %gx", how, speed)
         self.win.wake()
 
@@ -89,7 +91,7 @@ class Actions:
             return
         earlier = len(self.state.open_messages)
         if self.state.open_scene(source):
-            log.info("action: %s -> opened %s (%s)", how, source, self.state.view_label)
+            log.info("action: %s -> opened %s (%s)", how, source, self.state.views.label)
             self.win.files.recent.add(source)
             self.win.notice = ""             # what the panel said of the last scene goes with it
             self.win.tools.scene_changed()
@@ -112,7 +114,7 @@ class Actions:
         from PIL import Image
 
         s = self.state
-        path = unused(self.win.out_dir / picture_name(s.scene.name, s.view_number, s.projection,
+        path = unused(self.win.out_dir / picture_name(s.scene.name, s.views.number, s.projection,
                                                   s.shading, s.renderer_name))
         try:
             self.win.out_dir.mkdir(parents=True, exist_ok=True)
@@ -150,16 +152,16 @@ class Actions:
         self.win.wake()
 
     def undo_camera(self, how: str) -> None:
-        done = self.state.undo_camera()
-        back, _ = self.state.camera_history
+        done = self.state.views.undo()
+        back, _ = self.state.views.history
         log.info("action: %s -> %s", how, f"camera undone ({back} more to undo)" if done
                  else "nothing to undo")
         if done:
             self.win.hands.message = ""
 
     def redo_camera(self, how: str) -> None:
-        done = self.state.redo_camera()
-        _, ahead = self.state.camera_history
+        done = self.state.views.redo()
+        _, ahead = self.state.views.history
         log.info("action: %s -> %s", how, f"camera redone ({ahead} more to redo)" if done
                  else "nothing to redo")
 
@@ -182,7 +184,7 @@ class Actions:
         self.win.wake()
 
     def log_camera(self, how: str) -> None:
-        v = self.state.view
+        v = self.state.views.current
         numbers = lambda values: "(" + ", ".join(f"{float(c):.17g}" for c in values) + ")"
         log.info("action: %s -> camera VRP %s VPN %s VUP %s window %s PRP %s F %.17g B %.17g",
                  how, numbers(v.vrp), numbers(v.vpn), numbers(v.vup), numbers(v.window),
@@ -191,7 +193,7 @@ class Actions:
 
     def save_view(self, how: str, path: Path | None = None) -> int | None:
         """Append the view shown to a view file (six lines); returns its number there."""
-        view = self.state.view
+        view = self.state.views.current
         if view is None:
             return None
         if path is None:

@@ -145,7 +145,7 @@ class CameraHands:
     @property
     def usable(self) -> str:
         """"" when the camera can move; else why not."""
-        if self.state.view is None:
+        if self.state.views.current is None:
             return "there is no valid view to move"
         return ""
 
@@ -153,7 +153,7 @@ class CameraHands:
         """Make F and B follow the bounds, judge the pose, and show it or keep the last one."""
         projection = self.state.projection
         candidate = orbit.follow_bounds(candidate, *self.bounds, projection)
-        source = self.state.file_view
+        source = self.state.views.file_view
         candidate = replace(candidate, label=f"{source.label if source else 'view'}, moved")
         found = orbit.pose_problems(candidate, projection, *self.bounds)
         if found:
@@ -161,7 +161,7 @@ class CameraHands:
             log.info("camera: %s", self.message)
             return False
         self.message = ""
-        self.state.set_hand_view(candidate)
+        self.state.views.set_hand_view(candidate)
         return True
 
     def _base(self, what: str) -> View | None:
@@ -169,7 +169,7 @@ class CameraHands:
         if why:
             self.message = f"{what}: {why}"
             return None
-        return self.state.view
+        return self.state.views.current
 
     # -- drags -------------------------------------------------------------------------------
     def press(self, x: float, y: float, pan: bool, under=None) -> None:
@@ -225,7 +225,7 @@ class CameraHands:
 
     def up(self) -> np.ndarray:
         """The world's up axis of the turntable: the file's view's VUP (the scene's up)."""
-        source = self.state.file_view
+        source = self.state.views.file_view
         return np.asarray(source.vup if source is not None else (0.0, 1.0, 0.0),
                           dtype=np.float64)
 
@@ -267,7 +267,7 @@ class CameraHands:
     def reset(self) -> bool:
         """The file's view again, exactly (its own F and B too)."""
         self.message = ""
-        return self.state.reset_view()
+        return self.state.views.reset()
 
     def projection_changed(self) -> None:
         """A moved camera's F and B redone for the new projection (perspective keeps F in

@@ -216,7 +216,7 @@ class InspectorTools:
         if s.playback is not None:
             raise NotInspectable("animated scenes are not inspected: the objects of the "
                                  "moment shown are not kept (use a still scene)")
-        return s.drawn_scene(), s.view, s.settings()
+        return s.lighting.drawn_scene(), s.views.current, s.choices.settings()
 
     def context(self):
         if self._context is None:
@@ -236,9 +236,9 @@ class InspectorTools:
         if done_for is frame:
             return found
         s = self.state
-        if (self._picking is None and s.view is not None and s.scene is not None
+        if (self._picking is None and s.views.current is not None and s.scene is not None
                 and s.playback is None and s.scene.triangle_count <= MAX_PICKED
-                and s.renderer_entry.triangle_ids):
+                and s.choices.renderer_entry.triangle_ids):
             drawn = self._drawn()
             self._picking = threading.Thread(target=self._pick, args=(frame, drawn),
                                              name="triangle ids", daemon=True)
@@ -265,7 +265,7 @@ class InspectorTools:
         """The buffer views to choose from: the renderer's, then a volume scene's slices."""
         from app.session.volume_controls import SLICES
         from core.inspect.buffers import BUFFERS
-        return (*BUFFERS, ALIASING, *(SLICES if self.state.volumes else ()))
+        return (*BUFFERS, ALIASING, *(SLICES if self.state.volumes.all else ()))
 
     def next_buffer(self, how: str) -> None:
         """``v``: the next buffer view this frame keeps (those it lacks are skipped), found
@@ -322,7 +322,7 @@ class InspectorTools:
         from app.session.volume_controls import SLICES
         from core.inspect import NotInspectable
         s = self.state
-        if s.view is None or s.frame is None:
+        if s.views.current is None or s.frame is None:
             return
         if name in SLICES:
             self._show_slice(name, how)
@@ -360,20 +360,20 @@ class InspectorTools:
         """A slice through the volume the controls act on, in place of the picture."""
         from app.session.volume_controls import slice_picture
         s = self.state
-        if s.volume is None:
+        if s.volumes.current is None:
             return False
         if name != s.slice_name:
-            s.set_slice(name)
+            s.volumes.set_slice(name)
         height, width = s.frame.color.shape[:2]
-        self.overlay = slice_picture(s.volume, name, s.slice_shown(), (width, height))
+        volume, index = s.volumes.current, s.volumes.slice_shown()
+        self.overlay = slice_picture(volume, name, index, (width, height))
         self.buffer = name
-        log.info("action: %s -> buffer view: %s slice %d of %s", how, name, s.slice_shown(),
-                 s.volume.name)
+        log.info("action: %s -> buffer view: %s slice %d of %s", how, name, index, volume.name)
         return True
 
     def show_slice(self, name: str, index: int | None, how: str) -> None:
         """The slice slider or its axis: show that slice now."""
-        self.state.set_slice(name, index)
+        self.state.volumes.set_slice(name, index)
         if self._show_slice(name, how):
             self.changed = True
 
@@ -383,7 +383,7 @@ class InspectorTools:
         from core.inspect import NotInspectable
         from core.inspect.compare import compare, heat_map
         s = self.state
-        if s.frame is None or s.view is None:
+        if s.frame is None or s.views.current is None:
             return
         ours = s.frame.color
         try:

@@ -57,7 +57,7 @@ class Keys:
             log.info("action: key Esc -> close the open menu")
             return
         if key == glfw.KEY_ESCAPE and self.state.open_messages:
-            self.state.clear_messages()   # an error is a message to dismiss, not a reason to quit
+            self.state.messages.clear()   # an error is a message to dismiss, not a reason to quit
             log.info("action: key Esc -> dismiss the message")
             return
         if imgui.get_io().want_capture_keyboard:
@@ -97,9 +97,9 @@ class Keys:
             self.win.actions.choose("renderer", renderer, f"key {char}")
         elif char == "b":
             self.win.actions.choose("bump", not self.state.bump, "key b")
-        elif char in ",." and self.state.animated:
+        elif char in ",." and self.state.player.animated:
             self.win.actions.step_frame(-1 if char == "," else +1, f"key {char}")
-        elif char in "[]" and self.state.animated:
+        elif char in "[]" and self.state.player.animated:
             self.win.actions.change_speed(0.5 if char == "[" else 2.0, f"key {char}")
         elif char == "q":
             self.win.actions.quit("key q")

@@ -150,7 +150,7 @@ def _open_state(scene_source, size, options, started):
     for message in state.scene.messages:
         print(f"warning: {message}", file=sys.stderr)
     log.info("scene %s: %d valid views, %d invalid (%.3f s after process start)",
-             scene_source, state.view_count, len(state.scene.view_messages),
+             scene_source, state.views.count, len(state.scene.view_messages),
              time.perf_counter() - started)
     return state
 
@@ -206,7 +206,7 @@ def prime_kernels(state) -> threading.Thread | None:
     kernel cache, which the window's worker processes fill (a compile here would hold the GIL
     the window needs).
     """
-    settings = state.settings()
+    settings = state.choices.settings()
     if settings.shading == "wireframe" or not state.scene.triangle_count or not state.renderable:
         return None
     from app.distribution.warm_stamp import is_warm
@@ -218,7 +218,7 @@ def prime_kernels(state) -> threading.Thread | None:
         from app.session.state import render
         from core.context import RenderContext
         try:
-            render(state.scene, state.view, quick(settings.replace(size=(16, 16))),
+            render(state.scene, state.views.current, quick(settings.replace(size=(16, 16))),
                    RenderContext())
         except Exception as error:        # the window's own frame will say what is wrong
             log.info("kernels not primed: %s", error)
@@ -303,9 +303,9 @@ def render_all_views(state, out_dir: str | Path | None, reason: str,
         return 1
     failed = 0
     for index in range(len(scene.views)):
-        state.set_view(index)
-        state.update()
-        number = state.view_number               # its position in the file
+        state.views.set_view(index)
+        state.frames.update()
+        number = state.views.number              # its position in the file
         if state.render_error:
             print(f"error: view {number}: {state.render_error}", file=sys.stderr)
             failed += 1
@@ -321,7 +321,7 @@ def render_all_views(state, out_dir: str | Path | None, reason: str,
             print(f"error: cannot write {path}: {error}", file=sys.stderr)
             failed += 1
             continue
-        log.info("%s", state.frame_summary())
+        log.info("%s", state.frames.summary())
         print(f"wrote {path}")
     if not scene.views:
         print(f"{scene.name}: no valid view to render", file=sys.stderr)

@@ -67,7 +67,7 @@ class FrameLoop:
                                          - (time.perf_counter() - self._swapped_at)))
         elif shown and (self.win.busy > 0 or self.state.dirty):
             glfw.poll_events()
-        elif self.state.playing:
+        elif self.state.player.playing:
             glfw.wait_events_timeout(1 / 60)     # the movie's clock moves on
         elif self.win.worker.waiting or self.win.tools.busy:
             glfw.wait_events_timeout(0.1)
@@ -127,12 +127,12 @@ class FrameLoop:
         """Ask the worker for the next frame and take the one it finished, if any."""
         self._note_kernels()
         self.win.files.poll_dialog()
-        self.state.tick(time.perf_counter(), busy=self.win.worker.waiting)
-        if self.state.request(self.win.worker):
+        self.state.player.tick(time.perf_counter(), busy=self.win.worker.waiting)
+        if self.state.frames.request(self.win.worker):
             self.compiles_at_request = compile_count()
         self.win.tools.poll()                 # a buffer view, a record, a comparison: done?
         result = self.win.worker.collect()
-        if result is not None and self.state.accept(result):
+        if result is not None and self.state.frames.accept(result):
             if getattr(result, "final", True):
                 self._log_frame()
                 self._warm_up_due = True  # once this frame is on screen (the thread takes the GIL)
@@ -217,7 +217,7 @@ class FrameLoop:
                      time.perf_counter() - self.win.started, user + system)
 
     def _log_frame(self) -> None:
-        log.info("%s", self.state.frame_summary())
+        log.info("%s", self.state.frames.summary())
         if self.state.frame.message:
             print(self.state.frame.message, file=sys.stderr)
         glfw.set_window_title(self.win.window, self.win.title())

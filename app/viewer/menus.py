@@ -70,7 +70,7 @@ class Menus:
                 self.win.actions.choose("projection", value, how)
 
     def shading_items(self, how: str) -> None:
-        solid = self.state.has_triangles
+        solid = self.state.choices.has_triangles
         if not solid:
             imgui.push_text_wrap_pos(imgui.get_font_size() * 22)
             imgui.text_disabled(NO_TRIANGLES)
@@ -94,7 +94,7 @@ class Menus:
                                       ("Shading", lambda: self.shading_items("menu Shading"),
                                        True),
                                       ("Render", self._render_items, True),
-                                      ("View", self._view_menu, self.state.view_count > 0),
+                                      ("View", self._view_menu, self.state.views.count > 0),
                                       ("?###Help", self._help_menu, True)):  # the bar is full
             if imgui.begin_menu(title, enabled):
                 self.closing()
@@ -159,7 +159,7 @@ class Menus:
         for rotation, words in ROTATIONS.items():
             if imgui.menu_item_simple(words, "Y", self.win.hands.rotation == rotation):
                 self.win.actions.set_rotation(rotation, "menu View")
-        back, ahead = self.state.camera_history
+        back, ahead = self.state.views.history
         if imgui.menu_item_simple("Undo camera", "Ctrl+Z", False, back > 0):
             self.win.actions.undo_camera("menu View > Undo camera")
         if imgui.menu_item_simple("Redo camera", "Ctrl+Shift+Z", False, ahead > 0):
@@ -220,7 +220,7 @@ class Menus:
         imgui.text_disabled("Rasterizer")
         for value, label in RASTERIZER_LABELS:
             if imgui.menu_item_simple(label, None, self.state.rasterizer == value,
-                               self.state.has_triangles):
+                               self.state.choices.has_triangles):
                 self.win.actions.choose("rasterizer", value, "menu Render")
         imgui.separator()
         if imgui.menu_item_simple("Keep the window's aspect (letterbox)", "A",
@@ -233,11 +233,11 @@ class Menus:
 
     def _painter_items(self) -> None:
         imgui.separator()
-        cued = bool(self.state.settings().depth_cue)
+        cued = bool(self.state.choices.settings().depth_cue)
         if imgui.menu_item_simple("Depth cueing", None, cued):
             self.win.actions.choose("depth_cue", not cued, "menu Render")
         imgui.text_disabled("Transparency (k_t > 0)")
-        current = self.state.settings().transparency
+        current = self.state.choices.settings().transparency
         from core.settings import TRANSPARENCIES
         for value, label in TRANSPARENCIES.items():
             if imgui.menu_item_simple(label, None, current == value):
@@ -253,6 +253,6 @@ class Menus:
             imgui.text_disabled("Shading")
             self.shading_items("pop-up")
             imgui.separator()
-            if imgui.menu_item_simple("Next view", "Right", False, self.state.view_count > 0):
+            if imgui.menu_item_simple("Next view", "Right", False, self.state.views.count > 0):
                 self.win.actions.step_view(+1, "pop-up Next view")
             imgui.end_popup()

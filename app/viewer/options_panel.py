@@ -1,7 +1,7 @@
 """The panel's renderer-options section: one control per option of the current renderer.
 
 The controls come from :func:`app.session.options.controls` (the renderer's registered options
-class); every change goes through :meth:`ViewerState.set_option`, which keeps the last good
+class); every change goes through ``state.choices.set_option``, which keeps the last good
 value and says why when the class refuses one. Numbers are taken when Enter is pressed (or a
 step button clicked), so a ray-traced picture is not re-drawn at every keystroke.
 """
@@ -19,7 +19,7 @@ def draw(imgui, state, displayable) -> None:
     from app.session.options import controls
     from core.registry import get_renderer
     _samples(imgui, state)
-    found = controls(state.renderer_options())
+    found = controls(state.choices.renderer_options())
     if not found:
         _message(imgui, state, displayable)
         return
@@ -32,7 +32,7 @@ def draw(imgui, state, displayable) -> None:
         if control.help and imgui.is_item_hovered():
             imgui.set_tooltip(control.help)
         if changed:
-            ok = state.set_option(control.name, value)
+            ok = state.choices.set_option(control.name, value)
             log.info("action: panel %s -> %s", control.name,
                      repr(value) if ok else state.option_message)
     imgui.pop_item_width()
@@ -50,7 +50,7 @@ def _message(imgui, state, displayable) -> None:
 def _samples(imgui, state) -> None:
     """Samples per pixel (taken on Enter): the path tracer's passes add up to it at rest."""
     imgui.push_item_width(imgui.get_content_region_avail().x * 0.5)
-    shown = state.samples_wanted or 1
+    shown = state.choices.samples_wanted or 1
     changed, value = imgui.input_int("samples per pixel##film-samples", int(shown), 1, 16,
                                      imgui.InputTextFlags_.enter_returns_true)
     imgui.pop_item_width()
@@ -58,7 +58,7 @@ def _samples(imgui, state) -> None:
         imgui.set_tooltip("samples per pixel of the next frames; the path tracer adds one "
                           "pass at a time while the camera rests")
     if changed and value != shown:
-        ok = state.set_samples(int(value))
+        ok = state.choices.set_samples(int(value))
         log.info("action: panel samples per pixel -> %s", value if ok else state.option_message)
 
 

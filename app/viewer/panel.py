@@ -50,7 +50,7 @@ class SidePanel:
 
     def _camera_strip(self) -> None:
         """The view's numbers, live: VRP ... B and each factor of N_per / N_par."""
-        view = self.state.view
+        view = self.state.views.current
         if view is None:
             return
         moved = " (moved)" if self.state.hand_view is not None else ""
@@ -104,8 +104,8 @@ class SidePanel:
     def _draw_order(self) -> None:
         """The painter's renderers: a slider that paints only the first K triangles."""
         s = self.state
-        total = s.painted_total
-        if not s.renderer_entry.has_option("paint_first") or not total:
+        total = s.choices.painted_total
+        if not s.choices.renderer_entry.has_option("paint_first") or not total:
             return
         imgui.text("draw order (triangles painted)")
         imgui.push_item_width(-1)
@@ -136,13 +136,13 @@ class SidePanel:
         changed, t = imgui.slider_float("##time", playback.time, 0.0,
                                         max(playback.end, 1e-6), "%.2f s")
         if changed:
-            self.state.seek(t, time.perf_counter())
+            self.state.player.seek(t, time.perf_counter())
             self.win.wake()
         labels = [f"{v:g}x" for v in SPEEDS]
         current = min(range(len(SPEEDS)), key=lambda i: abs(SPEEDS[i] - playback.speed))
         changed, chosen = imgui.combo("##speed", current, labels)
         if changed:
-            self.state.set_speed(SPEEDS[chosen])
+            self.state.player.set_speed(SPEEDS[chosen])
             log.info("action: speed -> %gx", SPEEDS[chosen])
         imgui.pop_item_width()
         imgui.text_disabled("space play/pause, , . step, [ ] speed")
@@ -174,7 +174,7 @@ class SidePanel:
         imgui.pop_text_wrap_pos()
 
     def _invalid_views_strip(self) -> None:
-        invalid = self.state.invalid_messages
+        invalid = self.state.messages.invalid
         if not invalid:
             return
         expanded = imgui.collapsing_header(f"Invalid views ({len(invalid)})###invalid")
@@ -185,14 +185,14 @@ class SidePanel:
             imgui.pop_text_wrap_pos()
 
     def _messages_strip(self) -> None:
-        notices = self.state.notices
+        notices = self.state.messages.notices
         if not notices:
             return
         expanded = imgui.collapsing_header(f"Messages ({len(notices)})###messages",
                                            imgui.TreeNodeFlags_.default_open)
         if expanded:
             if self.state.open_messages and imgui.small_button("Clear"):
-                self.state.clear_messages()
+                self.state.messages.clear()
             imgui.push_text_wrap_pos(0.0)
             for message in notices:
                 imgui.text_colored((1.0, 0.75, 0.4, 1.0), displayable(message))

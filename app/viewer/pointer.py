@@ -74,9 +74,9 @@ class Pointer:
 
     def click(self, button: int, x: float, y: float, where: str) -> None:
         """A click on the picture (a press released without a drag, or a right press)."""
-        if (demo := self.state.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
+        if (demo := self.state.choices.demo_click(button == glfw.MOUSE_BUTTON_LEFT)) is not None:
             log.info("action: %s -> the bump demo: %s", where, demo)
-        elif self.state.playing and button == glfw.MOUSE_BUTTON_LEFT:
+        elif self.state.player.playing and button == glfw.MOUSE_BUTTON_LEFT:
             self.win.actions.toggle_play(where)
         elif self.win.tools.inspecting and button == glfw.MOUSE_BUTTON_LEFT:
             self.win.tools.inspect(*self.frame_pixel(x, y), where)

@@ -45,34 +45,34 @@ class StatusLine:
     def draw(self) -> None:
         s = self.state
         imgui.push_text_wrap_pos(0.0)
-        problem = s.problem or self.win.hands.message
+        problem = s.messages.problem or self.win.hands.message
         if problem:                       # where the eye is, until the next success clears it
             imgui.text_colored(PROBLEM_COLOUR, displayable(problem))
-        imgui.text(displayable(f"{s.scene.name}: {s.view_label}"))
-        if s.view_count:
-            imgui.text_disabled(displayable(s.view.label))
+        imgui.text(displayable(f"{s.scene.name}: {s.views.label}"))
+        if s.views.count:
+            imgui.text_disabled(displayable(s.views.current.label))
         rasterizer = (f", {s.rasterizer} rasterizer"                 # the tracers have none
-                      if s.has_triangles and s.renderer_entry.rasterizes else "")
+                      if s.choices.has_triangles and s.choices.renderer_entry.rasterizes else "")
         imgui.text(f"{s.projection}, {s.shading}{rasterizer}")
         imgui.text("aspect kept (letterbox)" if s.keep_aspect
                    else "window stretched over the viewport")
         if s.course_tri:
             imgui.text_disabled("course .tri rules: left Phong, middle Gouraud, right flat")
-        words = s.renderer_entry.status                   # the registry entry's status words
+        words = s.choices.renderer_entry.status           # the registry entry's status words
         extras = [words + (" (refining)" if s.frame_partial else "")] if words else []
-        if s.has_textures:
+        if s.choices.has_textures:
             extras.append(f"{s.texture_filter} textures" + ("" if s.bump else ", no bump maps"))
         if s.shading == "depth":
             extras.append("depth: " + ("height, terrain map" if s.depth_shading == "height"
                                        else "distance from the eye, near bright"))
-        if s.headlight_note:
-            extras.append(s.headlight_note)
+        if s.lighting.note:
+            extras.append(s.lighting.note)
         if extras:
             imgui.text(", ".join(extras))
         for note in (s.frame.stats.get("not drawn", []) if s.frame is not None else []):
             imgui.text_colored((1.0, 0.7, 0.3, 1.0), displayable(f"not drawn: {note}"))
-        if s.bump_label:
-            imgui.text_colored((0.6, 0.7, 1.0, 1.0), displayable(s.bump_label))
+        if s.choices.bump_label:
+            imgui.text_colored((0.6, 0.7, 1.0, 1.0), displayable(s.choices.bump_label))
             imgui.text_disabled("left click: bump / Phong; other buttons: next map")
         if not s.renderable:
             imgui.text_colored((1.0, 0.75, 0.4, 1.0),

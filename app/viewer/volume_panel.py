@@ -1,4 +1,4 @@
-"""The panel's volume section: widgets only; every change goes through :class:`ViewerState`.
+"""The panel's volume section: widgets only; every change goes through the state's ``volumes``.
 
 - the transfer function as a plot over the data's histogram (grey bars, log counts): each
   point a dot in its own colour at (value, alpha); drag one to move it (the picture re-renders
@@ -72,12 +72,12 @@ class VolumePanel:
 
     def draw(self, imgui, displayable) -> None:
         s = self.state
-        if not s.volumes:
+        if not s.volumes.all:
             return
         if not imgui.collapsing_header("Volume###volume", imgui.TreeNodeFlags_.default_open):
             return
         self._choose_volume(imgui)
-        v = s.volume
+        v = s.volumes.current
         lo, hi = v.value_range
         imgui.push_text_wrap_pos(0.0)
         imgui.text_disabled(f"{v.mode}, {' x '.join(map(str, v.dims))}, values {lo:.3g} .. "
@@ -96,38 +96,39 @@ class VolumePanel:
 
     def _choose_volume(self, imgui) -> None:
         s = self.state
-        if len(s.volumes) < 2:
-            imgui.text(s.volume.name)
+        if len(s.volumes.all) < 2:
+            imgui.text(s.volumes.current.name)
             return
-        names = [v.name for v in s.volumes]
+        names = [v.name for v in s.volumes.all]
         imgui.push_item_width(-1)
         changed, k = imgui.combo("##volume", s.volume_index, names)
         imgui.pop_item_width()
         if changed:
             from app.session.volume_controls import SLICES
-            s.select_volume(k)
+            s.volumes.select(k)
             self.dragging = None
             if self.tools.buffer in SLICES:          # the slice shown is the new volume's
                 self.tools.show_slice(s.slice_name, None, "panel volume")
 
     def _iso(self, imgui) -> None:
-        s, v = self.state, self.state.volume
+        s, v = self.state, self.state.volumes.current
         lo, hi = v.value_range
         imgui.push_item_width(-1)
-        changed, iso = imgui.slider_float("##iso", float(s.iso_shown(v)), lo, hi, "iso %.4g")
+        shown = float(s.volumes.iso_shown(v))
+        changed, iso = imgui.slider_float("##iso", shown, lo, hi, "iso %.4g")
         imgui.pop_item_width()
         if changed:
-            ok = s.set_iso(iso)
+            ok = s.volumes.set_iso(iso)
             log.info("action: slider iso -> %s", f"iso {float(iso)!r} asked" if ok else s.volume_message)
         k = _mesh_of(s.scene, v)
         triangles = "" if k is None else f", {len(s.scene.meshes[k].triangles)} triangles"
-        if s.extracting:
+        if s.volumes.extracting:
             imgui.text_colored((0.55, 0.8, 1.0, 1.0), "extracting…")
         else:
             imgui.text_disabled(f"isosurface at {v.iso:.4g}{triangles}")
 
     def _transfer(self, imgui) -> None:
-        s, v = self.state, self.state.volume
+        s, v = self.state, self.state.volumes.current
         width = max(imgui.get_content_region_avail().x, 40.0)
         origin = imgui.get_cursor_screen_pos()
         box = (origin.x, origin.y, width, float(PLOT_HEIGHT))
@@ -139,7 +140,8 @@ class VolumePanel:
             self._pressed = (box, scale)
         if self.dragging is not None:       # the release's frame moves it to the last place too
             # the press's box and scale: the panel's lines above may move the plot meanwhile
-            s.move_transfer_point(self.dragging, *from_plot(mouse.x, mouse.y, *self._pressed))
+            point = from_plot(mouse.x, mouse.y, *self._pressed)
+            s.volumes.move_transfer_point(self.dragging, *point)
             if not imgui.is_item_active():
                 row = v.transfer[self.dragging]
                 log.info("action: drag transfer point %d -> value %.4g, alpha %.4g%s",
@@ -177,9 +179,9 @@ class VolumePanel:
             imgui.same_line()
         if imgui.radio_button("off", not showing) and showing:
             tools.choose_buffer("picture", "panel slice off")
-        n = s.volume.values.shape[SLICE_AXIS[s.slice_name]]
+        n = s.volumes.current.values.shape[SLICE_AXIS[s.slice_name]]
         imgui.push_item_width(-1)
-        changed, k = imgui.slider_int("##slice", s.slice_shown(), 0, n - 1,
+        changed, k = imgui.slider_int("##slice", s.volumes.slice_shown(), 0, n - 1,
                                       f"{s.slice_name} slice %d of {n}")
         imgui.pop_item_width()
         if changed:

@@ -105,9 +105,9 @@ SCREENSHOTS_DIR = "screenshots"
 def window_title(s: ViewerState) -> str:
     """The window's title: scene, view, projection, shading and the renderer's title words
     (its registry entry's ``title``)."""
-    words = s.renderer_entry.title
+    words = s.choices.renderer_entry.title
     renderer = f" - {words}" if words else ""
-    return (f"FvD viewer - {s.scene.name} - {s.view_label} - {s.projection} - "
+    return (f"FvD viewer - {s.scene.name} - {s.views.label} - {s.projection} - "
             f"{s.shading}{renderer}")
 
 

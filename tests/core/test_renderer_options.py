@@ -100,10 +100,11 @@ def test_a_new_renderers_options_reach_settings_panel_and_command_line(toy):
     assert option_overrides(args)["knob"] == 4
     from app.session.state import ViewerState
     state = ViewerState.open(SCENES / "torus.toml", size=(32, 24))
-    state.set_renderer("toy-knob")
-    assert not state.set_option("knob", 12)
+    state.choices.set_renderer("toy-knob")
+    assert not state.choices.set_option("knob", 12)
     assert state.option_message == "knob must be from 0 to 9, not 12; knob stays 2"
-    assert state.set_option("knob", 7) and state.renderer_options() == KnobOptions(knob=7)
+    assert state.choices.set_option("knob", 7)
+    assert state.choices.renderer_options() == KnobOptions(knob=7)
 
 
 def test_the_panels_depth_limit_changes_the_ray_traced_mirror():
@@ -111,19 +112,19 @@ def test_the_panels_depth_limit_changes_the_ray_traced_mirror():
     at the mirror's own colour, so the pictures differ, and only where secondary rays go."""
     from app.session.state import ViewerState
     state = ViewerState.open(SCENES / "house_mirror.toml", size=(48, 36))
-    state.set_renderer("raytrace")
+    state.choices.set_renderer("raytrace")
     deep = _frame(state)
-    assert state.set_option("max_depth", 1)
+    assert state.choices.set_option("max_depth", 1)
     shallow = _frame(state)
     differs = np.any(deep != shallow, axis=2)
     assert 0 < differs.sum() < differs.size
-    assert state.set_option("max_depth", 7)
+    assert state.choices.set_option("max_depth", 7)
     assert np.array_equal(_frame(state), deep)
 
 
 def _frame(state):
     from core.render import render
-    return render(state.scene, state.current_view(), state.settings()).color
+    return render(state.scene, state.views.current, state.choices.settings()).color
 
 
 def _scene():

@@ -89,8 +89,8 @@ def test_the_command_line_and_the_window_offer_it(tmp_path, normal_colours):
     args = command_parser("render").parse_args(["render", str(path), "--shading", "normal-colours"])
     assert args.shading == "normal-colours"
     state = ViewerState.open(path, size=(32, 32))
-    state.set_shading("normal-colours")
-    assert state.settings().shading == "normal-colours"
+    state.choices.set_shading("normal-colours")
+    assert state.choices.settings().shading == "normal-colours"
 
 
 def test_an_unregistered_name_is_refused_with_the_modes_there_are(tmp_path):

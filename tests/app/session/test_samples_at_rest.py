@@ -13,19 +13,19 @@ ROOT = Path(__file__).resolve().parents[3]
 def test_the_path_tracer_accumulates_to_its_registered_number_unless_the_user_chooses():
     from core.registry import get_renderer
     state = ViewerState.open(ROOT / "scenes" / "cornell_box.toml", size=(32, 32))
-    assert state.settings().samples == 1                       # the z-buffer: the scene's
-    state.set_renderer("pathtrace")
+    assert state.choices.settings().samples == 1                       # the z-buffer: the scene's
+    state.choices.set_renderer("pathtrace")
     assert get_renderer("pathtrace").samples_at_rest == 256
-    assert state.settings().samples == 256
+    assert state.choices.settings().samples == 256
     state.dirty = False
-    assert state.set_samples(16) and state.dirty and state.settings().samples == 16
-    state.set_renderer("zbuffer")
-    assert state.settings().samples == 16                      # the user's, for any renderer
+    assert state.choices.set_samples(16) and state.dirty and state.choices.settings().samples == 16
+    state.choices.set_renderer("zbuffer")
+    assert state.choices.settings().samples == 16                  # the user's, for any renderer
     state.dirty = False
-    assert not state.set_samples(0) and not state.dirty
+    assert not state.choices.set_samples(0) and not state.dirty
     assert state.option_message == ("samples per pixel must be a whole number from 1 to 256, "
                                     "not 0; samples per pixel stay 16")
-    assert state.set_samples(None) and state.settings().samples == 1
+    assert state.choices.set_samples(None) and state.choices.settings().samples == 1
     assert state.option_message == ""
 
 
@@ -38,8 +38,8 @@ def test_view_samples_on_the_command_line_reaches_the_state(monkeypatch):
     assert opened[0]["options"]["samples"] == 64
     state = ViewerState.open(ROOT / "scenes" / "cornell_box.toml", size=(8, 8),
                              **{k: v for k, v in opened[0]["options"].items() if v is not None})
-    state.set_renderer("pathtrace")
-    assert state.settings().samples == 64
+    state.choices.set_renderer("pathtrace")
+    assert state.choices.settings().samples == 64
 
 
 def test_view_help_lists_every_key_and_mouse_action():

@@ -59,32 +59,33 @@ def whitted():
 
 def test_ray_traced_is_a_setting_of_the_next_frame(whitted):
     state = whitted
-    assert state.renderer_name == "zbuffer" and state.settings().renderer == "zbuffer"
-    state.update()
-    state.set_renderer("raytrace")
-    assert state.dirty and state.settings().renderer == "raytrace"
+    assert state.renderer_name == "zbuffer" and state.choices.settings().renderer == "zbuffer"
+    state.frames.update()
+    state.choices.set_renderer("raytrace")
+    assert state.dirty and state.choices.settings().renderer == "raytrace"
     with pytest.raises(ValueError, match="zbuffer"):
-        state.set_renderer("photon map")
+        state.choices.set_renderer("photon map")
     assert state.renderer_name == "raytrace"
 
 
 def test_progressive_frame_is_coarse_first_and_ends_as_the_renderers_frame(whitted):
     state = whitted
-    state.set_renderer("raytrace")
-    settings, control = state.settings(), Recorder()
-    final = trace_progressively(state.scene, state.view, settings, state.context, render,
+    state.choices.set_renderer("raytrace")
+    settings, control = state.choices.settings(), Recorder()
+    final = trace_progressively(state.scene, state.views.current, settings, state.context, render,
                                 control=control)
-    whole = render(state.scene, state.view, settings)
+    whole = render(state.scene, state.views.current, settings)
     assert np.array_equal(final.color, whole.color)          # the same rays, filter, rounding
-    coarse = render(state.scene, state.view, settings.replace(size=(8, 6)))   # ceil(60/8) x ...
+    view = state.views.current
+    coarse = render(state.scene, view, settings.replace(size=(8, 6)))   # ceil(60/8) x ...
     assert control.partials[0].stats["pass"] == "coarse (1 ray per 8 x 8 pixels)"
     assert np.array_equal(control.partials[0].color, upscale(coarse.color, COARSE, 60, 44))
     assert control.partials[0].color.shape == (44, 60, 3)
     fractions = [f for f, _ in control.reports]
     assert fractions[0] == 0.0 and fractions[-1] == 1.0 and fractions == sorted(fractions)
     assert control.reports[-1][1] == "refining: tile 4 of 4"     # 60 x 44 in 32-pixel tiles
-    # ViewerState.update draws the same finished frame
-    assert state.update() and np.array_equal(state.frame.color, whole.color)
+    # state.frames.update() draws the same finished frame
+    assert state.frames.update() and np.array_equal(state.frame.color, whole.color)
     assert not state.frame_partial
 
 
@@ -92,7 +93,7 @@ def test_a_view_change_cancels_the_ray_traced_frame_at_its_next_tile(whitted, mo
     import core.raytrace.renderer as tracer
 
     state = whitted
-    state.set_renderer("raytrace")
+    state.choices.set_renderer("raytrace")
     real, traced, first_tile = tracer.trace_tile, [], threading.Event()
 
     def slow_tile(setup, r0, r1, c0, c1):
@@ -104,10 +105,10 @@ def test_a_view_change_cancels_the_ray_traced_frame_at_its_next_tile(whitted, mo
     monkeypatch.setattr(tracer, "trace_tile", slow_tile)
     worker = RenderWorker()
     try:
-        first_view = state.view
-        assert state.request(worker)
+        first_view = state.views.current
+        assert state.frames.request(worker)
         coarse = _wait(worker, final=False)
-        assert not coarse.final and state.accept(coarse) and state.frame_partial
+        assert not coarse.final and state.frames.accept(coarse) and state.frame_partial
         assert worker.waiting and worker.progress().frame
         assert first_tile.wait(30)
         deadline = time.monotonic() + 30                  # the progress line follows the tiles
@@ -115,25 +116,25 @@ def test_a_view_change_cancels_the_ray_traced_frame_at_its_next_tile(whitted, mo
             time.sleep(0.02)
         progress = worker.progress()
         assert progress.detail == "refining: tile 1 of 4" and progress.fraction == 0.25
-        state.next_view()                                 # the user moves on
-        assert state.request(worker)
+        state.views.next_view()                                 # the user moves on
+        assert state.frames.request(worker)
         result = _wait(worker)
-        assert state.accept(result) and not state.frame_partial
+        assert state.frames.accept(result) and not state.frame_partial
         old = sum(1 for v in traced if v is first_view)
         assert 1 <= old < 4, "the superseded frame stopped at its next tile"
-        assert np.array_equal(state.frame.color,
-                              render(state.scene, state.view, state.settings()).color)
+        whole = render(state.scene, state.views.current, state.choices.settings())
+        assert np.array_equal(state.frame.color, whole.color)
     finally:
         worker.stop()
 
 
 def test_the_zbuffer_picture_stays_until_the_coarse_traced_one_arrives(whitted):
     state = whitted
-    state.update()
+    state.frames.update()
     zbuffer = state.frame
-    state.set_renderer("raytrace")
+    state.choices.set_renderer("raytrace")
     gate = threading.Event()
-    run, _ = state.frame_job()
+    run, _ = state.frames.job()
     worker = RenderWorker()
     try:
         worker.submit(lambda control: gate.wait(30) and run(control), "traced", control=True)
@@ -142,7 +143,7 @@ def test_the_zbuffer_picture_stays_until_the_coarse_traced_one_arrives(whitted):
         assert worker.collect() is None and state.frame is zbuffer    # still the z-buffer's
         gate.set()
         first = _wait(worker, final=False)
-        state.accept(first)
+        state.frames.accept(first)
         # The first traced picture replaces it: the coarse one, or the finished one when the
         # small frame was traced before the worker was polled (the newest result is kept).
         assert state.frame is not zbuffer and state.frame.stats["renderer"] == "raytrace"
@@ -236,25 +237,25 @@ def fountain():
 
 def test_animated_scene_plays_steps_and_left_click_views(fountain):
     state = fountain
-    assert state.animated and state.keyed_view and not state.playing
-    state.update()
-    state.toggle_play(100.0)
-    assert state.playing and state.dirty
-    state.update()
-    assert not state.tick(100.4, busy=True)                 # the frame is still being drawn
-    assert state.tick(100.4, busy=False) and state.dirty
+    assert state.player.animated and state.keyed_view and not state.player.playing
+    state.frames.update()
+    state.player.toggle(100.0)
+    assert state.player.playing and state.dirty
+    state.frames.update()
+    assert not state.player.tick(100.4, busy=True)                 # the frame is still being drawn
+    assert state.player.tick(100.4, busy=False) and state.dirty
     assert state.playback.time == pytest.approx(0.4)
-    state.toggle_play(101.0)
-    assert not state.playing
-    state.step_frame(+1)                                      # '.': frame 13 at 30 fps
+    state.player.toggle(101.0)
+    assert not state.player.playing
+    state.player.step(+1)                                      # '.': frame 13 at 30 fps
     assert state.playback.time == pytest.approx(13 / 30) and state.dirty
-    state.step_frame(-1)
+    state.player.step(-1)
     assert state.playback.time == pytest.approx(12 / 30)
     # views: the keyed camera, then the file's views, then the keyed camera again
     labels = []
-    for _ in range(state.view_count + 1):
-        state.next_view()
-        labels.append(state.view_label)
+    for _ in range(state.views.count + 1):
+        state.views.next_view()
+        labels.append(state.views.label)
     assert labels[-1].startswith("the keyed view") and labels[0] == "view 1 of 2"
 
 
@@ -264,24 +265,24 @@ def test_animated_frames_are_render_at_and_seeking_back_resimulates(fountain):
     from core.scene.formats import load_scene
 
     state = fountain
-    state.seek(0.3)
-    state.update()
-    state.seek(0.6)                       # forward: the particle simulation continues
-    state.update()
+    state.player.seek(0.3)
+    state.frames.update()
+    state.player.seek(0.6)                       # forward: the particle simulation continues
+    state.frames.update()
     system = state.playback.animation.particle_system
     at_06 = system.step_index
     fresh = animation_of(load_scene(SCENES_DIR / "fountain.toml", size=(48, 40)))
-    expected = render_at(fresh, 0.6, state.settings(), view_index=0)
+    expected = render_at(fresh, 0.6, state.choices.settings(), view_index=0)
     assert np.array_equal(state.frame.color, expected.color)
     assert len(np.unique(expected.color.reshape(-1, 3), axis=0)) > 10
     # back to 0.45: the simulation starts again from its snapshot at step 0 (one every 240
     # steps), reporting how far it is
     control = Recorder()
-    again = render_animated(state.playback.animation, 0.45, state.settings(), state.context,
+    again = render_animated(state.playback.animation, 0.45, state.choices.settings(), state.context,
                             0, control)
     assert system.step_index < at_06
     assert control.reports and "simulating the particles again from step 0" in control.reports[0][1]
-    assert np.array_equal(again.color, render_at(fresh, 0.45, state.settings(),
+    assert np.array_equal(again.color, render_at(fresh, 0.45, state.choices.settings(),
                                                  view_index=0).color)
 
 
@@ -289,10 +290,10 @@ def test_a_file_view_of_an_animated_scene_is_render_ats_numbering(fountain):
     from core.animation.frames import render_at
 
     state = fountain
-    state.set_view(1)                      # the file's second view: render_at's index 2
+    state.views.set_view(1)                      # the file's second view: render_at's index 2
     assert not state.keyed_view
-    state.update()
-    expected = render_at(state.playback.animation, 0.0, state.settings(), view_index=2)
+    state.frames.update()
+    expected = render_at(state.playback.animation, 0.0, state.choices.settings(), view_index=2)
     assert np.array_equal(state.frame.color, expected.color)
 
 
@@ -300,17 +301,17 @@ def test_a_file_view_of_an_animated_scene_is_render_ats_numbering(fountain):
 
 def test_texture_filter_and_bump_are_settings_of_the_next_frame(whitted):
     state = whitted
-    assert state.settings().texture_filter == "trilinear" and state.settings().bump
-    state.update()
-    assert state.next_texture_filter() == "anisotropic" and state.dirty
-    assert state.next_texture_filter() == "nearest"
-    state.set_texture_filter("bilinear")
-    assert state.settings().texture_filter == "bilinear"
+    assert state.choices.settings().texture_filter == "trilinear" and state.choices.settings().bump
+    state.frames.update()
+    assert state.choices.next_texture_filter() == "anisotropic" and state.dirty
+    assert state.choices.next_texture_filter() == "nearest"
+    state.choices.set_texture_filter("bilinear")
+    assert state.choices.settings().texture_filter == "bilinear"
     with pytest.raises(ValueError, match="nearest"):
-        state.set_texture_filter("cubic")
-    state.set_bump(False)
-    assert state.settings().bump is False
-    assert not state.is_bump_demo and state.bump_label is None
+        state.choices.set_texture_filter("cubic")
+    state.choices.set_bump(False)
+    assert state.choices.settings().bump is False
+    assert not state.choices.is_bump_demo and state.choices.bump_label is None
 
 
 def test_bump_demo_clicks_change_map_and_mode_like_the_cli():
@@ -320,13 +321,14 @@ def test_bump_demo_clicks_change_map_and_mode_like_the_cli():
 
     path = SCENES_DIR / "bump_demo.toml"
     state = ViewerState.open(path, size=(64, 64))
-    assert state.is_bump_demo and state.bump_label == "Bump: B(x,y) = sin((x^2 + y^2)^0.5)"
-    assert [state.next_bump_map() for _ in range(4)] == [1, 2, 3, 0]
-    state.next_bump_map()
-    state.next_bump_map()                                  # map 2
+    assert state.choices.is_bump_demo
+    assert state.choices.bump_label == "Bump: B(x,y) = sin((x^2 + y^2)^0.5)"
+    assert [state.choices.next_bump_map() for _ in range(4)] == [1, 2, 3, 0]
+    state.choices.next_bump_map()
+    state.choices.next_bump_map()                                  # map 2
     for bump in (True, False):
-        state.set_bump(bump)
-        assert state.update()
+        state.choices.set_bump(bump)
+        assert state.frames.update()
         # what `render scenes/bump_demo.toml --bump-map 2 [--no-bump]` draws
         scene = load_scene(path, size=(64, 64))
         apply_demo_options(scene, 2, bump)
@@ -334,7 +336,7 @@ def test_bump_demo_clicks_change_map_and_mode_like_the_cli():
                      RenderSettings.for_scene(scene, size=(64, 64),
                                               bump=None if bump else False))
         assert np.array_equal(state.frame.color, cli.color)
-    assert state.bump_label == "Phong"
+    assert state.choices.bump_label == "Phong"
 
 
 def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
@@ -360,15 +362,15 @@ def test_a_scene_file_can_ask_for_the_ray_tracer(tmp_path):
 
 
 def test_the_status_speaks_of_textures_only_where_there_are_some(whitted):
-    assert not whitted.has_textures
-    assert ViewerState.open(SCENES_DIR / "texture_floor.toml", size=(40, 30)).has_textures
+    assert not whitted.choices.has_textures
+    assert ViewerState.open(SCENES_DIR / "texture_floor.toml", size=(40, 30)).choices.has_textures
 
 
 def test_a_letterboxed_progressive_frame_is_the_renderers_too(whitted):
-    whitted.set_renderer("raytrace")
-    whitted.set_keep_aspect(True)                       # 60 x 44: letterboxed, not stretched
-    settings = whitted.settings()
-    final = trace_progressively(whitted.scene, whitted.view, settings, whitted.context, render)
-    assert np.array_equal(final.color, render(whitted.scene, whitted.view, settings).color)
-    stretched = render(whitted.scene, whitted.view, settings.replace(keep_aspect=False))
+    whitted.choices.set_renderer("raytrace")
+    whitted.choices.set_keep_aspect(True)                   # 60 x 44: letterboxed, not stretched
+    settings, view = whitted.choices.settings(), whitted.views.current
+    final = trace_progressively(whitted.scene, view, settings, whitted.context, render)
+    assert np.array_equal(final.color, render(whitted.scene, view, settings).color)
+    stretched = render(whitted.scene, view, settings.replace(keep_aspect=False))
     assert not np.array_equal(final.color, stretched.color)

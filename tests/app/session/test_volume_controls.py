@@ -56,18 +56,18 @@ def test_iso_change_re_extracts_the_triangles_counted_by_hand():
     values, spacing = generators.sphere(5, radius=0.5, density=1.0)
     volume = Volume(values=values, spacing=spacing, mode="isosurface", iso=0.7, name="ball")
     state = volume_state(volume, renderer=stub_frame)
-    state.update()
+    state.frames.update()
     # iso 0.7: only the centre is inside; each of its 8 cells cuts off one corner: 8
     assert len(state.scene.meshes[0].triangles) == 8
     # iso 0.3: the centre and its face neighbours; each of the centre's 8 cells holds the
     # centre and three face neighbours (a hexagon: 4 triangles), and each face neighbour is
     # the one inside corner of 4 more cells: 8 · 4 + 6 · 4 = 56
-    assert state.set_iso(0.3) and state.extracting and state.dirty
+    assert state.volumes.set_iso(0.3) and state.volumes.extracting and state.dirty
     assert len(state.scene.meshes[0].triangles) == 8          # not before the frame's job
-    assert state.update()
+    assert state.frames.update()
     assert len(state.scene.meshes[0].triangles) == 56
-    assert state.volume.iso == 0.3 and not state.extracting
-    assert state.set_iso(0.7) and state.update()
+    assert state.volumes.current.iso == 0.3 and not state.volumes.extracting
+    assert state.volumes.set_iso(0.7) and state.frames.update()
     assert len(state.scene.meshes[0].triangles) == 8
 
 
@@ -76,12 +76,12 @@ def test_iso_moves_the_sphere_s_surface_where_its_ramp_puts_it():
     # d = r + h (1/2 − iso): iso 0.25 a quarter sample outside r, 0.75 one inside
     state = volume_state(sphere_volume(), renderer=stub_frame)
     for iso in (0.25, 0.5, 0.75):
-        state.set_iso(iso)
-        state.update()
+        state.volumes.set_iso(iso)
+        state.frames.update()
         mesh = state.scene.meshes[0]
         radius = np.linalg.norm(mesh.positions, axis=1).mean()
         assert radius == pytest.approx(0.6 + 0.05 * (0.5 - iso), abs=0.005)   # h / 10
-        _, triangles, _ = marching_cubes(state.volume.values, iso, "oracle")
+        _, triangles, _ = marching_cubes(state.volumes.current.values, iso, "oracle")
         assert len(mesh.triangles) == len(triangles)
 
 
@@ -97,45 +97,45 @@ def test_iso_is_extracted_on_the_worker_thread_and_the_panel_says_extracting(mon
     monkeypatch.setattr(volume_controls, "reextract", recorded)
     worker = RenderWorker()
     try:
-        assert state.set_iso(0.3)
-        assert state.extracting                    # "extracting…" until the frame is in
-        assert state.request(worker)
+        assert state.volumes.set_iso(0.3)
+        assert state.volumes.extracting                    # "extracting…" until the frame is in
+        assert state.frames.request(worker)
         deadline = time.monotonic() + 120
         result = None
         while result is None and time.monotonic() < deadline:
             result = worker.collect()
             time.sleep(0.02)
         assert result is not None and result.error is None
-        state.accept(result)
+        state.frames.accept(result)
     finally:
         worker.stop()
     assert threads == ["render"]
     assert threading.current_thread().name != "render"
-    assert not state.extracting and state.volume.iso == 0.3
+    assert not state.volumes.extracting and state.volumes.current.iso == 0.3
 
 
 def test_iso_outside_the_data_keeps_the_last_surface_with_a_message():
     state = volume_state(sphere_volume(), renderer=stub_frame)
-    state.update()
+    state.frames.update()
     mesh = state.scene.meshes[0]
-    assert not state.set_iso(1.5)
+    assert not state.volumes.set_iso(1.5)
     assert state.volume_message == ("iso: iso 1.5 is outside the data's range (0, 1): no "
                                     "surface; the surface stays at iso 0.5")
-    assert not state.dirty and not state.extracting
-    assert not state.update() and state.scene.meshes[0] is mesh
-    assert state.set_iso(0.4) and state.volume_message == ""
+    assert not state.dirty and not state.volumes.extracting
+    assert not state.frames.update() and state.scene.meshes[0] is mesh
+    assert state.volumes.set_iso(0.4) and state.volume_message == ""
 
 
 def test_an_isosurface_past_the_triangle_limit_keeps_the_last_one(monkeypatch):
     import core.scene.generators as limits
     state = volume_state(sphere_volume(), renderer=stub_frame)
-    state.update()
+    state.frames.update()
     mesh = state.scene.meshes[0]
     monkeypatch.setattr(limits, "MAX_TRIANGLES", len(mesh.triangles))
-    assert state.set_iso(0.25)                # more triangles than the (lowered) limit
-    assert not state.update()
-    assert state.scene.meshes[0] is mesh and state.volume.iso == 0.5
-    assert not state.extracting and state.render_error is None
+    assert state.volumes.set_iso(0.25)                # more triangles than the (lowered) limit
+    assert not state.frames.update()
+    assert state.scene.meshes[0] is mesh and state.volumes.current.iso == 0.5
+    assert not state.volumes.extracting and state.render_error is None
     assert "the limit is" in state.volume_message and "last good iso" in state.volume_message
 
 
@@ -149,15 +149,15 @@ def test_dragging_a_transfer_point_changes_the_picture_by_the_exact_integral():
     # extinction = alpha_1 · value / σ on the ramp; through the centre the field integrates
     # to σ · chord (chord 1.6): the middle pixel is c (1 − e^{−alpha_1 · 1.6})
     state = volume_state(emitting_sphere(), size=(21, 21))
-    state.set_renderer("volume")
-    assert state.update()
+    state.choices.set_renderer("volume")
+    assert state.frames.update()
     c = 0.8
     middle = state.frame.color[10, 10].astype(float) / 255
     assert middle == pytest.approx([c * (1 - np.exp(-1.6))] * 3, abs=2 / 255)
-    old = state.volume.transfer
-    assert state.move_transfer_point(1, 1.0, 2.0) and state.dirty
+    old = state.volumes.current.transfer
+    assert state.volumes.move_transfer_point(1, 1.0, 2.0) and state.dirty
     assert old[1, 4] == 1.0                  # a new array: a frame being drawn keeps the old
-    assert state.update()
+    assert state.frames.update()
     middle = state.frame.color[10, 10].astype(float) / 255
     assert middle == pytest.approx([c * (1 - np.exp(-3.2))] * 3, abs=2 / 255)
     assert state.frame.color[0, 0].tolist() == [0, 0, 0]          # outside: the background
@@ -165,14 +165,14 @@ def test_dragging_a_transfer_point_changes_the_picture_by_the_exact_integral():
 
 def test_a_transfer_with_negative_alpha_keeps_the_last_good_one():
     state = volume_state(emitting_sphere(), renderer=stub_frame)
-    state.update()
-    before = state.volume.transfer.copy()
-    assert not state.move_transfer_point(1, 1.0, -0.5)
+    state.frames.update()
+    before = state.volumes.current.transfer.copy()
+    assert not state.volumes.move_transfer_point(1, 1.0, -0.5)
     assert state.volume_message == ("transfer: transfer alpha (extinction per unit length) "
                                     "must be >= 0; the last good transfer function stays")
-    assert not state.move_transfer_point(1, -0.5, 1.0)        # before point 0's value
+    assert not state.volumes.move_transfer_point(1, -0.5, 1.0)        # before point 0's value
     assert "must increase strictly" in state.volume_message
-    assert np.array_equal(state.volume.transfer, before) and not state.dirty
+    assert np.array_equal(state.volumes.current.transfer, before) and not state.dirty
 
 
 def test_a_slice_is_the_volumes_array_slice_exactly():
@@ -195,13 +195,13 @@ def test_a_slice_is_the_volumes_array_slice_exactly():
 
 def test_the_state_picks_the_middle_slice_and_refuses_one_past_the_end():
     state = volume_state(sphere_volume(), renderer=stub_frame)
-    assert state.slice_shown() == 20
-    state.set_slice("sagittal", 40)
-    assert state.slice_shown() == 40
+    assert state.volumes.slice_shown() == 20
+    state.volumes.set_slice("sagittal", 40)
+    assert state.volumes.slice_shown() == 40
     with pytest.raises(ValueError, match="sagittal slice index must be in 0..40, not 41"):
-        state.set_slice("sagittal", 41)
+        state.volumes.set_slice("sagittal", 41)
     with pytest.raises(ValueError, match="slice must be one of axial, coronal, sagittal"):
-        state.set_slice("oblique")
+        state.volumes.set_slice("oblique")
 
 
 def test_the_plot_maps_points_to_pixels_and_back():
@@ -217,26 +217,26 @@ def test_the_plot_maps_points_to_pixels_and_back():
 def test_the_slice_buffer_view_follows_the_slider_and_the_frame():
     from app.viewer.inspector_tools import PICTURE, InspectorTools
     state = volume_state(sphere_volume(), renderer=stub_frame)
-    state.update()
+    state.frames.update()
     tools = InspectorTools(state)
     assert tools.buffer_names()[-3:] == ("axial", "coronal", "sagittal")
     tools.choose_buffer("axial", "test")
     assert tools.buffer == "axial" and tools.changed
-    expected = volume_controls.slice_picture(state.volume, "axial", 20, (40, 40))
+    expected = volume_controls.slice_picture(state.volumes.current, "axial", 20, (40, 40))
     assert np.array_equal(tools.picture(state.frame), expected)
     tools.show_slice("sagittal", 3, "test")
-    assert state.slice_name == "sagittal" and state.slice_shown() == 3
-    expected = volume_controls.slice_picture(state.volume, "sagittal", 3, (40, 40))
+    assert state.slice_name == "sagittal" and state.volumes.slice_shown() == 3
+    expected = volume_controls.slice_picture(state.volumes.current, "sagittal", 3, (40, 40))
     assert np.array_equal(tools.overlay, expected)
     state.dirty = True
-    state.update()
+    state.frames.update()
     tools.frame_changed(state.frame, state.frame_seconds)      # a new frame keeps the slice
     assert tools.buffer == "sagittal" and np.array_equal(tools.overlay, expected)
     tools.choose_buffer(PICTURE, "test")
     assert tools.buffer == PICTURE and tools.overlay is None
     # a re-extracted surface: the inspector's own caches of the scene are dropped
     tools.context().cache(state.scene)["held"] = "the old mesh's"
-    state.set_iso(0.3)
-    state.update()
+    state.volumes.set_iso(0.3)
+    state.frames.update()
     tools.frame_changed(state.frame, state.frame_seconds)
     assert "held" not in tools.context().cache(state.scene)

@@ -60,19 +60,19 @@ def test_the_window_s_tools_draw_the_ids_off_the_ui_thread_once_per_frame():
     from app.viewer.inspector_tools import InspectorTools
     from app.session.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(80, 60))
-    assert state.update()
+    assert state.frames.update()
     tools = InspectorTools(state)
     assert tools.triangle_ids(state.frame) == (None, ())      # asked: drawn on a thread
     deadline = time.monotonic() + 120
     while tools._picking is not None and time.monotonic() < deadline:
         time.sleep(0.01)
     ids, meshes = tools.triangle_ids(state.frame)
-    expected, _ = buffer(state.scene, state.view, state.settings(), "triangle")
+    expected, _ = buffer(state.scene, state.views.current, state.choices.settings(), "triangle")
     assert np.array_equal(ids, expected)
     assert meshes == [(m.name, len(m.triangles)) for m in state.scene.meshes]
     assert tools.triangle_ids(state.frame)[0] is ids           # once per frame
-    state.set_renderer("raytrace")                             # keeps no triangle buffer
-    assert state.update()
+    state.choices.set_renderer("raytrace")                             # keeps no triangle buffer
+    assert state.frames.update()
     assert tools.triangle_ids(state.frame) == (None, ()) and tools._picking is None
 
 
@@ -81,13 +81,13 @@ def test_the_aliasing_view_is_the_aliased_frame_left_and_the_antialiased_right()
     from app.viewer.inspector_tools import ALIASED, ANTIALIASED_LINES, InspectorTools
     from app.session.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "house.toml", size=(90, 60))     # the wireframe
-    assert state.update()
+    assert state.frames.update()
     tools = InspectorTools(state)
     tools.choose_buffer("aliasing", "test")
     assert tools.buffer == "picture" and tools.busy == "drawing the aliasing view"   # off the UI thread
     tools.settle()
     assert tools.buffer == "aliasing"
-    view, settings = state.view, state.settings()
+    view, settings = state.views.current, state.choices.settings()
     aliased = render(state.scene, view, dataclasses.replace(settings, **ALIASED)).color
     smooth = render(state.scene, view, dataclasses.replace(settings, **ANTIALIASED_LINES)).color
     shown = tools.picture(state.frame)[:, :, :3]
@@ -113,8 +113,8 @@ def test_the_aliasing_view_is_not_drawn_for_a_ray_tracer_on_the_ui_thread():
     from app.viewer.inspector_tools import InspectorTools
     from app.session.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(40, 30))
-    state.set_renderer("raytrace")
-    assert state.update()
+    state.choices.set_renderer("raytrace")
+    assert state.frames.update()
     tools = InspectorTools(state)
     tools.choose_buffer("aliasing", "test")
     tools.settle()
@@ -126,12 +126,12 @@ def test_a_filled_scene_s_antialiased_half_is_16_samples_through_mitchell():
     from app.viewer.inspector_tools import ANTIALIASED, InspectorTools
     from app.session.state import ViewerState
     state = ViewerState.open(SCENES_DIR / "three_bars.toml", size=(60, 40))
-    assert state.update()
+    assert state.frames.update()
     tools = InspectorTools(state)
     tools.choose_buffer("aliasing", "test")
     tools.settle()
-    smooth = render(state.scene, state.view,
-                    dataclasses.replace(state.settings(), **ANTIALIASED)).color
+    smooth = render(state.scene, state.views.current,
+                    dataclasses.replace(state.choices.settings(), **ANTIALIASED)).color
     shown = tools.picture(state.frame)[:, :, :3]
     assert np.array_equal(shown[:, 30:], smooth[:, 30:])
     assert np.array_equal(shown[:, :30], state.frame.color[:, :30])   # the frame: 1 sample

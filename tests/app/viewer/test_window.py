@@ -66,66 +66,66 @@ def state():
 def test_views_wrap_both_ways(state):
     # house.views: 20 views, 6 invalid (14-18 and 20); the window steps over those and
     # numbers the others by their place in the file
-    n = state.view_count
-    assert n == 14 and state.view_label == "view 1 of 20 (6 invalid)"
-    state.prev_view()
-    assert state.view_index == n - 1 and state.view_label == "view 19 of 20 (6 invalid)"
-    state.prev_view()
-    assert state.view_label == "view 13 of 20 (6 invalid)"
-    state.next_view()
-    state.next_view()
+    n = state.views.count
+    assert n == 14 and state.views.label == "view 1 of 20 (6 invalid)"
+    state.views.prev_view()
+    assert state.view_index == n - 1 and state.views.label == "view 19 of 20 (6 invalid)"
+    state.views.prev_view()
+    assert state.views.label == "view 13 of 20 (6 invalid)"
+    state.views.next_view()
+    state.views.next_view()
     assert state.view_index == 0
     for _ in range(n):
-        state.next_view()
+        state.views.next_view()
     assert state.view_index == 0
 
 
 def test_frames_are_rendered_only_when_the_picture_changes(state):
     calls = state.renderer.calls
-    assert state.update() and len(calls) == 1
+    assert state.frames.update() and len(calls) == 1
     assert state.frame.color.shape == (150, 200, 3)
-    assert not state.update() and len(calls) == 1          # nothing changed
-    state.set_projection("perspective")                     # already perspective
-    state.set_shading("wireframe")                          # already wireframe
-    assert not state.update() and len(calls) == 1
-    state.set_projection("parallel")
-    assert state.update() and calls[-1] == (0, "parallel", "wireframe", (200, 150))
-    state.next_view()
-    assert state.update() and calls[-1] == (1, "parallel", "wireframe", (200, 150))
-    state.set_shading("flat")                               # the house has no triangles:
-    assert state.update() and calls[-1][2] == "flat"        # still a frame, of its edges
+    assert not state.frames.update() and len(calls) == 1          # nothing changed
+    state.choices.set_projection("perspective")                     # already perspective
+    state.choices.set_shading("wireframe")                          # already wireframe
+    assert not state.frames.update() and len(calls) == 1
+    state.choices.set_projection("parallel")
+    assert state.frames.update() and calls[-1] == (0, "parallel", "wireframe", (200, 150))
+    state.views.next_view()
+    assert state.frames.update() and calls[-1] == (1, "parallel", "wireframe", (200, 150))
+    state.choices.set_shading("flat")                               # the house has no triangles:
+    assert state.frames.update() and calls[-1][2] == "flat"        # still a frame, of its edges
 
 
 def test_bad_settings_are_refused(state):
     with pytest.raises(ValueError, match="perspective, parallel"):
-        state.set_projection("orthographic")
+        state.choices.set_projection("orthographic")
     with pytest.raises(ValueError, match="wireframe"):
-        state.set_shading("toon")
+        state.choices.set_shading("toon")
     assert state.projection == "perspective" and state.shading == "wireframe"
 
 
 def test_minimised_window_renders_nothing_and_resize_renders_at_new_size(state):
     calls = state.renderer.calls
-    state.update()
+    state.frames.update()
     first = state.frame
     state.resize(0, 0)
     assert not state.renderable
-    state.next_view()
-    assert not state.update() and len(calls) == 1 and state.frame is first
+    state.views.next_view()
+    assert not state.frames.update() and len(calls) == 1 and state.frame is first
     state.resize(333, 217)
-    assert state.update() and state.frame.color.shape == (217, 333, 3)
+    assert state.frames.update() and state.frame.color.shape == (217, 333, 3)
     assert calls[-1] == (1, "perspective", "wireframe", (333, 217))
     state.resize(0, 217)                                    # one side zero is still nothing
-    assert not state.update()
+    assert not state.frames.update()
 
 
 def test_restoring_a_minimised_window_reuses_its_frame(state):
     calls = state.renderer.calls
-    state.update()
+    state.frames.update()
     width, height = state.size
     state.resize(0, 0)
     state.resize(width, height)                  # back to the frame's size: nothing changed
-    assert not state.update() and len(calls) == 1
+    assert not state.frames.update() and len(calls) == 1
 
 
 def test_standard_input_cannot_be_opened_from_the_window(state):
@@ -136,7 +136,7 @@ def test_standard_input_cannot_be_opened_from_the_window(state):
 
 
 def test_a_failing_render_keeps_the_last_frame_and_says_why(state):
-    state.update()
+    state.frames.update()
     good = state.frame
     real = state.renderer
 
@@ -146,31 +146,31 @@ def test_a_failing_render_keeps_the_last_frame_and_says_why(state):
         return real(scene, view, settings, context)
 
     state.renderer = broken
-    state.set_shading("phong")
-    assert not state.update() and state.frame is good and not state.dirty
-    assert state.messages[-1] == ("could not render view 1 of 20 (6 invalid) (perspective, phong): "
-                                  "ZeroDivisionError: a stage fell over")
-    state.set_shading("wireframe")                          # the user carries on
-    assert state.update() and state.frame is not good and state.render_error is None
-    assert not any("could not render" in m for m in state.messages)
+    state.choices.set_shading("phong")
+    assert not state.frames.update() and state.frame is good and not state.dirty
+    assert state.messages.all[-1] == ("could not render view 1 of 20 (6 invalid) "
+                                      "(perspective, phong): ZeroDivisionError: a stage fell over")
+    state.choices.set_shading("wireframe")                          # the user carries on
+    assert state.frames.update() and state.frame is not good and state.render_error is None
+    assert not any("could not render" in m for m in state.messages.all)
 
 
 def test_messages_show_invalid_views_and_the_frame_message(state):
     scene = state.scene
     assert scene.view_messages, "house.views has invalid views that must give messages"
-    assert state.messages == [f"invalid view: {m}" for m in scene.view_messages]
+    assert state.messages.all == [f"invalid view: {m}" for m in scene.view_messages]
     # A view that is valid for one projection only: its frame says why it is blank.
     from core.camera.view import problems
     index = next((i for i, v in enumerate(scene.views)
                   if bool(problems(v, "perspective")) != bool(problems(v, "parallel"))), None)
     assert index is not None, "house.views has a view valid for one projection only"
-    state.set_view(index)
+    state.views.set_view(index)
     blank = []
     for projection in ("perspective", "parallel"):
-        state.set_projection(projection)
-        state.update()
+        state.choices.set_projection(projection)
+        state.frames.update()
         if state.frame.message:
-            assert state.messages[-1] == state.frame.message
+            assert state.messages.all[-1] == state.frame.message
             assert "invalid" in state.frame.message
             blank.append(projection)
     assert blank == ["perspective"]            # F behind the eye: only perspective refuses it
@@ -207,22 +207,23 @@ def bad_scene_files(tmp_path) -> list[Path]:
 
 
 def test_a_scene_that_fails_to_open_keeps_the_users_work(state, tmp_path):
-    state.next_view()
-    state.next_view()
-    state.set_projection("parallel")
-    state.update()
+    state.views.next_view()
+    state.views.next_view()
+    state.choices.set_projection("parallel")
+    state.frames.update()
     scene, frame, renders = state.scene, state.frame, len(state.renderer.calls)
     for path in bad_scene_files(tmp_path):
         assert state.open_scene(str(path)) is False
         assert state.scene is scene and state.frame is frame
         assert (state.view_index, state.projection, state.shading) == (2, "parallel", "wireframe")
-        assert not state.dirty and not state.update() and len(state.renderer.calls) == renders
-        assert state.messages[-1].startswith(f"could not open {path}")
+        assert not state.dirty and not state.frames.update()
+        assert len(state.renderer.calls) == renders
+        assert state.messages.all[-1].startswith(f"could not open {path}")
     assert len(state.open_messages) == 3
     # A good scene then opens, at its first view with its own settings, and clears the errors.
     assert state.open_scene(str(SCENES_DIR / "house.views"))
     assert state.view_index == 0 and state.open_messages == [] and state.dirty
-    assert state.update()
+    assert state.frames.update()
 
 
 # -- the real window under Xvfb ----------------------------------------------------------
@@ -325,7 +326,7 @@ def test_no_display_renders_every_view_to_png(state, tmp_path, capsys):
     out = tmp_path / "views"
     assert render_all_views(state, out, "DISPLAY and WAYLAND_DISPLAY are not set") == 0
     captured = capsys.readouterr()
-    n = state.view_count
+    n = state.views.count
     assert (f"no display found (DISPLAY and WAYLAND_DISPLAY are not set): rendering the {n} "
             f"views to PNG in {out}") in captured.err
     files = sorted(out.glob("*.png"))

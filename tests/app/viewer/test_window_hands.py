@@ -309,23 +309,24 @@ def test_a_refused_pose_keeps_the_last_good_view_and_reset_is_exact():
     from app.viewer.hands import CameraHands
     state = house_state()
     hands = CameraHands(state)
-    file_view = state.view
+    file_view = state.views.current
     hands.press(80, 60, pan=False)
     assert not hands.move(82, 61, threshold=6)              # within the threshold: no drag
     assert hands.move(120, 60, threshold=6) and state.hand_view is not None
     assert hands.release(120, 60, threshold=6)             # it was a drag, not a click
-    moved = state.view
+    moved = state.views.current
     assert moved.vpn != file_view.vpn and state.view_index == 0
     # dolly in until the eye nears the VRP: refused with its reason, the last pose kept
     refused = 0
     for _ in range(400):
-        before = state.view
+        before = state.views.current
         if not hands.wheel(+1):
             refused += 1
-            assert state.view == before and "refused, the last good view kept" in hands.message
+            assert state.views.current == before
+            assert "refused, the last good view kept" in hands.message
     assert refused > 0
     # Enter: the file's view, the very object (every number and F, B as in the file)
-    assert hands.reset() and state.view is file_view and state.hand_view is None
+    assert hands.reset() and state.views.current is file_view and state.hand_view is None
     # a click (press and release within the threshold) is not a drag
     hands.press(10, 10, pan=True)
     assert hands.release(13, 12, threshold=6) is False and state.hand_view is None
@@ -336,7 +337,7 @@ def test_the_panel_numbers_are_the_matrices_commands(tmp_path):
 
     from app.viewer.hands import save_view, view_lines
     state = house_state()
-    view = state.view
+    view = state.views.current
     lines = view_lines(view, "perspective")
     assert lines[:2] == ["VRP 0 0 0", "VPN 0 0 1"] and "N_per =" in lines
     done = subprocess.run([sys.executable, "-m", "app", "matrices", "scenes/house.toml",
@@ -366,7 +367,7 @@ def test_the_reference_cycles_picture_reference_difference(tmp_path):
     from app.viewer.reference import ReferenceView, load_reference
     from core.inspect.compare import compare
     state = house_state()
-    state.update()
+    state.frames.update()
     ours = state.frame.color
     teacher = ours.copy()
     teacher[10:20, 30:40] = (255, 0, 0)                   # 100 pixels differ
@@ -422,19 +423,19 @@ def test_while_dragging_the_latest_camera_wins():
     try:
         hands.press(80, 60, pan=False)
         hands.move(100, 60, threshold=6)
-        assert state.request(worker)
+        assert state.frames.request(worker)
         deadline = time.monotonic() + 10
         while not drawn and time.monotonic() < deadline:
             time.sleep(0.01)
         for k in range(50):                       # the frame is still being drawn
             hands.move(100 + k, 60 + k % 7, threshold=6)
-            state.request(worker)
-        latest = state.view
+            state.frames.request(worker)
+        latest = state.views.current
         release.set()
         deadline = time.monotonic() + 20
         while time.monotonic() < deadline:
             result = worker.collect()
-            if result is not None and state.accept(result) and len(drawn) == 2:
+            if result is not None and state.frames.accept(result) and len(drawn) == 2:
                 break
             time.sleep(0.01)
         assert len(drawn) == 2 and drawn[1] == latest

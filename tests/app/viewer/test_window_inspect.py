@@ -123,8 +123,8 @@ def test_the_tools_follow_the_frame_without_a_window():
     from core.paths import SCENES_DIR
 
     state = ViewerState.open(SCENES_DIR / "cube.toml", size=SIZE)
-    state.set_shading("phong")
-    state.update()
+    state.choices.set_shading("phong")
+    state.frames.update()
     tools = InspectorTools(state)
     tools.toggle_inspect("test")
     tools.inspect(120, 100, "test")
@@ -135,8 +135,8 @@ def test_the_tools_follow_the_frame_without_a_window():
     tools.settle()
     assert tools.buffer == "depth" and tools.overlay.shape == (SIZE[1], SIZE[0], 4)
     assert tools.picture(state.frame) is tools.overlay
-    state.set_shading("wireframe")                  # no triangles filled: no depth buffer
-    state.update()
+    state.choices.set_shading("wireframe")                  # no triangles filled: no depth buffer
+    state.frames.update()
     tools.frame_changed(state.frame, state.frame_seconds)
     tools.settle()
     assert tools.buffer == PICTURE and tools.picture(state.frame) is state.frame.rgbx
@@ -148,8 +148,8 @@ def test_another_scene_clears_the_last_ones_record_comparison_and_buffer_view():
     from app.session.state import ViewerState
     from core.paths import SCENES_DIR
     state = ViewerState.open(SCENES_DIR / "cube.toml", size=SIZE)
-    state.set_shading("phong")
-    state.update()
+    state.choices.set_shading("phong")
+    state.frames.update()
     tools = InspectorTools(state)
     tools.inspect(120, 100, "test")
     tools.settle()

@@ -59,7 +59,7 @@ def test_the_point_under_a_pixel_is_read_from_the_frames_depth(projection):
     # (-0.275, 0.375, 0), meets it at t = 2 / (2 - u/2) from the eye (perspective, P = E +
     # t (u, v, -2)), or at z = -u/2 straight behind the view-plane point (parallel).
     state = state_of(square(0.6, slope=0.5), projection=projection)
-    assert state.update()
+    assert state.frames.update()
     u, v = pixel_point(14, 12)
     if projection == "perspective":
         t = 2 / (2 - 0.5 * u)
@@ -77,12 +77,12 @@ def test_the_point_under_a_pixel_is_read_from_the_frames_depth(projection):
 
 def test_the_frame_keeps_its_own_depth_when_the_next_frame_overwrites_the_buffer():
     state = state_of(square(0.6, slope=0.5))
-    assert state.update()
+    assert state.frames.update()
     pick = state.frame.stats[PICK_KEY]
     before = point_at(pick, 14, 12)
-    state.set_hand_view(View(vrp=(0.3, 0.0, 0.0), vpn=(0.0, 0.0, 1.0), vup=(0.0, 1.0, 0.0),
+    state.views.set_hand_view(View(vrp=(0.3, 0.0, 0.0), vpn=(0.0, 0.0, 1.0), vup=(0.0, 1.0, 0.0),
                              window=VIEW.window, prp=(0.0, 0.0, 2.0), front=1.0, back=-1.0))
-    assert state.update()                      # drawn into the same context's z-buffer
+    assert state.frames.update()                      # drawn into the same context's z-buffer
     assert np.array_equal(point_at(pick, 14, 12), before)
 
 
@@ -95,11 +95,11 @@ def _drag(hands, x0, y0, x1, y1, under=None):
 
 def test_a_drag_pressed_on_the_model_orbits_about_the_point_under_the_cursor():
     state = state_of(square(0.6, slope=0.5))
-    assert state.update()
+    assert state.frames.update()
     under = point_at(state.frame.stats[PICK_KEY], 14, 12)
     hands = CameraHands(state)
     _drag(hands, 14.5, 12.5, 30, 20, under=under)
-    after = state.view
+    after = state.views.current
     eye = eye_from_view(after, "perspective").point
     # turned about the point: the eye and the VRP keep their distances to it ...
     assert math.isclose(np.linalg.norm(eye - under), np.linalg.norm(EYE - under), rel_tol=1e-12)
@@ -108,15 +108,15 @@ def test_a_drag_pressed_on_the_model_orbits_about_the_point_under_the_cursor():
     # ... and not to the scene's centre (the origin), which a miss would have kept
     assert abs(np.linalg.norm(eye) - 2.0) > 1e-3
     # a press that misses the model (no point) orbits about the scene's centre
-    state.reset_view()
+    state.views.reset()
     _drag(hands, 0.5, 0.5, 16, 8)
-    assert math.isclose(np.linalg.norm(eye_from_view(state.view, "perspective").point), 2.0,
-                        rel_tol=1e-12)
+    eye = eye_from_view(state.views.current, "perspective").point
+    assert math.isclose(np.linalg.norm(eye), 2.0, rel_tol=1e-12)
     # the VRP pivot stays a choice: the VRP (the origin here) does not move
-    state.reset_view()
+    state.views.reset()
     hands.set_pivot("vrp")
     _drag(hands, 14.5, 12.5, 30, 20, under=under)
-    assert np.array_equal(state.view.vrp, (0.0, 0.0, 0.0))
+    assert np.array_equal(state.views.current.vrp, (0.0, 0.0, 0.0))
 
 
 # -- the turntable ----------------------------------------------------------------------------
@@ -127,22 +127,22 @@ def test_the_turntable_yaws_about_up_and_pitches_about_right_without_roll():
     # pi radians over the shorter side (40 px): 20 px right is a quarter turn of the scene
     # about +y (its front moves right), so the eye goes round to -x: VPN (-1, 0, 0)
     _drag(hands, 10, 20, 30, 20)
-    assert np.allclose(state.view.vpn, (-1.0, 0.0, 0.0), atol=1e-12)
-    assert np.allclose(state.view.vup, (0.0, 1.0, 0.0), atol=0)
+    assert np.allclose(state.views.current.vpn, (-1.0, 0.0, 0.0), atol=1e-12)
+    assert np.allclose(state.views.current.vup, (0.0, 1.0, 0.0), atol=0)
     # 10 px down: the eye rises by pi/4 over the horizon
     _drag(hands, 20, 10, 20, 20)
-    assert np.allclose(state.view.vpn, (-math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0),
-                       atol=1e-12)
+    assert np.allclose(state.views.current.vpn,
+                       (-math.cos(math.pi / 4), math.sin(math.pi / 4), 0.0), atol=1e-12)
     # far down: the elevation stops at 89 degrees, the picture never rolls
     _drag(hands, 20, 0, 20, 400)
-    assert math.isclose(state.view.vpn[1], math.sin(math.radians(89)), rel_tol=1e-12)
-    u, _, _ = vrc_basis(state.view)
+    assert math.isclose(state.views.current.vpn[1], math.sin(math.radians(89)), rel_tol=1e-12)
+    u, _, _ = vrc_basis(state.views.current)
     assert abs(u[1]) < 1e-12                         # the right axis stays horizontal
 
 
 # -- the headlight ----------------------------------------------------------------------------
 def _square_pixels(state) -> np.ndarray:
-    assert state.update()
+    assert state.frames.update()
     return state.frame.color[..., 0].astype(int)
 
 
@@ -158,34 +158,34 @@ def _square_pixels(state) -> np.ndarray:
 def test_the_headlight_lights_what_the_eye_sees_in_every_local_shading(shading, centre, corner):
     state = state_of(square(), shading=shading)
     assert (_square_pixels(state) == 0).all()     # the scene's light grazes the square
-    state.set_headlight(True)
+    state.lighting.set_headlight(True)
     lit = _square_pixels(state)
     assert abs(lit[20, 20] - centre) <= 1 and abs(lit[0, 0] - corner) <= 1
-    assert "headlight on" in state.headlight_note
+    assert "headlight on" in state.lighting.note
 
 
 def test_the_headlight_follows_the_camera_and_the_inspector_sees_it():
     # The eye turned 60 degrees about y: flat lights the centroid with N . L = cos 60 = 0.5
     state = state_of(square())
-    state.set_headlight(True)
+    state.lighting.set_headlight(True)
     turned = (math.sin(math.radians(60)), 0.0, math.cos(math.radians(60)))
-    state.set_hand_view(View(vrp=(0.0, 0.0, 0.0), vpn=turned, vup=(0.0, 1.0, 0.0),
+    state.views.set_hand_view(View(vrp=(0.0, 0.0, 0.0), vpn=turned, vup=(0.0, 1.0, 0.0),
                              window=VIEW.window, prp=(0.0, 0.0, 2.0), front=1.5, back=-1.5))
     pixels = _square_pixels(state)
     assert abs(pixels[20, 20] - 127.5) <= 1
-    assert np.allclose(state.drawn_scene().lights[0].position, 2 * np.array(turned))
-    state.set_headlight(False)
-    assert _square_pixels(state)[20, 20] == 0 and state.drawn_scene() is state.scene
+    assert np.allclose(state.lighting.drawn_scene().lights[0].position, 2 * np.array(turned))
+    state.lighting.set_headlight(False)
+    assert _square_pixels(state)[20, 20] == 0 and state.lighting.drawn_scene() is state.scene
 
 
 def test_the_global_illumination_renderers_keep_the_scenes_lights_and_say_so():
     state = state_of(square())
-    state.set_headlight(True)
-    state.set_renderer("radiosity")
-    assert "off for radiosity" in state.headlight_note
-    assert state.drawn_scene() is state.scene
-    assert state.headlight_note and not ViewerState(
-        scene=state.scene, scene_source="square", size=(SIZE, SIZE)).headlight_note
+    state.lighting.set_headlight(True)
+    state.choices.set_renderer("radiosity")
+    assert "off for radiosity" in state.lighting.note
+    assert state.lighting.drawn_scene() is state.scene
+    assert state.lighting.note and not ViewerState(
+        scene=state.scene, scene_source="square", size=(SIZE, SIZE)).lighting.note
 
 
 # -- depth shading -----------------------------------------------------------------------------
@@ -197,15 +197,15 @@ def test_depth_shading_colours_by_the_distance_from_the_eye_and_by_height_on_req
     above = View(vrp=(0.0, 0.0, 0.0), vpn=(0.0, 1.0, 1.0), vup=(0.0, 1.0, 0.0),
                  window=(-1.2, 1.2, -1.2, 1.2), prp=(0.0, 0.0, 3.0), front=2.0, back=-2.0)
     state = state_of(floor, shading="depth", view=above)
-    assert state.settings().depth_shading == "view"
-    assert state.update()
+    assert state.choices.settings().depth_shading == "view"
+    assert state.frames.update()
     column = state.frame.color[:, 20, 0].astype(int)
     covered = np.flatnonzero(np.isfinite(state.frame.depth[:, 20]))
     levels = column[covered]
     assert len(covered) > 10 and levels[-1] > levels[0] + 100
     assert (np.diff(levels) >= 0).all()               # brighter row by row towards the eye
-    state.set_depth_shading("height")
-    assert state.update()
+    state.choices.set_depth_shading("height")
+    assert state.frames.update()
     colours = state.frame.color[covered, 20]
     assert (colours == colours[0]).all()
 

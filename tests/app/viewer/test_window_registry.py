@@ -41,6 +41,6 @@ def test_a_registered_mode_and_renderer_have_their_keys_menu_item_and_title(toys
     assert [e.key for e in renderers() if e.name == "toy"] == ["X"]    # its Render menu item
     state = ViewerState.open(ROOT / "scenes" / "house.toml", size=(64, 48))
     assert not window_title(state).endswith("drawn")
-    state.set_renderer("toy")
-    state.set_shading("toy-mode")
+    state.choices.set_renderer("toy")
+    state.choices.set_shading("toy-mode")
     assert window_title(state).endswith(" - toy-mode - toy drawn")

@@ -97,20 +97,20 @@ def test_a_file_of_only_invalid_views_keeps_the_current_scene(tmp_path):
     bad.write_text("0 0 0\n0 0 0\n0 1 0\n-1 1 -1 1\n0 0 5\n1 -1\n"
                    "0 0 0\n0 0 1\n0 0 1\n-1 1 -1 1\n0 0 5\n1 -1\n")
     state = ViewerState.open(SCENES_DIR / "house.toml", size=(120, 90))
-    state.next_view()
-    assert state.update()
+    state.views.next_view()
+    assert state.frames.update()
     scene, frame = state.scene, state.frame
     assert state.open_scene(str(bad)) is False
     assert state.scene is scene and state.frame is frame and state.view_index == 1
-    assert "none of its 2 views is valid" in state.notices[0]
-    assert any("VPN is zero" in m for m in state.notices)
-    assert any("VUP is parallel to VPN" in m for m in state.notices)
+    assert "none of its 2 views is valid" in state.messages.notices[0]
+    assert any("VPN is zero" in m for m in state.messages.notices)
+    assert any("VUP is parallel to VPN" in m for m in state.messages.notices)
 
 
 def test_invalid_views_are_kept_apart_from_the_other_messages():
     state = ViewerState.open(SCENES_DIR / "house.toml", size=(120, 90))
-    assert len(state.invalid_messages) == 6 and state.notices == []
-    assert state.view_label == "view 1 of 20 (6 invalid)"
+    assert len(state.messages.invalid) == 6 and state.messages.notices == []
+    assert state.views.label == "view 1 of 20 (6 invalid)"
 
 
 def test_scene_keys_keep_aspect_and_rasterizer(tmp_path):

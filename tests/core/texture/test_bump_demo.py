@@ -163,11 +163,12 @@ def test_window_clicks_toggle_bump_and_cycle_maps():
     from core.texture.demo_scene import demo_materials
     state = ViewerState.open("scenes/bump_demo.toml", size=(40, 40))
     demo = demo_materials(state.scene)[0]
-    assert state.demo_click(left=False) == "Bump: B(x,y) = sin(x) + cos(y)" and demo.bump_map == 1
-    assert state.demo_click(left=True) == "Phong" and not demo.bump
-    assert state.demo_click(left=True).startswith("Bump:") and demo.bump
+    assert state.choices.demo_click(left=False) == "Bump: B(x,y) = sin(x) + cos(y)"
+    assert demo.bump_map == 1
+    assert state.choices.demo_click(left=True) == "Phong" and not demo.bump
+    assert state.choices.demo_click(left=True).startswith("Bump:") and demo.bump
     for _ in range(3):
-        state.demo_click(left=False)
+        state.choices.demo_click(left=False)
     assert demo.bump_map == 0 and state.dirty
     other = ViewerState.open("scenes/texture_floor.toml", size=(40, 40))
-    assert other.demo_click(left=True) is None       # elsewhere clicks keep their meaning
+    assert other.choices.demo_click(left=True) is None       # elsewhere clicks keep their meaning

@@ -181,11 +181,11 @@ def test_flat_and_gouraud_draw_textured_materials_with_their_colour(tmp_path, sh
 def test_viewer_texture_filter_reaches_the_settings():
     from app.session.state import ViewerState
     state = ViewerState.open("scenes/texture_floor.toml", size=(40, 40))
-    assert state.settings().texture_filter == "trilinear"
-    state.set_texture_filter("anisotropic")
-    assert state.settings().texture_filter == "anisotropic" and state.dirty
+    assert state.choices.settings().texture_filter == "trilinear"
+    state.choices.set_texture_filter("anisotropic")
+    assert state.choices.settings().texture_filter == "anisotropic" and state.dirty
     with pytest.raises(ValueError):
-        state.set_texture_filter("cubic")
+        state.choices.set_texture_filter("cubic")
 
 
 def test_obj_vt_is_textured(tmp_path):

@@ -262,18 +262,19 @@ def test_cli_painter_options(tmp_path, capsys):
 def test_viewer_state_draw_order_and_toggles():
     from app.session.state import ViewerState
     state = ViewerState.open(SCENES / "three_bars.toml")
-    state.set_renderer("depth-sort")
-    state.set_paint_first(7)
-    assert state.settings().options_of("depth-sort").paint_first == 7
-    state.set_renderer("zbuffer")
-    assert state.settings().options_of("depth-sort").paint_first is None          # only the painters paint in order
-    assert not state.settings().depth_cue
-    state.set_depth_cue(True)
-    assert state.settings().depth_cue and state.dirty
-    state.set_transparency("screen-door")
-    assert state.settings().transparency == "screen-door"
+    state.choices.set_renderer("depth-sort")
+    state.choices.set_paint_first(7)
+    assert state.choices.settings().options_of("depth-sort").paint_first == 7
+    state.choices.set_renderer("zbuffer")
+    # only the painters paint in order
+    assert state.choices.settings().options_of("depth-sort").paint_first is None
+    assert not state.choices.settings().depth_cue
+    state.choices.set_depth_cue(True)
+    assert state.choices.settings().depth_cue and state.dirty
+    state.choices.set_transparency("screen-door")
+    assert state.choices.settings().transparency == "screen-door"
     with pytest.raises(ValueError, match="transparency must be one of"):
-        state.set_transparency("glass")
+        state.choices.set_transparency("glass")
 
 
 def test_a_painter_under_a_new_name_is_treated_as_the_one_it_copies(capsys):
@@ -330,10 +331,10 @@ def test_a_painter_under_a_new_name_is_treated_as_the_one_it_copies(capsys):
         assert record["writes"] and record["writes"] == same["writes"]
         assert _drawn_by(settings) == "bsp-again"
         state = ViewerState.open(SCENES / "three_bars.toml")
-        state.set_renderer("bsp-again")
-        state.set_paint_first(7)
-        assert state.settings().options_of("bsp-again").paint_first == 7
-        assert state.renderer_entry.status == "drawn by bsp-again"
+        state.choices.set_renderer("bsp-again")
+        state.choices.set_paint_first(7)
+        assert state.choices.settings().options_of("bsp-again").paint_first == 7
+        assert state.choices.renderer_entry.status == "drawn by bsp-again"
     finally:
         unregister_renderer("bsp-again")
 
