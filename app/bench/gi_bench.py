@@ -59,7 +59,7 @@ def radiosity_rows(scene, resolution: int, sizes=(1000, 10000), raycast_sizes=(1
 
 def pathtrace_rows(scene, size, spp: int) -> list:
     from core.context import RenderContext
-    from core.pathtrace.renderer import render_passes
+    from core.renderers.pathtrace.draw import render_passes
     from core.settings import RenderSettings
     view = scene.views[0]
     width, height = size

@@ -121,7 +121,7 @@ def raytrace_bench(args) -> int:
 def _raytrace_row(args, label: str, scene, view, frames: int, warmup: int) -> dict:
     """One scene's row: the BVH build, primary rays/s (ours and Embree's), Whitted frames."""
     from core.raytrace import bvh, geometry
-    from core.raytrace.renderer import TraceOptions, prepare, primary, render_raw
+    from core.renderers.raytrace.draw import TraceOptions, prepare, primary, render_raw
     progress(f"{label}: build, primary rays, Whitted frames ...")
     bvh.build(np.eye(3), [[0, 1, 2]])                 # load the compiled build first
     geometry.forget(scene)                            # time the build from nothing
@@ -228,7 +228,7 @@ def _many_spheres_row(frames: int, warmup: int, small: int = 100, large: int = 4
     frame, CPU and wall, median of ``frames``."""
     import dataclasses
     from core.raytrace import geometry
-    from core.raytrace.renderer import TraceOptions, prepare, render_raw
+    from core.renderers.raytrace.draw import TraceOptions, prepare, render_raw
     from core.scene.formats import load_scene
     from core.scene.primitives import Sphere
     progress(f"{SPHERES:,} spheres: {small}² and {large}² frames ...")

@@ -67,7 +67,7 @@ def frame_rows(values, spacing, size, frames, warmup) -> list[dict]:
     from core.scene.model import Light, Scene
     from core.settings import RenderSettings
     from core.volume.data import Volume, attach_volumes
-    from core.volume.renderer import step_of
+    from core.renderers.volume.draw import step_of
     view, rows = _view(), []
     peer = volume_vtk.available()
     for label, mode, lighting in MODES:

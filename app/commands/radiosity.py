@@ -1,7 +1,7 @@
 """``python -m app radiosity SCENE --out solution.npz``: solve once, save the solution keyed to
 the scene's hash (``render --renderer radiosity --solution FILE`` draws from it; a file of
 another scene is refused). Radiosity's options and their flags are
-:class:`core.radiosity.options.RadiosityOptions`'s."""
+:class:`core.renderers.radiosity.options.RadiosityOptions`'s."""
 
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ def add_solution_argument(parser) -> None:
 def load_solution(scene, path, context) -> str | None:
     """Make the saved solution the one ``scene`` is drawn with; the error, or None."""
     from core.radiosity.mesh import RadiosityError
-    from core.radiosity.renderer import use_solution
+    from core.renderers.radiosity.draw import use_solution
     from core.radiosity.solution import load
     try:
         solution = load(path, scene)
@@ -32,7 +32,7 @@ def load_solution(scene, path, context) -> str | None:
 def add_arguments(parser) -> None:
     parser.add_argument("scene", help="a scene file (.toml)")
     parser.add_argument("--out", required=True, help="the solution file to write (.npz)")
-    from core.radiosity.options import RadiosityOptions
+    from core.renderers.radiosity.options import RadiosityOptions
     RadiosityOptions.add_arguments(parser)
 
 
@@ -50,7 +50,7 @@ def main(args) -> int:
         print(f"error: {error}", file=sys.stderr)
         return 2
     try:
-        from core.radiosity.options import RadiosityOptions
+        from core.renderers.radiosity.options import RadiosityOptions
         settings = RenderSettings.for_scene(scene, **RadiosityOptions.overrides(args))
         options = Options.from_settings(settings)
     except ValueError as error:

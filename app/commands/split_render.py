@@ -1,7 +1,7 @@
 """``render --scheduler ADDR`` (or ``--workers N``): one ray-traced frame split across a cluster.
 
 The frame is cut into bands of rows; each band is a task that traces its rows at every
-sample of the pixel (:func:`core.raytrace.renderer.trace_tile`) on a worker, which reads the
+sample of the pixel (:func:`core.renderers.raytrace.draw.trace_tile`) on a worker, which reads the
 scene from the job's bundle (:mod:`app.commands.bundle`: the scene file and every file it names,
 so the worker needs only the package) and prepares it once (BVH and all) for every band it
 traces. A pixel's colour depends on its own rays only, so the assembled bands are exactly the
@@ -57,7 +57,7 @@ def bands(height: int, workers: int) -> list[tuple[int, int]]:
 
 def trace_band(bundle, view_number: int, settings, demo, rows) -> tuple[tuple[int, int], np.ndarray]:
     """A worker's task: the rows ``[row0, row1)`` of the frame, as uint8 colours."""
-    from core.raytrace.renderer import trace_tile
+    from core.renderers.raytrace.draw import trace_tile
     from core.shading.illumination import to_uint8
     setup = _setup(bundle, view_number, settings, demo)
     return rows, to_uint8(trace_tile(setup, rows[0], rows[1], 0, setup.width))
@@ -69,7 +69,7 @@ def _setup(bundle, view_number, settings, demo):
     if _prepared.get("key") != key:
         from app.commands.bundle import unpack
         from core.camera.film import sample_offsets
-        from core.raytrace.renderer import TraceOptions, prepare
+        from core.renderers.raytrace.draw import TraceOptions, prepare
         from core.scene.formats import load_scene
         from core.scene.view_numbers import index_of
         from core.texture.demo_scene import apply_demo_options

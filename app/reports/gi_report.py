@@ -46,7 +46,7 @@ def form_factor_rows(resolutions=(16, 32, 64, 128, 256)) -> list[dict]:
 
 def _reference(scene, view):
     from core.context import RenderContext
-    from core.pathtrace.renderer import render_passes
+    from core.renderers.pathtrace.draw import render_passes
     from core.settings import RenderSettings
     settings = RenderSettings.for_scene(scene, renderer="pathtrace", size=(SIZE, SIZE), seed=7)
     image, _ = render_passes(scene, view, settings, RenderContext(), samples=REFERENCE_SPP)
@@ -63,7 +63,7 @@ def _wall_error(image, reference, ids, mask, on_walls) -> float:
 
 
 def radiosity_rows(scene, view, reference, ids, mask, on_walls) -> list[dict]:
-    from core.radiosity.renderer import radiosity_image
+    from core.renderers.radiosity.draw import radiosity_image
     from core.radiosity.solution import Options, solve
     rows = []
     for elements in (250, 1000, 4000):
@@ -85,7 +85,7 @@ def radiosity_rows(scene, view, reference, ids, mask, on_walls) -> list[dict]:
 
 def pathtrace_rows(scene, view, reference, mask) -> list[dict]:
     from core.context import RenderContext
-    from core.pathtrace.renderer import render_passes
+    from core.renderers.pathtrace.draw import render_passes
     from core.settings import RenderSettings
     settings = RenderSettings.for_scene(scene, renderer="pathtrace", size=(SIZE, SIZE))
     context = RenderContext()

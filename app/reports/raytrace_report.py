@@ -94,7 +94,7 @@ def adaptive_rows(size: int = ADAPTIVE_SIZE, progress=print) -> list[dict]:
     plane to the horizon): RMSE in 8-bit units against the regular 256-sample image."""
     from core.paths import SCENES_DIR
     from core.raytrace import adaptive
-    from core.raytrace.renderer import TraceOptions, prepare, render_image, trace_points
+    from core.renderers.raytrace.draw import TraceOptions, prepare, render_image, trace_points
     from core.scene.formats import load_scene
     scene = load_scene(SCENES_DIR / "whitted.toml")
     view, shape = scene.views[0], (size, size)

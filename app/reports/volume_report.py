@@ -31,7 +31,7 @@ def _march(volume, rays, fraction, repeats=3):
     from core.shading.illumination import pack_lights
     from core.scene.model import Light
     from core.volume.raymarch import march_volume
-    from core.volume.renderer import step_of
+    from core.renderers.volume.draw import step_of
     lights = pack_lights([Light(position=(4.0, 5.0, 6.0))])
     times, result = [], None
     for _ in range(repeats):

@@ -86,7 +86,7 @@ def render_per_ray(animation, t: float, settings, view_index: int, shutter, cont
     cannot be ray traced (the caller's accumulated path then says why). The buckets go in
     time order, each scene made once (a simulation only steps on)."""
     from core.camera.film import sample_offsets
-    from core.raytrace.renderer import TraceOptions
+    from core.renderers.raytrace.draw import TraceOptions
     from core.shading.illumination import to_uint8
     width, height = settings.size
     offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
@@ -125,7 +125,7 @@ def _sorted(row0, picks, buckets):
 
 def _trace_into(total, setup, points, y, x) -> None:
     """Adds the colours of the primary rays through ``points`` to their pixels."""
-    from core.raytrace.renderer import trace_points
+    from core.renderers.raytrace.draw import trace_points
     step = 1 << 18                                   # rays a call, to bound the memory
     for s in range(0, len(points), step):
         colours = trace_points(setup, points[s:s + step])
@@ -134,7 +134,7 @@ def _trace_into(total, setup, points, y, x) -> None:
 
 def _setup_at(animation, when, settings, view_index, options, context):
     from core.camera.view import pick_view
-    from core.raytrace.renderer import prepare
+    from core.renderers.raytrace.draw import prepare
     from core.render import DEFAULT_CONTEXT, lit_as_asked
     scene = animation.scene_at(when)
     if not scene.views:

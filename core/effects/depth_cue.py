@@ -144,7 +144,7 @@ def _depth_from_rays(scene, view, settings, width, height) -> np.ndarray:
     """``(samples, H, W)`` view depth of each primary ray's first hit (NaN: none)."""
     from core.camera.film import sample_offsets
     from core.raytrace import whitted
-    from core.raytrace.renderer import TraceOptions, prepare, primary
+    from core.renderers.raytrace.draw import TraceOptions, prepare, primary
     offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
                if settings.samples > 1 else np.array([settings.pixel_offset]))
     setup = prepare(scene, view, settings.projection, (width, height), TraceOptions(), offsets,

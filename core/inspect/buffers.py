@@ -5,7 +5,7 @@ The module of a renderer's inspector (its registry entry's ``inspector``) may de
 ``buffers(scene, view, settings, context, names) -> {name: array}``: the z-buffer's
 (:func:`core.renderers.zbuffer.inspect.buffers`, the scan-line renderer's the same), the
 painters' overdraw (:func:`core.renderers.painters.inspect.buffers`) and the ray tracer's
-(:func:`core.raytrace.inspect.buffers`) do.
+(:func:`core.renderers.raytrace.inspect.buffers`) do.
 
 =============  =====================================  ===========================================
 name           values                                 colour map

@@ -18,7 +18,7 @@ def surface_ids(scene, view, projection: str, width: int, height: int,
     """(H, W) int64: the planar surface seen at each pixel centre (-1: nothing); with
     ``with_meshes`` also (H, W) the index of its mesh among those with triangles."""
     from core.camera.rays import camera_rays
-    from core.pathtrace.renderer import pack
+    from core.renderers.pathtrace.draw import pack
     from core.raytrace.bvh import intersect_rays
     packed = pack(scene)
     origins, directions, t_min, t_max = camera_rays(view, projection, width, height)

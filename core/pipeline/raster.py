@@ -973,7 +973,8 @@ def count_fragments(xy_z, inv_w, triangles, width, height, parallel: bool = True
 
 
 # The setup other visible-surface algorithms share with this one, so that they cover exactly
-# the same pixel centres and compute the same depths (core.visibility.scanline's Watkins).
+# the same pixel centres and compute the same depths (Watkins' algorithm:
+# core.visibility.watkins).
 snap_vertices = _snap_vertices
 triangle_edges = _triangle_edges
 pixel_box = _pixel_box

@@ -1,4 +1,11 @@
-"""The course's scan-line polygon algorithm with a z-buffer (FvDFH 3.6, 15.4 and 15.6).
+"""The scan-line rasterizer (``--rasterizer scanline``): the course's scan-line polygon
+algorithm with a z-buffer (FvDFH 3.6, 15.4 and 15.6), one of the z-buffer's two rasterizers.
+
+Not to be confused with Watkins' scan-line *visible-surface* algorithm
+(:mod:`core.visibility.watkins`, drawn by the ``scanline`` renderer,
+:mod:`core.renderers.scanline`), which keeps every polygon's edges in one active edge table
+and reads no depth buffer; this rasterizer scan-converts each triangle on its own and tests
+every pixel against the depth buffer.
 
 Assignment 2 asks for a scan-line polygon renderer: each polygon's edges go into an **edge
 table** (ET) bucketed by the scan line where they start; walking up the scan lines, edges move
@@ -244,7 +251,7 @@ def rasterize(xy_z, inv_w, triangles, width, height, out: VisibilityBuffer | Non
 
 
 # The edge-table entry and its integer crossing, shared with the scan-line visible-surface
-# algorithm (core.visibility.scanline), whose spans must start and end on the same pixels.
+# algorithm (core.visibility.watkins), whose spans must start and end on the same pixels.
 EDGE_FIELDS = 8             # an entry's fields; a table may carry more columns after them
 EDGE_FIRST, EDGE_LAST, EDGE_A = _FIRST, _LAST, _A
 edge_entry = _edge_entry

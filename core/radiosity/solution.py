@@ -2,7 +2,7 @@
 
 :func:`solve` takes a scene and :class:`Options` and returns a :class:`Solution` (the elements,
 their radiosity and the ambient term for display, what it cost). It does not depend on any
-view: every view of the scene draws from the same solution (``core.radiosity.renderer``).
+view: every view of the scene draws from the same solution (``core.renderers.radiosity.draw``).
 
 Adaptive subdivision (Cohen et al. 1986): after a solve, the elements whose radiosity differs
 most from the mean at their corners (a large gradient: shadow edges, corners) are cut into
@@ -24,7 +24,7 @@ import numpy as np
 
 from core.radiosity import mesh as meshing
 from core.radiosity.mesh import Elements, RadiosityError
-from core.radiosity.options import RadiosityOptions
+from core.renderers.radiosity.options import RadiosityOptions
 from core.radiosity.solve import Progressive, Shooter, direct_light, gauss_seidel, scene_bvh
 
 FORMAT = 1

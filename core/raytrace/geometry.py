@@ -93,7 +93,9 @@ def traced_meshes(scene) -> list:
             and len(m.triangles)]
 
 
-def _primitives(scene) -> tuple[list, list]:
+def traced_primitives(scene) -> tuple[list, list]:
+    """The spheres and planes traced exactly: ``scene.primitives``' and those a mesh
+    tessellates, each once (by identity), in the order they are packed."""
     spheres = [p for p in scene.primitives if isinstance(p, Sphere)]
     planes = [p for p in scene.primitives if isinstance(p, Plane)]
     seen = {id(p) for p in spheres + planes}        # by identity: a set, not a scan per mesh
@@ -111,7 +113,7 @@ def pack(scene) -> Packing:
     Raises ValueError (naming the mesh or primitive) for a material the tracer cannot use.
     """
     meshes = traced_meshes(scene)
-    spheres, planes = _primitives(scene)
+    spheres, planes = traced_primitives(scene)
     key = tuple(id(a) for m in meshes for a in (m, m.positions, m.triangles)) + tuple(
         id(p) for p in spheres + planes)
     entry = _cache.get(scene)

@@ -6,21 +6,37 @@ in ``frame.stats``. It may draw one sample per pixel only: the front door runs i
 sample when ``settings.samples > 1`` unless it says it samples pixels itself
 (``samples_itself=True``, as a ray caster does).
 
-Each renderer is one package, its drawing beside its pixel inspector and its plan stages, and
-one :func:`register_renderer` line below that names them by module path, so that choosing a
+Each renderer is one package here, ``core/renderers/<name>/``, all of one shape:
+
+- ``draw.py``: ``draw``, the registered function;
+- ``inspect.py``: ``inspect_pixel``, its pixel inspector (and ``buffers``, its buffer views);
+- where it has them, ``plan.py`` (its stages in the plan, importing nothing heavy),
+  ``options.py`` (its settings, a frozen dataclass) and ``progressive.py`` (its drawer for
+  the window's pictures on the way).
+
+One :func:`register_renderer` line below names them by module path, so that choosing a
 renderer imports it (and its compiled kernels) only when it is first used, and planning a
-frame imports only its stages:
+frame imports only its stages. The algorithms a renderer draws with are systems outside this
+package, which it imports: the pipeline (:mod:`core.pipeline`), the visible-surface
+algorithms (:mod:`core.visibility`), the ray tracer's BVH and ray tree (:mod:`core.raytrace`),
+radiosity's solvers (:mod:`core.radiosity`), the path tracer's kernel
+(:mod:`core.pathtrace`), the two-pass method's second pass (:mod:`core.twopass`) and the
+volumes' data, marching cubes and marcher (:mod:`core.volume`).
+
+To add a renderer, copy a package such as ``core/renderers/raycast/`` and add one
+:func:`register_renderer` line below.
 
 - ``zbuffer``: the FvDFH pipeline, lines and triangles (:mod:`core.renderers.zbuffer`);
 - ``bsp``, ``depth-sort``: the painter's algorithms (:mod:`core.renderers.painters`);
 - ``scanline``: Watkins' scan-line visible-surface algorithm (:mod:`core.renderers.scanline`);
 - ``raycast``: the exact analytic surfaces of ``scene.primitives`` (:mod:`core.renderers.raycast`);
-- ``raytrace``, ``radiosity``, ``pathtrace``: the Whitted ray tracer, radiosity and the path
-  tracer (:mod:`core.raytrace`, :mod:`core.radiosity`, :mod:`core.pathtrace`);
+- ``raytrace``: the Whitted ray tracer (:mod:`core.renderers.raytrace`);
+- ``radiosity``: radiosity, drawn Gouraud by the z-buffer (:mod:`core.renderers.radiosity`);
+- ``pathtrace``: the path tracer (:mod:`core.renderers.pathtrace`);
 - ``twopass``: the two-pass method, radiosity's solution for the diffuse part and Whitted's
-  rays for the specular part (:mod:`core.twopass`);
+  rays for the specular part (:mod:`core.renderers.twopass`);
 - ``volume``: the opaque geometry by the z-buffer, then the scene's volumes ray-marched
-  (emission–absorption, MIP), cut at the z-buffer's depth (:mod:`core.volume`).
+  (emission–absorption, MIP), cut at the z-buffer's depth (:mod:`core.renderers.volume`).
 """
 
 from __future__ import annotations
@@ -42,22 +58,23 @@ register_renderer("raycast", "core.renderers.raycast.draw:draw", samples_itself=
                   label="Ray cast (exact analytic surfaces)", in_menu=False, ray_depth=True,
                   analytic=True,
                   drawn_by="ray cast (exact)")
-register_renderer("raytrace", "core.raytrace.renderer:draw", samples_itself=True,
-                  inspector="core.raytrace.inspect:inspect_pixel",
+register_renderer("raytrace", "core.renderers.raytrace.draw:draw", samples_itself=True,
+                  inspector="core.renderers.raytrace.inspect:inspect_pixel",
                   description="Whitted ray tracing: shadows, mirrors, glass (core.raytrace)",
                   label="Ray traced", recursive=True, progressive=True, analytic=True,
-                  progressive_drawer="core.raytrace.progressive:trace_progressively",
-                  options="core.raytrace.options:RaytraceOptions", ray_depth=True,
+                  progressive_drawer="core.renderers.raytrace.progressive:trace_progressively",
+                  options="core.renderers.raytrace.options:RaytraceOptions", ray_depth=True,
                   blur_per_ray=True, drawn_by="ray traced", status="ray traced", key="R",
                   title="ray traced", bench="raytrace",
                   warm_up=(("ray traced (Whitted)", "closed", {"shading": "phong"}),))
-register_renderer("radiosity", "core.radiosity.renderer:draw",
-                  inspector="core.radiosity.inspect:inspect_pixel",
+register_renderer("radiosity", "core.renderers.radiosity.draw:draw",
+                  inspector="core.renderers.radiosity.inspect:inspect_pixel",
                   description="radiosity (hemicube or ray-cast form factors, progressive "
                               "refinement), drawn Gouraud by the z-buffer (core.radiosity)",
                   label="Radiosity", emitters=True, textures=False, progressive=True,
-                  progressive_drawer="core.radiosity.progressive:radiosity_progressively",
-                  options="core.radiosity.options:RadiosityOptions",
+                  progressive_drawer="core.renderers.radiosity.progressive:"
+                                     "radiosity_progressively",
+                  options="core.renderers.radiosity.options:RadiosityOptions",
                   drawn_by="radiosity ({options.form_factors} form factors, {options.solver})",
                   status="radiosity", title="radiosity", bench="gi",
                   warm_up=tuple((f"radiosity ({method})", "box",
@@ -65,28 +82,31 @@ register_renderer("radiosity", "core.radiosity.renderer:draw",
                                   "hemicube_resolution": 16})
                                 for method in ("hemicube", "raycast")),
                   quick={"hemicube_resolution": 16, "max_elements": 64, "converge": 0.99})
-register_renderer("pathtrace", "core.pathtrace.renderer:draw", samples_itself=True,
-                  inspector="core.pathtrace.inspect:inspect_pixel",
+register_renderer("pathtrace", "core.renderers.pathtrace.draw:draw", samples_itself=True,
+                  inspector="core.renderers.pathtrace.inspect:inspect_pixel",
                   description="Kajiya's rendering equation by path tracing on the BVH "
                               "(core.pathtrace)",
                   label="Path traced", emitters=True, recursive=True, caustics=True,
                   textures=False,
                   progressive=True,
-                  progressive_drawer="core.pathtrace.progressive:pathtrace_progressively",
-                  samples_at_rest=256, options="core.pathtrace.options:PathtraceOptions",
+                  progressive_drawer="core.renderers.pathtrace.progressive:"
+                                     "pathtrace_progressively",
+                  samples_at_rest=256,
+                  options="core.renderers.pathtrace.options:PathtraceOptions",
                   drawn_by="path traced, {settings.samples} paths per pixel, "
                            "{options.sampler}",
                   status="path traced", title="path traced", bench="gi",
                   warm_up=(("path traced", "box", {}),), quick={"samples": 1})
-register_renderer("twopass", "core.twopass.renderer:draw",
-                  inspector="core.twopass.inspect:inspect_pixel",
-                  plan_stages="core.twopass.plan:add_stages",
+register_renderer("twopass", "core.renderers.twopass.draw:draw",
+                  inspector="core.renderers.twopass.inspect:inspect_pixel",
+                  plan_stages="core.renderers.twopass.plan:add_stages",
                   description="the two-pass method: radiosity for the diffuse part, Whitted "
                               "ray tracing for the specular part (core.twopass)",
                   label="Two-pass (radiosity, then ray tracing)", emitters=True,
                   recursive=True, textures=False, progressive=True,
-                  progressive_drawer="core.radiosity.progressive:radiosity_progressively",
-                  options="core.radiosity.options:RadiosityOptions", ray_depth=True,
+                  progressive_drawer="core.renderers.radiosity.progressive:"
+                                     "radiosity_progressively",
+                  options="core.renderers.radiosity.options:RadiosityOptions", ray_depth=True,
                   drawn_by="two-pass: radiosity ({options.form_factors} form factors, "
                            "{options.solver}), then Whitted's eye rays",
                   status="two-pass", title="two-pass", bench="gi",
@@ -121,8 +141,8 @@ register_renderer("depth-sort", "core.renderers.painters.draw:draw_depth_sort",
                   status="drawn by the depth sort", bench="painters",
                   warm_up=(("depth sort (painter's), depth-cued", "small",
                             {"shading": "gouraud", "depth_cue": True}),))
-register_renderer("volume", "core.volume.renderer:draw",
-                  inspector="core.volume.inspect:inspect_pixel",
+register_renderer("volume", "core.renderers.volume.draw:draw",
+                  inspector="core.renderers.volume.inspect:inspect_pixel",
                   description="volumes ray-marched (emission-absorption with gradient "
                               "shading, or MIP) over the z-buffer's opaque geometry "
                               "(core.volume)",

@@ -10,8 +10,8 @@ Puech 1989).
   (the k_s highlight of the point and directional lights, k_r I_r, k_t I_t), the reflected and
   refracted rays shaded the same way at their own hits.
 
-Modules: ``second_pass`` (the rays, in waves through the ray tracer's BVH kernels),
-``renderer`` (the registered ``"twopass"`` renderer), ``plan`` (its stages in the plan),
-``inspect`` (one pixel's ray tree). Nothing is imported here, so that naming a module of the
+Here: ``second_pass`` (the rays, in waves through the ray tracer's BVH kernels). The
+registered ``"twopass"`` renderer, its stages in the plan and its pixel inspector are
+:mod:`core.renderers.twopass`. Nothing is imported here, so that naming a module of the
 package loads only that module.
 """

@@ -7,6 +7,6 @@ exists; the renderers in :mod:`core.renderers.painters` paint that order.
 - :mod:`core.visibility.depth_sort`: Newell, Newell and Sancha's depth sort (1972), per frame
   in device space;
 - :mod:`core.visibility.split`: cutting a triangle by a plane, shared by both;
-- :mod:`core.visibility.scanline`: Watkins' scan-line algorithm (approach 5, FvDFH 15.6): no
+- :mod:`core.visibility.watkins`: Watkins' scan-line algorithm (approach 5, FvDFH 15.6): no
   order, but the visible polygon of each span of each scan line, by depth at the span's ends.
 """

@@ -12,9 +12,9 @@ Rendering)"): sampled 3D data, its isosurface as an ordinary mesh, and direct re
   mesh with gradient normals;
 - :mod:`core.volume.raymarch`: the ray marcher's kernels (trilinear samples, emission–absorption
   front to back with early termination, gradient shading by the Phong model, MIP);
-- :mod:`core.volume.renderer`: ``--renderer volume``: opaque geometry by the z-buffer, then the
-  volumes' rays cut at its depth;
-- :mod:`core.volume.inspect`: the renderer's pixel record (the ray, each volume's samples, the
-  marching cube an isosurface point lies in);
 - :mod:`core.volume.scenekeys`: the scene file's ``[[volume]]`` tables.
+
+The renderer that draws with them (``--renderer volume``: opaque geometry by the z-buffer,
+then the volumes' rays cut at its depth; its pixel record: the ray, each volume's samples, the
+marching cube an isosurface point lies in) is :mod:`core.renderers.volume`.
 """

@@ -31,7 +31,7 @@ def test_a_field_is_routed_to_its_renderers_options_and_defaults_are_not_stored(
     assert s.options_of("zbuffer") is None                          # it registered none
     assert RenderSettings().replace(max_depth=7) == RenderSettings()   # the default again
     assert s.replace(max_depth=7, bsp_root="fewest-splits").options == ()
-    from core.raytrace.options import RaytraceOptions
+    from core.renderers.raytrace.options import RaytraceOptions
     given = RenderSettings().replace(options=(RaytraceOptions(max_depth=2),), shading="phong")
     assert given.options_of("raytrace").max_depth == 2 and given.shading == "phong"
     assert RenderSettings().replace(options=(RaytraceOptions(),)) == RenderSettings()

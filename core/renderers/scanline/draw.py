@@ -3,7 +3,7 @@ pipeline.
 
 ``draw(scene, view, settings, frame, context, timer)`` runs the z-buffer renderer's stages
 (cull, shade inputs, N, clip, project, shade) with one stage replaced: instead of testing each
-triangle's pixels against a depth buffer, :mod:`core.visibility.scanline.watkins` walks the
+triangle's pixels against a depth buffer, :mod:`core.visibility.watkins` walks the
 scan lines with its edge table, polygon table and active edge table, and decides the visible
 polygon of each span by depth at the span's ends. What it leaves (the visible triangle and
 its weights at every pixel) is shaded by the same shading step, flat, Gouraud or Phong, so
@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from core.renderers.scanline.plan import STAGE
 from core.renderers.zbuffer import draw as zbuffer
-from core.visibility.scanline import watkins
+from core.visibility import watkins
 
 
 class Watkins:

@@ -13,7 +13,7 @@ from core.context import DEFAULT_CONTEXT
 from core.renderers.scanline.draw import Watkins, draw
 from core.renderers.zbuffer.draw import draw_lines
 from core.renderers.zbuffer.inspect import Stages, buffer_views, capture, pixel_record
-from core.visibility.scanline import watkins
+from core.visibility import watkins
 
 SCANLINE = Stages(draw, draw_lines, sample_viewport)
 

@@ -12,7 +12,7 @@ import pytest
 
 from app.session.playback import Playback, render_animated
 from core.progressive import upscale
-from core.raytrace.progressive import COARSE, trace_progressively
+from core.renderers.raytrace.progressive import COARSE, trace_progressively
 from app.session.state import ViewerState
 from app.viewer.worker import RenderWorker
 from core.paths import SCENES_DIR
@@ -90,7 +90,7 @@ def test_progressive_frame_is_coarse_first_and_ends_as_the_renderers_frame(whitt
 
 
 def test_a_view_change_cancels_the_ray_traced_frame_at_its_next_tile(whitted, monkeypatch):
-    import core.raytrace.renderer as tracer
+    import core.renderers.raytrace.draw as tracer
 
     state = whitted
     state.choices.set_renderer("raytrace")

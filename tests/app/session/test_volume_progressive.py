@@ -48,6 +48,6 @@ def test_coarse_first_then_the_front_doors_frame():
 
 
 def test_a_progressive_renderer_without_a_drawer_of_its_own_is_drawn_coarse_then_full():
-    from core.raytrace.progressive import trace_progressively
+    from core.renderers.raytrace.progressive import trace_progressively
     assert get_renderer("volume").drawer() is coarse_then_full
     assert get_renderer("raytrace").drawer() is trace_progressively

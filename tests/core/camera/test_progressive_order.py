@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from core.camera.film import progressive_order, sample_offsets
-from core.pathtrace.renderer import pass_offsets
+from core.renderers.pathtrace.draw import pass_offsets
 
 
 @pytest.mark.parametrize("side", [2, 4, 8, 16])

@@ -82,8 +82,8 @@ def test_a_ray_tracer_under_a_new_name_is_cued_by_its_rays():
 
     from core.animation import ray_blur
     from core.renderers import register_renderer, unregister_renderer
-    register_renderer("whitted-again", "core.raytrace.renderer:draw", samples_itself=True,
-                      options="core.raytrace.options:RaytraceOptions", recursive=True,
+    register_renderer("whitted-again", "core.renderers.raytrace.draw:draw", samples_itself=True,
+                      options="core.renderers.raytrace.options:RaytraceOptions", recursive=True,
                       ray_depth=True, blur_per_ray=True)
     try:
         scene = _squares()

@@ -13,8 +13,8 @@ from tools import unavailable
 from app.oracles import mitsuba_oracle
 from core.context import RenderContext
 from core.pathtrace.compare import block_relative_error, interior_mask, surface_ids
-from core.pathtrace.renderer import render_passes
-from core.radiosity.renderer import radiosity_image
+from core.renderers.pathtrace.draw import render_passes
+from core.renderers.radiosity.draw import radiosity_image
 from core.radiosity.solution import Options, solve
 from core.scene.formats import load_scene
 from core.settings import RenderSettings
@@ -63,7 +63,7 @@ def test_radiosity_walls_match_the_path_tracer(cornell):
 
 
 def test_inspect_pixel_retraces_the_pixel():
-    from core.pathtrace.inspect import inspect_pixel
+    from core.renderers.pathtrace.inspect import inspect_pixel
     from core.render import render
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
     settings = RenderSettings.for_scene(scene, renderer="pathtrace", size=(24, 24), samples=4)

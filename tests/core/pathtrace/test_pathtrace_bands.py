@@ -9,7 +9,7 @@ import pytest
 
 from core import work
 from core.context import RenderContext
-from core.pathtrace import renderer
+from core.renderers.pathtrace import draw as renderer
 from core.paths import SCENES_DIR
 from core.scene.formats import load_scene
 from core.settings import RenderSettings

@@ -1,6 +1,6 @@
-"""The path tracer in the window (core.pathtrace.progressive): a coarse one-path picture, then
-passes adding up to the film's samples, each picture saying how many; the last picture is the
-renderer's own; a newer request stops it between passes."""
+"""The path tracer in the window (core.renderers.pathtrace.progressive): a coarse one-path
+picture, then passes adding up to the film's samples, each picture saying how many; the last
+picture is the renderer's own; a newer request stops it between passes."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from core.pathtrace.progressive import pathtrace_progressively
+from core.renderers.pathtrace.progressive import pathtrace_progressively
 from core.context import RenderContext
 from core.progressive import upscale
 from core.render import render
@@ -64,7 +64,7 @@ def test_passes_add_up_to_the_renderers_frame(cornell):
 
 
 def test_the_running_mean_is_the_mean_of_the_passes_so_far(cornell):
-    from core.pathtrace.renderer import render_passes
+    from core.renderers.pathtrace.draw import render_passes
     from core.radiosity.tone import tone_map
     from core.shading.illumination import to_uint8
     scene, view = cornell

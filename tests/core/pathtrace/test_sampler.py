@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from core.context import RenderContext
-from core.pathtrace.renderer import render_passes
+from core.renderers.pathtrace.draw import render_passes
 from core.scene.formats import load_scene
 from core.settings import RenderSettings
 

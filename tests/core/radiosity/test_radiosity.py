@@ -255,7 +255,7 @@ def test_every_view_draws_from_one_solution():
 
 def test_inspect_pixel_matches_the_picture():
     from core.context import RenderContext
-    from core.radiosity.inspect import inspect_pixel
+    from core.renderers.radiosity.inspect import inspect_pixel
     scene = load_scene(ROOT / "scenes" / "cornell_box.toml")
     settings = RenderSettings.for_scene(scene, renderer="radiosity", size=(48, 48),
                                         max_elements=100, hemicube_resolution=16)
@@ -269,7 +269,7 @@ def test_inspect_pixel_matches_the_picture():
 
 
 def test_window_progress_brightens_step_by_step_then_equals_the_renderer(monkeypatch):
-    from core.radiosity import progressive as progressive_gi
+    from core.renderers.radiosity import progressive as progressive_gi
     from core.context import RenderContext
     monkeypatch.setattr(progressive_gi, "PARTIAL_EVERY", 0.0)     # a picture after every shot
 

@@ -8,7 +8,7 @@ import pytest
 
 from core import work
 from core.paths import SCENES_DIR
-from core.raytrace import renderer
+from core.renderers.raytrace import draw as renderer
 from core.render import render
 from core.scene.formats import load_scene
 from core.settings import RenderSettings

@@ -117,7 +117,7 @@ def _slab_scene(edge_x: float, thickness: float, ior: float):
 
 def _trace_one(scene, origin, direction, medium):
     from core.camera.view import View
-    from core.raytrace.renderer import TraceOptions, prepare, trace_rays
+    from core.renderers.raytrace.draw import TraceOptions, prepare, trace_rays
     view = View((0, 0, 0), (0, 0, 1), (0, 1, 0), (-1, 1, -1, 1), (0, 0, 5), 1, -1)
     setup = prepare(scene, view, "parallel", (1, 1),
                     TraceOptions(shadows="off", medium=medium, adaptive_epsilon=0.0))

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from core.camera.view import View
-from core.raytrace.renderer import (TraceOptions, prepare, render_image, render_raw, tiles,
-                                    trace_rays, trace_tile)
-from core.raytrace.geometry import _primitives as geometry_primitives
+from core.raytrace.geometry import traced_primitives as geometry_primitives
+from core.renderers.raytrace.draw import (TraceOptions, prepare, render_image, render_raw,
+                                          tiles, trace_rays, trace_tile)
 from core.raytrace.whitted import COUNTERS
 from core.scene.model import Light, Material, Scene
 from core.scene.primitives import Plane, Sphere
@@ -237,7 +237,7 @@ def test_the_whole_frame_is_traced_in_bands_of_bounded_rays(monkeypatch):
     """render_raw holds about RAYS_PER_BAND rays at once (a 500 x 500 x 64 frame in one band
     held 1.7 GB), and the bands give the one-band picture exactly, stats included."""
     from core.camera.film import sample_offsets
-    from core.raytrace import renderer
+    from core.renderers.raytrace import draw as renderer
     from core.scene.formats import load_scene
     scene = load_scene(str(SCENES / "whitted.toml"))
     assert renderer.band_rows(500, 64) == 32 and renderer.band_rows(10**6, 64) == 1

@@ -13,9 +13,9 @@ import pytest
 
 from core.camera.view import View
 from core.raytrace import bvh
-from core.raytrace.inspect import inspect_pixel
+from core.renderers.raytrace.inspect import inspect_pixel
 from core.raytrace.optics import AIR, fresnel_exact, schlick
-from core.raytrace.renderer import TraceOptions, render_image
+from core.renderers.raytrace.draw import TraceOptions, render_image
 from core.render import render
 from core.scene.formats import load_scene
 from core.scene.model import Light, Material, Scene
@@ -314,7 +314,7 @@ def _mirror_scene():
 def test_attenuation_of_secondary_rays_by_hand():
     """The eye ray meets the mirror at the origin going down 45°; its reflection travels
     R = 4 √2 to the wall: I = k_r · I_a k_a O_d / (1 + C1 R + C2 R²)."""
-    from core.raytrace.renderer import prepare, trace_rays
+    from core.renderers.raytrace.draw import prepare, trace_rays
     scene = _mirror_scene()
     view = View((0, 0, 0), (0, 0, 1), (0, 1, 0), (-1, 1, -1, 1), (0, 0, 5), 1, -1)
     origin = np.array([[0.0, 1.0, 1.0]])

@@ -238,10 +238,10 @@ def test_the_shipped_scene_draws_cook_torrance_highlights():
 
 
 def test_the_inspector_gives_cook_torrance_terms_that_sum_to_the_pixel():
-    """The z-buffer's record and the ray tree's (core.raytrace.inspect) name the model and its
-    terms, and their colour is the picture's pixel."""
+    """The z-buffer's record and the ray tree's (core.renderers.raytrace.inspect) name the model
+    and its terms, and their colour is the picture's pixel."""
     from core.inspect import inspect_pixel
-    from core.raytrace.inspect import ray_tree_record
+    from core.renderers.raytrace.inspect import ray_tree_record
     scene = _plane_scene(_ct(ks=0.8, kd=0.3, roughness=0.3, f0=(0.9, 0.6, 0.3)))
     settings = RenderSettings.for_scene(scene, shading="phong", size=(24, 24))
     for renderer, inspect in (("zbuffer", inspect_pixel), ("raytrace", ray_tree_record)):

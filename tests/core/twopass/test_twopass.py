@@ -246,7 +246,7 @@ def test_a_flat_mirror_shows_the_radiosity_picture_from_the_reflected_camera():
 
 def test_the_plan_names_the_stages_the_frame_ran():
     from core.plan import plan
-    from core.twopass import plan as stages
+    from core.renderers.twopass import plan as stages
     scene = load_scene(ROOT / "scenes" / "two_pass.toml")
     settings = RenderSettings.for_scene(scene, size=(48, 36), max_elements=150,
                                         hemicube_resolution=16)
@@ -273,7 +273,7 @@ def test_the_plan_names_the_stages_the_frame_ran():
 
 
 def test_the_window_solves_shot_by_shot_then_traces(monkeypatch):
-    from core.radiosity import progressive
+    from core.renderers.radiosity import progressive
     monkeypatch.setattr(progressive, "PARTIAL_EVERY", 0.0)
     from core.registry import get_renderer, load
     scene = load_scene(ROOT / "scenes" / "two_pass.toml")
@@ -292,7 +292,7 @@ def test_the_window_solves_shot_by_shot_then_traces(monkeypatch):
             partials.append(frame)
 
     drawer = get_renderer("twopass").drawer()
-    assert drawer is load("core.radiosity.progressive:radiosity_progressively")
+    assert drawer is load("core.renderers.radiosity.progressive:radiosity_progressively")
     frame = drawer(scene, scene.views[0], settings, RenderContext(), render, Control())
     assert len(partials) > 2 and all("twopass" in f.stats for f in partials)
     again = render(scene, scene.views[0], settings, RenderContext())

@@ -18,7 +18,7 @@ from core.volume import generators
 from core.volume.data import Volume
 from core.volume.raymarch import (BLOCK, COARSE, EARLY_TERMINATION, block_constants,
                                   block_ranges, coarse_blocks, empty_blocks, march_volume)
-from core.volume.renderer import step_of
+from core.renderers.volume.draw import step_of
 
 TRANSFER = np.array([[0.0, 0, 0, 0, 0], [0.15, 0.2, 0.3, 0.6, 0], [0.2, 0.45, 0.6, 0.9, 0.9],
                      [0.25, 0.9, 0.7, 0.3, 1.5], [0.3, 1, 0.55, 0.2, 12], [1, 1, 1, 1, 1.5]])

@@ -1,5 +1,6 @@
-"""The volume marched a chunk of rays at a time (core.volume.renderer.march_in_chunks, so that a
-large frame reports its progress and stops on Ctrl+C): the numbers of one call over every ray."""
+"""The volume marched a chunk of rays at a time (core.renderers.volume.draw.march_in_chunks, so
+that a large frame reports its progress and stops on Ctrl+C): the numbers of one call over every
+ray."""
 
 from __future__ import annotations
 
@@ -11,7 +12,8 @@ from core.camera.rays import camera_rays
 from core.camera.view import View, eye_from_view
 from core.scene.model import Light
 from core.shading.illumination import pack_ambient, pack_eye, pack_lights
-from core.volume import generators, renderer
+from core.renderers.volume import draw as renderer
+from core.volume import generators
 from core.volume.data import Volume
 from core.volume.raymarch import march_volume
 

@@ -71,7 +71,7 @@ def test_a_plain_nrrd_still_reads(tmp_path):
 def test_a_very_anisotropic_volume_steps_at_most_max_steps_along_its_diagonal():
     import math
     from core.volume.data import Volume
-    from core.volume.renderer import MAX_STEPS, STEP, step_of
+    from core.renderers.volume.draw import MAX_STEPS, STEP, step_of
     transfer = np.array([[0.0, 1, 1, 1, 0.0], [1.0, 1, 1, 1, 1.0]])
     values = np.zeros((64, 64, 64), np.float32)
     flat = Volume(values=values, spacing=(1e-3, 1e3, 1e3), transfer=transfer)

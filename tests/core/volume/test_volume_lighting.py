@@ -24,7 +24,7 @@ from core.shading import illumination as il
 from core.shading.models import with_model
 from core.volume.data import Volume, attach_volumes, volumes_of
 from core.volume.raymarch import march_volume
-from core.volume.renderer import step_of
+from core.renderers.volume.draw import step_of
 
 C, SIGMA = Q(1, 2), 1.0                # the sample's colour (grey) and extinction
 KD, KS = Q(1, 4), Q(1, 2)

@@ -1,4 +1,4 @@
-"""The volume renderer (core.volume.renderer, core.volume.raymarch) against exact integrals:
+"""The volume renderer (core.renderers.volume.draw, core.volume.raymarch) against exact integrals:
 the emission–absorption of a homogeneous sphere, MIP against scipy's trilinear samples, and
 the rays cut at an opaque sphere's depth, each pixel derived by hand."""
 
@@ -16,7 +16,7 @@ from core.settings import RenderSettings
 from core.volume import generators
 from core.volume.data import Volume, attach_volumes
 from core.volume.raymarch import march_volume
-from core.volume.renderer import step_of
+from core.renderers.volume.draw import step_of
 from tests.tools import need_module
 
 ndimage = need_module("scipy.ndimage", "scipy's map_coordinates is the trilinear oracle")

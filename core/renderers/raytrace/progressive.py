@@ -8,8 +8,8 @@ frozen z-buffer picture) for that long. :func:`trace_progressively` therefore
    of a second: ``COARSE`` = 8 before the first is timed) through the front door (``core.render`` with the
    ``"raytrace"`` renderer, so its checks and messages are the usual ones) and hands it over
    upscaled by pixel repetition — the first picture the user sees;
-2. then traces the full-size frame tile by tile (``core.raytrace.renderer.trace_tile``, in
-   :func:`core.raytrace.renderer.tiles`' order: the centre first), writing each finished tile
+2. then traces the full-size frame tile by tile (``core.renderers.raytrace.draw.trace_tile``, in
+   :func:`core.renderers.raytrace.draw.tiles`' order: the centre first), writing each finished tile
    over the coarse picture and handing the picture over every few tiles;
 3. returns the finished frame, which is pixel for pixel what ``core.render`` would give
    (the same rays, the same box filter, the same rounding; a test holds them equal).
@@ -34,7 +34,7 @@ def _prepare(scene, view, settings):
     """The tracer's per-frame setup for ``settings`` (its film's samples, its letterboxing), as
     its ``draw`` makes it."""
     from core.camera.film import sample_offsets
-    from core.raytrace.renderer import TraceOptions, prepare
+    from core.renderers.raytrace.draw import TraceOptions, prepare
     offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
                if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
     return prepare(scene, view, settings.projection, settings.size,
@@ -44,7 +44,7 @@ def _prepare(scene, view, settings):
 def trace_progressively(scene, view, settings, context, render, control=None):
     """The ray-traced frame of ``view`` for ``settings`` (``settings.renderer`` is taken as
     ``"raytrace"``), handing pictures on the way to ``control.partial``."""
-    from core.raytrace.renderer import stats_of, tiles, trace_tile
+    from core.renderers.raytrace.draw import stats_of, tiles, trace_tile
     from core.shading.illumination import to_uint8
     control = control or Quiet()
     settings = settings.replace(renderer="raytrace")

@@ -20,8 +20,8 @@ import numpy as np
 
 from core.camera.view import View
 from core.raytrace import bvh, geometry, whitted
-from core.raytrace.renderer import (Setup, TraceOptions, differentials, frame_offsets, prepare,
-                                    primary)
+from core.renderers.raytrace.draw import (Setup, TraceOptions, differentials, frame_offsets,
+                                          prepare, primary)
 from core.shading.illumination import EYE_POINT, POINT_LIGHT, TWO_SIDED, to_uint8
 from core.shading.models.dispatch import lighting_terms
 
@@ -32,8 +32,8 @@ HITS = {0: "triangle", 1: "sphere", 2: "plane"}
 def ray_tree_record(scene, view, settings, x: int, y: int, context=None) -> dict:
     """The pixel's ray tree walked in Python, node by node (see the module)."""
     from core.camera.film import sample_offsets
-    from core.raytrace import renderer
-    options = renderer.TraceOptions.from_settings(settings)
+    from core.renderers.raytrace import draw
+    options = draw.TraceOptions.from_settings(settings)
     offsets = (sample_offsets(settings.samples, settings.sample_pattern, settings.seed)
                if settings.samples > 1 else np.array([settings.pixel_offset], dtype=np.float64))
     setup, (origins, directions, t_min, t_max) = _setup(scene, view, settings, options, offsets,
@@ -65,7 +65,7 @@ def _setup(scene, view, settings, options, offsets, context):
     """The tracer's prepared frame and its primary rays (all of them at once: one pixel's
     alone costs as much), kept per scene for the last view and settings asked."""
     from core.context import DEFAULT_CONTEXT
-    from core.raytrace import renderer
+    from core.renderers.raytrace import draw
     cache = (context or DEFAULT_CONTEXT).cache(scene)
     held = cache.get("pixel inspector: raytrace")
     try:
@@ -73,9 +73,9 @@ def _setup(scene, view, settings, options, offsets, context):
             return held[1]
     except (TypeError, ValueError):
         pass
-    setup = renderer.prepare(scene, view, settings.projection, settings.size, options, offsets,
-                             settings.keep_aspect)
-    held = (setup, renderer.primary(setup, 0, setup.height, 0, setup.width))
+    setup = draw.prepare(scene, view, settings.projection, settings.size, options, offsets,
+                         settings.keep_aspect)
+    held = (setup, draw.primary(setup, 0, setup.height, 0, setup.width))
     cache["pixel inspector: raytrace"] = ((view, settings), held)
     return held
 
@@ -221,7 +221,7 @@ def buffers(scene, view, settings, context, names) -> dict:
     -1 for spheres, planes and nothing) and ``ray-depth`` (per pixel, the smallest depth
     limit from which the traced colour no longer changes: the depth of the tree that
     matters). One sample per pixel, at the pixel centre."""
-    from core.raytrace.renderer import render_raw
+    from core.renderers.raytrace.draw import render_raw
     options_settings = settings.replace(samples=1)
     setup, (origins, directions, t_min, t_max) = _setup(
         scene, view, options_settings, _options(options_settings),
@@ -252,8 +252,8 @@ def buffers(scene, view, settings, context, names) -> dict:
 
 
 def _options(settings):
-    from core.raytrace import renderer
-    return renderer.TraceOptions.from_settings(settings)
+    from core.renderers.raytrace import draw
+    return draw.TraceOptions.from_settings(settings)
 
 
 # ------------------------------------------------------ the tree the kernel records
@@ -344,7 +344,7 @@ def _material_name(scene, s: int) -> str:
     meshes = geometry.traced_meshes(scene)
     if s < len(meshes):
         return f"mesh {meshes[s].name!r}"
-    spheres, planes = geometry._primitives(scene)
+    spheres, planes = geometry.traced_primitives(scene)
     if s < len(meshes) + len(spheres):
         return f"sphere {s - len(meshes) + 1}"
     return f"plane {s - len(meshes) - len(spheres) + 1}"

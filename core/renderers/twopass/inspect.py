@@ -16,7 +16,7 @@ def inspect_pixel(scene, view, settings, x, y, context, *, render) -> dict:
     """The ray tree of image pixel (x, y) (its centre), and the frame's colour there."""
     from core.camera.rays import camera_rays
     from core.raytrace.whitted import COUNTERS
-    from core.twopass.renderer import geometry_for
+    from core.renderers.twopass.draw import geometry_for
     from core.twopass.second_pass import Rules, trace
     frame = render(scene, view, settings, context)
     record = {"renderer": "twopass", "pixel": [int(x), int(y)],

@@ -2,7 +2,7 @@
 through the renderer's registry entry): the z-buffer's stages give way to the two passes.
 
 Each stage that runs is named in the frame's ``stats["computed"]`` by the same words
-(:mod:`core.twopass.renderer`), so a test can hold the plan and the frame together. Imports
+(:mod:`core.renderers.twopass.draw`), so a test can hold the plan and the frame together. Imports
 nothing heavy: ``python -m app plan`` loads this module, not the renderer.
 """
 

@@ -3,14 +3,14 @@ and the vertex values interpolated there (the pixel's colour).
 
 It reads the frame the front door draws (``render``, handed over by
 :func:`core.inspect.inspect_pixel`: this package, below it, does not import it) and the
-solution the renderer (:mod:`core.radiosity.renderer`) kept in the context.
+solution the renderer (:mod:`core.renderers.radiosity.draw`) kept in the context.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from core.radiosity.renderer import display
+from core.renderers.radiosity.draw import display
 
 
 def inspect_pixel(scene, view, settings, x, y, context, *, render) -> dict:

@@ -8,7 +8,7 @@ cumulative distribution that light sampling draws from (area x emitted luminance
 point and directional lights. :func:`render_passes` traces ``samples`` passes, each one ray
 through every pixel at one of the film's sample offsets (jittered strata), and returns the
 mean radiance ``(H, W, 3)``; :func:`draw` is the registered renderer. Its pixel inspector is
-:mod:`core.pathtrace.inspect`.
+:mod:`core.renderers.pathtrace.inspect`.
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The path tracer's pixel record, for the pixel inspector: :func:`inspect_pixel` traces one
-pixel's paths again, as :func:`core.pathtrace.renderer.draw` traced them (the same random
+pixel's paths again, as :func:`core.renderers.pathtrace.draw.draw` traced them (the same random
 numbers), and reports the first pass's rays.
 """
 
@@ -9,7 +9,7 @@ import numpy as np
 
 from core.camera.rays import camera_rays
 from core.pathtrace import kernel
-from core.pathtrace.renderer import packed_for, pass_offsets, sample_index
+from core.renderers.pathtrace.draw import packed_for, pass_offsets, sample_index
 from core.radiosity.mesh import has_light, reflectance
 from core.radiosity.tone import tone_map
 from core.shading.illumination import to_uint8

@@ -16,7 +16,7 @@ from core.progressive import PARTIAL_EVERY, Quiet
 
 def radiosity_progressively(scene, view, settings, context, render, control=None):
     from core.radiosity.mesh import has_light
-    from core.radiosity.renderer import use_solution
+    from core.renderers.radiosity.draw import use_solution
     from core.radiosity.solution import Options, Solution, scene_hash, solve
     control = control or Quiet()
     options = Options.from_settings(settings)

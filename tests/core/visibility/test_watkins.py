@@ -17,7 +17,7 @@ from core.inspect import inspect_pixel
 from core.inspect.text import describe
 from core.pipeline.raster import rasterize as zbuffer_rasterize
 from core.scene.formats import load_scene
-from core.visibility.scanline import watkins
+from core.visibility import watkins
 from app.distribution.warmup import shipped_scenes
 
 SHADINGS = ("flat", "gouraud", "phong")

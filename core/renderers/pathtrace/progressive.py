@@ -17,7 +17,7 @@ from core.progressive import (COARSE_FIRST, PARTIAL_EVERY, Quiet, coarse_factor,
 
 
 def pathtrace_progressively(scene, view, settings, context, render, control=None):
-    from core.pathtrace.renderer import render_passes
+    from core.renderers.pathtrace.draw import render_passes
     from core.radiosity.mesh import RadiosityError, has_light
     from core.radiosity.tone import tone_map
     from core.shading.illumination import to_uint8

@@ -1,9 +1,9 @@
 """The ``"twopass"`` renderer: radiosity for the diffuse part, ray tracing for the specular part.
 
-Pass 1 is the radiosity renderer's solution (:func:`core.radiosity.renderer.solution_for`),
+Pass 1 is the radiosity renderer's solution (:func:`core.renderers.radiosity.draw.solution_for`),
 kept in the render context with the scene under the same key and for the same options, so the
 two renderers share it (and ``render --solution FILE`` and the window's progressive solve,
-:func:`core.radiosity.progressive.radiosity_progressively`, work for both). Pass 2
+:func:`core.renderers.radiosity.progressive.radiosity_progressively`, work for both). Pass 2
 (:mod:`core.twopass.second_pass`) traces one eye ray per film sample (the front door runs the
 renderer once per sample, as it runs the radiosity renderer); the summed radiance goes through
 the scene's tone (``scene.tone``: linear, or the sRGB curve) and is clamped to bytes.
@@ -24,8 +24,8 @@ import numpy as np
 from core.camera.film import fill
 from core.raytrace.whitted import COUNTERS
 # The frame's ``computed`` words for each stage that ran are the plan's stage names.
-from core.twopass.plan import (BVH, EYE, HIGHLIGHTS, REFLECTED, REFRACTED, SOLUTION, TONE,
-                               VERTICES)
+from core.renderers.twopass.plan import (BVH, EYE, HIGHLIGHTS, REFLECTED, REFRACTED, SOLUTION,
+                                         TONE, VERTICES)
 
 RAYS_PER_BAND = 1 << 18          # eye rays traced at a time (a band of rows): the progress unit
 
@@ -62,7 +62,7 @@ def geometry_for(scene, solution, context):
 def draw(scene, view, settings, frame, context, timer) -> None:
     """Fill ``frame`` with the two-pass picture of ``scene`` seen through ``view``."""
     from core.camera.rays import camera_rays
-    from core.radiosity.renderer import solved_or_said
+    from core.renderers.radiosity.draw import solved_or_said
     from core.radiosity.tone import tone_map
     from core.shading.illumination import to_uint8
     from core.twopass.second_pass import Rules, trace

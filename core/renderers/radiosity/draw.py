@@ -12,7 +12,7 @@ Display meshes: the two-sided pairs are one mesh marked closed, so back-face cul
 each side's own copy; the one-sided elements another, drawn from both sides.
 
 What one pixel shows (its element, emission, reflectance, radiosity and the vertex values
-interpolated there) is told by :mod:`core.radiosity.inspect`.
+interpolated there) is told by :mod:`core.renderers.radiosity.inspect`.
 """
 
 from __future__ import annotations

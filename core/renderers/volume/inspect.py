@@ -25,7 +25,7 @@ from core.context import DEFAULT_CONTEXT
 from core.shading.illumination import pack_ambient, pack_eye, pack_lights, to_uint8
 from core.volume.data import volumes_of
 from core.volume.raymarch import march_volume
-from core.volume.renderer import farthest_first, step_of
+from core.renderers.volume.draw import farthest_first, step_of
 
 
 def cell_of(volume, world) -> dict:

@@ -25,7 +25,8 @@ from core.camera.rays import camera_rays, primary_rays
 from core.camera.view import View, check
 from core.raytrace import adaptive, geometry, whitted
 from core.raytrace.optics import AIR, index_of_refraction
-from core.raytrace.options import MAX_DEPTH_LIMIT, RaytraceOptions  # noqa: F401  (its limit)
+from core.renderers.raytrace.options import (MAX_DEPTH_LIMIT,  # noqa: F401  (its limit)
+                                             RaytraceOptions)
 from core.camera.film import sample_offsets
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights,
                                        to_uint8)
