@@ -24,6 +24,7 @@ from functools import lru_cache
 import numpy as np
 
 from core.camera.view import View
+from core.jit import njit
 from core.pipeline import project
 from core.pipeline.clip_polygon import clip_triangles
 from core.pipeline.raster import VisibilityBuffer, rasterize
@@ -140,15 +141,60 @@ def form_factors(positions, triangles, point, normal, res: int, scale: float,
     top_df, side_df = delta_factors(res)
     count = len(triangles) if count is None else count
     out = np.zeros(count)
-    # Triangles wholly below the point's tangent plane are behind every face: left out once.
-    height = (positions - np.asarray(point, dtype=np.float64)) @ np.asarray(normal, float)
-    above = np.flatnonzero(height[triangles].max(axis=1) > 0.0)
-    if not len(above):
-        return out
-    kept = np.ascontiguousarray(triangles[above])
-    for look, up, top in faces(point, normal):
-        items = item_buffer(positions, kept, point, look, up, top, res, scale)
+    n = np.asarray(normal, dtype=np.float64)
+    n = n / np.linalg.norm(n)
+    frame = np.stack([*_basis(n), n])                    # the patch's u, v, n (faces())
+    triangles = np.ascontiguousarray(triangles, dtype=np.int64)
+    in_faces = np.empty((5, len(triangles)), np.bool_)
+    _face_frusta(positions, triangles, np.asarray(point, dtype=np.float64), frame,
+                 1e-9 * scale, in_faces)
+    for (look, up, top), in_face in zip(faces(point, normal), in_faces):
+        chosen = np.flatnonzero(in_face)
+        if not len(chosen):
+            continue
+        # only the face's own triangles, each with its three corners: the clipper would
+        # reject the others whole, and the rest reach the rasterizer in the same order
+        corners = np.ascontiguousarray(positions[triangles[chosen]].reshape(-1, 3))
+        items = item_buffer(corners, _corner_triangles(len(chosen)), point, look, up, top,
+                            res, scale)
         seen = items >= 0
-        out += np.bincount(above[items[seen]], weights=(top_df if top else side_df)[seen],
+        out += np.bincount(chosen[items[seen]], weights=(top_df if top else side_df)[seen],
                            minlength=count)[:count]
     return out
+
+
+@njit(cache=True, nogil=True)
+def _face_frusta(positions, triangles, point, frame, slack, out):
+    """``out[f, k]``: whether triangle k may be in the frustum of face f of :func:`faces`
+    (top, +u, −u, +v, −v): not when its three corners, in the patch's frame (a, b, c along
+    u, v, n), are all beyond one of the frustum's planes by more than ``slack`` (so that
+    rounding never drops one the clipper would keep; the top face |a|, |b| <= c, the side
+    face +u |b| <= a and 0 <= c <= a). A triangle wholly at or below the tangent plane
+    (c <= 0) is behind every face."""
+    nearest = np.empty(17)                     # per plane: the corner least beyond it
+    for k in range(triangles.shape[0]):
+        nearest[:] = np.inf
+        for corner in range(3):
+            q = triangles[k, corner]
+            dx = positions[q, 0] - point[0]
+            dy = positions[q, 1] - point[1]
+            dz = positions[q, 2] - point[2]
+            a = frame[0, 0] * dx + frame[0, 1] * dy + frame[0, 2] * dz
+            b = frame[1, 0] * dx + frame[1, 1] * dy + frame[1, 2] * dz
+            c = frame[2, 0] * dx + frame[2, 1] * dy + frame[2, 2] * dz
+            beyond = (-c, a - c, -a - c, b - c, -b - c,
+                      c - a, b - a, -b - a, c + a, b + a, -b + a,
+                      c - b, a - b, -a - b, c + b, a + b, -a + b)
+            for plane in range(17):
+                nearest[plane] = min(nearest[plane], beyond[plane])
+        below = nearest[0] >= 0.0              # wholly at or below the tangent plane
+        out[0, k] = not (below or max(nearest[1], nearest[2], nearest[3], nearest[4]) > slack)
+        for f in range(4):
+            first = 5 + 3 * f
+            out[1 + f, k] = not (below or max(nearest[first], nearest[first + 1],
+                                              nearest[first + 2]) > slack)
+
+
+def _corner_triangles(count: int) -> np.ndarray:
+    """``(count, 3)``: triangle k made of corners 3k, 3k + 1, 3k + 2."""
+    return np.arange(3 * count, dtype=np.int64).reshape(count, 3)
