@@ -251,13 +251,14 @@ def scene_jobs(path, size=SIZE, every=False):
     from core.texture.modes import FILTERS
 
     state = ViewerState.open(path, size=size)
-    window_settings = state.settings
+    choices = state.choices
+    window_settings = choices.settings
     # Fewer elements, a coarser hemicube, an early stop and one sample a pixel change no
     # kernel's argument types, only how long each solve runs: the same kernels compile. The
     # stop is early indeed (1 % of the light shot): a solve of the bezier patches to half of
     # it took 2,013 shots and 15 s, a third of all the rendering the warm-up did.
-    state.settings = lambda: quick(window_settings())
-    filters = tuple(FILTERS) if state.has_textures else (state.texture_filter,)
+    choices.settings = lambda: quick(window_settings())
+    filters = tuple(FILTERS) if choices.has_textures else (state.texture_filter,)
     own_shading, own_filter = state.shading, state.texture_filter
     jobs = []
     for renderer in renderer_names():
@@ -267,10 +268,10 @@ def scene_jobs(path, size=SIZE, every=False):
         entry = get_renderer(renderer)
         for shading in shading_names() if entry.shaders or every else (own_shading,):
             for filter_ in filters if entry.textures or every else (own_filter,):
-                state.set_renderer(renderer)
-                state.set_shading(shading)
-                state.set_texture_filter(filter_)
-                run, _ = state.frame_job()
+                choices.set_renderer(renderer)
+                choices.set_shading(shading)
+                choices.set_texture_filter(filter_)
+                run, _ = state.frames.job()
                 jobs.append((f"{path.name}: {renderer}, {shading}, {filter_}", run))
     return jobs
 
@@ -308,7 +309,7 @@ def opening_steps(path) -> list[tuple[str, Callable[[], object]]]:
     def run():
         from app.session.state import ViewerState
         state = ViewerState.open(path, size=SIZE)
-        state.frame_job()[0]()
+        state.frames.job()[0]()
     return [(opening_label(path), run)]
 
 
