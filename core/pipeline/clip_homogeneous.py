@@ -133,8 +133,10 @@ def clip_against_plane(k, in_h, in_a, in_id, n_in, out_h, out_a, out_id, perspec
                            out_a[n_out])
                 out_id[n_out] = -1
                 n_out += 1
-            out_h[n_out] = in_h[p]
-            out_a[n_out] = in_a[p]
+            for c in range(in_h.shape[1]):        # not out_h[n_out] = in_h[p]: see
+                out_h[n_out, c] = in_h[p, c]         # core.visibility.split.grow
+            for c in range(in_a.shape[1]):
+                out_a[n_out, c] = in_a[p, c]
             out_id[n_out] = in_id[p]
             n_out += 1
         elif e_s >= 0.0:  # leaving: the crossing, computed from the inside end s

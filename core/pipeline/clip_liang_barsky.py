@@ -107,8 +107,10 @@ def clip_against_plane(k, in_rows, in_a, in_id, n_in, out_rows, out_a, out_id, p
             out_id[n_out] = -1
             n_out += 1
         if p_inside:
-            out_rows[n_out] = in_rows[p]
-            out_a[n_out] = in_a[p]
+            for c in range(in_rows.shape[1]):     # not out_rows[n_out] = in_rows[p]: see
+                out_rows[n_out, c] = in_rows[p, c]   # core.visibility.split.grow
+            for c in range(in_a.shape[1]):
+                out_a[n_out, c] = in_a[p, c]
             out_id[n_out] = in_id[p]
             n_out += 1
         elif p_k > 0.0 and q_k >= 0.0:  # leaves at t = q_k / p_k, in [0, 1), from s inside

@@ -329,7 +329,8 @@ def clip_and_fan(points, triangles, attrs, codes, todo, perspective, z_min, widt
         for c in range(3):
             v = triangles[t, c]
             corner(points[v, 0], points[v, 1], points[v, 2], perspective, z_min, poly[0, c])
-            poly_a[0, c] = attrs[v]
+            for a in range(n_attrs):    # not a row assignment: see core.visibility.split.grow
+                poly_a[0, c, a] = attrs[v, a]
             poly_id[0, c] = v
             crossed |= codes[v]
             for d in range(3):
@@ -350,7 +351,8 @@ def clip_and_fan(points, triangles, attrs, codes, todo, perspective, z_min, widt
                 index[j] = poly_id[cur, j]
             else:
                 position(poly[cur, j], perspective, new_points[n_new_points])
-                new_attrs[n_new_points] = poly_a[cur, j]
+                for a in range(n_attrs):
+                    new_attrs[n_new_points, a] = poly_a[cur, j, a]
                 index[j] = n_points + n_new_points
                 n_new_points += 1
         for j in range(1, n - 1):  # fan the convex polygon from its first vertex

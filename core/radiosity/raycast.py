@@ -33,7 +33,8 @@ def _clip_to_plane(tri, x, n, poly):
         da = (a[0] - x[0]) * n[0] + (a[1] - x[1]) * n[1] + (a[2] - x[2]) * n[2]
         db = (b[0] - x[0]) * n[0] + (b[1] - x[1]) * n[1] + (b[2] - x[2]) * n[2]
         if da >= 0.0:
-            poly[count] = a
+            for c in range(3):          # not poly[count] = a: numba's array assignment
+                poly[count, c] = a[c]   # compiles a shape-error path (2 s per process)
             count += 1
         if (da >= 0.0) != (db >= 0.0):
             t = da / (da - db)

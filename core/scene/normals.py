@@ -292,7 +292,8 @@ def _smooth_groups(triangles, vertex_count, corner_a, corner_b, degenerate):
     primary = np.full(vertex_count, -1, dtype=np.int64)  # each vertex's first group root
     corner_vertex = np.empty(n, dtype=np.int64)
     origin = np.empty(vertex_count + n, dtype=np.int64)
-    origin[:vertex_count] = np.arange(vertex_count)
+    for v in range(vertex_count):       # not a slice assignment: see core.visibility.split.grow
+        origin[v] = v
     next_vertex = vertex_count
     for c in range(n):
         v = triangles[c // 3, c % 3]

@@ -183,7 +183,8 @@ def _chunk_spheres(ids, fragments, points):
                 for a in range(3):
                     box_lo[a] = min(box_lo[a], points[v, a])
                     box_hi[a] = max(box_hi[a], points[v, a])
-        centres[c] = 0.5 * (box_lo + box_hi)
+        for a in range(3):              # component by component: see split.grow
+            centres[c, a] = 0.5 * (box_lo[a] + box_hi[a])
         radii[c] = 0.0
         for k in range(lo, hi):
             _enclose(centres, radii, c, fragments[ids[k]], points)
@@ -339,7 +340,8 @@ def _build(positions, triangles, rule, seed, eps):
                 recipe = grow(recipe, n_points + n_new - positions.shape[0])
                 for j in range(n_new):
                     a, b, t = int(new[j, 0]), int(new[j, 1]), new[j, 2]
-                    points[n_points] = points[a] + t * (points[b] - points[a])
+                    for c in range(3):
+                        points[n_points, c] = points[a, c] + t * (points[b, c] - points[a, c])
                     row = n_points - positions.shape[0]
                     recipe[row, 0], recipe[row, 1], recipe[row, 2] = a, b, t
                     n_points += 1

@@ -289,7 +289,8 @@ def _depth_sort(device_in, inv_w_in, triangles, eps, resolve):
         recipe = grow(recipe, n_points + n_new - n_in)
         for k in range(n_new):
             a, b, t = int(new[k, 0]), int(new[k, 1]), new[k, 2]
-            device[n_points] = device[a] + t * (device[b] - device[a])
+            for c in range(3):           # component by component: see split.grow
+                device[n_points, c] = device[a, c] + t * (device[b, c] - device[a, c])
             inv_w[n_points] = (1.0 - t) * inv_w[a] + t * inv_w[b]
             row = n_points - n_in
             recipe[row, 0], recipe[row, 1] = a, b

@@ -87,6 +87,7 @@ def grow(a, need):
     of a BSP build or a depth sort add triangles as they go)."""
     if need <= a.shape[0]:
         return a
-    bigger = np.empty((max(need, 2 * a.shape[0]),) + a.shape[1:], a.dtype)
-    bigger[:a.shape[0]] = a
-    return bigger
+    # concatenated, not assigned into a slice: numba's array-to-array assignment compiles a
+    # shape-mismatch error path with its string formatting (2-3 s in every process)
+    more = np.empty((max(need, 2 * a.shape[0]) - a.shape[0],) + a.shape[1:], a.dtype)
+    return np.concatenate((a, more))

@@ -484,7 +484,8 @@ def odd_cell(v, i, j, k, mask, tables, count, extra, triangles, positions, norma
         return zip_tube(ring[0], sizes[0], ring[1], sizes[1], vert, spots, triangles, count,
                         write), extra
     for m in range(loops):
-        loop[:sizes[m]] = ring[m, :sizes[m]]
+        for q in range(sizes[m]):      # not a slice assignment: see core.visibility.split.grow
+            loop[q] = ring[m, q]
         count, extra = cap(loop, sizes[m], edge_faces, vert, triangles, count, extra, spots,
                            slopes, positions, normals, write)
     return count, extra
