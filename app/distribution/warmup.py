@@ -134,7 +134,6 @@ COSTS: dict[str, float] = {
     "house.toml, every renderer, shading and filter": 0.02,
     "house_projections.toml, every renderer, shading and filter": 0.01,
     "gouraud, perspective, scanline rasterizer": 0.00,
-    "depth, the float64 kernels": 0.00,
     "phong, perspective, scanline rasterizer": 0.00,
     "phong, perspective, open mesh and lines": 0.00,
     "depth, perspective, open mesh and lines": 0.00,

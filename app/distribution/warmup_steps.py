@@ -185,7 +185,7 @@ def steps() -> list[tuple[str, Callable[[], object]]]:
                     shading=shading, projection=projection, rasterizer=rasterizer)
             add(f"{shading}, {projection}, open mesh and lines", opened, shading=shading,
                 projection=projection)
-    for shading in (m.name for m in shading_modes() if m.module):
+    for shading in (m.name for m in shading_modes() if m.module and m.lights):
         # the textbook float64 kernels, which a material float32 cannot light exactly takes
         # (Cook–Torrance, an exponent that is not a whole number): compiled here, not by the
         # first shipped scene that has one (cook_torrance.toml, 8 s of its step)
