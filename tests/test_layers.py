@@ -96,7 +96,7 @@ CORE_RANKS = {
     "core.shading": 5,
     "core.texture": 6,
     "core.raytrace": 7, "core.visibility": 7,
-    "core.plan": 8,
+    "core.plan": 8, "core.stages": 8,
     "core.renderers": 9, "core.radiosity": 9, "core.pathtrace": 9, "core.volume": 9,
     "core.twopass": 9,
     "core.effects": 10,

@@ -27,6 +27,8 @@ from __future__ import annotations
 from core.camera.film import fill, sample_viewport
 from core.pipeline import project
 from core.renderers.zbuffer.draw import draw_lines
+from core.stages import (CLIP_LINES, CLIP_TRIANGLES, CULL, DECIDED_BY_THE_SHADER, DEPTH_BUFFER,
+                         NORMALIZE, PROJECT, SCAN_CONVERSION, Facts, ran)
 from core.visibility.paint import bsp_painting, depth_sorted_painting, paint, resolve, true_depth
 
 
@@ -48,10 +50,12 @@ def _draw(scene, view, settings, frame, context, timer, painting) -> None:
     vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
     timer.lap("normalize")
-    solid = settings.shading != "wireframe" and scene.triangle_count > 0
-    if solid:
+    facts = Facts.of(scene, settings)           # the z-buffer's stages decide, as there
+    ran(frame.stats, NORMALIZE)
+    if CLIP_TRIANGLES.runs(facts):
         p = painting(scene, view, settings, context, timer, n, z_min, vp)
         frame.stats.update(p.stats)
+        _ran_painting(frame.stats, p)
         _update_plan(frame, p.stats)
         vis = paint(p, width, height, context)
         frame.stats["painted"] = int(len(p.triangles))
@@ -61,12 +65,20 @@ def _draw(scene, view, settings, frame, context, timer, painting) -> None:
         timer.lap("shade: pixel step")
     else:
         fill(frame.color, scene.background)
-    line_meshes = [m for m in scene.meshes
-                   if settings.shading == "wireframe" or not len(m.triangles)]
-    if line_meshes:
+    if CLIP_LINES.runs(facts):
+        line_meshes = [m for m in scene.meshes
+                       if settings.shading == "wireframe" or not len(m.triangles)]
         draw_lines(frame.color, line_meshes, settings.projection, n, z_min, vp,
                    scene.line_color, context, timer, frame.stats, settings.clipper,
                    settings.antialias_lines)
+
+
+def _ran_painting(stats: dict, p) -> None:
+    """Name the stages the painting ran (its order's stage by its name in the plan)."""
+    ordering = [name for name in ("BSP tree", "depth sort") if name in p.stats]
+    ran(stats, *([CULL] if "culled" in p.stats else []),
+        *(name for name in p.inputs.computed if name in DECIDED_BY_THE_SHADER),
+        *ordering, CLIP_TRIANGLES, PROJECT, DEPTH_BUFFER, SCAN_CONVERSION)
 
 
 def _update_plan(frame, stats) -> None:

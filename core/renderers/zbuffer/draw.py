@@ -4,7 +4,9 @@
 Lines (every edge in wireframe; line-only meshes always): N, Cohen–Sutherland, M_per ·
 M_vv3dv, divide by W, midpoint line. Triangles: cull → shade inputs → N → clip → project →
 z-buffer → resolve. Each step is one call into the module that implements it; this file only
-threads arrays from one to the next and records what ran in ``frame.stats``:
+threads arrays from one to the next and records what ran in ``frame.stats``. Whether a stage
+runs is asked of its object in :mod:`core.stages`, the same one the plan asks, and each stage
+that ran is named in ``frame.stats["stages run"]``:
 
 1. ``front_faces``: back-face culling, only for meshes declared closed (``core/pipeline/cull.py``).
 2. ``shade.prepare``: the mode's per-face or per-vertex work in world coordinates, for the
@@ -22,6 +24,8 @@ from __future__ import annotations
 
 from core.camera.film import fill, sample_viewport, to_rgb8
 from core.pipeline import clip, project, raster_lines
+from core.stages import (CLIP_LINES, CLIP_TRIANGLES, CULL, DECIDED_BY_THE_SHADER, DEPTH_BUFFER,
+                         NORMALIZE, PROJECT, SCAN_CONVERSION, SCAN_LINES, Facts, ran)
 from core.transforms import apply
 
 
@@ -36,14 +40,15 @@ def draw(scene, view, settings, frame, context, timer, rasterize=None) -> None:
     vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
     timer.lap("normalize")
-    solid = shading != "wireframe" and scene.triangle_count > 0
-    if solid:
+    facts = Facts.of(scene, settings)           # what the plan's stages decide from
+    ran(frame.stats, NORMALIZE)
+    if CLIP_TRIANGLES.runs(facts):              # the triangles' stages run together, or none
         draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context, timer,
-                       settings, rasterize)
+                       settings, rasterize, facts)
     else:
         fill(frame.color, scene.background)
-    line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
-    if line_meshes:
+    if CLIP_LINES.runs(facts):
+        line_meshes = [m for m in scene.meshes if shading == "wireframe" or not len(m.triangles)]
         draw_lines(frame.color, line_meshes, projection, n, z_min, vp, scene.line_color, context,
                    timer, frame.stats, settings.clipper, settings.antialias_lines)
 
@@ -89,14 +94,17 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         drawn += len(q0)
     stats["segments drawn"] = drawn
     stats["computed"].append("line clipping")
+    ran(stats, CLIP_LINES, PROJECT, SCAN_LINES)
 
 
 def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context,
-                   timer, settings=None, visible_surface=None) -> None:
+                   timer, settings=None, visible_surface=None, facts=None) -> None:
     """Draw every triangle of ``scene`` into ``frame.color`` with ``shading``; with
     ``settings.rasterizer`` "scanline" the course's ET/AET algorithm scan-converts
-    (screen-linear weights); ``visible_surface`` (a rasterizer's signature) replaces both."""
+    (screen-linear weights); ``visible_surface`` (a rasterizer's signature) replaces both.
+    ``facts``: what the stages decide from (default: the scene and ``shading``)."""
     rasterizer = settings.rasterizer if settings is not None else "edge"
+    facts = facts or Facts(scene, projection, shading)
     from core.shading import stages      # the compiled stages, on first use
     from core.texture.shaders import shading_for        # textured materials: Phong of their own
     shading = shading_for(scene, shading)
@@ -104,9 +112,11 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     height, width = frame.color.shape[:2]
     eye = stages.shade.eye_from_view(view, projection)
     positions, all_triangles = stages.shade.geometry(scene, context)
-    culled = stages.front_faces(scene.meshes, all_triangles, eye, context)
+    culled = (stages.front_faces(scene.meshes, all_triangles, eye, context)
+              if CULL.runs(facts) else None)
     kept, triangles = (None, all_triangles) if culled is None else culled
     if kept is not None:
+        ran(stats, CULL)
         stats["computed"].append("back-face culling")
         stats["culled"] = int(len(all_triangles) - len(kept))
     timer.lap("cull back faces")
@@ -116,6 +126,8 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
                                       stages.shade.get_shader(shading), scene, width * height),
                                   settings=settings)
     stats["computed"].extend(inputs.computed)
+    # the shading mode's own vertex step decided these; it names what it computed
+    ran(stats, *(name for name in inputs.computed if name in DECIDED_BY_THE_SHADER))
     timer.lap("shade: vertex step", vertex_attrs=inputs.vertex_attrs,
               **({} if inputs.face_rgb is None else {"face_rgb": inputs.face_rgb}))
 
@@ -147,6 +159,7 @@ def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, 
     source = clipped.source if kept is None else kept[clipped.source]
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))
+    ran(stats, CLIP_TRIANGLES)
     timer.lap("clip triangles", clipped_points=clipped.points, clipped_attrs=clipped.attrs,
               clipped_triangles=clipped.triangles, source=source)
 
@@ -155,6 +168,7 @@ def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, 
         project.triangle_matrix(projection, z_min, vp), clipped.points,
         out=context.scratch("device points", (count, 3)), inv_w=context.scratch("1/W", (count,)))
     timer.lap("project", device_points=device, inv_w=inv_w)
+    ran(stats, PROJECT)
     return clipped, source, device, inv_w
 
 
@@ -180,6 +194,7 @@ def _visible_surfaces(device, inv_w, triangles, width, height, rasterizer, visib
     if rasterize is not stages.rasterize:
         vis.forget_spans()       # speed: the edge rasterizer clears and shades only its spans
     stats["allocated"].append("depth")
+    ran(stats, DEPTH_BUFFER, getattr(visible_surface, "stage", SCAN_CONVERSION.name))
     vis.planes = None
     if stages.shade.get_shader(shading).needs_derivatives:
         vis.planes = stages.barycentric_planes(device, inv_w, triangles)
