@@ -2,9 +2,10 @@
 
 ``plan(scene, projection, shading)`` returns the stages in pipeline order, each with whether it
 runs and why (or why not), by asking the stage objects of :mod:`core.stages`, which the
-z-buffer's draw asks too before it runs a stage. ``python -m app plan`` prints it and the window shows it; the
-renderer records the stages it ran in ``Frame.stats["stages run"]`` (and what it allocated and
-computed) so that tests can hold the two against each other.
+z-buffer's draw asks too before it runs a stage. ``python -m app plan`` prints it and the
+window shows it; the renderer names the stages it ran in ``Frame.stats["stages run"]`` (and
+records what it allocated and computed) so that tests can hold the two against each other
+(``tests/core/test_plan_stages.py``).
 """
 
 from __future__ import annotations

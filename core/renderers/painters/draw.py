@@ -50,8 +50,8 @@ def _draw(scene, view, settings, frame, context, timer, painting) -> None:
     vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
     timer.lap("normalize")
+    ran(frame.stats, NORMALIZE, PROJECT)        # N and the viewport: every frame
     facts = Facts.of(scene, settings)           # the z-buffer's stages decide, as there
-    ran(frame.stats, NORMALIZE)
     if CLIP_TRIANGLES.runs(facts):
         p = painting(scene, view, settings, context, timer, n, z_min, vp)
         frame.stats.update(p.stats)
@@ -78,7 +78,7 @@ def _ran_painting(stats: dict, p) -> None:
     ordering = [name for name in ("BSP tree", "depth sort") if name in p.stats]
     ran(stats, *([CULL] if "culled" in p.stats else []),
         *(name for name in p.inputs.computed if name in DECIDED_BY_THE_SHADER),
-        *ordering, CLIP_TRIANGLES, PROJECT, DEPTH_BUFFER, SCAN_CONVERSION)
+        *ordering, CLIP_TRIANGLES, DEPTH_BUFFER, SCAN_CONVERSION)
 
 
 def _update_plan(frame, stats) -> None:

@@ -40,8 +40,8 @@ def draw(scene, view, settings, frame, context, timer, rasterize=None) -> None:
     vp = sample_viewport(project.viewport(view.window, width, height, settings.keep_aspect),
                           settings.pixel_offset)
     timer.lap("normalize")
+    ran(frame.stats, NORMALIZE, PROJECT)        # N and the viewport: every frame
     facts = Facts.of(scene, settings)           # what the plan's stages decide from
-    ran(frame.stats, NORMALIZE)
     if CLIP_TRIANGLES.runs(facts):              # the triangles' stages run together, or none
         draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context, timer,
                        settings, rasterize, facts)
@@ -94,7 +94,7 @@ def draw_lines(color, meshes, projection, n, z_min, vp, line_color, context, tim
         drawn += len(q0)
     stats["segments drawn"] = drawn
     stats["computed"].append("line clipping")
-    ran(stats, CLIP_LINES, PROJECT, SCAN_LINES)
+    ran(stats, CLIP_LINES, SCAN_LINES)
 
 
 def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, context,
@@ -168,7 +168,6 @@ def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, 
         project.triangle_matrix(projection, z_min, vp), clipped.points,
         out=context.scratch("device points", (count, 3)), inv_w=context.scratch("1/W", (count,)))
     timer.lap("project", device_points=device, inv_w=inv_w)
-    ran(stats, PROJECT)
     return clipped, source, device, inv_w
 
 
