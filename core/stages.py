@@ -277,9 +277,9 @@ DECIDED_BY_THE_SHADER = frozenset(s.name for s in (
 
 def triangle_stage_for(facts: Facts):
     """``triangle_stage(name, runs, why, why_not="")``, the helper a renderer's plan hook is
-    given: a stage of the triangles, whose why not says so when none are drawn."""
+    given: a stage of the triangles, which does not run when none are drawn."""
     def triangle_stage(name: str, runs: bool, why: str, why_not: str = "") -> Stage:
-        return Stage(name, *either(runs, why, why_not if facts.solid else facts.no_triangles))
+        return Stage(name, *on_triangles(lambda f: either(runs, why, why_not))(facts))
     return triangle_stage
 
 
