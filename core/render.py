@@ -30,6 +30,7 @@ from core.plan import Stage, plan
 from core.renderers import get_renderer
 from core.scene.model import Scene
 from core.settings import RenderSettings
+from core.stages import TRANSPARENCY, ran
 
 # Above this many samples in one pass (k·W x k·H), a regular grid is drawn sample by sample.
 MAX_PASS_PIXELS = 16_000_000
@@ -136,6 +137,8 @@ def render(scene: Scene, view: View | None, settings: RenderSettings | None = No
         draw(scene, view, settings, frame, context, Timer(frame.stats, inspect))
     else:
         _supersample(draw, scene, view, settings, frame, context, inspect)
+    if "transparency" in frame.stats.get("ms", {}):    # the effect timed it: k_t > 0 laid over
+        ran(frame.stats, TRANSPARENCY)
     _say_what_is_not_drawn(scene, renderer, frame.stats, settings.transparency,
                            settings.shading)
     return frame

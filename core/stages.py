@@ -261,6 +261,7 @@ def _asked_transparency(scene) -> str:
     return getattr(scene, "transparency", None) or needed_transparency(scene)
 
 
+# core.render wraps the draw in the effect; it names the stage when the effect has run.
 TRANSPARENCY = PipelineStage("transparency", _transparency)
 
 # The z-buffer's stages in the order it runs them; a renderer's plan hook may change the list

@@ -35,7 +35,6 @@ from core.pipeline.raster import (INVALID, PIXEL_CENTRE, SUBPIXEL_ONE, pixel_box
                                   snap_vertices, triangle_edges)
 from core.settings import TRANSPARENCIES
 from core.shading.illumination import to_uint8
-from core.stages import TRANSPARENCY, ran
 
 MODES = tuple(TRANSPARENCIES)
 # The 4 x 4 ordered-dither (Bayer) matrix: a pixel shows the surface where
@@ -81,7 +80,6 @@ def with_transparency(draw):
         if frame.message is None and settings.shading not in ("wireframe",):
             composite(clear, view, settings, frame, context)
             timer.lap("transparency")
-            ran(frame.stats, TRANSPARENCY)
     return draw_transparent
 
 
