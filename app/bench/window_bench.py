@@ -182,8 +182,10 @@ class Window:
 
 
 def pictures_between(events, start: float, end: float) -> dict:
-    """The pictures the window showed in [start, end]: frames a second, gaps, render times."""
-    shown, renders = [], []
+    """The pictures the window showed in [start, end]: frames a second, gaps, render times,
+    and from its "on screen" lines the window's own time per picture and the wait from an
+    input to the picture that shows it."""
+    shown, renders, own, waited = [], [], [], []
     for ms, message in events:
         if not start <= ms <= end + 50:
             continue
@@ -192,11 +194,22 @@ def pictures_between(events, start: float, end: float) -> dict:
             render = re.search(r"render=([\d.]+)ms", message)
             if render:
                 renders.append(float(render.group(1)))
+        elif message.startswith("on screen:"):
+            own.append(float(re.search(r"own ([\d.]+) ms", message).group(1)))
+            after = re.search(r"([\d.]+) ms after the input", message)
+            if after:
+                waited.append(float(after.group(1)))
     gaps = np.diff([start] + shown) if shown else np.array([end - start])
     return {"pictures": len(shown), "seconds": (end - start) / 1e3,
             "fps": len(shown) / max((end - start) / 1e3, 1e-9),
             "gap_median_ms": float(np.median(gaps)), "gap_worst_ms": float(np.max(gaps)),
-            "render_median_ms": float(statistics.median(renders)) if renders else None}
+            "render_median_ms": _median(renders), "window_median_ms": _median(own),
+            "latency_median_ms": _median(waited),
+            "latency_worst_ms": float(max(waited)) if waited else None}
+
+
+def _median(values: list[float]) -> float | None:
+    return float(statistics.median(values)) if values else None
 
 
 def orbit_case(display, out, label, scene, size, seconds, shading=None, renderer=None) -> dict:
@@ -291,15 +304,23 @@ def _print_row(row: dict) -> None:
     _progress(json.dumps(row))
 
 
+def _ms(value: float | None, digits: int = 0) -> str:
+    return "–" if value is None else f"{value:.{digits}f} ms"
+
+
 def markdown(report: dict) -> str:
     lines = ["| case | picture | pictures a second while dragging | median gap | worst gap "
-             "| render median |", "|---|---|---|---|---|---|"]
+             "| render median | input to screen, median (worst) | the window's own, median |",
+             "|---|---|---|---|---|---|---|---|"]
     for r in report["rows"]:
         if r["kind"] != "orbit":
             continue
-        render = f"{r['render_median_ms']:.1f} ms" if r["render_median_ms"] else "–"
+        render = _ms(r["render_median_ms"], 1)
+        waited = (f"{_ms(r.get('latency_median_ms'))} ({_ms(r.get('latency_worst_ms'))})"
+                  if r.get("latency_median_ms") is not None else "–")
         lines.append(f"| {r['case']} | {r['size'][0]}x{r['size'][1]} | {r['fps']:.1f} "
-                     f"| {r['gap_median_ms']:.0f} ms | {r['gap_worst_ms']:.0f} ms | {render} |")
+                     f"| {r['gap_median_ms']:.0f} ms | {r['gap_worst_ms']:.0f} ms | {render} "
+                     f"| {waited} | {_ms(r.get('window_median_ms'), 1)} |")
     for r in report["rows"]:
         if r["kind"] == "rest":
             at = ", ".join(f"{a['seconds']:g} s: {a['samples_per_pixel']} spp, noise "

@@ -106,6 +106,7 @@ class FrameRequests:
 
     def __init__(self, state):
         self.state = state        # the ViewerState: the fields live there, not here
+        self.generation = 0       # the worker's number for the last request made
 
     def summary(self) -> str:
         """One log line for the last frame: which view, settings, size and time."""
@@ -219,16 +220,18 @@ class FrameRequests:
     def request(self, worker) -> bool:
         """Hand the next frame to ``worker`` (an :class:`app.viewer.worker.RenderWorker`) if
         the picture changed; a request still waiting there is replaced. Returns whether one
-        was made; the frame arrives through :meth:`accept`. Until it does, a picture the
-        worker finishes for an older request of the same scene may still come (a camera that
-        moves faster than frames are drawn); another scene's never does."""
+        was made (its generation in :attr:`generation`); the frame arrives through
+        :meth:`accept`. Until it does, a picture the worker finishes for an older request of
+        the same scene may still come (a camera that moves faster than frames are drawn);
+        another scene's never does."""
         s = self.state
         if not s.dirty or not s.renderable:
             return False
         run, what = self.job()
         if s.gate is not None:
             run = s.gate(run)
-        worker.submit(run, what, control=True, keep_older=s.scene is s._requested_scene)
+        self.generation = worker.submit(run, what, control=True,
+                                        keep_older=s.scene is s._requested_scene)
         s._clear_failed_open = bool(s.failed_open)    # its frame is the next success
         s._requested_scene = s.scene
         s.dirty = False

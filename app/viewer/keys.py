@@ -7,6 +7,7 @@ so does a renderer's (``r`` steps through the renderers registered with the key 
 from __future__ import annotations
 
 import logging
+import time
 
 from imgui_bundle import imgui  # noqa: I001  (first: it names the library glfw loads)
 import glfw
@@ -52,6 +53,7 @@ class Keys:
         self.win.wake()
         if action not in (glfw.PRESS, glfw.REPEAT):
             return
+        self.win.loop.latency.input(time.perf_counter())     # how long until it shows
         if key == glfw.KEY_ESCAPE and self.win.menus.popup_open:
             self.win.menus.close_popups = True    # Esc closes the open menu or pop-up only
             log.info("action: key Esc -> close the open menu")

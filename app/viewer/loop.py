@@ -18,6 +18,7 @@ import glfw
 from app import startup_gc
 from app.session.state import compile_count
 from app.viewer.blit import clear_around
+from app.viewer.latency import InputLatency
 
 log = logging.getLogger("fvd")
 # While a camera gesture waits for its frame, the window is drawn again at most this often.
@@ -40,7 +41,8 @@ class FrameLoop:
         self._warm_up_due = False
         self.compiles_at_request = 0
         self._swapped_at, self._picture_new = 0.0, False    # the last redraw; a picture since
-
+        self.latency = InputLatency()     # from an input to the picture that shows it
+        self._on_screen: int | None = None    # the request of a picture due on screen
 
     def run(self) -> int:
         try:
@@ -76,6 +78,22 @@ class FrameLoop:
 
     def draw_frame(self) -> bool:
         """Input, clicks, ask for / collect a frame, GUI, blit, swap; False when minimised."""
+        started = time.perf_counter()
+        drawn = self._draw_frame()
+        self.latency.drawn(self.state.dirty)
+        if self._on_screen is not None and self._swapped_at >= started:
+            self._log_on_screen(self._on_screen, self._swapped_at - started)
+            self._on_screen = None
+        return drawn
+
+    def _log_on_screen(self, generation: int, own: float) -> None:
+        """A new picture was swapped onto the screen: the window's own time to draw it, and
+        how long after the input it answers (``python -m app bench --window`` reads both)."""
+        waited = self.latency.shown(generation, self._swapped_at)
+        log.info("on screen: the window's own %.1f ms%s", 1e3 * own,
+                 "" if waited is None else f", {1e3 * waited:.0f} ms after the input")
+
+    def _draw_frame(self) -> bool:
         fb_w, fb_h = glfw.get_framebuffer_size(self.win.window)
         self.win.fit_picture()
         if fb_w <= 0 or fb_h <= 0 or glfw.get_window_attrib(self.win.window, glfw.ICONIFIED):
@@ -130,6 +148,7 @@ class FrameLoop:
         self.state.player.tick(time.perf_counter(), busy=self.win.worker.waiting)
         if self.state.frames.request(self.win.worker):
             self.compiles_at_request = compile_count()
+            self.latency.requested(self.state.frames.generation)
         self.win.tools.poll()                 # a buffer view, a record, a comparison: done?
         result = self.win.worker.collect()
         if result is not None and self.state.frames.accept(result):
@@ -143,7 +162,7 @@ class FrameLoop:
                 self.win.tools.note_convergence(self.state.frame.stats)
             self.win.blit.upload(self.win.tools.picture(self.state.frame))
             self.win.tools.changed = False
-            self._picture_new = True
+            self._picture_new, self._on_screen = True, result.generation
             self.win.wake()                  # the GUI shows the new frame's plan and timing next
         if self.win.tools.changed and self.state.frame is not None:
             self.win.blit.upload(self.win.tools.picture(self.state.frame))

@@ -69,6 +69,7 @@ gets the requested pixels; a minimised (0 x 0) window renders nothing.
 from __future__ import annotations
 
 import logging
+import time
 from pathlib import Path
 
 
@@ -282,6 +283,8 @@ class ViewerWindow:
     def _on_cursor(self, window, x, y) -> None:
         self.input.on_cursor(x, y)
         self.wake()
+        if self.hands.drag is not None:      # a move that turns the camera: its wait counts
+            self.loop.latency.input(time.perf_counter())
 
     def _on_cursor_enter(self, window, entered) -> None:
         self.input.on_cursor_enter(bool(entered))
@@ -290,6 +293,7 @@ class ViewerWindow:
     def _on_scroll(self, window, x_offset, y_offset) -> None:
         self.input.on_scroll(x_offset, y_offset)
         self.wake()
+        self.loop.latency.input(time.perf_counter())
         self.pointer.wheel(y_offset)
 
     def _on_framebuffer_size(self, window, width, height) -> None:
