@@ -185,7 +185,7 @@ def pictures_between(events, start: float, end: float) -> dict:
     """The pictures the window showed in [start, end]: frames a second, gaps, render times,
     and from its "on screen" lines the window's own time per picture and the wait from an
     input to the picture that shows it."""
-    shown, renders, own, waited = [], [], [], []
+    shown, renders, own, cpu, waited = [], [], [], [], []
     for ms, message in events:
         if not start <= ms <= end + 50:
             continue
@@ -196,6 +196,7 @@ def pictures_between(events, start: float, end: float) -> dict:
                 renders.append(float(render.group(1)))
         elif message.startswith("on screen:"):
             own.append(float(re.search(r"own ([\d.]+) ms", message).group(1)))
+            cpu.append(float(re.search(r"CPU ([\d.]+) ms", message).group(1)))
             after = re.search(r"([\d.]+) ms after the input", message)
             if after:
                 waited.append(float(after.group(1)))
@@ -204,6 +205,7 @@ def pictures_between(events, start: float, end: float) -> dict:
             "fps": len(shown) / max((end - start) / 1e3, 1e-9),
             "gap_median_ms": float(np.median(gaps)), "gap_worst_ms": float(np.max(gaps)),
             "render_median_ms": _median(renders), "window_median_ms": _median(own),
+            "window_cpu_median_ms": _median(cpu),
             "latency_median_ms": _median(waited),
             "latency_worst_ms": float(max(waited)) if waited else None}
 
@@ -310,8 +312,8 @@ def _ms(value: float | None, digits: int = 0) -> str:
 
 def markdown(report: dict) -> str:
     lines = ["| case | picture | pictures a second while dragging | median gap | worst gap "
-             "| render median | input to screen, median (worst) | the window's own, median |",
-             "|---|---|---|---|---|---|---|---|"]
+             "| render median | input to screen, median (worst) | the window's own, median "
+             "(its CPU) |", "|---|---|---|---|---|---|---|---|"]
     for r in report["rows"]:
         if r["kind"] != "orbit":
             continue
@@ -320,7 +322,8 @@ def markdown(report: dict) -> str:
                   if r.get("latency_median_ms") is not None else "–")
         lines.append(f"| {r['case']} | {r['size'][0]}x{r['size'][1]} | {r['fps']:.1f} "
                      f"| {r['gap_median_ms']:.0f} ms | {r['gap_worst_ms']:.0f} ms | {render} "
-                     f"| {waited} | {_ms(r.get('window_median_ms'), 1)} |")
+                     f"| {waited} | {_ms(r.get('window_median_ms'), 1)} "
+                     f"({_ms(r.get('window_cpu_median_ms'), 1)}) |")
     for r in report["rows"]:
         if r["kind"] == "rest":
             at = ", ".join(f"{a['seconds']:g} s: {a['samples_per_pixel']} spp, noise "

@@ -43,6 +43,7 @@ class FrameLoop:
         self._swapped_at, self._picture_new = 0.0, False    # the last redraw; a picture since
         self.latency = InputLatency()     # from an input to the picture that shows it
         self._on_screen: int | None = None    # the request of a picture due on screen
+        self._swap_s = 0.0                # how long the last swap took
 
     def run(self) -> int:
         try:
@@ -78,19 +79,22 @@ class FrameLoop:
 
     def draw_frame(self) -> bool:
         """Input, clicks, ask for / collect a frame, GUI, blit, swap; False when minimised."""
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.thread_time()
         drawn = self._draw_frame()
         self.latency.drawn(self.state.dirty)
         if self._on_screen is not None and self._swapped_at >= started:
-            self._log_on_screen(self._on_screen, self._swapped_at - started)
+            self._log_on_screen(self._on_screen, self._swapped_at - started,
+                                time.thread_time() - cpu)
             self._on_screen = None
         return drawn
 
-    def _log_on_screen(self, generation: int, own: float) -> None:
-        """A new picture was swapped onto the screen: the window's own time to draw it, and
-        how long after the input it answers (``python -m app bench --window`` reads both)."""
+    def _log_on_screen(self, generation: int, own: float, cpu: float) -> None:
+        """A new picture was swapped onto the screen: the window's own time to draw it (and
+        of that, this thread's CPU and the swap), and how long after the input it answers
+        (``python -m app bench --window`` reads them)."""
         waited = self.latency.shown(generation, self._swapped_at)
-        log.info("on screen: the window's own %.1f ms%s", 1e3 * own,
+        log.info("on screen: the window's own %.1f ms (CPU %.1f ms, swap %.1f ms)%s",
+                 1e3 * own, 1e3 * cpu, 1e3 * self._swap_s,
                  "" if waited is None else f", {1e3 * waited:.0f} ms after the input")
 
     def _draw_frame(self) -> bool:
@@ -117,8 +121,10 @@ class FrameLoop:
 
         self._draw_picture(fb_w, fb_h)
         self.win.gui.render(imgui.get_draw_data())
+        swap = time.perf_counter()
         glfw.swap_buffers(self.win.window)
         self._swapped_at, self._picture_new = time.perf_counter(), False
+        self._swap_s = self._swapped_at - swap
         if not self._first_frame_logged and self.state.frame is not None:
             self._first_frame_logged = True
             self._log_since_start("first frame shown")

@@ -65,16 +65,17 @@ def test_a_change_that_waited_for_its_request_keeps_its_time():
 
 def test_the_window_bench_reads_the_on_screen_lines():
     events = [(100.0, "frame 3: view 1 render=20.5ms"),
-              (110.0, "on screen: the window's own 6.2 ms, 45 ms after the input"),
+              (110.0, "on screen: the window's own 6.2 ms (CPU 3.0 ms, swap 1.0 ms), 45 ms after the input"),
               (140.0, "partial frame: trace (pass 1)"),
-              (141.0, "on screen: the window's own 4.0 ms"),
-              (170.0, "on screen: the window's own 5.0 ms, 75 ms after the input"),
-              (900.0, "on screen: the window's own 50.0 ms, 900 ms after the input")]
+              (141.0, "on screen: the window's own 4.0 ms (CPU 2.0 ms, swap 1.0 ms)"),
+              (170.0, "on screen: the window's own 5.0 ms (CPU 2.5 ms, swap 1.0 ms), 75 ms after the input"),
+              (900.0, "on screen: the window's own 50.0 ms (CPU 9.0 ms, swap 1.0 ms), 900 ms after the input")]
     row = pictures_between(events, 90.0, 200.0)
     assert row["pictures"] == 2
     assert row["window_median_ms"] == pytest.approx(5.0)
+    assert row["window_cpu_median_ms"] == pytest.approx(2.5)
     assert row["latency_median_ms"] == pytest.approx(60.0)
     assert row["latency_worst_ms"] == pytest.approx(75.0)
     table = markdown({"rows": [{"case": "c", "size": [5, 5], "kind": "orbit", **row}],
                       "load_before": (1.0,), "load_after": (1.0,)})
-    assert "| 60 ms (75 ms) | 5.0 ms |" in table
+    assert "| 60 ms (75 ms) | 5.0 ms (2.5 ms) |" in table
