@@ -154,7 +154,7 @@ def _copies_stl(count: int) -> bytes:
 
 
 def test_many_copies_of_one_triangle_render_as_one(tmp_path):
-    """200,000 copies of one triangle (the issue's 4.2M STL, scaled down): one triangle after
+    """200,000 copies of one triangle (a reported 4.2M-triangle STL, scaled down): one triangle after
     loading, and the same picture as a file with one copy."""
     (tmp_path / "many.stl").write_bytes(_copies_stl(200_000))
     (tmp_path / "one.stl").write_bytes(_copies_stl(1))

@@ -1,10 +1,10 @@
 """Textures, animation keys, particles and primitives under hostile input.
 
-Every reproducer of the issue ends in one clean line and a non-zero exit, or in a correct
+Every hostile case (a file or setting a user could write) ends in one clean line and a non-zero exit, or in a correct
 picture: nothing hangs (a FIFO as a texture), nothing grows without a budget (texels, particle
 steps, splatted pixels, arc-length tables), no Python text reaches the user, and no silent
 clamp. The memory cases run in a child process and assert its peak (``ru_maxrss``) stays
-under 2 GB; their figures are printed (``pytest -s``) for the issue's closing note.
+under 2 GB; their figures are printed (``pytest -s``) for docs/limits.md.
 """
 
 from __future__ import annotations
