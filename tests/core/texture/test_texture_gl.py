@@ -3,8 +3,9 @@
 The floor is a quad seen at a grazing angle under perspective, (u, v) repeating 4 x 5 times,
 a 64 x 64 texture of random texels (the hardest case: neighbours differ by anything) with
 its MIP chain uploaded level by level. Our side runs the project's own stages (N_per, clipping,
-the z-buffer) and the texture kernel (core.texture.shading); llvmpipe draws the same triangles
-through the same world-to-clip matrix. Compared away from the floor's edges (two pixels in):
+the z-buffer) and the renderers' sampler over the tutorial's plane constants (``unlit_texture``
+below); llvmpipe draws the same triangles through the same world-to-clip matrix. Compared
+away from the floor's edges (two pixels in):
 
 - GL_NEAREST: equal, except where a pixel centre maps within 1e-4 texel of a texel boundary
   (there the choice is float32 rounding in llvmpipe: 13 of ~49,000 pixels here);
@@ -29,10 +30,30 @@ from core.pipeline.vertex_kernels import transform_affine, transform_projective
 from core.texture import Texture
 from core.texture.sample import FILTERS
 from tools import llvmpipe_context
-from core.texture.shading import unlit_texture
+from core.jit import njit, prange
+from core.texture.sample import sample
 from core.texture.tutorial import triangle_constants, uv_at
 
 SIZE = 256
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def unlit_texture(tri, constants, texels, levels, wrap, filter_, background, out):
+    """``out (H, W, 4)`` float: the filtered texel at each covered pixel (the tutorial's
+    plane constants, :func:`core.texture.tutorial.uv_at`, and the sampler the renderers use),
+    ``background`` elsewhere: the texture alone, no light, as the GL oracle draws it."""
+    height, width = tri.shape
+    for j in prange(height):
+        for i in range(width):
+            t = tri[j, i]
+            if t < 0:
+                for k in range(4):
+                    out[j, i, k] = background[k]
+                continue
+            u, v, dudx, dvdx, dudy, dvdy = uv_at(constants, t, i, j)
+            r, g, b, a = sample(texels, levels, wrap, filter_, u, v, dudx, dvdx, dudy, dvdy)
+            out[j, i, 0], out[j, i, 1], out[j, i, 2], out[j, i, 3] = r, g, b, a
+
 TEXELS = 64
 FLOOR = np.array([[-4, 0, -8], [4, 0, -8], [4, 0, 2], [-4, 0, 2]], float)
 # an offset keeps pixel centres off exact texel boundaries (the quad is symmetric)
