@@ -3,17 +3,29 @@
 ``render(scene, view, settings) -> Frame`` is the one call (``render_file(path, shading=…)``
 for a scene file; a ``Frame`` shows itself in Jupyter); read the packages in pipeline order:
 
-- ``transforms`` — T, S, R, shear, unit vectors (FvDFH 5);
+- ``transforms``, ``vectors`` — T, S, R, shear (FvDFH 5); unit vectors inside kernels;
 - ``scene/`` — what is drawn: meshes with named attributes, materials, lights, analytic
-  primitives, generators, every file reader;
+  primitives, generators, every file reader; ``systems`` registers the systems' scene keys;
 - ``camera/`` — the view (VRC, N_per, N_par; FvDFH 6) and the film (samples per pixel);
 - ``pipeline/`` — the z-buffer's stages in order: cull → clip → project → raster;
-- ``shading/`` — the Phong model once; flat, Gouraud, Phong as registered shaders;
-- ``renderers/`` — the z-buffer and the exact ray caster, by name;
-- ``settings``, ``context``, ``plan``, ``render`` — how to draw, what outlives a frame, which
-  stages run and why, and the front door;
-- ``jit`` — numba for every kernel: ``from core.jit import njit, prange`` (cached kernels load
-  without numba's full registry refresh, and go stale when any kernel file changes);
+  ``stages`` and ``plan`` say which of them run for a scene, and why;
+- ``shading/`` — the illumination model once, its lighting models (Phong, Cook–Torrance…)
+  and the shading modes (flat, Gouraud, Phong…) as registered shaders;
+- ``texture/`` — textures, samplers, texture and bump mapping;
+- ``visibility/`` — object-precision visible surfaces: BSP tree, depth sort, Watkins;
+- ``effects/`` — what is laid over a picture: depth cueing, transparency;
+- ``raytrace/``, ``pathtrace/``, ``radiosity/``, ``twopass/``, ``volume/`` — the other
+  renderers' systems (the BVH and ray tree, paths, form factors and solvers, the two-pass
+  method, sampled volumes and their isosurfaces);
+- ``renderers/`` — every renderer by name, one package each (draw, inspect, options, plan),
+  registered in ``registry``; ``progressive`` hands pictures over on the way;
+- ``animation/`` — keyframes, particles, linkages, rigid bodies, actors;
+- ``colour/`` — the CIE observer, chromaticity, sRGB;
+- ``inspect/`` — the pixel inspector's front door;
+- ``settings``, ``context``, ``render``, ``work`` — how to draw, what outlives a frame, the
+  front door, long work that reports and stops;
+- ``jit``, ``arrays``, ``prefetch`` — numba for every kernel: ``from core.jit import njit,
+  prange`` (a cached kernel goes stale only when a kernel it calls or inlines changes);
 - ``analysis/`` — accuracy, stability, exact arithmetic: they import the core, never the
   other way round.
 
