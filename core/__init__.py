@@ -40,6 +40,8 @@ import os
 # takes effect if set before the OpenMP runtime loads, i.e. before the first parallel kernel.
 os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
+# the built-in shading modes, registered before any module can ask for one (data only: no numba)
+import core.shading.modes  # noqa: E402,F401
 from core.camera.view import View, ViewError  # noqa: E402
 from core.context import RenderContext  # noqa: E402
 from core.render import Frame, render, render_file  # noqa: E402

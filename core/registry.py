@@ -87,7 +87,6 @@ shape of every registry; the functions here are its wrappers.
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 from typing import Callable
 
@@ -227,13 +226,10 @@ class ShadingMode:
     description: str = ""
 
 
-def _load_built_in_shadings(name: str | None) -> None:
-    """The built-in modes, registered on the first lookup (their module is data only, like
-    the renderers' registrations)."""
-    importlib.import_module("core.shading.modes")
-
-
-SHADINGS = Registry("shading", _load_built_in_shadings)
+# The built-in modes register themselves (core.shading.modes, data only, like the renderers'
+# registrations), imported by the core package before anything can look one up: this
+# module, at the bottom of the core, names nothing above it.
+SHADINGS = Registry("shading")
 
 
 def register_shading(name: str, module: str | None, **fields) -> ShadingMode:

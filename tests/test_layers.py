@@ -3,12 +3,14 @@
 Layers, from the bottom: ``core`` (numbers, scene, camera, pipeline, shading, renderers, the
 front door) → ``core.analysis`` (accuracy, stability, exact arithmetic) → ``app`` (viewer,
 commands, benches, oracles, reports, distribution, command line). A module may import only from its own layer or below; imports inside
-functions count too (they are still dependencies).
+functions count too (they are still dependencies), and so do modules named in strings (the
+registries' lazy "package.module:function" entries, ``importlib.import_module("…")``).
 """
 
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 from tests.conftest import ROOT
@@ -24,6 +26,11 @@ def _modules() -> dict[str, Path]:
     return found
 
 
+# A module named in a string, as the registries name what they import lazily
+# ("core.renderers.painters.plan:bsp_stages") or importlib is handed one: a dependency too.
+STRING_IMPORT = re.compile(r"^((?:core|app)(?:\.\w+)+)(?::\w+)?$")
+
+
 def import_graph() -> dict[str, set[str]]:
     modules = _modules()
     graph = {}
@@ -34,11 +41,19 @@ def import_graph() -> dict[str, set[str]]:
                 names = [a.name for a in node.names]
             elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
                 names = [node.module] + [f"{node.module}.{a.name}" for a in node.names]
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+                named = STRING_IMPORT.match(node.value)
+                names = [named.group(1)] if named else []
             else:
                 continue
             targets |= {n for n in names if n in modules}
         graph[name] = targets - {name}
     return graph
+
+
+def test_a_module_named_in_a_string_is_an_import():
+    registered = import_graph()["core.renderers"]
+    assert "core.renderers.painters.plan" in registered     # plan_stages="…plan:bsp_stages"
 
 
 def layer(module: str) -> int:
