@@ -229,6 +229,25 @@ def orbit_case(display, out, label, scene, size, seconds, shading=None, renderer
     return {"case": label, "size": list(size), "kind": "orbit", **row}
 
 
+def keys_case(display, out, label, scene, size, seconds, shading=None) -> dict:
+    """The shading keys 1, 2, 3 in turn, eight a second for ``seconds``: each change's
+    picture, and how long after its key it reached the screen."""
+    _progress(f"{label} at {size[0]}x{size[1]}: shading keys for {seconds:g} s ...")
+    window = Window(display, scene, size, out / f"{_slug(label, size)}.log")
+    try:
+        window.settle()
+        start, began = window.now_ms(), time.time()
+        for i in range(int(seconds * 8)):
+            window.key("123"[i % 3])
+            time.sleep(max(0.0, began + (i + 1) / 8 - time.time()))    # xdotool takes time
+        end = window.now_ms()
+        time.sleep(0.5)
+        row = pictures_between(window.events(), start, end)
+    finally:
+        window.close()
+    return {"case": label, "size": list(size), "kind": "keys", **row}
+
+
 def laplacian_noise(grey: np.ndarray, box) -> float:
     """The median absolute Laplacian of the grey levels over ``box`` (x0, y0, x1, y1)."""
     x0, y0, x1, y1 = box
@@ -268,6 +287,8 @@ def cases(args, out: Path) -> list[tuple]:
              for size in (small, big) for s in ("flat", "gouraud", "phong")]
     found.append((orbit_case, "bunny subdivided to 1.1M, flat", None, small, args.seconds,
                   "flat"))
+    found.append((keys_case, f"bunny {bunny.stem}, 8 shading keys a second", bunny, small,
+                  args.seconds, None))
     found.append((orbit_case, "whitted.toml, ray traced", ROOT / "scenes" / "whitted.toml", big,
                   args.seconds, None, "raytrace"))
     return found
@@ -311,11 +332,12 @@ def _ms(value: float | None, digits: int = 0) -> str:
 
 
 def markdown(report: dict) -> str:
-    lines = ["| case | picture | pictures a second while dragging | median gap | worst gap "
+    lines = ["| case | picture | pictures a second (dragging, or pressing keys) | median gap "
+             "| worst gap "
              "| render median | input to screen, median (worst) | the window's own, median "
              "(its CPU) |", "|---|---|---|---|---|---|---|---|"]
     for r in report["rows"]:
-        if r["kind"] != "orbit":
+        if r["kind"] not in ("orbit", "keys"):
             continue
         render = _ms(r["render_median_ms"], 1)
         waited = (f"{_ms(r.get('latency_median_ms'))} ({_ms(r.get('latency_worst_ms'))})"

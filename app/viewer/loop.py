@@ -43,7 +43,7 @@ class FrameLoop:
         self._swapped_at, self._picture_new = 0.0, False    # the last redraw; a picture since
         self.latency = InputLatency()     # from an input to the picture that shows it
         self._on_screen: int | None = None    # the request of a picture due on screen
-        self._swap_s = 0.0                # how long the last swap took
+        self._swap_s = self._swapped_cpu = 0.0    # the last swap's length; the thread's CPU then
 
     def run(self) -> int:
         try:
@@ -84,7 +84,7 @@ class FrameLoop:
         self.latency.drawn(self.state.dirty)
         if self._on_screen is not None and self._swapped_at >= started:
             self._log_on_screen(self._on_screen, self._swapped_at - started,
-                                time.thread_time() - cpu)
+                                self._swapped_cpu - cpu)
             self._on_screen = None
         return drawn
 
@@ -93,8 +93,8 @@ class FrameLoop:
         of that, this thread's CPU and the swap), and how long after the input it answers
         (``python -m app bench --window`` reads them)."""
         waited = self.latency.shown(generation, self._swapped_at)
-        log.info("on screen: the window's own %.1f ms (CPU %.1f ms, swap %.1f ms)%s",
-                 1e3 * own, 1e3 * cpu, 1e3 * self._swap_s,
+        log.info("on screen: request %d, the window's own %.1f ms (CPU %.1f ms, swap "
+                 "%.1f ms)%s", generation, 1e3 * own, 1e3 * cpu, 1e3 * self._swap_s,
                  "" if waited is None else f", {1e3 * waited:.0f} ms after the input")
 
     def _draw_frame(self) -> bool:
@@ -124,7 +124,7 @@ class FrameLoop:
         swap = time.perf_counter()
         glfw.swap_buffers(self.win.window)
         self._swapped_at, self._picture_new = time.perf_counter(), False
-        self._swap_s = self._swapped_at - swap
+        self._swap_s, self._swapped_cpu = self._swapped_at - swap, time.thread_time()
         if not self._first_frame_logged and self.state.frame is not None:
             self._first_frame_logged = True
             self._log_since_start("first frame shown")

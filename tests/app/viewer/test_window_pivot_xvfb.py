@@ -81,8 +81,9 @@ def test_a_drag_turns_about_the_point_under_the_press_and_the_headlight_follows(
         assert np.allclose(_numbers(line[1]), (-0.2475, 0.0, 0.2525), atol=1e-4)
         # the picture that answers the drag says how long after the input it reached the
         # screen (app.viewer.latency): more than nothing, less than the test's own wait
-        shown = app.wait_for(r"on screen: the window's own ([\d.]+) ms \(CPU [\d.]+ ms, swap "
-                             r"[\d.]+ ms\), (\d+) ms after the input", timeout=30, after=mark)
+        shown = app.wait_for(r"on screen: request \d+, the window's own ([\d.]+) ms "
+                             r"\(CPU [\d.]+ ms, swap [\d.]+ ms\), (\d+) ms after the input",
+                             timeout=30, after=mark)
         assert 0.0 < float(shown[1]) and 0 < int(shown[2]) < 30_000
 
         # A press on the background: the scene's centre, the origin
