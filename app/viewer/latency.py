@@ -33,13 +33,16 @@ class InputLatency:
             self._changed = self._batch
         self._batch = None
 
-    def requested(self, generation: int) -> None:
-        """The picture was asked for as request ``generation``: the pending inputs ride on it."""
+    def requested(self, generation: int) -> bool:
+        """The picture was asked for as request ``generation``: the pending inputs ride on it.
+        Returns whether any did (an input now waits for this picture)."""
         if self._changed is None:
             self._changed = self._batch
-        if self._changed is not None:
+        answers = self._changed is not None
+        if answers:
             self._waiting.append((generation, self._changed))
         self._changed = None
+        return answers
 
     def shown(self, generation: int, at: float) -> float | None:
         """A picture of request ``generation`` reached the screen at ``at``: seconds since the

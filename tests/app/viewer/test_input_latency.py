@@ -13,7 +13,7 @@ def test_the_wait_runs_from_the_first_input_of_the_batch_to_the_swap():
     latency = InputLatency()
     latency.input(1.0)
     latency.input(1.2)                  # the same batch: the first counts
-    latency.requested(5)
+    assert latency.requested(5)         # an input waits for request 5's picture
     latency.drawn(dirty=False)
     assert latency.shown(5, 1.5) == pytest.approx(0.5)
     assert latency.shown(5, 1.7) is None        # a refinement answers no new input
@@ -47,6 +47,7 @@ def test_inputs_that_changed_nothing_do_not_start_the_clock():
     latency = InputLatency()
     latency.input(2.0)                  # a key that changed nothing
     latency.drawn(dirty=False)
+    assert not latency.requested(6)     # a request no input asked for (the movie's clock)
     latency.input(3.0)
     latency.requested(7)
     latency.drawn(dirty=False)

@@ -19,6 +19,7 @@ def _loop(monkeypatch, calls):
     frames = loop.FrameLoop.__new__(loop.FrameLoop)
     frames.win, frames.state = win, SimpleNamespace(dirty=True, playing=False)
     frames._picture_new, frames._swapped_at = False, time.perf_counter()
+    frames._input_waits = False
     return frames
 
 
@@ -42,3 +43,15 @@ def test_a_new_picture_or_no_drag_is_drawn_at_once_as_before(monkeypatch):
     frames.win.hands.drag = SimpleNamespace(start=(10, 20))
     frames._wait(True)
     assert calls == [("poll",)] * 3
+
+
+def test_a_key_whose_picture_is_on_its_way_waits_for_it_too(monkeypatch):
+    calls = []
+    frames = _loop(monkeypatch, calls)
+    frames.win.hands.drag = None
+    frames._input_waits = True                  # a shading key asked for a new picture
+    frames._wait(True)
+    frames._swapped_at -= 1.0                   # past the deadline: redrawn
+    frames._wait(True)
+    (kind, seconds), poll = calls
+    assert kind == "wait" and 0 < seconds <= loop.GESTURE_REDRAW_S and poll == ("poll",)
