@@ -98,7 +98,7 @@ class Actions:
             self.win.hands.message = ""
             for message in self.state.scene.view_messages:
                 print(f"invalid view: {message}", file=sys.stderr)
-            glfw.set_window_title(self.win.window, self.win.title())
+            self.win.sizes.set_title(self.win.title())
         else:                             # this failure's messages only, not the earlier ones
             new = self.state.open_messages[earlier:]
             log.info("action: %s -> %s", how, new[0] if new else "not opened")

@@ -102,11 +102,12 @@ class GlfwInput:
     two frames are both seen, each where it happened.
     """
 
-    def __init__(self, window):
+    def __init__(self, window, sizes=None):
         import glfw                      # only the window needs glfw; the renderer does not
 
         self._glfw = glfw
         self.window = window
+        self.sizes = sizes               # the window's kept sizes (app.viewer.window_sizes)
         self.io = imgui.get_io()
         self._time = None
         self._keys = _key_map(glfw)
@@ -149,8 +150,11 @@ class GlfwInput:
     def new_frame(self) -> None:
         """Display size, framebuffer scale and time step."""
         glfw = self._glfw
-        set_display(self.io, glfw.get_window_size(self.window),
-                    glfw.get_framebuffer_size(self.window))
+        if self.sizes is not None:
+            set_display(self.io, self.sizes.window, self.sizes.framebuffer)
+        else:
+            set_display(self.io, glfw.get_window_size(self.window),
+                        glfw.get_framebuffer_size(self.window))
         now = glfw.get_time()
         self.io.delta_time = max(now - self._time, 1e-4) if self._time is not None else 1 / 60
         self._time = now

@@ -99,9 +99,9 @@ class FrameLoop:
                  "" if waited is None else f", {1e3 * waited:.0f} ms after the input")
 
     def _draw_frame(self) -> bool:
-        fb_w, fb_h = glfw.get_framebuffer_size(self.win.window)
+        fb_w, fb_h = self.win.sizes.framebuffer
         self.win.fit_picture()
-        if fb_w <= 0 or fb_h <= 0 or glfw.get_window_attrib(self.win.window, glfw.ICONIFIED):
+        if fb_w <= 0 or fb_h <= 0 or self.win.sizes.iconified:
             self.win.pointer.clicks.clear()
             self.win.busy = 0
             return False                  # minimised: nothing to render or draw
@@ -252,4 +252,4 @@ class FrameLoop:
         log.info("%s", self.state.frames.summary())
         if self.state.frame.message:
             print(self.state.frame.message, file=sys.stderr)
-        glfw.set_window_title(self.win.window, self.win.title())
+        self.win.sizes.set_title(self.win.title())

@@ -9,8 +9,7 @@ from __future__ import annotations
 import logging
 import time
 
-from imgui_bundle import imgui  # noqa: I001  (first: it names the library glfw loads)
-import glfw
+from imgui_bundle import imgui
 
 from app.viewer import options_panel
 from app.viewer.gui_text import displayable
@@ -81,7 +80,7 @@ class SidePanel:
     def draw(self) -> None:
         scale = self.win.scale()
         width, height = self.state.size
-        fb_w, fb_h = glfw.get_framebuffer_size(self.win.window)
+        fb_w, fb_h = self.win.sizes.framebuffer
         imgui.set_next_window_pos((width / scale, 0), imgui.Cond_.always)
         # no wider than the window, so that its text wraps where it can be read
         imgui.set_next_window_size((min(PANEL_WIDTH, fb_w / scale), fb_h / scale),

@@ -127,7 +127,7 @@ class Pointer:
         the worker renders only the newest request)."""
         if self.win.hands.drag is None:
             return
-        x, y = glfw.get_cursor_pos(self.win.window)
+        x, y = self.win.sizes.cursor
         if (self._pressed is not None and not self.clicks
                 and glfw.get_mouse_button(self.win.window, self._pressed[0]) != glfw.PRESS):
             self._release(self._pressed[0], x, y)    # a release the window never saw
@@ -172,7 +172,7 @@ class Pointer:
 
     def wheel(self, notches: float) -> None:
         """The wheel on the picture: dolly; Ctrl: the window (field of view); Alt: the loupe."""
-        x, y = glfw.get_cursor_pos(self.win.window)
+        x, y = self.win.sizes.cursor
         if imgui.get_io().want_capture_mouse or not self.win.on_picture(x, y) or not notches:
             return
         held = lambda *keys: any(glfw.get_key(self.win.window, k) == glfw.PRESS for k in keys)

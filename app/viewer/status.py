@@ -8,8 +8,7 @@ from __future__ import annotations
 import logging
 import time
 
-from imgui_bundle import imgui  # noqa: I001  (first: it names the library glfw loads)
-import glfw
+from imgui_bundle import imgui
 
 from app.session.state import compile_count
 from app.viewer.gui_text import displayable
@@ -29,7 +28,7 @@ class StatusLine:
 
     def _cursor_line(self) -> None:
         """The status line's value under the cursor (through the loupe), and the loupe's m."""
-        x, y = glfw.get_cursor_pos(self.win.window)
+        x, y = self.win.sizes.cursor
         if self.state.frame is None or not self.win.on_picture(x, y) or self.win.menus.popup_open \
                 or self.win.files.dialog.open:
             return                        # a menu or a dialog over the picture: not a pixel

@@ -96,6 +96,7 @@ from app.viewer.panel import PANEL_WIDTH, SidePanel
 from app.viewer.pointer import Pointer
 from app.viewer.status import StatusLine
 from app.viewer.volume_panel import VolumePanel
+from app.viewer.window_sizes import WindowSizes
 from app.viewer.worker import RenderWorker
 
 log = logging.getLogger("fvd")
@@ -177,6 +178,7 @@ class ViewerWindow:
         width, height = state.size
         self.window = create_window((width + PANEL_WIDTH, height), self.title())
         glfw.ERROR_REPORTING = "log"      # later glfw errors are not fatal
+        self.sizes = WindowSizes(self.window)     # kept from the callbacks: no X round trips
         self.fit_window(width, height)
         try:
             self.ctx = moderngl.create_context(require=330)
@@ -190,7 +192,7 @@ class ViewerWindow:
             self.gui_context = imgui.create_context()
             imgui.get_io().set_ini_filename(None)     # keep no imgui.ini in the user's directory
             self.gui = GuiRenderer()
-            self.input = GlfwInput(self.window)
+            self.input = GlfwInput(self.window, self.sizes)
         except Exception as error:        # e.g. a shader that does not compile: close it all
             if self.gui_context is not None:
                 imgui.destroy_context(self.gui_context)
@@ -238,8 +240,7 @@ class ViewerWindow:
     # -- geometry: the picture at the top-left, the panel to its right -----------------------
     def scale(self) -> float:
         """Framebuffer pixels per screen point (1 except on HiDPI screens)."""
-        window_w, _ = glfw.get_window_size(self.window)
-        fb_w, _ = glfw.get_framebuffer_size(self.window)
+        window_w, fb_w = self.sizes.window[0], self.sizes.framebuffer[0]
         return fb_w / window_w if window_w > 0 and fb_w > 0 else 1.0
 
     def panel_pixels(self) -> int:
@@ -255,7 +256,7 @@ class ViewerWindow:
 
     def picture_size(self) -> tuple[int, int]:
         """The picture's size in framebuffer pixels: the window less the panel."""
-        fb_w, fb_h = glfw.get_framebuffer_size(self.window)
+        fb_w, fb_h = self.sizes.framebuffer
         return max(fb_w - self.panel_pixels(), 0), max(fb_h, 0)
 
     def on_picture(self, x: float, y: float) -> bool:
@@ -273,6 +274,8 @@ class ViewerWindow:
         glfw.set_cursor_pos_callback(w, self._on_cursor)
         glfw.set_cursor_enter_callback(w, self._on_cursor_enter)
         glfw.set_framebuffer_size_callback(w, self._on_framebuffer_size)
+        glfw.set_window_size_callback(w, lambda _, *size: self.sizes.on_window_size(*size))
+        glfw.set_window_iconify_callback(w, lambda _, iconified: self.sizes.on_iconify(iconified))
         glfw.set_window_refresh_callback(w, lambda *_: self.wake())
         glfw.set_window_focus_callback(w, lambda *_: self.wake())
         self.files.install_drop()
@@ -281,6 +284,7 @@ class ViewerWindow:
         self.busy = FRAMES_AFTER_EVENT
 
     def _on_cursor(self, window, x, y) -> None:
+        self.sizes.on_cursor(x, y)
         self.input.on_cursor(x, y)
         self.wake()
         if self.hands.drag is not None:      # a move that turns the camera: its wait counts
@@ -297,13 +301,14 @@ class ViewerWindow:
         self.pointer.wheel(y_offset)
 
     def _on_framebuffer_size(self, window, width, height) -> None:
+        self.sizes.on_framebuffer_size(width, height)
         self.fit_picture()
         self.wake()
 
     def fit_picture(self) -> None:
         """Give the picture what the panel leaves; say when that is nothing."""
         shown = self.state.renderable
-        fb_w, fb_h = glfw.get_framebuffer_size(self.window)
+        fb_w, fb_h = self.sizes.framebuffer
         self.state.resize(*self.picture_size())
         if shown != self.state.renderable and fb_w > 0 and fb_h > 0:
             log.info("picture %s", "shown" if self.state.renderable
