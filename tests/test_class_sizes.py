@@ -1,4 +1,5 @@
-"""No class in ``app`` or ``core`` has more than 40 methods, counting what it inherits.
+"""No class in ``app`` or ``core`` has more than 40 methods, counting what it inherits, and no
+module in ``app`` is longer than 800 lines.
 
 A class that grows past that does several jobs; it is split into parts that it holds (the
 viewer's state and its views, choices, messages, ... in ``app.session``), not into mixins it
@@ -17,6 +18,7 @@ import ast
 from tests.test_layers import _modules
 
 MOST_METHODS = 40
+MOST_APP_LINES = 800     # a window, a command or a bench that grows past it does several jobs
 
 
 def _own_methods(node: ast.ClassDef) -> set[str]:
@@ -77,3 +79,11 @@ def test_no_class_has_more_than_40_methods():
     big = {name: n for name, n in project_method_counts().items() if n > MOST_METHODS}
     assert not big, "; ".join(f"{name} has {n} methods (its bases' included), more than "
                               f"{MOST_METHODS}" for name, n in sorted(big.items()))
+
+
+def test_no_module_of_the_app_is_longer_than_800_lines():
+    long = {name: len(path.read_text().splitlines()) for name, path in _modules().items()
+            if name.startswith("app")}
+    long = {name: n for name, n in long.items() if n > MOST_APP_LINES}
+    assert not long, "; ".join(f"{name} has {n} lines, more than {MOST_APP_LINES}"
+                               for name, n in sorted(long.items()))
