@@ -91,8 +91,8 @@ print(*(p.name for p in shipped_scenes()), sep="\n")')
     if [[ "$scene" == *.tri ]]; then size=(); want=any; fi
     "$venv/bin/fvd-viewer" render "$clone/scenes/$scene" "${size[@]}" \
       --out "png/${scene%.*}.png" > /dev/null 2> render.err || { cat render.err; fail "render $scene"; }
-    # a picture may be one flat colour only where the program said what it left out (the
-    # Cornell box's emitter lights nothing in the z-buffer, its default)
+    # a picture may be one flat colour only where the program said what it left out (a
+    # scene lit only by an emitter, drawn by a renderer that does not light with one)
     "$py" - "png/${scene%.*}.png" render.err "$want" <<'EOF' || fail "render $scene: the PNG is missing or blank"
 import sys
 from PIL import Image
