@@ -102,7 +102,7 @@ class GlfwInput:
     two frames are both seen, each where it happened.
     """
 
-    def __init__(self, window, sizes=None):
+    def __init__(self, window, sizes):
         import glfw                      # only the window needs glfw; the renderer does not
 
         self._glfw = glfw
@@ -150,11 +150,7 @@ class GlfwInput:
     def new_frame(self) -> None:
         """Display size, framebuffer scale and time step."""
         glfw = self._glfw
-        if self.sizes is not None:
-            set_display(self.io, self.sizes.window, self.sizes.framebuffer)
-        else:
-            set_display(self.io, glfw.get_window_size(self.window),
-                        glfw.get_framebuffer_size(self.window))
+        set_display(self.io, self.sizes.window, self.sizes.framebuffer)
         now = glfw.get_time()
         self.io.delta_time = max(now - self._time, 1e-4) if self._time is not None else 1 / 60
         self._time = now

@@ -42,10 +42,12 @@ class Pointer:
 
     def on_mouse_button(self, window, button, action, mods) -> None:
         self.win.input.on_mouse_button(button, action)
+        # where it happened, asked: a warped pointer (xdotool) may have sent no motion first
+        self.win.sizes.on_cursor(*glfw.get_cursor_pos(window))
         if action in (glfw.PRESS, glfw.RELEASE) and button in (
                 glfw.MOUSE_BUTTON_LEFT, glfw.MOUSE_BUTTON_RIGHT, glfw.MOUSE_BUTTON_MIDDLE):
             # Decided in the next frame, once ImGui has seen this press at this position.
-            self.clicks.append((button, action, *glfw.get_cursor_pos(window), mods))
+            self.clicks.append((button, action, *self.win.sizes.cursor, mods))
         self.win.wake()
 
     def handle_clicks(self) -> None:

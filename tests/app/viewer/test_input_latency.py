@@ -19,26 +19,24 @@ def test_the_wait_runs_from_the_first_input_of_the_batch_to_the_swap():
     assert latency.shown(5, 1.7) is None        # a refinement answers no new input
 
 
-def test_a_newer_picture_answers_the_older_requests_too():
+def _two_requests() -> InputLatency:
+    """Two turns of the loop, each an input and its request: 1.0 s asks 5, 1.1 s asks 6."""
     latency = InputLatency()
-    latency.input(1.0)
-    latency.requested(5)
-    latency.drawn(dirty=False)
-    latency.input(1.1)
-    latency.requested(6)
-    latency.drawn(dirty=False)
+    for at, generation in ((1.0, 5), (1.1, 6)):
+        latency.input(at)
+        latency.requested(generation)
+        latency.drawn(dirty=False)
+    return latency
+
+
+def test_a_newer_picture_answers_the_older_requests_too():
+    latency = _two_requests()
     assert latency.shown(6, 1.4) == pytest.approx(0.4)     # from 1.0: the oldest it answers
     assert latency.shown(5, 1.5) is None                   # overtaken: already answered
 
 
 def test_pictures_in_order_each_answer_their_own_request():
-    latency = InputLatency()
-    latency.input(1.0)
-    latency.requested(5)
-    latency.drawn(dirty=False)
-    latency.input(1.1)
-    latency.requested(6)
-    latency.drawn(dirty=False)
+    latency = _two_requests()
     assert latency.shown(5, 1.3) == pytest.approx(0.3)
     assert latency.shown(6, 1.5) == pytest.approx(0.4)
 
