@@ -148,3 +148,23 @@ register_renderer("volume", "core.renderers.volume.draw:draw",
                               "(core.volume)",
                   label="Volume (ray marching)", shaders=True, progressive=True,
                   volumes=True, bench="volume")
+
+
+def held_instead(scene) -> list[str]:
+    """What a scene that gives a surface renderer nothing to draw holds instead, one phrase
+    each with the renderer that draws it: its line edges and its ray-marched volumes."""
+    return [note for note in (line_edges_note(scene), volumes_note(scene)) if note]
+
+
+def line_edges_note(scene) -> str | None:
+    """The meshes of line edges alone, which only the z-buffer draws; None if there are none."""
+    lines = [m.name for m in scene.meshes if len(m.edges) and not len(m.triangles)]
+    return f"line edges ({', '.join(lines)}): drawn by the z-buffer only" if lines else None
+
+
+def volumes_note(scene) -> str | None:
+    """The scene's volumes and the renderers that draw them; None if it has none."""
+    from core.volume.data import volumes_of
+    volumes = [v.name for v in volumes_of(scene)]
+    return (f"volumes ({', '.join(volumes)}): drawn by --renderer "
+            f"{' or '.join(names_that('volumes'))}" if volumes else None)

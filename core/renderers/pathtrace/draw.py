@@ -77,8 +77,9 @@ def pack(scene) -> Packed:
     check_scene(scene)
     meshes = [m for m in scene.meshes if len(m.triangles)]
     if not meshes:
-        raise RadiosityError("it has no surfaces, only lines (the path tracer draws triangles; "
-                             "the z-buffer draws lines)")
+        from core.renderers import held_instead
+        raise RadiosityError("; ".join(["it has no triangles, and the path tracer draws "
+                                        "triangles only", *held_instead(scene)]))
     positions = np.concatenate([m.positions for m in meshes])
     offsets = np.cumsum([0] + [len(m.positions) for m in meshes])
     triangles = np.concatenate([m.triangles + offsets[i] for i, m in enumerate(meshes)])

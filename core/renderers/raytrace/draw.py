@@ -106,10 +106,8 @@ def prepare(scene, view: View, projection: str, size: tuple[int, int],
 def not_drawn(scene) -> tuple:
     """What of ``scene`` the tracer cannot draw, one sentence each (shown with the frame's
     stats and in the window's panel, never silently dropped)."""
-    notes = []
-    lines = [m.name for m in scene.meshes if len(m.edges) and not len(m.triangles)]
-    if lines:
-        notes.append(f"line edges ({', '.join(lines)}): drawn by the z-buffer only")
+    from core.renderers import line_edges_note
+    notes = [note for note in (line_edges_note(scene),) if note]
     from core.texture.material import maps_of
     demo = [m.name for m in scene.meshes if getattr(maps_of(m.material), "demo", None)]
     if demo:
@@ -120,6 +118,15 @@ def not_drawn(scene) -> tuple:
         notes.append(f"texture maps on analytic primitives ({', '.join(mapped)}): the traced "
                      f"sphere or plane has no (u, v)")
     return tuple(notes)
+
+
+def nothing_to_trace(scene) -> str:
+    """Why the tracer has nothing to draw in a scene with no triangle, sphere or plane: what
+    the scene holds instead, and which renderer draws that."""
+    from core.renderers import held_instead
+    held = held_instead(scene)
+    return (f"{scene.name}: nothing to ray trace: no triangles, spheres or planes"
+            + (f"; {'; '.join(held)}" if held else ""))
 
 
 def trace_rays(setup: Setup, origins, directions, t_min, t_max,
@@ -290,8 +297,7 @@ def draw(scene, view: View, settings, frame, context=None, timer=None) -> None:
         return
     if setup.packing.build.triangles == 0 and not (len(setup.packing.packed.spheres)
                                                    or len(setup.packing.packed.planes)):
-        frame.message = (f"{scene.name}: nothing to ray trace (line edges are drawn by the "
-                         "z-buffer only)")
+        frame.message = nothing_to_trace(scene)
     if timer is not None:
         timer.lap("pack scene, build BVH")
     start = time.perf_counter()

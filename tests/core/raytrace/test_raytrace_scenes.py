@@ -100,6 +100,24 @@ def test_what_the_tracer_cannot_draw_is_said():
     assert any("bump demo" in note for note in frame.stats["not drawn"])
 
 
+def test_a_scene_with_nothing_to_trace_says_what_it_holds_instead():
+    volume = load_scene(SCENES / "volume_alone.toml")
+    frame = render(volume, volume.views[0], RenderSettings.for_scene(
+        volume, renderer="raytrace", size=(16, 12)))
+    assert frame.message == (f"{volume.name}: nothing to ray trace: no triangles, spheres or "
+                             "planes; volumes (head): drawn by --renderer volume")
+    house = load_scene(SCENES / "house.toml")
+    frame = render(house, house.views[0], RenderSettings.for_scene(
+        house, renderer="raytrace", size=(16, 12)))
+    assert frame.message == (f"{house.name}: nothing to ray trace: no triangles, spheres or "
+                             "planes; line edges (house): drawn by the z-buffer only")
+    frame = render(volume, volume.views[0], RenderSettings.for_scene(
+        volume, renderer="pathtrace", size=(16, 12), samples=1))
+    assert frame.message == (f"{volume.name}: cannot path trace: it has no triangles, and the "
+                             "path tracer draws triangles only; volumes (head): drawn by "
+                             "--renderer volume")
+
+
 # ----------------------------------------------------------------------------- keyed objects
 
 KEYED = """
