@@ -18,6 +18,11 @@
 #            screenshots), from the clone, with the test extras installed on this Python
 # FVD_SMOKE_PHASES="cli render" runs only those (install always runs). Any failure exits
 # non-zero with a line naming the Python and the phase. FVD_SMOKE_KEEP=1 keeps the folder.
+# Beside another job (.ci/run runs this beside the main test suite, which keeps one of two
+# cores busy on average): FVD_SMOKE_NICE=N runs every phase but the window's at that niceness,
+# so that it takes the cores the other job leaves idle; FVD_SMOKE_WINDOW_AFTER=FILE holds the
+# window phase until FILE exists, so that its real window never shares the cores with the
+# other job's windows and compiles.
 set -euo pipefail
 
 python=${1:?usage: .ci/smoke.sh PYTHON [REPO]}
@@ -35,6 +40,7 @@ started=$SECONDS
 phase_started=$SECONDS
 times=()
 
+niced() { if [ -n "${FVD_SMOKE_NICE:-}" ]; then nice -n "$FVD_SMOKE_NICE" "$@"; else "$@"; fi; }
 fail() { echo "smoke: $name ($python): $phase failed${1:+: $1}" >&2; exit 1; }
 trap 'fail "exit status $? at line $LINENO"' ERR
 begin() { phase=$1; phase_started=$SECONDS; echo "smoke: $name: $phase ..."; }
@@ -50,9 +56,9 @@ if [ -d "$repo/../shared" ]; then ln -s "$(cd "$repo/../shared" && pwd)" "$work/
 end
 
 begin install
-"$python" -m venv "$venv"
+niced "$python" -m venv "$venv"
 # No compiler: a dependency without a wheel for this Python fails here, loudly.
-CC=false CXX=false PIP_ONLY_BINARY=:all: "$py" -m pip install -q --disable-pip-version-check \
+CC=false CXX=false PIP_ONLY_BINARY=:all: niced "$py" -m pip install -q --disable-pip-version-check \
   "$clone[test]" || fail "a dependency has no wheel for $name (see pip's message above)"
 end
 
@@ -71,7 +77,7 @@ fi
 
 if [[ " $phases " == *" warmup "* ]]; then
   begin warmup                      # every kernel compiled on all cores, as `make` does
-  "$venv/bin/fvd-viewer" -q warmup > warmup.txt || { tail -20 warmup.txt; fail "the warm-up"; }
+  niced "$venv/bin/fvd-viewer" -q warmup > warmup.txt || { tail -20 warmup.txt; fail "the warm-up"; }
   end
 fi
 
@@ -89,7 +95,7 @@ print(*(p.name for p in shipped_scenes()), sep="\n")')
     # a .tri file's camera is in pixels (its own 500 x 500): another size shows only a corner
     size=(--size 64x48); want=64x48
     if [[ "$scene" == *.tri ]]; then size=(); want=any; fi
-    "$venv/bin/fvd-viewer" render "$clone/scenes/$scene" "${size[@]}" \
+    niced "$venv/bin/fvd-viewer" render "$clone/scenes/$scene" "${size[@]}" \
       --out "png/${scene%.*}.png" > /dev/null 2> render.err || { cat render.err; fail "render $scene"; }
     # a picture may be one flat colour only where the program said what it left out (a
     # scene lit only by an emitter, drawn by a renderer that does not light with one)
@@ -108,6 +114,14 @@ EOF
 fi
 
 if [[ " $phases " == *" window "* ]]; then
+  if [ -n "${FVD_SMOKE_WINDOW_AFTER:-}" ]; then
+    waited=$SECONDS
+    until [ -e "$FVD_SMOKE_WINDOW_AFTER" ]; do
+      [ $((SECONDS - waited)) -lt 3600 ] || fail "$FVD_SMOKE_WINDOW_AFTER did not appear within an hour"
+      sleep 2
+    done
+    echo "smoke: $name: waited $((SECONDS - waited))s for the other job before the window phase"
+  fi
   begin window
   cd "$clone"
   # The tests run the clone's code, whose kernel cache is its own folder. The installed
