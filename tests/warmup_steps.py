@@ -34,7 +34,11 @@ def _quick():
 
 
 def _say(name: str) -> None:
-    (_folder() / f"{name}.{os.getpid()}").write_text(str(os.getpid()))
+    """``name.PID`` holding the pid, whole when it appears (a test reads it at once; on a busy
+    machine a plain write let it read the file still empty)."""
+    partial = _folder() / f".{name}.{os.getpid()}.partial"
+    partial.write_text(str(os.getpid()))
+    os.replace(partial, _folder() / f"{name}.{os.getpid()}")
 
 
 def _waits_for_a_kill():
