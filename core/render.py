@@ -228,12 +228,10 @@ def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,
         said.append(f"{len(untessellated):,} spheres past the triangle budget, which were not "
                     f"tessellated: {_who('analytic')} draw them (Render > Ray traced, or "
                     f"--renderer raytrace)")
-    from core.volume.data import volumes_of
-    marched = [v.name for v in volumes_of(scene) if v.mode != "isosurface"]
+    from core.renderers import volumes_note
+    marched = volumes_note(scene)
     if marched and not renderer.volumes:
-        from core.registry import names_that
-        said.append(f"the volumes drawn by ray marching ({', '.join(marched)}): "
-                    f"--renderer {' or '.join(names_that('volumes'))} draws them")
+        said.append(marched)
     for note in said:
         if note not in notes:
             notes.append(note)

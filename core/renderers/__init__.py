@@ -163,8 +163,9 @@ def line_edges_note(scene) -> str | None:
 
 
 def volumes_note(scene) -> str | None:
-    """The scene's volumes and the renderers that draw them; None if it has none."""
+    """The scene's ray-marched volumes (an isosurface is a mesh) and the renderers that draw
+    them; None if it has none."""
     from core.volume.data import volumes_of
-    volumes = [v.name for v in volumes_of(scene)]
-    return (f"volumes ({', '.join(volumes)}): drawn by --renderer "
-            f"{' or '.join(names_that('volumes'))}" if volumes else None)
+    marched = [v.name for v in volumes_of(scene) if v.mode != "isosurface"]
+    return (f"the volumes drawn by ray marching ({', '.join(marched)}): --renderer "
+            f"{' or '.join(names_that('volumes'))} draws them" if marched else None)

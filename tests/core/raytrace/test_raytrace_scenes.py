@@ -105,7 +105,8 @@ def test_a_scene_with_nothing_to_trace_says_what_it_holds_instead():
     frame = render(volume, volume.views[0], RenderSettings.for_scene(
         volume, renderer="raytrace", size=(16, 12)))
     assert frame.message == (f"{volume.name}: nothing to ray trace: no triangles, spheres or "
-                             "planes; volumes (head): drawn by --renderer volume")
+                             "planes; the volumes drawn by ray marching (head): --renderer "
+                             "volume draws them")
     house = load_scene(SCENES / "house.toml")
     frame = render(house, house.views[0], RenderSettings.for_scene(
         house, renderer="raytrace", size=(16, 12)))
@@ -114,8 +115,8 @@ def test_a_scene_with_nothing_to_trace_says_what_it_holds_instead():
     frame = render(volume, volume.views[0], RenderSettings.for_scene(
         volume, renderer="pathtrace", size=(16, 12), samples=1))
     assert frame.message == (f"{volume.name}: cannot path trace: it has no triangles, and the "
-                             "path tracer draws triangles only; volumes (head): drawn by "
-                             "--renderer volume")
+                             "path tracer draws triangles only; the volumes drawn by ray "
+                             "marching (head): --renderer volume draws them")
 
 
 # ----------------------------------------------------------------------------- keyed objects
