@@ -2,9 +2,11 @@
 
 Takes the renderer's ``Frame.color`` — an ``(H, W, 3)`` uint8 numpy image, row 0 at the top —
 uploads it into a texture of the same size (NEAREST filtering, recreated when the size
-changes) and draws one oversized triangle whose fragment shader fetches the texel under
-``gl_FragCoord`` (``shaders/blit.vert`` with ``shaders/copy.frag``; ``shaders/blit.frag``
-when the loupe magnifies or a resized window stretches the last frame). Depth test and blending are
+changes) and draws it: the plain copy is a rectangle over the picture's area whose fragment
+shader reads the texel under each pixel's centre (``shaders/copy.vert`` with
+``shaders/copy.frag``); when the loupe magnifies or a resized window stretches the last frame,
+one oversized triangle whose fragment shader works out the texel from ``gl_FragCoord``
+(``shaders/blit.vert`` with ``shaders/blit.frag``). Depth test and blending are
 off: every pixel on screen is exactly the pixel our CPU pipeline wrote. No geometry, no
 transform, no lighting happens here (FvDFH's frame buffer, shown by a video controller).
 """
@@ -39,6 +41,10 @@ def clear_around(ctx: moderngl.Context, window: tuple[int, int], picture: tuple[
     ctx.scissor = None
 
 
+# The plain copy's two triangles over the viewport, in clip space (counter-clockwise).
+COPY_RECTANGLE = np.array([-1, -1, 1, -1, 1, 1, -1, -1, 1, 1, -1, 1], np.float32)
+
+
 class Blit:
     """Uploads a CPU image and draws it into the bound framebuffer, pixel (0, 0) bottom-left."""
 
@@ -53,7 +59,7 @@ class Blit:
         # the plain copy's program, made at the first draw: only a window draws (a bench that
         # times the uploads on the OpenGL oracle's context made llvmpipe draw the oracle's
         # Phong frames 100 times slower with a second program there; not understood)
-        self.copy = self.copy_vao = None
+        self.copy = self.copy_vao = self.copy_corners = None
         self.texture: moderngl.Texture | None = None
 
     @property
@@ -108,13 +114,12 @@ class Blit:
         origin = (int(origin[0]), int(origin[1]))
         if self.magnify == 1 and (width, height) == self.texture.size:
             if self.copy is None:
-                self.copy = self.ctx.program(
-                    vertex_shader=(SHADERS_DIR / "blit.vert").read_text(),
-                    fragment_shader=(SHADERS_DIR / "copy.frag").read_text())
+                self.copy = load_program(self.ctx, "copy")
                 self.copy["frame"].value = 0
-                self.copy_vao = self.ctx.vertex_array(self.copy, [])
-            self.copy["origin"].value = origin            # the plain copy: every other frame
-            self.copy_vao.render(moderngl.TRIANGLES, vertices=3)
+                self.copy_corners = self.ctx.buffer(COPY_RECTANGLE.tobytes())
+                self.copy_vao = self.ctx.vertex_array(
+                    self.copy, [(self.copy_corners, "2f", "corner")])
+            self.copy_vao.render(moderngl.TRIANGLES)      # the plain copy: every other frame
             return
         self.program["origin"].value = origin
         self.program["shown"].value = (max(int(width), 1), max(int(height), 1))
@@ -128,4 +133,5 @@ class Blit:
         self.program.release()
         if self.copy is not None:
             self.copy_vao.release()
+            self.copy_corners.release()
             self.copy.release()

@@ -299,3 +299,25 @@ def test_the_plain_copy_and_the_loupe_agree_at_magnification_one(ctx):
     through_loupe = blit_through(ctx, blit, image)
     blit.release()
     assert np.array_equal(plain, image) and np.array_equal(through_loupe, image)
+
+
+@pytest.mark.parametrize("window", [(60, 50), (1580, 1080)])
+def test_the_plain_copy_fills_its_viewport_at_the_window_top_left_and_nothing_else(ctx, window):
+    # The window draws the picture at its top left, with the viewport set to the picture's
+    # rectangle (app.viewer.loop): the copy's rectangle covers that viewport exactly, each
+    # pixel its own texel, and leaves the rest of the window as it was.
+    fb_w, fb_h = window
+    width, height = fb_w * 2 // 3 + 1, fb_h // 2 + 3
+    image = np.random.default_rng(fb_w).integers(0, 256, size=(height, width, 3), dtype=np.uint8)
+    fbo = ctx.simple_framebuffer(window, components=4)
+    fbo.use()
+    fbo.clear(0.0, 1.0, 0.0, 1.0)
+    blit = Blit(ctx)
+    blit.upload(image)
+    ctx.viewport = (0, fb_h - height, width, height)
+    blit.draw((0, fb_h - height))
+    out = read_image(fbo)
+    blit.release()
+    fbo.release()
+    assert np.array_equal(out[:height, :width], image)
+    assert (out[height:] == (0, 255, 0)).all() and (out[:, width:] == (0, 255, 0)).all()
