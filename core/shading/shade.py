@@ -107,9 +107,11 @@ class ShadeInput:
     # clipped vertices.
     settings: object = None
     device: tuple | None = None
-    # Flat shading: each face's planar polygon (-1 alone) and the polygons' centroids.
+    # Flat shading: each face's planar polygon (-1 alone) and the polygons' centroids; for the
+    # float32 passes, every face's lighting point and normal (the scene's, kept between frames).
     polygon: np.ndarray | None = None
     polygon_point: np.ndarray | None = None
+    face_points: tuple | None = None
 
 
 # --------------------------------------------------------------------------------------------

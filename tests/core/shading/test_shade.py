@@ -299,3 +299,21 @@ def test_resolve_speed_at_500x500(benchmark):
     image = benchmark(shade.resolve, s, vis, s.triangles, s.vertex_attrs, np.arange(4),
                       scene.background, out)
     assert image.shape == (500, 500, 3) and image.any()
+
+
+def test_flat_faces_are_lit_at_their_polygons_centroid_from_points_made_once_per_scene():
+    # Each square is one planar polygon: both of its triangles are lit once, at the square's
+    # centroid with its normal (FvDFH 16.2.3), whatever the eye. The points and normals are
+    # the scene's: a second frame from another eye reads the same arrays, not new ones.
+    from core.context import RenderContext
+    scene, context = quad_scene(), RenderContext()
+    s = shade.prepare("flat", scene, EYE, context=context)
+    centroids = [[0.5, 0.5, 0.0]] * 2 + [[-0.5, -0.5, 0.5]] * 2
+    expected = il.illuminate(np.array(centroids), [[0, 0, 1]] * 4, s.face_surface, s.surfaces,
+                             s.lights, s.ambient, s.eye, False)
+    np.testing.assert_allclose(s.face_rgb, expected, rtol=2e-6)         # float32 passes
+    points, normals = s.face_points
+    np.testing.assert_array_equal(points, centroids)
+    np.testing.assert_array_equal(normals, [[0, 0, 1]] * 4)
+    other = shade.prepare("flat", scene, shade.eye_from_view(VIEW, "parallel"), context=context)
+    assert other.face_points[0] is points and other.face_points[1] is normals
