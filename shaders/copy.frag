@@ -5,7 +5,7 @@
 // loupe's magnification and the stretch after a resize; this one is what is drawn at every
 // other frame. A texture fetch at an interpolated coordinate is the fragment shader llvmpipe
 // runs fastest: at 1580 x 1080 on two cores, 8.7 ms of its CPU a copy against 13.3 ms for a
-// texelFetch at gl_FragCoord (and about 40 ms for blit.frag).
+// texelFetch at gl_FragCoord.
 uniform sampler2D frame;
 in vec2 uv;
 out vec4 color;
