@@ -229,9 +229,9 @@ def _say_what_is_not_drawn(scene: Scene, renderer, stats: dict,
                     f"tessellated: {_who('analytic')} draw them (Render > Ray traced, or "
                     f"--renderer raytrace)")
     from core.renderers import volumes_note
-    marched = volumes_note(scene)
-    if marched and not renderer.volumes:
-        said.append(marched)
+    volumes = volumes_note(scene)
+    if volumes and not renderer.volumes:
+        said.append(volumes)
     for note in said:
         if note not in notes:
             notes.append(note)
