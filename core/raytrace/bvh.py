@@ -9,10 +9,12 @@ Build (:func:`build`), top down, in one numba loop over a stack of pending node 
 
 - each node's triangles are sorted into ``BINS`` equal bins along each axis of their
   centroids' bounds; for every one of the ``BINS − 1`` planes between bins the surface-area
-  heuristic ``cost = C_trav + (A_L N_L + A_R N_R) / A`` (Wald 2007) is evaluated from
+  heuristic ``cost = C_box + C_tri (A_L N_L + A_R N_R) / A`` (Wald 2007) is evaluated from
   prefix sums of the bins' boxes and counts, and the cheapest plane over the three axes wins;
-- a node becomes a leaf when it has at most ``MIN_SPLIT`` triangles, or when no split is
-  cheaper than intersecting all its triangles (``N``) and it has at most ``MAX_LEAF``;
+- a node becomes a leaf when it has at most a few triangles, or when no split is cheaper
+  than intersecting all its triangles (``C_tri N``) and it has at most a leaf's largest
+  number (:data:`TRIANGLE_LEAVES`: a leaf's triangles are tested four at a time, so a
+  triangle costs ``C_tri`` = 0.3 box tests and leaves hold up to 16);
 - triangles whose centroids coincide (no bin can separate them), and nodes deeper than
   ``SAH_DEPTH``, are split at the median by index, so the tree stays at most ~``MAX_DEPTH``
   deep and the traversal stack (``STACK``) cannot overflow.
@@ -21,16 +23,19 @@ Layout (:class:`BVH`): node ``k`` has its box in ``box[k] = (min xyz, max xyz)``
 (float32 boxes halve the memory but cost a conversion per bound tested: 10 % of the bunny's
 primary rays); an inner node's children are ``first[k]``
 and ``first[k] + 1`` (``count[k] == 0``), a leaf holds triangles ``first[k] .. first[k] +
-count[k] − 1`` of the BVH's own order. Triangles are stored in that order as one row
-``V0, E1, E2`` each (``tri``, what Möller–Trumbore reads) with ``prim`` mapping back to the
-scene's triangle index, so a leaf's data is one run of memory.
+count[k] − 1`` of the BVH's own order. Triangles are stored in that order as columns of
+``tri`` ``(9, T)``, whose rows are ``V0, E1, E2`` by component (what Möller–Trumbore reads),
+with ``prim`` mapping back to the scene's triangle index: each of a leaf's nine numbers is a
+run of memory, what a four-wide load takes.
 
 Traversal (:func:`closest`, :func:`occluded`): the slab test against the box with the ray's
 reciprocal direction (each axis's near and far slab picked once per ray by the direction's
 sign), the nearer child first, nodes whose entry lies beyond the best hit so far skipped.
 The stack (:func:`new_stack`) keeps each pushed node's entry distance beside it, so a node
 popped after a nearer hit is dropped without testing its box again.
-``occluded`` stops at the first hit (shadow rays). ``closest`` is inlined into its callers:
+A leaf's triangles are tested side by side (:func:`intersect.triangle_run`), their ``t``
+into the stack's tail, then read in order: the hit is the one the one-at-a-time loop found,
+to the bit. ``occluded`` stops at the first hit (shadow rays). ``closest`` is inlined into its callers:
 a numba call that takes the scene's tuple of arrays costs per array in it, per call.
 """
 
@@ -45,12 +50,13 @@ from core.jit import config, njit, prange
 from core.raytrace import intersect
 
 BINS = 16
-MIN_SPLIT = 2          # a node of this many triangles or fewer is always a leaf
-MAX_LEAF = 8           # above this many a node is always split
-TRAVERSAL_COST = 1.0   # the cost of one box test, in units of one triangle test
+# Leaves: (always a leaf at or below, always split above, one item's test in units of a box
+# test). A leaf's triangles are tested four at a time (intersect.triangle_run), so a
+# triangle's test costs a box test's fraction, and a leaf of up to four costs one test.
+TRIANGLE_LEAVES = (4, 16, 0.3)
+ITEM_LEAVES = (2, 8, 1.0)   # the spheres of a BoxTree, one at a time
 SAH_DEPTH = 48         # below this depth, median splits only (bounds the tree's depth)
 STACK = 128            # traversal stack; >= the deepest tree SAH_DEPTH + log2(2^40) allows
-NODE, ENTRY = 0, 1     # a stack row: the node (as a float, exact below 2^53), where the ray enters it
 
 
 class BVH(NamedTuple):
@@ -59,7 +65,7 @@ class BVH(NamedTuple):
     box: np.ndarray      # (nodes, 6) float64: min x, y, z, max x, y, z
     first: np.ndarray    # (nodes,) int64: first child (inner) or first triangle (leaf)
     count: np.ndarray    # (nodes,) int64: 0 for an inner node, else the leaf's triangles
-    tri: np.ndarray      # (T, 9) float64, in BVH order: V0, E1 = V1 - V0, E2 = V2 - V0
+    tri: np.ndarray      # (9, T) float64, columns in BVH order: V0, E1 = V1 - V0, E2 = V2 - V0
     prim: np.ndarray     # (T,) int64: the scene triangle at each BVH position
 
 
@@ -172,8 +178,10 @@ def _push(pending, i, node, start, end, depth):
 
 
 @njit(cache=True)
-def _build(lo, hi, cent):
-    """Nodes ``(box, first, count)``, the triangle order ``index`` and the tree's depth."""
+def _build(lo, hi, cent, leaves):
+    """Nodes ``(box, first, count)``, the triangle order ``index`` and the tree's depth;
+    ``leaves``: :data:`TRIANGLE_LEAVES` or :data:`ITEM_LEAVES`."""
+    min_split, max_leaf, item_cost = leaves
     n = cent.shape[0]
     max_nodes = max(2 * n - 1, 1)
     box = np.empty((max_nodes, 6))
@@ -198,7 +206,7 @@ def _build(lo, hi, cent):
         _range_bounds(lo, hi, cent, index, start, end, box[node], cbox)
         size = end - start
         first[node], count[node] = start, size
-        if size <= MIN_SPLIT:
+        if size <= min_split:
             continue
         mid = start
         if depth < SAH_DEPTH:
@@ -207,13 +215,15 @@ def _build(lo, hi, cent):
             parent_area = _area(box[node, 0], box[node, 1], box[node, 2],
                                 box[node, 3], box[node, 4], box[node, 5])
             if axis >= 0:
-                split_cost = TRAVERSAL_COST + cost / parent_area if parent_area > 0.0 else size
-                if split_cost >= size and size <= MAX_LEAF:
+                leaf_cost = item_cost * size
+                split_cost = (1.0 + item_cost * cost / parent_area if parent_area > 0.0
+                              else leaf_cost)
+                if split_cost >= leaf_cost and size <= max_leaf:
                     continue                          # intersecting them all is cheaper
                 scale = BINS / (cbox[axis + 3] - cbox[axis])
                 mid = _partition(cent, index, start, end, axis, split_bin, cbox[axis], scale)
         if mid == start or mid == end:               # inseparable centroids, or too deep
-            if size <= MAX_LEAF:
+            if size <= max_leaf:
                 continue
             mid = start + size // 2                   # the median by index
         left = used
@@ -231,9 +241,9 @@ def _triangle_arrays(positions, triangles, order, tri):
         t = order[k]
         a, b, c = triangles[t, 0], triangles[t, 1], triangles[t, 2]
         for ax in range(3):
-            tri[k, ax] = positions[a, ax]
-            tri[k, 3 + ax] = positions[b, ax] - positions[a, ax]
-            tri[k, 6 + ax] = positions[c, ax] - positions[a, ax]
+            tri[ax, k] = positions[a, ax]
+            tri[3 + ax, k] = positions[b, ax] - positions[a, ax]
+            tri[6 + ax, k] = positions[c, ax] - positions[a, ax]
 
 
 def build(positions: np.ndarray, triangles: np.ndarray) -> tuple[BVH, BuildReport]:
@@ -256,10 +266,10 @@ def build(positions: np.ndarray, triangles: np.ndarray) -> tuple[BVH, BuildRepor
         box = np.array([[np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf]])
         nodes = (box, np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64), 0)
     else:
-        nodes = _build(lo, hi, cent)
+        nodes = _build(lo, hi, cent, TRIANGLE_LEAVES)
     box, first, count, index, depth = nodes
     order = keep[index]
-    tri = np.empty((len(order), 9))
+    tri = np.empty((9, len(order)))
     _triangle_arrays(positions, triangles, order, tri)
     bvh = BVH(box, first, count, tri, order.astype(np.int64))
     seconds = time.perf_counter() - start_time
@@ -285,7 +295,7 @@ def build_boxes(lo: np.ndarray, hi: np.ndarray) -> BoxTree:
     if len(lo) == 0:
         box = np.array([[np.inf, np.inf, np.inf, -np.inf, -np.inf, -np.inf]])
         return BoxTree(box, np.zeros(1, np.int64), np.zeros(1, np.int64), np.zeros(0, np.int64))
-    box, first, count, index, _ = _build(lo, hi, (lo + hi) * 0.5)
+    box, first, count, index, _ = _build(lo, hi, (lo + hi) * 0.5, ITEM_LEAVES)
     return BoxTree(box, first, count, index.astype(np.int64))
 
 
@@ -328,8 +338,9 @@ def _sides(ix, iy, iz):
 
 @njit(cache=True)
 def new_stack():
-    """A traversal stack: ``STACK`` rows of (node, entry distance)."""
-    return np.empty((STACK, 2))
+    """A traversal's scratch: ``STACK`` pairs (node as a float, exact below 2^53; where the
+    ray enters it), then room for a leaf's hits (:func:`intersect.triangle_run`)."""
+    return np.empty(2 * STACK + TRIANGLE_LEAVES[1])
 
 
 @njit(cache=True, inline="always")
@@ -338,11 +349,11 @@ def _push_nearer(stack, top, left, t_left, t_right):
     nearer one and the new top; ``t = inf`` for a child the ray misses."""
     if t_left <= t_right:
         if t_right != np.inf:
-            stack[top, NODE], stack[top, ENTRY] = left + 1, t_right
+            stack[2 * top], stack[2 * top + 1] = left + 1, t_right
             top += 1
         return left, top
     if t_left != np.inf:
-        stack[top, NODE], stack[top, ENTRY] = left, t_left
+        stack[2 * top], stack[2 * top + 1] = left, t_left
         top += 1
     return left + 1, top
 
@@ -352,8 +363,8 @@ def _pop(stack, top, best_t):
     """The next pushed node the ray enters before ``best_t`` (-1: none) and the new top."""
     while top > 0:
         top -= 1
-        if stack[top, ENTRY] <= best_t:
-            return np.int64(stack[top, NODE]), top
+        if stack[2 * top + 1] <= best_t:
+            return np.int64(stack[2 * top]), top
     return -1, 0
 
 
@@ -365,11 +376,11 @@ def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     The nearer child is visited first and the farther one pushed with its entry distance; a
     popped node that the best hit so far lies in front of is dropped."""
     box, first, count, tri = bvh.box, bvh.first, bvh.count, bvh.tri
-    if tri.shape[0] == 0:
+    if tri.shape[1] == 0:
         return -1, np.inf, 0.0, 0.0
     ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
     near = _sides(ix, iy, iz)
-    best_k, best_t, best_u, best_v = -1, t_max, 0.0, 0.0
+    best_k, best_t = -1, t_max
     if _box_entry(box, 0, ox, oy, oz, ix, iy, iz, near, best_t) == np.inf:
         return -1, np.inf, 0.0, 0.0
     node, top = 0, 0
@@ -377,10 +388,11 @@ def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
         n = count[node]
         if n > 0:                                         # a leaf: test its triangles
             f = first[node]
-            for k in range(f, f + n):
-                t, u, v = intersect.triangle_row(ox, oy, oz, dx, dy, dz, tri, k, t_min, best_t)
-                if t < best_t:
-                    best_k, best_t, best_u, best_v = k, t, u, v
+            hits = stack[2 * STACK:]
+            intersect.triangle_run(ox, oy, oz, dx, dy, dz, tri, f, n, t_min, best_t, hits)
+            for j in range(n):
+                if hits[j] < best_t:
+                    best_k, best_t = f + j, hits[j]
         else:
             left = first[node]
             t_left = _box_entry(box, left, ox, oy, oz, ix, iy, iz, near, best_t)
@@ -391,34 +403,36 @@ def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
         node, top = _pop(stack, top, best_t)
     if best_k < 0:
         return -1, np.inf, 0.0, 0.0
-    return best_k, best_t, best_u, best_v
+    _, u, v = intersect.triangle_column(ox, oy, oz, dx, dy, dz, tri, best_k, t_min, np.inf)
+    return best_k, best_t, u, v
 
 
 @njit(cache=True)
 def occluded(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     """BVH position of any triangle hit in ``(t_min, t_max)``, or -1 (the shadow-ray query)."""
     box, first, count, tri = bvh.box, bvh.first, bvh.count, bvh.tri
-    if tri.shape[0] == 0:
+    if tri.shape[1] == 0:
         return -1
     ix, iy, iz = _reciprocal(dx), _reciprocal(dy), _reciprocal(dz)
     near = _sides(ix, iy, iz)
-    stack[0, NODE] = 0
+    stack[0] = 0
     top = 1
     while top > 0:
         top -= 1
-        node = np.int64(stack[top, NODE])
+        node = np.int64(stack[2 * top])
         if _box_entry(box, node, ox, oy, oz, ix, iy, iz, near, t_max) == np.inf:
             continue
         n = count[node]
         if n > 0:
             f = first[node]
-            for k in range(f, f + n):
-                t, _, _ = intersect.triangle_row(ox, oy, oz, dx, dy, dz, tri, k, t_min, t_max)
-                if t < t_max:
-                    return k
+            hits = stack[2 * STACK:]
+            intersect.triangle_run(ox, oy, oz, dx, dy, dz, tri, f, n, t_min, t_max, hits)
+            for j in range(n):
+                if hits[j] < t_max:
+                    return f + j
             continue
-        stack[top, NODE] = first[node] + 1
-        stack[top + 1, NODE] = first[node]
+        stack[2 * top] = first[node] + 1
+        stack[2 * top + 2] = first[node]
         top += 2
     return -1
 

@@ -106,13 +106,14 @@ def surface_at(packed, kind, index, u, v, ox, oy, oz, dx, dy, dz, t):
     A triangle's point is ``V0 + u E1 + v E2`` and its shading normal the vertex normals
     interpolated with ``(1 − u − v, u, v)`` — what the z-buffer's Phong shading computes."""
     if kind == TRIANGLE:
-        tri = packed.tri            # V0, E1, E2 of each triangle, in BVH order
-        px = tri[index, 0] + u * tri[index, 3] + v * tri[index, 6]
-        py = tri[index, 1] + u * tri[index, 4] + v * tri[index, 7]
-        pz = tri[index, 2] + u * tri[index, 5] + v * tri[index, 8]
-        e1, e2 = tri[index, 3:6], tri[index, 6:9]
-        gx, gy, gz, _ = unit3(e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                              e1[0] * e2[1] - e1[1] * e2[0])
+        tri = packed.tri            # rows V0, E1, E2 of each triangle's column, in BVH order
+        px = tri[0, index] + u * tri[3, index] + v * tri[6, index]
+        py = tri[1, index] + u * tri[4, index] + v * tri[7, index]
+        pz = tri[2, index] + u * tri[5, index] + v * tri[8, index]
+        e1x, e1y, e1z = tri[3, index], tri[4, index], tri[5, index]
+        e2x, e2y, e2z = tri[6, index], tri[7, index], tri[8, index]
+        gx, gy, gz, _ = unit3(e1y * e2z - e1z * e2y, e1z * e2x - e1x * e2z,
+                              e1x * e2y - e1y * e2x)
         f = packed.prim[index]
         i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
         w0 = 1.0 - u - v
@@ -321,7 +322,7 @@ def uv_derivatives(packed, tex, index, dp, duv):
     """``duv`` = (∂u/∂x, ∂v/∂x, ∂u/∂y, ∂v/∂y) of the texture coordinates on triangle
     ``index`` (BVH order) from the point's derivatives ``dp``: ``dP = dβ₁ E1 + dβ₂ E2``
     solved by least squares in the triangle's plane, then (u, v) interpolated."""
-    e1, e2 = packed.tri[index, 3:6], packed.tri[index, 6:9]
+    e1, e2 = packed.tri[3:6, index], packed.tri[6:9, index]
     a = e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]
     b = e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]
     c = e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2]
