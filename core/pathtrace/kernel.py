@@ -177,7 +177,7 @@ def _record(row, ox, oy, oz, dx, dy, dz, kind, tr, tg, tb, t, tri, lr, lg, lb):
     row[10], row[11], row[12], row[13], row[14] = t, tri, lr, lg, lb
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
                tri_area, tri_emit_pdf, lights, background, ox, oy, oz, dx, dy, dz, t_min, t_max,
                offset, state, strata, stratified, stack, record):
@@ -328,6 +328,33 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
     return lr, lg, lb, state, MAX_BOUNCES
 
 
+@njit(cache=True)
+def trace_run(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
+              tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
+              first_index, strata_seed, sample, start, end, out, stack, record):
+    """Rays ``start .. end − 1`` of :func:`trace_many`'s, their radiance into ``out``; returns
+    their bounces. One call per run of rays, with :func:`trace_path` inlined in its loop: a
+    numba call hands over each of its ~15 arrays (reference counts) and cost about a tenth
+    of a path when made once per ray. ``record``: the path of a run of one ray, or (0, …)."""
+    total = 0
+    for i in range(start, end):
+        state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(first_index + i)
+        state, _ = _next(state)
+        if not t_min[i] < t_max[i]:          # outside the viewport (letterbox)
+            out[i, 0], out[i, 1], out[i, 2] = background[0], background[1], background[2]
+            continue
+        strata = _strata(strata_seed, first_index + i, max(sample, 0))
+        r, g, b, state, depth = trace_path(
+            bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
+            tri_area, tri_emit_pdf, lights, background,
+            origins[i, 0], origins[i, 1], origins[i, 2],
+            directions[i, 0], directions[i, 1], directions[i, 2], t_min[i], t_max[i],
+            offset, state, strata, sample >= 0, stack, record)
+        out[i, 0], out[i, 1], out[i, 2] = r, g, b
+        total += depth
+    return total
+
+
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
                tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
@@ -342,24 +369,11 @@ def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
     chunks = (n + 255) // 256
     for j in prange(chunks):
         chunk = spread(j, chunks)
-        stack = new_stack()
-        total = 0
-        for i in range(chunk * 256, min(n, (chunk + 1) * 256)):
-            state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(first_index + i)
-            state, _ = _next(state)
-            if not t_min[i] < t_max[i]:          # outside the viewport (letterbox)
-                out[i, 0], out[i, 1], out[i, 2] = background[0], background[1], background[2]
-                continue
-            strata = _strata(strata_seed, first_index + i, max(sample, 0))
-            r, g, b, state, depth = trace_path(
-                bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
-                tri_area, tri_emit_pdf, lights, background,
-                origins[i, 0], origins[i, 1], origins[i, 2],
-                directions[i, 0], directions[i, 1], directions[i, 2], t_min[i], t_max[i],
-                offset, state, strata, sample >= 0, stack, no_record)
-            out[i, 0], out[i, 1], out[i, 2] = r, g, b
-            total += depth
-        bounces[chunk] = total
+        bounces[chunk] = trace_run(
+            bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
+            tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
+            first_index, strata_seed, sample, chunk * 256, min(n, (chunk + 1) * 256), out,
+            new_stack(), no_record)
 
 
 @njit(cache=True)
@@ -368,14 +382,12 @@ def trace_recorded(bvh, corners, tri_normal, tri_material, materials, emit_tri, 
                    offset, seed, index, strata_seed, sample, record):
     """One ray, as :func:`trace_many` traces ray ``index`` of its frame, with its path in
     ``record``: ``(r, g, b, bounces)``."""
-    state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(index)
-    state, _ = _next(state)
-    if not t_min < t_max:
-        return background[0], background[1], background[2], 0
-    stack = new_stack()
-    r, g, b, state, depth = trace_path(
-        bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
-        tri_emit_pdf, lights, background, origin[0], origin[1], origin[2], direction[0],
-        direction[1], direction[2], t_min, t_max, offset, state,
-        _strata(strata_seed, index, max(sample, 0)), sample >= 0, stack, record)
-    return r, g, b, depth
+    origins, directions = np.empty((1, 3)), np.empty((1, 3))
+    for a in range(3):
+        origins[0, a], directions[0, a] = origin[a], direction[a]
+    out = np.empty((1, 3))
+    depth = trace_run(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
+                      tri_area, tri_emit_pdf, lights, background, origins, directions,
+                      np.full(1, t_min), np.full(1, t_max), offset, seed, index, strata_seed,
+                      sample, 0, 1, out, new_stack(), record)
+    return out[0, 0], out[0, 1], out[0, 2], depth
