@@ -13,6 +13,9 @@ from pathlib import Path
 from typing import Callable
 
 
+WINDOW_NICE = 19      # the most a process can lower its own priority
+
+
 class BackgroundWarmup:
     """``python -m app warmup --progress-json`` in a subprocess, for the window.
 
@@ -39,8 +42,9 @@ class BackgroundWarmup:
         self._ok: bool | None = None
         self._on_event = on_event
         self._scenes_dir = (ROOT / "scenes").resolve()
+        # below the window's priority: while the user works, the window's frames come first
         command = [sys.executable, "-m", "app.distribution.warmup", "--progress-json",
-                   "--until-stdin-closes"]
+                   "--until-stdin-closes", "--nice", str(WINDOW_NICE)]
         if first_scene is not None:
             command += ["--first", str(first_scene)]
         if jobs:

@@ -242,6 +242,30 @@ def test_background_warmup_stops_its_workers(tmp_path, monkeypatch):
     assert _gone(worker)
 
 
+@pytest.mark.skipif(not hasattr(os, "getpriority"), reason="no process priorities here")
+def test_the_windows_warm_up_and_its_workers_run_below_the_window(tmp_path, monkeypatch):
+    """The window's warm-up renders every shipped scene after compiling; it and its workers
+    run at nice 19, so that a drag in the window gets the cores first."""
+    monkeypatch.setenv("FVD_WARMUP_TEST_DIR", str(tmp_path))
+    run = background_warmup.BackgroundWarmup(jobs=1, log_path=tmp_path / "warmup.log", extra_args=[
+        *EXTRA, "--stamp", tmp_path / "warm.json", "--only", "test: waits"])
+    try:
+        while not list(tmp_path.glob("sleeping.*")):
+            assert not run.finished, run.failed
+            time.sleep(0.05)
+        worker = int(next(tmp_path.glob("sleeping.*")).read_text())
+        assert os.getpriority(os.PRIO_PROCESS, 0) < background_warmup.WINDOW_NICE
+        assert os.getpriority(os.PRIO_PROCESS, run._process.pid) == background_warmup.WINDOW_NICE
+        assert os.getpriority(os.PRIO_PROCESS, worker) == background_warmup.WINDOW_NICE
+    finally:
+        run.stop()
+
+
+def test_a_warm_up_run_by_hand_keeps_its_priority(tmp_path):
+    assert warmup._lower_priority(0) is None
+    assert warmup._options(["--nice", "19"]).nice == 19 and warmup._options([]).nice == 0
+
+
 def test_the_warm_up_ends_when_the_window_that_started_it_is_killed(tmp_path):
     """The window holds the warm-up's standard input: a window killed with SIGKILL (no
     clean-up of its own) closes it, and the warm-up stops its workers and exits, no stamp."""
