@@ -298,6 +298,9 @@ def build(positions: np.ndarray, triangles: np.ndarray) -> tuple[BVH, BuildRepor
         nodes = _build(lo, hi, cent, TRIANGLE_LEAVES)
     box, first, count, index, depth = nodes
     column = _pad_leaves(first, count, LANES)
+    if len(count) and count.max() > TRIANGLE_LEAVES[1]:     # the traversal's hit buffer
+        raise RuntimeError(f"a BVH leaf of {count.max()} columns: at most "
+                           f"{TRIANGLE_LEAVES[1]} fit the traversal's buffer")
     order = np.where(column >= 0, keep[index][column], -1).astype(np.int64)
     tri = np.empty((9, len(order)))
     _triangle_arrays(positions, triangles, order, tri)

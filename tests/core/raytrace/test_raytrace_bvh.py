@@ -124,6 +124,46 @@ def test_bvh_finds_what_brute_force_finds():
     assert report.triangles == 300 and report.depth < bvh.STACK
 
 
+def test_leaves_are_runs_of_four_columns_whose_padding_is_never_hit():
+    """A leaf's triangles are tested four at a time: its run of columns is padded to a
+    multiple of four with zero triangles, fits the traversal's buffer, and every triangle
+    of the scene is in exactly one column."""
+    rng = np.random.default_rng(3)
+    positions = rng.uniform(-1, 1, (3 * 997, 3))
+    tree, report = bvh.build(positions, np.arange(3 * 997).reshape(-1, 3))
+    leaves = tree.count > 0
+    assert report.leaves == leaves.sum() and report.triangles == 997
+    assert np.all(tree.count[leaves] % bvh.LANES == 0)
+    assert tree.count.max() <= bvh.TRIANGLE_LEAVES[1]
+    assert np.array_equal(np.sort(tree.prim[tree.prim >= 0]), np.arange(997))
+    pads = tree.prim < 0
+    assert pads.any() and np.all(tree.tri[:, pads] == 0.0)
+    # a ray through the origin plane everywhere: no padding column is ever reported
+    prim, _, _, _ = bvh.intersect_rays(tree, rng.uniform(-1, 1, (500, 3)) + [0, 0, 3],
+                                       np.tile([0.0, 0.0, -1.0], (500, 1)))
+    assert (prim >= 0).sum() > 50 and prim.min() >= -1
+
+
+def test_a_run_of_triangles_gives_the_one_at_a_time_test_s_t_to_the_bit():
+    """``triangle_run`` (four at a time, no branch) against ``triangle_column`` (one at a
+    time) on hits, misses, edge-on rays, degenerate and non-finite triangles."""
+    rng = np.random.default_rng(11)
+    tri = rng.normal(size=(9, 40))
+    tri[3:, 5] = 0.0                                  # no area
+    tri[3:6, 6] = tri[6:9, 6]                          # E1 = E2: no area
+    tri[0, 7] = np.nan                                 # a NaN corner
+    tri[3, 8] = np.inf                                 # an infinite edge
+    tri[3:6, 9], tri[6:9, 9] = [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]   # in the plane z = V0.z
+    hits = np.empty(40)
+    for o, d in [((0.1, 0.2, 3.0), (0.0, 0.0, -1.0)), ((0.0, 0.0, 0.0), (0.3, -0.4, 0.5)),
+                 ((tri[0, 9], tri[1, 9], tri[2, 9]), (1.0, 0.0, 0.0))]:
+        for t_max in (np.inf, 0.5):
+            intersect.triangle_run(*o, *d, tri, 0, 40, 1e-9, t_max, hits)
+            one = [intersect.triangle_column(*o, *d, tri, k, 1e-9, t_max)[0] for k in range(40)]
+            assert np.array_equal(hits, one)
+            assert all(hits[k] == np.inf for k in (5, 6, 7, 8))
+
+
 def test_the_deal_of_work_items_is_a_permutation_in_order_per_thread(monkeypatch):
     """``spread`` deals chunk ``j`` of a prange: every chunk exactly once, and each thread's
     contiguous block of ``j`` the chunks of one remainder mod T, in increasing order (spread
