@@ -85,6 +85,45 @@ def in_depth_range(cam, px, py, pz):
     return cam[CAMERA_BACK] <= n <= cam[CAMERA_FRONT]
 
 
+@njit(cache=True)
+def clipped_ray(cam, x, y):
+    """``(ox, oy, oz, dx, dy, dz, t_min, t_max)``: :func:`camera_ray` at device point (x, y)
+    with its part between the front and back planes, as :func:`camera_rays` gives it (a
+    parallel ray moved to start there; ``t_min = inf`` outside the viewport). For a kernel
+    that makes its rays itself: the path tracer, one pass after another."""
+    ok, ox, oy, oz, dx, dy, dz = camera_ray(cam, x, y)
+    b = CAMERA_BASIS + 6                         # n, the VPN's unit vector
+    n0 = (ox - cam[0]) * cam[b] + (oy - cam[1]) * cam[b + 1] + (oz - cam[2]) * cam[b + 2]
+    dn = dx * cam[b] + dy * cam[b + 1] + dz * cam[b + 2]
+    front, back = cam[CAMERA_FRONT], cam[CAMERA_BACK]
+    perspective = cam[CAMERA_PERSPECTIVE] != 0.0
+    if dn == 0.0:              # parallel to the planes: all of the ray between them, or none
+        between = back <= n0 <= front
+        t_min, t_max = (0.0, np.inf) if between else (np.inf, -np.inf)
+    else:
+        t_front, t_back = (front - n0) / dn, (back - n0) / dn
+        t_min, t_max = min(t_front, t_back), max(t_front, t_back)
+        if perspective:
+            t_min = max(t_min, 0.0)
+    if not perspective:
+        start = t_min if ok and np.isfinite(t_min) else 0.0
+        ox, oy, oz = ox + start * dx, oy + start * dy, oz + start * dz
+        t_min, t_max = t_min - start, t_max - start
+    if not ok:
+        t_min = np.inf
+    return ox, oy, oz, dx, dy, dz, t_min, t_max
+
+
+@njit(cache=True, inline="always")
+def pixel_point(width, height, pixel, offset_x, offset_y):
+    """Device point (x, y) of the sample at film offset (x right, y down, in the pixel) of
+    pixel number ``pixel`` (rows from the top, then columns), as :func:`primary_rays` makes it."""
+    row = pixel // width
+    col = pixel - row * width
+    j = height - 1 - row                     # device row, counted from the bottom
+    return col + offset_x, j + 1.0 - offset_y
+
+
 @njit(cache=True, parallel=True, nogil=True)
 def _rays(cam, height, row0, row1, col0, col1, offsets, origins, directions, inside):
     rows, cols = row1 - row0, col1 - col0

@@ -41,6 +41,7 @@ import math
 import numpy as np
 
 from core.jit import njit, prange
+from core.camera.rays import clipped_ray, pixel_point
 from core.raytrace.bvh import closest, new_stack, occluded, spread
 from core.shading.illumination import SURFACE_COLUMNS
 from core.shading.models.dispatch import glossy, sample_glossy
@@ -330,25 +331,28 @@ def trace_path(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit
 
 @njit(cache=True)
 def trace_run(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
-              tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
-              first_index, strata_seed, sample, start, end, out, stack, record):
-    """Rays ``start .. end − 1`` of :func:`trace_many`'s, their radiance into ``out``; returns
-    their bounces. One call per run of rays, with :func:`trace_path` inlined in its loop: a
-    numba call hands over each of its ~15 arrays (reference counts) and cost about a tenth
-    of a path when made once per ray. ``record``: the path of a run of one ray, or (0, …)."""
+              tri_emit_pdf, lights, background, cam, width, height, offset_x, offset_y, offset,
+              seed, first_pixel, strata_seed, sample, start, end, out, stack, record):
+    """Pixels ``first_pixel + start .. first_pixel + end − 1`` of a pass, each one's camera ray
+    made here (:func:`core.camera.rays.clipped_ray` at the pass's film offset), their
+    radiance into ``out[start:end]``; returns their bounces. One call per run of pixels,
+    with :func:`trace_path` inlined in its loop: a numba call hands over each of its ~15
+    arrays (reference counts) and cost about a tenth of a path when made once per ray.
+    ``record``: the path of a run of one pixel, or (0, …)."""
     total = 0
     for i in range(start, end):
-        state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(first_index + i)
+        pixel = first_pixel + i
+        state = np.uint64(seed) * np.uint64(0x632BE59BD9B4E019) + np.uint64(pixel)
         state, _ = _next(state)
-        if not t_min[i] < t_max[i]:          # outside the viewport (letterbox)
+        x, y = pixel_point(width, height, pixel, offset_x, offset_y)
+        ox, oy, oz, dx, dy, dz, t_min, t_max = clipped_ray(cam, x, y)
+        if not t_min < t_max:                # outside the viewport (letterbox)
             out[i, 0], out[i, 1], out[i, 2] = background[0], background[1], background[2]
             continue
-        strata = _strata(strata_seed, first_index + i, max(sample, 0))
+        strata = _strata(strata_seed, pixel, max(sample, 0))
         r, g, b, state, depth = trace_path(
             bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
-            tri_area, tri_emit_pdf, lights, background,
-            origins[i, 0], origins[i, 1], origins[i, 2],
-            directions[i, 0], directions[i, 1], directions[i, 2], t_min[i], t_max[i],
+            tri_area, tri_emit_pdf, lights, background, ox, oy, oz, dx, dy, dz, t_min, t_max,
             offset, state, strata, sample >= 0, stack, record)
         out[i, 0], out[i, 1], out[i, 2] = r, g, b
         total += depth
@@ -357,37 +361,36 @@ def trace_run(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_
 
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
-               tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
-               out, bounces, first_index, strata_seed, sample):
-    """Radiance of every ray into ``out`` (N, 3); ``bounces`` (chunks,) the path lengths.
-    Ray i draws its random numbers from (seed, first_index + i): its pixel's index in the
-    frame, so one pixel can be traced again alone (the inspector). ``sample`` >= 0: the rays
-    are their pixels' ``sample``-th paths, whose first hits are stratified
-    (:func:`_strata` with ``strata_seed``); ``INDEPENDENT``: they are not."""
-    n = origins.shape[0]
+               tri_emit_pdf, lights, background, cam, width, height, offset_x, offset_y, offset,
+               seed, out, bounces, first_pixel, strata_seed, sample):
+    """Radiance of pixels ``first_pixel .. first_pixel + N − 1`` of one pass into ``out``
+    (N, 3): rays from the packed camera ``cam`` (:func:`core.camera.rays.pack_camera`) of a
+    ``width`` x ``height`` picture at film offset (``offset_x``, ``offset_y``); ``bounces``
+    (chunks,) the path lengths. A pixel draws its random numbers from (seed, its index in the
+    frame), so it can be traced again alone (the inspector). ``sample`` >= 0: the paths are
+    their pixels' ``sample``-th, whose first hits are stratified (:func:`_strata` with
+    ``strata_seed``); ``INDEPENDENT``: they are not."""
+    n = out.shape[0]
     no_record = np.empty((0, RECORD_WIDTH))
     chunks = (n + 255) // 256
     for j in prange(chunks):
         chunk = spread(j, chunks)
         bounces[chunk] = trace_run(
             bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
-            tri_emit_pdf, lights, background, origins, directions, t_min, t_max, offset, seed,
-            first_index, strata_seed, sample, chunk * 256, min(n, (chunk + 1) * 256), out,
-            new_stack(), no_record)
+            tri_emit_pdf, lights, background, cam, width, height, offset_x, offset_y, offset,
+            seed, first_pixel, strata_seed, sample, chunk * 256, min(n, (chunk + 1) * 256),
+            out, new_stack(), no_record)
 
 
 @njit(cache=True)
 def trace_recorded(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
-                   tri_area, tri_emit_pdf, lights, background, origin, direction, t_min, t_max,
-                   offset, seed, index, strata_seed, sample, record):
-    """One ray, as :func:`trace_many` traces ray ``index`` of its frame, with its path in
+                   tri_area, tri_emit_pdf, lights, background, cam, width, height, offset_x,
+                   offset_y, offset, seed, pixel, strata_seed, sample, record):
+    """Pixel ``pixel`` of a pass, as :func:`trace_many` traces it, with its path in
     ``record``: ``(r, g, b, bounces)``."""
-    origins, directions = np.empty((1, 3)), np.empty((1, 3))
-    for a in range(3):
-        origins[0, a], directions[0, a] = origin[a], direction[a]
     out = np.empty((1, 3))
     depth = trace_run(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
-                      tri_area, tri_emit_pdf, lights, background, origins, directions,
-                      np.full(1, t_min), np.full(1, t_max), offset, seed, index, strata_seed,
-                      sample, 0, 1, out, new_stack(), record)
+                      tri_area, tri_emit_pdf, lights, background, cam, width, height,
+                      offset_x, offset_y, offset, seed, pixel, strata_seed, sample, 0, 1, out,
+                      new_stack(), record)
     return out[0, 0], out[0, 1], out[0, 2], depth

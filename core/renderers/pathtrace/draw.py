@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.camera.film import progressive_order, sample_offsets
-from core.camera.rays import camera_rays
+from core.camera.rays import pack_camera
 from core.pathtrace import kernel
 from core.radiosity.mesh import check_scene, has_light, reflectance
 from core.radiosity.tone import tone_map
@@ -112,21 +112,22 @@ def packed_for(scene, context) -> Packed:
     return cache["pathtrace packing"]
 
 
-def trace(packed: Packed, origins, directions, t_min, t_max, seed: int, strata_seed: int = 0,
-          sample: int = kernel.INDEPENDENT, first_index: int = 0) -> tuple[np.ndarray, int]:
-    """Radiance ``(N, 3)`` of the rays and the bounces their paths made; ``sample``: which of
-    their pixels' paths they are, for the stratified first bounce (``kernel.INDEPENDENT``:
-    none); ``first_index``: the frame's index of the first ray (its pixel's random numbers)."""
-    n = len(origins)
+def trace(packed: Packed, cam, width: int, height: int, offset, seed: int,
+          strata_seed: int = 0, sample: int = kernel.INDEPENDENT, first_pixel: int = 0,
+          count: int | None = None) -> tuple[np.ndarray, int]:
+    """Radiance ``(count, 3)`` of pixels ``first_pixel ..`` of one pass (film ``offset``;
+    ``cam``: :func:`core.camera.rays.pack_camera` of the picture), and the bounces their
+    paths made; ``sample``: which of their pixels' paths they are, for the stratified first
+    bounce (``kernel.INDEPENDENT``: none). The kernel makes each pixel's ray itself."""
+    n = width * height - first_pixel if count is None else count
     out = np.empty((n, 3))
     bounces = np.zeros((n + 255) // 256, np.int64)
     kernel.trace_many(packed.bvh, packed.corners, packed.normal, packed.material,
                       packed.materials, packed.emit_tri, packed.emit_cdf, packed.area,
-                      packed.emit_pdf, packed.lights, packed.background,
-                      np.ascontiguousarray(origins),
-                      np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
-                      np.ascontiguousarray(t_max), kernel.EPS * packed.scale, int(seed), out,
-                      bounces, int(first_index), int(strata_seed), int(sample))
+                      packed.emit_pdf, packed.lights, packed.background, cam, int(width),
+                      int(height), float(offset[0]), float(offset[1]),
+                      kernel.EPS * packed.scale, int(seed), out, bounces, int(first_pixel),
+                      int(strata_seed), int(sample))
     return out, int(bounces.sum())
 
 
@@ -157,14 +158,14 @@ def render_passes(scene, view, settings, context, first: int = 0, count: int | N
     total = np.zeros((height * width, 3))
     bounces, began = 0, time.perf_counter()
     n = width * height
+    cam = pack_camera(view, settings.projection, width, height, settings.keep_aspect)
     for k in range(first, first + count):
-        rays = camera_rays(view, settings.projection, width, height, [offsets[k]],
-                           settings.keep_aspect)
         for start in range(0, n, BAND):       # a band at a time: progress, and Ctrl+C between
             end = min(n, start + BAND)
-            radiance, b = trace(packed, *(r[start:end] for r in rays),
+            radiance, b = trace(packed, cam, width, height, offsets[k],
                                 seed=settings.seed * 1_000_003 + k, strata_seed=settings.seed,
-                                sample=sample_index(settings, k), first_index=start)
+                                sample=sample_index(settings, k), first_pixel=start,
+                                count=end - start)
             total[start:end] += radiance
             bounces += b
             report("path tracing", (k - first) * n + end, count * n, "path")

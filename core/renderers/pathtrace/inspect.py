@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.camera.rays import camera_rays
+from core.camera.rays import pack_camera
 from core.pathtrace import kernel
 from core.renderers.pathtrace.draw import packed_for, pass_offsets, sample_index
 from core.radiosity.mesh import has_light, reflectance
@@ -32,17 +32,15 @@ def inspect_pixel(scene, view, settings, x, y, context) -> dict:
     offsets = pass_offsets(settings.samples, settings.seed)
     total = np.zeros(3)
     path = []
+    cam = pack_camera(view, settings.projection, width, height, settings.keep_aspect)
     for k, offset in enumerate(offsets):
-        o, d, t0, t1 = camera_rays(view, settings.projection, width, height, [offset],
-                                   settings.keep_aspect, rows=(y, y + 1), cols=(x, x + 1))
         rays = np.zeros((16, kernel.RECORD_WIDTH))
         r, g, b, depth = kernel.trace_recorded(
             packed.bvh, packed.corners, packed.normal, packed.material, packed.materials,
             packed.emit_tri, packed.emit_cdf, packed.area, packed.emit_pdf, packed.lights,
-            packed.background, np.ascontiguousarray(o[0]), np.ascontiguousarray(d[0]),
-            float(t0[0]), float(t1[0]), kernel.EPS * packed.scale,
-            settings.seed * 1_000_003 + k, y * width + x, settings.seed,
-            sample_index(settings, k), rays)
+            packed.background, cam, int(width), int(height), float(offset[0]),
+            float(offset[1]), kernel.EPS * packed.scale, settings.seed * 1_000_003 + k,
+            y * width + x, settings.seed, sample_index(settings, k), rays)
         total += (r, g, b)
         if k == 0:
             recorded = int(np.count_nonzero(np.abs(rays[:, 3:6]).sum(axis=1)))   # direction set

@@ -41,7 +41,7 @@ def test_each_band_is_reported_and_a_watcher_stops_between_two(monkeypatch):
 
     traced = []
     monkeypatch.setattr(renderer, "trace", lambda *a, f=renderer.trace, **k:
-                        traced.append(k["first_index"]) or f(*a, **k))
+                        traced.append(k["first_pixel"]) or f(*a, **k))
     with pytest.raises(Stop), work.watching(stop_after_the_second):
         passes(scene)
     assert traced == [0, 500]

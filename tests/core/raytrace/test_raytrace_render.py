@@ -313,6 +313,29 @@ def test_camera_rays_are_the_primary_rays_between_the_front_and_back_planes():
             np.testing.assert_allclose(n_end, view.back, atol=1e-9)
 
 
+def test_a_kernel_s_own_camera_ray_is_camera_rays_ray():
+    """``clipped_ray`` (one ray, in a kernel: the path tracer's) against ``camera_rays`` (the
+    numpy twin): the same origin and direction to the bit, the same t interval within 1e-12
+    (numpy's matrix product may round the plane distances differently), and a sample outside
+    the viewport at t_min = inf in both; perspective and parallel, with a letterbox."""
+    from core.camera.rays import camera_rays, clipped_ray, pack_camera, pixel_point
+    from core.scene.formats import load_scene
+    scene = load_scene(str(SCENES / "whitted.toml"))
+    view = scene.views[0]
+    width, height, offset = 40, 30, (0.25, 0.75)
+    for projection in ("perspective", "parallel"):
+        o, d, t_min, t_max = camera_rays(view, projection, width, height, [offset], True)
+        cam = pack_camera(view, projection, width, height, True)
+        ours = np.array([clipped_ray(cam, *pixel_point(width, height, p, *offset))
+                         for p in range(width * height)])
+        assert np.array_equal(ours[:, 0:3], o) and np.array_equal(ours[:, 3:6], d)
+        outside = np.isinf(t_min)
+        assert outside.any() and not outside.all()
+        assert np.array_equal(np.isinf(ours[:, 6]), outside)
+        np.testing.assert_allclose(ours[~outside, 6], t_min[~outside], rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(ours[~outside, 7], t_max[~outside], rtol=1e-12)
+
+
 def test_registered_renderer_through_the_front_door():
     from core import render
     from core.scene.formats import load_scene
