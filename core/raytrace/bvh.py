@@ -37,8 +37,8 @@ The stack (:func:`new_stack`) keeps each pushed node's entry distance beside it,
 popped after a nearer hit is dropped without testing its box again.
 A leaf's triangles are tested side by side (:func:`intersect.triangle_run`), their ``t``
 into the stack's tail, then read in order: the hit is the one the one-at-a-time loop found,
-to the bit. ``occluded`` stops at the first hit (shadow rays). ``closest`` is inlined into its callers:
-a numba call that takes the scene's tuple of arrays costs per array in it, per call.
+to the bit. ``occluded`` stops at the first hit (shadow rays). ``closest`` is inlined into
+its callers: a numba call that takes the scene's tuple of arrays costs per array, per call.
 """
 
 from __future__ import annotations
