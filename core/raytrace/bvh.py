@@ -436,7 +436,8 @@ def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
         node, top = _pop(stack, top, best_t)
     if best_k < 0:
         return -1, np.inf, 0.0, 0.0
-    _, u, v = intersect.triangle_column(ox, oy, oz, dx, dy, dz, tri, best_k, t_min, np.inf)
+    _, u, v = intersect.triangle(ox, oy, oz, dx, dy, dz, tri[0:3, best_k], tri[3:6, best_k],
+                                 tri[6:9, best_k], t_min, np.inf)
     return best_k, best_t, u, v
 
 

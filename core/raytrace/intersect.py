@@ -60,38 +60,11 @@ def triangle(ox, oy, oz, dx, dy, dz, v0, e1, e2, t_min, t_max):
 
 
 @njit(cache=True, inline="always")
-def triangle_column(ox, oy, oz, dx, dy, dz, tri, k, t_min, t_max):
-    """:func:`triangle` on column ``k`` of ``tri`` ``(9, T)``: rows V0, E1, E2 by component."""
-    e2x, e2y, e2z = tri[6, k], tri[7, k], tri[8, k]
-    px = dy * e2z - dz * e2y
-    py = dz * e2x - dx * e2z
-    pz = dx * e2y - dy * e2x
-    e1x, e1y, e1z = tri[3, k], tri[4, k], tri[5, k]
-    det = e1x * px + e1y * py + e1z * pz
-    if det == 0.0 or not math.isfinite(det):
-        return NO_HIT, 0.0, 0.0
-    inv_det = 1.0 / det
-    sx, sy, sz = ox - tri[0, k], oy - tri[1, k], oz - tri[2, k]
-    u = (sx * px + sy * py + sz * pz) * inv_det
-    if u < 0.0 or u > 1.0:
-        return NO_HIT, 0.0, 0.0
-    qx = sy * e1z - sz * e1y
-    qy = sz * e1x - sx * e1z
-    qz = sx * e1y - sy * e1x
-    v = (dx * qx + dy * qy + dz * qz) * inv_det
-    if v < 0.0 or u + v > 1.0:
-        return NO_HIT, 0.0, 0.0
-    t = (e2x * qx + e2y * qy + e2z * qz) * inv_det
-    if not (t_min < t < t_max):
-        return NO_HIT, 0.0, 0.0
-    return t, u, v
-
-
-@njit(cache=True, inline="always")
 def triangle_run(ox, oy, oz, dx, dy, dz, tri, first, n, t_min, t_max, hits):
-    """:func:`triangle_column` on columns ``first .. first + n − 1`` of ``tri``, each one's
-    ``t`` (or ``NO_HIT``) into ``hits[:n]``. The same arithmetic in the same order, so the
-    same ``t`` to the bit, but written without a branch: the columns are consecutive in
+    """:func:`triangle` on columns ``first .. first + n − 1`` of ``tri`` ``(9, T)`` (rows V0,
+    E1, E2 by component), each one's ``t`` (or ``NO_HIT``) into ``hits[:n]``. The same
+    arithmetic in the same order, so the same ``t`` to the bit (tests/core/raytrace holds
+    them together), but written without a branch: the columns are consecutive in
     memory, so LLVM tests four triangles at once in the AVX registers (one at a time, a
     BVH leaf's tests cost about twice as long)."""
     start = np.uint64(first)            # unsigned: no wrap-around test for a negative index

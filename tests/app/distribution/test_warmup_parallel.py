@@ -261,11 +261,6 @@ def test_the_windows_warm_up_and_its_workers_run_below_the_window(tmp_path, monk
         run.stop()
 
 
-def test_a_warm_up_run_by_hand_keeps_its_priority(tmp_path):
-    assert warmup._lower_priority(0) is None
-    assert warmup._options(["--nice", "19"]).nice == 19 and warmup._options([]).nice == 0
-
-
 def test_the_warm_up_ends_when_the_window_that_started_it_is_killed(tmp_path):
     """The window holds the warm-up's standard input: a window killed with SIGKILL (no
     clean-up of its own) closes it, and the warm-up stops its workers and exits, no stamp."""

@@ -145,7 +145,7 @@ def test_leaves_are_runs_of_four_columns_whose_padding_is_never_hit():
 
 
 def test_a_run_of_triangles_gives_the_one_at_a_time_test_s_t_to_the_bit():
-    """``triangle_run`` (four at a time, no branch) against ``triangle_column`` (one at a
+    """``triangle_run`` (four at a time, no branch) against ``triangle`` (one at a
     time) on hits, misses, edge-on rays, degenerate and non-finite triangles."""
     rng = np.random.default_rng(11)
     tri = rng.normal(size=(9, 40))
@@ -159,7 +159,8 @@ def test_a_run_of_triangles_gives_the_one_at_a_time_test_s_t_to_the_bit():
                  ((tri[0, 9], tri[1, 9], tri[2, 9]), (1.0, 0.0, 0.0))]:
         for t_max in (np.inf, 0.5):
             intersect.triangle_run(*o, *d, tri, 0, 40, 1e-9, t_max, hits)
-            one = [intersect.triangle_column(*o, *d, tri, k, 1e-9, t_max)[0] for k in range(40)]
+            one = [intersect.triangle(*o, *d, tri[0:3, k], tri[3:6, k], tri[6:9, k], 1e-9,
+                                      t_max)[0] for k in range(40)]
             assert np.array_equal(hits, one)
             assert all(hits[k] == np.inf for k in (5, 6, 7, 8))
 
