@@ -456,3 +456,65 @@ SERIALISED_CACHE_SAVES = serialised_cache_saves()
 TOLERANT_CACHE_FILES = tolerant_cache_files()    # after it: wraps its save
 UNTIMED_LLVM_CALLS = untimed_llvm_calls()
 SHARED_SCOPE_COPIES = shared_scope_copies()
+
+
+# --------------------------------------------------------------------------------------------
+# Calls by address
+
+
+def _types_key(argtypes) -> int:
+    """A number for a kernel's argument types, the same in every process."""
+    import zlib
+    return zlib.crc32(repr(tuple(argtypes)).encode())
+
+
+@numba.extending.intrinsic
+def call_compiled(typingctx, at, callee, *args):
+    """``callee(*args)``, through its machine code at ``at`` (:func:`compiled_at`).
+
+    A plain call links the callee's code into the caller, where LLVM optimises all of it
+    again: the parallel loop over ``whitted.trace`` took 10 s of compile for that, beside the
+    20 s of ``trace`` itself. Called by its address, the callee is compiled once, on its own,
+    and runs the same code. numba types the callee here as for a plain call (compiling it if
+    it must). ``at`` carries its argument types' key: code compiled for other types is never
+    called (the call raises ValueError instead, and is skipped in a parallel loop, where numba
+    drops exceptions)."""
+    from numba.core import cgutils
+    from numba.core.typing import signature
+    argtypes = tuple(args)
+    typed = typingctx.resolve_function_type(callee, argtypes, {})
+    if typed is None:
+        raise numba.core.errors.TypingError(f"{callee} cannot take {argtypes}")
+    key = _types_key(typed.args)
+
+    def codegen(context, builder, sig, values):
+        address, given_key = cgutils.unpack_tuple(builder, values[0], 2)
+        with builder.if_then(builder.icmp_signed("!=", given_key, given_key.type(key)),
+                             likely=False):
+            context.call_conv.return_user_exc(
+                builder, ValueError, (f"machine code for other argument types than "
+                                      f"{callee.dispatcher.py_func.__qualname__}'s here",))
+        given = cgutils.unpack_tuple(builder, values[2], len(argtypes))
+        cast = [context.cast(builder, v, a, b) for v, a, b in zip(given, argtypes, typed.args)]
+        fnty = context.call_conv.get_function_type(typed.return_type, typed.args)
+        function = builder.inttoptr(address, fnty.as_pointer())
+        status, result = context.call_conv.call_function(builder, function, typed.return_type,
+                                                         typed.args, cast)
+        with cgutils.if_unlikely(builder, status.is_error):
+            context.call_conv.return_status_propagate(builder, status)
+        return result
+    return signature(typed.return_type, at, callee,
+                     types.StarArgTuple.from_types(argtypes)), codegen
+
+
+def compiled_at(dispatcher, arguments) -> tuple[int, int]:
+    """``(address, key)`` of ``dispatcher``'s machine code for the types of ``arguments``
+    (values, typed as a call from Python types them; compiled or loaded first), for
+    :func:`call_compiled`."""
+    argtypes = tuple(types.unliteral(dispatcher.typeof_pyval(a)) for a in arguments)
+    result = dispatcher.overloads.get(argtypes)
+    if result is None:
+        dispatcher.compile(argtypes)
+        result = dispatcher.overloads[argtypes]
+    address = result.library.get_pointer_to_function(result.fndesc.llvm_func_name)
+    return address, _types_key(result.signature.args)

@@ -40,7 +40,7 @@ import math
 
 import numpy as np
 
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.camera.rays import clipped_ray, pixel_point
 from core.raytrace.bvh import closest, new_stack, occluded, spread
 from core.shading.illumination import SURFACE_COLUMNS
@@ -362,24 +362,36 @@ def trace_run(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
                tri_emit_pdf, lights, background, cam, width, height, offset_x, offset_y, offset,
-               seed, out, bounces, first_pixel, strata_seed, sample):
+               seed, out, bounces, first_pixel, strata_seed, sample, at):
     """Radiance of pixels ``first_pixel .. first_pixel + N − 1`` of one pass into ``out``
     (N, 3): rays from the packed camera ``cam`` (:func:`core.camera.rays.pack_camera`) of a
     ``width`` x ``height`` picture at film offset (``offset_x``, ``offset_y``); ``bounces``
     (chunks,) the path lengths. A pixel draws its random numbers from (seed, its index in the
     frame), so it can be traced again alone (the inspector). ``sample`` >= 0: the paths are
     their pixels' ``sample``-th, whose first hits are stratified (:func:`_strata` with
-    ``strata_seed``); ``INDEPENDENT``: they are not."""
+    ``strata_seed``); ``INDEPENDENT``: they are not. ``at``: :func:`trace_run`'s machine
+    code for these arguments (:func:`trace_run_at`), called by its address."""
     n = out.shape[0]
     no_record = np.empty((0, RECORD_WIDTH))
     chunks = (n + 255) // 256
     for j in prange(chunks):
         chunk = spread(j, chunks)
-        bounces[chunk] = trace_run(
-            bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
-            tri_emit_pdf, lights, background, cam, width, height, offset_x, offset_y, offset,
-            seed, first_pixel, strata_seed, sample, chunk * 256, min(n, (chunk + 1) * 256),
-            out, new_stack(), no_record)
+        bounces[chunk] = call_compiled(
+            at, trace_run, bvh, corners, tri_normal, tri_material, materials, emit_tri,
+            emit_cdf, tri_area, tri_emit_pdf, lights, background, cam, width, height,
+            offset_x, offset_y, offset, seed, first_pixel, strata_seed, sample, chunk * 256,
+            min(n, (chunk + 1) * 256), out, new_stack(), no_record)
+
+
+def trace_run_at(bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf,
+                 tri_area, tri_emit_pdf, lights, background, cam, width, height, offset_x,
+                 offset_y, offset, seed, out, bounces, first_pixel, strata_seed,
+                 sample) -> tuple[int, int]:
+    """:func:`trace_run`'s machine code for the arguments :func:`trace_many` gives it."""
+    return compiled_at(trace_run, (
+        bvh, corners, tri_normal, tri_material, materials, emit_tri, emit_cdf, tri_area,
+        tri_emit_pdf, lights, background, cam, width, height, offset_x, offset_y, offset, seed,
+        first_pixel, strata_seed, sample, 0, 0, out, new_stack(), np.empty((0, RECORD_WIDTH))))
 
 
 @njit(cache=True)

@@ -51,7 +51,7 @@ import math
 
 import numpy as np
 
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.raytrace import bvh, intersect, optics
 from core.texture.surface import UV, textured_at
 from core.shading.illumination import (EYE_DIRECTION, EYE_POINT, LIGHT_INTENSITY, OD, POINT_LIGHT,
@@ -564,9 +564,11 @@ def scratch(packed, textured):
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, ambient, halfway,
                background, shadows, max_depth, epsilon, fresnel, medium, offset, raw, counts,
-               tex, textured, filter_, bump, differentials, attenuation):
+               tex, textured, filter_, bump, differentials, attenuation, at):
     """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``;
-    ``differentials`` ``(N, 12)`` (used when ``textured``)."""
+    ``differentials`` ``(N, 12)`` (used when ``textured``). ``at``: :func:`trace`'s
+    machine code for these arguments (:func:`trace_at`): called by its address, its
+    code is not optimised a second time inside this loop (10 s of a cold start)."""
     n = origins.shape[0]
     chunks = (n + CHUNK - 1) // CHUNK
     for j in prange(chunks):
@@ -578,11 +580,27 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
         eye = np.empty(4)
         stack = bvh.new_stack()
         work = scratch(packed, textured)
-        trace(packed, origins, directions, t_min, t_max, chunk * CHUNK,
-              min(n, (chunk + 1) * CHUNK), primary_eye, lights, ambient, halfway, background,
-              shadows, max_depth, epsilon, fresnel, medium, offset, rays, scaled, surface_row,
-              eye, stack, counts[chunk], tex, textured, filter_, bump, differentials, work,
-              no_tree, attenuation, raw)
+        call_compiled(at, trace, packed, origins, directions, t_min, t_max, chunk * CHUNK,
+                      min(n, (chunk + 1) * CHUNK), primary_eye, lights, ambient, halfway,
+                      background, shadows, max_depth, epsilon, fresnel, medium, offset, rays,
+                      scaled, surface_row, eye, stack, counts[chunk], tex, textured, filter_,
+                      bump, differentials, work, no_tree, attenuation, raw)
+
+
+def trace_at(packed, origins, directions, t_min, t_max, primary_eye, lights, ambient,
+                  halfway, background, shadows, max_depth, epsilon, fresnel, medium, offset,
+                  raw, counts, tex, textured, filter_, bump, differentials,
+                  attenuation) -> tuple[int, int]:
+    """:func:`trace`'s machine code for the arguments :func:`trace_many` gives it (its
+    scratch arrays are made as it makes them, so that numba types them alike)."""
+    scratch_arrays = (np.empty((1, STACK_COLUMNS)), np.empty(lights.shape),
+                      np.empty((1, packed.surfaces.shape[1])), np.empty(4), bvh.new_stack(),
+                      np.empty(counts.shape[1:], counts.dtype))
+    given = (packed, origins, directions, t_min, t_max, 0, 0, primary_eye, lights, ambient,
+             halfway, background, shadows, max_depth, epsilon, fresnel, medium, offset,
+             *scratch_arrays, tex, textured, filter_, bump, differentials,
+             scratch(packed, textured), np.empty((0, TREE_COLUMNS)), attenuation, raw)
+    return compiled_at(trace, given)
 
 
 @njit(cache=True, parallel=True, nogil=True)

@@ -53,7 +53,7 @@ import weakref
 import numpy as np
 from numba import get_num_threads
 
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.shading.illumination import LIGHT_COLUMNS, OD, pack_surfaces
 from core.shading.models import with_model
 from core.shading.models.dispatch import light_point_calling
@@ -265,7 +265,7 @@ def _sample_gradients(v, out):
 @njit(cache=True, parallel=True, nogil=True)
 def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer, lit,
           material, lights, ambient, eye, halfway, flat, empty, highs, coarse_empty, coarse_highs,
-          constants, cores, color, transmittance, largest):
+          constants, cores, color, transmittance, largest, at):
     """March every ray (see the module); ``grads``: the samples' gradients (or one row, not
     kept). Fills ``color`` (N, 3) and ``transmittance`` (N,)
     (emission–absorption) or ``largest`` (N,) (MIP; −inf where the ray misses the grid).
@@ -275,11 +275,13 @@ def march(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer
     one step's ``1 − α`` (:func:`classified_constants`); ``cores``:
     numba's threads (read here: the kernel reading it would not be cached). The rays are
     dealt round-robin: the loop's static split would give each core one contiguous run (a
-    frame's top rows to one, its middle to the other)."""
+    frame's top rows to one, its middle to the other). ``at``: :func:`march_rays`'s machine
+    code for these arguments, called by its address (:func:`core.jit.call_compiled`)."""
     for c in prange(cores):
-        march_rays(v, grads, m_inv, origins, directions, t_lo, t_hi, step, mode, transfer,
-                   lit, material.copy(), lights, ambient, eye, halfway, flat, empty, highs,
-                   coarse_empty, coarse_highs, constants, c, cores, color, transmittance, largest)
+        call_compiled(at, march_rays, v, grads, m_inv, origins, directions, t_lo, t_hi, step,
+                      mode, transfer, lit, material.copy(), lights, ambient, eye, halfway, flat,
+                      empty, highs, coarse_empty, coarse_highs, constants, np.int64(c), cores,
+                      color, transmittance, largest)
 
 
 # numpy's error model, as the parallel loop that calls it has: one compiled form (the loop's
@@ -500,14 +502,19 @@ def march_volume(volume, origins, directions, t_lo, t_hi, step, lights, ambient,
         empty, highs = np.zeros_like(empty), np.full_like(highs, np.inf)
     if not (skip_empty and skip_constant):
         constants[..., 0] = np.nan
-    march(np.ascontiguousarray(volume.values), sample_gradients(volume) if lit else _NO_GRADIENTS, m_inv, np.ascontiguousarray(origins, dtype=np.float64),
-          np.ascontiguousarray(directions, dtype=np.float64),
-          np.ascontiguousarray(t_lo, dtype=np.float64), np.ascontiguousarray(t_hi, dtype=np.float64),
-          float(step), MIP if volume.mode == "mip" else EMISSION_ABSORPTION,
-          np.ascontiguousarray(transfer, dtype=np.float64), lit,
-          material, np.ascontiguousarray(lights, dtype=np.float64).reshape(-1, LIGHT_COLUMNS),
-          np.asarray(ambient, dtype=np.float64), np.asarray(eye, dtype=np.float64),
-          bool(halfway), FLAT_GRADIENT * max(hi - lo, 1e-30),
-          empty, highs, *coarse_blocks(empty, highs), constants, get_num_threads(), color,
-          transmittance, largest)
+    args = (np.ascontiguousarray(volume.values),
+            sample_gradients(volume) if lit else _NO_GRADIENTS, m_inv,
+            np.ascontiguousarray(origins, dtype=np.float64),
+            np.ascontiguousarray(directions, dtype=np.float64),
+            np.ascontiguousarray(t_lo, dtype=np.float64),
+            np.ascontiguousarray(t_hi, dtype=np.float64),
+            float(step), MIP if volume.mode == "mip" else EMISSION_ABSORPTION,
+            np.ascontiguousarray(transfer, dtype=np.float64), lit,
+            material, np.ascontiguousarray(lights, dtype=np.float64).reshape(-1, LIGHT_COLUMNS),
+            np.asarray(ambient, dtype=np.float64), np.asarray(eye, dtype=np.float64),
+            bool(halfway), FLAT_GRADIENT * max(hi - lo, 1e-30),
+            empty, highs, *coarse_blocks(empty, highs), constants, get_num_threads())
+    rays_at = compiled_at(march_rays, (*args[:11], material.copy(), *args[12:-1], 0, 0,
+                                       color, transmittance, largest))   # as march calls it
+    march(*args, color, transmittance, largest, rays_at)
     return color, transmittance, largest

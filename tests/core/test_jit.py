@@ -335,3 +335,61 @@ def test_a_cache_folder_that_refuses_writes_is_said_once_and_the_kernels_still_r
         assert done.returncode == 0 and done.stdout.strip() == "6.0 [0.0, 2.0, 4.0]", done.stderr
         said = [line for line in done.stderr.splitlines() if "not kept on disk" in line]
         assert len(said) == 1, done.stderr
+
+
+ADDRESSED = '''
+import numpy as np
+from core.jit import call_compiled, njit, prange
+
+
+@njit(cache=True)
+def dot(a, b, lo, hi):
+    s = 0.0
+    for i in range(lo, hi):
+        s += a[i] * b[i]
+    return s
+
+
+@njit(cache=True)
+def one(at, a, b):
+    return call_compiled(at, dot, a, b, 2, 5)
+
+
+@njit(cache=True, parallel=True)
+def rows(at, a, b, out):
+    for j in prange(out.shape[0]):
+        out[j] = call_compiled(at, dot, a, b, 10 * j, 10 * j + 10)
+'''
+
+
+def test_a_kernel_called_by_its_address_gives_the_plain_calls_values_cached_or_not(tmp_path):
+    (tmp_path / "addressed_for_jit_test.py").write_text(ADDRESSED)
+    code = """
+        import numpy as np, addressed_for_jit_test as k
+        from core.jit import compiled_at
+        a, b = np.arange(40.0), np.arange(40.0) ** 2
+        at = compiled_at(k.dot, (a, b, 0, 0))
+        out = np.empty(4)
+        k.rows(at, a, b, out)
+        print(k.one(at, a, b), k.dot(a, b, 2, 5), out.tolist() == [k.dot(a, b, 10 * j, 10 * j + 10)
+                                                                   for j in range(4)])
+        print(len(k.dot.signatures), len(k.one.signatures), len(k.rows.signatures))
+    """
+    # 2³ + 3³ + 4³ = 99, by hand; the second process loads all three kernels from the cache
+    assert _run(tmp_path, code) == "99.0 99.0 True\n1 1 1"
+    assert _run(tmp_path, code) == "99.0 99.0 True\n1 1 1"
+
+
+def test_machine_code_for_other_argument_types_is_refused_not_called(tmp_path):
+    (tmp_path / "addressed_for_jit_test.py").write_text(ADDRESSED)
+    said = _run(tmp_path, """
+        import numpy as np, addressed_for_jit_test as k
+        from core.jit import compiled_at
+        a = np.arange(40.0)
+        wrong = compiled_at(k.dot, (a.astype(np.float32), a.astype(np.float32), 0, 0))
+        try:
+            k.one(wrong, a, a)
+        except ValueError as error:
+            print(error)
+    """)
+    assert said == "machine code for other argument types than dot's here"

@@ -122,12 +122,12 @@ def trace(packed: Packed, cam, width: int, height: int, offset, seed: int,
     n = width * height - first_pixel if count is None else count
     out = np.empty((n, 3))
     bounces = np.zeros((n + 255) // 256, np.int64)
-    kernel.trace_many(packed.bvh, packed.corners, packed.normal, packed.material,
-                      packed.materials, packed.emit_tri, packed.emit_cdf, packed.area,
-                      packed.emit_pdf, packed.lights, packed.background, cam, int(width),
-                      int(height), float(offset[0]), float(offset[1]),
-                      kernel.EPS * packed.scale, int(seed), out, bounces, int(first_pixel),
-                      int(strata_seed), int(sample))
+    args = (packed.bvh, packed.corners, packed.normal, packed.material, packed.materials,
+            packed.emit_tri, packed.emit_cdf, packed.area, packed.emit_pdf, packed.lights,
+            packed.background, cam, int(width), int(height), float(offset[0]),
+            float(offset[1]), kernel.EPS * packed.scale, int(seed), out, bounces,
+            int(first_pixel), int(strata_seed), int(sample))
+    kernel.trace_many(*args, kernel.trace_run_at(*args))
     return out, int(bounces.sum())
 
 

@@ -145,15 +145,15 @@ def trace_rays(setup: Setup, origins, directions, t_min, t_max,
     counts = np.zeros(((n + whitted.CHUNK - 1) // whitted.CHUNK, len(whitted.COUNTERS)),
                       dtype=np.int64)
     offset = 1e-9 * setup.packing.scale
-    whitted.trace_many(setup.packing.packed, np.ascontiguousarray(origins),
-                       np.ascontiguousarray(directions), np.ascontiguousarray(t_min),
-                       np.ascontiguousarray(t_max), setup.eye, setup.lights, setup.ambient,
-                       setup.halfway, setup.background, whitted.SHADOW_MODES.index(o.shadows),
-                       o.max_depth, float(o.adaptive_epsilon), o.fresnel_code, o.medium,
-                       offset, raw, counts, setup.packing.texturing, textured,
-                       FILTERS[o.texture_filter], bool(o.bump),
-                       np.ascontiguousarray(differentials, dtype=np.float64),
-                       np.array(o.secondary_attenuation, dtype=np.float64))
+    args = (setup.packing.packed, np.ascontiguousarray(origins), np.ascontiguousarray(directions),
+            np.ascontiguousarray(t_min), np.ascontiguousarray(t_max), setup.eye, setup.lights,
+            setup.ambient, setup.halfway, setup.background,
+            whitted.SHADOW_MODES.index(o.shadows), o.max_depth, float(o.adaptive_epsilon),
+            o.fresnel_code, o.medium, offset, raw, counts, setup.packing.texturing, textured,
+            FILTERS[o.texture_filter], bool(o.bump),
+            np.ascontiguousarray(differentials, dtype=np.float64),
+            np.array(o.secondary_attenuation, dtype=np.float64))
+    whitted.trace_many(*args, whitted.trace_at(*args))
     setup.counts += counts.sum(axis=0)
     return raw
 
