@@ -232,28 +232,13 @@ def has_maps(tex, kind, s):
     return False
 
 
-@njit(cache=True, inline="always")
-def local_colour(packed, kind, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights, ambient,
-                 eye, halfway, shadows, background, offset, scaled, surface_row, stack, counts):
-    """``I_local`` at P with each light's ``I_p`` scaled by its shadow term (Phong's model)."""
-    checker_colour(packed, kind, index, s, px, py, pz, surface_row)
-    arriving = shadowed_lights(packed, px, py, pz, nx, ny, nz, gx, gy, gz, lights, eye, shadows,
-                               background, offset, scaled, surface_row, stack, counts)
-    return light_point_calling(px, py, pz, nx, ny, nz, 0, surface_row, arriving, ambient, eye,
-                               halfway)
-
-
 @njit(cache=True)
-def textured_colour(packed, index, s, px, py, pz, nx, ny, nz, gx, gy, gz, lights, ambient,
-                    eye, halfway, shadows, background, offset, scaled, surface_row, stack,
-                    counts, tex, filter_, bump, u, v, duv, surf):
-    """``I_local`` of a textured triangle (BVH position ``index``, barycentrics ``(u, v)``):
-    the z-buffer's textured pixel step (:func:`core.texture.surface.textured_at`) with the
-    (u, v) derivatives ``duv`` of the ray's differentials, lights scaled by their shadows."""
-    for c in range(surface_row.shape[1]):
-        surface_row[0, c] = packed.surfaces[s, c]
-    arriving = shadowed_lights(packed, px, py, pz, nx, ny, nz, gx, gy, gz, lights, eye, shadows,
-                               background, offset, scaled, surface_row, stack, counts)
+def textured_colour(packed, index, s, px, py, pz, nx, ny, nz, arriving, ambient, eye, halfway,
+                    tex, filter_, bump, u, v, duv, surf):
+    """``I_local`` of a textured triangle (BVH position ``index``, barycentrics ``(u, v)``)
+    lit by ``arriving`` (the lights scaled by their shadows, :func:`shadowed_lights`): the
+    z-buffer's textured pixel step (:func:`core.texture.surface.textured_at`) with the (u, v)
+    derivatives ``duv`` of the ray's differentials."""
     f = packed.prim[index]
     i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
     w0 = 1.0 - u - v
@@ -449,15 +434,20 @@ def trace(packed, origins, directions, t_lo, t_hi, begin, end, primary_eye, ligh
             hit_viewer(ray_kind, primary_eye, dx, dy, dz, eye)
             entering, lnx, lny, lnz = lit_normal(packed.surfaces, s, nx, ny, nz, gx, gy, gz,
                                                  dx, dy, dz)
+            # I_local: each light's I_p scaled by its shadow term, then Phong's model (a
+            # textured triangle: the z-buffer's textured pixel step). One shadow walk for both,
+            # here, not a second one compiled inside textured_colour.
+            checker_colour(packed, kind, index, s, px, py, pz, surface_row)
+            arriving = shadowed_lights(packed, px, py, pz, lnx, lny, lnz, gx, gy, gz, lights, eye,
+                                       shadows, background, offset, scaled, surface_row, stack,
+                                       counts)
             if mapped:
-                r, g, b = textured_colour(packed, index, s, px, py, pz, lnx, lny, lnz, gx, gy, gz,
-                                          lights, ambient, eye, halfway, shadows, background,
-                                          offset, scaled, surface_row, stack, counts, tex, filter_,
-                                          bump, u, v, duv, surf)
+                r, g, b = textured_colour(packed, index, s, px, py, pz, lnx, lny, lnz, arriving,
+                                          ambient, eye, halfway, tex, filter_, bump, u, v, duv,
+                                          surf)
             else:
-                r, g, b = local_colour(packed, kind, index, s, px, py, pz, lnx, lny, lnz, gx, gy,
-                                       gz, lights, ambient, eye, halfway, shadows, background,
-                                       offset, scaled, surface_row, stack, counts)
+                r, g, b = light_point_calling(px, py, pz, lnx, lny, lnz, 0, surface_row, arriving,
+                                              ambient, eye, halfway)
             r_sum += weight * r
             g_sum += weight * g
             b_sum += weight * b

@@ -184,7 +184,8 @@ def _queue_children(o, node: dict, ray: tuple, hit: tuple, entering: bool, optic
 
 def _local(setup, packed, kind, index, s, p, n, g, eye, shadows, offset, surface_row, stack,
            counts) -> dict:
-    """local_colour's terms: the checker's O_d, each light's shadow factor, Phong."""
+    """The terms of ``I_local`` as :func:`whitted.trace` finds them: the checker's O_d, each
+    light's shadow factor, Phong."""
     from core.shading.illumination import unit3
     px, py, pz = p
     nx, ny, nz = n
