@@ -307,7 +307,11 @@ def _value_bytes(value) -> bytes:
         return repr((value.__module__, value.__qualname__,
                      getattr(value, "_fields", None))).encode()
     if hasattr(value, "_defn") and hasattr(value._defn, "__code__"):   # an @intrinsic
-        return _code_bytes(value._defn.__code__)
+        # and our own functions it calls: call_compiled's type key is frozen into the code
+        helpers = [v for _, v in _globals_read(value._defn)
+                   if inspect.isfunction(v) and v.__module__.split(".")[0] in ("core", "app")]
+        return _code_bytes(value._defn.__code__) + b"".join(_code_bytes(h.__code__)
+                                                            for h in helpers)
     return repr((type(value).__module__, type(value).__qualname__,
                  getattr(value, "__qualname__", None))).encode()
 

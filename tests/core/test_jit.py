@@ -393,3 +393,19 @@ def test_machine_code_for_other_argument_types_is_refused_not_called(tmp_path):
             print(error)
     """)
     assert said == "machine code for other argument types than dot's here"
+
+
+def test_a_kernel_calling_by_address_is_tied_to_the_type_key_frozen_into_it(monkeypatch):
+    """The key of the argument types is computed when the caller compiles and again at each
+    call: another key function must make the cached caller stale, or its calls would be
+    refused."""
+    import core.jit as jit
+    from core.raytrace import whitted
+    def another_key(argtypes):
+        return 0
+    another_key.__module__ = "core.jit"         # as an edit of core/jit.py would make it
+    before = jit.kernel_digest(whitted.trace_many.py_func)
+    monkeypatch.setattr(jit, "_types_key", another_key)
+    assert jit.kernel_digest(whitted.trace_many.py_func) != before
+    monkeypatch.undo()
+    assert jit.kernel_digest(whitted.trace_many.py_func) == before
