@@ -17,18 +17,15 @@ KERNELS := $(shell grep -rl --include='*.py' 'core.jit import' core app 2>/dev/n
 .PHONY: run test bench report stability warmup clean
 
 # What running needs (the viewer, `animate`'s movies); the tests' oracles (Embree, Mitsuba,
-# scikit-image, pytest) only with `make test`. --no-compile: pip would write bytecode for
-# every module of every wheel (VTK's and SciPy's thousands among them), half of an install's
-# CPU; Python writes it for the modules a run imports, the first time it imports them.
-PIP := $(PY) -m pip install --quiet --no-compile
+# scikit-image, pytest) only with `make test`.
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
-	$(PIP) --upgrade pip
-	$(PIP) -e '.[anim]'
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[anim]'
 	touch $(STAMP)
 
 $(TESTED): $(STAMP)
-	$(PIP) -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test]'
 	touch $(TESTED)
 
 # The warm-up compiles on one worker process a core (JOBS=N for another number); when its

@@ -58,9 +58,8 @@ end
 begin install
 niced "$python" -m venv "$venv"
 # No compiler: a dependency without a wheel for this Python fails here, loudly.
-# --no-compile as the Makefile's installs: bytecode only for the modules a run imports.
 CC=false CXX=false PIP_ONLY_BINARY=:all: niced "$py" -m pip install -q --disable-pip-version-check \
-  --no-compile "$clone[test]" || fail "a dependency has no wheel for $name (see pip's message above)"
+  "$clone[test]" || fail "a dependency has no wheel for $name (see pip's message above)"
 end
 
 cd "$work"                          # not the clone: the installed program is the one that runs
