@@ -10,12 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.shading.illumination import quantize
 from core.shading.models.dispatch import light_point
 from core.shading.registry import Shader, register_shader
 from core.scene.normals import face_normals, planar_polygons
-from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_face_normals, cached,
+from core.shading.shade import (PARALLEL_ITEMS, RUN, ShadeInput, all_face_normals, cached,
                                  covered_spans, scene_arrays, visible_items, wide_shading)
 from core.shading.wide import illuminate_wide
 
@@ -57,12 +57,28 @@ def _face_points(positions, triangles, normals, polygon, polygon_point):
     return points, unit
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _phong_faces_parallel(positions, triangles, faces, normals, polygon, polygon_point,
-                          face_surface, surfaces, lights, ambient, eye, halfway, out):
-    for k in prange(faces.shape[0]):
+# numpy's error model, as the parallel loop's body that it was
+@njit(cache=True, nogil=True, error_model="numpy")
+def _phong_faces(positions, triangles, faces, normals, polygon, polygon_point, face_surface,
+                 surfaces, lights, ambient, eye, halfway, out, start, end):
+    """:func:`_phong_face` for ``faces[start:end]``."""
+    for k in range(start, end):
         _phong_face(positions, triangles, faces[k], normals, polygon, polygon_point,
                     face_surface, surfaces, lights, ambient, eye, halfway, out)
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _phong_faces_parallel(positions, triangles, faces, normals, polygon, polygon_point,
+                          face_surface, surfaces, lights, ambient, eye, halfway, out, at):
+    """:func:`_phong_faces` on runs of :data:`RUN` faces, in parallel, called by its address
+    ``at`` (core.jit.call_compiled): every lighting model is typed and optimised once, in
+    ``_phong_faces``, not again inside this loop."""
+    n = faces.shape[0]
+    for j in prange((n + RUN - 1) // RUN):
+        start = np.int64(j) * RUN
+        call_compiled(at, _phong_faces, positions, triangles, faces, normals, polygon,
+                      polygon_point, face_surface, surfaces, lights, ambient, eye, halfway, out,
+                      start, min(n, start + RUN))
 
 
 def _mesh_polygons(mesh) -> tuple[np.ndarray, np.ndarray]:
@@ -139,10 +155,13 @@ def _light(s: ShadeInput, faces) -> None:
         illuminate_wide(points, normals, s.face_surface, faces, s.face_rgb, faces, s.surfaces,
                         s.lights, s.ambient, s.eye, s.halfway, parallel)
         return
-    # one kernel for any count: a serial twin cost 1.7 s of compile for ~0.1 ms a frame
-    _phong_faces_parallel(s.positions, s.triangles, faces, s.normals, s.polygon,
-                          s.polygon_point, s.face_surface, s.surfaces, s.lights, s.ambient,
-                          s.eye, s.halfway, s.face_rgb)
+    given = (s.positions, s.triangles, faces, s.normals, s.polygon, s.polygon_point,
+             s.face_surface, s.surfaces, s.lights, s.ambient, s.eye, s.halfway, s.face_rgb,
+             0, len(faces))
+    if len(faces) < PARALLEL_ITEMS:
+        _phong_faces(*given)
+    else:
+        _phong_faces_parallel(*given[:-2], compiled_at(_phong_faces, given))
 
 
 @njit(cache=True, parallel=True, nogil=True)

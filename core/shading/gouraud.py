@@ -6,12 +6,12 @@ from __future__ import annotations
 import numpy as np
 
 from core.arrays import read_only
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.shading.illumination import quantize
 from core.shading.models.dispatch import light_point
 from core.shading.registry import Shader, register_shader
-from core.shading.shade import (PARALLEL_ITEMS, ShadeInput, all_vertex_normals, covered_spans,
-                                 unlit, visible_items, wide_shading)
+from core.shading.shade import (PARALLEL_ITEMS, RUN, ShadeInput, all_vertex_normals,
+                                 covered_spans, unlit, visible_items, wide_shading)
 from core.shading.wide import illuminate_wide
 
 
@@ -40,9 +40,12 @@ def _light(s: ShadeInput, vertices, out) -> None:
                         s.surfaces, s.lights, s.ambient, s.eye, s.halfway,
                         len(vertices) >= PARALLEL_ITEMS)
         return
-    # one kernel for any count: a serial twin cost 1.1 s of compile for ~0.1 ms a frame
-    _phong_vertices_parallel(s.positions, s.normals, vertices, s.vertex_surface, s.surfaces,
-                             s.lights, s.ambient, s.eye, s.halfway, out)
+    given = (s.positions, s.normals, vertices, s.vertex_surface, s.surfaces, s.lights,
+             s.ambient, s.eye, s.halfway, out, 0, len(vertices))
+    if len(vertices) < PARALLEL_ITEMS:
+        _phong_vertices(*given)
+    else:
+        _phong_vertices_parallel(*given[:-2], compiled_at(_phong_vertices, given))
 
 
 @njit(cache=True)
@@ -65,12 +68,26 @@ def _phong_vertex(positions, normals, i, vertex_surface, surfaces, lights, ambie
     out[i, 0], out[i, 1], out[i, 2] = r, g, b
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _phong_vertices_parallel(positions, normals, vertices, vertex_surface, surfaces, lights,
-                             ambient, eye, halfway, out):
-    for k in prange(vertices.shape[0]):
+# numpy's error model, as the parallel loop's body that it was
+@njit(cache=True, nogil=True, error_model="numpy")
+def _phong_vertices(positions, normals, vertices, vertex_surface, surfaces, lights, ambient,
+                    eye, halfway, out, start, end):
+    """:func:`_phong_vertex` for ``vertices[start:end]``."""
+    for k in range(start, end):
         _phong_vertex(positions, normals, vertices[k], vertex_surface, surfaces, lights, ambient,
                       eye, halfway, out)
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _phong_vertices_parallel(positions, normals, vertices, vertex_surface, surfaces, lights,
+                             ambient, eye, halfway, out, at):
+    """:func:`_phong_vertices` on runs of :data:`RUN` vertices, in parallel, called by its
+    address ``at``: the lighting models' code is not optimised again inside this loop."""
+    n = vertices.shape[0]
+    for j in prange((n + RUN - 1) // RUN):
+        start = np.int64(j) * RUN
+        call_compiled(at, _phong_vertices, positions, normals, vertices, vertex_surface,
+                      surfaces, lights, ambient, eye, halfway, out, start, min(n, start + RUN))
 
 
 @njit(cache=True, parallel=True, nogil=True)

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.arrays import read_only
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.shading.illumination import quantize, unit3
 from core.shading.models.dispatch import light_point
 from core.shading.wide import resolve_phong_wide
@@ -27,11 +27,13 @@ def _prepare_phong(s: ShadeInput, scene, meshes, weighting) -> None:
     s.computed.append("illuminate pixels")
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _resolve_phong(tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces, lights,
-                   ambient, eye, halfway, out):
-    """The model at every covered pixel of each row's span (the rest is background)."""
-    for row in prange(tri.shape[0]):
+# numpy's error model, as the parallel loop's body that it was
+@njit(cache=True, nogil=True, error_model="numpy")
+def _phong_rows(tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces, lights,
+                ambient, eye, halfway, out, start, end):
+    """The model at every covered pixel of the spans of rows ``start`` to ``end`` (the rest
+    is background)."""
+    for row in range(start, end):
         for col in range(span[row, 0], span[row, 1] + 1):
             t = tri[row, col]
             if t < 0:
@@ -53,15 +55,35 @@ def _resolve_phong(tri, b1, b2, span, triangles, attrs, source, face_surface, su
             out[row, col, 2] = quantize(b)
 
 
+ROWS = 4    # picture rows a call of the parallel loop
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _resolve_phong(tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces, lights,
+                   ambient, eye, halfway, out, at):
+    """:func:`_phong_rows` on runs of :data:`ROWS` rows, in parallel, called by its address
+    ``at`` (core.jit.call_compiled): every lighting model is typed and optimised once, in
+    ``_phong_rows``, not again inside this loop."""
+    n = tri.shape[0]
+    for j in prange((n + ROWS - 1) // ROWS):
+        start = np.int64(j) * ROWS
+        call_compiled(at, _phong_rows, tri, b1, b2, span, triangles, attrs, source,
+                      face_surface, surfaces, lights, ambient, eye, halfway, out, start,
+                      min(n, start + ROWS))
+
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
     """float32 passes (core.shading.wide) unless the settings ask for the textbook
     kernel or an exponent is not a whole number up to 2^16 (then float64 throughout)."""
-    (resolve_phong_wide if wide_shading(s) else _resolve_phong)(np.ascontiguousarray(vis.tri, dtype=np.int32),
-                   np.ascontiguousarray(vis.b1, dtype=np.float64),
-                   np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis),
-                   triangles, read_only(attrs), source, s.face_surface, s.surfaces, s.lights,
-                   s.ambient, s.eye, s.halfway, out)
+    given = (np.ascontiguousarray(vis.tri, dtype=np.int32),
+             np.ascontiguousarray(vis.b1, dtype=np.float64),
+             np.ascontiguousarray(vis.b2, dtype=np.float64), covered_spans(vis), triangles,
+             read_only(attrs), source, s.face_surface, s.surfaces, s.lights, s.ambient, s.eye,
+             s.halfway, out)
+    if wide_shading(s):
+        resolve_phong_wide(*given)
+    else:
+        _resolve_phong(*given, compiled_at(_phong_rows, given + (0, 0)))
 
 
 register_shader(Shader("phong", _prepare_phong, _pixel, varyings=("normal", "position"), width=6,

@@ -200,6 +200,9 @@ def _geometry(context, scene, meshes):
 
 # Below this many faces or vertices one core is quicker: waking the second costs ~0.1 ms.
 PARALLEL_ITEMS = 4_096
+# Items a call in the float64 lighting kernels' parallel loops (core.jit.call_compiled): a call
+# through a pointer costs about a microsecond, a face or a vertex about a tenth of one.
+RUN = 1_024
 # Below this many triangles the z-buffer lights every front face (flat) or its vertices
 # (Gouraud) in the vertex step, as the painters do, instead of deferring to the visible ones:
 # finding those is a pass over the covered pixels, which costs more than lighting them all.

@@ -402,7 +402,7 @@ def _power(base, spec, n):
 @njit(cache=True, error_model="numpy")
 def _float64_pixel(row, col, t, b1, b2, triangles, attrs, source, face_surface, surfaces,
                    lights, ambient, eye, halfway, out):
-    """The textbook kernel's evaluation of one pixel (core.shading.phong._resolve_phong)."""
+    """The textbook kernel's evaluation of one pixel (core.shading.phong._phong_rows)."""
     i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
     w1, w2 = b1[row, col], b2[row, col]
     w0 = 1.0 - w1 - w2
