@@ -287,15 +287,16 @@ RENDER_TORUS = """
 
 def test_an_edit_to_the_volume_ray_marcher_leaves_the_torus_cached(tmp_path):
     """A comment appended to ``core/volume/raymarch.py`` made every kernel compile
-    again. In a copy of the code with a cache of its own, the torus is drawn (its kernels
-    compile), the comment is appended, and the torus drawn again compiles nothing."""
+    again. In a copy of the code with a copy of its kernel cache (a cached kernel is keyed by
+    its code, not its path), the torus is drawn (compiling what the cache lacks), the comment
+    is appended, and the torus drawn again compiles nothing."""
     import json
     import shutil
     clone = tmp_path / "clone"
     for folder in ("app", "core", "scenes", "shaders"):
-        shutil.copytree(ROOT / folder, clone / folder,
-                        ignore=shutil.ignore_patterns("__pycache__"))
-    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"), PYTHONPATH=str(clone))
+        shutil.copytree(ROOT / folder, clone / folder)          # with the dates: numba checks
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = str(clone)
 
     def draw():
         done = subprocess.run([sys.executable, "-c", textwrap.dedent(RENDER_TORUS)], env=env,
@@ -304,9 +305,10 @@ def test_an_edit_to_the_volume_ray_marcher_leaves_the_torus_cached(tmp_path):
         return json.loads(done.stdout.strip().splitlines()[-1])
 
     first = draw()
-    assert first["compiled"] and first["lit"] > 0
-    with (clone / "core" / "volume" / "raymarch.py").open("a") as marcher:
-        marcher.write("# an edit that changes no code the torus runs\n")
+    assert first["lit"] > 0
+    marcher = clone / "core" / "volume" / "raymarch.py"
+    with marcher.open("a") as out:
+        out.write("# an edit that changes no code the torus runs\n")
     again = draw()
     assert again["compiled"] == [] and again["lit"] == first["lit"]
 
