@@ -44,7 +44,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.shading.illumination import (eye_from_view, pack_ambient, pack_eye, pack_lights, pack_surfaces,
                                unit3)
 from core.shading.models.dispatch import light_point_calling
@@ -284,15 +284,18 @@ def _nearest_hit(shapes, ox, oy, oz, dx, dy, dz, vrp, nvx, nvy, nvz, front, back
     return best_shape, best_t
 
 
-@njit(cache=True, parallel=True, nogil=True)
-def _trace(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, background, rgb,
-           surface_rgb, coverage, seen):
+# numpy's error model, as the parallel loop's body that it was
+@njit(cache=True, nogil=True, error_model="numpy")
+def _trace_rows(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, background, rgb,
+                surface_rgb, coverage, seen, start, end):
+    """Every pixel of rows ``start`` to ``end``: its samples' rays, the nearest shape each
+    meets, lit there; the mean into ``rgb``, the hits' mean into ``surface_rgb``."""
     height, width = coverage.shape
     vrp = cam[CAMERA_VRP:CAMERA_VRP + 3]
     nvx, nvy, nvz = cam[CAMERA_BASIS + 6], cam[CAMERA_BASIS + 7], cam[CAMERA_BASIS + 8]
     front, back = cam[CAMERA_FRONT], cam[CAMERA_BACK]
     per_pixel = samples * samples
-    for row in prange(height):
+    for row in range(start, end):
         roots = np.empty(4)
         breaks = np.empty(6)
         j = height - 1 - row                 # device row, counted from the bottom
@@ -343,6 +346,19 @@ def _trace(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, backgr
                     surface_rgb[row, col, ch] = background[ch]
 
 
+@njit(cache=True, parallel=True, nogil=True)
+def _trace(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, background, rgb,
+           surface_rgb, coverage, seen, at):
+    """:func:`_trace_rows` row by row, in parallel, called by its address ``at``
+    (core.jit.call_compiled): the shapes' tests and the lighting are typed and optimised
+    once, in ``_trace_rows``, not again inside this loop."""
+    height = coverage.shape[0]
+    for row in prange(height):
+        start = np.int64(row)
+        call_compiled(at, _trace_rows, shapes, surfaces, lights, ambient, eye, halfway, cam,
+                      samples, background, rgb, surface_rgb, coverage, seen, start, start + 1)
+
+
 def render_reference(shapes, scene, view: View, projection: str,
                      size: tuple[int, int] | None = None, samples: int = 4,
                      keep_aspect: bool = False) -> Reference:
@@ -364,11 +380,12 @@ def render_reference(shapes, scene, view: View, projection: str,
     surface_rgb = np.zeros((height, width, 3))
     coverage = np.zeros((height, width))
     seen = np.zeros((height, width), dtype=np.int64)
-    _trace(packed, surfaces, pack_lights(scene.lights), pack_ambient(scene.ambient),
-           pack_eye(eye), scene.specular == "halfway",
-           pack_camera(view, projection, width, height, keep_aspect), int(samples),
-           np.asarray(scene.background, dtype=np.float64).reshape(3), rgb, surface_rgb, coverage,
-           seen)
+    given = (packed, surfaces, pack_lights(scene.lights), pack_ambient(scene.ambient),
+             pack_eye(eye), scene.specular == "halfway",
+             pack_camera(view, projection, width, height, keep_aspect), int(samples),
+             np.asarray(scene.background, dtype=np.float64).reshape(3), rgb, surface_rgb,
+             coverage, seen)
+    _trace(*given, compiled_at(_trace_rows, given + (0, 0)))
     return Reference(rgb=rgb, surface_rgb=surface_rgb, coverage=coverage, shape=seen,
                      samples=int(samples))
 
