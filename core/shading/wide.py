@@ -33,7 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.arrays import read_only
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.shading.illumination import MODEL, SQUARING_LIMIT, phong_point, quantize, unit3
 
 F = np.float32
@@ -219,23 +219,38 @@ def illuminate_wide(points, normals, surface, which, out, out_rows, surfaces, li
     :func:`core.shading.illumination.illuminate` but in float32 passes: RGB in [0, 1] into
     the rows ``out_rows`` of ``out`` (one per point of ``which``). ``surface`` is each
     point's row of ``surfaces``; blocks of points run on all cores when ``parallel``."""
-    kernel = _illuminate_blocks_parallel if parallel else _illuminate_blocks
-    kernel(read_only(points), read_only(normals), read_only(surface), which, out, out_rows,
-           surfaces, lights, ambient, eye, halfway)
+    given = (read_only(points), read_only(normals), read_only(surface), which, out, out_rows,
+             surfaces, lights, ambient, eye, halfway, 0, (which.shape[0] + BLOCK - 1) // BLOCK)
+    if parallel:
+        _illuminate_blocks_parallel(*given[:-2], compiled_at(_illuminate_blocks, given))
+    else:
+        _illuminate_blocks(*given)
+
+
+# Blocks a call of the parallel loop: a call through a pointer costs about a microsecond, a
+# block about twenty.
+BLOCKS_A_CALL = 4
 
 
 @njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def _illuminate_blocks_parallel(points, normals, surface, which, out, out_rows, surfaces,
-                                lights, ambient, eye, halfway):
-    for block in prange((which.shape[0] + BLOCK - 1) // BLOCK):
-        _illuminate_block(block * BLOCK, points, normals, surface, which, out, out_rows,
-                          surfaces, lights, ambient, eye, halfway)
+                                lights, ambient, eye, halfway, at):
+    """:func:`_illuminate_blocks` on runs of :data:`BLOCKS_A_CALL` blocks, in parallel,
+    called by its address ``at`` (core.jit.call_compiled): the lighting passes are
+    optimised once, in ``_illuminate_blocks``, not again inside this loop."""
+    blocks = (which.shape[0] + BLOCK - 1) // BLOCK
+    for j in prange((blocks + BLOCKS_A_CALL - 1) // BLOCKS_A_CALL):
+        first = np.int64(j) * BLOCKS_A_CALL
+        call_compiled(at, _illuminate_blocks, points, normals, surface, which, out, out_rows,
+                      surfaces, lights, ambient, eye, halfway, first,
+                      min(blocks, first + BLOCKS_A_CALL))
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _illuminate_blocks(points, normals, surface, which, out, out_rows, surfaces, lights,
-                       ambient, eye, halfway):
-    for block in range((which.shape[0] + BLOCK - 1) // BLOCK):
+                       ambient, eye, halfway, first, end):
+    """Blocks ``first`` to ``end`` of :data:`BLOCK` points each."""
+    for block in range(first, end):
         _illuminate_block(block * BLOCK, points, normals, surface, which, out, out_rows,
                           surfaces, lights, ambient, eye, halfway)
 
