@@ -46,7 +46,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.scene.generators import MAX_TRIANGLES
 from core.scene.model import Mesh
 from core.volume.data import VolumeError, check_iso
@@ -562,17 +562,17 @@ def cell_row(v, iso, i, j, trims, counts, cases, tables, count, extra, triangles
     return count, extra
 
 
-@njit(cache=True, parallel=True, error_model="numpy")
-def cell_rows(v, iso, trims, counts, cases, tables, tri, extra, triangles, positions, normals,
-              write):
-    """Every row of cells on all cores. Without ``write``: each row's triangles and loop
-    centres into ``tri[i, j]`` and ``extra[i, j]``, and each row's crossings along x and y
-    into ``counts[i, j, 0 | 1]``. With it (``counts``: each row's first vertex per axis;
-    ``tri``, ``extra``: each row of cells' first triangle and centre): the vertices and
-    triangles."""
-    n0, n1, _ = v.shape
-    for i in prange(n0 - 1):
-        scratch = cell_scratch()
+@njit(cache=True, error_model="numpy")
+def cell_slabs(v, iso, trims, counts, cases, tables, tri, extra, triangles, positions, normals,
+               write, first, end):
+    """The rows of cells of slabs ``first`` to ``end`` (the first index). Without ``write``:
+    each row's triangles and loop centres into ``tri[i, j]`` and ``extra[i, j]``, and each
+    row's crossings along x and y into ``counts[i, j, 0 | 1]``. With it (``counts``: each
+    row's first vertex per axis; ``tri``, ``extra``: each row of cells' first triangle and
+    centre): the vertices and triangles."""
+    n1 = v.shape[1]
+    scratch = cell_scratch()
+    for i in range(first, end):
         for j in range(n1 - 1):
             t0 = tri[i, j] if write else 0
             e0 = extra[i, j] if write else 0
@@ -580,6 +580,24 @@ def cell_rows(v, iso, trims, counts, cases, tables, tri, extra, triangles, posit
                               positions, normals, scratch, write)
             if not write:
                 tri[i, j], extra[i, j] = t1, e1
+
+
+@njit(cache=True, parallel=True, error_model="numpy")
+def _cell_slabs_parallel(v, iso, trims, counts, cases, tables, tri, extra, triangles,
+                         positions, normals, write, at):
+    """:func:`cell_slabs` slab by slab on all cores, called by its address ``at``
+    (core.jit.call_compiled): the cell's code is optimised once, in ``cell_slabs``, not
+    again inside this loop."""
+    for i in prange(v.shape[0] - 1):
+        first = np.int64(i)
+        call_compiled(at, cell_slabs, v, iso, trims, counts, cases, tables, tri, extra,
+                      triangles, positions, normals, write, first, first + 1)
+
+
+def cell_rows(*given) -> None:
+    """:func:`cell_slabs` for every slab of cells, on all cores (its arguments but the
+    slabs)."""
+    _cell_slabs_parallel(*given, compiled_at(cell_slabs, given + (0, 0)))
 
 
 def _exclusive(counts: np.ndarray, base: int = 0) -> np.ndarray:
