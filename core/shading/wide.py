@@ -59,9 +59,8 @@ def float32_is_exact_enough(surfaces: np.ndarray) -> bool:
 BAND_PIXELS = 2048     # Phong's pixels per work item: a band of whole rows of about this many
 
 
-@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
 def resolve_phong_wide(tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces,
-                        lights, ambient, eye, halfway, out):
+                       lights, ambient, eye, halfway, out):
     """Phong at every covered pixel of each row's span, float32 in passes (see the module).
 
     The work items are bands of whole rows of about ``BAND_PIXELS`` covered pixels, their
@@ -73,25 +72,44 @@ def resolve_phong_wide(tri, b1, b2, span, triangles, attrs, source, face_surface
     that loads and stores do not overlap."""
     if triangles.shape[0] == 0:
         return
-    first = _bands(span)
+    given = (tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces, lights,
+             ambient, eye, halfway, out)
+    _resolve_bands(_bands(span), *given, compiled_at(_phong_band, (0, 0) + given))
+
+
+@njit(cache=True, parallel=True, nogil=True, error_model="numpy")
+def _resolve_bands(first, tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces,
+                   lights, ambient, eye, halfway, out, at):
+    """:func:`_phong_band` on each band, in parallel, called by its address ``at``
+    (core.jit.call_compiled): the passes are optimised once, in ``_phong_band``, not again
+    inside this loop (its compile 5.4 s → under 1 s)."""
     for band in prange(first.shape[0] - 1):
-        r0, r1 = first[band], first[band + 1]
-        m = 0
-        for row in range(r0, r1):
-            m += max(span[row, 1] - span[row, 0] + 1, 0)
-        if m == 0:
-            continue
-        q = np.empty((ROWS, m), np.float32)
-        p = np.empty((3, m))
-        flag = np.zeros(m, np.bool_)
-        runs = np.empty(m + 1, np.int64)
-        run_surface = np.empty(m, np.int64)
-        n_runs = _gather(r0, r1, span, tri, b1, b2, triangles, attrs, source,
-                              face_surface, eye, q, p, runs, run_surface)
-        sums = _shade_span(q, p, flag, runs[:n_runs + 1], run_surface[:n_runs], surfaces,
-                           lights, ambient, halfway)
-        _store(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface,
-                    surfaces, lights, ambient, eye, halfway, q[sums:sums + 3], flag, out)
+        call_compiled(at, _phong_band, first[band], first[band + 1], tri, b1, b2, span,
+                      triangles, attrs, source, face_surface, surfaces, lights, ambient, eye,
+                      halfway, out)
+
+
+# numpy's error model, as the parallel loop's body that it was
+@njit(cache=True, nogil=True, error_model="numpy")
+def _phong_band(r0, r1, tri, b1, b2, span, triangles, attrs, source, face_surface, surfaces,
+                lights, ambient, eye, halfway, out):
+    """The passes over the spans of rows ``r0`` to ``r1``, one after another."""
+    m = 0
+    for row in range(r0, r1):
+        m += max(span[row, 1] - span[row, 0] + 1, 0)
+    if m == 0:
+        return
+    q = np.empty((ROWS, m), np.float32)
+    p = np.empty((3, m))
+    flag = np.zeros(m, np.bool_)
+    runs = np.empty(m + 1, np.int64)
+    run_surface = np.empty(m, np.int64)
+    n_runs = _gather(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface, eye, q,
+                     p, runs, run_surface)
+    sums = _shade_span(q, p, flag, runs[:n_runs + 1], run_surface[:n_runs], surfaces, lights,
+                       ambient, halfway)
+    _store(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface, surfaces, lights,
+           ambient, eye, halfway, q[sums:sums + 3], flag, out)
 
 
 @njit(cache=True, error_model="numpy")

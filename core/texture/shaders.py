@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from core.arrays import read_only
-from core.jit import njit, prange
+from core.jit import call_compiled, compiled_at, njit, prange
 from core.shading.illumination import OD, quantize
 from core.shading.registry import Shader, register_shader
 from core.shading.shade import ShadeInput, all_vertex_normals, cached, scene_arrays
@@ -101,13 +101,35 @@ def _vertex(s: ShadeInput, scene, meshes, weighting) -> None:
     s.computed += ["illuminate pixels", "texture lookups"]
 
 
+ROWS = 4    # picture rows a call of the parallel loop
+
+
 @njit(cache=True, parallel=True, nogil=True)
 def _resolve(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surfaces, maps,
              texels, levels, textures, demo, demo_light, filter_, bump, lights, ambient, eye,
-             halfway, background8, out):
+             halfway, background8, out, at):
+    """:func:`_textured_rows` on runs of :data:`ROWS` rows, in parallel, called by its
+    address ``at`` (core.jit.call_compiled): the texture lookups and the lighting are
+    optimised once, in ``_textured_rows``, not again inside this loop."""
+    n = tri.shape[0]
+    for j in prange((n + ROWS - 1) // ROWS):
+        start = np.int64(j) * ROWS
+        call_compiled(at, _textured_rows, tri, b1, b2, triangles, attrs, device_h, source,
+                      face_surface, surfaces, maps, texels, levels, textures, demo, demo_light,
+                      filter_, bump, lights, ambient, eye, halfway, background8, out, start,
+                      min(n, start + ROWS))
+
+
+# numpy's error model, as the parallel loop's body that it was
+@njit(cache=True, nogil=True, error_model="numpy")
+def _textured_rows(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surfaces,
+                   maps, texels, levels, textures, demo, demo_light, filter_, bump, lights,
+                   ambient, eye, halfway, background8, out, start, end):
+    """Every pixel of rows ``start`` to ``end``: the background, the bump demo's model, or
+    the textured model."""
     height, width = tri.shape
-    for row in prange(height):
-        surf = surfaces.copy()                  # per row: a pixel writes its texture's O_d here
+    surf = surfaces.copy()                  # a pixel writes its texture's O_d here, then undoes it
+    for row in range(start, end):
         # the visible triangle's plane constants, made when the scan line enters it (per
         # visible triangle, not for every triangle of the scene)
         constants = np.zeros((1, 3, 3))
@@ -172,11 +194,11 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
     # the demo lights its panel with the scene's first light (J3DPanel's lightSource)
     demo_light = (s.lights[0, 1:4].copy() if len(s.lights) and s.lights[0, 0] == 0.0
                   else np.array(DEMO_LIGHT))
-    _resolve(tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
-             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, read_only(attrs), device_h,
-             source,
-             s.face_surface, s.surfaces, maps, texels, levels, textures, s.demo, demo_light, filter_, bump,
-             s.lights, s.ambient, s.eye, s.halfway, background8, out)
+    given = (tri, np.ascontiguousarray(vis.b1, dtype=np.float64),
+             np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, read_only(attrs),
+             device_h, source, s.face_surface, s.surfaces, maps, texels, levels, textures, s.demo,
+             demo_light, filter_, bump, s.lights, s.ambient, s.eye, s.halfway, background8, out)
+    _resolve(*given, compiled_at(_textured_rows, given + (0, 0)))
 
 
 register_shader(Shader(NAME, _vertex, _pixel,
