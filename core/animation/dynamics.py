@@ -37,7 +37,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core.animation.rewind import Rewind
-from core.jit import njit
+from core.jit import call_compiled, compiled_at, njit
 from core.vectors import dot3, mat_t_vec3, mat_vec3
 
 DEFAULT_STEP = 1.0 / 240.0
@@ -261,7 +261,7 @@ def _flight(b, x, vel, q, L, inv_body, g, h):
 
 @njit(cache=True)
 def _sphere_flight(b, x, vel, q, L, inv_mass, inv_body, radius, rest, fric, plane_p, plane_n,
-                   g, dt, v_rest):
+                   g, dt, v_rest, at):
     """A sphere's step with its plane impacts at their exact times inside the step (at most
     four a step; a fifth waits for the end-of-step contacts)."""
     left = dt
@@ -279,15 +279,15 @@ def _sphere_flight(b, x, vel, q, L, inv_mass, inv_body, radius, rest, fric, plan
             break
         _flight(b, x, vel, q, L, inv_body, g, first)
         n = plane_n[which]
-        _resolve(b, -1, x[b] - radius[b] * n, n, rest[b], fric[b], x, vel, q, L, inv_mass,
-                 inv_body, v_rest, np.zeros((0, 4)), np.zeros(1, np.int64))
+        call_compiled(at, _resolve, b, -1, x[b] - radius[b] * n, n, rest[b], fric[b], x, vel,
+                      q, L, inv_mass, inv_body, v_rest, np.zeros((0, 4)), np.zeros(1, np.int64))
         left -= first
     _flight(b, x, vel, q, L, inv_body, g, left)
 
 
 @njit(cache=True)
 def _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start, rest,
-                fric, plane_p, plane_n, v_rest, push, cache, counter):
+                fric, plane_p, plane_n, v_rest, push, cache, counter, at):
     """Body b against every plane: the velocity impulses at each point below it, or (with
     ``push``) the body moved out by the deepest point's depth."""
     for p in range(len(plane_p)):
@@ -298,8 +298,9 @@ def _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_s
             if depth > 0.0:
                 deepest = depth
                 if not push:
-                    _resolve(b, -1, x[b] - radius[b] * n, n, rest[b], fric[b], x, vel, q, L,
-                             inv_mass, inv_body, v_rest, cache, counter)
+                    call_compiled(at, _resolve, b, -1, x[b] - radius[b] * n, n, rest[b],
+                                  fric[b], x, vel, q, L, inv_mass, inv_body, v_rest, cache,
+                                  counter)
         else:
             r = _matrix(q[b])
             for k in range(hull_start[b], hull_start[b + 1]):
@@ -308,15 +309,15 @@ def _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_s
                 if depth > 0.0:
                     deepest = max(deepest, depth)
                     if not push:
-                        _resolve(b, -1, point, n, rest[b], fric[b], x, vel, q, L, inv_mass,
-                                 inv_body, v_rest, cache, counter)
+                        call_compiled(at, _resolve, b, -1, point, n, rest[b], fric[b], x, vel,
+                                      q, L, inv_mass, inv_body, v_rest, cache, counter)
         if push and deepest > 0.0:
             x[b] += deepest * n
 
 
 @njit(cache=True)
 def _sphere_pass(a, b, c, rc, x, vel, q, L, inv_mass, inv_body, radius, rest, fric, v_rest,
-                 push, cache, counter):
+                 push, cache, counter, at):
     """Body a against body b's bounding sphere, or (b = -1) the static sphere (c, rc)."""
     other = c if b < 0 else x[b]
     reach = radius[a] + (rc if b < 0 else radius[b])
@@ -334,7 +335,8 @@ def _sphere_pass(a, b, c, rc, x, vel, q, L, inv_mass, inv_body, radius, rest, fr
         return
     e = rest[a] if b < 0 else math.sqrt(rest[a] * rest[b])
     mu = fric[a] if b < 0 else math.sqrt(fric[a] * fric[b])
-    _resolve(a, b, x[a] - radius[a] * n, n, e, mu, x, vel, q, L, inv_mass, inv_body, v_rest, cache, counter)
+    call_compiled(at, _resolve, a, b, x[a] - radius[a] * n, n, e, mu, x, vel, q, L, inv_mass,
+                  inv_body, v_rest, cache, counter)
 
 
 @njit(cache=True)
@@ -358,7 +360,7 @@ def _separation(a, b, x, q, hull, hull_start, faces, face_start):
 
 @njit(cache=True)
 def _hull_pass(a, b, x, vel, q, L, inv_mass, inv_body, hull, hull_start, faces, face_start,
-               rest, fric, v_rest, push, cache, counter):
+               rest, fric, v_rest, push, cache, counter, at):
     """Two convex bodies: the axis of least overlap among both bodies' face normals (none
     with a gap: they touch), then every point of the other body inside the face's body gets
     an impulse along that one normal; or (with ``push``) the two are moved apart by the
@@ -392,41 +394,47 @@ def _hull_pass(a, b, x, vel, q, L, inv_mass, inv_body, hull, hull_start, faces, 
                 inside = False
                 break
         if inside:
-            _resolve(inc, ref, point, n, e, mu, x, vel, q, L, inv_mass, inv_body, v_rest,
-                     cache, counter)
+            call_compiled(at, _resolve, inc, ref, point, n, e, mu, x, vel, q, L, inv_mass,
+                          inv_body, v_rest, cache, counter)
 
 
 @njit(cache=True)
 def _pair(a, b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start, faces,
-          face_start, rest, fric, v_rest, push, cache, counter):
+          face_start, rest, fric, v_rest, push, cache, counter, at):
     """Two bodies: convex hulls by their vertices against each other's faces (once their
     bounding spheres meet), anything else by the bounding spheres."""
+    _, _, at_sphere, at_hull, at_resolve = at
     convex = face_start[a + 1] > face_start[a] and face_start[b + 1] > face_start[b]
     if not convex:
-        _sphere_pass(a, b, x[a], 0.0, x, vel, q, L, inv_mass, inv_body, radius, rest, fric,
-                     v_rest, push, cache, counter)
+        call_compiled(at_sphere, _sphere_pass, a, b, x[a], 0.0, x, vel, q, L, inv_mass,
+                      inv_body, radius, rest, fric, v_rest, push, cache, counter, at_resolve)
         return
     d = x[a] - x[b]
     if dot3(d, d) >= (radius[a] + radius[b]) ** 2:
         return
-    _hull_pass(a, b, x, vel, q, L, inv_mass, inv_body, hull, hull_start, faces, face_start,
-               rest, fric, v_rest, push, cache, counter)
+    call_compiled(at_hull, _hull_pass, a, b, x, vel, q, L, inv_mass, inv_body, hull,
+                  hull_start, faces, face_start, rest, fric, v_rest, push, cache, counter,
+                  at_resolve)
 
 
 @njit(cache=True)
 def step_world(x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start, faces,
                face_start, rest, fric, plane_p, plane_n, sphere_c, sphere_r, g, dt, iterations,
-               v_rest):
+               v_rest, at, cache):
     """One fixed step of every body: flight, ``iterations`` passes of contact impulses, then
-    ``iterations`` passes pushing the bodies out of what they entered."""
+    ``iterations`` passes pushing the bodies out of what they entered. ``at``: the passes'
+    and the contact's machine code (:func:`kernels_at`), called by its address: each is
+    optimised once, on its own, not again inside every kernel that calls it (the rigid
+    bodies' compile from an empty cache: see docs/speed.md). ``cache`` ``(MAX_CONTACTS, 4)``:
+    the contacts' rows (their contents need not be kept between steps)."""
+    at_flight, at_plane, at_sphere, _, at_resolve = at
     n = len(x)
     for b in range(n):
         if shape[b] == 0:
-            _sphere_flight(b, x, vel, q, L, inv_mass, inv_body, radius, rest, fric, plane_p,
-                           plane_n, g, dt, v_rest)
+            call_compiled(at_flight, _sphere_flight, b, x, vel, q, L, inv_mass, inv_body,
+                          radius, rest, fric, plane_p, plane_n, g, dt, v_rest, at_resolve)
         else:
             _flight(b, x, vel, q, L, inv_body, g, dt)
-    cache = np.empty((MAX_CONTACTS, 4))
     counter = np.zeros(2, np.int64)          # this pass's next row; the rows emptied so far
     for stage in range(2):
         push = stage == 1
@@ -435,15 +443,41 @@ def step_world(x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start
             # (a contact's bounce is set on its first pass; a later pass bounces nothing)
             bounce = v_rest if it == 0 else np.inf
             for b in range(n):
-                _plane_pass(b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull,
-                            hull_start, rest, fric, plane_p, plane_n, bounce, push, cache, counter)
+                call_compiled(at_plane, _plane_pass, b, x, vel, q, L, inv_mass, inv_body,
+                              radius, shape, hull, hull_start, rest, fric, plane_p, plane_n,
+                              bounce, push, cache, counter, at_resolve)
                 for s in range(len(sphere_c)):
-                    _sphere_pass(b, -1, sphere_c[s], sphere_r[s], x, vel, q, L, inv_mass,
-                                 inv_body, radius, rest, fric, bounce, push, cache, counter)
+                    call_compiled(at_sphere, _sphere_pass, b, -1, sphere_c[s], sphere_r[s], x,
+                                  vel, q, L, inv_mass, inv_body, radius, rest, fric, bounce,
+                                  push, cache, counter, at_resolve)
             for a in range(n):
                 for b in range(a + 1, n):
                     _pair(a, b, x, vel, q, L, inv_mass, inv_body, radius, shape, hull,
-                          hull_start, faces, face_start, rest, fric, bounce, push, cache, counter)
+                          hull_start, faces, face_start, rest, fric, bounce, push, cache,
+                          counter, at)
+
+
+def kernels_at(x, vel, q, L, inv_mass, inv_body, radius, shape, hull, hull_start, faces,
+               face_start, rest, fric, plane_p, plane_n, g, dt, v_rest) -> tuple:
+    """The machine code :func:`step_world` calls for these arrays' types (``at``): the
+    sphere's flight, the plane pass, the sphere pass, the hull pass and the contact, each
+    typed as step_world calls it (its scratch arrays made here alike)."""
+    cache, counter, point = np.empty((0, 4)), np.zeros(2, np.int64), np.zeros(3)
+    dt, v_rest = float(dt), float(v_rest)
+    resolve = compiled_at(_resolve, (0, 0, point, point, 0.0, 0.0, x, vel, q, L, inv_mass,
+                                     inv_body, v_rest, cache, counter))
+    flight = compiled_at(_sphere_flight, (0, x, vel, q, L, inv_mass, inv_body, radius, rest,
+                                          fric, plane_p, plane_n, g, dt, v_rest, resolve))
+    plane = compiled_at(_plane_pass, (0, x, vel, q, L, inv_mass, inv_body, radius, shape, hull,
+                                      hull_start, rest, fric, plane_p, plane_n, v_rest, False,
+                                      cache, counter, resolve))
+    sphere = compiled_at(_sphere_pass, (0, 0, point, 0.0, x, vel, q, L, inv_mass, inv_body,
+                                        radius, rest, fric, v_rest, False, cache, counter,
+                                        resolve))
+    hull_pass = compiled_at(_hull_pass, (0, 0, x, vel, q, L, inv_mass, inv_body, hull,
+                                         hull_start, faces, face_start, rest, fric, v_rest,
+                                         False, cache, counter, resolve))
+    return flight, plane, sphere, hull_pass, resolve
 
 
 # ---------------------------------------------------------------------- the world
@@ -503,12 +537,23 @@ class World:
         self.q = np.tile([1.0, 0.0, 0.0, 0.0], (len(b), 1))
         self.L = np.array([body.inertia @ body.spin for body in b], np.float64).reshape(-1, 3)
 
-    def step(self) -> None:
-        step_world(self.x, self.v, self.q, self.L, self.inv_mass, self.inv_body, self.radius,
-                   self.shape, self.hull, self.hull_start, self.faces, self.face_start,
-                   self.rest, self.fric, self.plane_p,
-                   self.plane_n, self.sphere_c, self.sphere_r, self.gravity, self.dt,
-                   self.iterations, self.v_rest)
+    def _arrays(self) -> tuple:
+        return (self.x, self.v, self.q, self.L, self.inv_mass, self.inv_body, self.radius,
+                self.shape, self.hull, self.hull_start, self.faces, self.face_start, self.rest,
+                self.fric, self.plane_p, self.plane_n)
+
+    def scratch(self) -> tuple:
+        """What a run of steps shares: the kernels' machine code and the contacts' rows
+        (2 MB, allocated once a run: a fresh buffer every step cost a few tenths of a
+        millisecond of a step's ~1 ms)."""
+        return (kernels_at(*self._arrays(), self.gravity, self.dt, self.v_rest),
+                np.empty((MAX_CONTACTS, 4)))
+
+    def step(self, scratch: tuple | None = None) -> None:
+        """One step; ``scratch``: :meth:`scratch`'s, when stepping many."""
+        at, cache = scratch if scratch is not None else self.scratch()
+        step_world(*self._arrays(), self.sphere_c, self.sphere_r, self.gravity, self.dt,
+                   self.iterations, self.v_rest, at, cache)
         self.step_index += 1
 
     def steps_to(self, t: float) -> int:
@@ -528,9 +573,10 @@ class World:
 
     def step_on(self, n: int) -> None:
         """n steps on, snapshots noted on the way."""
+        scratch = self.scratch()
         for _ in range(n):
             self.rewind.note(self.step_index, self.snapshot)
-            self.step()
+            self.step(scratch)
 
     def rotations(self) -> np.ndarray:
         """(N, 3, 3): each body's rotation since t = 0."""
