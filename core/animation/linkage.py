@@ -32,7 +32,7 @@ import math
 
 import numpy as np
 
-from core.jit import njit
+from core.jit import call_compiled, compiled_at, njit
 from core.vectors import mat_vec3
 
 DLS, CCD = 0, 1
@@ -143,14 +143,35 @@ def _error(base, axes, bones, theta, target, points, world_axes):
     return math.sqrt(np.dot(d, d))
 
 
-@njit(cache=True)
 def solve_chain(base, axes, bones, theta0, lo, hi, target, solver, damping, iterations):
     """The chain's angles that bring its end to ``target`` (or as near as the limits and
     the reach allow), from ``theta0``; every iterate within ``[lo, hi]``. A descent that
     ends short of the target may be held at a limit it started on (the elbow, straight at
     its stop, pushed the wrong way): a second descent from the middle of every joint's
     range is made then, and the nearer of the two kept."""
-    theta = _descend(base, axes, bones, theta0, lo, hi, target, solver, damping, iterations)
+    given = _given(base, axes, bones, theta0, lo, hi, target, solver, damping, iterations)
+    return _solve_chain(*given, _descend_at(given))
+
+
+def _given(base, axes, bones, theta0, lo, hi, target, solver, damping, iterations) -> tuple:
+    """The solver's arguments as its kernels take them (every array C-ordered float64, so
+    that a descent from ``theta0`` and one from the middle of the range are one kernel)."""
+    arrays = (np.ascontiguousarray(a, dtype=np.float64)
+              for a in (base, axes, bones, theta0, lo, hi, target))
+    return (*arrays, int(solver), float(damping), int(iterations))
+
+
+def _descend_at(given) -> tuple[int, int]:
+    """:func:`_descend`'s machine code for the solver's arguments ``given``."""
+    return compiled_at(_descend, given)
+
+
+@njit(cache=True)
+def _solve_chain(base, axes, bones, theta0, lo, hi, target, solver, damping, iterations, at):
+    """:func:`solve_chain`, its descents called by their address ``at`` (core.jit.
+    call_compiled): ``_descend`` is optimised once, not again in every kernel above it."""
+    theta = call_compiled(at, _descend, base, axes, bones, theta0, lo, hi, target, solver,
+                          damping, iterations)
     n = len(theta0)
     points, world_axes = np.empty((n + 1, 3)), np.empty((n, 3))
     reach = 0.0
@@ -160,7 +181,8 @@ def solve_chain(base, axes, bones, theta0, lo, hi, target, solver, damping, iter
     if error <= 1e3 * TOLERANCE * reach:
         return theta
     middle = 0.5 * (np.maximum(lo, -math.pi) + np.minimum(hi, math.pi))
-    other = _descend(base, axes, bones, middle, lo, hi, target, solver, damping, iterations)
+    other = call_compiled(at, _descend, base, axes, bones, middle, lo, hi, target, solver,
+                          damping, iterations)
     if _error(base, axes, bones, other, target, points, world_axes) < error:
         return other
     return theta
@@ -238,13 +260,24 @@ def _descend(base, axes, bones, theta0, lo, hi, target, solver, damping, iterati
     return theta
 
 
-@njit(cache=True)
 def solve_many(base, axes, bones, theta0, lo, hi, targets, solver, damping, iterations):
     """:func:`solve_chain` for each row of ``targets`` (a batch: tests, tables of poses)."""
+    targets = np.ascontiguousarray(targets, dtype=np.float64).reshape(-1, 3)
+    given = _given(base, axes, bones, theta0, lo, hi, np.zeros(3), solver, damping, iterations)
+    descend = _descend_at(given)
+    chain = compiled_at(_solve_chain, (*given, descend))
+    base, axes, bones, theta0, lo, hi, _, solver, damping, iterations = given
+    return _solve_many(base, axes, bones, theta0, lo, hi, targets, solver, damping, iterations,
+                       chain, descend)
+
+
+@njit(cache=True)
+def _solve_many(base, axes, bones, theta0, lo, hi, targets, solver, damping, iterations, chain,
+                descend):
     out = np.empty((len(targets), len(theta0)))
     for k in range(len(targets)):
-        out[k] = solve_chain(base, axes, bones, theta0, lo, hi, targets[k], solver, damping,
-                             iterations)
+        out[k] = call_compiled(chain, _solve_chain, base, axes, bones, theta0, lo, hi,
+                               targets[k], solver, damping, iterations, descend)
     return out
 
 
