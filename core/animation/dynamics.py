@@ -552,8 +552,8 @@ class World:
     def step(self, scratch: tuple | None = None) -> None:
         """One step; ``scratch``: :meth:`scratch`'s, when stepping many."""
         at, cache = scratch if scratch is not None else self.scratch()
-        step_world(*self._arrays(), self.sphere_c, self.sphere_r, self.gravity, self.dt,
-                   self.iterations, self.v_rest, at, cache)
+        step_world(*self._arrays(), self.sphere_c, self.sphere_r, self.gravity,
+                   float(self.dt), int(self.iterations), self.v_rest, at, cache)
         self.step_index += 1
 
     def steps_to(self, t: float) -> int:

@@ -48,7 +48,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from core.jit import config, njit, prange
+from core.jit import SimplifiedCompiler, call_compiled, compiled_at, config, njit, prange
 from core.raytrace import intersect
 
 BINS = 16
@@ -502,20 +502,38 @@ def spread(j, chunks):
     return r + i * threads
 
 
-@njit(cache=True, parallel=True, nogil=True)
 def closest_many(bvh, origins, directions, t_min, t_max, prim, t_hit, u_hit, v_hit):
     """:func:`closest` for every ray (in parallel): the scene triangle (-1: none), t, u, v."""
+    given = (bvh, origins, directions, t_min, t_max, prim, t_hit, u_hit, v_hit)
+    _closest_chunks(*given, compiled_at(_closest_run, given + (0, 0)))
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _closest_chunks(bvh, origins, directions, t_min, t_max, prim, t_hit, u_hit, v_hit, at):
+    """:func:`_closest_run` on chunks of 1,024 rays, in parallel, called by its address
+    ``at`` (core.jit.call_compiled): the walk is optimised once, in ``_closest_run``, not
+    again inside this loop."""
     n = origins.shape[0]
     chunks = (n + 1023) // 1024
     for j in prange(chunks):
         chunk = spread(j, chunks)
-        stack = new_stack()
-        for i in range(chunk * 1024, min(n, (chunk + 1) * 1024)):
-            k, t, u, v = closest(bvh, origins[i, 0], origins[i, 1], origins[i, 2],
-                                 directions[i, 0], directions[i, 1], directions[i, 2],
-                                 t_min[i], t_max[i], stack)
-            prim[i] = bvh.prim[k] if k >= 0 else -1
-            t_hit[i], u_hit[i], v_hit[i] = t, u, v
+        call_compiled(at, _closest_run, bvh, origins, directions, t_min, t_max, prim, t_hit,
+                      u_hit, v_hit, chunk * 1024, min(n, (chunk + 1) * 1024))
+
+
+# numpy's error model, as the parallel loop's body that it was; simplified, as that body was
+# (core.jit.SimplifiedCompiler: without it the walk took 1.25x as long)
+@njit(cache=True, nogil=True, error_model="numpy", pipeline_class=SimplifiedCompiler)
+def _closest_run(bvh, origins, directions, t_min, t_max, prim, t_hit, u_hit, v_hit, start,
+                 end):
+    """:func:`closest` for rays ``start`` to ``end``."""
+    stack = new_stack()
+    for i in range(start, end):
+        k, t, u, v = closest(bvh, origins[i, 0], origins[i, 1], origins[i, 2],
+                             directions[i, 0], directions[i, 1], directions[i, 2],
+                             t_min[i], t_max[i], stack)
+        prim[i] = bvh.prim[k] if k >= 0 else -1
+        t_hit[i], u_hit[i], v_hit[i] = t, u, v
 
 
 @njit(cache=True, parallel=True, nogil=True)
