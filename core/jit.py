@@ -45,6 +45,13 @@ renderer's compile, and 9 of the 19 s of ``whitted.trace``. :func:`shared_scope_
 the blocks of one such copy share one copy of their scope (what one deep copy of all the
 blocks together would give); numba's renaming then walks one scope instead of one per block.
 
+numba compiles the implementation of an ``@overload`` (``np.empty``'s, ``min``'s, …) anew
+for each literal argument and each set of its caller's flags: ``np.empty(3)`` and
+``np.empty(4)`` each compiled the ``(int64, …)`` form, and so did a ``nogil`` kernel beside a
+plain one, though that code depends only on the implementation's own code and closed-over
+values and on the four flags a callee takes from its caller (error model, fastmath,
+forceinline, NRT). :func:`shared_overload_impls` hands numba one dispatcher for each of those.
+
 If numba's cache classes do not have the shape this expects (another numba version),
 nothing is changed: the kernels load as numba loads them.
 
@@ -81,7 +88,7 @@ from numba.core.runtime import nrt
 
 __all__ = ["SimplifiedCompiler", "config", "kernel_digest", "njit", "prange",
            "quick_cache_loads", "reuse_plain_overloads", "serialised_cache_saves",
-           "untimed_llvm_calls"]
+           "shared_overload_impls", "untimed_llvm_calls"]
 
 # The packages whose kernel files the warm-up's stamp digests (app/distribution/warm_stamp.py:
 # after any change to one of them the warm-up runs again and compiles what went stale).
@@ -495,11 +502,66 @@ def shared_scope_copies() -> bool:
     inline_closurecall.copy = _BlockCopier(copy)
     return True
 
+
+# The flags a callee takes from the kernel that calls it (numba.core.cpu.CPUTargetOptions)
+INHERITED_FLAGS = ("error_model", "fastmath", "forceinline", "nrt")
+
+
+def _impl_key(pyfunc, options):
+    """What an ``@overload`` implementation compiles from: its code, the values it closes
+    over, its defaults, its jit options and the caller's inherited flags (None: a function
+    whose parts cannot be compared)."""
+    from numba.core import targetconfig
+    flags = targetconfig.ConfigStack.top_or_none()
+    try:
+        cells = tuple(c.cell_contents for c in pyfunc.__closure__ or ())
+        key = (pyfunc.__code__, cells, pyfunc.__defaults__, tuple(sorted(options.items())),
+               None if flags is None else tuple(repr(getattr(flags, name, None))
+                                                for name in INHERITED_FLAGS))
+        hash(key)
+    except (TypeError, ValueError):      # an unhashable value, or an empty cell
+        return None
+    return key
+
+
+def shared_overload_impls() -> bool:
+    """One compiled ``@overload`` implementation per code, closed-over values and inherited
+    flags (see the module). Returns whether the change is in place."""
+    from numba.core.typing import templates
+    template = getattr(templates, "_OverloadFunctionTemplate", None)
+    if template is None or not hasattr(template, "_get_jit_decorator"):
+        return False
+    if getattr(template._get_jit_decorator, "shared", False):
+        return True
+    jit_decorator = template._get_jit_decorator
+    made = {}
+
+    def _get_jit_decorator(self):
+        jitter = jit_decorator(self)
+
+        def shared_jitter(**options):
+            decorate = jitter(**options)
+
+            def dispatcher(pyfunc):
+                key = _impl_key(pyfunc, options)
+                if key is None:
+                    return decorate(pyfunc)
+                if key not in made:
+                    made[key] = decorate(pyfunc)
+                return made[key]
+            return dispatcher
+        return shared_jitter
+    _get_jit_decorator.shared = True
+    template._get_jit_decorator = _get_jit_decorator
+    return True
+
+
 QUICK_CACHE_LOADS = quick_cache_loads()
 SERIALISED_CACHE_SAVES = serialised_cache_saves()
 TOLERANT_CACHE_FILES = tolerant_cache_files()    # after it: wraps its save
 UNTIMED_LLVM_CALLS = untimed_llvm_calls()
 SHARED_SCOPE_COPIES = shared_scope_copies()
+SHARED_OVERLOAD_IMPLS = shared_overload_impls()
 
 
 # --------------------------------------------------------------------------------------------

@@ -411,3 +411,67 @@ def test_a_kernel_calling_by_address_is_tied_to_the_type_key_frozen_into_it(monk
     assert jit.kernel_digest(whitted.trace_many.py_func) != before
     monkeypatch.undo()
     assert jit.kernel_digest(whitted.trace_many.py_func) == before
+
+
+OVERLOADED = '''
+import numpy as np
+from numba.extending import overload
+from core.jit import njit
+
+
+def filled(n):
+    raise NotImplementedError("a kernel's helper: called from kernels only")
+
+
+@overload(filled)
+def _filled(n):
+    kind = np.int64
+
+    def impl(n):
+        return np.full(n, 7, kind)
+    return impl
+
+
+@njit(cache=True)
+def three():
+    return filled(3).sum()
+
+
+@njit(cache=True, nogil=True)
+def four():
+    return filled(4).sum()
+
+
+@njit(cache=True)
+def many(n):
+    return filled(n).sum()
+
+
+@njit(cache=True, error_model="numpy")
+def five_numpy():
+    return filled(5).sum()
+'''
+
+
+def test_an_overloads_implementation_compiles_once_per_code_and_inherited_flags(tmp_path):
+    """numba alone compiled ``impl`` for ``(int64,)`` three times here: for ``three``, again
+    for ``four`` (a ``nogil`` kernel; another literal), and for ``five_numpy``. numpy's error
+    model reaches the callee's code, so that one compiles on its own; ``nogil`` and the
+    literal do not."""
+    (tmp_path / "overloaded_for_jit_test.py").write_text(OVERLOADED)
+    said = _run(tmp_path, """
+        from numba.core import event
+        compiled = []
+        class Listener(event.Listener):
+            def on_start(self, ev):
+                d = ev.data["dispatcher"]
+                if d.py_func.__module__ == "overloaded_for_jit_test":
+                    compiled.append((d.py_func.__name__, tuple(map(str, ev.data["args"]))))
+            def on_end(self, ev): pass
+        event.register("numba:compile", Listener())
+        import core.jit, overloaded_for_jit_test as k
+        print(core.jit.SHARED_OVERLOAD_IMPLS, k.three(), k.four(), k.many(6), k.five_numpy())
+        print([args for name, args in compiled if name == "impl"])
+    """)
+    # 7 x 3, 7 x 4, 7 x 6, 7 x 5
+    assert said == "True 21 28 42 35\n[('int64',), ('int64',)]"
