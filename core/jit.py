@@ -514,8 +514,12 @@ def _impl_key(pyfunc, options):
     from numba.core import targetconfig
     flags = targetconfig.ConfigStack.top_or_none()
     try:
-        cells = tuple(c.cell_contents for c in pyfunc.__closure__ or ())
-        key = (pyfunc.__code__, cells, pyfunc.__defaults__, tuple(sorted(options.items())),
+        # each value with its type: 1, 1.0 and True are equal, and numba types them apart
+        cells = tuple((type(c.cell_contents), c.cell_contents) for c in pyfunc.__closure__ or ())
+        defaults = tuple((type(v), v) for v in pyfunc.__defaults__ or ())
+        key = (pyfunc.__code__, cells, defaults,
+               tuple(sorted((k, type(v), v) for k, v in (pyfunc.__kwdefaults__ or {}).items())),
+               tuple(sorted(options.items())),
                None if flags is None else tuple(repr(getattr(flags, name, None))
                                                 for name in INHERITED_FLAGS))
         hash(key)

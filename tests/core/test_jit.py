@@ -415,6 +415,7 @@ def test_a_kernel_calling_by_address_is_tied_to_the_type_key_frozen_into_it(monk
 
 OVERLOADED = '''
 import numpy as np
+from numba import types
 from numba.extending import overload
 from core.jit import njit
 
@@ -450,6 +451,24 @@ def many(n):
 @njit(cache=True, error_model="numpy")
 def five_numpy():
     return filled(5).sum()
+
+
+def unit(x):
+    raise NotImplementedError("a kernel's helper: called from kernels only")
+
+
+@overload(unit)
+def _unit(x):
+    one = 1 if isinstance(x, types.Integer) else 1.0     # equal values, apart in type
+
+    def impl(x):
+        return one
+    return impl
+
+
+@njit(cache=True)
+def units():
+    return unit(2), unit(2.5)
 '''
 
 
@@ -475,3 +494,12 @@ def test_an_overloads_implementation_compiles_once_per_code_and_inherited_flags(
     """)
     # 7 x 3, 7 x 4, 7 x 6, 7 x 5
     assert said == "True 21 28 42 35\n[('int64',), ('int64',)]"
+
+
+def test_implementations_closing_over_equal_values_of_other_types_stay_apart(tmp_path):
+    (tmp_path / "overloaded_for_jit_test.py").write_text(OVERLOADED)
+    said = _run(tmp_path, """
+        import overloaded_for_jit_test as k
+        print(k.units())
+    """)
+    assert said == "(1, 1.0)"
