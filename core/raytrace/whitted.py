@@ -51,7 +51,10 @@ import math
 
 import numpy as np
 
-from core.jit import SimplifiedCompiler, call_compiled, compiled_at, njit, prange
+from numba.core import types
+
+from core.jit import (NOT_COMPILED, SimplifiedCompiler, call_compiled, compiled_apart,
+                      compiled_at, njit, prange)
 from core.raytrace import bvh, intersect, optics
 from core.texture.surface import UV, textured_at
 from core.shading.illumination import (EYE_DIRECTION, EYE_POINT, LIGHT_INTENSITY, OD, POINT_LIGHT,
@@ -232,13 +235,15 @@ def has_maps(tex, kind, s):
     return False
 
 
+@compiled_apart(returns=types.UniTuple(types.float64, 3))
 @njit(cache=True)
 def textured_colour(packed, index, s, px, py, pz, nx, ny, nz, arriving, ambient, eye, halfway,
                     tex, filter_, bump, u, v, duv, surf):
     """``I_local`` of a textured triangle (BVH position ``index``, barycentrics ``(u, v)``)
     lit by ``arriving`` (the lights scaled by their shadows, :func:`shadowed_lights`): the
     z-buffer's textured pixel step (:func:`core.texture.surface.textured_at`) with the (u, v)
-    derivatives ``duv`` of the ray's differentials."""
+    derivatives ``duv`` of the ray's differentials. :func:`trace` calls it by its address
+    (:func:`colour_at`), so that a scene without textures never compiles it."""
     f = packed.prim[index]
     i0, i1, i2 = packed.corners[f, 0], packed.corners[f, 1], packed.corners[f, 2]
     w0 = 1.0 - u - v
@@ -251,6 +256,17 @@ def textured_colour(packed, index, s, px, py, pz, nx, ny, nz, arriving, ambient,
     for c in range(3):                                  # textured_at wrote its texel's O_d
         surf[s, OD + c] = packed.surfaces[s, OD + c]
     return r, g, b
+
+
+def colour_at(packed, lights, ambient, halfway, tex, textured, filter_, bump):
+    """:func:`textured_colour`'s machine code for the arguments :func:`trace` gives it,
+    compiled for a scene with textures only (:data:`core.jit.NOT_COMPILED` without: no
+    triangle then has maps, and :func:`trace` never calls it)."""
+    if not textured:
+        return NOT_COMPILED
+    given = (packed, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, lights, ambient, np.empty(4), halfway,
+             tex, filter_, bump, 0.0, 0.0, np.zeros(4), scratch(packed, True)[3])
+    return compiled_at(textured_colour, given)
 
 
 @njit(cache=True, inline="always")
@@ -373,15 +389,16 @@ def _push_differentials(rays, row, dp, dif, nx, ny, nz, alpha, dbeta):
 @njit(cache=True)
 def trace(packed, origins, directions, t_lo, t_hi, begin, end, primary_eye, lights, ambient,
           halfway, background, shadows, max_depth, epsilon, fresnel, medium, offset, rays,
-          scaled, surface_row, eye, stack, counts, tex, textured, filter_, bump, differentials,
-          work, tree, attenuation, raw):
+          scaled, surface_row, eye, stack, counts, tex, textured, filter_, bump, colour_at,
+          differentials, work, tree, attenuation, raw):
     """The colours (unclamped RGB) of primary rays ``begin .. end − 1`` into ``raw``: each
     ray's whole tree, depth first. One call traces a run of rays: a call hands over the
     scene's arrays and the texture tables, which cost more than a ray that misses everything
     when paid per ray (0.6 µs; 10,000 spheres at 400 x 400).
 
     With ``textured`` every ray carries its differentials (``differentials[i]``: the primary
-    ray's), so that a texture is filtered over the pixel's footprint where the ray lands.
+    ray's), so that a texture is filtered over the pixel's footprint where the ray lands, and
+    a textured triangle is lit by :func:`textured_colour` at ``colour_at`` (:func:`colour_at`).
     ``tree`` ``(R, TREE_COLUMNS)``: where to record the first R rays of the (last) ray's tree
     (the pixel inspector's; zero rows when tracing a frame); returns the count recorded."""
     dif, dp, duv, surf = work
@@ -442,9 +459,9 @@ def trace(packed, origins, directions, t_lo, t_hi, begin, end, primary_eye, ligh
                                        shadows, background, offset, scaled, surface_row, stack,
                                        counts)
             if mapped:
-                r, g, b = textured_colour(packed, index, s, px, py, pz, lnx, lny, lnz, arriving,
-                                          ambient, eye, halfway, tex, filter_, bump, u, v, duv,
-                                          surf)
+                r, g, b = call_compiled(colour_at, textured_colour, packed, index, s, px, py, pz,
+                                        lnx, lny, lnz, arriving, ambient, eye, halfway, tex,
+                                        filter_, bump, u, v, duv, surf)
             else:
                 r, g, b = light_point_calling(px, py, pz, lnx, lny, lnz, 0, surface_row, arriving,
                                               ambient, eye, halfway)
@@ -554,7 +571,7 @@ def scratch(packed, textured):
 @njit(cache=True, parallel=True, nogil=True)
 def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, ambient, halfway,
                background, shadows, max_depth, epsilon, fresnel, medium, offset, raw, counts,
-               tex, textured, filter_, bump, differentials, attenuation, at):
+               tex, textured, filter_, bump, differentials, attenuation, colour_at, at):
     """Every primary ray's colour into ``raw`` ``(N, 3)``; ray counts per chunk ``(C, 7)``;
     ``differentials`` ``(N, 12)`` (used when ``textured``). ``at``: :func:`trace`'s
     machine code for these arguments (:func:`trace_at`): called by its address, its
@@ -574,13 +591,13 @@ def trace_many(packed, origins, directions, t_min, t_max, primary_eye, lights, a
                       min(n, (chunk + 1) * CHUNK), primary_eye, lights, ambient, halfway,
                       background, shadows, max_depth, epsilon, fresnel, medium, offset, rays,
                       scaled, surface_row, eye, stack, counts[chunk], tex, textured, filter_,
-                      bump, differentials, work, no_tree, attenuation, raw)
+                      bump, colour_at, differentials, work, no_tree, attenuation, raw)
 
 
 def trace_at(packed, origins, directions, t_min, t_max, primary_eye, lights, ambient,
                   halfway, background, shadows, max_depth, epsilon, fresnel, medium, offset,
                   raw, counts, tex, textured, filter_, bump, differentials,
-                  attenuation) -> tuple[int, int]:
+                  attenuation, colour_at) -> tuple[int, int]:
     """:func:`trace`'s machine code for the arguments :func:`trace_many` gives it (its
     scratch arrays are made as it makes them, so that numba types them alike)."""
     scratch_arrays = (np.empty((1, STACK_COLUMNS)), np.empty(lights.shape),
@@ -588,7 +605,7 @@ def trace_at(packed, origins, directions, t_min, t_max, primary_eye, lights, amb
                       np.empty(counts.shape[1:], counts.dtype))
     given = (packed, origins, directions, t_min, t_max, 0, 0, primary_eye, lights, ambient,
              halfway, background, shadows, max_depth, epsilon, fresnel, medium, offset,
-             *scratch_arrays, tex, textured, filter_, bump, differentials,
+             *scratch_arrays, tex, textured, filter_, bump, colour_at, differentials,
              scratch(packed, textured), np.empty((0, TREE_COLUMNS)), attenuation, raw)
     return compiled_at(trace, given)
 

@@ -413,6 +413,59 @@ def test_a_kernel_calling_by_address_is_tied_to_the_type_key_frozen_into_it(monk
     assert jit.kernel_digest(whitted.trace_many.py_func) == before
 
 
+
+APART = '''
+from numba import types
+from core.jit import call_compiled, compiled_apart, njit
+
+
+@compiled_apart(returns=types.UniTuple(types.float64, 2))
+@njit(cache=True)
+def rare(a, i):
+    return a[i] * 2.0, a[i] + 1.0
+
+
+@compiled_apart(returns=types.float64)
+@njit(cache=True)
+def misdeclared(a, i):
+    return i
+
+
+@njit(cache=True)
+def caller(at, a, use):
+    if use:
+        x, y = call_compiled(at, rare, a, 1)
+        return x + y
+    return -1.0
+'''
+
+
+def test_a_kernel_compiled_apart_is_compiled_where_it_is_called_not_by_its_caller(tmp_path):
+    """The caller compiles (and loads from the cache) without compiling ``rare``; called by
+    the address compiled_at gives, ``rare`` runs; NOT_COMPILED is refused if ever called, and
+    a return type that is not the declared one is refused before any call."""
+    (tmp_path / "apart_for_jit_test.py").write_text(APART)
+    code = """
+        import numpy as np, apart_for_jit_test as k
+        from core.jit import NOT_COMPILED, compiled_at
+        a = np.arange(4.0)
+        print(k.caller(NOT_COMPILED, a, False), len(k.rare.signatures))
+        try:
+            k.caller(NOT_COMPILED, a, True)
+        except ValueError as error:
+            print(error)
+        print(k.caller(compiled_at(k.rare, (a, 0)), a, True), len(k.rare.signatures))
+        try:
+            compiled_at(k.misdeclared, (a, 0))
+        except TypeError as error:
+            print(error)
+    """
+    # a[1] = 1.0: 2 * 1 + (1 + 1) = 4, by hand
+    expected = ("-1.0 0\nmachine code for other argument types than rare's here\n4.0 1\n"
+                "misdeclared returns int64, not the float64 it declares")
+    assert _run(tmp_path, code) == expected
+    assert _run(tmp_path, code) == expected       # the caller and rare loaded from the cache
+
 OVERLOADED = '''
 import numpy as np
 from numba import types

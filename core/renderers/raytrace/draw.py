@@ -152,7 +152,10 @@ def trace_rays(setup: Setup, origins, directions, t_min, t_max,
             o.fresnel_code, o.medium, offset, raw, counts, setup.packing.texturing, textured,
             FILTERS[o.texture_filter], bool(o.bump),
             np.ascontiguousarray(differentials, dtype=np.float64),
-            np.array(o.secondary_attenuation, dtype=np.float64))
+            np.array(o.secondary_attenuation, dtype=np.float64),
+            whitted.colour_at(setup.packing.packed, setup.lights, setup.ambient, setup.halfway,
+                              setup.packing.texturing, textured, FILTERS[o.texture_filter],
+                              bool(o.bump)))
     whitted.trace_many(*args, whitted.trace_at(*args))
     setup.counts += counts.sum(axis=0)
     return raw

@@ -312,7 +312,10 @@ def _trace_one(setup: Setup, origin, direction, t_min, t_max, diff, tree):
         o.fresnel_code, o.medium, 1e-9 * setup.packing.scale, rays, np.empty(setup.lights.shape),
         np.empty((1, packed.surfaces.shape[1])), np.empty(4), bvh.new_stack(),
         counts, setup.packing.texturing, setup.packing.textured, FILTERS[o.texture_filter],
-        bool(o.bump), np.array([diff], dtype=np.float64),
+        bool(o.bump), whitted.colour_at(packed, setup.lights, setup.ambient, setup.halfway,
+                                        setup.packing.texturing, setup.packing.textured,
+                                        FILTERS[o.texture_filter], bool(o.bump)),
+        np.array([diff], dtype=np.float64),
         whitted.scratch(packed, setup.packing.textured), tree, np.array(o.secondary_attenuation, dtype=np.float64), raw)
     r, g, b = raw[0]
     setup.counts += counts
