@@ -556,3 +556,95 @@ def test_implementations_closing_over_equal_values_of_other_types_stay_apart(tmp
         print(k.units())
     """)
     assert said == "(1, 1.0)"
+
+
+def _kernels_with_loops_branches_and_reassignments():
+    """Small kernels, compiled afresh (no cache): loops, branches, variables assigned more
+    than once, an inlined helper, a tuple return."""
+    import numpy as np
+    from numba import njit as plain
+
+    @plain(inline="always")
+    def clamp(x, lo, hi):
+        if x < lo:
+            x = lo
+        elif x > hi:
+            x = hi
+        return x
+
+    @plain
+    def walk(a, t):
+        best, k = np.inf, -1
+        for i in range(a.shape[0]):
+            v = clamp(a[i] * t, -1.0, 1.0)
+            if v < best:
+                best, k = v, i
+            while v > 0.5:
+                v -= 0.25
+                k += 1
+        return best, k
+
+    @plain
+    def select(a, n):
+        s = 0.0
+        for i in range(n):
+            x = a[i % a.shape[0]]
+            if i % 3 == 0:
+                x = -x
+            elif i % 3 == 1:
+                continue
+            s += clamp(x, 0.0, 2.0)
+        return s
+    a = np.linspace(-2.0, 2.0, 9)
+    calls = ((walk, (a, 0.7)), (walk, (a, -1.3)), (select, (a, 20)))
+    # compiled, and as Python runs them (the interpreter: an independent check of the code)
+    return [(kernel(*args), kernel.py_func(*args)) for kernel, args in calls]
+
+
+def test_liveness_on_bit_sets_gives_numbas_own_live_sets(monkeypatch):
+    """Consistency check against numba's own implementation (a different algorithm's code,
+    not ours): every live map numba asks for while compiling these kernels is the same."""
+    from numba.core import analysis, ir_utils
+
+    import core.jit as jit
+    assert jit.BITSET_LIVE_MAPS
+    theirs = analysis.compute_live_map.__wrapped__
+    checked = []
+
+    def both(cfg, blocks, use, defs):
+        mine = jit._live_map(cfg, blocks, use, defs)
+        assert mine == theirs(cfg, blocks, use, defs)
+        checked.append(sum(len(v) for v in mine.values()))
+        return mine
+    monkeypatch.setattr(analysis, "compute_live_map", both)
+    monkeypatch.setattr(ir_utils, "compute_live_map", both)
+    _kernels_with_loops_branches_and_reassignments()
+    assert len(checked) >= 10 and max(checked) > 20
+
+
+def test_ssa_over_the_blocks_naming_a_variable_gives_numbas_own_ir(monkeypatch):
+    """Consistency check against numba's own SSA reconstruction, run on a deep copy of the
+    same blocks: the same blocks, statements and fresh names, printed line by line."""
+    import copy
+
+    from numba.core import ssa
+
+    import core.jit as jit
+    assert jit.SSA_BY_BLOCKS_NAMED
+    theirs = ssa._run_ssa.__wrapped__
+    rewritten = []
+
+    def text(blocks):
+        return [(label, [str(stmt) for stmt in block.body]) for label, block in blocks.items()]
+
+    def both(blocks):
+        expected = theirs(copy.deepcopy(blocks))
+        mine = jit._ssa_blocks(blocks)
+        assert text(mine) == text(expected)
+        assert not any(mine[label] is blocks[label] for label in mine)
+        rewritten.append(sum("phi(" in line for _, body in text(mine) for line in body))
+        return mine
+    monkeypatch.setattr(ssa, "_run_ssa", both)
+    results = _kernels_with_loops_branches_and_reassignments()
+    assert len(rewritten) >= 3 and max(rewritten) >= 2       # phi nodes were placed
+    assert all(compiled == interpreted for compiled, interpreted in results), results
