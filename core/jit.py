@@ -60,6 +60,13 @@ variables (1.9 → 0.2 s in ``whitted.trace``'s compile). Its SSA reconstruction
 block twice for each variable assigned more than once; :func:`ssa_by_blocks_named` runs the
 same handlers over the blocks that name that variable (0.9 → 0.1 s). Both give numba's own
 result: the same live sets and the same IR, checked call by call over the whole warm-up.
+Two more of its hot paths, over a whole warm-up in one process: its compile flags are hashed
+and compared as a dict of every option read through a property, 650,000 times (a cache key
+of each overload's typing) — :func:`quick_compile_flags` builds that dict from the defaults
+and the options set; and an IR statement's variables are gathered by joining a new list at
+each level of a recursion, three million times — :func:`listed_vars_in_one_list` appends to
+one. Together 3.5 % of the warm-up's CPU, with numba's values, hashes and lists (checked
+call by call over a whole warm-up).
 
 If numba's cache classes (or the analyses above) do not have the shape this expects
 (another numba version), nothing is changed: the kernels load and compile as numba's do.
@@ -92,7 +99,7 @@ import numba
 import numpy as np
 from llvmlite.binding import ffi as llvm_ffi
 from numba import config, prange  # noqa: F401  (re-exported: the kernels' imports)
-from numba.core import caching, types
+from numba.core import caching, ir, types
 from numba.core.runtime import nrt
 
 __all__ = ["SimplifiedCompiler", "config", "kernel_digest", "njit", "prange",
@@ -626,7 +633,6 @@ def _ssa_blocks(blocks):
 
 
 def _block_copy(block):
-    from numba.core import ir
     copied = ir.Block(scope=block.scope, loc=block.loc)
     copied.body = list(block.body)
     return copied
@@ -641,6 +647,81 @@ def ssa_by_blocks_named() -> bool:
     if not _is_known_source(ssa._run_ssa, "c497422bcf049990"):
         return False
     ssa._run_ssa = functools.wraps(ssa._run_ssa)(_ssa_blocks)
+    return True
+
+
+def _option_defaults(cls):
+    """``{option: default}`` of a ``TargetConfig`` class whose options all read through the
+    properties numba's metaclass made (``_values.get(name, default)``), else None."""
+    defaults = {}
+    for name, option in cls.options.items():
+        read = getattr(getattr(cls, name, None), "fget", None)
+        if not getattr(read, "__qualname__", "").endswith("make_prop.<locals>.getter"):
+            return None
+        defaults[name] = option.default
+    return defaults
+
+
+def quick_compile_flags() -> bool:
+    """numba's compile flags (``TargetConfig``) hashed and compared without reading each
+    option through its property (see the module). Returns whether the change is in place."""
+    from numba.core import targetconfig
+    config = targetconfig.TargetConfig
+    if getattr(config.values, "quick", False):
+        return True
+    if not (_is_known_source(config.values, "12a29dc810f6a91b")
+            and _is_known_source(config.__hash__, "4d15a6c75137a983")):
+        return False
+    known, slow = {}, config.values
+
+    def values(self):
+        cls = type(self)
+        if cls not in known:
+            known[cls] = _option_defaults(cls)
+        defaults = known[cls]
+        if defaults is None or not self._values.keys() <= defaults.keys():
+            return slow(self)
+        out = dict(defaults)              # in the options' order, as numba's
+        out.update(self._values)
+        return out
+
+    def hash_of(self):
+        # numba's hash(tuple(sorted(self.values()))) sorts the dict's keys: the options
+        return hash(tuple(sorted(self.options)))
+    values.quick, values.__wrapped__ = True, slow
+    config.values, config.__hash__ = values, hash_of
+    return True
+
+
+def _vars_into(value, out: list) -> None:
+    """numba's ``Inst._rec_list_vars``, appending to one list instead of joining lists."""
+    if isinstance(value, ir.Var):
+        out.append(value)
+    elif isinstance(value, ir.Inst):
+        out.extend(value.list_vars())
+    elif isinstance(value, (list, tuple)):
+        for item in value:
+            _vars_into(item, out)
+    elif isinstance(value, dict):
+        for item in value.values():
+            _vars_into(item, out)
+
+
+def _rec_list_vars(self, value):
+    out = []
+    _vars_into(value, out)
+    return out
+
+
+def listed_vars_in_one_list() -> bool:
+    """numba's IR ``list_vars`` without its intermediate lists (see the module). Returns
+    whether the change is in place."""
+    if ir.Inst._rec_list_vars is _rec_list_vars:
+        return True
+    if not _is_known_source(ir.Inst._rec_list_vars, "054700e9100b6299"):
+        return False
+    _rec_list_vars.__wrapped__ = ir.Inst._rec_list_vars       # numba's, for the tests
+    ir.Inst._rec_list_vars = _rec_list_vars
     return True
 
 
@@ -709,6 +790,8 @@ SHARED_SCOPE_COPIES = shared_scope_copies()
 SHARED_OVERLOAD_IMPLS = shared_overload_impls()
 BITSET_LIVE_MAPS = bitset_live_maps()
 SSA_BY_BLOCKS_NAMED = ssa_by_blocks_named()
+QUICK_COMPILE_FLAGS = quick_compile_flags()
+LISTED_VARS_IN_ONE_LIST = listed_vars_in_one_list()
 
 
 # --------------------------------------------------------------------------------------------

@@ -648,3 +648,47 @@ def test_ssa_over_the_blocks_naming_a_variable_gives_numbas_own_ir(monkeypatch):
     results = _kernels_with_loops_branches_and_reassignments()
     assert len(rewritten) >= 3 and max(rewritten) >= 2       # phi nodes were placed
     assert all(compiled == interpreted for compiled, interpreted in results), results
+
+
+def test_compile_flags_read_without_their_properties_are_numbas_values_and_hash():
+    """Consistency check against numba's own reading (each option through its property)."""
+    from numba.core.compiler import Flags
+
+    import core.jit as jit
+    assert jit.QUICK_COMPILE_FLAGS
+    plain, set_some = Flags(), Flags()
+    set_some.nrt, set_some.error_model, set_some.fastmath = True, "numpy", True
+    for flags in (plain, set_some, set_some.copy()):
+        expected = {name: getattr(flags, name) for name in flags.options}
+        got = flags.values()
+        assert got == expected and list(got) == list(expected)
+        assert hash(flags) == hash(tuple(sorted(expected)))
+    assert set_some == set_some.copy() and set_some != plain
+    assert {set_some: 1}[set_some.copy()] == 1
+
+
+def test_listed_variables_are_numbas_own_in_the_same_order():
+    """Consistency check against numba's ``_rec_list_vars``: every statement of a function's
+    IR lists the same variables, the same objects in the same order."""
+    from numba.core import ir
+    from numba.core.compiler import run_frontend
+
+    import core.jit as jit
+    assert jit.LISTED_VARS_IN_ONE_LIST
+    theirs = jit._rec_list_vars.__wrapped__
+
+    def kernel(a, n):
+        s, t = 0.0, (1, 2)
+        for i in range(n):
+            s += a[i % 3] * t[i % 2] if i > 1 else -a[0]
+        return s, [s, n], {"k": s}
+    statements = [stmt for block in run_frontend(kernel).blocks.values() for stmt in block.body]
+    listed = 0
+    for stmt in statements:
+        value = stmt.__dict__ if not isinstance(stmt, ir.Assign) else stmt.value
+        if isinstance(value, (dict, ir.Inst)):
+            mine = jit._rec_list_vars(stmt, value)
+            expected = theirs(stmt, value)
+            assert len(mine) == len(expected) and all(a is b for a, b in zip(mine, expected))
+            listed += len(mine)
+    assert len(statements) > 20 and listed > 20
