@@ -498,7 +498,6 @@ class _BlockCopier:
         return getattr(self._module, name)
 
     def deepcopy(self, x, memo=None):
-        from numba.core import ir
         if memo is not None or not isinstance(x, ir.Block):
             return self._module.deepcopy(x, memo)
         if x.scope is not self._scope or id(x) in self._memo:    # another IR, or a 2nd copy

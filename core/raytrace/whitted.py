@@ -265,7 +265,7 @@ def colour_at(packed, lights, ambient, halfway, tex, textured, filter_, bump):
     if not textured:
         return NOT_COMPILED
     given = (packed, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, lights, ambient, np.empty(4), halfway,
-             tex, filter_, bump, 0.0, 0.0, np.zeros(4), scratch(packed, True)[3])
+             tex, filter_, bump, 0.0, 0.0, np.zeros(4), packed.surfaces.copy())  # scratch's
     return compiled_at(textured_colour, given)
 
 
