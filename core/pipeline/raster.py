@@ -21,7 +21,10 @@ Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene and bins it into t
   goes into the *scene* (its id, fixed-point corners, depths and 1/W) and into the *bin* of
   every 64 x 64 tile its box meets (a big triangle skips the tiles one of its edges misses),
   with its nearest depth beside it. Setup counts the entries per tile, chunk by chunk of the
-  triangle array, then writes them, so that each bin lists its triangles in triangle order.
+  triangle array, then writes them, so that each bin lists its front faces (counter-clockwise
+  on the screen) in triangle order and then its back faces in triangle order: in a mesh that
+  is not closed (whose back faces are drawn) the near side then lands first, and
+  hierarchical z rejects most of the far side without visiting its pixels.
 * **rast** takes the tiles one at a time, each with its own slice of the z-buffer (a tile's
   depth and ids stay in the core's cache). It orients each triangle counter-clockwise
   (either winding is drawn) and writes each edge as an edge function E(x, y) = A x + B y + C
@@ -32,14 +35,17 @@ Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene and bins it into t
   per pixel (FvDFH's incremental scan line, in integers). Depth is interpolated linearly in
   screen space (after the perspective-to-parallel divide it is an affine function of x and y,
   FvDFH 6.5.4) and tested as the notes write it, ``z >= zbuffer``: on a tie the later
-  triangle wins. Barycentrics are perspective-corrected with 1/W.
+  triangle wins. The rast does not draw in triangle order (front faces first, or last to
+  first), so it settles a tie by the triangle ids, the later one winning: the same winner as
+  the notes' test in triangle order. Barycentrics are perspective-corrected with 1/W.
 * **hierarchical z**: once every pixel of an 8 x 8 block has been written, the block keeps its
   farthest depth (its *coarse z*), and once every block of a tile is full, the tile keeps the
   farthest of those. Depths only grow during a frame, so these stay lower bounds: a triangle
   whose nearest vertex is behind the tile's coarse z is dropped reading its bin entry alone,
   and one behind a block's is not visited in that block. A tile whose later triangles look
-  nearer (a back-to-front stream) is drawn last to first with the test ``z > zbuffer``, which
-  picks the same winner at every pixel, ties included, and lets the near surface land first.
+  nearer (a back-to-front stream) is drawn last to first (its front faces, then its back
+  faces), which picks the same winner at every pixel, ties included, and lets the near
+  surface land first.
   So depth complexity costs close to the visible pixels plus a few nanoseconds per hidden
   triangle.
 * **early z in setup**: a frame of ``BATCH_FROM`` triangles or more goes in two batches, the
@@ -92,7 +98,7 @@ HIERARCHICAL_Z = True  # skip hidden triangles by tile and by block (the bench c
 # scene slot, a bin entry or a second look. Deep stacks of layers then cost close to one.
 BATCH_FROM = 200_000
 FIRST_BATCH = 64            # the first batch: this fraction (1/64) of the triangles
-COUNT_CELLS = 1 << 20  # at most this many (chunk, tile) counters: huge frames get fewer chunks
+COUNT_CELLS = 1 << 20  # at most this many (chunk, bin half) counters: huge frames get fewer chunks
 PREFETCH = 8           # the rast asks for the scene slot of the bin entry this far ahead
 
 
@@ -111,8 +117,14 @@ class _Scene:
     xy: np.ndarray = field(default_factory=lambda: np.empty((0, 6), np.int32))  # fixed x0..y2
     zw: np.ndarray = field(default_factory=lambda: np.empty((0, 6)))  # z0, z1, z2, 1/W0..2
     chunk_end: np.ndarray = field(default_factory=lambda: np.empty(SETUP_CHUNKS, np.int64))
-    counts: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))  # (chunk, tile)
+    # per chunk, the front faces' depth sum and count, then the back faces': do the front
+    # faces lie nearer (a mesh wound one way), so that drawing them first pays?
+    sides: np.ndarray = field(default_factory=lambda: np.empty((SETUP_CHUNKS, 4)))
+    # (chunk, 2 tile + 1 for a back face): the entries a chunk puts in each half of each bin
+    counts: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
     tile_start: np.ndarray = field(default_factory=lambda: np.empty(1, np.int64))
+    # per tile, the first entry of its bin that is a back face (its front faces come before)
+    tile_split: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
     tile_rows: np.ndarray = field(default_factory=lambda: np.empty((0, TILE, 2), np.int32))
     bins: np.ndarray = field(default_factory=lambda: np.empty(0, np.int32))
     bin_z: np.ndarray = field(default_factory=lambda: np.empty(0))  # each entry's nearest z
@@ -132,10 +144,11 @@ class _Scene:
             self.tri = np.empty(n, np.int32)
             self.xy = np.empty((n, 6), np.int32)
             self.zw = np.empty((n, 6))
-        if self.counts.shape[0] < n_chunks * n_tiles:
-            self.counts = np.empty(n_chunks * n_tiles, np.int64)
+        if self.counts.shape[0] < n_chunks * 2 * n_tiles:
+            self.counts = np.empty(n_chunks * 2 * n_tiles, np.int64)
         if self.tile_start.shape[0] < n_tiles + 1:
             self.tile_start = np.empty(n_tiles + 1, np.int64)
+            self.tile_split = np.empty(n_tiles, np.int64)
             self.tile_rows = np.empty((n_tiles, TILE, 2), np.int32)
             self.tile_unfilled = np.empty((n_tiles, N_BLOCKS + 1), np.int32)
             self.tile_zmin = np.empty((n_tiles, N_BLOCKS + 1))
@@ -248,6 +261,13 @@ def _edge(xa, ya, xb, yb, sign):
     top_left = (a > 0) | ((a == 0) & (b < 0))  # no short circuit: a select, not a branch
     bias = 1 - np.int64(top_left)
     return a, b, c - bias, bias
+
+
+@njit(cache=True)
+def _back_face(x0, y0, x1, y1, x2, y2):
+    """1 for a triangle clockwise on the screen (y up: a back face of a mesh wound
+    counter-clockwise seen from outside), else 0: which half of a bin it goes in."""
+    return np.int64((x1 - x0) * (y2 - y0) - (x2 - x0) * (y1 - y0) < 0)
 
 
 @njit(cache=True)
@@ -382,10 +402,12 @@ def _hidden_vertices(xy_z, fixed, n_tiles_x, width, height, tile_zmin, later_fir
 # compiled form for both (core.jit.reuse_plain_overloads)
 @njit(cache=True, error_model="numpy")
 def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk, n_chunks,
-                 s_tri, s_xy, s_zw, chunk_end, counts, offset, tile_zmin, early_z, later_first,
-                 hidden_in):
+                 s_tri, s_xy, s_zw, chunk_end, counts, sides, offset, tile_zmin, early_z,
+                 later_first, hidden_in):
     """Put the triangles of one chunk that can draw something into the scene, in order, and
-    count how many of them each tile will draw (``counts[chunk, tile]``). ``triangles`` is a
+    count how many of them each tile will draw (``counts[chunk, 2 tile]`` the front faces,
+    ``counts[chunk, 2 tile + 1]`` the back faces: :func:`_back_face`), and sum each side's
+    corner depths (``sides[chunk]``: front sum and count, back sum and count). ``triangles`` is a
     batch starting at triangle ``offset``; with ``early_z`` a triangle behind the coarse z of
     every tile its box meets (the batches before drew there) is dropped here; first, cheaply,
     one whose three corners are hidden in one tile (``hidden_in``, :func:`_hidden_vertices`).
@@ -398,6 +420,7 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
     bad = 0
     n_vertices = fixed.shape[0]
     counts[chunk, :] = 0
+    sides[chunk, :] = 0.0
     for t in range(first, (chunk + 1) * n // n_chunks):
         v0 = triangles[t, 0]
         v1 = triangles[t, 1]
@@ -429,11 +452,14 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
         tx0, tx1 = i_min >> TILE_BITS, i_max >> TILE_BITS
         ty0, ty1 = j_min >> TILE_BITS, j_max >> TILE_BITS
         several = tx1 > tx0 and ty1 > ty0
+        back = _back_face(x0, y0, x1, y1, x2, y2)
         for ty in range(ty0, ty1 + 1):
             for tx in range(tx0, tx1 + 1):
                 if _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty,
                                 several):
-                    counts[chunk, ty * n_tiles_x + tx] += 1
+                    counts[chunk, 2 * (ty * n_tiles_x + tx) + back] += 1
+        sides[chunk, 2 * back] += xy_z[v0, 2] + xy_z[v1, 2] + xy_z[v2, 2]
+        sides[chunk, 2 * back + 1] += 1.0
         s_tri[slot] = offset + t
         s_xy[slot, 0] = x0
         s_xy[slot, 1] = y0
@@ -461,11 +487,12 @@ def _nearest(z0, z1, z2):
 
 @njit(cache=True, error_model="numpy")
 def _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_zw, chunk_end,
-               cursor, bins, bin_z):
+               cursor, bins, bin_z, partition):
     """Append the chunk's scene slots to the bins of the tiles they draw into: the same tiles
     :func:`_setup_chunk` counted, written from the chunk's cursor in each bin. Each entry
     carries the triangle's nearest depth, so that the rast rejects a hidden triangle reading
-    the bin alone, in order (its scene slot may be far away in memory)."""
+    the bin alone, in order (its scene slot may be far away in memory). With ``partition``
+    the front faces go in the first half of each bin and the back faces in the second."""
     for slot in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
         z_near = _nearest(s_zw[slot, 0], s_zw[slot, 1], s_zw[slot, 2])
         x0 = np.int64(s_xy[slot, 0])
@@ -478,36 +505,47 @@ def _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_z
         tx0, tx1 = i_min >> TILE_BITS, i_max >> TILE_BITS
         ty0, ty1 = j_min >> TILE_BITS, j_max >> TILE_BITS
         several = tx1 > tx0 and ty1 > ty0
+        back = _back_face(x0, y0, x1, y1, x2, y2) if partition else 0
         for ty in range(ty0, ty1 + 1):
             for tx in range(tx0, tx1 + 1):
                 if _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty,
                                 several):
-                    k = ty * n_tiles_x + tx
+                    k = 2 * (ty * n_tiles_x + tx) + back
                     bins[cursor[chunk, k]] = slot
                     bin_z[cursor[chunk, k]] = z_near
                     cursor[chunk, k] += 1
 
 
 @njit(cache=True, nogil=True)
-def _bin_offsets(counts, tile_start):
-    """Turn the per-chunk counts into write cursors, bin by bin and chunk by chunk within a
-    bin, so that each tile's bin lists its triangles in triangle order. Returns the total."""
-    n_chunks, n_tiles = counts.shape
+def _bin_offsets(counts, tile_start, tile_split, partition):
+    """Turn the per-chunk counts into write cursors, bin by bin, chunk by chunk within a bin,
+    so that each bin lists its triangles in triangle order; with ``partition`` its front faces
+    and then (from ``tile_split``) its back faces, each half in triangle order. Without, the
+    two halves' counts are one, at the front faces' cursor. Returns the total."""
+    n_chunks = counts.shape[0]
+    n_tiles = counts.shape[1] // 2
     total = 0
     for k in range(n_tiles):
         tile_start[k] = total
-        for c in range(n_chunks):
-            here = counts[c, k]
-            counts[c, k] = total
-            total += here
+        for back in range(2):
+            if back:
+                tile_split[k] = total
+                if not partition:
+                    break
+            for c in range(n_chunks):
+                here = counts[c, 2 * k + back]
+                if not partition:
+                    here += counts[c, 2 * k + 1]
+                counts[c, 2 * k + back] = total
+                total += here
     tile_start[n_tiles] = total
     return total
 
 
 @njit(cache=True, parallel=True, nogil=True)
 def _setup_parallel(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri, s_xy,
-                    s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first,
-                    hidden_in):
+                    s_zw, chunk_end, counts, sides, snap, offset, tile_zmin, early_z,
+                    later_first, hidden_in):
     n_chunks = chunk_end.shape[0]
     if snap:                    # (about 1 ms for 500k vertices on one core)
         n_vertices = xy_z.shape[0]
@@ -517,41 +555,41 @@ def _setup_parallel(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_t
     bad = 0
     for chunk in prange(n_chunks):
         bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
-                            n_chunks, s_tri, s_xy, s_zw, chunk_end, counts, offset, tile_zmin,
-                            early_z, later_first, hidden_in)
+                            n_chunks, s_tri, s_xy, s_zw, chunk_end, counts, sides, offset,
+                            tile_zmin, early_z, later_first, hidden_in)
     return bad
 
 
 @njit(cache=True, nogil=True)
 def _setup_serial(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, s_tri, s_xy,
-                  s_zw, chunk_end, counts, snap, offset, tile_zmin, early_z, later_first,
+                  s_zw, chunk_end, counts, sides, snap, offset, tile_zmin, early_z, later_first,
                   hidden_in):
     if snap:
         _snap_vertices(xy_z, inv_w, fixed, 0, xy_z.shape[0])
     bad = 0
     for chunk in range(chunk_end.shape[0]):
         bad += _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
-                            chunk_end.shape[0], s_tri, s_xy, s_zw, chunk_end, counts, offset,
-                            tile_zmin, early_z, later_first, hidden_in)
+                            chunk_end.shape[0], s_tri, s_xy, s_zw, chunk_end, counts, sides,
+                            offset, tile_zmin, early_z, later_first, hidden_in)
     return bad
 
 
 @njit(cache=True, parallel=True, nogil=True)
 def _bin_parallel(width, height, n_triangles, n_tiles_x, s_xy, s_zw, chunk_end, cursor, bins,
-                  bin_z):
+                  bin_z, partition):
     n_chunks = chunk_end.shape[0]
     for chunk in prange(n_chunks):
         _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_zw,
-                   chunk_end, cursor, bins, bin_z)
+                   chunk_end, cursor, bins, bin_z, partition)
 
 
 @njit(cache=True, nogil=True)
 def _bin_serial(width, height, n_triangles, n_tiles_x, s_xy, s_zw, chunk_end, cursor, bins,
-                bin_z):
+                bin_z, partition):
     n_chunks = chunk_end.shape[0]
     for chunk in range(n_chunks):
         _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_zw,
-                   chunk_end, cursor, bins, bin_z)
+                   chunk_end, cursor, bins, bin_z, partition)
 
 
 # --------------------------------------------------------------------------------------------
@@ -590,9 +628,21 @@ def _block_filled(b, bi, bj, ti1, tj1, depth, zmin, unfilled):
 
 @njit(cache=True)
 def _hidden(z_near, coarse, later_first):
-    """Is a triangle whose depth is at most z_near hidden behind a coarse z? (In triangle
-    order a tie draws, ``z >= zbuffer``; last to first it does not.)"""
+    """Is a triangle whose depth is at most z_near hidden behind a coarse z? (A tie goes to
+    the later triangle: in triangle order a tie draws; when every triangle drawn so far comes
+    later, ``later_first``, it does not.)"""
     return z_near < coarse or (later_first and z_near == coarse)
+
+
+@njit(cache=True)
+def _entry(n, start, split, end, later_first):
+    """The bin entry a tile draws n-th: its front faces (``start .. split``), then its back
+    faces (``split .. end``), each half in triangle order or, ``later_first``, last to first."""
+    if not later_first:
+        return start + n
+    if n < split - start:
+        return split - 1 - n
+    return end - 1 - (n - (split - start))
 
 
 @njit(cache=True)
@@ -641,14 +691,15 @@ def _clear_tile(k, ti0, ti1, tj0, tj1, depth, tri, span, tile_rows, unfilled, zm
 
 
 @njit(cache=True, error_model="numpy")
-def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
-               span, tile_rows, hiz, count_fragments, fragments, first, order, tile_unfilled,
-               tile_zmin, barycentrics):
+def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s_zw, depth,
+               tri, b1, b2, span, tile_rows, hiz, count_fragments, fragments, first, order,
+               tile_unfilled, tile_zmin, barycentrics):
     """Clear one tile, then draw into it every triangle of its bin, 8 x 8 block by block.
 
     Hierarchical z: a triangle whose nearest vertex lies behind the tile's coarse z, or a
-    block's, is not visited there at all. With ``later_first`` the tile's triangles come last
-    to first, so a tie keeps what is there (``z > zbuffer``): the same pixel wins as in
+    block's, is not visited there at all. The bin's front faces come first, then its back
+    faces (:func:`_entry`); with ``later_first`` each half comes last to first. A tie at a
+    pixel goes to the larger triangle id, whatever the order: the same pixel wins as in
     triangle order with ``z >= zbuffer``.
 
     Only what the last frame wrote is cleared (each row's span; the rest of the row is still
@@ -671,22 +722,26 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, 
         _clear_tile(k, ti0, ti1, tj0, tj1, depth, tri, span, tile_rows, unfilled, zmin)
     start = tile_start[k]
     end = tile_start[k + 1]
-    if order < 0:
-        later_first = hiz and _later_first(bin_z, start, end)
+    split = tile_split[k]
+    if order < 0:           # the front faces decide, when there are enough of them
+        later_first = hiz and _later_first(bin_z, start, split if split - start >= 8 else end)
     else:
         later_first = order == 1
+    # with both halves, a back face may come later than a front face drawn before it: a
+    # tie at a coarse z no longer tells
+    ties_hidden = later_first and (split == start or split == end)
     for n in range(end - start):
-        entry = end - 1 - n if later_first else start + n
-        if hiz and _hidden(bin_z[entry], zmin[N_BLOCKS], later_first):
+        entry = _entry(n, start, split, end, later_first)
+        if hiz and _hidden(bin_z[entry], zmin[N_BLOCKS], ties_hidden):
             continue  # behind everything in the tile: the common case deep in a stack of layers
         # Scan-convert the triangle into the tile, 8 x 8 block by block. (Written out here,
         # not called: a call passing the arrays costs two atomic reference counts per array
         # per triangle, more than the pixels of a small triangle.)
-        ahead = entry - PREFETCH if later_first else entry + PREFETCH
-        if start <= ahead < end:        # a gather from megabytes: ask for it early
-            prefetch(s_xy, bins[ahead])
-            prefetch(s_zw, bins[ahead])
-            prefetch(s_tri, bins[ahead])
+        if n + PREFETCH < end - start:  # a gather from megabytes: ask for it early
+            ahead = bins[_entry(n + PREFETCH, start, split, end, later_first)]
+            prefetch(s_xy, ahead)
+            prefetch(s_zw, ahead)
+            prefetch(s_tri, ahead)
         slot = bins[entry]
         t = s_tri[slot]
         z_near = bin_z[entry]
@@ -731,7 +786,7 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, 
                 ci0 = max(i_min, bi << BLOCK_BITS)
                 ci1 = min(i_max, ((bi + 1) << BLOCK_BITS) - 1)
                 b = ((bj - tbj) << (TILE_BITS - BLOCK_BITS)) + bi - tbi
-                if hiz and _hidden(z_near, zmin[b], later_first):
+                if hiz and _hidden(z_near, zmin[b], ties_hidden):
                     continue  # hidden behind everything already in the block
                 if big and (_edge_misses_box(a0, b0, c0, ci0, ci1, cj0, cj1)
                             or _edge_misses_box(a1, b1_, c1, ci0, ci1, cj0, cj1)
@@ -759,7 +814,7 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, 
                             z = z0 + (l1 * dz1 + l2 * dz2) * inv_area
                             old = depth[row, i]
                             # the notes' test z >= zbuffer: a tie goes to the later triangle
-                            if z > old or (z == old and not later_first):
+                            if z > old or (z == old and t > tri[row, i]):
                                 filled += old == -np.inf
                                 depth[row, i] = z
                                 tri[row, i] = t
@@ -800,25 +855,25 @@ def _merge_spans(n_tiles_x, tile_rows, span):
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _rast_parallel(n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
-                   span, tile_rows, hiz, count_fragments, fragments, first, last, order,
-                   tile_unfilled, tile_zmin, barycentrics):
+def _rast_parallel(n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s_zw, depth,
+                   tri, b1, b2, span, tile_rows, hiz, count_fragments, fragments, first, last,
+                   order, tile_unfilled, tile_zmin, barycentrics):
     for k in prange(tile_rows.shape[0]):
-        _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1,
-                   b2, span, tile_rows, hiz, count_fragments, fragments, first, order,
-                   tile_unfilled, tile_zmin, barycentrics)
+        _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s_zw,
+                   depth, tri, b1, b2, span, tile_rows, hiz, count_fragments, fragments, first,
+                   order, tile_unfilled, tile_zmin, barycentrics)
     if last:
         _merge_spans(n_tiles_x, tile_rows, span)
 
 
 @njit(cache=True, nogil=True)
-def _rast_serial(n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1, b2,
-                 span, tile_rows, hiz, count_fragments, fragments, first, last, order,
-                 tile_unfilled, tile_zmin, barycentrics):
+def _rast_serial(n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s_zw, depth,
+                 tri, b1, b2, span, tile_rows, hiz, count_fragments, fragments, first, last,
+                 order, tile_unfilled, tile_zmin, barycentrics):
     for k in range(tile_rows.shape[0]):
-        _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, s_tri, s_xy, s_zw, depth, tri, b1,
-                   b2, span, tile_rows, hiz, count_fragments, fragments, first, order,
-                   tile_unfilled, tile_zmin, barycentrics)
+        _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s_zw,
+                   depth, tri, b1, b2, span, tile_rows, hiz, count_fragments, fragments, first,
+                   order, tile_unfilled, tile_zmin, barycentrics)
     if last:
         _merge_spans(n_tiles_x, tile_rows, span)
 
@@ -864,7 +919,7 @@ def _run(xy_z, inv_w, triangles, width, height, out, parallel, fragments, baryce
     # Below PARALLEL_SETUP triangles setup takes well under a millisecond: waking a second
     # core would cost more than it saves. The bins are the same either way (triangle order).
     parallel_setup = parallel and largest >= PARALLEL_SETUP
-    n_chunks = max(1, min(SETUP_CHUNKS, COUNT_CELLS // n_tiles)) if parallel_setup else 1
+    n_chunks = max(1, min(SETUP_CHUNKS, COUNT_CELLS // (2 * n_tiles))) if parallel_setup else 1
     scene = out._scene
     scene.reserve(xy_z.shape[0], largest, n_chunks, n_tiles)
     if not out.spans_known or out.span is None or out.span.shape != (height, 2):
@@ -903,13 +958,27 @@ def _stream_runs_backwards(xy_z, triangles) -> bool:
     return bool(finite and tail.mean() > head.mean())
 
 
+def _fronts_nearer(sides) -> bool:
+    """Do the front faces lie nearer than the back faces, on average? Then each bin draws
+    its front faces first (a mesh wound one way, open somewhere, so its back faces are not
+    culled: the near side lands first and hierarchical z rejects most of the far side);
+    else, in triangle order: a surface of mixed windings (whose two sides lie at one depth,
+    to within a thousandth) would only fill its blocks later."""
+    front_z, front_n, back_z, back_n = sides.sum(axis=0)
+    if front_n == 0 or back_n == 0:
+        return False
+    front, back = front_z / front_n, back_z / back_n
+    return bool(front - back > 1e-3 * (abs(front) + abs(back)))
+
+
 def _batch(xy_z, inv_w, triangles, offset, width, height, n_tiles_x, n_tiles, n_chunks, scene,
            out, parallel, parallel_setup, hiz, count, frag, first, last, order, barycentrics):
     """Set up, bin and rasterize one batch of triangles (triangle ``offset`` on)."""
     fixed = scene.fixed[:xy_z.shape[0]]
     chunk_end = scene.chunk_end[:n_chunks]
-    counts = scene.counts[:n_chunks * n_tiles].reshape(n_chunks, n_tiles)
+    counts = scene.counts[:n_chunks * 2 * n_tiles].reshape(n_chunks, 2 * n_tiles)
     tile_start = scene.tile_start[:n_tiles + 1]
+    tile_split = scene.tile_split[:n_tiles]
     tile_rows = scene.tile_rows[:n_tiles]
     tile_unfilled = scene.tile_unfilled[:n_tiles]
     tile_zmin = scene.tile_zmin[:n_tiles]
@@ -923,17 +992,19 @@ def _batch(xy_z, inv_w, triangles, offset, width, height, n_tiles_x, n_tiles, n_
         margin = 3e-9 * float(np.abs(xy_z[:, 2]).max())
         _hidden_vertices(xy_z, fixed, n_tiles_x, width, height, tile_zmin, order == 1,
                          margin if np.isfinite(margin) else np.inf, hidden_in)
+    sides = scene.sides[:n_chunks]
     bad = setup(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, scene.tri, scene.xy,
-                scene.zw, chunk_end, counts, first, offset, tile_zmin, early_z, order == 1,
-                hidden_in)
+                scene.zw, chunk_end, counts, sides, first, offset, tile_zmin, early_z,
+                order == 1, hidden_in)
     if bad:
         raise ValueError(f"{bad} triangles name a vertex outside 0..{xy_z.shape[0] - 1}")
-    scene.reserve_bins(_bin_offsets(counts, tile_start))
+    partition = hiz and _fronts_nearer(sides)
+    scene.reserve_bins(_bin_offsets(counts, tile_start, tile_split, partition))
     bin_(width, height, triangles.shape[0], n_tiles_x, scene.xy, scene.zw, chunk_end, counts,
-         scene.bins, scene.bin_z)
-    rast(n_tiles_x, scene.bins, scene.bin_z, tile_start, scene.tri, scene.xy, scene.zw,
-         out.depth, out.tri, out.b1, out.b2, out.span, tile_rows, hiz, count, frag, first, last,
-         order, tile_unfilled, tile_zmin, barycentrics)
+         scene.bins, scene.bin_z, partition)
+    rast(n_tiles_x, scene.bins, scene.bin_z, tile_start, tile_split, scene.tri, scene.xy,
+         scene.zw, out.depth, out.tri, out.b1, out.b2, out.span, tile_rows, hiz, count, frag,
+         first, last, order, tile_unfilled, tile_zmin, barycentrics)
 
 
 def rasterize(xy_z, inv_w, triangles, width, height, out: VisibilityBuffer | None = None,
