@@ -10,8 +10,9 @@ from core.jit import call_compiled, compiled_at, njit, prange
 from core.shading.illumination import quantize
 from core.shading.models.dispatch import light_point
 from core.shading.registry import Shader, register_shader
-from core.shading.shade import (PARALLEL_ITEMS, RUN, ShadeInput, all_vertex_normals,
-                                 covered_spans, unlit, visible_items, wide_shading)
+from core.shading.shade import (PARALLEL_ITEMS, RUN, ShadeInput, all_vertex_normals, cached,
+                                 covered_spans, scene_arrays, unlit, visible_items,
+                                 wide_shading)
 from core.shading.wide import illuminate_wide
 
 
@@ -30,7 +31,17 @@ def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
         s.before_clip = lambda vertices: _light(s, unlit(vertices, s.lit), s.vertex_attrs)
         return
     s.normals = normals
-    _light(s, _used_vertices(s.triangles, s.faces, len(s.positions)), s.vertex_attrs)
+    _light(s, _drawn_vertices(s, scene, meshes), s.vertex_attrs)
+
+
+def _drawn_vertices(s: ShadeInput, scene, meshes) -> np.ndarray:
+    """The vertices of the faces drawn: when no face is culled (a mesh not declared closed,
+    such as a scan), those of every face, the same for every view (kept with the scene: a
+    pass over the bunny's 69,451 faces, 0.17 ms a frame)."""
+    if len(s.faces) == len(s.triangles):     # every face (``faces`` are distinct indices)
+        return cached(s.context, scene, scene_arrays(meshes), "vertices of the faces",
+                      lambda: _used_vertices(s.triangles, s.faces, len(s.positions)))
+    return _used_vertices(s.triangles, s.faces, len(s.positions))
 
 
 def _light(s: ShadeInput, vertices, out) -> None:
