@@ -756,11 +756,11 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s
         # Scan-convert the triangle into the tile, 8 x 8 block by block. (Written out here,
         # not called: a call passing the arrays costs two atomic reference counts per array
         # per triangle, more than the pixels of a small triangle.)
-        if n + PREFETCH < end - start:  # a gather from megabytes: ask for it early
-            ahead = bins[_entry(n + PREFETCH, start, split, end, later_first)]
-            prefetch(s_xy, ahead)
-            prefetch(s_zw, ahead)
-            prefetch(s_tri, ahead)
+        ahead = entry - PREFETCH if later_first else entry + PREFETCH
+        if start <= ahead < end:        # a gather from megabytes: ask for it early (near
+            prefetch(s_xy, bins[ahead])   # the split, maybe for the wrong half: no harm)
+            prefetch(s_zw, bins[ahead])
+            prefetch(s_tri, bins[ahead])
         slot = bins[entry]
         z_near = bin_z[entry]
         x0 = np.int64(s_xy[slot, 0])
