@@ -32,16 +32,23 @@ def _plain(xy_z, inv_w, tris, w, h, monkeypatch):
         return raster.rasterize(xy_z, inv_w, tris, w, h)
 
 
-@pytest.mark.parametrize("front_to_back", [True, False])
-def test_layer_stacks_equal_the_plain_zbuffer_and_the_scanline_oracle(front_to_back, monkeypatch):
-    w, h = 150, 100                               # 3 x 2 tiles, the last ones partial
-    xy_z, inv_w, tris = depth_layers(12, 300, w, h, front_to_back)
+def _checked_against_both(xy_z, inv_w, tris, w, h, monkeypatch):
+    """The tiled rasterizer's buffer, asserted equal to the plain z-buffer's (every array) and
+    to the scan-line oracle's (ids and depths)."""
     fast = raster.rasterize(xy_z, inv_w, tris, w, h)
     plain = _plain(xy_z, inv_w, tris, w, h, monkeypatch)
     for name in ("depth", "tri", "b1", "b2"):
         assert np.array_equal(getattr(fast, name), getattr(plain, name)), name
     oracle = raster_scanline.rasterize(xy_z, inv_w, tris, w, h)
     assert np.array_equal(fast.tri, oracle.tri) and np.array_equal(fast.depth, oracle.depth)
+    return fast
+
+
+@pytest.mark.parametrize("front_to_back", [True, False])
+def test_layer_stacks_equal_the_plain_zbuffer_and_the_scanline_oracle(front_to_back, monkeypatch):
+    w, h = 150, 100                               # 3 x 2 tiles, the last ones partial
+    xy_z, inv_w, tris = depth_layers(12, 300, w, h, front_to_back)
+    fast = _checked_against_both(xy_z, inv_w, tris, w, h, monkeypatch)
     # every pixel shows the nearest layer: the first drawn front to back, the last otherwise
     layer = fast.tri // (len(tris) // 12)
     assert np.all(layer == (0 if front_to_back else 11))
@@ -126,12 +133,7 @@ def test_an_open_mesh_draws_its_front_faces_first_and_changes_no_pixel(monkeypat
     inv_w = np.ones(len(xy_z))
     winding = _screen_winding(xy_z, tris)
     assert (winding > 0).any() and (winding < 0).any()
-    fast = raster.rasterize(xy_z, inv_w, tris, w, h)
-    plain = _plain(xy_z, inv_w, tris, w, h, monkeypatch)
-    for name in ("depth", "tri", "b1", "b2"):
-        assert np.array_equal(getattr(fast, name), getattr(plain, name)), name
-    oracle = raster_scanline.rasterize(xy_z, inv_w, tris, w, h)
-    assert np.array_equal(fast.tri, oracle.tri) and np.array_equal(fast.depth, oracle.depth)
+    fast = _checked_against_both(xy_z, inv_w, tris, w, h, monkeypatch)
     assert (winding[fast.tri[fast.tri >= 0]] < 0).any()  # a back face is seen, through the hole
     # the (last batch's) bins: front faces before the split, back faces after it
     scene = fast._scene
