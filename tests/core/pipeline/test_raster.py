@@ -407,6 +407,21 @@ def test_parallel_bands_are_bit_identical_to_serial(n_bands, monkeypatch):
                               count_fragments(xy_z, inv_w, tris, w, h, n_bands=n_bands))
 
 
+
+@pytest.mark.parametrize("n_tiles_x, n_tiles_y", [(1, 1), (2, 1), (1, 3), (2, 2), (8, 8),
+                                                  (25, 17), (5, 10), (512, 1), (6, 6)])
+def test_the_cores_are_dealt_every_tile_once(n_tiles_x, n_tiles_y):
+    """The rast's handout order (n x stride mod count) is a permutation of the tiles, also
+    where the stride aimed for shares a factor with the count (25 x 17: 290 and 425, both
+    multiples of 5), and on an 8 x 8 grid a handout is no neighbour of the one before."""
+    count = n_tiles_x * n_tiles_y
+    stride = raster._deal_stride(n_tiles_x, n_tiles_y)
+    order = [n * stride % count for n in range(count)]
+    assert sorted(order) == list(range(count))
+    if (n_tiles_x, n_tiles_y) == (8, 8):
+        rows, columns = np.divmod(np.array(order), 8)
+        assert np.all((np.abs(np.diff(rows)) > 1) | (np.abs(np.diff(columns)) > 1))
+
 # --- an independent reference for the fill rule ----------------------------------------------
 
 def _reference_coverage(corners, width, height):
