@@ -408,19 +408,14 @@ def test_parallel_bands_are_bit_identical_to_serial(n_bands, monkeypatch):
 
 
 
-@pytest.mark.parametrize("n_tiles_x, n_tiles_y", [(1, 1), (2, 1), (1, 3), (2, 2), (8, 8),
-                                                  (25, 17), (5, 10), (512, 1), (6, 6)])
-def test_the_cores_are_dealt_every_tile_once(n_tiles_x, n_tiles_y):
-    """The rast's handout order (n x stride mod count) is a permutation of the tiles, also
-    where the stride aimed for shares a factor with the count (25 x 17: 290 and 425, both
-    multiples of 5), and on an 8 x 8 grid a handout is no neighbour of the one before."""
-    count = n_tiles_x * n_tiles_y
-    stride = raster._deal_stride(n_tiles_x, n_tiles_y)
-    order = [n * stride % count for n in range(count)]
-    assert sorted(order) == list(range(count))
-    if (n_tiles_x, n_tiles_y) == (8, 8):
-        rows, columns = np.divmod(np.array(order), 8)
-        assert np.all((np.abs(np.diff(rows)) > 1) | (np.abs(np.diff(columns)) > 1))
+@pytest.mark.parametrize("n_tiles", [1, 2, 3, 4, 7, 64, 425])
+def test_the_cores_are_dealt_every_tile_once_from_both_halves(n_tiles):
+    """The rast's handout order is a permutation of the tiles, odd counts included, and two
+    consecutive handouts lie half the screen apart (by tile index)."""
+    order = [raster._dealt(n, n_tiles) for n in range(n_tiles)]
+    assert sorted(order) == list(range(n_tiles))
+    half = (n_tiles + 1) // 2
+    assert order[0::2] == list(range(half)) and order[1::2] == list(range(half, n_tiles))
 
 # --- an independent reference for the fill rule ----------------------------------------------
 
