@@ -896,9 +896,9 @@ def _rast_parallel(n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, 
                    order, tile_unfilled, tile_zmin, barycentrics):
     n_tiles = tile_rows.shape[0]
     for n in prange(n_tiles):
-        _scan_tile(_dealt(n, n_tiles), n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s_zw,
-                   depth, tri, b1, b2, span, tile_rows, hiz, count_fragments, fragments, first,
-                   order, tile_unfilled, tile_zmin, barycentrics)
+        _scan_tile(_dealt(n, n_tiles), n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri,
+                   s_xy, s_zw, depth, tri, b1, b2, span, tile_rows, hiz, count_fragments,
+                   fragments, first, order, tile_unfilled, tile_zmin, barycentrics)
     if last:
         _merge_spans(n_tiles_x, tile_rows, span)
 
