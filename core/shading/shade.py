@@ -112,6 +112,7 @@ class ShadeInput:
     polygon: np.ndarray | None = None
     polygon_point: np.ndarray | None = None
     face_points: tuple | None = None
+    face_bytes: np.ndarray | None = None     # (T, 3) uint8: face_rgb rounded, for the pixels
 
 
 # --------------------------------------------------------------------------------------------
