@@ -179,10 +179,11 @@ def _face_bytes(face_rgb, faces, out):
 
 @njit(cache=True, parallel=True, nogil=True)
 def _face_bytes_parallel(face_rgb, faces, out):
-    for k in prange(faces.shape[0]):
-        f = faces[k]
-        out[f, 0], out[f, 1], out[f, 2] = (quantize(face_rgb[f, 0]), quantize(face_rgb[f, 1]),
-                                           quantize(face_rgb[f, 2]))
+    """:func:`_face_bytes` on runs of :data:`RUN` faces, in parallel."""
+    n = faces.shape[0]
+    for j in prange((n + RUN - 1) // RUN):
+        start = np.int64(j) * RUN
+        _face_bytes(face_rgb, faces[start:min(n, start + RUN)], out)
 
 
 @njit(cache=True, parallel=True, nogil=True)
