@@ -407,7 +407,6 @@ def test_parallel_bands_are_bit_identical_to_serial(n_bands, monkeypatch):
                               count_fragments(xy_z, inv_w, tris, w, h, n_bands=n_bands))
 
 
-
 @pytest.mark.parametrize("n_tiles", [1, 2, 3, 4, 7, 64, 425])
 def test_the_cores_are_dealt_every_tile_once_from_both_halves(n_tiles):
     """The rast's handout order is a permutation of the tiles, odd counts included, and two
@@ -416,6 +415,7 @@ def test_the_cores_are_dealt_every_tile_once_from_both_halves(n_tiles):
     assert sorted(order) == list(range(n_tiles))
     half = (n_tiles + 1) // 2
     assert order[0::2] == list(range(half)) and order[1::2] == list(range(half, n_tiles))
+
 
 # --- an independent reference for the fill rule ----------------------------------------------
 
