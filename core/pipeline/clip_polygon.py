@@ -81,26 +81,27 @@ def _check_projection(projection: str) -> bool:
 
 
 @njit(cache=True)
+def outcode(x, y, z, perspective, z_min):
+    """The outcode of one canonical point (see :func:`outcodes`). Each bit is "not inside"
+    rather than "outside", so that a NaN coordinate, which fails every comparison, lands
+    outside. No branches: a loop over points runs at memory speed."""
+    if perspective:  # the side planes are x, y = +-z; the same bounds serve x and y
+        high, low, near = -z, z, z_min
+    else:
+        high, low, near = 1.0, -1.0, 0.0
+    return (np.int64(not (y <= high)) * ABOVE | np.int64(not (y >= low)) * BELOW
+            | np.int64(not (x <= high)) * RIGHT | np.int64(not (x >= low)) * LEFT
+            | np.int64(not (z >= -1.0)) * BEHIND | np.int64(not (z <= near)) * FRONT)
+
+
+@njit(cache=True)
 def _outcodes(points, perspective, z_min, codes, first, end):
     """Outcode of points first..end-1 into ``codes``; returns the OR of them all (0: all
     inside). (No default arguments: numba dispatches a call that omits them about 25 times
-    slower, 0.1 ms a frame.)
-
-    Each bit is "not inside" rather than "outside", so that a NaN coordinate, which fails
-    every comparison, lands outside. No branches: the loop runs at memory speed.
-    """
+    slower, 0.1 ms a frame.)"""
     any_outside = 0
     for v in range(first, end):
-        x = points[v, 0]
-        y = points[v, 1]
-        z = points[v, 2]
-        if perspective:  # the side planes are x, y = +-z; the same bounds serve x and y
-            high, low, near = -z, z, z_min
-        else:
-            high, low, near = 1.0, -1.0, 0.0
-        code = (np.int64(not (y <= high)) * ABOVE | np.int64(not (y >= low)) * BELOW
-                | np.int64(not (x <= high)) * RIGHT | np.int64(not (x >= low)) * LEFT
-                | np.int64(not (z >= -1.0)) * BEHIND | np.int64(not (z <= near)) * FRONT)
+        code = outcode(points[v, 0], points[v, 1], points[v, 2], perspective, z_min)
         codes[v] = code
         any_outside |= code
     return any_outside
@@ -405,7 +406,7 @@ def _arange(n: int) -> np.ndarray:
 
 def clip_triangles(points, triangles, attrs, projection: str,
                    z_min: float = 0.0, before_clip=None,
-                   clipper: str = "cohen-sutherland") -> ClippedTriangles:
+                   clipper: str = "cohen-sutherland", codes_found=None) -> ClippedTriangles:
     """Clip triangles to the canonical view volume (see the module docstring).
 
     ``attrs`` may be None (no attributes: (V, 0)). ``z_min`` is the front plane of the
@@ -419,6 +420,8 @@ def clip_triangles(points, triangles, attrs, projection: str,
     "cohen-sutherland" this module's Sutherland–Hodgman, "liang-barsky"
     (:mod:`core.pipeline.clip_liang_barsky`) or "homogeneous"
     (:mod:`core.pipeline.clip_homogeneous`); the outcodes' accept and reject are shared.
+    ``codes_found``: ``(codes (V,) uint8, their OR)`` of ``points`` when the caller found them
+    in its own pass over the vertices (:func:`core.pipeline.vertex_kernels.view_points`).
     """
     perspective = _check_projection(projection)
     kernel = _KERNELS.get(clipper)
@@ -435,7 +438,7 @@ def clip_triangles(points, triangles, attrs, projection: str,
         raise ValueError(f"triangles must be (T, 3), got {triangles.shape}")
     if attrs.ndim != 2 or attrs.shape[0] != points.shape[0]:
         raise ValueError(f"attrs must be ({points.shape[0]}, K), got {attrs.shape}")
-    codes, any_outside = _outcodes_and_any(points, perspective, z_min)
+    codes, any_outside = codes_found or _outcodes_and_any(points, perspective, z_min)
     if not any_outside:  # the whole mesh is inside: trivial accept for every triangle
         return ClippedTriangles(points, triangles, attrs, _arange(triangles.shape[0]))
 

@@ -16,6 +16,7 @@ import numpy as np
 
 from core.arrays import read_only
 from core.jit import njit, prange
+from core.pipeline.clip_polygon import CHUNKS, outcode
 
 
 # Below this many points one core is quicker: waking the second costs ~0.1 ms.
@@ -86,3 +87,59 @@ def transform_projective(m: np.ndarray, points: np.ndarray, out: np.ndarray | No
     kernel(read_only(np.ascontiguousarray(m, dtype=np.float64)),
            read_only(np.ascontiguousarray(points, dtype=np.float64)), out, inv_w)
     return out, inv_w
+
+
+# The triangle path's three passes over the vertices in one: N, the outcode, M and the divide.
+
+
+@njit(cache=True, error_model="numpy")
+def _view_point(n, m, points, canonical, codes, device, inv_w, perspective, z_min, i):
+    """Point ``i``: its canonical point ``N p``, that point's outcode, and its device point
+    (``M``, divided by W, from the canonical point as :func:`transform_projective` computes
+    it: the same numbers). Returns the outcode."""
+    _affine_point(n, points, canonical, i)
+    code = outcode(canonical[i, 0], canonical[i, 1], canonical[i, 2], perspective, z_min)
+    codes[i] = code
+    _projective_point(m, canonical, device, inv_w, i)
+    return code
+
+
+@njit(cache=True, error_model="numpy")
+def _view_run(n, m, points, canonical, codes, device, inv_w, perspective, z_min, first, end):
+    """:func:`_view_point` for points ``first`` to ``end``; the OR of their outcodes."""
+    any_outside = 0
+    for i in range(first, end):
+        any_outside |= _view_point(n, m, points, canonical, codes, device, inv_w, perspective,
+                                   z_min, i)
+    return any_outside
+
+
+@njit(cache=True, parallel=True, nogil=True)
+def _view_parallel(n, m, points, canonical, codes, device, inv_w, perspective, z_min):
+    count = points.shape[0]
+    ors = np.zeros(CHUNKS, np.int64)
+    for chunk in prange(CHUNKS):
+        ors[chunk] = _view_run(n, m, points, canonical, codes, device, inv_w, perspective,
+                               z_min, chunk * count // CHUNKS, (chunk + 1) * count // CHUNKS)
+    any_outside = 0
+    for chunk in range(CHUNKS):
+        any_outside |= ors[chunk]
+    return any_outside
+
+
+def view_points(n: np.ndarray, m: np.ndarray, points: np.ndarray, perspective: bool,
+                z_min: float, canonical: np.ndarray, codes: np.ndarray, device: np.ndarray,
+                inv_w: np.ndarray) -> int:
+    """The normalizing transform, the clipper's outcodes and the projection of ``(N, 3)``
+    points in one pass (it was three: 0.36 → 0.2 ms a frame on the bunny's 35,947 vertices):
+    ``canonical`` (what :func:`transform_affine` gives), ``codes`` (what the clipper's
+    ``outcodes`` gives), ``device`` and ``inv_w`` (what :func:`transform_projective` gives
+    for the canonical points), filled in place. Returns the OR of the outcodes: 0 when every
+    point lies inside the view volume, and the device points are then the frame's."""
+    given = (read_only(np.ascontiguousarray(n, dtype=np.float64)),
+             read_only(np.ascontiguousarray(m, dtype=np.float64)),
+             read_only(np.ascontiguousarray(points, dtype=np.float64)), canonical, codes,
+             device, inv_w, bool(perspective), float(z_min))
+    if len(points) >= PARALLEL_POINTS:
+        return int(_view_parallel(*given))
+    return int(_view_run(*given, 0, len(points)))

@@ -13,7 +13,8 @@ from core.shading.registry import Shader, register_shader
 from core.shading.shade import (PARALLEL_ITEMS, RUN, ShadeInput, all_vertex_normals, cached,
                                  covered_spans, scene_arrays, unlit, visible_items,
                                  wide_shading)
-from core.shading.wide import illuminate_wide
+from core.prefetch import prefetch
+from core.shading.wide import AHEAD, illuminate_wide
 
 
 def _prepare_gouraud(s: ShadeInput, scene, meshes, weighting) -> None:
@@ -108,7 +109,9 @@ def resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
     for row in prange(tri.shape[0]):
         last = -1
         r0 = g0 = b0 = r1 = g1 = b1_ = r2 = g2 = b2_ = 0.0
-        for col in range(span[row, 0], span[row, 1] + 1):
+        end = span[row, 1]
+        for col in range(span[row, 0], end + 1):
+            prefetch(triangles, max(tri[row, min(col + AHEAD, end)], 0))   # as Phong's gather
             t = tri[row, col]
             if t < 0:
                 continue                # background, filled before

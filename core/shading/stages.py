@@ -7,7 +7,8 @@ from core.pipeline.clip_polygon import clip_triangles  # noqa: F401
 from core.pipeline.cull import front_faces  # noqa: F401
 from core.pipeline.derivatives import barycentric_planes  # noqa: F401
 from core.pipeline.raster import VisibilityBuffer, rasterize  # noqa: F401
-from core.pipeline.vertex_kernels import transform_affine, transform_projective  # noqa: F401
+from core.pipeline.vertex_kernels import (transform_affine, transform_projective,  # noqa: F401
+                                          view_points)
 from core.shading import shade  # noqa: F401
 
 # Our compiled kernels run their own threads (screen bands, pixel rows). OpenBLAS's threads,

@@ -11,16 +11,20 @@ that ran is named in ``frame.stats["stages run"]``:
 1. ``front_faces``: back-face culling, only for meshes declared closed (``core/pipeline/cull.py``).
 2. ``shade.prepare``: the mode's per-face or per-vertex work in world coordinates, for the
    faces that survived culling only.
-3. ``N_per`` / ``N_par`` on every vertex.
-4. ``clip_triangles``: trivial accept/reject by outcode, Sutherland–Hodgman for the rest (or
-   the kernel ``settings.clipper`` names).
-5. ``transform_projective``: perspective-to-parallel M, M_vv3dv (``project.triangle_matrix``),
-   divide by W.
+3. ``N_per`` / ``N_par`` on every vertex, each vertex's outcode, and perspective-to-parallel
+   M, M_vv3dv (``project.triangle_matrix``) with the divide by W, in one pass
+   (``view_points``).
+4. ``clip_triangles``: trivial accept/reject by those outcodes, Sutherland–Hodgman for the
+   rest (or the kernel ``settings.clipper`` names).
+5. ``transform_projective`` of the clipped points, when the clipper made new ones (else the
+   device points of step 3 are the frame's).
 6. ``rasterize``: the scan-line z-buffer into a visibility buffer (reused between frames).
 7. ``shade.resolve``: one colour per visible pixel.
 """
 
 from __future__ import annotations
+
+import numpy as np
 
 from core.camera.film import fill, sample_viewport, to_rgb8
 from core.pipeline import clip, project, raster_lines
@@ -150,12 +154,20 @@ def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, 
     """Normalize, clip and project the kept triangles: (the clipped triangles, the scene
     triangle each came from, their device points, 1/W)."""
     from core.shading import stages
-    points = stages.transform_affine(n, positions,
-                                     out=context.scratch("canonical points", (len(positions), 3)))
+    count = len(positions)
+    points = context.scratch("canonical points", (count, 3))
+    codes = context.scratch("outcodes", (count,), np.uint8)
+    m = project.triangle_matrix(projection, z_min, vp)
+    device = context.scratch("device points", (count, 3))
+    inv_w = context.scratch("1/W", (count,))
+    # N, the outcodes and M with the divide, in one pass over the vertices
+    any_outside = stages.view_points(n, m, positions, projection == "perspective", z_min,
+                                     points, codes, device, inv_w)
     timer.lap("normalize", canonical_points=points)
 
     clipped = stages.clip_triangles(points, triangles, inputs.vertex_attrs, projection, z_min,
-                                    before_clip=inputs.before_clip, clipper=clipper)
+                                    before_clip=inputs.before_clip, clipper=clipper,
+                                    codes_found=(codes, any_outside))
     source = clipped.source if kept is None else kept[clipped.source]
     stats["triangles in"] = int(len(inputs.triangles))
     stats["triangles rasterized"] = int(len(clipped.triangles))
@@ -163,10 +175,11 @@ def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, 
     timer.lap("clip triangles", clipped_points=clipped.points, clipped_attrs=clipped.attrs,
               clipped_triangles=clipped.triangles, source=source)
 
-    count = len(clipped.points)
-    device, inv_w = stages.transform_projective(
-        project.triangle_matrix(projection, z_min, vp), clipped.points,
-        out=context.scratch("device points", (count, 3)), inv_w=context.scratch("1/W", (count,)))
+    if clipped.points is not points:        # the clipper made new points: project them all
+        count = len(clipped.points)
+        device, inv_w = stages.transform_projective(
+            m, clipped.points, out=context.scratch("clipped device points", (count, 3)),
+            inv_w=context.scratch("clipped 1/W", (count,)))
     timer.lap("project", device_points=device, inv_w=inv_w)
     return clipped, source, device, inv_w
 

@@ -28,3 +28,32 @@ def test_projective_equals_project_triangles_and_never_divides_by_zero():
     assert inv_w[0] == 0.0 and np.all(np.isfinite(xyz))
     assert np.allclose(inv_w, ref_inv_w, rtol=1e-14, atol=0)
     assert np.allclose(xyz, ref_xyz, rtol=1e-13, atol=1e-9)
+
+
+def test_one_pass_gives_the_three_passes_numbers():
+    """view_points (N, the outcodes and the projection in one pass) against the passes it
+    replaced, to the bit, on one core and on all: points inside, outside every plane, behind
+    the eye and not numbers."""
+    from core.pipeline.clip_polygon import outcodes
+    from core.pipeline.vertex_kernels import PARALLEL_POINTS, view_points
+    rng = np.random.default_rng(7)
+    for projection in ("perspective", "parallel"):
+        n, z_min = normalizing_transform(VIEW, projection)
+        m = project.triangle_matrix(projection, z_min, project.viewport(VIEW.window, 333, 217))
+        for count in (50, PARALLEL_POINTS + 11):
+            points = rng.uniform(-80, 80, (count, 3))
+            points[1] = np.nan
+            points[2] = (10, 20, 30)
+            canonical, codes = np.empty((count, 3)), np.empty(count, np.uint8)
+            device, inv_w = np.empty((count, 3)), np.empty(count)
+            found = view_points(n, m, points, projection == "perspective", z_min, canonical,
+                                codes, device, inv_w)
+            ref = transform_affine(n, points)
+            ref_codes = outcodes(ref, projection, z_min)
+            ref_device, ref_inv_w = transform_projective(m, ref)
+            assert np.array_equal(canonical, ref, equal_nan=True)
+            assert np.array_equal(codes, ref_codes) and found == np.bitwise_or.reduce(ref_codes)
+            assert np.array_equal(device, ref_device, equal_nan=True)
+            assert np.array_equal(inv_w, ref_inv_w, equal_nan=True)
+            assert codes[1] == 0b111111 and 0 < found < 64
+            assert projection == "parallel" or np.any(inv_w == 0.0)      # W <= 0: behind
