@@ -55,9 +55,10 @@ Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene and bins it into t
   meets, before it takes a scene slot or a bin entry: in a deep stack the hidden triangles
   cost one box and one comparison each.
 
-Both cores: setup works on chunks of the triangle array, rast on tiles, handed out one at a
-time. The tiles are dealt from the screen's two halves in turn (:func:`_dealt`), not in row
-order, in which two cores draw neighbouring tiles deep in the model at once. A pixel's
+Both cores: setup works on chunks of the triangle array, rast on tiles. numba's threading
+layers here (OpenMP, and its own workqueue) give each thread one contiguous block of a
+``prange``'s items, whatever ``numba.parallel_chunksize`` asks, so the tiles are dealt
+(:func:`_dealt`) so that each core's block holds tiles of both halves of the screen. A pixel's
 winner depends only on the triangles of its tile's bin, which is the same list whatever the
 number of threads, so the result of the single-threaded path
 (``parallel=False``) is bit-identical.
@@ -72,7 +73,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
 from core.arrays import read_only
 from core.jit import njit, prange
@@ -880,13 +880,13 @@ def _merge_spans(n_tiles_x, tile_rows, span):
 
 @njit(cache=True)
 def _dealt(n, n_tiles):
-    """The tile that the cores' n-th handout draws: the tiles of the screen's top and bottom
-    halves (by tile index) alternately, each half in row order. The two cores, which take
-    consecutive handouts, then work half a screen apart, each beside the tile it drew last.
-    On the bunny (2 cores), row order, in which the cores draw neighbouring tiles deep in the
-    model at once, took 1.05-1.06x as long at 500 x 500 and 1.1-1.16x at 1580 x 1080. A deal
-    with a stride of 1/φ of the screen was as fast on the bunny, but took 1.11x as long as row
-    order on a layer that fills the screen (no tile beside the last)."""
+    """The tile that the rast's n-th item draws: the tiles of the screen's top and bottom
+    halves (by tile index) alternately, each half in row order. numba hands each of two
+    threads one contiguous block of the items, so each core draws rows of tiles from both
+    halves of the screen (in row order, one core had the top of a model and the other its
+    bottom). On the bunny (2 cores), row order took 1.05-1.06x as long at 500 x 500 and
+    1.1-1.16x at 1580 x 1080. A deal with a stride of 1/φ of the screen was as fast on the
+    bunny, but took 1.11x as long as row order on a layer that fills the screen."""
     return n // 2 + (n % 2) * ((n_tiles + 1) // 2)
 
 
@@ -962,14 +962,11 @@ def _run(xy_z, inv_w, triangles, width, height, out, parallel, fragments, baryce
     if not out.spans_known or out.span is None or out.span.shape != (height, 2):
         out.forget_spans()
     out.spans_known = False                 # until the rast has run to its end
-    # chunk size 1: chunks and tiles are handed out one at a time, so the cores share the
-    # load even when a few tiles hold most of the triangles
-    with numba.parallel_chunksize(1):
-        for b, (start, end) in enumerate(batches):
-            _batch(xy_z, inv_w, triangles[start:end], start, width, height, n_tiles_x,
-                   n_tiles, n_chunks, scene, out, parallel, parallel_setup, hiz, count,
-                   fragments if count else _NO_FRAGMENTS, b == 0, b == len(batches) - 1,
-                   order, barycentrics)
+    for b, (start, end) in enumerate(batches):
+        _batch(xy_z, inv_w, triangles[start:end], start, width, height, n_tiles_x, n_tiles,
+               n_chunks, scene, out, parallel, parallel_setup, hiz, count,
+               fragments if count else _NO_FRAGMENTS, b == 0, b == len(batches) - 1, order,
+               barycentrics)
     out.spans_known = True
     out.barycentrics = barycentrics
     return out
