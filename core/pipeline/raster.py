@@ -25,7 +25,7 @@ Two stages, as in llvmpipe (``lp_setup_tri.c`` builds a scene and bins it into t
   on the screen) in triangle order and then its back faces in triangle order: in a mesh that
   is not closed (whose back faces are drawn) the near side then lands first, and
   hierarchical z rejects most of the far side without visiting its pixels.
-* **rast** takes the tiles one at a time, each with its own slice of the z-buffer (a tile's
+* **rast** draws the frame tile by tile, each with its own slice of the z-buffer (a tile's
   depth and ids stay in the core's cache). It orients each triangle counter-clockwise
   (either winding is drawn) and writes each edge as an edge function E(x, y) = A x + B y + C
   whose constant already holds the top-left fill rule, so a pixel centre is inside exactly
@@ -1056,7 +1056,7 @@ def rasterize(xy_z, inv_w, triangles, width, height, out: VisibilityBuffer | Non
     parallel : use all cores; ``False`` runs the single-threaded path, whose result is
         bit-identical.
     n_bands : accepted for the banded rasterizer's callers and ignored: the frame is cut into
-        64 x 64 tiles, which the cores take one at a time.
+        64 x 64 tiles, which the cores share (:func:`_dealt`).
     barycentrics : False leaves ``b1`` and ``b2`` as they were (``out.barycentrics`` says so):
         flat shading reads only the triangle ids, and at 1580 x 1080 the weights of the bunny's
         fragments are a quarter of the rast's time.
