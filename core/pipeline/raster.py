@@ -63,6 +63,13 @@ winner depends only on the triangles of its tile's bin, which is the same list w
 number of threads, so the result of the single-threaded path
 (``parallel=False``) is bit-identical.
 
+**Unsigned indices.** numba lets a signed index count from the end of its axis, as Python
+does, and so compares every signed index with zero and corrects it: a compare and a select
+per index, per array. The hot loops index with ``np.uint64`` values, which have no negative
+form (their arithmetic stays signed: numba would make int64 and uint64 mixed a float). On the
+bunny at 500 x 500, one core: setup 0.96x, binning 0.76x, the rast 0.92x as long, the same
+buffers.
+
 Vertices far outside the framebuffer are safe: coordinates are clamped to ``COORD_LIMIT``
 pixels before the fixed-point conversion (so no product overflows int64) and boxes are clamped
 to the framebuffer. A triangle with a non-finite coordinate or a 1/W that is not positive and
@@ -424,13 +431,15 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
     counts[chunk, :] = 0
     front_z = back_z = 0.0
     n_back = 0
-    for t in range(first, (chunk + 1) * n // n_chunks):
+    for t_ in range(first, (chunk + 1) * n // n_chunks):
+        t = np.uint64(t_)
         v0 = triangles[t, 0]
         v1 = triangles[t, 1]
         v2 = triangles[t, 2]
         if min(v0, v1, v2) < 0 or max(v0, v1, v2) >= n_vertices:
             bad += 1
             continue
+        v0, v1, v2 = np.uint64(v0), np.uint64(v1), np.uint64(v2)
         if early_z and hidden_in[v0] >= 0 and hidden_in[v1] == hidden_in[v0] \
                 and hidden_in[v2] == hidden_in[v0]:
             continue  # three corners hidden in one tile: the triangle is (the common case)
@@ -460,24 +469,25 @@ def _setup_chunk(xy_z, inv_w, triangles, width, height, n_tiles_x, fixed, chunk,
             for tx in range(tx0, tx1 + 1):
                 if _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty,
                                 several):
-                    counts[chunk, 2 * (ty * n_tiles_x + tx) + back] += 1
+                    counts[chunk, np.uint64(2 * (ty * n_tiles_x + tx) + back)] += 1
         depth = xy_z[v0, 2] + xy_z[v1, 2] + xy_z[v2, 2]
         front_z += depth * (1 - back)
         back_z += depth * back
         n_back += back
-        s_tri[slot] = offset + t
-        s_xy[slot, 0] = x0
-        s_xy[slot, 1] = y0
-        s_xy[slot, 2] = x1
-        s_xy[slot, 3] = y1
-        s_xy[slot, 4] = x2
-        s_xy[slot, 5] = y2
-        s_zw[slot, 0] = xy_z[v0, 2]
-        s_zw[slot, 1] = xy_z[v1, 2]
-        s_zw[slot, 2] = xy_z[v2, 2]
-        s_zw[slot, 3] = inv_w[v0]
-        s_zw[slot, 4] = inv_w[v1]
-        s_zw[slot, 5] = inv_w[v2]
+        at = np.uint64(slot)
+        s_tri[at] = offset + t_
+        s_xy[at, 0] = x0
+        s_xy[at, 1] = y0
+        s_xy[at, 2] = x1
+        s_xy[at, 3] = y1
+        s_xy[at, 4] = x2
+        s_xy[at, 5] = y2
+        s_zw[at, 0] = xy_z[v0, 2]
+        s_zw[at, 1] = xy_z[v1, 2]
+        s_zw[at, 2] = xy_z[v2, 2]
+        s_zw[at, 3] = inv_w[v0]
+        s_zw[at, 4] = inv_w[v1]
+        s_zw[at, 5] = inv_w[v2]
         slot += 1
     chunk_end[chunk] = slot
     sides[chunk, 0], sides[chunk, 1] = front_z, slot - first - n_back
@@ -500,7 +510,8 @@ def _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_z
     carries the triangle's nearest depth, so that the rast rejects a hidden triangle reading
     the bin alone, in order (its scene slot may be far away in memory). With ``partition``
     the front faces go in the first half of each bin and the back faces in the second."""
-    for slot in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
+    for slot_ in range(chunk * n_triangles // n_chunks, chunk_end[chunk]):
+        slot = np.uint64(slot_)
         z_near = _nearest(s_zw[slot, 0], s_zw[slot, 1], s_zw[slot, 2])
         x0 = np.int64(s_xy[slot, 0])
         y0 = np.int64(s_xy[slot, 1])
@@ -517,9 +528,10 @@ def _bin_chunk(width, height, n_triangles, n_tiles_x, chunk, n_chunks, s_xy, s_z
             for tx in range(tx0, tx1 + 1):
                 if _tile_is_hit(x0, y0, x1, y1, x2, y2, i_min, i_max, j_min, j_max, tx, ty,
                                 several):
-                    k = 2 * (ty * n_tiles_x + tx) + back
-                    bins[cursor[chunk, k]] = slot
-                    bin_z[cursor[chunk, k]] = z_near
+                    k = np.uint64(2 * (ty * n_tiles_x + tx) + back)
+                    at = np.uint64(cursor[chunk, k])
+                    bins[at] = slot_
+                    bin_z[at] = z_near
                     cursor[chunk, k] += 1
 
 
@@ -649,7 +661,7 @@ def _behind_blocks(z_near, i_min, i_max, j_min, j_max, tbi, tbj, zmin, later_fir
     drawn after its near side, three triangles in four."""
     for bj in range(j_min >> BLOCK_BITS, (j_max >> BLOCK_BITS) + 1):
         for bi in range(i_min >> BLOCK_BITS, (i_max >> BLOCK_BITS) + 1):
-            b = ((bj - tbj) << (TILE_BITS - BLOCK_BITS)) + bi - tbi
+            b = np.uint64(((bj - tbj) << (TILE_BITS - BLOCK_BITS)) + bi - tbi)
             if not _hidden(z_near, zmin[b], later_first):
                 return False
     return True
@@ -753,7 +765,8 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s
     ties_hidden = later_first and (split == start or split == end)
     for n in range(end - start):
         entry = _entry(n, start, split, end, later_first)
-        if hiz and _hidden(bin_z[entry], zmin[N_BLOCKS], ties_hidden):
+        at = np.uint64(entry)
+        if hiz and _hidden(bin_z[at], zmin[N_BLOCKS], ties_hidden):
             continue  # behind everything in the tile: the common case deep in a stack of layers
         # Scan-convert the triangle into the tile, 8 x 8 block by block. (Written out here,
         # not called: a call passing the arrays costs two atomic reference counts per array
@@ -763,8 +776,8 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s
             prefetch(s_xy, bins[ahead])   # the split, maybe for the wrong half: no harm)
             prefetch(s_zw, bins[ahead])
             prefetch(s_tri, bins[ahead])
-        slot = bins[entry]
-        z_near = bin_z[entry]
+        slot = np.uint64(bins[at])
+        z_near = bin_z[at]
         x0 = np.int64(s_xy[slot, 0])
         y0 = np.int64(s_xy[slot, 1])
         x1 = np.int64(s_xy[slot, 2])
@@ -788,8 +801,9 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s
         z1 = s_zw[slot, 1]
         z2 = s_zw[slot, 2]
         for j in range(j_min, j_max + 1):
-            tile_rows[k, j - tj0, 0] = min(tile_rows[k, j - tj0, 0], i_min)
-            tile_rows[k, j - tj0, 1] = max(tile_rows[k, j - tj0, 1], i_max)
+            r = np.uint64(j - tj0)
+            tile_rows[k, r, 0] = min(tile_rows[k, r, 0], i_min)
+            tile_rows[k, r, 1] = max(tile_rows[k, r, 1], i_max)
         area2, edge0, edge1, edge2 = _triangle_edges(x0, y0, x1, y1, x2, y2)
         if area2 == 0:
             continue
@@ -809,7 +823,7 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s
             for bi in range(i_min >> BLOCK_BITS, (i_max >> BLOCK_BITS) + 1):
                 ci0 = max(i_min, bi << BLOCK_BITS)
                 ci1 = min(i_max, ((bi + 1) << BLOCK_BITS) - 1)
-                b = ((bj - tbj) << (TILE_BITS - BLOCK_BITS)) + bi - tbi
+                b = np.uint64(((bj - tbj) << (TILE_BITS - BLOCK_BITS)) + bi - tbi)
                 if hiz and _hidden(z_near, zmin[b], ties_hidden):
                     continue  # hidden behind everything already in the block
                 if big and (_edge_misses_box(a0, b0, c0, ci0, ci1, cj0, cj1)
@@ -823,9 +837,10 @@ def _scan_tile(k, n_tiles_x, bins, bin_z, tile_start, tile_split, s_tri, s_xy, s
                     e0 = a0 * px + b0 * py + c0
                     e1 = a1 * px + b1_ * py + c1
                     e2 = a2 * px + b2_ * py + c2
-                    row = height - 1 - j  # image order: row 0 is the top
+                    row = np.uint64(height - 1 - j)  # image order: row 0 is the top
                     entered = False
-                    for i in range(ci0, ci1 + 1):
+                    for i_ in range(ci0, ci1 + 1):
+                        i = np.uint64(i_)
                         if (e0 | e1 | e2) >= 0:  # inside all three edges, fill rule included
                             entered = True
                             if count_fragments:
