@@ -145,26 +145,30 @@ def _gather(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface, e
     ex, ey, ez = eye[1], eye[2], eye[3]
     nx0 = ny0 = nz0 = nx1 = ny1 = nz1 = nx2 = ny2 = nz2 = 0.0     # normal: a0, d1, d2
     px0 = py0 = pz0 = px1 = py1 = pz1 = px2 = py2 = pz2 = 0.0     # position: a0, d1, d2
-    last, n_runs, j = -1, 0, 0
-    for row in range(r0, r1):
+    last, n_runs, j = -1, 0, np.uint64(0)
+    for row_ in range(r0, r1):
+        row = np.uint64(row_)           # unsigned indices: no wraparound (core.pipeline.raster)
         end = span[row, 1]
-        for col in range(span[row, 0], end + 1):
+        for col_ in range(span[row, 0], end + 1):
+            col = np.uint64(col_)
             # the corner indices of the triangle AHEAD pixels on: a new triangle every ~1.4
             # pixels, and these loads, not the branch, were the pass's time
-            prefetch(triangles, max(tri[row, min(col + AHEAD, end)], 0))
+            prefetch(triangles, max(tri[row, np.uint64(min(col_ + AHEAD, end))], 0))
             t = tri[row, col]
             if t < 0:                     # background: the last triangle's harmless numbers
                 t = max(last, 0)
             if t != last:
                 last = t
-                i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+                u = np.uint64(t)
+                i0, i1, i2 = (np.uint64(triangles[u, 0]), np.uint64(triangles[u, 1]),
+                              np.uint64(triangles[u, 2]))
                 nx0, ny0, nz0 = attrs[i0, 0], attrs[i0, 1], attrs[i0, 2]
                 px0, py0, pz0 = attrs[i0, 3], attrs[i0, 4], attrs[i0, 5]
                 nx1, ny1, nz1 = attrs[i1, 0] - nx0, attrs[i1, 1] - ny0, attrs[i1, 2] - nz0
                 px1, py1, pz1 = attrs[i1, 3] - px0, attrs[i1, 4] - py0, attrs[i1, 5] - pz0
                 nx2, ny2, nz2 = attrs[i2, 0] - nx0, attrs[i2, 1] - ny0, attrs[i2, 2] - nz0
                 px2, py2, pz2 = attrs[i2, 3] - px0, attrs[i2, 4] - py0, attrs[i2, 5] - pz0
-                s = face_surface[source[t]]
+                s = face_surface[np.uint64(source[u])]
                 if n_runs == 0 or run_surface[n_runs - 1] != s:
                     runs[n_runs], run_surface[n_runs] = j, s
                     n_runs += 1
@@ -180,7 +184,7 @@ def _gather(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface, e
                 q[VX, j], q[VY, j], q[VZ, j] = ex - x, ey - y, ez - z
             else:
                 q[VX, j], q[VY, j], q[VZ, j] = ex, ey, ez
-            j += 1
+            j += np.uint64(1)
     runs[n_runs] = j
     return n_runs
 
@@ -196,18 +200,20 @@ def _store(r0, r1, span, tri, b1, b2, triangles, attrs, source, face_surface, su
         for j in range(m):
             rgb[c, j] = np.uint8(np.int32(min(max(rgb_sum[c, j], F(0.0)), F(1.0)) * F(255.0)
                                           + F(0.5)))   # clamped to [0, 1]: truncation floors
-    j = 0
-    for row in range(r0, r1):
-        for col in range(span[row, 0], span[row, 1] + 1):
+    j = np.uint64(0)
+    for row_ in range(r0, r1):
+        row = np.uint64(row_)          # unsigned indices: no wraparound (as in _gather)
+        for col_ in range(span[row, 0], span[row, 1] + 1):
+            col = np.uint64(col_)
             t = tri[row, col]
             if t >= 0:
                 if not flag[j]:
                     out[row, col, 0], out[row, col, 1], out[row, col, 2] = (rgb[0, j], rgb[1, j],
                                                                             rgb[2, j])
                 else:
-                    _float64_pixel(row, col, t, b1, b2, triangles, attrs, source, face_surface,
-                                   surfaces, lights, ambient, eye, halfway, out)
-            j += 1
+                    _float64_pixel(row_, col_, t, b1, b2, triangles, attrs, source,
+                                   face_surface, surfaces, lights, ambient, eye, halfway, out)
+            j += np.uint64(1)
 
 
 @njit(cache=True, error_model="numpy")
