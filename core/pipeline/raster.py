@@ -301,7 +301,8 @@ def _triangle_edges(x0, y0, x1, y1, x2, y2):
 @njit(cache=True)
 def _snap_vertices(xy_z, inv_w, fixed, first, end):
     """Fixed-point x, y of vertices first..end-1, or INVALID for one no triangle may use."""
-    for v in range(first, end):
+    for v_ in range(first, end):
+        v = np.uint64(v_)
         x = xy_z[v, 0]
         y = xy_z[v, 1]
         w = inv_w[v]
@@ -382,7 +383,8 @@ def _behind_tiles(z_near, i_min, i_max, j_min, j_max, n_tiles_x, tile_zmin, late
     meets? (A tile's coarse z is -inf until all its pixels are written.)"""
     for ty in range(j_min >> TILE_BITS, (j_max >> TILE_BITS) + 1):
         for tx in range(i_min >> TILE_BITS, (i_max >> TILE_BITS) + 1):
-            if not _hidden(z_near, tile_zmin[ty * n_tiles_x + tx, N_BLOCKS], later_first):
+            if not _hidden(z_near, tile_zmin[np.uint64(ty * n_tiles_x + tx), N_BLOCKS],
+                           later_first):
                 return False
     return True
 
@@ -396,14 +398,15 @@ def _hidden_vertices(xy_z, fixed, n_tiles_x, width, height, tile_zmin, later_fir
     plus ``margin`` (3e-9 times the largest |z| of the frame)."""
     n = xy_z.shape[0]
     for chunk in prange(SETUP_CHUNKS):
-        for v in range(chunk * n // SETUP_CHUNKS, (chunk + 1) * n // SETUP_CHUNKS):
+        for v_ in range(chunk * n // SETUP_CHUNKS, (chunk + 1) * n // SETUP_CHUNKS):
+            v = np.uint64(v_)
             hidden_in[v] = -1
             x, y = np.int64(fixed[v, 0]), np.int64(fixed[v, 1])
             if x == INVALID or x < 0 or y < 0 or x >= width << SUBPIXEL_BITS \
                     or y >= height << SUBPIXEL_BITS:
                 continue
             k = (y >> (SUBPIXEL_BITS + TILE_BITS)) * n_tiles_x + (x >> (SUBPIXEL_BITS + TILE_BITS))
-            if _hidden(xy_z[v, 2] + margin, tile_zmin[k, N_BLOCKS], later_first):
+            if _hidden(xy_z[v, 2] + margin, tile_zmin[np.uint64(k), N_BLOCKS], later_first):
                 hidden_in[v] = k
 
 

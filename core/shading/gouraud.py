@@ -110,14 +110,17 @@ def resolve_gouraud(tri, b1, b2, span, triangles, rgb, out):
         last = -1
         r0 = g0 = b0 = r1 = g1 = b1_ = r2 = g2 = b2_ = 0.0
         end = span[row, 1]
-        for col in range(span[row, 0], end + 1):
-            prefetch(triangles, max(tri[row, min(col + AHEAD, end)], 0))   # as Phong's gather
+        for col_ in range(span[row, 0], end + 1):
+            col = np.uint64(col_)      # unsigned: no wraparound select (core.pipeline.raster)
+            prefetch(triangles, max(tri[row, np.uint64(min(col_ + AHEAD, end))], 0))  # as Phong's
             t = tri[row, col]
             if t < 0:
                 continue                # background, filled before
             if t != last:
                 last = t
-                i0, i1, i2 = triangles[t, 0], triangles[t, 1], triangles[t, 2]
+                u = np.uint64(t)
+                i0, i1, i2 = (np.uint64(triangles[u, 0]), np.uint64(triangles[u, 1]),
+                              np.uint64(triangles[u, 2]))
                 r0, g0, b0 = rgb[i0, 0], rgb[i0, 1], rgb[i0, 2]
                 r1, g1, b1_ = rgb[i1, 0], rgb[i1, 1], rgb[i1, 2]
                 r2, g2, b2_ = rgb[i2, 0], rgb[i2, 1], rgb[i2, 2]

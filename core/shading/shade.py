@@ -337,7 +337,7 @@ def _mark_shown(tri, span, shown):
     mispredict at each new triangle along a row. Threads may write the same 1 at once."""
     for row in prange(tri.shape[0]):
         for col in range(span[row, 0], span[row, 1] + 1):
-            shown[tri[row, col] + 1] = 1
+            shown[np.uint64(tri[row, np.uint64(col)] + 1)] = 1     # unsigned: no wraparound
 
 
 @njit(cache=True)
