@@ -707,10 +707,10 @@ def _clear_tile(k, ti0, ti1, tj0, tj1, depth, tri, span, tile_rows, unfilled, zm
     until every pixel has been written."""
     height, width = depth.shape
     for j in range(tj0, tj1 + 1):
-        row = height - 1 - j
+        row = np.uint64(height - 1 - j)
         for i in range(max(span[row, 0], ti0), min(span[row, 1], ti1) + 1):
-            depth[row, i] = -np.inf
-            tri[row, i] = -1
+            depth[row, np.uint64(i)] = -np.inf
+            tri[row, np.uint64(i)] = -1
     tile_rows[k, :, 0] = width
     tile_rows[k, :, 1] = -1
     side = TILE // BLOCK
