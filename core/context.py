@@ -30,18 +30,40 @@ class RenderContext:
             self._buffers[kind] = held = (key, make())
         return held[1]
 
+    def remembered(self, kind: str, key, compute):
+        """``compute()``, kept for the last ``key`` asked under ``kind``: a viewer asks for the
+        same view's matrices every frame. A key that cannot be compared (a View built from
+        arrays) is computed each time."""
+        held = self._buffers.get(kind)
+        try:
+            same = held is not None and bool(held[0] == key)
+        except (TypeError, ValueError):     # numpy arrays in the key: no single answer
+            return compute()
+        if not same:
+            self._buffers[kind] = held = (key, compute())
+        return held[1]
+
     def normalizing_transform(self, view, projection: str):
-        """``core.camera.view.normalizing_transform``, kept for the last view asked (a viewer
-        asks for the same one every frame: 0.13 ms saved a frame). N is read-only."""
+        """``core.camera.view.normalizing_transform``, kept for the last view asked (0.13 ms
+        saved a frame). N is read-only."""
         def compute():
             from core.camera.view import normalizing_transform
             n, z_min = normalizing_transform(view, projection)
             n.flags.writeable = False
             return n, z_min
-        try:
-            return self.buffer("normalizing transform", (view, projection), compute)
-        except TypeError:               # a View built from unhashable arrays: nothing to keep
-            return compute()
+        return self.remembered("normalizing transform", (view, projection), compute)
+
+    def eye(self, view, projection: str):
+        """``core.camera.view.eye_from_view``, kept for the last view asked (its arrays
+        read-only)."""
+        def compute():
+            from core.camera.view import eye_from_view
+            eye = eye_from_view(view, projection)
+            for a in eye:
+                if a is not None:
+                    a.flags.writeable = False
+            return eye
+        return self.remembered("eye", (view, projection), compute)
 
     def scratch(self, kind: str, shape: tuple, dtype=np.float64, zero: bool = False) -> np.ndarray:
         """A ``shape`` array kept from frame to frame for ``kind`` (grown as needed), so a frame

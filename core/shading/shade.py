@@ -274,7 +274,8 @@ def prepare(mode: str, scene, eye: Eye, weighting: str = "mean",
         surfaces=pack_surfaces([m.material for m in meshes], [not m.closed for m in meshes]),
         lights=pack_lights(scene.lights), ambient=pack_ambient(scene.ambient),
         eye=pack_eye(eye), halfway=scene.specular == "halfway",
-        faces=(np.arange(len(triangles), dtype=np.int64) if faces is None
+        faces=(cached(context, scene, scene_arrays(meshes), "every face",
+                      lambda: np.arange(len(triangles), dtype=np.int64)) if faces is None
                else np.ascontiguousarray(faces, dtype=np.int64)), context=context, lazy=lazy,
         settings=settings)
     shader.vertex(s, scene, meshes, weighting)
@@ -396,9 +397,12 @@ def wide_shading(s: ShadeInput) -> bool:
     not fit in float32."""
     if getattr(s.settings, "shading_precision", "float32") != "float32":
         return False
-    if s.float32_safe is None:          # asked up to three times a frame; ~35 µs to answer
-        s.float32_safe = (float32_is_exact_enough(s.surfaces)
-                          and float32_holds_the_terms(s.surfaces, s.lights, s.ambient))
+    if s.float32_safe is None:          # asked up to three times a frame; ~35 µs to answer,
+        s.float32_safe = s.context.remembered(      # so kept while the numbers stay the same
+            "float32 holds", (s.surfaces.tobytes(), s.lights.tobytes(),
+                              np.asarray(s.ambient, np.float64).tobytes()),
+            lambda: (float32_is_exact_enough(s.surfaces)
+                     and float32_holds_the_terms(s.surfaces, s.lights, s.ambient)))
     return s.float32_safe
 
 

@@ -114,7 +114,7 @@ def draw_triangles(frame, scene, view, projection, shading, n, z_min, vp, contex
     shading = shading_for(scene, shading)
     stats = frame.stats
     height, width = frame.color.shape[:2]
-    eye = stages.shade.eye_from_view(view, projection)
+    eye = context.eye(view, projection)
     positions, all_triangles = stages.shade.geometry(scene, context)
     culled = (stages.front_faces(scene.meshes, all_triangles, eye, context)
               if CULL.runs(facts) else None)
@@ -157,7 +157,8 @@ def _clip_and_project(positions, triangles, kept, inputs, n, projection, z_min, 
     count = len(positions)
     points = context.scratch("canonical points", (count, 3))
     codes = context.scratch("outcodes", (count,), np.uint8)
-    m = project.triangle_matrix(projection, z_min, vp)
+    m = context.remembered("triangle matrix", (projection, z_min, vp),
+                           lambda: project.triangle_matrix(projection, z_min, vp))
     device = context.scratch("device points", (count, 3))
     inv_w = context.scratch("1/W", (count,))
     # N, the outcodes and M with the divide, in one pass over the vertices
