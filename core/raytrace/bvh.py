@@ -353,6 +353,7 @@ def _box_entry(box, k, ox, oy, oz, ix, iy, iz, near, t_max):
     far ones: each axis costs two products and no min/max. ``i*`` are never 0 or NaN, so no
     product is NaN."""
     nx, ny, nz, fx, fy, fz = near
+    k = np.uint64(k)        # unsigned: no wrap-around test for a negative index
     t_enter = max((box[k, nx] - ox) * ix, (box[k, ny] - oy) * iy, (box[k, nz] - oz) * iz, 0.0)
     t_exit = min((box[k, fx] - ox) * ix, (box[k, fy] - oy) * iy, (box[k, fz] - oz) * iz, t_max)
     if t_enter > t_exit:
@@ -366,7 +367,8 @@ def _sides(ix, iy, iz):
     nx = 0 if ix >= 0.0 else 3
     ny = 1 if iy >= 0.0 else 4
     nz = 2 if iz >= 0.0 else 5
-    return nx, ny, nz, 3 - nx, 5 - ny, 7 - nz
+    return (np.uint64(nx), np.uint64(ny), np.uint64(nz), np.uint64(3 - nx), np.uint64(5 - ny),
+            np.uint64(7 - nz))
 
 
 @njit(cache=True)
@@ -380,13 +382,14 @@ def new_stack():
 def _push_nearer(stack, top, left, t_left, t_right):
     """Of two children that the ray enters, push the farther (with its entry) and return the
     nearer one and the new top; ``t = inf`` for a child the ray misses."""
+    at = np.uint64(2 * top)
     if t_left <= t_right:
         if t_right != np.inf:
-            stack[2 * top], stack[2 * top + 1] = left + 1, t_right
+            stack[at], stack[at + np.uint64(1)] = left + 1, t_right
             top += 1
         return left, top
     if t_left != np.inf:
-        stack[2 * top], stack[2 * top + 1] = left, t_left
+        stack[at], stack[at + np.uint64(1)] = left, t_left
         top += 1
     return left + 1, top
 
@@ -396,8 +399,9 @@ def _pop(stack, top, best_t):
     """The next pushed node the ray enters before ``best_t`` (-1: none) and the new top."""
     while top > 0:
         top -= 1
-        if stack[2 * top + 1] <= best_t:
-            return np.int64(stack[2 * top]), top
+        at = np.uint64(2 * top)
+        if stack[at + np.uint64(1)] <= best_t:
+            return np.int64(stack[at]), top
     return -1, 0
 
 
@@ -418,16 +422,16 @@ def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
         return -1, np.inf, 0.0, 0.0
     node, top = 0, 0
     while node >= 0:
-        n = count[node]
+        n = count[np.uint64(node)]
         if n > 0:                                         # a leaf: test its triangles
-            f = first[node]
+            f = first[np.uint64(node)]
             hits = stack[2 * STACK:]
             intersect.triangle_run(ox, oy, oz, dx, dy, dz, tri, f, n, t_min, best_t, hits)
             for j in range(n):
                 if hits[j] < best_t:
                     best_k, best_t = f + j, hits[j]
         else:
-            left = first[node]
+            left = first[np.uint64(node)]
             t_left = _box_entry(box, left, ox, oy, oz, ix, iy, iz, near, best_t)
             t_right = _box_entry(box, left + 1, ox, oy, oz, ix, iy, iz, near, best_t)
             if t_left != np.inf or t_right != np.inf:
@@ -453,7 +457,7 @@ def occluded(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     top = 1
     while top > 0:
         top -= 1
-        node = np.int64(stack[2 * top])
+        node = np.uint64(stack[np.uint64(2 * top)])
         if _box_entry(box, node, ox, oy, oz, ix, iy, iz, near, t_max) == np.inf:
             continue
         n = count[node]
@@ -465,8 +469,9 @@ def occluded(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
                 if hits[j] < t_max:
                     return f + j
             continue
-        stack[2 * top] = first[node] + 1
-        stack[2 * top + 2] = first[node]
+        at = np.uint64(2 * top)
+        stack[at] = first[node] + 1
+        stack[at + np.uint64(2)] = first[node]
         top += 2
     return -1
 
@@ -599,7 +604,7 @@ def closest_sphere(box, first, count, item, spheres, ox, oy, oz, dx, dy, dz, t_m
                 if t < best_t:
                     best, best_t = i, t
         else:
-            left = first[node]
+            left = first[np.uint64(node)]
             t_left = _box_entry(box, left, ox, oy, oz, ix, iy, iz, near, best_t)
             t_right = _box_entry(box, left + 1, ox, oy, oz, ix, iy, iz, near, best_t)
             if t_left != np.inf or t_right != np.inf:
