@@ -279,8 +279,16 @@ def _supersample(draw, scene, view, settings, frame, context, inspect) -> None:
     for offset in film.offsets:
         draw(scene, view, settings.replace(samples=1, pixel_offset=tuple(offset)), one, context,
              Timer(frame.stats, inspect))
+        _take_message(frame, one)
         film.add(one.color)
     frame.color[:] = film.resolve()
+
+
+def _take_message(frame, sample) -> None:
+    """A sample's frame said why it could not draw (a renderer's refusal): the frame the
+    caller gets says it (the samples share the stats, not the message)."""
+    if sample.message and not frame.message:
+        frame.message = sample.message
 
 
 def _one_pass(draw, scene, view, settings, frame, context, inspect):
@@ -295,6 +303,7 @@ def _one_pass(draw, scene, view, settings, frame, context, inspect):
                 stats=frame.stats)
     draw(scene, view, settings.replace(samples=1, size=(width * side, height * side)), big,
          context, Timer(frame.stats, inspect))
+    _take_message(frame, big)
     return big
 
 
@@ -317,6 +326,7 @@ def _filtered(draw, scene, view, settings, frame, context, inspect) -> None:
             one = Frame(rgbx=np.empty_like(frame.rgbx), plan=frame.plan, stats=frame.stats)
             draw(scene, view, settings.replace(samples=1, pixel_offset=offset), one, context,
                  Timer(frame.stats, inspect))
+            _take_message(frame, one)
             images.append(one.color.copy())
     frame.filtered = reconstruct(images, offsets, settings.pixel_filter, radius)
     frame.color[:] = np.floor(frame.filtered + 0.5).astype(np.uint8)

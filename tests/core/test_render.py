@@ -85,3 +85,20 @@ def test_every_shipped_scene_renders_every_view_in_every_mode():
                                RenderSettings.for_scene(scene, projection=None, shading=shading, size=(48, 48)))
                 assert frame.color.shape == (48, 48, 3), (path.name, k, shading)
                 assert frame.message is None or "invalid" in frame.message, frame.message
+
+
+@pytest.mark.parametrize("samples", [
+    {"samples": 4},                                       # a regular grid, drawn as one pass
+    {"samples": 2, "sample_pattern": "jittered"},         # one frame per sample
+    {"samples": 4, "pixel_filter": "tent"},               # the filtered film
+])
+@pytest.mark.parametrize("renderer", ["radiosity", "twopass"])
+def test_a_refusal_reaches_the_frame_through_supersampling(renderer, samples):
+    """A renderer that refuses a scene says why in the frame, however many samples a pixel
+    takes: the whitted scene's 20,352 triangles are more than radiosity meshes."""
+    scene = load_scene(SCENES_DIR / "whitted.toml")
+    settings = RenderSettings.for_scene(scene, renderer=renderer, size=(32, 24)).replace(
+        **samples)
+    frame = render(scene, scene.views[0], settings)
+    assert "too many for radiosity" in (frame.message or "")
+    assert frame.color.max() == 0
