@@ -165,7 +165,7 @@ def njit(*args, **options):
 
     def decorate(function):
         dispatcher = numba.njit(**options)(function)
-        dispatcher._cache = _CacheOnFirstUse(function)
+        dispatcher._cache = _CacheOnFirstUse(function, dispatcher)
         reuse_plain_overloads(dispatcher)
         return dispatcher
     return decorate
@@ -202,8 +202,9 @@ class _CacheOnFirstUse:
     """numba's ``FunctionCache`` for a kernel, made the first time the dispatcher asks it
     anything (what ``enable_caching`` would have made at import)."""
 
-    def __init__(self, function):
+    def __init__(self, function, dispatcher=None):
         self._function = function
+        self._dispatcher = dispatcher
         self._cache = None
 
     def __getattr__(self, name):
@@ -213,7 +214,7 @@ class _CacheOnFirstUse:
             except RuntimeError as error:           # no folder it may write (numba's words)
                 _say_once("kernels are compiled but not kept on disk: %s", error)
                 cache = _NoCache()
-            stamp_with_callees(cache, self._function)
+            stamp_with_callees(cache, self._function, self._dispatcher)
             self._cache = cache
         return getattr(self._cache, name)
 
@@ -284,22 +285,34 @@ def tolerant_cache_files() -> bool:
     return True
 
 
-def stamp_with_callees(cache, function) -> bool:
-    """Tie ``cache`` (numba's cache of kernel ``function``) to :func:`kernel_digest` instead
-    of to its own file's time and size (see the module). Returns whether it could."""
+def stamp_with_callees(cache, function, dispatcher=None) -> bool:
+    """Tie ``cache`` (numba's cache of kernel ``function``, compiled by ``dispatcher``) to
+    :func:`kernel_digest` instead of to its own file's time and size (see the module).
+    Returns whether it could."""
     cache_file = getattr(cache, "_cache_file", None)
     if not hasattr(cache_file, "_source_stamp"):
         return False
-    cache_file._source_stamp = ("kernel digest", kernel_digest(function))
+    cache_file._source_stamp = ("kernel digest", kernel_digest(function, dispatcher))
     return True
 
 
-def kernel_digest(function) -> str:
+def _options_bytes(dispatcher) -> bytes:
+    """A dispatcher's numba options and compiler pipeline: what, beside the code, decides the
+    machine code (``_nrt``, ``error_model``, ``fastmath``, ``parallel``, ...)."""
+    pipeline = getattr(getattr(dispatcher, "_compiler", None), "pipeline_class", None)
+    return repr((sorted(dispatcher.targetoptions.items()),
+                 getattr(pipeline, "__qualname__", None))).encode()
+
+
+def kernel_digest(function, dispatcher=None) -> str:
     """SHA-256 of what kernel ``function``'s machine code is made from: its code and that of
-    every kernel it reaches through its globals and closure (each kernel's numba options
-    too), and the global constants they read. Line numbers and file names are left out, so
-    a comment or a moved function changes nothing. About 0.1 ms a function reached."""
+    every kernel it reaches through its globals and closure, each one's numba options (its
+    own from ``dispatcher``, when given: a kernel whose options change compiles again), and
+    the global constants they read. Line numbers and file names are left out, so a comment
+    or a moved function changes nothing. About 0.1 ms a function reached."""
     digest = hashlib.sha256()
+    if dispatcher is not None:
+        digest.update(_options_bytes(dispatcher))
     seen, todo = set(), [function]
     while todo:
         f = todo.pop()
@@ -310,7 +323,7 @@ def kernel_digest(function) -> str:
         for name, value in _globals_read(f):
             digest.update(name.encode() + b"=")
             if isinstance(value, numba.core.dispatcher.Dispatcher):
-                digest.update(repr(sorted(value.targetoptions.items())).encode())
+                digest.update(_options_bytes(value))
                 todo.append(value.py_func)
             else:
                 digest.update(_value_bytes(value))

@@ -157,6 +157,20 @@ def test_a_comment_or_an_edit_elsewhere_recompiles_nothing(tmp_path):
     assert _run(tmp_path, COUNTED) == "12 4 ['unrelated']"
 
 
+def test_a_kernel_compiles_again_when_its_own_options_change(tmp_path):
+    """A kernel's numba options decide its machine code as its code does (``_nrt=False``
+    leaves out the reference counts): changing them in its decorator must not load the code
+    cached under the old ones. Only the changed kernel compiles."""
+    (tmp_path / "helper_for_jit_test.py").write_text(HELPER.format(step=1))
+    (tmp_path / "user_for_jit_test.py").write_text(USER)
+    (tmp_path / "other_for_jit_test.py").write_text(OTHER)
+    assert _run(tmp_path, COUNTED) == "12 3 ['twice', 'unrelated']"
+    (tmp_path / "other_for_jit_test.py").write_text(
+        OTHER.replace("@njit(cache=True)", "@njit(cache=True, _nrt=False)"))
+    assert _run(tmp_path, COUNTED) == "12 3 ['unrelated']"
+    assert _run(tmp_path, COUNTED) == "12 3 []"                 # and cached under the new
+
+
 def test_the_digest_follows_calls_and_constants_not_line_numbers():
     """core.jit.kernel_digest: the same for the same code moved down a line; different for a
     changed constant the kernel reads, or a changed callee."""
