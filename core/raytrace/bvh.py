@@ -445,7 +445,8 @@ def closest(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     return best_k, best_t, u, v
 
 
-@njit(cache=True)
+# no reference counts: a shadow ray's walk makes no array (see pathtrace.kernel.trace_run)
+@njit(cache=True, _nrt=False)
 def occluded(bvh, ox, oy, oz, dx, dy, dz, t_min, t_max, stack):
     """BVH position of any triangle hit in ``(t_min, t_max)``, or -1 (the shadow-ray query)."""
     box, first, count, tri = bvh.box, bvh.first, bvh.count, bvh.tri

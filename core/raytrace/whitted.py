@@ -236,7 +236,7 @@ def has_maps(tex, kind, s):
 
 
 @compiled_apart(returns=types.UniTuple(types.float64, 3))
-@njit(cache=True)
+@njit(cache=True, _nrt=False)    # no reference counts, as trace
 def textured_colour(packed, index, s, px, py, pz, nx, ny, nz, arriving, ambient, eye, halfway,
                     tex, filter_, bump, u, v, duv, surf):
     """``I_local`` of a textured triangle (BVH position ``index``, barycentrics ``(u, v)``)
@@ -386,7 +386,9 @@ def _push_differentials(rays, row, dp, dif, nx, ny, nz, alpha, dbeta):
         rays[row, DIFF + 6 * k + 5] = alpha * ez + dn * nz
 
 
-@njit(cache=True)
+# No reference counts (numba's _nrt): a ray tree makes no array, and the two cores taking
+# and giving back counts on the same scene arrays, atomically, took most of a frame.
+@njit(cache=True, _nrt=False)
 def trace(packed, origins, directions, t_lo, t_hi, begin, end, primary_eye, lights, ambient,
           halfway, background, shadows, max_depth, epsilon, fresnel, medium, offset, rays,
           scaled, surface_row, eye, stack, counts, tex, textured, filter_, bump, colour_at,

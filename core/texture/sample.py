@@ -40,13 +40,18 @@ import math
 import numpy as np
 
 from core.jit import njit
+
+# The kernels here that are not inlined declare _nrt=False (no reference counts): they make
+# no array, and numba compiles a callee with the flags of the first caller that needs it,
+# so without the declaration a counted copy, linked into the ray tracer's or the pixel
+# step's uncounted code, would take and give back a count for every view it makes.
 from core.texture.modes import (ANISOTROPIC, BILINEAR, CLAMP, FILTERS, MIRROR,  # noqa: F401
                                 NEAREST, REPEAT, TRILINEAR, WRAPS)
 
 MAX_ANISOTROPY = 16          # probes along the major axis at most (GPUs offer 2 … 16)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def wrap_index(i, size, mode):
     """GL's wrap of an integer texel index ``i`` into [0, size) (Table 8.20)."""
     if mode == REPEAT:
@@ -58,13 +63,13 @@ def wrap_index(i, size, mode):
     return (size - 1) - mirror
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def floor_index(x):
     """⌊x⌋ as an integer, with coordinates far outside the texture kept in int64 range."""
     return int(math.floor(min(max(x, -1e15), 1e15)))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def texel(texels, levels, level, i, j):
     """The texel (i, j) of ``level``, indices already wrapped: ``(r, g, b, a)``."""
     row = levels[level, 0] + j * levels[level, 1] + i
@@ -72,7 +77,7 @@ def texel(texels, levels, level, i, j):
             np.float64(texels[row, 2]), np.float64(texels[row, 3]))
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def nearest(texels, levels, wrap, level, u, v):
     """GL_NEAREST on ``level``: the texel that contains (u, v)."""
     w, h = levels[level, 1], levels[level, 2]
@@ -81,7 +86,7 @@ def nearest(texels, levels, wrap, level, u, v):
     return texel(texels, levels, level, i, j)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def bilinear(texels, levels, wrap, level, u, v):
     """GL_LINEAR on ``level``: the four texels around (u, v), weighted by distance."""
     w, h = levels[level, 1], levels[level, 2]
@@ -104,7 +109,7 @@ def bilinear(texels, levels, wrap, level, u, v):
             w00 * a00 + w10 * a10 + w01 * a01 + w11 * a11)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def footprint(levels, dudx, dvdx, dudy, dvdy, base=0):
     """``(ρ_x, ρ_y)``: texels of level 0 (row ``base``) a step of one pixel along x and
     along y covers."""
@@ -114,7 +119,7 @@ def footprint(levels, dudx, dvdx, dudy, dvdy, base=0):
     return rho_x, rho_y
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def level_of_detail(levels, dudx, dvdx, dudy, dvdy, base=0):
     """λ = log2 ρ with ρ = max(ρ_x, ρ_y) (GL eq. 8.5); −inf for a zero footprint."""
     rho_x, rho_y = footprint(levels, dudx, dvdx, dudy, dvdy, base)
@@ -126,7 +131,7 @@ def level_of_detail(levels, dudx, dvdx, dudy, dvdy, base=0):
     return math.log2(rho)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def mip_at(texels, levels, wrap, lam, u, v, base=0, count=-1):
     """Bilinear on the two levels around λ, blended (GL_LINEAR_MIPMAP_LINEAR). The texture's
     levels are rows ``base`` … ``base + count − 1`` of ``levels`` (default: all of them)."""
@@ -143,14 +148,14 @@ def mip_at(texels, levels, wrap, lam, u, v, base=0, count=-1):
             (1.0 - f) * b1 + f * b2, (1.0 - f) * a1 + f * a2)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def trilinear(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy, base=0, count=-1):
     """GL_LINEAR_MIPMAP_LINEAR with the level from the derivatives of (u, v)."""
     return mip_at(texels, levels, wrap, level_of_detail(levels, dudx, dvdx, dudy, dvdy, base),
                   u, v, base, count)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def anisotropic(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy, base=0, count=-1):
     """Several trilinear probes along the footprint's major axis, averaged."""
     rho_x, rho_y = footprint(levels, dudx, dvdx, dudy, dvdy, base)
@@ -171,7 +176,7 @@ def anisotropic(texels, levels, wrap, u, v, dudx, dvdx, dudy, dvdy, base=0, coun
     return r / n, g / n, b / n, a / n
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def sample(texels, levels, wrap, filter_, u, v, dudx, dvdx, dudy, dvdy, base=0, count=-1):
     """The texture at (u, v) with filter ``filter_`` (NEAREST … ANISOTROPIC): ``(r, g, b, a)``.
 

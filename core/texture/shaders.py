@@ -117,22 +117,21 @@ def _resolve(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surf
         call_compiled(at, _textured_rows, tri, b1, b2, triangles, attrs, device_h, source,
                       face_surface, surfaces, maps, texels, levels, textures, demo, demo_light,
                       filter_, bump, lights, ambient, eye, halfway, background8, out, start,
-                      min(n, start + ROWS))
+                      min(n, start + ROWS), surfaces.copy(), np.zeros((1, 3, 3)))
 
 
-# numpy's error model, as the parallel loop's body that it was
-@njit(cache=True, nogil=True, error_model="numpy")
+# numpy's error model, as the parallel loop's body that it was; no reference counts (_nrt:
+# it makes no array, and the counts of the views it takes cost 17 % of a textured frame)
+@njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 def _textured_rows(tri, b1, b2, triangles, attrs, device_h, source, face_surface, surfaces,
                    maps, texels, levels, textures, demo, demo_light, filter_, bump, lights,
-                   ambient, eye, halfway, background8, out, start, end):
+                   ambient, eye, halfway, background8, out, start, end, surf, constants):
     """Every pixel of rows ``start`` to ``end``: the background, the bump demo's model, or
-    the textured model."""
+    the textured model. ``surf``: a copy of ``surfaces``, where a pixel writes its texture's
+    O_d, then undoes it; ``constants`` (1, 3, 3): the visible triangle's plane constants,
+    made when the scan line enters it (per visible triangle, not for every triangle)."""
     height, width = tri.shape
-    surf = surfaces.copy()                  # a pixel writes its texture's O_d here, then undoes it
     for row in range(start, end):
-        # the visible triangle's plane constants, made when the scan line enters it (per
-        # visible triangle, not for every triangle of the scene)
-        constants = np.zeros((1, 3, 3))
         current = -1
         for col in range(width):
             t = tri[row, col]
@@ -172,11 +171,14 @@ def _textured_rows(tri, b1, b2, triangles, attrs, device_h, source, face_surface
 @njit(cache=True)
 def demo_shade(attrs, i0, i1, i2, w0, w1, w2, demo, s, light):
     """The demo's pixel step at the interpolated point and normal."""
-    n = np.empty(6)                 # normal, position: the first six varyings
-    for c in range(6):
-        n[c] = w0 * attrs[i0, c] + w1 * attrs[i1, c] + w2 * attrs[i2, c]
-    return demo_pixel(n[3], n[4], n[5], n[0], n[1], n[2], light, demo[s, 3:6],
-                      int(demo[s, 1]), demo[s, 2] > 0.5)
+    nx = w0 * attrs[i0, 0] + w1 * attrs[i1, 0] + w2 * attrs[i2, 0]    # the normal, then the
+    ny = w0 * attrs[i0, 1] + w1 * attrs[i1, 1] + w2 * attrs[i2, 1]    # position: the first
+    nz = w0 * attrs[i0, 2] + w1 * attrs[i1, 2] + w2 * attrs[i2, 2]    # six varyings
+    x = w0 * attrs[i0, 3] + w1 * attrs[i1, 3] + w2 * attrs[i2, 3]
+    y = w0 * attrs[i0, 4] + w1 * attrs[i1, 4] + w2 * attrs[i2, 4]
+    z = w0 * attrs[i0, 5] + w1 * attrs[i1, 5] + w2 * attrs[i2, 5]
+    return demo_pixel(x, y, z, nx, ny, nz, light, demo[s, 3:6], int(demo[s, 1]),
+                      demo[s, 2] > 0.5)
 
 
 def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> None:
@@ -198,7 +200,8 @@ def _pixel(s: ShadeInput, vis, triangles, attrs, source, background8, out) -> No
              np.ascontiguousarray(vis.b2, dtype=np.float64), triangles, read_only(attrs),
              device_h, source, s.face_surface, s.surfaces, maps, texels, levels, textures, s.demo,
              demo_light, filter_, bump, s.lights, s.ambient, s.eye, s.halfway, background8, out)
-    _resolve(*given, compiled_at(_textured_rows, given + (0, 0)))
+    _resolve(*given, compiled_at(_textured_rows, given + (0, 0, s.surfaces.copy(),
+                                                        np.zeros((1, 3, 3)))))
 
 
 register_shader(Shader(NAME, _vertex, _pixel,

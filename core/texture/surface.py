@@ -30,6 +30,11 @@ import math
 import numpy as np
 
 from core.jit import njit
+
+# The kernels here that are not inlined declare _nrt=False (no reference counts): they make
+# no array, and numba compiles a callee with the flags of the first caller that needs it,
+# so without the declaration a counted copy, linked into the ray tracer's or the pixel
+# step's uncounted code, would take and give back a count for every view it makes.
 from core.shading.illumination import OD, TWO_SIDED, unit3
 from core.shading.models.dispatch import light_point
 from core.texture.sample import BILINEAR, sample
@@ -88,25 +93,25 @@ def pack_maps(maps_per_surface: list) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return np.ascontiguousarray(texels), np.ascontiguousarray(levels), table, rows
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def lookup(texels, levels, textures, k, filter_, u, v, dudx, dvdx, dudy, dvdy):
     first, count, wrap = textures[k, 0], textures[k, 1], textures[k, 2]
     return sample(texels, levels, wrap, filter_, u, v, dudx, dvdx, dudy, dvdy, first, count)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def encode_srgb(c):
     """Linear light → sRGB display value (IEC 61966-2-1), c clamped to [0, 1]."""
     c = min(max(c, 0.0), 1.0)
     return c * 12.92 if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def bumped_normal(nx, ny, nz, pux, puy, puz, pvx, pvy, pvz, texels, levels, textures, k,
                   scale, filter_, u, v, dudx, dvdx, dudy, dvdy):
     """Blinn's perturbed normal from height map ``k``; P_u, P_v: ∂P/∂u, ∂P/∂v.
@@ -138,7 +143,7 @@ def bumped_normal(nx, ny, nz, pux, puy, puz, pvx, pvy, pvz, texels, levels, text
     return mx, my, mz
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def mapped_normal(nx, ny, nz, pux, puy, puz, pvx, pvy, pvz, texels, levels, textures, k,
                   filter_, u, v, dudx, dvdx, dudy, dvdy):
     """The tangent-space normal map ``k``: n = 2 rgb − 1 in the frame (T, B, N)."""
@@ -156,7 +161,7 @@ def mapped_normal(nx, ny, nz, pux, puy, puz, pvx, pvy, pvz, texels, levels, text
     return mx, my, mz
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def environment(texels, levels, textures, k, rx, ry, rz):
     """The equirectangular environment in direction R (unit): ``(r, g, b)``, linear."""
     u = 0.5 + math.atan2(rx, -rz) / (2 * math.pi)
@@ -165,7 +170,7 @@ def environment(texels, levels, textures, k, rx, ry, rz):
     return r, g, b
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def view_direction(eye, px, py, pz):
     if eye[0] == 1.0:                                   # a point: perspective
         vx, vy, vz, _ = unit3(eye[1] - px, eye[2] - py, eye[3] - pz)
@@ -173,14 +178,14 @@ def view_direction(eye, px, py, pz):
     return eye[1], eye[2], eye[3]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _lerp(attrs, c, i0, i1, i2, w0, w1, w2):
     return w0 * attrs[i0, c] + w1 * attrs[i1, c] + w2 * attrs[i2, c]
 
 
 # numpy's error model, as in the parallel loops that call it with their index: one
 # compiled form for both (core.jit.reuse_plain_overloads)
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", _nrt=False)
 def textured_pixel(attrs, i0, i1, i2, w0, w1, w2, t, col, row, constants, s, maps,
                    texels, levels, textures, filter_, bump, surf, lights, ambient, eye,
                    halfway):
@@ -195,7 +200,7 @@ def textured_pixel(attrs, i0, i1, i2, w0, w1, w2, t, col, row, constants, s, map
                        halfway)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def textured_at(attrs, i0, i1, i2, w0, w1, w2, u, v, dudx, dvdx, dudy, dvdy, s, maps,
                 texels, levels, textures, filter_, bump, surf, lights, ambient, eye, halfway):
     """The textured colour at barycentrics ``(w0, w1, w2)`` of corners ``i0, i1, i2`` with

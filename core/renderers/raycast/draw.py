@@ -103,14 +103,18 @@ def pack_shapes(shapes) -> np.ndarray:
 
 # --------------------------------------------------------------------------------------------
 # Root finding
+# The kernels here that are not inlined declare _nrt=False (no reference counts): they make
+# no array, and numba compiles a callee with the flags of the first caller that needs it,
+# so without the declaration a counted copy, linked into the rows' uncounted code, would
+# take and give back a count for every view it makes.
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _poly(c0, c1, c2, c3, c4, t):
     return (((c4 * t + c3) * t + c2) * t + c1) * t + c0
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _monotone_root(c0, c1, c2, c3, c4, lo, hi, f_lo):
     """The root of the polynomial in [lo, hi], where it is monotone and changes sign.
 
@@ -136,7 +140,7 @@ def _monotone_root(c0, c1, c2, c3, c4, lo, hi, f_lo):
     return t
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sign_changes(c0, c1, c2, c3, c4, breaks, n_breaks, roots):
     """Roots of the polynomial between consecutive ``breaks`` (where it is monotone)."""
     count = 0
@@ -150,7 +154,7 @@ def _sign_changes(c0, c1, c2, c3, c4, breaks, n_breaks, roots):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _quartic_roots(c0, c1, c2, c3, c4, lo, hi, breaks, roots):
     """All real roots of c4 t⁴ + … + c0 (c4 > 0) in [lo, hi], ascending, into ``roots``."""
     # Critical points of f' are the roots of f'' = 12 c4 t² + 6 c3 t + 2 c2 (stable formula).
@@ -181,7 +185,7 @@ def _quartic_roots(c0, c1, c2, c3, c4, lo, hi, breaks, roots):
 # Ray–surface intersection (unit direction d)
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _sphere_roots(ox, oy, oz, dx, dy, dz, cx, cy, cz, radius, roots):
     """Ray parameters where the ray meets the sphere (0 or 2, ascending)."""
     fx, fy, fz = ox - cx, oy - cy, oz - cz
@@ -202,7 +206,7 @@ def _sphere_roots(ox, oy, oz, dx, dy, dz, cx, cy, cz, radius, roots):
     return 2
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _torus_roots(ox, oy, oz, dx, dy, dz, shape, breaks, roots):
     """Ray parameters where the ray meets the torus (0 to 4, ascending)."""
     cx, cy, cz = shape[1] - ox, shape[2] - oy, shape[3] - oz
@@ -241,7 +245,7 @@ def _torus_roots(ox, oy, oz, dx, dy, dz, shape, breaks, roots):
     return count
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _torus_normal(px, py, pz, shape):
     """Unit normal at a point of the torus: away from the nearest point of the core circle."""
     qx, qy, qz = px - shape[1], py - shape[2], pz - shape[3]
@@ -262,7 +266,7 @@ def _torus_normal(px, py, pz, shape):
 # The per-pixel kernel
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _nearest_hit(shapes, ox, oy, oz, dx, dy, dz, vrp, nvx, nvy, nvz, front, back, breaks, roots):
     """``(shape, t)`` of the visible hit on the ray: inside [B, F] (n measured from the VRP
     along VPN) and nearest the viewer (largest n); ``(-1, 0)`` when there is none."""
@@ -284,20 +288,20 @@ def _nearest_hit(shapes, ox, oy, oz, dx, dy, dz, vrp, nvx, nvy, nvz, front, back
     return best_shape, best_t
 
 
-# numpy's error model, as the parallel loop's body that it was
-@njit(cache=True, nogil=True, error_model="numpy")
+# numpy's error model, as the parallel loop's body that it was; no reference counts (_nrt:
+# it makes no array; the counts of the views it takes were a sixth of a frame)
+@njit(cache=True, nogil=True, error_model="numpy", _nrt=False)
 def _trace_rows(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, background, rgb,
-                surface_rgb, coverage, seen, start, end):
+                surface_rgb, coverage, seen, start, end, roots, breaks):
     """Every pixel of rows ``start`` to ``end``: its samples' rays, the nearest shape each
-    meets, lit there; the mean into ``rgb``, the hits' mean into ``surface_rgb``."""
+    meets, lit there; the mean into ``rgb``, the hits' mean into ``surface_rgb``. ``roots``
+    (4,) and ``breaks`` (6,): the shapes' scratch."""
     height, width = coverage.shape
     vrp = cam[CAMERA_VRP:CAMERA_VRP + 3]
     nvx, nvy, nvz = cam[CAMERA_BASIS + 6], cam[CAMERA_BASIS + 7], cam[CAMERA_BASIS + 8]
     front, back = cam[CAMERA_FRONT], cam[CAMERA_BACK]
     per_pixel = samples * samples
     for row in range(start, end):
-        roots = np.empty(4)
-        breaks = np.empty(6)
         j = height - 1 - row                 # device row, counted from the bottom
         for col in range(width):
             sr, sg, sb = 0.0, 0.0, 0.0
@@ -356,7 +360,8 @@ def _trace(shapes, surfaces, lights, ambient, eye, halfway, cam, samples, backgr
     for row in prange(height):
         start = np.int64(row)
         call_compiled(at, _trace_rows, shapes, surfaces, lights, ambient, eye, halfway, cam,
-                      samples, background, rgb, surface_rgb, coverage, seen, start, start + 1)
+                      samples, background, rgb, surface_rgb, coverage, seen, start, start + 1,
+                      np.empty(4), np.empty(6))
 
 
 def render_reference(shapes, scene, view: View, projection: str,
@@ -385,7 +390,7 @@ def render_reference(shapes, scene, view: View, projection: str,
              pack_camera(view, projection, width, height, keep_aspect), int(samples),
              np.asarray(scene.background, dtype=np.float64).reshape(3), rgb, surface_rgb,
              coverage, seen)
-    _trace(*given, compiled_at(_trace_rows, given + (0, 0)))
+    _trace(*given, compiled_at(_trace_rows, given + (0, 0, np.empty(4), np.empty(6))))
     return Reference(rgb=rgb, surface_rgb=surface_rgb, coverage=coverage, shape=seen,
                      samples=int(samples))
 
